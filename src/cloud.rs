@@ -1,0 +1,257 @@
+//! Point clouds: the owned `f32` xyz type, validation, and the joint normalisation.
+//!
+//! Downsampling lives in [`crate::sampling`], normals in [`crate::normals`].
+
+use crate::{Error, Result};
+use nalgebra::{Matrix4, Vector3};
+
+/// The fewest points a cloud may have to be registered.
+pub const MIN_POINTS: usize = 16;
+
+/// An owned cloud of `f32` xyz points.
+///
+/// Readers fill it faithfully (a PCD "no return" stays NaN); [`PointCloud::validated`] is where
+/// non-finite points are rejected or dropped, before any numerical work.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct PointCloud {
+    /// The points, `[x, y, z]` each.
+    pub points: Vec<[f32; 3]>,
+}
+
+/// What to do with points that have a NaN or infinite coordinate.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum NonFinite {
+    /// Fail with an error naming the first bad point (the default).
+    #[default]
+    Error,
+    /// Drop such points silently (e.g. organised PCD clouds, where NaN means "no return").
+    Drop,
+}
+
+impl PointCloud {
+    /// Wraps points without checking them.
+    pub fn new(points: Vec<[f32; 3]>) -> Self {
+        Self { points }
+    }
+
+    /// From a packed `[x0, y0, z0, x1, ...]` buffer (the JS `Float32Array` layout).
+    /// Fails if the length is not a multiple of 3.
+    pub fn from_xyz(flat: &[f32]) -> Result<Self> {
+        if flat.len() % 3 != 0 {
+            return Err(Error::InvalidCloud(format!(
+                "packed xyz buffer has length {}, which is not a multiple of 3",
+                flat.len()
+            )));
+        }
+        Ok(Self {
+            points: flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
+        })
+    }
+
+    /// The packed `[x0, y0, z0, x1, ...]` layout.
+    pub fn to_xyz(&self) -> Vec<f32> {
+        self.points.iter().flatten().copied().collect()
+    }
+
+    /// Number of points.
+    pub fn len(&self) -> usize {
+        self.points.len()
+    }
+
+    /// True when the cloud has no points.
+    pub fn is_empty(&self) -> bool {
+        self.points.is_empty()
+    }
+
+    /// Checks the cloud for registration: non-finite points are an error naming the first bad
+    /// index (or are dropped, with [`NonFinite::Drop`]); fewer than `min_points` points is an
+    /// error; so is a cloud whose points all coincide. `what` names the cloud in messages
+    /// (`"source"`, `"target"`).
+    pub fn validated(&self, what: &str, min_points: usize, non_finite: NonFinite) -> Result<PointCloud> {
+        let bad = self
+            .points
+            .iter()
+            .position(|p| !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()));
+        let cloud = match (bad, non_finite) {
+            (None, _) => self.clone(),
+            (Some(i), NonFinite::Error) => {
+                return Err(Error::InvalidCloud(format!(
+                    "{what} point {i} has a non-finite coordinate {:?} (drop such points with the non-finite option set to drop)",
+                    self.points[i]
+                )))
+            }
+            (Some(_), NonFinite::Drop) => PointCloud::new(
+                self.points
+                    .iter()
+                    .copied()
+                    .filter(|p| p.iter().all(|v| v.is_finite()))
+                    .collect(),
+            ),
+        };
+        if cloud.len() < min_points {
+            return Err(Error::InvalidCloud(format!(
+                "{what} has {} finite points; at least {min_points} are needed",
+                cloud.len()
+            )));
+        }
+        let (lo, hi) = cloud.bounds();
+        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
+        if extent <= 0.0 {
+            return Err(Error::InvalidCloud(format!(
+                "{what} has zero extent: all {} points coincide",
+                cloud.len()
+            )));
+        }
+        Ok(cloud)
+    }
+
+    /// Axis-aligned bounds `(min, max)`. For an empty cloud both are zero.
+    pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
+        if self.points.is_empty() {
+            return ([0.0; 3], [0.0; 3]);
+        }
+        let mut lo = [f32::INFINITY; 3];
+        let mut hi = [f32::NEG_INFINITY; 3];
+        for p in &self.points {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The mean point, accumulated in `f64`.
+    pub fn centroid(&self) -> [f64; 3] {
+        let mut s = [0.0f64; 3];
+        for p in &self.points {
+            for a in 0..3 {
+                s[a] += p[a] as f64;
+            }
+        }
+        let n = self.points.len().max(1) as f64;
+        [s[0] / n, s[1] / n, s[2] / n]
+    }
+
+    /// A copy with every point mapped by the rigid (or similarity) transform `m`.
+    pub fn transformed(&self, m: &Matrix4<f64>) -> PointCloud {
+        PointCloud::new(self.points.iter().map(|&p| crate::transform::apply(m, p)).collect())
+    }
+}
+
+/// The normalisation the library applies before the network (method.md A.2).
+///
+/// **Rule**: each cloud is centred on its own bounding-box centre, and both are divided by one
+/// shared scale `s` = the largest half-extent over both clouds' boxes, so each lies in
+/// `[-1, 1]^3` with its aspect ratio kept. Because the scale is shared, a rigid
+/// `T_target_source` in normalised units maps back to a rigid transform in user units:
+/// `T_user = N_target^-1 * T_norm * N_source`, where `N(x) = (x - c) / s`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct JointNormalization {
+    /// Bounding-box centre of the source, user units.
+    pub source_center: [f64; 3],
+    /// Bounding-box centre of the target, user units.
+    pub target_center: [f64; 3],
+    /// The shared scale (user units per normalised unit); always > 0.
+    pub scale: f64,
+}
+
+impl JointNormalization {
+    /// Computes the normalisation of a (validated) pair.
+    pub fn of_pair(source: &PointCloud, target: &PointCloud) -> Self {
+        let box_of = |c: &PointCloud| {
+            let (lo, hi) = c.bounds();
+            let center = [0, 1, 2].map(|a| (lo[a] as f64 + hi[a] as f64) * 0.5);
+            let half = (0..3).map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5).fold(0.0, f64::max);
+            (center, half)
+        };
+        let (source_center, hs) = box_of(source);
+        let (target_center, ht) = box_of(target);
+        let scale = hs.max(ht);
+        let scale = if scale > 0.0 && scale.is_finite() { scale } else { 1.0 };
+        Self {
+            source_center,
+            target_center,
+            scale,
+        }
+    }
+
+    /// `N_source`: user source units to normalised units.
+    pub fn source_to_normalized(&self) -> Matrix4<f64> {
+        Self::to_normalized(self.source_center, self.scale)
+    }
+
+    /// `N_target`: user target units to normalised units.
+    pub fn target_to_normalized(&self) -> Matrix4<f64> {
+        Self::to_normalized(self.target_center, self.scale)
+    }
+
+    fn to_normalized(center: [f64; 3], scale: f64) -> Matrix4<f64> {
+        let inv = 1.0 / scale;
+        let mut m = Matrix4::identity() * inv;
+        m[(3, 3)] = 1.0;
+        let c = Vector3::from(center) * inv;
+        m.fixed_view_mut::<3, 1>(0, 3).copy_from(&(-c));
+        m
+    }
+
+    /// Maps a normalised-units `T_target_source` back to user units.
+    pub fn denormalize(&self, t_norm: &Matrix4<f64>) -> Matrix4<f64> {
+        let nt = self.target_to_normalized();
+        let nt_inv = nt.try_inverse().unwrap_or_else(Matrix4::identity);
+        nt_inv * t_norm * self.source_to_normalized()
+    }
+
+    /// Maps a user-units `T_target_source` into normalised units.
+    pub fn normalize_transform(&self, t_user: &Matrix4<f64>) -> Matrix4<f64> {
+        let ns_inv = self.source_to_normalized().try_inverse().unwrap_or_else(Matrix4::identity);
+        self.target_to_normalized() * t_user * ns_inv
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transform::{check_rigid, euler_xyz, from_rotation_translation};
+
+    fn cube(n: usize) -> PointCloud {
+        PointCloud::new((0..n).map(|i| [(i % 7) as f32, (i % 5) as f32 * 2.0, (i % 3) as f32 * 0.5]).collect())
+    }
+
+    #[test]
+    fn packed_length_must_be_multiple_of_three() {
+        assert!(PointCloud::from_xyz(&[0.0; 7]).is_err());
+        assert_eq!(PointCloud::from_xyz(&[1.0, 2.0, 3.0]).unwrap().points, vec![[1.0, 2.0, 3.0]]);
+    }
+
+    #[test]
+    fn validation_names_first_bad_index_or_drops() {
+        let mut c = cube(40);
+        c.points[17][1] = f32::NAN;
+        c.points[30][0] = f32::INFINITY;
+        let err = c.validated("source", MIN_POINTS, NonFinite::Error).unwrap_err().to_string();
+        assert!(err.contains("source point 17"), "{err}");
+        assert_eq!(c.validated("source", MIN_POINTS, NonFinite::Drop).unwrap().len(), 38);
+        let err = cube(5).validated("target", MIN_POINTS, NonFinite::Error).unwrap_err().to_string();
+        assert!(err.contains("target has 5 finite points"), "{err}");
+        let same = PointCloud::new(vec![[1.0, 1.0, 1.0]; 30]);
+        assert!(same.validated("source", MIN_POINTS, NonFinite::Error).is_err());
+        assert!(PointCloud::default().validated("source", MIN_POINTS, NonFinite::Error).is_err());
+    }
+
+    #[test]
+    fn normalization_maps_into_unit_box_and_back() {
+        let s = cube(100);
+        let t_user = from_rotation_translation(&euler_xyz(0.2, 0.1, -0.3), &Vector3::new(5.0, -2.0, 1.0));
+        let t = s.transformed(&t_user);
+        let n = JointNormalization::of_pair(&s, &t);
+        for (c, nm) in [(&s, n.source_to_normalized()), (&t, n.target_to_normalized())] {
+            let (lo, hi) = c.transformed(&nm).bounds();
+            assert!(lo.iter().chain(hi.iter()).all(|v| v.abs() <= 1.0 + 1e-5));
+        }
+        let t_norm = n.normalize_transform(&t_user);
+        assert!(check_rigid(&t_norm, 1e-9).is_ok());
+        assert!((n.denormalize(&t_norm) - t_user).abs().max() < 1e-9);
+    }
+}

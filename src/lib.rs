@@ -1,0 +1,40 @@
+//! # arps
+//!
+//! Partial-to-partial 3D point-cloud registration: DGMR-ARPS (attention-guided reference point
+//! shifting + Gaussian mixture registration) followed by ICP, in pure Rust, for native targets
+//! and WebAssembly.
+//!
+//! ```no_run
+//! use arps::{io, Options, Registrar, Weights, ModelConfig};
+//! let source = io::read_point_cloud(&std::fs::read("source.ply")?, "source.ply")?;
+//! let target = io::read_point_cloud(&std::fs::read("target.ply")?, "target.ply")?;
+//! let mut registrar = Registrar::new(&Weights::random(&ModelConfig::web(), 0)?)?;
+//! let result = registrar.register(&source, &target, &Options::default())?;
+//! println!("{}", result.T_target_source); // maps source points into the target frame
+//! # Ok::<(), arps::Error>(())
+//! ```
+//!
+//! Conventions (frames, the 4x4 layout) are documented once, in [`transform`].
+
+#![warn(missing_docs)]
+
+pub mod cloud;
+pub mod error;
+pub mod gmr;
+pub mod icp;
+pub mod io;
+pub mod model;
+pub mod nn;
+pub mod normals;
+pub mod register;
+pub mod sampling;
+pub mod timing;
+pub mod transform;
+pub mod weights;
+
+pub use cloud::{NonFinite, PointCloud};
+pub use error::{Error, Result};
+pub use icp::IcpKind;
+pub use model::{Model, ModelConfig};
+pub use register::{Options, Registrar, Registration, Timings};
+pub use weights::{StoreAs, Weights};

@@ -1,0 +1,246 @@
+//! Model configuration: read from the weights file, with the two named presets of method.md A.1.
+
+use crate::{Error, Result};
+use serde::{Deserialize, Serialize};
+
+/// How each ARPS layer picks its reference point.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Reference {
+    /// The paper's rule: the mean of the H points with the largest feature norm (no gradient
+    /// through the selection).
+    TopH,
+    /// Differentiable: a softmax over a learned per-point score (temperature
+    /// [`ModelConfig::soft_temperature`]) weights the mean of positions and features.
+    Soft,
+}
+
+/// Every size of the network. Stored as JSON in the weights file's metadata.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct ModelConfig {
+    /// Preset name this config started from (`web`, `paper`, or a custom label).
+    pub preset: String,
+    /// Network points per cloud, N.
+    pub n_points: usize,
+    /// Per-point feature width C; attention tokens are `2C` wide (`[f ; phi]`).
+    pub feature_dim: usize,
+    /// Attention heads; `2C` must be divisible by it.
+    pub heads: usize,
+    /// Hidden width of each attention block's feed-forward network.
+    pub ffn_dim: usize,
+    /// Number of ARPS layers, L.
+    pub layers: usize,
+    /// Top-H size for [`Reference::TopH`].
+    pub top_h: usize,
+    /// Number of Gaussians, J.
+    pub gaussians: usize,
+    /// Hidden widths of the position MLP `3 -> ... -> C`.
+    pub pos_hidden: Vec<usize>,
+    /// Hidden width of the step-size MLP `(3 + C) -> hidden -> 1`.
+    pub step_hidden: usize,
+    /// Hidden widths of the membership head `2C -> ... -> J`.
+    pub head_hidden: Vec<usize>,
+    /// Reference-point rule.
+    pub reference: Reference,
+    /// Softmax temperature of [`Reference::Soft`].
+    pub soft_temperature: f32,
+    /// LayerNorm epsilon.
+    pub layer_norm_eps: f32,
+}
+
+impl ModelConfig {
+    /// The default shipped size (method.md A.1 starting point, N = 512 network points).
+    pub fn web() -> Self {
+        Self {
+            preset: "web".into(),
+            n_points: 512,
+            feature_dim: 64,
+            heads: 4,
+            ffn_dim: 256,
+            layers: 4,
+            top_h: 128,
+            gaussians: 16,
+            pos_hidden: vec![32, 64],
+            step_hidden: 64,
+            head_hidden: vec![128, 64],
+            reference: Reference::Soft,
+            soft_temperature: 1.0,
+            layer_norm_eps: 1e-5,
+        }
+    }
+
+    /// The paper-size reconstruction (method.md B §2.2): C = 256, tokens 512, 4 heads, N = 1024.
+    pub fn paper() -> Self {
+        Self {
+            preset: "paper".into(),
+            n_points: 1024,
+            feature_dim: 256,
+            heads: 4,
+            ffn_dim: 512,
+            layers: 4,
+            top_h: 256,
+            gaussians: 16,
+            pos_hidden: vec![64, 128],
+            step_hidden: 64,
+            head_hidden: vec![512, 256, 128],
+            reference: Reference::TopH,
+            soft_temperature: 1.0,
+            layer_norm_eps: 1e-5,
+        }
+    }
+
+    /// A tiny config for tests and gradient checks.
+    pub fn tiny() -> Self {
+        Self {
+            preset: "tiny".into(),
+            n_points: 32,
+            feature_dim: 8,
+            heads: 2,
+            ffn_dim: 16,
+            layers: 2,
+            top_h: 8,
+            gaussians: 4,
+            pos_hidden: vec![8],
+            step_hidden: 8,
+            head_hidden: vec![8],
+            reference: Reference::Soft,
+            soft_temperature: 1.0,
+            layer_norm_eps: 1e-5,
+        }
+    }
+
+    /// A preset by name.
+    pub fn preset(name: &str) -> Result<Self> {
+        match name {
+            "web" => Ok(Self::web()),
+            "paper" => Ok(Self::paper()),
+            "tiny" => Ok(Self::tiny()),
+            other => Err(Error::InvalidOption(format!("unknown model preset '{other}' (expected web, paper or tiny)"))),
+        }
+    }
+
+    /// Attention token width `2C`.
+    pub fn token_dim(&self) -> usize {
+        2 * self.feature_dim
+    }
+
+    /// Checks that the sizes are consistent and bounded (a hostile file cannot make the engine
+    /// allocate without limit).
+    pub fn validate(&self) -> Result<()> {
+        let bad = |m: String| Err(Error::Weights(format!("invalid model config: {m}")));
+        let mut dims: Vec<(&str, usize)> = vec![
+            ("n_points", self.n_points),
+            ("feature_dim", self.feature_dim),
+            ("heads", self.heads),
+            ("ffn_dim", self.ffn_dim),
+            ("layers", self.layers),
+            ("top_h", self.top_h),
+            ("gaussians", self.gaussians),
+            ("step_hidden", self.step_hidden),
+        ];
+        dims.extend(self.pos_hidden.iter().map(|&v| ("pos_hidden", v)));
+        dims.extend(self.head_hidden.iter().map(|&v| ("head_hidden", v)));
+        for (name, v) in dims {
+            if v == 0 || v > 8192 {
+                return bad(format!("{name} = {v} is outside 1..=8192"));
+            }
+        }
+        if self.layers > 16 {
+            return bad(format!("layers = {} is more than 16", self.layers));
+        }
+        if self.n_points < 16 {
+            return bad(format!("n_points = {} is fewer than 16", self.n_points));
+        }
+        if self.token_dim() % self.heads != 0 {
+            return bad(format!("token width {} is not divisible by heads = {}", self.token_dim(), self.heads));
+        }
+        if self.top_h > self.n_points {
+            return bad(format!("top_h = {} exceeds n_points = {}", self.top_h, self.n_points));
+        }
+        if !(self.soft_temperature.is_finite() && self.soft_temperature > 0.0) {
+            return bad(format!("soft_temperature = {} must be positive", self.soft_temperature));
+        }
+        if !(self.layer_norm_eps.is_finite() && self.layer_norm_eps > 0.0) {
+            return bad(format!("layer_norm_eps = {} must be positive", self.layer_norm_eps));
+        }
+        Ok(())
+    }
+
+    /// Every tensor of the model, in a fixed order: `(name, shape)`. Linear weights are
+    /// `[out, in]`; biases `[out]`; LayerNorm `weight`/`bias` are `[dim]`.
+    pub fn tensor_specs(&self) -> Vec<(String, Vec<usize>)> {
+        let mut specs = Vec::new();
+        let linear = |specs: &mut Vec<(String, Vec<usize>)>, name: String, i: usize, o: usize| {
+            specs.push((format!("{name}.weight"), vec![o, i]));
+            specs.push((format!("{name}.bias"), vec![o]));
+        };
+        let c = self.feature_dim;
+        let d = self.token_dim();
+        for l in 0..self.layers {
+            let p = format!("layers.{l}");
+            let mut prev = 3;
+            for (i, &h) in self.pos_hidden.iter().chain(std::iter::once(&c)).enumerate() {
+                linear(&mut specs, format!("{p}.pos.{i}"), prev, h);
+                prev = h;
+            }
+            for block in ["self_attn", "cross_attn"] {
+                let b = format!("{p}.{block}");
+                for proj in ["q", "k", "v", "o"] {
+                    linear(&mut specs, format!("{b}.{proj}"), d, d);
+                }
+                specs.push((format!("{b}.norm1.weight"), vec![d]));
+                specs.push((format!("{b}.norm1.bias"), vec![d]));
+                linear(&mut specs, format!("{b}.ffn1"), d, self.ffn_dim);
+                linear(&mut specs, format!("{b}.ffn2"), self.ffn_dim, d);
+                specs.push((format!("{b}.norm2.weight"), vec![d]));
+                specs.push((format!("{b}.norm2.bias"), vec![d]));
+            }
+            linear(&mut specs, format!("{p}.out"), d, c);
+            if self.reference == Reference::Soft {
+                linear(&mut specs, format!("{p}.score"), c, 1);
+            }
+            linear(&mut specs, format!("{p}.step.0"), 3 + c, self.step_hidden);
+            linear(&mut specs, format!("{p}.step.1"), self.step_hidden, 1);
+        }
+        let mut prev = 2 * c;
+        for (i, &h) in self.head_hidden.iter().chain(std::iter::once(&self.gaussians)).enumerate() {
+            linear(&mut specs, format!("head.{i}"), prev, h);
+            prev = h;
+        }
+        specs
+    }
+
+    /// Total number of parameters.
+    pub fn parameter_count(&self) -> usize {
+        self.tensor_specs().iter().map(|(_, s)| s.iter().product::<usize>()).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn presets_validate_and_paper_size_is_close_to_the_paper() {
+        for p in ["web", "paper", "tiny"] {
+            ModelConfig::preset(p).unwrap().validate().unwrap();
+        }
+        // The paper reports 13.2M; method.md's reconstruction is ~13.8M (its MLPs use BN folded away).
+        let n = ModelConfig::paper().parameter_count();
+        assert!((12_000_000..15_000_000).contains(&n), "{n}");
+        assert!(ModelConfig::preset("huge").is_err());
+    }
+
+    #[test]
+    fn validation_rejects_inconsistent_sizes() {
+        let mut c = ModelConfig::web();
+        c.heads = 3;
+        assert!(c.validate().is_err());
+        let mut c = ModelConfig::web();
+        c.top_h = 10_000;
+        assert!(c.validate().is_err());
+        let mut c = ModelConfig::web();
+        c.feature_dim = 1 << 20;
+        assert!(c.validate().is_err());
+    }
+}

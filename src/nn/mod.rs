@@ -1,0 +1,22 @@
+//! Neural-network kernels for inference (and, through the trainer's tape, for training).
+//!
+//! Layout: activations are row-major `[rows, dim]` `f32` slices; a [`Linear`] weight is
+//! `[out, in]` row-major (the PyTorch layout), so `y = x W^T + b`.
+//! Kernels write into caller-provided buffers; [`Workspace`] holds the scratch a forward
+//! pass reuses across calls, so the hot path makes no large allocations after the first call.
+
+pub mod activation;
+pub mod attention;
+pub mod linear;
+pub mod matmul;
+pub mod norm;
+pub mod softmax;
+pub mod workspace;
+
+pub use activation::{gelu_inplace, relu_inplace, sigmoid};
+pub use attention::{AttentionBlock, MultiHeadAttention};
+pub use linear::{Linear, Mlp};
+pub use matmul::{matmul, matmul_bt};
+pub use norm::LayerNorm;
+pub use softmax::softmax_rows_inplace;
+pub use workspace::Workspace;

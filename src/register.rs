@@ -1,0 +1,255 @@
+//! The registration pipeline: normalise, sample, network, GMR, ICP, de-normalise.
+
+use crate::cloud::{JointNormalization, NonFinite, PointCloud, MIN_POINTS};
+use crate::icp::{IcpKind, IcpParams, IcpTarget};
+use crate::model::{Model, ModelWorkspace};
+use crate::timing::{default_clock, Clock, Stopwatch};
+use crate::weights::Weights;
+use crate::{gmr, sampling, transform, Error, Result};
+use nalgebra::Matrix4;
+use serde::{Deserialize, Serialize};
+
+/// Options of [`Registrar::register`]. Every field has a documented default
+/// ([`Options::default`]); the JS options object mirrors it field by field (camelCase).
+#[allow(non_snake_case)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase", default, deny_unknown_fields)]
+pub struct Options {
+    /// Points per cloud fed to the network. Default `None`: the model's N (512 for `web`).
+    pub network_points: Option<usize>,
+    /// Seed of every random choice (network sampling). Default 0. Same inputs + same seed = same
+    /// output, bit for bit, on a given build.
+    pub seed: u64,
+    /// Refinement after the network. Default [`IcpKind::Plane`] (point-to-plane).
+    pub icp: IcpKind,
+    /// ICP's final max correspondence distance, in the **user's units**. Default `None`: 0.025
+    /// normalised units (2.5% of the clouds' shared half-extent). ICP runs coarse to fine at
+    /// 4x, 2x and 1x this distance; `fitness` and `inlier_rmse` are measured at 1x.
+    pub max_correspondence_distance: Option<f64>,
+    /// Iteration cap of each ICP stage. Default 30.
+    pub icp_max_iterations: u32,
+    /// Voxel size for the ICP clouds, in the user's units. Default `None`: half the final max
+    /// correspondence distance. `Some(0.0)` uses the full clouds.
+    pub voxel_size: Option<f64>,
+    /// An initial guess of `T_target_source` (4x4, user units). The network then estimates the
+    /// remaining motion from there. Default `None` (identity).
+    pub initial_transform: Option<[[f64; 4]; 4]>,
+    /// What to do with NaN/Inf points. Default [`NonFinite::Error`].
+    pub non_finite: NonFinite,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self {
+            network_points: None,
+            seed: 0,
+            icp: IcpKind::Plane,
+            max_correspondence_distance: None,
+            icp_max_iterations: 30,
+            voxel_size: None,
+            initial_transform: None,
+            non_finite: NonFinite::Error,
+        }
+    }
+}
+
+/// Milliseconds spent in each stage of one registration (0 where no clock is available).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub struct Timings {
+    /// Validation, normalisation and downsampling (network points and ICP voxels).
+    pub preprocess_ms: f64,
+    /// The network forward pass.
+    pub network_ms: f64,
+    /// GMM parameters and the weighted Procrustes solve.
+    pub gmr_ms: f64,
+    /// ICP refinement (normals, kd-tree, iterations) and the final quality figures.
+    pub icp_ms: f64,
+    /// Everything.
+    pub total_ms: f64,
+}
+
+/// The result of one registration.
+#[allow(non_snake_case)]
+#[derive(Clone, Debug, PartialEq)]
+pub struct Registration {
+    /// The answer: maps source points into the target frame (user units), after ICP.
+    pub T_target_source: Matrix4<f64>,
+    /// The network + GMR estimate, before ICP (user units).
+    pub T_target_source_network: Matrix4<f64>,
+    /// Fraction of (voxelised) source points with a target point within the final max
+    /// correspondence distance, under `T_target_source`; in [0, 1].
+    pub fitness: f64,
+    /// RMS distance of those inlier pairs, user units (0 if there are none).
+    pub inlier_rmse: f64,
+    /// ICP iterations run over all stages (0 with ICP off).
+    pub icp_iterations: u32,
+    /// True when the last ICP stage met its convergence criteria (false with ICP off).
+    pub icp_converged: bool,
+    /// The final max correspondence distance used, user units.
+    pub max_correspondence_distance: f64,
+    /// Time per stage.
+    pub timings: Timings,
+    /// Things the caller should know (input padded, low fitness, large rotation, ...).
+    pub warnings: Vec<String>,
+}
+
+/// Holds a loaded model and reusable buffers; registers pairs of clouds.
+pub struct Registrar {
+    model: Model,
+    weights_provenance: serde_json::Value,
+    workspace: ModelWorkspace,
+    clock: Option<Clock>,
+}
+
+/// Default final ICP distance in normalised units.
+const DEFAULT_MAX_CORRESPONDENCE: f64 = 0.025;
+/// Fitness below which a warning says the alignment may have failed.
+const LOW_FITNESS: f64 = 0.3;
+
+impl Registrar {
+    /// A registrar for given weights.
+    pub fn new(weights: &Weights) -> Result<Self> {
+        Ok(Self {
+            model: Model::from_weights(weights)?,
+            weights_provenance: weights.provenance.clone(),
+            workspace: ModelWorkspace::default(),
+            clock: default_clock(),
+        })
+    }
+
+    /// A registrar from weights-file bytes.
+    pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
+        Self::new(&Weights::from_bytes(bytes)?)
+    }
+
+    /// Replaces the clock used for [`Timings`] (the wasm binding passes `performance.now`).
+    pub fn set_clock(&mut self, clock: Option<Clock>) {
+        self.clock = clock;
+    }
+
+    /// The network.
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
+
+    /// How the loaded weights were made.
+    pub fn provenance(&self) -> &serde_json::Value {
+        &self.weights_provenance
+    }
+
+    /// Registers `source` onto `target`: returns `T_target_source` and quality figures.
+    /// The clouds may be in any unit (the same for both) and any size >= 16 points.
+    #[allow(non_snake_case)]
+    pub fn register(&mut self, source: &PointCloud, target: &PointCloud, options: &Options) -> Result<Registration> {
+        let mut watch = Stopwatch::start(self.clock);
+        let mut total = Stopwatch::start(self.clock);
+        let mut warnings = Vec::new();
+        let n_net = options.network_points.unwrap_or(self.model.config.n_points);
+        if n_net < self.model.min_points() || n_net > 1 << 16 {
+            return Err(Error::InvalidOption(format!(
+                "networkPoints = {n_net} is outside {}..=65536 for this model",
+                self.model.min_points()
+            )));
+        }
+        if options.icp_max_iterations > 10_000 {
+            return Err(Error::InvalidOption(format!("icpMaxIterations = {} is more than 10000", options.icp_max_iterations)));
+        }
+        let source = source.validated("source", MIN_POINTS, options.non_finite)?;
+        let target = target.validated("target", MIN_POINTS, options.non_finite)?;
+        let init = match &options.initial_transform {
+            Some(rows) => {
+                let m = transform::from_rows(rows);
+                transform::check_rigid(&m, 1e-4).map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?;
+                m
+            }
+            None => Matrix4::identity(),
+        };
+        // The network sees the source already moved by the initial guess.
+        let source_init = if options.initial_transform.is_some() { source.transformed(&init) } else { source.clone() };
+        let norm = JointNormalization::of_pair(&source_init, &target);
+        let s = norm.scale;
+        let src_n = source_init.transformed(&norm.source_to_normalized());
+        let tgt_n = target.transformed(&norm.target_to_normalized());
+
+        let d_final = match options.max_correspondence_distance {
+            Some(d) if d.is_finite() && d > 0.0 => d / s,
+            Some(d) => return Err(Error::InvalidOption(format!("maxCorrespondenceDistance = {d} must be a positive number"))),
+            None => DEFAULT_MAX_CORRESPONDENCE,
+        };
+        let voxel = match options.voxel_size {
+            Some(v) if v.is_finite() && v >= 0.0 => v / s,
+            Some(v) => return Err(Error::InvalidOption(format!("voxelSize = {v} must be >= 0"))),
+            None => d_final * 0.5,
+        };
+        for (what, c) in [("source", &src_n), ("target", &tgt_n)] {
+            if c.len() < n_net {
+                warnings.push(format!("{what} has {} points, fewer than the network's {n_net}: some were used twice", c.len()));
+            }
+        }
+        let net_src = sampling::network_sample(&src_n, n_net, options.seed);
+        let net_tgt = sampling::network_sample(&tgt_n, n_net, options.seed ^ 0x5EED_7A26_E7C0_FFEE);
+        let icp_src = sampling::voxel_downsample(&src_n, voxel as f32);
+        let icp_tgt = sampling::voxel_downsample(&tgt_n, voxel as f32);
+        let preprocess_ms = watch.lap();
+
+        let out = self.model.forward(&net_src.points, &net_tgt.points, &mut self.workspace)?;
+        let network_ms = watch.lap();
+
+        let j = self.model.config.gaussians;
+        let g_src = gmr::gmm_params(&net_src.points, &out.gamma_source, j);
+        let g_tgt = gmr::gmm_params(&net_tgt.points, &out.gamma_target, j);
+        let t_net_n = gmr::solve(&g_src, &g_tgt);
+        let gmr_ms = watch.lap();
+
+        let with_normals = options.icp == IcpKind::Plane;
+        let target_index = IcpTarget::new(&icp_tgt.points, with_normals);
+        let mut t_n = t_net_n;
+        let mut iterations = 0;
+        let mut converged = false;
+        if options.icp != IcpKind::Off {
+            for factor in [4.0, 2.0, 1.0] {
+                let params = IcpParams {
+                    kind: options.icp,
+                    max_correspondence_distance: d_final * factor,
+                    max_iterations: options.icp_max_iterations,
+                    relative_fitness: 1e-6,
+                    relative_rmse: 1e-6,
+                };
+                let r = target_index.align(&icp_src.points, &t_n, &params);
+                t_n = r.T_target_source;
+                iterations += r.iterations;
+                converged = r.converged;
+            }
+        }
+        let (fitness, rmse_n) = target_index.evaluate(&icp_src.points, &t_n, d_final);
+        let icp_ms = watch.lap();
+
+        let T_target_source = norm.denormalize(&t_n) * init;
+        let T_target_source_network = norm.denormalize(&t_net_n) * init;
+        if fitness < LOW_FITNESS {
+            warnings.push(format!(
+                "low fitness {fitness:.2}: fewer than {:.0}% of source points found a target point within {:.3}; the alignment may have failed (the method is local: rotations beyond about 45 degrees per axis are outside its training range)",
+                LOW_FITNESS * 100.0,
+                d_final * s
+            ));
+        }
+        Ok(Registration {
+            T_target_source,
+            T_target_source_network,
+            fitness,
+            inlier_rmse: rmse_n * s,
+            icp_iterations: iterations,
+            icp_converged: converged,
+            max_correspondence_distance: d_final * s,
+            timings: Timings {
+                preprocess_ms,
+                network_ms,
+                gmr_ms,
+                icp_ms,
+                total_ms: total.lap(),
+            },
+            warnings,
+        })
+    }
+}

@@ -1,0 +1,156 @@
+//! Rigid transforms as 4x4 matrices, and the error metrics of the paper.
+//!
+//! # Conventions (documented once, used everywhere)
+//! * `T_target_source` maps a point expressed in the source frame into the target frame:
+//!   `p_target = R * p_source + t`, with `T = [[R, t], [0, 0, 0, 1]]`.
+//! * In Rust the transform is a [`nalgebra::Matrix4<f64>`].
+//! * Across the JavaScript boundary a 4x4 is a `Float32Array(16)` in **column-major** order
+//!   (element `(row r, col c)` at index `c * 4 + r`), exactly what three.js `Matrix4.fromArray`
+//!   reads. [`to_column_major_f32`] and [`from_column_major`] convert.
+//! * The CLI's JSON prints four **row-major** rows (`[[r00, r01, r02, t0], ...]`), as people read
+//!   matrices; [`to_rows`] converts.
+
+use nalgebra::{Matrix3, Matrix4, Vector3};
+
+/// Builds `[[R, t], [0, 0, 0, 1]]`.
+pub fn from_rotation_translation(r: &Matrix3<f64>, t: &Vector3<f64>) -> Matrix4<f64> {
+    let mut m = Matrix4::identity();
+    m.fixed_view_mut::<3, 3>(0, 0).copy_from(r);
+    m.fixed_view_mut::<3, 1>(0, 3).copy_from(t);
+    m
+}
+
+/// The rotation block `R` of a rigid transform.
+pub fn rotation(m: &Matrix4<f64>) -> Matrix3<f64> {
+    m.fixed_view::<3, 3>(0, 0).into_owned()
+}
+
+/// The translation `t` of a rigid transform.
+pub fn translation(m: &Matrix4<f64>) -> Vector3<f64> {
+    m.fixed_view::<3, 1>(0, 3).into_owned()
+}
+
+/// The inverse of a rigid transform, in closed form: `[[R^T, -R^T t], [0, 1]]`.
+pub fn rigid_inverse(m: &Matrix4<f64>) -> Matrix4<f64> {
+    let rt = rotation(m).transpose();
+    let t = -(rt * translation(m));
+    from_rotation_translation(&rt, &t)
+}
+
+/// Applies a rigid transform to a point.
+pub fn apply(m: &Matrix4<f64>, p: [f32; 3]) -> [f32; 3] {
+    let v = Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+    let q = rotation(m) * v + translation(m);
+    [q.x as f32, q.y as f32, q.z as f32]
+}
+
+/// Geodesic rotation error in degrees: `acos(clip((tr(R_a^T R_b) - 1) / 2, -1, 1))`.
+pub fn rotation_error_deg(a: &Matrix4<f64>, b: &Matrix4<f64>) -> f64 {
+    let r = rotation(a).transpose() * rotation(b);
+    let c = ((r.trace() - 1.0) / 2.0).clamp(-1.0, 1.0);
+    c.acos().to_degrees()
+}
+
+/// Translation error: `|t_a - t_b|`.
+pub fn translation_error(a: &Matrix4<f64>, b: &Matrix4<f64>) -> f64 {
+    (translation(a) - translation(b)).norm()
+}
+
+/// Rotation angle of a rigid transform in degrees (0 for the identity).
+pub fn rotation_angle_deg(m: &Matrix4<f64>) -> f64 {
+    rotation_error_deg(m, &Matrix4::identity())
+}
+
+/// Four row-major rows, as the CLI's JSON prints them.
+pub fn to_rows(m: &Matrix4<f64>) -> [[f64; 4]; 4] {
+    let mut rows = [[0.0; 4]; 4];
+    for (r, row) in rows.iter_mut().enumerate() {
+        for (c, v) in row.iter_mut().enumerate() {
+            *v = m[(r, c)];
+        }
+    }
+    rows
+}
+
+/// From four row-major rows.
+pub fn from_rows(rows: &[[f64; 4]; 4]) -> Matrix4<f64> {
+    Matrix4::from_fn(|r, c| rows[r][c])
+}
+
+/// Column-major `f32` array of 16, for three.js `Matrix4.fromArray`.
+pub fn to_column_major_f32(m: &Matrix4<f64>) -> [f32; 16] {
+    let mut out = [0.0f32; 16];
+    for c in 0..4 {
+        for r in 0..4 {
+            out[c * 4 + r] = m[(r, c)] as f32;
+        }
+    }
+    out
+}
+
+/// From a column-major array of 16 (three.js `Matrix4.elements`).
+pub fn from_column_major(a: &[f64; 16]) -> Matrix4<f64> {
+    Matrix4::from_fn(|r, c| a[c * 4 + r])
+}
+
+/// Checks that `m` is a finite rigid transform: bottom row `[0, 0, 0, 1]`, `R^T R = I` and
+/// `det R = +1` to within `tol`. Returns a message saying what is off.
+pub fn check_rigid(m: &Matrix4<f64>, tol: f64) -> Result<(), String> {
+    if m.iter().any(|v| !v.is_finite()) {
+        return Err("transform has non-finite entries".into());
+    }
+    let bottom = [m[(3, 0)], m[(3, 1)], m[(3, 2)], m[(3, 3)]];
+    if (bottom[0].abs() + bottom[1].abs() + bottom[2].abs() + (bottom[3] - 1.0).abs()) > tol {
+        return Err(format!("bottom row is {bottom:?}, expected [0, 0, 0, 1]"));
+    }
+    let r = rotation(m);
+    let ortho = (r.transpose() * r - Matrix3::identity()).abs().max();
+    if ortho > tol {
+        return Err(format!("rotation block is not orthonormal (|R^T R - I| = {ortho:.2e})"));
+    }
+    let det = r.determinant();
+    if (det - 1.0).abs() > tol {
+        return Err(format!("rotation block has determinant {det:.6}, expected +1"));
+    }
+    Ok(())
+}
+
+/// Rotation from Euler angles in radians, `R = Rx(ax) * Ry(ay) * Rz(az)` (the DCP / paper protocol).
+pub fn euler_xyz(ax: f64, ay: f64, az: f64) -> Matrix3<f64> {
+    let (sx, cx) = ax.sin_cos();
+    let (sy, cy) = ay.sin_cos();
+    let (sz, cz) = az.sin_cos();
+    let rx = Matrix3::new(1.0, 0.0, 0.0, 0.0, cx, -sx, 0.0, sx, cx);
+    let ry = Matrix3::new(cy, 0.0, sy, 0.0, 1.0, 0.0, -sy, 0.0, cy);
+    let rz = Matrix3::new(cz, -sz, 0.0, sz, cz, 0.0, 0.0, 0.0, 1.0);
+    rx * ry * rz
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn column_major_round_trip_and_layout() {
+        let m = from_rotation_translation(&euler_xyz(0.1, -0.2, 0.3), &Vector3::new(1.0, 2.0, 3.0));
+        let cm = to_column_major_f32(&m);
+        // translation sits at indices 12, 13, 14 in column-major order (three.js layout)
+        assert_eq!([cm[12], cm[13], cm[14], cm[15]], [1.0, 2.0, 3.0, 1.0]);
+        let back = from_column_major(&cm.map(|v| v as f64));
+        assert!((back - m).abs().max() < 1e-6);
+        assert_eq!(from_rows(&to_rows(&m)), m);
+    }
+
+    #[test]
+    fn inverse_and_errors() {
+        let m = from_rotation_translation(&euler_xyz(0.3, 0.2, -0.5), &Vector3::new(0.1, -0.4, 0.2));
+        let id = m * rigid_inverse(&m);
+        assert!((id - Matrix4::identity()).abs().max() < 1e-12);
+        assert!(check_rigid(&m, 1e-9).is_ok());
+        let ten = from_rotation_translation(&euler_xyz(10f64.to_radians(), 0.0, 0.0), &Vector3::zeros());
+        assert!((rotation_angle_deg(&ten) - 10.0).abs() < 1e-9);
+        let mut bad = m;
+        bad[(0, 0)] = 2.0;
+        assert!(check_rigid(&bad, 1e-6).is_err());
+    }
+}
