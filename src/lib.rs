@@ -31,6 +31,8 @@ pub mod sampling;
 pub mod timing;
 pub mod transform;
 pub mod weights;
+#[cfg(target_arch = "wasm32")]
+pub mod wasm;
 
 pub use cloud::{NonFinite, PointCloud};
 pub use error::{Error, Result};
