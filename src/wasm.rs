@@ -180,7 +180,51 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
         }
         None => options,
     };
+    // serde-wasm-bindgen reads a struct by asking for each known field, so it never sees unknown
+    // ones and `deny_unknown_fields` has no effect: check the keys here, against the core's own
+    // field list (taken from its `Deserialize` impl, so it cannot drift).
+    let fields = struct_fields::<Options>();
+    for key in Object::keys(options.unchecked_ref::<Object>()).iter() {
+        let key = key.as_string().unwrap_or_default();
+        let defined = !Reflect::get(&options, &JsValue::from_str(&key)).unwrap_or(JsValue::UNDEFINED).is_undefined();
+        if defined && !fields.contains(&key.as_str()) {
+            return Err(JsError::new(&format!(
+                "invalid options: unknown field `{key}`, expected one of {}",
+                fields.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ")
+            )));
+        }
+    }
     serde_wasm_bindgen::from_value::<Options>(options).map_err(|e| JsError::new(&format!("invalid options: {e}")))
+}
+
+/// The (renamed) field names of a `Deserialize` struct: serde's derive passes them to
+/// `Deserializer::deserialize_struct`, which this deserializer records and then stops.
+fn struct_fields<T: serde::de::DeserializeOwned>() -> &'static [&'static str] {
+    use serde::de::{self, Visitor};
+    struct Capture<'a>(&'a mut &'static [&'static str]);
+    impl<'de> de::Deserializer<'de> for Capture<'_> {
+        type Error = de::value::Error;
+        fn deserialize_any<V: Visitor<'de>>(self, _: V) -> Result<V::Value, Self::Error> {
+            Err(de::Error::custom("not a struct"))
+        }
+        fn deserialize_struct<V: Visitor<'de>>(
+            self,
+            _name: &'static str,
+            fields: &'static [&'static str],
+            _visitor: V,
+        ) -> Result<V::Value, Self::Error> {
+            *self.0 = fields;
+            Err(de::Error::custom("fields captured"))
+        }
+        serde::forward_to_deserialize_any! {
+            bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf
+            option unit unit_struct newtype_struct seq tuple tuple_struct map enum identifier
+            ignored_any
+        }
+    }
+    let mut fields: &'static [&'static str] = &[];
+    let _ = T::deserialize(Capture(&mut fields));
+    fields
 }
 
 /// `Some` when `v` is a flat array-like of 16 numbers (column-major), `None` for anything else
