@@ -118,6 +118,11 @@ impl Registrar {
         })
     }
 
+    /// A registrar on the embedded default model ([`crate::weights::DEFAULT_MODEL`]).
+    pub fn with_default_model() -> Result<Self> {
+        Self::from_bytes(crate::weights::DEFAULT_MODEL)
+    }
+
     /// A registrar from weights-file bytes.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
         Self::new(&Weights::from_bytes(bytes)?)
@@ -141,7 +146,12 @@ impl Registrar {
     /// Registers `source` onto `target`: returns `T_target_source` and quality figures.
     /// The clouds may be in any unit (the same for both) and any size >= 16 points.
     #[allow(non_snake_case)]
-    pub fn register(&mut self, source: &PointCloud, target: &PointCloud, options: &Options) -> Result<Registration> {
+    pub fn register(
+        &mut self,
+        source: &PointCloud,
+        target: &PointCloud,
+        options: &Options,
+    ) -> Result<Registration> {
         let mut watch = Stopwatch::start(self.clock);
         let mut total = Stopwatch::start(self.clock);
         let mut warnings = Vec::new();
@@ -153,20 +163,29 @@ impl Registrar {
             )));
         }
         if options.icp_max_iterations > 10_000 {
-            return Err(Error::InvalidOption(format!("icpMaxIterations = {} is more than 10000", options.icp_max_iterations)));
+            return Err(Error::InvalidOption(format!(
+                "icpMaxIterations = {} is more than 10000",
+                options.icp_max_iterations
+            )));
         }
         let source = source.validated("source", MIN_POINTS, options.non_finite)?;
         let target = target.validated("target", MIN_POINTS, options.non_finite)?;
         let init = match &options.initial_transform {
             Some(rows) => {
                 let m = transform::from_rows(rows);
-                transform::check_rigid(&m, 1e-4).map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?;
+                transform::check_rigid(&m, 1e-4).map_err(|e| {
+                    Error::InvalidOption(format!("initialTransform is not rigid: {e}"))
+                })?;
                 m
             }
             None => Matrix4::identity(),
         };
         // The network sees the source already moved by the initial guess.
-        let source_init = if options.initial_transform.is_some() { source.transformed(&init) } else { source.clone() };
+        let source_init = if options.initial_transform.is_some() {
+            source.transformed(&init)
+        } else {
+            source.clone()
+        };
         let norm = JointNormalization::of_pair(&source_init, &target);
         let s = norm.scale;
         let src_n = source_init.transformed(&norm.source_to_normalized());
@@ -174,17 +193,28 @@ impl Registrar {
 
         let d_final = match options.max_correspondence_distance {
             Some(d) if d.is_finite() && d > 0.0 => d / s,
-            Some(d) => return Err(Error::InvalidOption(format!("maxCorrespondenceDistance = {d} must be a positive number"))),
+            Some(d) => {
+                return Err(Error::InvalidOption(format!(
+                    "maxCorrespondenceDistance = {d} must be a positive number"
+                )))
+            }
             None => DEFAULT_MAX_CORRESPONDENCE,
         };
         let voxel = match options.voxel_size {
             Some(v) if v.is_finite() && v >= 0.0 => v / s,
-            Some(v) => return Err(Error::InvalidOption(format!("voxelSize = {v} must be >= 0"))),
+            Some(v) => {
+                return Err(Error::InvalidOption(format!(
+                    "voxelSize = {v} must be >= 0"
+                )))
+            }
             None => d_final * 0.5,
         };
         for (what, c) in [("source", &src_n), ("target", &tgt_n)] {
             if c.len() < n_net {
-                warnings.push(format!("{what} has {} points, fewer than the network's {n_net}: some were used twice", c.len()));
+                warnings.push(format!(
+                    "{what} has {} points, fewer than the network's {n_net}: some were used twice",
+                    c.len()
+                ));
             }
         }
         let net_src = sampling::network_sample(&src_n, n_net, options.seed);
@@ -193,7 +223,9 @@ impl Registrar {
         let icp_tgt = sampling::voxel_downsample(&tgt_n, voxel as f32);
         let preprocess_ms = watch.lap();
 
-        let out = self.model.forward(&net_src.points, &net_tgt.points, &mut self.workspace)?;
+        let out = self
+            .model
+            .forward(&net_src.points, &net_tgt.points, &mut self.workspace)?;
         let network_ms = watch.lap();
 
         let j = self.model.config.gaussians;
