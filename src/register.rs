@@ -223,16 +223,20 @@ impl Registrar {
         let icp_tgt = sampling::voxel_downsample(&tgt_n, voxel as f32);
         let preprocess_ms = watch.lap();
 
-        let out = self
-            .model
-            .forward(&net_src.points, &net_tgt.points, &mut self.workspace)?;
-        let network_ms = watch.lap();
-
-        let j = self.model.config.gaussians;
-        let g_src = gmr::gmm_params(&net_src.points, &out.gamma_source, j);
-        let g_tgt = gmr::gmm_params(&net_tgt.points, &out.gamma_target, j);
-        let t_net_n = gmr::solve(&g_src, &g_tgt);
-        let gmr_ms = watch.lap();
+        let (t_net_n, network_ms, gmr_ms) = if options.network {
+            let out = self
+                .model
+                .forward(&net_src.points, &net_tgt.points, &mut self.workspace)?;
+            let network_ms = watch.lap();
+            let j = self.model.config.gaussians;
+            let g_src = gmr::gmm_params(&net_src.points, &out.gamma_source, j);
+            let g_tgt = gmr::gmm_params(&net_tgt.points, &out.gamma_target, j);
+            let t = gmr::solve(&g_src, &g_tgt);
+            (t, network_ms, watch.lap())
+        } else {
+            // identity in user units (relative to the initial guess), in normalised units
+            (norm.normalize_transform(&Matrix4::identity()), 0.0, 0.0)
+        };
 
         let with_normals = options.icp == IcpKind::Plane;
         let target_index = IcpTarget::new(&icp_tgt.points, with_normals);

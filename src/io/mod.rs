@@ -48,10 +48,20 @@ impl Mesh {
         self.triangles
             .iter()
             .map(|t| {
-                let [a, b, c] = t.map(|i| self.vertices.get(i as usize).copied().unwrap_or([0.0; 3]).map(|v| v as f64));
+                let [a, b, c] = t.map(|i| {
+                    self.vertices
+                        .get(i as usize)
+                        .copied()
+                        .unwrap_or([0.0; 3])
+                        .map(|v| v as f64)
+                });
                 let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
                 let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
-                let cr = [u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]];
+                let cr = [
+                    u[1] * v[2] - u[2] * v[1],
+                    u[2] * v[0] - u[0] * v[2],
+                    u[0] * v[1] - u[1] * v[0],
+                ];
                 let area = 0.5 * (cr[0] * cr[0] + cr[1] * cr[1] + cr[2] * cr[2]).sqrt();
                 if area.is_finite() {
                     area
@@ -67,7 +77,11 @@ impl Mesh {
     /// or a triangle index is out of range.
     pub fn sample_surface(&self, n: usize, seed: u64) -> Result<PointCloud> {
         use rand::Rng;
-        if let Some(t) = self.triangles.iter().find(|t| t.iter().any(|&i| i as usize >= self.vertices.len())) {
+        if let Some(t) = self
+            .triangles
+            .iter()
+            .find(|t| t.iter().any(|&i| i as usize >= self.vertices.len()))
+        {
             return Err(crate::Error::InvalidCloud(format!(
                 "mesh triangle {t:?} refers to a vertex beyond the {} vertices",
                 self.vertices.len()
@@ -81,7 +95,9 @@ impl Mesh {
             cumulative.push(total);
         }
         if !(total > 0.0) {
-            return Err(crate::Error::InvalidCloud("mesh has no triangle with positive area to sample".into()));
+            return Err(crate::Error::InvalidCloud(
+                "mesh has no triangle with positive area to sample".into(),
+            ));
         }
         let mut rng = crate::sampling::rng(seed);
         let mut points = Vec::with_capacity(n);
@@ -94,7 +110,9 @@ impl Mesh {
                 u = 1.0 - u;
                 v = 1.0 - v;
             }
-            points.push([0, 1, 2].map(|ax| (a[ax] + u * (b[ax] - a[ax]) + v * (c[ax] - a[ax])) as f32));
+            points.push(
+                [0, 1, 2].map(|ax| (a[ax] + u * (b[ax] - a[ax]) + v * (c[ax] - a[ax])) as f32),
+            );
         }
         Ok(PointCloud::new(points))
     }
