@@ -30,9 +30,9 @@ pub mod register;
 pub mod sampling;
 pub mod timing;
 pub mod transform;
-pub mod weights;
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
+pub mod weights;
 
 pub use cloud::{NonFinite, PointCloud};
 pub use error::{Error, Result};

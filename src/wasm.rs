@@ -17,9 +17,6 @@ use crate::{transform, Options, PointCloud};
 use js_sys::{Array, Float32Array, Object, Reflect};
 use wasm_bindgen::prelude::*;
 
-/// The embedded default model (`models/web.safetensors`).
-static DEFAULT_MODEL: &[u8] = include_bytes!("../models/web.safetensors");
-
 #[wasm_bindgen]
 extern "C" {
     #[wasm_bindgen(js_namespace = performance, js_name = now)]
@@ -86,7 +83,9 @@ impl Registrar {
     /// A registrar on the model embedded in the package (`models/web.safetensors`).
     #[wasm_bindgen(js_name = withDefaultModel)]
     pub fn with_default_model() -> Result<Registrar, JsError> {
-        Self::from_bytes(DEFAULT_MODEL)
+        let mut inner = crate::Registrar::with_default_model().map_err(js_err)?;
+        inner.set_clock(Some(js_clock()));
+        Ok(Registrar { inner })
     }
 
     /// A registrar on custom weights (the bytes of an arps `.safetensors` file).
@@ -101,19 +100,39 @@ impl Registrar {
     /// Registers `source` onto `target` (packed xyz, same units) and returns the transform
     /// mapping source points into the target frame, with quality figures. `options` is a plain
     /// object (or `undefined`/`null`) mirroring the core `Options`; unknown fields throw.
-    pub fn register(&mut self, source: &[f32], target: &[f32], options: JsValue) -> Result<JsValue, JsError> {
+    pub fn register(
+        &mut self,
+        source: &[f32],
+        target: &[f32],
+        options: JsValue,
+    ) -> Result<JsValue, JsError> {
         let options = parse_options(options)?;
         let source = PointCloud::from_xyz(source).map_err(|e| prefixed("source", e))?;
         let target = PointCloud::from_xyz(target).map_err(|e| prefixed("target", e))?;
-        let r = self.inner.register(&source, &target, &options).map_err(js_err)?;
+        let r = self
+            .inner
+            .register(&source, &target, &options)
+            .map_err(js_err)?;
         let out = Object::new();
         set(&out, "matrix", &matrix_js(&r.T_target_source))?;
-        set(&out, "networkMatrix", &matrix_js(&r.T_target_source_network))?;
+        set(
+            &out,
+            "networkMatrix",
+            &matrix_js(&r.T_target_source_network),
+        )?;
         set(&out, "fitness", &JsValue::from_f64(r.fitness))?;
         set(&out, "inlierRmse", &JsValue::from_f64(r.inlier_rmse))?;
-        set(&out, "iterations", &JsValue::from_f64(r.icp_iterations as f64))?;
+        set(
+            &out,
+            "iterations",
+            &JsValue::from_f64(r.icp_iterations as f64),
+        )?;
         set(&out, "converged", &JsValue::from_bool(r.icp_converged))?;
-        set(&out, "maxCorrespondenceDistance", &JsValue::from_f64(r.max_correspondence_distance))?;
+        set(
+            &out,
+            "maxCorrespondenceDistance",
+            &JsValue::from_f64(r.max_correspondence_distance),
+        )?;
         set(&out, "timingsMs", &to_js(&r.timings)?)?;
         let warnings: Array = r.warnings.iter().map(|w| JsValue::from_str(w)).collect();
         set(&out, "warnings", &warnings)?;
@@ -148,7 +167,9 @@ fn set(obj: &Object, key: &str, value: &JsValue) -> Result<(), JsError> {
 /// Serialises with plain JS objects for maps (not `Map`s).
 fn to_js<T: serde::Serialize + ?Sized>(value: &T) -> Result<JsValue, JsError> {
     let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
-    value.serialize(&ser).map_err(|e| JsError::new(&format!("internal: {e}")))
+    value
+        .serialize(&ser)
+        .map_err(|e| JsError::new(&format!("internal: {e}")))
 }
 
 /// A 4x4 as `Float32Array(16)`, column-major (three.js `Matrix4.fromArray`).
@@ -165,7 +186,9 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
         return Ok(Options::default());
     }
     if !options.is_object() || Array::is_array(&options) {
-        return Err(JsError::new("invalid options: expected a plain object (or undefined)"));
+        return Err(JsError::new(
+            "invalid options: expected a plain object (or undefined)",
+        ));
     }
     let key = JsValue::from_str("initialTransform");
     let init = Reflect::get(&options, &key).unwrap_or(JsValue::UNDEFINED);
@@ -174,8 +197,17 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
             // A shallow copy, so the caller's object is left as it was.
             let copy = Object::assign(&Object::new(), options.unchecked_ref());
             let rows = transform::to_rows(&transform::from_column_major(&elements));
-            let rows_js: Array = rows.iter().map(|r| -> JsValue { r.iter().map(|v| JsValue::from_f64(*v)).collect::<Array>().into() }).collect();
-            Reflect::set(&copy, &key, &rows_js).map_err(|_| JsError::new("internal: could not convert initialTransform"))?;
+            let rows_js: Array = rows
+                .iter()
+                .map(|r| -> JsValue {
+                    r.iter()
+                        .map(|v| JsValue::from_f64(*v))
+                        .collect::<Array>()
+                        .into()
+                })
+                .collect();
+            Reflect::set(&copy, &key, &rows_js)
+                .map_err(|_| JsError::new("internal: could not convert initialTransform"))?;
             copy.into()
         }
         None => options,
@@ -186,15 +218,22 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
     let fields = struct_fields::<Options>();
     for key in Object::keys(options.unchecked_ref::<Object>()).iter() {
         let key = key.as_string().unwrap_or_default();
-        let defined = !Reflect::get(&options, &JsValue::from_str(&key)).unwrap_or(JsValue::UNDEFINED).is_undefined();
+        let defined = !Reflect::get(&options, &JsValue::from_str(&key))
+            .unwrap_or(JsValue::UNDEFINED)
+            .is_undefined();
         if defined && !fields.contains(&key.as_str()) {
             return Err(JsError::new(&format!(
                 "invalid options: unknown field `{key}`, expected one of {}",
-                fields.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ")
+                fields
+                    .iter()
+                    .map(|f| format!("`{f}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ")
             )));
         }
     }
-    serde_wasm_bindgen::from_value::<Options>(options).map_err(|e| JsError::new(&format!("invalid options: {e}")))
+    serde_wasm_bindgen::from_value::<Options>(options)
+        .map_err(|e| JsError::new(&format!("invalid options: {e}")))
 }
 
 /// The (renamed) field names of a `Deserialize` struct: serde's derive passes them to
@@ -230,18 +269,19 @@ fn struct_fields<T: serde::de::DeserializeOwned>() -> &'static [&'static str] {
 /// `Some` when `v` is a flat array-like of 16 numbers (column-major), `None` for anything else
 /// (rows, `undefined`, or a wrong shape, which serde then reports).
 fn column_major_16(v: &JsValue) -> Result<Option<[f64; 16]>, JsError> {
-    let flat: Option<Vec<JsValue>> = if v.is_instance_of::<Float32Array>() || v.is_instance_of::<js_sys::Float64Array>() {
-        Some(Array::from(v).to_vec())
-    } else if Array::is_array(v) {
-        let a: &Array = v.unchecked_ref();
-        if a.length() == 16 {
-            Some(a.to_vec())
+    let flat: Option<Vec<JsValue>> =
+        if v.is_instance_of::<Float32Array>() || v.is_instance_of::<js_sys::Float64Array>() {
+            Some(Array::from(v).to_vec())
+        } else if Array::is_array(v) {
+            let a: &Array = v.unchecked_ref();
+            if a.length() == 16 {
+                Some(a.to_vec())
+            } else {
+                None
+            }
         } else {
             None
-        }
-    } else {
-        None
-    };
+        };
     let Some(flat) = flat else { return Ok(None) };
     if flat.len() != 16 {
         return Err(JsError::new(&format!(
@@ -251,7 +291,11 @@ fn column_major_16(v: &JsValue) -> Result<Option<[f64; 16]>, JsError> {
     }
     let mut out = [0.0; 16];
     for (i, (o, x)) in out.iter_mut().zip(&flat).enumerate() {
-        *o = x.as_f64().ok_or_else(|| JsError::new(&format!("invalid options: initialTransform[{i}] is not a number")))?;
+        *o = x.as_f64().ok_or_else(|| {
+            JsError::new(&format!(
+                "invalid options: initialTransform[{i}] is not a number"
+            ))
+        })?;
     }
     Ok(Some(out))
 }
