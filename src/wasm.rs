@@ -17,6 +17,11 @@ use crate::{transform, Options, PointCloud};
 use js_sys::{Array, Float32Array, Object, Reflect};
 use wasm_bindgen::prelude::*;
 
+/// The documented option and result types (`RegisterOptions`, `RegistrationResult`, ...),
+/// hand-written in `js/arps-types.d.ts` and appended to the generated `arps.d.ts`.
+#[wasm_bindgen(typescript_custom_section)]
+const TS_TYPES: &'static str = include_str!("../js/arps-types.d.ts");
+
 #[wasm_bindgen]
 extern "C" {
     #[wasm_bindgen(js_namespace = performance, js_name = now)]
@@ -100,12 +105,14 @@ impl Registrar {
     /// Registers `source` onto `target` (packed xyz, same units) and returns the transform
     /// mapping source points into the target frame, with quality figures. `options` is a plain
     /// object (or `undefined`/`null`) mirroring the core `Options`; unknown fields throw.
+    #[wasm_bindgen(unchecked_return_type = "RegistrationResult")]
     pub fn register(
         &mut self,
         source: &[f32],
         target: &[f32],
-        options: JsValue,
+        #[wasm_bindgen(unchecked_param_type = "RegisterOptions")] options: Option<JsValue>,
     ) -> Result<JsValue, JsError> {
+        let options = options.unwrap_or(JsValue::UNDEFINED);
         let options = parse_options(options)?;
         let source = PointCloud::from_xyz(source).map_err(|e| prefixed("source", e))?;
         let target = PointCloud::from_xyz(target).map_err(|e| prefixed("target", e))?;
@@ -141,13 +148,13 @@ impl Registrar {
 
     /// How the loaded weights were made (the weights file's provenance JSON), e.g.
     /// `{ kind: "random", seed: 0 }` for untrained placeholder weights.
-    #[wasm_bindgen(getter)]
+    #[wasm_bindgen(getter, unchecked_return_type = "ModelProvenance")]
     pub fn provenance(&self) -> Result<JsValue, JsError> {
         to_js(self.inner.provenance())
     }
 
     /// The network configuration of the loaded weights (sizes, preset name).
-    #[wasm_bindgen(getter, js_name = modelConfig)]
+    #[wasm_bindgen(getter, js_name = modelConfig, unchecked_return_type = "ModelConfig")]
     pub fn model_config(&self) -> Result<JsValue, JsError> {
         to_js(&self.inner.model().config)
     }

@@ -20,7 +20,7 @@ fn errors(result: &JsValue) -> (f64, f64) {
 }
 
 fn register_ok(r: &mut Registrar, options: JsValue) -> JsValue {
-    match r.register(&source(), &target(), options) {
+    match r.register(&source(), &target(), Some(options)) {
         Ok(v) => v,
         Err(e) => panic!("register failed: {}", message(e)),
     }
@@ -187,7 +187,7 @@ fn nan_points_can_be_dropped() {
     src[3 * 10 + 1] = f32::NAN;
     src[3 * 20] = f32::INFINITY;
     let res = r
-        .register(&src, &target(), options(r#"{"nonFinite": "drop"}"#))
+        .register(&src, &target(), Some(options(r#"{"nonFinite": "drop"}"#)))
         .map_err(message)
         .unwrap();
     let (rot, tr) = errors(&res);
@@ -202,7 +202,7 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     let tgt = target();
     let expect_err = |r: &mut Registrar, s: &[f32], t: &[f32], o: JsValue, needle: &str| {
         let e = r
-            .register(s, t, o)
+            .register(s, t, Some(o))
             .err()
             .map(message)
             .unwrap_or_else(|| panic!("expected an error containing {needle:?}"));
@@ -446,7 +446,7 @@ fn custom_weights_from_bytes_match_the_default_model() {
         Some("random")
     );
     let res = t
-        .register(&source(), &target(), JsValue::UNDEFINED)
+        .register(&source(), &target(), None)
         .map_err(message)
         .unwrap();
     assert!(arps::transform::check_rigid(&matrix(&res, "matrix"), 1e-3).is_ok());
@@ -472,10 +472,7 @@ fn parse_point_cloud_reads_real_bytes() {
     let tgt = parse_point_cloud(TARGET_PLY, "target.ply")
         .map_err(message)
         .unwrap();
-    let res = r
-        .register(&got, &tgt, JsValue::UNDEFINED)
-        .map_err(message)
-        .unwrap();
+    let res = r.register(&got, &tgt, None).map_err(message).unwrap();
     let (rot, tr) = errors(&res);
     assert!(rot < 1.0 && tr < 0.02, "{rot:.3} deg, {tr:.4}");
 }
