@@ -54,7 +54,7 @@ fn js_clock() -> crate::timing::Clock {
 /// Installs the panic hook once, so that a core bug (a panic) at least prints its message to
 /// the console before the instance traps. Runs when the module is instantiated.
 #[wasm_bindgen(start)]
-pub fn start() {
+fn start() {
     console_error_panic_hook::set_once();
 }
 
@@ -72,7 +72,10 @@ pub fn version() -> String {
 /// file name's extension, else it is sniffed from the content; mesh formats give their
 /// vertices. Returns packed xyz (`[x0, y0, z0, x1, ...]`). Throws on unreadable input.
 #[wasm_bindgen(js_name = parsePointCloud)]
-pub fn parse_point_cloud(bytes: &[u8], file_name: &str) -> Result<Vec<f32>, JsError> {
+pub fn parse_point_cloud(
+    bytes: &[u8],
+    #[wasm_bindgen(js_name = "fileName")] file_name: &str,
+) -> Result<Vec<f32>, JsError> {
     let cloud = crate::io::read_point_cloud(bytes, file_name).map_err(js_err)?;
     Ok(cloud.to_xyz())
 }
@@ -110,7 +113,9 @@ impl Registrar {
         &mut self,
         source: &[f32],
         target: &[f32],
-        #[wasm_bindgen(unchecked_param_type = "RegisterOptions")] options: Option<JsValue>,
+        #[wasm_bindgen(unchecked_optional_param_type = "RegisterOptions | null")] options: Option<
+            JsValue,
+        >,
     ) -> Result<JsValue, JsError> {
         let options = options.unwrap_or(JsValue::UNDEFINED);
         let options = parse_options(options)?;
