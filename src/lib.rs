@@ -19,6 +19,8 @@
 #![warn(missing_docs)]
 
 pub mod cloud;
+#[cfg(feature = "cli")]
+pub mod data;
 pub mod error;
 pub mod gmr;
 pub mod icp;
