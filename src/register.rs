@@ -22,6 +22,10 @@ pub struct Options {
     pub seed: u64,
     /// Refinement after the network. Default [`IcpKind::Plane`] (point-to-plane).
     pub icp: IcpKind,
+    /// Run the network. Default `true`. With `false` the coarse estimate is the initial transform
+    /// (identity unless [`Options::initial_transform`] is set) and only ICP runs: the classical
+    /// baseline, or a refinement when a good initial guess is known.
+    pub network: bool,
     /// ICP's final max correspondence distance, in the **user's units**. Default `None`: 0.025
     /// normalised units (2.5% of the clouds' shared half-extent). ICP runs coarse to fine at
     /// 4x, 2x and 1x this distance; `fitness` and `inlier_rmse` are measured at 1x.
@@ -44,6 +48,7 @@ impl Default for Options {
             network_points: None,
             seed: 0,
             icp: IcpKind::Plane,
+            network: true,
             max_correspondence_distance: None,
             icp_max_iterations: 30,
             voxel_size: None,
