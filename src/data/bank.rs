@@ -91,7 +91,12 @@ pub fn check_mesh(mesh: &Mesh) -> Result<(), String> {
 fn is_mesh_file(p: &Path) -> bool {
     p.extension()
         .and_then(|e| e.to_str())
-        .map(|e| matches!(e.to_ascii_lowercase().as_str(), "obj" | "off" | "ply" | "stl"))
+        .map(|e| {
+            matches!(
+                e.to_ascii_lowercase().as_str(),
+                "obj" | "off" | "ply" | "stl"
+            )
+        })
         .unwrap_or(false)
 }
 

@@ -60,12 +60,19 @@ pub fn parse(text: &str) -> Result<Vec<Entry>, String> {
     let mut out = Vec::new();
     for (ln, line) in text.lines().enumerate() {
         let line = line.trim_end_matches('\r');
-        if line.trim().is_empty() || line.starts_with('#') || (ln == 0 && line.starts_with("name\t")) {
+        if line.trim().is_empty()
+            || line.starts_with('#')
+            || (ln == 0 && line.starts_with("name\t"))
+        {
             continue;
         }
         let cols: Vec<&str> = line.split('\t').collect();
         if cols.len() != 6 {
-            return Err(format!("line {}: {} tab-separated columns, expected 6", ln + 1, cols.len()));
+            return Err(format!(
+                "line {}: {} tab-separated columns, expected 6",
+                ln + 1,
+                cols.len()
+            ));
         }
         let overlap_threshold = cols[3]
             .trim()
@@ -77,7 +84,11 @@ pub fn parse(text: &str) -> Result<Vec<Entry>, String> {
             .collect::<Result<_, _>>()
             .map_err(|e| format!("line {}: transform: {e}", ln + 1))?;
         if nums.len() != 16 {
-            return Err(format!("line {}: transform has {} numbers, expected 16", ln + 1, nums.len()));
+            return Err(format!(
+                "line {}: transform has {} numbers, expected 16",
+                ln + 1,
+                nums.len()
+            ));
         }
         let t = Matrix4::from_fn(|r, c| nums[r * 4 + c]);
         transform::check_rigid(&t, 1e-3).map_err(|e| format!("line {}: transform: {e}", ln + 1))?;

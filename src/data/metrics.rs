@@ -68,7 +68,10 @@ pub fn summarize(errors: &[PairError], times_ms: &[f64], rot_thr: f64, trans_thr
             s / c as f64
         }
     };
-    let rec: Vec<&PairError> = errors.iter().filter(|e| recalled(e, rot_thr, trans_thr)).collect();
+    let rec: Vec<&PairError> = errors
+        .iter()
+        .filter(|e| recalled(e, rot_thr, trans_thr))
+        .collect();
     Summary {
         pairs: n,
         mre: mean(&mut errors.iter().map(|e| e.rot_deg)),
@@ -108,7 +111,10 @@ const COLORS: [&str; 8] = [
 ];
 
 fn escape(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
 }
 
 /// Two panels side by side: recall vs rotation threshold (0..`rot_max` degrees, translation held
@@ -134,8 +140,18 @@ pub fn recall_svg(
     );
     let steps = 120;
     let panels = [
-        (ml, rot_max, format!("rotation threshold (deg), TE < {trans_thr}"), true),
-        (ml + pw + gap, trans_max, format!("translation threshold, RE < {rot_thr} deg"), false),
+        (
+            ml,
+            rot_max,
+            format!("rotation threshold (deg), TE < {trans_thr}"),
+            true,
+        ),
+        (
+            ml + pw + gap,
+            trans_max,
+            format!("translation threshold, RE < {rot_thr} deg"),
+            false,
+        ),
     ];
     for (x0, max, label, is_rot) in panels {
         let y0 = mt;

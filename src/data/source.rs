@@ -9,9 +9,9 @@
 //!   `(split, index)`, so a validation set is a fixed list and a training stream is reproducible.
 
 use super::bank::{split_of, Bank, NamedMesh};
+use super::mix;
 use super::pairs::{make_pair, Pair, PairParams};
 use super::shapes::{generate, Category, CATEGORIES};
-use super::mix;
 use crate::io::Mesh;
 use crate::Result;
 use std::borrow::Cow;
@@ -120,7 +120,7 @@ impl ShapeSource {
         let bank = self.bank(split);
         let h = mix(index, split.tag());
         let use_bank = !bank.is_empty()
-            && (!self.procedural || (h >> 11) as f64 / (1u64 << 53) as f64 < self.bank_fraction);
+            && (!self.procedural || ((h >> 11) as f64 / (1u64 << 53) as f64) < self.bank_fraction);
         if use_bank {
             let m = &bank[(mix(h, 0xBA4C) % bank.len() as u64) as usize];
             return Ok(ShapeRef {
@@ -144,6 +144,11 @@ impl ShapeSource {
     /// `mix(index, split)`.
     pub fn pair(&self, split: Split, index: u64, params: &PairParams) -> Result<Pair> {
         let shape = self.shape(split, index)?;
-        make_pair(&shape.mesh, &shape.name, params, mix(index, split.tag() ^ 0x9A12))
+        make_pair(
+            &shape.mesh,
+            &shape.name,
+            params,
+            mix(index, split.tag() ^ 0x9A12),
+        )
     }
 }

@@ -249,7 +249,8 @@ pub fn triangulate(poly: &[[f64; 2]]) -> Vec<[usize; 3]> {
     let cross = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
         ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])) * orient
     };
-    let inside = |p: [f64; 2], a, b, c| cross(a, b, p) > 0.0 && cross(b, c, p) > 0.0 && cross(c, a, p) > 0.0;
+    let inside =
+        |p: [f64; 2], a, b, c| cross(a, b, p) > 0.0 && cross(b, c, p) > 0.0 && cross(c, a, p) > 0.0;
     let mut idx: Vec<usize> = (0..n).collect();
     let mut out = Vec::with_capacity(n - 2);
     let mut guard = 0;
@@ -300,7 +301,8 @@ pub fn extrude(outline: &[[f64; 2]], depth: f64) -> Mesh {
     for t in triangulate(outline) {
         let t = t.map(|i| i as u32);
         m.triangles.push([t[0], t[2], t[1]]);
-        m.triangles.push([t[0] + n as u32, t[1] + n as u32, t[2] + n as u32]);
+        m.triangles
+            .push([t[0] + n as u32, t[1] + n as u32, t[2] + n as u32]);
     }
     for i in 0..n {
         let j = (i + 1) % n;
@@ -347,7 +349,10 @@ pub fn open_box(s: [f64; 3], t: f64) -> Mesh {
         sh.add_at(slab([t, s[1], h]), [sx * (s[0] - t) * 0.5, 0.0, t]);
     }
     for sy in [-1.0, 1.0] {
-        sh.add_at(slab([s[0] - 2.0 * t, t, h]), [0.0, sy * (s[1] - t) * 0.5, t]);
+        sh.add_at(
+            slab([s[0] - 2.0 * t, t, h]),
+            [0.0, sy * (s[1] - t) * 0.5, t],
+        );
     }
     sh.mesh
 }

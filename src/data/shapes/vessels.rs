@@ -29,7 +29,13 @@ pub fn bottle(r: &mut Dice) -> Mesh {
     let hs = r.u(0.02, 0.08);
     let hn = r.u(0.03, 0.09);
     let waist = r.u(0.85, 1.0);
-    let mut prof = vec![(0.0, 0.0), (rb * 0.92, 0.0), (rb, 0.01), (rb * waist, hb * 0.5), (rb, hb)];
+    let mut prof = vec![
+        (0.0, 0.0),
+        (rb * 0.92, 0.0),
+        (rb, 0.01),
+        (rb * waist, hb * 0.5),
+        (rb, hb),
+    ];
     let steps = 5;
     for k in 1..=steps {
         let a = k as f64 / steps as f64 * FRAC_PI_2;
@@ -41,7 +47,10 @@ pub fn bottle(r: &mut Dice) -> Mesh {
         // a cap
         prof.push((0.0, hb + hs + hn));
         s.add_at(lathe(&prof, seg, false), [0.0; 3]);
-        s.add_at(cylinder(rn * 1.15, r.u(0.01, 0.03), seg), [0.0, 0.0, hb + hs + hn]);
+        s.add_at(
+            cylinder(rn * 1.15, r.u(0.01, 0.03), seg),
+            [0.0, 0.0, hb + hs + hn],
+        );
     } else {
         prof.push((rn * 1.1, hb + hs + hn + 0.005));
         prof.push((0.0, hb + hs + hn + 0.005));
@@ -84,11 +93,17 @@ pub fn bowl(r: &mut Dice) -> Mesh {
     if r.chance(0.3) {
         // two small lug handles
         for sx in [-1.0, 1.0] {
-            s.add_at(cuboid([0.03, 0.04, 0.008]), [sx * (rr + 0.012), 0.0, h - 0.01]);
+            s.add_at(
+                cuboid([0.03, 0.04, 0.008]),
+                [sx * (rr + 0.012), 0.0, h - 0.01],
+            );
         }
     } else if r.chance(0.3) {
         // a spout
-        s.add(frustum(0.015, 0.008, 0.05, 10), &(translate([rr * 0.95, 0.0, h * 0.85]) * rotate(1, 1.2)));
+        s.add(
+            frustum(0.015, 0.008, 0.05, 10),
+            &(translate([rr * 0.95, 0.0, h * 0.85]) * rotate(1, 1.2)),
+        );
     }
     s.mesh
 }
@@ -140,12 +155,21 @@ pub fn cup(r: &mut Dice) -> Mesh {
     let tube = r.u(0.004, 0.008);
     s.add(
         torus(hr, tube, PI, 12, 8),
-        &(translate([rt * (1.0 + bulge * 0.5) - 0.002, 0.0, h * 0.55]) * rotate(0, FRAC_PI_2) * rotate(2, -FRAC_PI_2)),
+        &(translate([rt * (1.0 + bulge * 0.5) - 0.002, 0.0, h * 0.55])
+            * rotate(0, FRAC_PI_2)
+            * rotate(2, -FRAC_PI_2)),
     );
     if r.chance(0.3) {
         // a saucer
         let sr = rt * r.u(1.6, 2.0);
-        s.add_at(shell(&[(0.0, -0.012), (sr * 0.5, -0.012), (sr, -0.002)], 0.004, seg), [0.0; 3]);
+        s.add_at(
+            shell(
+                &[(0.0, -0.012), (sr * 0.5, -0.012), (sr, -0.002)],
+                0.004,
+                seg,
+            ),
+            [0.0; 3],
+        );
     }
     s.mesh
 }
@@ -155,7 +179,11 @@ pub fn flower_pot(r: &mut Dice) -> Mesh {
     let h = r.u(0.12, 0.35);
     let rt = h * r.u(0.4, 0.7);
     let rb = rt * r.u(0.6, 0.9);
-    let seg = if r.chance(0.2) { 4 } else { r.pick(&[12, 16, 24]) };
+    let seg = if r.chance(0.2) {
+        4
+    } else {
+        r.pick(&[12, 16, 24])
+    };
     let mut outer = vec![(0.0, 0.0), (rb, 0.0), (rt, h)];
     if r.chance(0.6) {
         // a rim
@@ -170,9 +198,9 @@ pub fn flower_pot(r: &mut Dice) -> Mesh {
     // the plant: a bush, a few stems with leaves, or a tall single stem
     match r.int(0, 2) {
         0 => {
-            let bh = h * r.u(0.8, 2.0);
+            let bh = h * r.u(0.5, 1.6);
             s.add_at(
-                ellipsoid([rt * r.u(0.8, 1.4), rt * r.u(0.8, 1.4), bh * 0.5], 14),
+                ellipsoid([rt * r.u(0.5, 1.1), rt * r.u(0.5, 1.1), bh * 0.5], 14),
                 [r.u(-0.2, 0.2) * rt, r.u(-0.2, 0.2) * rt, top + bh * 0.45],
             );
         }
@@ -195,7 +223,18 @@ pub fn flower_pot(r: &mut Dice) -> Mesh {
             let len = h * r.u(1.5, 3.0);
             let tip = [r.u(-0.1, 0.1) * len, r.u(-0.1, 0.1) * len, top + len];
             s.add_at(rod([0.0, 0.0, top], tip, 0.006, 8), [0.0; 3]);
-            s.add_at(ellipsoid([len * 0.2, len * 0.2, len * 0.15], 12), tip);
+            let br = len * r.u(0.08, 0.16);
+            s.add_at(ellipsoid([br, br * r.u(0.7, 1.3), br * 0.8], 12), tip);
+            // a few leaves along the stem
+            for _ in 0..r.int(0, 4) {
+                let f = r.u(0.2, 0.8);
+                let at = [tip[0] * f, tip[1] * f, top + (tip[2] - top) * f];
+                let leaf = ellipsoid([len * 0.12, len * 0.04, 0.004], 10);
+                s.add(
+                    leaf,
+                    &(translate(at) * rotate(2, r.u(0.0, 2.0 * PI)) * rotate(1, -0.5)),
+                );
+            }
         }
     }
     s.mesh
@@ -210,18 +249,33 @@ pub fn lamp(r: &mut Dice) -> Mesh {
         let br = h * r.u(0.1, 0.2);
         s.add_at(cylinder(br, h * 0.03, seg), [0.0; 3]);
         let stem_top = h * 0.8;
-        s.add_at(rod([0.0, 0.0, 0.0], [0.0, 0.0, stem_top], h * 0.012, 10), [0.0; 3]);
+        s.add_at(
+            rod([0.0, 0.0, 0.0], [0.0, 0.0, stem_top], h * 0.012, 10),
+            [0.0; 3],
+        );
         let sh = h * r.u(0.18, 0.3);
         let sr0 = sh * r.u(0.7, 1.2);
         let sr1 = sr0 * r.u(0.45, 0.9);
         let t = 0.004;
-        let prof = [(sr0, 0.0), (sr1, sh), (sr1 - t, sh), (sr0 - t, 0.0), (sr0, 0.0)];
+        let prof = [
+            (sr0, 0.0),
+            (sr1, sh),
+            (sr1 - t, sh),
+            (sr0 - t, 0.0),
+            (sr0, 0.0),
+        ];
         // the shade may be tilted (reading lamp)
         let tilt = if r.chance(0.3) { r.u(0.2, 0.6) } else { 0.0 };
-        s.add(lathe(&prof, seg, false), &(translate([0.0, 0.0, stem_top - sh * 0.4]) * rotate(1, tilt)));
+        s.add(
+            lathe(&prof, seg, false),
+            &(translate([0.0, 0.0, stem_top - sh * 0.4]) * rotate(1, tilt)),
+        );
         if r.chance(0.5) {
             // a pull switch or a second arm to one side
-            s.add_at(rod([0.0, 0.0, h * 0.5], [h * 0.15, 0.0, h * 0.6], h * 0.008, 6), [0.0; 3]);
+            s.add_at(
+                rod([0.0, 0.0, h * 0.5], [h * 0.15, 0.0, h * 0.6], h * 0.008, 6),
+                [0.0; 3],
+            );
         }
     } else {
         // desk lamp: base, two-segment arm, conical head
@@ -245,7 +299,15 @@ pub fn lamp(r: &mut Dice) -> Mesh {
         s.add(head, &(translate(j2) * rotate(1, PI - r.u(0.0, 0.7))));
         if r.chance(0.5) {
             // a spring alongside the lower arm
-            s.add_at(rod([0.02, 0.02, 0.05], [j1[0] * 0.8 + 0.02, 0.02, j1[2] * 0.8], 0.004, 6), [0.0; 3]);
+            s.add_at(
+                rod(
+                    [0.02, 0.02, 0.05],
+                    [j1[0] * 0.8 + 0.02, 0.02, j1[2] * 0.8],
+                    0.004,
+                    6,
+                ),
+                [0.0; 3],
+            );
         }
     }
     s.mesh
