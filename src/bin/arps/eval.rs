@@ -307,10 +307,25 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         "{:<26} {:>9} {:>8} {:>7} {:>9} {:>8} {:>9} {:>6}",
         "method", "MRE(deg)", "MTE", "Recall", "RRE(deg)", "RTE", "ms/pair", "failed"
     );
+    // RRE/RTE are undefined (NaN) when nothing is recalled: print "-"
+    let num = |v: f64, prec: usize| {
+        if v.is_nan() {
+            "-".to_string()
+        } else {
+            format!("{v:.prec$}")
+        }
+    };
     for (n, _, s, f) in &per_method {
         println!(
-            "{:<26} {:>9.3} {:>8.4} {:>7.4} {:>9.3} {:>8.4} {:>9.1} {:>6}",
-            n, s.mre, s.mte, s.recall, s.rre, s.rte, s.ms_per_pair, f
+            "{:<26} {:>9} {:>8} {:>7.4} {:>9} {:>8} {:>9.1} {:>6}",
+            n,
+            num(s.mre, 3),
+            num(s.mte, 4),
+            s.recall,
+            num(s.rre, 3),
+            num(s.rte, 4),
+            s.ms_per_pair,
+            f
         );
     }
     for r in &results {

@@ -105,7 +105,11 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
             std::fs::write(&path, io::write_ply_binary(&PointCloud::new(pts.clone())))
                 .map_err(|e| format!("{}: {e}", path.display()))?;
         }
-        let name = format!("{stem}-{}", pair.shape.replace('/', "-"));
+        let short = pair
+            .shape
+            .strip_prefix("procedural/")
+            .unwrap_or(&pair.shape);
+        let name = format!("{stem}-{}", short.replace('/', "-"));
         entries.push(Entry {
             name: name.clone(),
             source: sf,
