@@ -76,7 +76,7 @@ pub fn check_mesh(mesh: &Mesh) -> Result<(), String> {
     let ext: Vec<f64> = (0..3).map(|a| hi[a] - lo[a]).collect();
     let max = ext.iter().copied().fold(0.0, f64::max);
     let min = ext.iter().copied().fold(f64::INFINITY, f64::min);
-    if !(min >= FLAT_RATIO * max) {
+    if min.is_nan() || min < FLAT_RATIO * max {
         return Err(format!(
             "flat: bounding box {:.3} x {:.3} x {:.3}, smallest extent below {}% of the largest",
             ext[0],
