@@ -53,7 +53,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
     let (hn, htoks) = next_tokens(&mut lines)?.ok_or_else(|| Error::parse(F, "the file is empty"))?;
     let mut count_toks: Vec<String> = Vec::new();
     let count_line;
-    if htoks[0].starts_with(|c: char| c.is_ascii_digit()) {
+    if htoks[0].chars().all(|c| c.is_ascii_digit()) {
         // No header keyword: the counts come first.
         count_line = hn;
         count_toks.extend(htoks.iter().map(|s| s.to_string()));
