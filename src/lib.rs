@@ -30,6 +30,7 @@ pub mod nn;
 pub mod normals;
 pub mod register;
 pub mod sampling;
+pub mod spatial;
 pub mod timing;
 pub mod transform;
 pub mod weights;
