@@ -49,7 +49,6 @@ pub struct IcpResult {
     pub converged: bool,
 }
 
-
 impl IcpParams {
     /// Open3D's defaults for a given distance: point-to-plane, 30 iterations, relative
     /// fitness and RMSE changes of 1e-6.
@@ -183,7 +182,11 @@ impl IcpTarget {
         if params.kind == IcpKind::Off || scratch.moved.is_empty() {
             return result;
         }
-        let target_normals = if params.kind == IcpKind::Plane { Some(self.normals()) } else { None };
+        let target_normals = if params.kind == IcpKind::Plane {
+            Some(self.normals())
+        } else {
+            None
+        };
         let mut t = *init;
         for it in 1..=params.max_iterations {
             let update = match target_normals {
@@ -199,7 +202,8 @@ impl IcpTarget {
             let (f, r) = self.correspond(source, &t, d, &mut scratch);
             result.iterations = it;
             result.T_target_source = t;
-            let done = (f - fitness).abs() < params.relative_fitness && (r - rmse).abs() < params.relative_rmse;
+            let done = (f - fitness).abs() < params.relative_fitness
+                && (r - rmse).abs() < params.relative_rmse;
             fitness = f;
             rmse = r;
             result.fitness = f;
@@ -227,7 +231,13 @@ impl IcpTarget {
 
     /// One correspondence pass: fills `scratch` with the inlier pairs and returns
     /// `(fitness, inlier_rmse)`.
-    fn correspond(&self, source: &[[f32; 3]], t: &Matrix4<f64>, max_distance: f64, scratch: &mut Scratch) -> (f64, f64) {
+    fn correspond(
+        &self,
+        source: &[[f32; 3]],
+        t: &Matrix4<f64>,
+        max_distance: f64,
+        scratch: &mut Scratch,
+    ) -> (f64, f64) {
         scratch.moved.clear();
         scratch.target.clear();
         if source.is_empty() || self.index.is_empty() || !(max_distance > 0.0) {
@@ -240,9 +250,13 @@ impl IcpTarget {
         for s in source {
             let p = r * Vector3::new(s[0] as f64, s[1] as f64, s[2] as f64) + tr;
             let q32 = [p.x as f32, p.y as f32, p.z as f32];
-            let Some((j, _)) = self.index.nearest(&q32) else { continue };
+            let Some((j, _)) = self.index.nearest(&q32) else {
+                continue;
+            };
             let q = self.points[j];
-            let d2 = (p.x - q[0] as f64).powi(2) + (p.y - q[1] as f64).powi(2) + (p.z - q[2] as f64).powi(2);
+            let d2 = (p.x - q[0] as f64).powi(2)
+                + (p.y - q[1] as f64).powi(2)
+                + (p.z - q[2] as f64).powi(2);
             if d2 < max2 {
                 sum2 += d2;
                 scratch.moved.push([p.x, p.y, p.z]);
@@ -253,15 +267,21 @@ impl IcpTarget {
         if inliers == 0 {
             return (0.0, 0.0);
         }
-        (inliers as f64 / source.len() as f64, (sum2 / inliers as f64).sqrt())
+        (
+            inliers as f64 / source.len() as f64,
+            (sum2 / inliers as f64).sqrt(),
+        )
     }
 
     /// Point-to-point update: Kabsch on the current inlier pairs.
     fn point_update(&self, scratch: &mut Scratch) -> Option<Matrix4<f64>> {
         scratch.target_xyz.clear();
-        scratch
-            .target_xyz
-            .extend(scratch.target.iter().map(|&j| self.points[j].map(|v| v as f64)));
+        scratch.target_xyz.extend(
+            scratch
+                .target
+                .iter()
+                .map(|&j| self.points[j].map(|v| v as f64)),
+        );
         Some(gmr::kabsch(&scratch.moved, &scratch.target_xyz, None))
     }
 

@@ -48,7 +48,10 @@ impl KdIndex {
     #[inline]
     pub fn nearest(&self, q: &[f32; 3]) -> Option<(usize, f32)> {
         let tree = self.tree.as_ref()?;
-        let r = tree.query(q).nearest_one::<SquaredEuclidean<f32>>().execute();
+        let r = tree
+            .query(q)
+            .nearest_one::<SquaredEuclidean<f32>>()
+            .execute();
         Some((r.item as usize, r.distance))
     }
 
@@ -59,7 +62,10 @@ impl KdIndex {
         let (Some(tree), Some(k)) = (self.tree.as_ref(), NonZeroUsize::new(k.min(self.len))) else {
             return;
         };
-        let found = tree.query(q).nearest_n::<SquaredEuclidean<f32>>(k).execute();
+        let found = tree
+            .query(q)
+            .nearest_n::<SquaredEuclidean<f32>>(k)
+            .execute();
         out.extend(found.iter().map(|r| r.item as usize));
     }
 }
@@ -79,12 +85,17 @@ mod tests {
         let pts: Vec<[f32; 3]> = (0..500)
             .map(|i| {
                 let f = i as f32;
-                [(f * 0.37).sin() * 3.0, (f * 0.11).cos() * 2.0, (f * 0.05).sin()]
+                [
+                    (f * 0.37).sin() * 3.0,
+                    (f * 0.11).cos() * 2.0,
+                    (f * 0.05).sin(),
+                ]
             })
             .collect();
         let idx = KdIndex::new(&pts);
         assert_eq!(idx.len(), 500);
-        let d2 = |a: &[f32; 3], b: &[f32; 3]| (0..3).map(|k| (a[k] - b[k]) * (a[k] - b[k])).sum::<f32>();
+        let d2 =
+            |a: &[f32; 3], b: &[f32; 3]| (0..3).map(|k| (a[k] - b[k]) * (a[k] - b[k])).sum::<f32>();
         let mut out = Vec::new();
         for q in [[0.1f32, 0.2, 0.3], [3.0, -2.0, 1.0], [-10.0, 0.0, 0.0]] {
             let (i, d) = idx.nearest(&q).unwrap();

@@ -275,3 +275,16 @@ fn shape_source_splits_by_shape() {
         "bank fraction off: {seen_bank}/300"
     );
 }
+
+#[test]
+fn network_sample_draws_from_the_engine_clouds() {
+    let mesh = generate(Category::Cup, 0);
+    let pair = make_pair(&mesh, "cup", &PairParams::default(), 2).unwrap();
+    let e = pair.engine_frames();
+    let (s, t) = e.network_sample(512, 7);
+    assert_eq!((s.len(), t.len()), (512, 512));
+    assert!(s.points.iter().all(|p| e.source.points.contains(p)));
+    assert!(t.points.iter().all(|p| e.target.points.contains(p)));
+    assert_eq!(e.network_sample(512, 7), (s.clone(), t));
+    assert_ne!(e.network_sample(512, 8).0, s);
+}

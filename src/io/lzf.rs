@@ -29,11 +29,17 @@ pub(crate) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, String
         } else {
             let mut len = ctrl >> 5;
             if len == 7 {
-                len += *input.get(i).ok_or_else(|| format!("a back-reference at compressed byte {at} is cut off"))? as usize;
+                len += *input
+                    .get(i)
+                    .ok_or_else(|| format!("a back-reference at compressed byte {at} is cut off"))?
+                    as usize;
                 i += 1;
             }
             len += 2;
-            let low = *input.get(i).ok_or_else(|| format!("a back-reference at compressed byte {at} is cut off"))? as usize;
+            let low = *input
+                .get(i)
+                .ok_or_else(|| format!("a back-reference at compressed byte {at} is cut off"))?
+                as usize;
             i += 1;
             let back = ((ctrl & 0x1f) << 8) + low + 1;
             if back > out.len() {
@@ -58,7 +64,10 @@ pub(crate) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, String
         }
     }
     if out.len() != out_len {
-        return Err(format!("the data decompresses to {} bytes, but the header declares {out_len}", out.len()));
+        return Err(format!(
+            "the data decompresses to {} bytes, but the header declares {out_len}",
+            out.len()
+        ));
     }
     Ok(out)
 }
@@ -74,7 +83,9 @@ mod tests {
         assert_eq!(decompress(&data, 9).unwrap(), b"abcabcabc");
         assert!(decompress(&data, 8).is_err());
         assert!(decompress(&data, 10).is_err());
-        assert!(decompress(&[0x20, 5], 3).unwrap_err().contains("before the start"));
+        assert!(decompress(&[0x20, 5], 3)
+            .unwrap_err()
+            .contains("before the start"));
         assert!(decompress(&[5, 1], 6).unwrap_err().contains("past the end"));
         assert!(decompress(&[0xe0], 9).unwrap_err().contains("cut off"));
     }

@@ -73,7 +73,9 @@ impl Mesh {
         let mut points = Vec::with_capacity(n.min(1 << 20));
         for _ in 0..n {
             let u = rng.random::<f64>() * total;
-            let k = cumulative.partition_point(|&c| c <= u).min(chosen.len() - 1);
+            let k = cumulative
+                .partition_point(|&c| c <= u)
+                .min(chosen.len() - 1);
             let [a, b, c] = chosen[k];
             let s = rng.random::<f64>().sqrt();
             let r2 = rng.random::<f64>();

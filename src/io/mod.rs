@@ -107,12 +107,19 @@ pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
 }
 
 fn sniff(bytes: &[u8]) -> Option<Format> {
-    let first = bytes.split(|&b| b == b'\n').next().unwrap_or_default().trim_ascii();
+    let first = bytes
+        .split(|&b| b == b'\n')
+        .next()
+        .unwrap_or_default()
+        .trim_ascii();
     if first == b"ply" {
         return Some(Format::Ply);
     }
     // PCD: a "# .PCD" comment or a VERSION / FIELDS line before anything else.
-    for line in bytes[..bytes.len().min(4096)].split(|&b| b == b'\n').take(20) {
+    for line in bytes[..bytes.len().min(4096)]
+        .split(|&b| b == b'\n')
+        .take(20)
+    {
         let l = line.trim_ascii();
         if l.starts_with(b"# .PCD") {
             return Some(Format::Pcd);
@@ -184,7 +191,15 @@ pub fn write_ply_binary(cloud: &PointCloud) -> Vec<u8> {
 /// Reads a point cloud from a file (native only); the format comes from the file name.
 #[cfg(not(target_arch = "wasm32"))]
 pub fn read_path(path: &std::path::Path) -> Result<PointCloud> {
-    let bytes = std::fs::read(path).map_err(|e| Error::Io(std::io::Error::new(e.kind(), format!("{}: {e}", path.display()))))?;
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let bytes = std::fs::read(path).map_err(|e| {
+        Error::Io(std::io::Error::new(
+            e.kind(),
+            format!("{}: {e}", path.display()),
+        ))
+    })?;
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     read_point_cloud(&bytes, &name)
 }

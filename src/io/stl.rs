@@ -87,7 +87,14 @@ fn read_binary(bytes: &[u8]) -> Result<Mesh> {
     for rec in bytes[84..84 + 50 * n].chunks_exact(50) {
         let v = |k: usize| {
             let o = 12 + 12 * k;
-            [0, 1, 2].map(|a| f32::from_le_bytes([rec[o + 4 * a], rec[o + 4 * a + 1], rec[o + 4 * a + 2], rec[o + 4 * a + 3]]))
+            [0, 1, 2].map(|a| {
+                f32::from_le_bytes([
+                    rec[o + 4 * a],
+                    rec[o + 4 * a + 1],
+                    rec[o + 4 * a + 2],
+                    rec[o + 4 * a + 3],
+                ])
+            })
         };
         let t = [w.add(v(0)), w.add(v(1)), w.add(v(2))];
         triangles.push(t);
@@ -111,27 +118,39 @@ fn read_ascii(bytes: &[u8]) -> Result<Mesh> {
             "solid" | "endsolid" | "facet" | "endfacet" => {}
             "outer" => {
                 if let Some((start, _)) = loop_ {
-                    return Err(Error::parse(F, format!("line {n}: 'outer loop' inside the loop opened at line {start}")));
+                    return Err(Error::parse(
+                        F,
+                        format!("line {n}: 'outer loop' inside the loop opened at line {start}"),
+                    ));
                 }
                 loop_ = Some((n, Vec::with_capacity(3)));
             }
             "vertex" => {
                 let Some((_, corners)) = loop_.as_mut() else {
-                    return Err(Error::parse(F, format!("line {n}: 'vertex' outside an 'outer loop'")));
+                    return Err(Error::parse(
+                        F,
+                        format!("line {n}: 'vertex' outside an 'outer loop'"),
+                    ));
                 };
                 let mut p = [0.0f32; 3];
                 for (a, v) in p.iter_mut().enumerate() {
                     let axis = ["x", "y", "z"][a];
-                    let tok = t
-                        .next()
-                        .ok_or_else(|| Error::parse(F, format!("line {n}: vertex has {a} coordinates, expected 3")))?;
+                    let tok = t.next().ok_or_else(|| {
+                        Error::parse(
+                            F,
+                            format!("line {n}: vertex has {a} coordinates, expected 3"),
+                        )
+                    })?;
                     *v = parse_f32(F, n, axis, tok)?;
                 }
                 corners.push(w.add(p));
             }
             "endloop" => {
                 let Some((start, corners)) = loop_.take() else {
-                    return Err(Error::parse(F, format!("line {n}: 'endloop' without 'outer loop'")));
+                    return Err(Error::parse(
+                        F,
+                        format!("line {n}: 'endloop' without 'outer loop'"),
+                    ));
                 };
                 if corners.len() < 3 {
                     return Err(Error::parse(
@@ -142,11 +161,19 @@ fn read_ascii(bytes: &[u8]) -> Result<Mesh> {
                 fan(&corners, &mut triangles);
                 facets += 1;
             }
-            other => return Err(Error::parse(F, format!("line {n}: unexpected keyword {} in ascii STL", show(other)))),
+            other => {
+                return Err(Error::parse(
+                    F,
+                    format!("line {n}: unexpected keyword {} in ascii STL", show(other)),
+                ))
+            }
         }
     }
     if let Some((start, _)) = loop_ {
-        return Err(Error::parse(F, format!("the file ends inside the facet loop opened at line {start}")));
+        return Err(Error::parse(
+            F,
+            format!("the file ends inside the facet loop opened at line {start}"),
+        ));
     }
     if facets == 0 {
         return Err(Error::parse(F, "ascii STL has no facets"));

@@ -49,13 +49,20 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f32; 3]>> {
                 }
                 return Err(Error::parse(
                     F,
-                    format!("line {n}: expected at least 3 numbers (x y z), found {} in {}", toks.len(), show(line.trim())),
+                    format!(
+                        "line {n}: expected at least 3 numbers (x y z), found {} in {}",
+                        toks.len(),
+                        show(line.trim())
+                    ),
                 ));
             }
         }
     }
     if !started {
-        return Err(Error::parse(F, "no line with three numbers (x y z) found: not a text point list"));
+        return Err(Error::parse(
+            F,
+            "no line with three numbers (x y z) found: not a text point list",
+        ));
     }
     Ok(out)
 }
@@ -66,7 +73,9 @@ pub(crate) fn sniff(bytes: &[u8]) -> bool {
     let head = &bytes[..bytes.len().min(64 * 1024)];
     let mut seen = 0;
     for (_, raw) in Lines::new(head) {
-        let Ok(line) = std::str::from_utf8(raw) else { return false };
+        let Ok(line) = std::str::from_utf8(raw) else {
+            return false;
+        };
         if is_comment(line) {
             continue;
         }
