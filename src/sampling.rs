@@ -12,6 +12,11 @@ pub fn rng(seed: u64) -> ChaCha8Rng {
     ChaCha8Rng::seed_from_u64(seed)
 }
 
+/// The target cloud's network sample uses `seed ^ TARGET_SEED_XOR` (the source uses `seed`), so the
+/// two clouds get independent draws. The trainer uses the same rule, so training inputs match
+/// inference inputs.
+pub const TARGET_SEED_XOR: u64 = 0x5EED_7A26_E7C0_FFEE;
+
 /// Voxel-grid downsampling: one point per occupied cube of side `voxel` (the centroid of the
 /// points in it), in a deterministic order. `voxel <= 0` returns a copy.
 ///

@@ -292,7 +292,7 @@ pub struct EnginePair {
 
 /// The seed offset the engine uses for the target's network sample (the source uses the seed
 /// itself). Mirrors `register.rs`; keep in sync.
-pub const TARGET_SAMPLE_SEED_XOR: u64 = 0x5EED_7A26_E7C0_FFEE;
+pub const TARGET_SAMPLE_SEED_XOR: u64 = sampling::TARGET_SEED_XOR;
 
 impl Pair {
     /// The pair in the engine's network frames (see [`EnginePair`]).
