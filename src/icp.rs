@@ -91,9 +91,12 @@ impl std::fmt::Debug for IcpTarget {
 /// Buffers reused across the iterations of one run.
 #[derive(Default)]
 struct Scratch {
-    /// Inlier pairs `(moved source point, target index)`.
+    /// Inlier pairs: the moved source point and its target partner's index.
     moved: Vec<[f64; 3]>,
     target: Vec<usize>,
+    /// Per source point, its partner in the previous pass (`u32::MAX`: none): warm-starts the
+    /// nearest-neighbour search.
+    prev: Vec<u32>,
     /// Contiguous copies for [`gmr::kabsch`].
     target_xyz: Vec<[f64; 3]>,
 }
@@ -234,13 +237,25 @@ impl IcpTarget {
             return (0.0, 0.0);
         }
         let max2 = max_distance * max_distance;
+        // The tree works in f32: search a hair wider, then decide in f64.
+        let search2 = (max2 * (1.0 + 1e-5)) as f32;
+        let search2 = if search2.is_finite() { search2 } else { f32::INFINITY };
         let r = transform::rotation(t);
         let tr = transform::translation(t);
+        if scratch.prev.len() != source.len() {
+            scratch.prev.clear();
+            scratch.prev.resize(source.len(), u32::MAX);
+        }
         let mut sum2 = 0.0f64;
-        for s in source {
+        for (s, prev) in source.iter().zip(scratch.prev.iter_mut()) {
             let p = r * Vector3::new(s[0] as f64, s[1] as f64, s[2] as f64) + tr;
             let q32 = [p.x as f32, p.y as f32, p.z as f32];
-            let Some((j, _)) = self.index.nearest(&q32) else { continue };
+            let hint = (*prev != u32::MAX).then_some(*prev as usize);
+            let Some((j, _)) = self.index.nearest_within(&q32, search2, hint) else {
+                *prev = u32::MAX;
+                continue;
+            };
+            *prev = j as u32;
             let q = self.points[j];
             let d2 = (p.x - q[0] as f64).powi(2) + (p.y - q[1] as f64).powi(2) + (p.z - q[2] as f64).powi(2);
             if d2 < max2 {
