@@ -49,7 +49,6 @@ pub struct IcpResult {
     pub converged: bool,
 }
 
-
 impl IcpParams {
     /// Open3D's defaults for a given distance: point-to-plane, 30 iterations, relative
     /// fitness and RMSE changes of 1e-6.
@@ -186,7 +185,11 @@ impl IcpTarget {
         if params.kind == IcpKind::Off || scratch.moved.is_empty() {
             return result;
         }
-        let target_normals = if params.kind == IcpKind::Plane { Some(self.normals()) } else { None };
+        let target_normals = if params.kind == IcpKind::Plane {
+            Some(self.normals())
+        } else {
+            None
+        };
         let mut t = *init;
         for it in 1..=params.max_iterations {
             let update = match target_normals {
@@ -202,7 +205,8 @@ impl IcpTarget {
             let (f, r) = self.correspond(source, &t, d, &mut scratch);
             result.iterations = it;
             result.T_target_source = t;
-            let done = (f - fitness).abs() < params.relative_fitness && (r - rmse).abs() < params.relative_rmse;
+            let done = (f - fitness).abs() < params.relative_fitness
+                && (r - rmse).abs() < params.relative_rmse;
             fitness = f;
             rmse = r;
             result.fitness = f;
@@ -230,16 +234,30 @@ impl IcpTarget {
 
     /// One correspondence pass: fills `scratch` with the inlier pairs and returns
     /// `(fitness, inlier_rmse)`.
-    fn correspond(&self, source: &[[f32; 3]], t: &Matrix4<f64>, max_distance: f64, scratch: &mut Scratch) -> (f64, f64) {
+    fn correspond(
+        &self,
+        source: &[[f32; 3]],
+        t: &Matrix4<f64>,
+        max_distance: f64,
+        scratch: &mut Scratch,
+    ) -> (f64, f64) {
         scratch.moved.clear();
         scratch.target.clear();
-        if source.is_empty() || self.index.is_empty() || !(max_distance > 0.0) {
+        if source.is_empty()
+            || self.index.is_empty()
+            || max_distance.is_nan()
+            || max_distance <= 0.0
+        {
             return (0.0, 0.0);
         }
         let max2 = max_distance * max_distance;
         // The tree works in f32: search a hair wider, then decide in f64.
         let search2 = (max2 * (1.0 + 1e-5)) as f32;
-        let search2 = if search2.is_finite() { search2 } else { f32::INFINITY };
+        let search2 = if search2.is_finite() {
+            search2
+        } else {
+            f32::INFINITY
+        };
         let r = transform::rotation(t);
         let tr = transform::translation(t);
         if scratch.prev.len() != source.len() {
@@ -257,7 +275,9 @@ impl IcpTarget {
             };
             *prev = j as u32;
             let q = self.points[j];
-            let d2 = (p.x - q[0] as f64).powi(2) + (p.y - q[1] as f64).powi(2) + (p.z - q[2] as f64).powi(2);
+            let d2 = (p.x - q[0] as f64).powi(2)
+                + (p.y - q[1] as f64).powi(2)
+                + (p.z - q[2] as f64).powi(2);
             if d2 < max2 {
                 sum2 += d2;
                 scratch.moved.push([p.x, p.y, p.z]);
@@ -268,15 +288,21 @@ impl IcpTarget {
         if inliers == 0 {
             return (0.0, 0.0);
         }
-        (inliers as f64 / source.len() as f64, (sum2 / inliers as f64).sqrt())
+        (
+            inliers as f64 / source.len() as f64,
+            (sum2 / inliers as f64).sqrt(),
+        )
     }
 
     /// Point-to-point update: Kabsch on the current inlier pairs.
     fn point_update(&self, scratch: &mut Scratch) -> Option<Matrix4<f64>> {
         scratch.target_xyz.clear();
-        scratch
-            .target_xyz
-            .extend(scratch.target.iter().map(|&j| self.points[j].map(|v| v as f64)));
+        scratch.target_xyz.extend(
+            scratch
+                .target
+                .iter()
+                .map(|&j| self.points[j].map(|v| v as f64)),
+        );
         Some(gmr::kabsch(&scratch.moved, &scratch.target_xyz, None))
     }
 
@@ -320,13 +346,13 @@ impl IcpTarget {
             return None;
         }
         let scale = ata.abs().max();
-        if !(scale > 0.0) {
+        if scale.is_nan() || scale <= 0.0 {
             return None;
         }
         let eig = SymmetricEigen::new(ata / scale);
         let rhs = atb / scale;
         let lmax = eig.eigenvalues.max();
-        if !(lmax > 0.0) {
+        if lmax.is_nan() || lmax <= 0.0 {
             return None;
         }
         let mut x = Vector6::<f64>::zeros();
