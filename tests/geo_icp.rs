@@ -9,48 +9,16 @@ use arps::PointCloud;
 use nalgebra::{Matrix4, Unit, UnitQuaternion, Vector3};
 use std::time::Instant;
 
-/// Reads a binary little-endian PLY whose only vertex properties are `float x, y, z` (the
-/// fixture's layout). Kept local to the tests: they must not depend on the io module.
-fn read_xyz_ply(path: &str) -> Vec<[f32; 3]> {
+/// Reads a point cloud file with the crate's reader.
+fn read_xyz(path: &str) -> Vec<[f32; 3]> {
     let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{path}: {e}"));
-    let end = b"end_header\n";
-    let h = bytes
-        .windows(end.len())
-        .position(|w| w == end)
-        .expect("no end_header")
-        + end.len();
-    let header = std::str::from_utf8(&bytes[..h]).unwrap();
-    assert!(
-        header.contains("format binary_little_endian 1.0"),
-        "{header}"
-    );
-    let props: Vec<&str> = header
-        .lines()
-        .filter(|l| l.starts_with("property"))
-        .collect();
-    assert_eq!(
-        props,
-        ["property float x", "property float y", "property float z"]
-    );
-    let n: usize = header
-        .lines()
-        .find_map(|l| l.strip_prefix("element vertex "))
-        .expect("no vertex count")
-        .trim()
-        .parse()
-        .unwrap();
-    let body = &bytes[h..];
-    assert!(body.len() >= n * 12, "truncated body");
-    body.chunks_exact(12)
-        .take(n)
-        .map(|c| [0, 4, 8].map(|o| f32::from_le_bytes(c[o..o + 4].try_into().unwrap())))
-        .collect()
+    arps::io::read_point_cloud(&bytes, path).unwrap().points
 }
 
 /// The fixture, centred on its bounding-box centre and scaled so its largest half-extent is 1
 /// (the pipeline's normalisation), so its extent along the longest axis is 2 units.
 fn fixture() -> Vec<[f32; 3]> {
-    let pts = PointCloud::new(read_xyz_ply(concat!(
+    let pts = PointCloud::new(read_xyz(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/fixtures/scans/velodyne-small.ply"
     )));
@@ -253,7 +221,7 @@ fn timing_full_scan() {
         eprintln!("skipped: {path} not found");
         return;
     }
-    let full = PointCloud::new(read_xyz_ply(path));
+    let full = PointCloud::new(read_xyz(path));
     let (lo, hi) = full.bounds();
     let c = [0, 1, 2].map(|a| (lo[a] + hi[a]) * 0.5);
     let s = (0..3).map(|a| (hi[a] - lo[a]) * 0.5).fold(0.0f32, f32::max);
