@@ -166,9 +166,9 @@ impl IcpTarget {
     ///   `relative_rmse` (Open3D compares absolute differences of the two figures, and so does
     ///   this), or after `max_iterations` updates.
     /// * [`IcpKind::Off`], `max_iterations == 0`, or no inlier pair at `init`: returns `init`
-    ///   with its fitness and RMSE, 0 iterations, `converged = false`. If a step loses every
-    ///   inlier, the run stops there with `converged = false`. A non-finite update is discarded
-    ///   and the run stops.
+    ///   with its fitness and RMSE, 0 iterations, `converged = false`. If a step would lose every
+    ///   inlier, or is not finite, it is discarded and the run stops (`converged = false`) with
+    ///   the last transform that had inliers.
     ///
     /// The result's `fitness` and `inlier_rmse` are those of the returned transform.
     pub fn align(&self, source: &[[f32; 3]], init: &Matrix4<f64>, params: &IcpParams) -> IcpResult {
@@ -201,9 +201,13 @@ impl IcpTarget {
             if next.iter().any(|v| !v.is_finite()) {
                 break;
             }
-            t = next;
-            let (f, r) = self.correspond(source, &t, d, &mut scratch);
+            let (f, r) = self.correspond(source, &next, d, &mut scratch);
             result.iterations = it;
+            if scratch.moved.is_empty() {
+                // Every pair lost: keep the last transform that had some.
+                break;
+            }
+            t = next;
             result.T_target_source = t;
             let done = (f - fitness).abs() < params.relative_fitness
                 && (r - rmse).abs() < params.relative_rmse;
@@ -211,9 +215,6 @@ impl IcpTarget {
             rmse = r;
             result.fitness = f;
             result.inlier_rmse = r;
-            if scratch.moved.is_empty() {
-                break;
-            }
             if done {
                 result.converged = true;
                 break;
