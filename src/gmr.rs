@@ -232,7 +232,7 @@ pub fn rotation_from_cross_covariance(m: &Matrix3<f64>) -> Matrix3<f64> {
         return Matrix3::identity();
     }
     let scale = m.abs().max();
-    if !(scale > 0.0) {
+    if scale.is_nan() || scale <= 0.0 {
         return Matrix3::identity();
     }
     // Scale to unit size first: the SVD is scale-invariant, and this keeps tiny or huge
@@ -245,7 +245,7 @@ pub fn rotation_from_cross_covariance(m: &Matrix3<f64>) -> Matrix3<f64> {
         return Matrix3::identity();
     };
     let s = svd.singular_values;
-    if !(s[0] > 0.0) {
+    if s[0].is_nan() || s[0] <= 0.0 {
         return Matrix3::identity();
     }
     let v = v_t.transpose();

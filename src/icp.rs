@@ -90,9 +90,12 @@ impl std::fmt::Debug for IcpTarget {
 /// Buffers reused across the iterations of one run.
 #[derive(Default)]
 struct Scratch {
-    /// Inlier pairs `(moved source point, target index)`.
+    /// Inlier pairs: the moved source point and its target partner's index.
     moved: Vec<[f64; 3]>,
     target: Vec<usize>,
+    /// Per source point, its partner in the previous pass (`u32::MAX`: none): warm-starts the
+    /// nearest-neighbour search.
+    prev: Vec<u32>,
     /// Contiguous copies for [`gmr::kabsch`].
     target_xyz: Vec<[f64; 3]>,
 }
@@ -163,9 +166,9 @@ impl IcpTarget {
     ///   `relative_rmse` (Open3D compares absolute differences of the two figures, and so does
     ///   this), or after `max_iterations` updates.
     /// * [`IcpKind::Off`], `max_iterations == 0`, or no inlier pair at `init`: returns `init`
-    ///   with its fitness and RMSE, 0 iterations, `converged = false`. If a step loses every
-    ///   inlier, the run stops there with `converged = false`. A non-finite update is discarded
-    ///   and the run stops.
+    ///   with its fitness and RMSE, 0 iterations, `converged = false`. If a step would lose every
+    ///   inlier, or is not finite, it is discarded and the run stops (`converged = false`) with
+    ///   the last transform that had inliers.
     ///
     /// The result's `fitness` and `inlier_rmse` are those of the returned transform.
     pub fn align(&self, source: &[[f32; 3]], init: &Matrix4<f64>, params: &IcpParams) -> IcpResult {
@@ -198,9 +201,13 @@ impl IcpTarget {
             if next.iter().any(|v| !v.is_finite()) {
                 break;
             }
-            t = next;
-            let (f, r) = self.correspond(source, &t, d, &mut scratch);
+            let (f, r) = self.correspond(source, &next, d, &mut scratch);
             result.iterations = it;
+            if scratch.moved.is_empty() {
+                // Every pair lost: keep the last transform that had some.
+                break;
+            }
+            t = next;
             result.T_target_source = t;
             let done = (f - fitness).abs() < params.relative_fitness
                 && (r - rmse).abs() < params.relative_rmse;
@@ -208,9 +215,6 @@ impl IcpTarget {
             rmse = r;
             result.fitness = f;
             result.inlier_rmse = r;
-            if scratch.moved.is_empty() {
-                break;
-            }
             if done {
                 result.converged = true;
                 break;
@@ -240,19 +244,37 @@ impl IcpTarget {
     ) -> (f64, f64) {
         scratch.moved.clear();
         scratch.target.clear();
-        if source.is_empty() || self.index.is_empty() || !(max_distance > 0.0) {
+        if source.is_empty()
+            || self.index.is_empty()
+            || max_distance.is_nan()
+            || max_distance <= 0.0
+        {
             return (0.0, 0.0);
         }
         let max2 = max_distance * max_distance;
+        // The tree works in f32: search a hair wider, then decide in f64.
+        let search2 = (max2 * (1.0 + 1e-5)) as f32;
+        let search2 = if search2.is_finite() {
+            search2
+        } else {
+            f32::INFINITY
+        };
         let r = transform::rotation(t);
         let tr = transform::translation(t);
+        if scratch.prev.len() != source.len() {
+            scratch.prev.clear();
+            scratch.prev.resize(source.len(), u32::MAX);
+        }
         let mut sum2 = 0.0f64;
-        for s in source {
+        for (s, prev) in source.iter().zip(scratch.prev.iter_mut()) {
             let p = r * Vector3::new(s[0] as f64, s[1] as f64, s[2] as f64) + tr;
             let q32 = [p.x as f32, p.y as f32, p.z as f32];
-            let Some((j, _)) = self.index.nearest(&q32) else {
+            let hint = (*prev != u32::MAX).then_some(*prev as usize);
+            let Some((j, _)) = self.index.nearest_within(&q32, search2, hint) else {
+                *prev = u32::MAX;
                 continue;
             };
+            *prev = j as u32;
             let q = self.points[j];
             let d2 = (p.x - q[0] as f64).powi(2)
                 + (p.y - q[1] as f64).powi(2)
@@ -325,13 +347,13 @@ impl IcpTarget {
             return None;
         }
         let scale = ata.abs().max();
-        if !(scale > 0.0) {
+        if scale.is_nan() || scale <= 0.0 {
             return None;
         }
         let eig = SymmetricEigen::new(ata / scale);
         let rhs = atb / scale;
         let lmax = eig.eigenvalues.max();
-        if !(lmax > 0.0) {
+        if lmax.is_nan() || lmax <= 0.0 {
             return None;
         }
         let mut x = Vector6::<f64>::zeros();

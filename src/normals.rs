@@ -22,31 +22,32 @@ pub fn estimate_normals(points: &[[f32; 3]], k: usize) -> Vec<[f32; 3]> {
     }
     let index = KdIndex::new(points);
     let k = k.clamp(3, points.len());
-    let mut nbrs = Vec::with_capacity(k);
+    let mut nbrs = Vec::with_capacity(k + 1);
     points
         .iter()
         .map(|q| {
             index.knn_into(q, k, &mut nbrs);
-            normal_of(points, &nbrs)
+            normal_of(points, nbrs.iter().map(|e| e.0))
         })
         .collect()
 }
 
 /// The PCA normal of the points `idx` of `points`.
-fn normal_of(points: &[[f32; 3]], idx: &[usize]) -> [f32; 3] {
-    if idx.len() < 3 {
+fn normal_of(points: &[[f32; 3]], idx: impl Iterator<Item = usize> + Clone) -> [f32; 3] {
+    let count = idx.clone().count();
+    if count < 3 {
         return DEFAULT_NORMAL;
     }
-    let n = idx.len() as f64;
+    let n = count as f64;
     let mut mean = [0.0f64; 3];
-    for &i in idx {
+    for i in idx.clone() {
         for a in 0..3 {
             mean[a] += points[i][a] as f64;
         }
     }
     mean = mean.map(|m| m / n);
     let mut c = Matrix3::<f64>::zeros();
-    for &i in idx {
+    for i in idx {
         let d = [0, 1, 2].map(|a| points[i][a] as f64 - mean[a]);
         for r in 0..3 {
             for s in r..3 {

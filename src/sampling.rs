@@ -74,12 +74,14 @@ pub fn voxel_downsample(cloud: &PointCloud, voxel: f32) -> PointCloud {
 ///   `n - len` more drawn uniformly **with replacement** (indices in `0..len`, same generator).
 /// * An empty cloud gives an empty cloud (there is nothing to pad with); `n == 0` too.
 ///
-/// No density equalisation is done here: the network was trained on uniform random subsets of
-/// the raw clouds, so that is what it is fed. For very uneven scans (LiDAR: dense near the
-/// sensor, sparse far away) a caller can voxel-equalise first,
-/// `network_sample(&voxel_downsample(c, v), n, seed)`, with `v` small enough to keep well over
-/// `n` voxels; this changes the input distribution the network sees, so it is a choice for the
-/// caller, not a default.
+/// No density equalisation is done here (decided, not measured for accuracy): the network was
+/// trained on uniform random subsets of uniformly sampled surfaces, so that is what it is fed,
+/// and equalising needs a voxel size that is a choice of its own. It does matter for LiDAR:
+/// in the small_gicp Velodyne scan, 70% of the 69,792 points lie within 5 m (horizontally) of
+/// the sensor, against 17% of the points left by a 0.5 m voxel grid; uniform sampling thus
+/// spends most of the network's points on the near-field rings. A caller with such scans can
+/// equalise first, `network_sample(&voxel_downsample(c, v), n, seed)`, with `v` small enough to
+/// keep well over `n` voxels.
 pub fn network_sample(cloud: &PointCloud, n: usize, seed: u64) -> PointCloud {
     let len = cloud.points.len();
     if len == 0 || n == 0 {
