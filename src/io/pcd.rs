@@ -193,7 +193,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
     match data {
         Data::Ascii => {
             let n_tokens: usize = fields.iter().map(|f| f.count).fold(0, usize::saturating_add);
-            out.reserve(bounded_capacity(n_points, body.len(), 2 * n_tokens.max(1)));
+            out.reserve(bounded_capacity(n_points, body.len(), n_tokens.saturating_mul(2)));
             let mut read = 0u64;
             while read < n_points {
                 let Some((n, raw)) = lines.next() else {
