@@ -1,11 +1,13 @@
 //! Reads every file of the shared data directories when they exist (they are not part of a
-//! fresh clone; the test then does nothing). Set `ARPS_SHARED_DATA` to point elsewhere.
+//! fresh clone; the test then does nothing). Looked for in `ARPS_SHARED_DATA`, `../shared/data`
+//! beside the crate, then `/work/shared/data`.
 
 use std::path::{Path, PathBuf};
 
 fn shared_root() -> Option<PathBuf> {
-    let root = std::env::var_os("ARPS_SHARED_DATA").map(PathBuf::from).unwrap_or_else(|| PathBuf::from("/work/shared/data"));
-    root.is_dir().then_some(root)
+    let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data");
+    let candidates = [std::env::var_os("ARPS_SHARED_DATA").map(PathBuf::from), Some(beside), Some(PathBuf::from("/work/shared/data"))];
+    candidates.into_iter().flatten().find(|p| p.join("formats").is_dir())
 }
 
 fn files(dir: &Path, out: &mut Vec<PathBuf>) {
