@@ -163,7 +163,9 @@ fn read_format(bytes: &[u8], format: Format, mesh: bool) -> Result<Mesh> {
 
 /// Reads a point cloud from a file's bytes; the format comes from the file name's extension,
 /// else it is sniffed from the content (see [`detect_format`]). Mesh formats give their
-/// vertices (STL corners merged by position). Non-finite coordinates are kept as they are.
+/// vertices (STL corners merged by position); OBJ, OFF and STL files are parsed whole, so a bad
+/// face is an error here too, while a PLY file is read only up to its `vertex` element.
+/// Non-finite coordinates are kept as they are.
 pub fn read_point_cloud(bytes: &[u8], file_name: &str) -> Result<PointCloud> {
     let format = detect_format(bytes, file_name)?;
     Ok(PointCloud::new(read_format(bytes, format, false)?.vertices))

@@ -575,21 +575,20 @@ fn read_ascii_element(lines: &mut Lines, el: &Element, want: Want, out: &mut Out
                 })
             };
             match p.kind {
-                Kind::Scalar(s) => {
+                Kind::Scalar(_) => {
                     let tok = next("property")?;
                     let slot = match want {
                         Want::Points(idx) => idx.iter().position(|&i| i == pi),
                         _ => None,
                     };
+                    // Skipped values are still checked to be numbers (integers written as
+                    // "255.0" are accepted), so a shifted column is caught.
+                    let v = parse_f32(F, n, &format!("'{}'", p.name), tok)?;
                     if let Some(a) = slot {
-                        xyz[a] = parse_f32(F, n, &format!("'{}'", p.name), tok)?;
-                    } else if s.is_int() {
-                        parse_int(F, n, &format!("'{}'", p.name), tok)?;
-                    } else {
-                        parse_f32(F, n, &format!("'{}'", p.name), tok)?;
+                        xyz[a] = v;
                     }
                 }
-                Kind::List { item, .. } => {
+                Kind::List { .. } => {
                     let tok = next("the length of list")?;
                     let len = parse_count(F, n, &format!("length of list '{}'", p.name), tok)?;
                     let is_faces = matches!(want, Want::Faces(fp, _) if fp == pi);
@@ -610,8 +609,6 @@ fn read_ascii_element(lines: &mut Lines, el: &Element, want: Want, out: &mut Out
                             };
                             let v = parse_int(F, n, "vertex index", tok)?;
                             poly.push(check_index(F, v, nv, || format!("line {n} (face {inst})"))?);
-                        } else if item.is_int() {
-                            parse_int(F, n, &format!("item of list '{}'", p.name), tok)?;
                         } else {
                             parse_f32(F, n, &format!("item of list '{}'", p.name), tok)?;
                         }
