@@ -19,6 +19,8 @@
 #![warn(missing_docs)]
 
 pub mod cloud;
+#[cfg(feature = "cli")]
+pub mod data;
 pub mod error;
 pub mod gmr;
 pub mod icp;
@@ -28,6 +30,7 @@ pub mod nn;
 pub mod normals;
 pub mod register;
 pub mod sampling;
+pub mod spatial;
 pub mod timing;
 pub mod transform;
 #[cfg(target_arch = "wasm32")]

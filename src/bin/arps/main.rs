@@ -9,6 +9,8 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 mod bench;
+mod eval;
+mod make_pairs;
 
 #[derive(Parser)]
 #[command(
@@ -69,6 +71,11 @@ enum Command {
     /// Time each stage (read, downsample, network, GMR, ICP) on a 1024 + 1024-point pair and compare the
     /// network's GFLOP/s with the matmul peak measured in the same run.
     Bench(bench::BenchArgs),
+    /// Evaluate a pair set (pairs.tsv) side by side: network, network + ICP, ICP from identity, ICP from
+    /// centroids, untrained network + ICP; prints MRE, MTE, Recall, RRE, RTE, ms/pair.
+    Eval(eval::EvalArgs),
+    /// Write a pair set made with the paper's protocol (PLY files, pairs.tsv, pairs.json).
+    MakePairs(make_pairs::MakePairsArgs),
     /// Write deterministic random (untrained) weights for a preset; for development and tests.
     RandomWeights {
         /// Preset: web, paper or tiny.
@@ -246,6 +253,8 @@ fn run(command: Command) -> Result<(), String> {
             Ok(())
         }
         Command::Bench(args) => bench::run(args),
+        Command::Eval(args) => eval::run(args),
+        Command::MakePairs(args) => make_pairs::run(args),
         Command::RandomWeights {
             preset,
             seed,

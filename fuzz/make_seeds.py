@@ -1,0 +1,125 @@
+#!/usr/bin/env python3
+"""Writes the small seed inputs of the reader fuzz targets into seeds/<target>/.
+
+Each seed is one byte choosing the file name (see the NAMES arrays of the targets) followed by
+the file's bytes. Sources are tiny hand-made files and cut-down fixtures from
+../fixtures/formats (see LICENSES.md there). The weights seeds were written by
+`Weights::random(&ModelConfig::tiny(), 1).to_bytes(..)`.
+"""
+import os
+import struct
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+FIX = os.path.join(HERE, "..", "fixtures", "formats")
+sys.path.insert(0, FIX)
+from derive import lzf_compress  # noqa: E402
+
+PC_NAMES = ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension"]
+MESH_NAMES = ["a.ply", "a.obj", "a.off", "a.stl", "no_extension"]
+
+TET = [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.5)]
+FACES = [(0, 2, 1), (0, 1, 3), (1, 2, 3), (0, 3, 2)]
+
+
+def ply(enc):
+    head = (
+        f"ply\nformat {enc} 1.0\ncomment seed\nelement vertex 4\nproperty double x\nproperty float y\n"
+        "property float z\nproperty uchar red\nproperty list uchar float extra\n"
+        "element face 4\nproperty list uchar int vertex_indices\nproperty float quality\nend_header\n"
+    ).encode()
+    if enc == "ascii":
+        body = "".join(f"{x} {y} {z} 200 2 0.5 0.25\n" for x, y, z in TET)
+        body += "".join(f"3 {a} {b} {c} 1.0\n" for a, b, c in FACES)
+        return head + body.encode()
+    e = "<" if enc == "binary_little_endian" else ">"
+    body = b"".join(struct.pack(f"{e}dffBBff", x, y, z, 200, 2, 0.5, 0.25) for x, y, z in TET)
+    body += b"".join(struct.pack(f"{e}B3if", 3, a, b, c, 1.0) for a, b, c in FACES)
+    return head + body
+
+
+def pcd(data):
+    head = (
+        "# .PCD v0.7 - Point Cloud Data file format\nVERSION 0.7\nFIELDS x y z rgb\nSIZE 4 4 8 4\n"
+        "TYPE F F F U\nCOUNT 1 1 1 1\nWIDTH 2\nHEIGHT 2\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 4\n"
+        f"DATA {data}\n"
+    ).encode()
+    if data == "ascii":
+        return head + "".join(f"{x} {y} {z} 4278190080\n" for x, y, z in TET[:3]).encode() + b"nan nan nan 0\n"
+    pts = TET[:3] + [(float("nan"),) * 3]
+    if data == "binary":
+        return head + b"".join(struct.pack("<ffdI", x, y, z, 7) for x, y, z in pts)
+    raw = b"".join(struct.pack("<f", p[0]) for p in pts) + b"".join(struct.pack("<f", p[1]) for p in pts)
+    raw += b"".join(struct.pack("<d", p[2]) for p in pts) + struct.pack("<4I", 7, 7, 7, 7)
+    packed = lzf_compress(raw)
+    return head + struct.pack("<II", len(packed), len(raw)) + packed
+
+
+def obj():
+    s = "# tet\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1.5\nvt 0 0\nvn 0 0 1\n"
+    return (s + "f 1/1/1 3/1/1 2/1/1\nf 1//1 2//1 4//1\nf -3 -2 -1\nf 1 4 3\n").encode()
+
+
+def off():
+    s = "COFF\n# tet\n4 4 6\n" + "".join(f"{x} {y} {z} 255 0 0 255\n" for x, y, z in TET)
+    return (s + "".join(f"3 {a} {b} {c}\n" for a, b, c in FACES)).encode()
+
+
+def stl_ascii():
+    s = "solid tet\n"
+    for f in FACES:
+        s += " facet normal 0 0 0\n  outer loop\n"
+        s += "".join("   vertex {} {} {}\n".format(*TET[i]) for i in f)
+        s += "  endloop\n endfacet\n"
+    return (s + "endsolid tet\n").encode()
+
+
+def stl_binary():
+    b = b"solid but binary".ljust(80, b" ") + struct.pack("<I", len(FACES))
+    for f in FACES:
+        b += struct.pack("<3f", 0, 0, 0) + b"".join(struct.pack("<3f", *TET[i]) for i in f) + b"\0\0"
+    return b
+
+
+def text(sep, header):
+    return (header + "".join(sep.join(str(v) for v in p) + sep + "1\n" for p in TET)).encode()
+
+
+def fixture_head(name, lines):
+    with open(os.path.join(FIX, name), "rb") as f:
+        return b"".join(f.readlines()[:lines])
+
+
+def main():
+    files = {
+        "ply_ascii": ("a.ply", ply("ascii")),
+        "ply_le": ("a.ply", ply("binary_little_endian")),
+        "ply_be": ("a.ply", ply("binary_big_endian")),
+        "pcd_ascii": ("a.pcd", pcd("ascii")),
+        "pcd_binary": ("a.pcd", pcd("binary")),
+        "pcd_compressed": ("a.pcd", pcd("binary_compressed")),
+        "obj": ("a.obj", obj()),
+        "off": ("a.off", off()),
+        "stl_ascii": ("a.stl", stl_ascii()),
+        "stl_binary": ("a.stl", stl_binary()),
+        "xyz": ("a.xyz", text(" ", "")),
+        "pts": ("a.pts", text(" ", "4\n")),
+        "csv": ("a.csv", text(",", "x,y,z,i\n")),
+        "csv_eth": ("a.csv", fixture_head("eth_car_1000.csv", 12)),
+        "txt": ("a.txt", text(";", "# comment\n")),
+    }
+    for target, names in (("read_point_cloud", PC_NAMES), ("read_mesh", MESH_NAMES)):
+        out = os.path.join(HERE, "seeds", target)
+        os.makedirs(out, exist_ok=True)
+        for key, (name, data) in files.items():
+            if name not in names:
+                continue
+            with open(os.path.join(out, key), "wb") as f:
+                f.write(bytes([names.index(name)]) + data)
+            # The same bytes with no extension, to exercise sniffing.
+            with open(os.path.join(out, key + "_sniffed"), "wb") as f:
+                f.write(bytes([names.index("no_extension")]) + data)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,342 @@
+//! `arps eval`: runs every pair of a manifest (`pairs.tsv`, the format of
+//! `../shared/data/scans/pairs.tsv`) through five methods side by side and prints the paper's
+//! table (method.md B §7): MRE, MTE, Recall, RRE, RTE and ms/pair.
+//!
+//! Methods (all use the pipeline's refinement: point-to-plane ICP, coarse to fine, defaults of
+//! [`Options`]):
+//! * `network`: the network + GMR estimate, ICP off;
+//! * `network + ICP`: the pipeline default;
+//! * `ICP from identity`: the network skipped (`Options::network = false`);
+//! * `ICP from centroids`: the network skipped, ICP started at the translation that aligns the
+//!   two clouds' centroids;
+//! * `untrained network + ICP`: random weights (`Weights::random(&ModelConfig::web(), 0)`).
+//!
+//! Units: errors are in normalised units. Generated sets (`arps make-pairs`, whose `pairs.json`
+//! says `"units": "normalized"`) already are; for anything else (real scans) TE is divided by the
+//! pair's shared scale (the largest bounding-box half-extent of the two clouds, as
+//! [`arps::cloud::JointNormalization`] picks it), so the 0.2 threshold means 20% of that.
+
+use arps::cloud::JointNormalization;
+use arps::data::manifest;
+use arps::data::metrics::{pair_error, recall_svg, summarize, PairError, Summary};
+use arps::transform::{euler_xyz, from_rotation_translation, rigid_inverse, to_rows};
+use arps::{io, ModelConfig, Options, PointCloud, Registrar, Weights};
+use clap::{Args, ValueEnum};
+use nalgebra::{Matrix4, Vector3};
+use rand::Rng;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum TeScale {
+    /// Normalised pair sets (pairs.json says so) as they are; anything else divided by the pair's shared scale.
+    Auto,
+    /// Never rescale TE.
+    One,
+    /// Always divide TE by the pair's shared scale.
+    Pair,
+}
+
+#[derive(Args)]
+pub struct EvalArgs {
+    /// The manifest (pairs.tsv): name, source, target, overlap_threshold, note, T_target_source (row-major).
+    manifest: PathBuf,
+    /// Weights file for the trained network (default: the embedded model).
+    #[arg(long)]
+    weights: Option<PathBuf>,
+    /// Only the first N pairs.
+    #[arg(long)]
+    limit: Option<usize>,
+    /// Move each source by a random pose (Euler angles in [-45, 45] deg about its bounding-box
+    /// centre, translation up to 0.5 normalised units) from this seed, and compose the GT accordingly.
+    #[arg(long)]
+    perturb: Option<u64>,
+    /// Write recall-vs-threshold curves (rotation 0-30 deg, translation 0-0.4) to this SVG.
+    #[arg(long)]
+    svg: Option<PathBuf>,
+    /// Print one JSON object (summaries and per-pair errors) instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Recall rotation threshold, degrees (strict).
+    #[arg(long, default_value_t = 15.0)]
+    rot_threshold: f64,
+    /// Recall translation threshold, normalised units (strict).
+    #[arg(long, default_value_t = 0.2)]
+    trans_threshold: f64,
+    /// How TE is scaled.
+    #[arg(long, value_enum, default_value_t = TeScale::Auto)]
+    te_scale: TeScale,
+}
+
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Method {
+    Network,
+    NetworkIcp,
+    IcpIdentity,
+    IcpCentroids,
+    UntrainedIcp,
+}
+
+const METHODS: [Method; 5] = [
+    Method::Network,
+    Method::NetworkIcp,
+    Method::IcpIdentity,
+    Method::IcpCentroids,
+    Method::UntrainedIcp,
+];
+
+impl Method {
+    fn name(self) -> &'static str {
+        match self {
+            Method::Network => "network",
+            Method::NetworkIcp => "network + ICP",
+            Method::IcpIdentity => "ICP from identity",
+            Method::IcpCentroids => "ICP from centroids",
+            Method::UntrainedIcp => "untrained network + ICP",
+        }
+    }
+    /// The one place that says how each method calls the pipeline.
+    fn options(self, source: &PointCloud, target: &PointCloud) -> Options {
+        let base = Options::default();
+        match self {
+            Method::Network => Options {
+                icp: arps::IcpKind::Off,
+                ..base
+            },
+            Method::NetworkIcp | Method::UntrainedIcp => base,
+            Method::IcpIdentity => Options {
+                network: false,
+                ..base
+            },
+            Method::IcpCentroids => {
+                let (cs, ct) = (source.centroid(), target.centroid());
+                let t = Vector3::new(ct[0] - cs[0], ct[1] - cs[1], ct[2] - cs[2]);
+                Options {
+                    network: false,
+                    initial_transform: Some(to_rows(&Matrix4::new_translation(&t))),
+                    ..base
+                }
+            }
+        }
+    }
+}
+
+/// A random pose about `center`: Euler angles U[-45, 45] deg each (R = Rx Ry Rz), translation
+/// `a * u * scale`, u uniform on S², a ~ U[0, 0.5].
+fn perturbation(seed: u64, index: u64, center: [f64; 3], scale: f64) -> Matrix4<f64> {
+    let mut rng = arps::sampling::rng(arps::data::mix(seed, index));
+    let a = 45f64.to_radians();
+    let mut ang = || (rng.random::<f64>() * 2.0 - 1.0) * a;
+    let r = euler_xyz(ang(), ang(), ang());
+    let u = arps::data::pairs::unit_vector(&mut rng);
+    let t = u * (rng.random::<f64>() * 0.5 * scale);
+    let c = Vector3::from(center);
+    // x -> R (x - c) + c + t
+    from_rotation_translation(&r, &(c - r * c + t))
+}
+
+struct PairResult {
+    name: String,
+    scale: f64,
+    errors: Vec<PairError>,
+    ms: Vec<f64>,
+    failed: Vec<Option<String>>,
+}
+
+pub fn run(a: EvalArgs) -> Result<(), String> {
+    let entries = manifest::read(&a.manifest)?;
+    let entries: Vec<_> = entries
+        .into_iter()
+        .take(a.limit.unwrap_or(usize::MAX))
+        .collect();
+    if entries.is_empty() {
+        return Err(format!("{}: no pairs", a.manifest.display()));
+    }
+    let normalized_set = match manifest::read_sidecar(&a.manifest) {
+        Some(Ok(s)) => s.units == "normalized",
+        Some(Err(e)) => return Err(e),
+        None => false,
+    };
+    let divide = match a.te_scale {
+        TeScale::Auto => !normalized_set,
+        TeScale::One => false,
+        TeScale::Pair => true,
+    };
+    let mut trained = super::load_registrar(a.weights.as_deref())?;
+    let untrained_weights = Weights::random(&ModelConfig::web(), 0).map_err(|e| e.to_string())?;
+    let mut untrained = Registrar::new(&untrained_weights).map_err(|e| e.to_string())?;
+
+    let mut results = Vec::new();
+    for (k, e) in entries.iter().enumerate() {
+        let read = |p: PathBuf| io::read_path(&p).map_err(|err| format!("{}: {err}", p.display()));
+        let mut source = read(e.source_path(&a.manifest))?;
+        let target = read(e.target_path(&a.manifest))?;
+        let mut gt = e.T_target_source;
+        if let Some(seed) = a.perturb {
+            let n = JointNormalization::of_pair(&source, &target);
+            let p = perturbation(seed, k as u64, n.source_center, n.scale);
+            source = source.transformed(&p);
+            gt *= rigid_inverse(&p);
+        }
+        let scale = if divide {
+            JointNormalization::of_pair(&source, &target).scale
+        } else {
+            1.0
+        };
+        let mut r = PairResult {
+            name: e.name.clone(),
+            scale,
+            errors: Vec::new(),
+            ms: Vec::new(),
+            failed: Vec::new(),
+        };
+        for m in METHODS {
+            let options = m.options(&source, &target);
+            let reg = if m == Method::UntrainedIcp {
+                &mut untrained
+            } else {
+                &mut trained
+            };
+            let t0 = Instant::now();
+            let out = reg.register(&source, &target, &options);
+            r.ms.push(t0.elapsed().as_secs_f64() * 1e3);
+            // a failed registration counts as the identity (no estimate), and is reported
+            let (pred, fail) = match out {
+                Ok(x) => (x.T_target_source, None),
+                Err(err) => (Matrix4::identity(), Some(err.to_string())),
+            };
+            r.errors.push(pair_error(&pred, &gt, scale));
+            r.failed.push(fail);
+        }
+        if !a.json {
+            eprint!("\r{} / {} pairs", k + 1, entries.len());
+        }
+        results.push(r);
+    }
+    if !a.json {
+        eprintln!();
+    }
+
+    let per_method: Vec<(String, Vec<PairError>, Summary, usize)> = METHODS
+        .iter()
+        .enumerate()
+        .map(|(i, m)| {
+            let errs: Vec<PairError> = results.iter().map(|r| r.errors[i]).collect();
+            let ms: Vec<f64> = results.iter().map(|r| r.ms[i]).collect();
+            let fails = results.iter().filter(|r| r.failed[i].is_some()).count();
+            let s = summarize(&errs, &ms, a.rot_threshold, a.trans_threshold);
+            (m.name().to_string(), errs, s, fails)
+        })
+        .collect();
+
+    let units = if divide {
+        "TE divided by each pair's shared scale (largest bounding-box half-extent of the two clouds)"
+    } else {
+        "normalised shape units (largest half-extent 1), TE not rescaled"
+    };
+    let weights_desc = match &a.weights {
+        Some(p) => p.display().to_string(),
+        None => "embedded default model".into(),
+    };
+    if let Some(path) = &a.svg {
+        let curves: Vec<(String, Vec<PairError>)> = per_method
+            .iter()
+            .map(|(n, e, _, _)| (n.clone(), e.clone()))
+            .collect();
+        let title = format!(
+            "{} ({} pairs{})",
+            a.manifest.display(),
+            results.len(),
+            a.perturb
+                .map(|s| format!(", perturbed, seed {s}"))
+                .unwrap_or_default()
+        );
+        let svg = recall_svg(
+            &curves,
+            a.rot_threshold,
+            a.trans_threshold,
+            30.0,
+            0.4,
+            &title,
+        );
+        std::fs::write(path, svg).map_err(|e| format!("{}: {e}", path.display()))?;
+    }
+    if a.json {
+        let out = serde_json::json!({
+            "manifest": a.manifest.display().to_string(),
+            "pairs": results.len(),
+            "weights": weights_desc,
+            "weights_provenance": trained.provenance(),
+            "perturb": a.perturb,
+            "units": units,
+            "rot_threshold_deg": a.rot_threshold,
+            "trans_threshold": a.trans_threshold,
+            "methods": per_method.iter().map(|(n, _, s, f)| serde_json::json!({
+                "name": n, "summary": s, "failed": f,
+            })).collect::<Vec<_>>(),
+            "per_pair": results.iter().map(|r| serde_json::json!({
+                "name": r.name,
+                "te_scale": r.scale,
+                "results": METHODS.iter().enumerate().map(|(i, m)| serde_json::json!({
+                    "method": m.name(),
+                    "rot_deg": r.errors[i].rot_deg,
+                    "trans": r.errors[i].trans,
+                    "ms": r.ms[i],
+                    "error": r.failed[i],
+                })).collect::<Vec<_>>(),
+            })).collect::<Vec<_>>(),
+        });
+        println!("{out}");
+        return Ok(());
+    }
+    println!(
+        "arps eval: {} pairs from {}{}",
+        results.len(),
+        a.manifest.display(),
+        a.perturb
+            .map(|s| format!(", sources perturbed (seed {s})"))
+            .unwrap_or_default()
+    );
+    println!("  weights: {weights_desc}; untrained: random web weights, seed 0");
+    println!("  errors: {units}");
+    println!(
+        "  recall: RE < {} deg and TE < {} (strict); RRE/RTE over recalled pairs; ICP: point-to-plane, coarse to fine",
+        a.rot_threshold, a.trans_threshold
+    );
+    println!(
+        "{:<26} {:>9} {:>8} {:>7} {:>9} {:>8} {:>9} {:>6}",
+        "method", "MRE(deg)", "MTE", "Recall", "RRE(deg)", "RTE", "ms/pair", "failed"
+    );
+    // RRE/RTE are undefined (NaN) when nothing is recalled: print "-"
+    let num = |v: f64, prec: usize| {
+        if v.is_nan() {
+            "-".to_string()
+        } else {
+            format!("{v:.prec$}")
+        }
+    };
+    for (n, _, s, f) in &per_method {
+        println!(
+            "{:<26} {:>9} {:>8} {:>7.4} {:>9} {:>8} {:>9.1} {:>6}",
+            n,
+            num(s.mre, 3),
+            num(s.mte, 4),
+            s.recall,
+            num(s.rre, 3),
+            num(s.rte, 4),
+            s.ms_per_pair,
+            f
+        );
+    }
+    for r in &results {
+        for (i, f) in r.failed.iter().enumerate() {
+            if let Some(f) = f {
+                println!("  failed: {} with {}: {f}", r.name, METHODS[i].name());
+            }
+        }
+    }
+    if let Some(p) = &a.svg {
+        println!("  curves: {}", p.display());
+    }
+    Ok(())
+}

@@ -1,0 +1,159 @@
+//! `arps make-pairs`: writes a pair set generated with the paper's protocol (method.md B §6.2):
+//! `NNNNN_source.ply`, `NNNNN_target.ply` (binary PLY), `pairs.tsv` (the format of
+//! `../shared/data/scans/pairs.tsv`, GT `T_target_source` row-major) and `pairs.json` (units,
+//! protocol parameters, and per pair the shape, seed, overlap and full-shape centroids).
+
+use arps::data::bank;
+use arps::data::manifest::{self, Entry, PairMeta, Sidecar};
+use arps::data::source::{ShapeSource, Split};
+use arps::data::PairParams;
+use arps::{io, PointCloud};
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+
+#[derive(Clone, Copy, ValueEnum)]
+pub enum SplitArg {
+    /// Held-out validation shapes (default; use these for evaluation).
+    Val,
+    /// Training shapes.
+    Train,
+}
+
+#[derive(Args)]
+pub struct MakePairsArgs {
+    /// Output directory (created if missing).
+    #[arg(long)]
+    out: PathBuf,
+    /// Number of pairs.
+    #[arg(long, default_value_t = 100)]
+    count: u64,
+    /// Seed of the set: pair i is pair (seed * 2^32 + i) of the split.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// A directory of meshes (OBJ/OFF/PLY/STL, searched recursively) to draw shapes from too.
+    #[arg(long)]
+    bank: Option<PathBuf>,
+    /// Which shapes.
+    #[arg(long, value_enum, default_value_t = SplitArg::Val)]
+    split: SplitArg,
+    /// Procedural shapes only (ignore --bank).
+    #[arg(long)]
+    procedural_only: bool,
+    /// Fraction of the bank held out for validation (by a hash of each mesh's relative path).
+    #[arg(long, default_value_t = 0.15)]
+    val_fraction: f64,
+    /// Probability that a pair uses a bank shape (when the split has any).
+    #[arg(long, default_value_t = 0.3)]
+    bank_fraction: f64,
+    /// Euler angle range, degrees (each angle in [-a, a]).
+    #[arg(long, default_value_t = 45.0)]
+    max_angle: f64,
+    /// Maximum translation, normalised units.
+    #[arg(long, default_value_t = 0.5)]
+    max_translation: f64,
+    /// Noise sigma, normalised units (clipped at 0.05, as the protocol).
+    #[arg(long, default_value_t = 0.01)]
+    noise: f64,
+    /// Points per cloud.
+    #[arg(long, default_value_t = 1024)]
+    points: usize,
+}
+
+/// The distance written as `overlap_threshold`: five noise sigmas at the default noise.
+const OVERLAP_THRESHOLD: f64 = 0.05;
+
+pub fn run(a: MakePairsArgs) -> Result<(), String> {
+    let mut source = match (&a.bank, a.procedural_only) {
+        (Some(dir), false) => {
+            let b = bank::load_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            for s in &b.skipped {
+                eprintln!("arps: bank: skipped {}: {}", s.name, s.reason);
+            }
+            eprintln!(
+                "arps: bank: {} meshes usable, {} skipped",
+                b.meshes.len(),
+                b.skipped.len()
+            );
+            ShapeSource::with_bank(b, a.val_fraction)
+        }
+        _ => ShapeSource::procedural(),
+    };
+    source.bank_fraction = a.bank_fraction;
+    let split = match a.split {
+        SplitArg::Val => Split::Val,
+        SplitArg::Train => Split::Train,
+    };
+    let params = PairParams {
+        max_angle_deg: a.max_angle,
+        max_translation: a.max_translation,
+        noise_sigma: a.noise,
+        points: a.points,
+        ..PairParams::default()
+    };
+    std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
+    let mut entries = Vec::new();
+    let mut metas = Vec::new();
+    for i in 0..a.count {
+        let index = (a.seed << 32).wrapping_add(i);
+        let pair = source
+            .pair(split, index, &params)
+            .map_err(|e| format!("pair {i}: {e}"))?;
+        let stem = format!("{i:05}");
+        let (sf, tf) = (format!("{stem}_source.ply"), format!("{stem}_target.ply"));
+        for (f, pts) in [(&sf, &pair.source), (&tf, &pair.target)] {
+            let path = a.out.join(f);
+            std::fs::write(&path, io::write_ply_binary(&PointCloud::new(pts.clone())))
+                .map_err(|e| format!("{}: {e}", path.display()))?;
+        }
+        let short = pair
+            .shape
+            .strip_prefix("procedural/")
+            .unwrap_or(&pair.shape);
+        let name = format!("{stem}-{}", short.replace('/', "-"));
+        entries.push(Entry {
+            name: name.clone(),
+            source: sf,
+            target: tf,
+            overlap_threshold: OVERLAP_THRESHOLD,
+            note: format!(
+                "synthetic: {} ({:?} split), pair seed {}, crop overlap {:.3}, normalised shape units",
+                pair.shape, split, pair.seed, pair.overlap
+            ),
+            T_target_source: pair.T_target_source,
+        });
+        metas.push(PairMeta {
+            name,
+            shape: pair.shape.clone(),
+            seed: pair.seed,
+            overlap: pair.overlap,
+            centroid_source: pair.centroid_source,
+            centroid_target: pair.centroid_target,
+        });
+    }
+    let tsv = a.out.join("pairs.tsv");
+    std::fs::write(&tsv, manifest::format(&entries))
+        .map_err(|e| format!("{}: {e}", tsv.display()))?;
+    let sidecar = Sidecar {
+        units: "normalized".into(),
+        generator: serde_json::json!({
+            "command": "arps make-pairs",
+            "version": env!("CARGO_PKG_VERSION"),
+            "split": format!("{split:?}").to_lowercase(),
+            "seed": a.seed,
+            "count": a.count,
+            "bank": a.bank.as_ref().filter(|_| !a.procedural_only).map(|p| p.display().to_string()),
+            "bank_fraction": a.bank_fraction,
+            "val_fraction": a.val_fraction,
+        }),
+        params,
+        pairs: metas,
+    };
+    let json = a.out.join("pairs.json");
+    std::fs::write(
+        &json,
+        serde_json::to_string_pretty(&sidecar).map_err(|e| e.to_string())? + "\n",
+    )
+    .map_err(|e| format!("{}: {e}", json.display()))?;
+    println!("wrote {} pairs to {}", a.count, a.out.display());
+    Ok(())
+}

@@ -1,0 +1,330 @@
+//! The paper's pair protocol (method.md B §6.2), seeded per pair, and the mapping of a pair into
+//! the frames the engine's network sees.
+//!
+//! Steps of [`make_pair`], in order:
+//! 1. dense cloud: `dense_points` area-weighted surface samples of the mesh;
+//! 2. normalise the **full** shape once: bounding-box centre to the origin, largest half-extent
+//!    to 1 (so it fits `[-1, 1]^3` with its aspect ratio kept); `c_full` = its mean;
+//! 3. two half-space crops keeping `keep_ratio` of the dense points each: for a direction `u`
+//!    uniform on S², keep the points with the largest `(p - c_full) · u`; both directions are
+//!    redrawn until the overlap `|S ∩ T| / min(|S|, |T|)` is at least `min_overlap` (at most
+//!    `max_crop_tries` draws; after that the second crop reuses the first direction);
+//! 4. each crop is resampled independently to exactly `points` points without replacement
+//!    (padded with replacement if a crop is short);
+//! 5. random rigid motion applied to the target: Euler angles `U[-a, a]` each,
+//!    `R = Rx·Ry·Rz` ([`crate::transform::euler_xyz`]), translation `s·u`, `u` uniform on S²,
+//!    `s ~ U[0, max_translation]`; GT `T_target_source = (R, t)`;
+//! 6. Gaussian noise `σ = noise_sigma` on every coordinate of both sets, clipped to
+//!    `±noise_clip`;
+//! 7. both sets shuffled.
+
+use crate::cloud::{JointNormalization, PointCloud};
+use crate::io::Mesh;
+use crate::transform::{euler_xyz, from_rotation_translation};
+use crate::{sampling, Result};
+use nalgebra::{Matrix4, Vector3};
+use rand::Rng;
+use rand_chacha::ChaCha8Rng;
+
+/// The knobs of the protocol. [`Default`] is the paper's protocol; the trainer's curriculum
+/// ramps `max_angle_deg`, `max_translation`, `keep_ratio`/`min_overlap` and `noise_sigma`.
+#[derive(Clone, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+#[serde(default)]
+pub struct PairParams {
+    /// Dense surface samples of the full shape (default 4096).
+    pub dense_points: usize,
+    /// Points per set after resampling (default 1024).
+    pub points: usize,
+    /// Fraction of the dense points each half-space crop keeps (default 0.7).
+    pub keep_ratio: f64,
+    /// Minimum overlap of the two crops' dense index sets (default 0.7).
+    pub min_overlap: f64,
+    /// Crop redraws before giving up on `min_overlap` (default 100).
+    pub max_crop_tries: usize,
+    /// Euler angles are drawn from `U[-max_angle_deg, max_angle_deg]`, degrees (default 45).
+    pub max_angle_deg: f64,
+    /// Translation length is drawn from `U[0, max_translation]`, normalised units (default 0.5).
+    pub max_translation: f64,
+    /// Noise standard deviation per coordinate, normalised units (default 0.01; 0 = no noise).
+    pub noise_sigma: f64,
+    /// Noise is clipped to `±noise_clip` (default 0.05).
+    pub noise_clip: f64,
+}
+
+impl Default for PairParams {
+    fn default() -> Self {
+        Self {
+            dense_points: 4096,
+            points: 1024,
+            keep_ratio: 0.7,
+            min_overlap: 0.7,
+            max_crop_tries: 100,
+            max_angle_deg: 45.0,
+            max_translation: 0.5,
+            noise_sigma: 0.01,
+            noise_clip: 0.05,
+        }
+    }
+}
+
+/// One registration pair in the normalised units of its full shape.
+#[allow(non_snake_case)]
+#[derive(Clone, Debug, PartialEq)]
+pub struct Pair {
+    /// The shape's name (`procedural/chair/12`, `bank/libigl/bunny.off`, ...).
+    pub shape: String,
+    /// The pair's seed: the same shape, params and seed give the same pair on every platform.
+    pub seed: u64,
+    /// Source points (canonical pose of the normalised shape, cropped, noisy, shuffled).
+    pub source: Vec<[f32; 3]>,
+    /// Target points (the other crop, moved by the GT motion, noisy, shuffled).
+    pub target: Vec<[f32; 3]>,
+    /// Ground truth: maps source points into the target frame, `p_t = R p_s + t`.
+    pub T_target_source: Matrix4<f64>,
+    /// The full (uncropped, dense) shape's mean in the source frame. **Not** pre-centred: subtract
+    /// the source's own mean yourself if your network input is mean-centred (method.md B §5.3).
+    pub centroid_source: [f64; 3],
+    /// The same point in the target frame: `R c + t`. Not pre-centred either.
+    pub centroid_target: [f64; 3],
+    /// Overlap of the two crops, `|S ∩ T| / min(|S|, |T|)` on the dense indices, in [0, 1].
+    pub overlap: f64,
+    /// For each source point, its index in the dense cloud. Source point `i` and target point
+    /// `k` are samples of the same surface point (before noise) iff their dense indices match.
+    pub source_dense_index: Vec<u32>,
+    /// For each target point, its index in the dense cloud.
+    pub target_dense_index: Vec<u32>,
+}
+
+/// Normalises a cloud as the protocol does for a full shape: bounding-box centre to the origin,
+/// largest half-extent to 1. Returns the cloud and the `(centre, scale)` used.
+pub fn normalize_shape(cloud: &PointCloud) -> (PointCloud, [f64; 3], f64) {
+    let (lo, hi) = cloud.bounds();
+    let c = [0, 1, 2].map(|a| (lo[a] as f64 + hi[a] as f64) * 0.5);
+    let s = (0..3)
+        .map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5)
+        .fold(0.0, f64::max);
+    let s = if s > 0.0 && s.is_finite() { s } else { 1.0 };
+    let points = cloud
+        .points
+        .iter()
+        .map(|p| [0, 1, 2].map(|a| ((p[a] as f64 - c[a]) / s) as f32))
+        .collect();
+    (PointCloud::new(points), c, s)
+}
+
+/// A direction uniform on S²: φ ~ U[0, 2π), cos θ ~ U[-1, 1].
+pub fn unit_vector(rng: &mut ChaCha8Rng) -> Vector3<f64> {
+    let phi = rng.random::<f64>() * std::f64::consts::TAU;
+    let z = rng.random::<f64>() * 2.0 - 1.0;
+    let r = (1.0 - z * z).max(0.0).sqrt();
+    Vector3::new(r * phi.cos(), r * phi.sin(), z)
+}
+
+/// A standard normal draw (Box–Muller; platform-stable).
+pub fn normal(rng: &mut ChaCha8Rng) -> f64 {
+    let u1 = 1.0 - rng.random::<f64>(); // (0, 1]
+    let u2 = rng.random::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
+/// The indices of the `k` points with the largest `(p - c) · u`, sorted ascending.
+fn half_space(points: &[[f32; 3]], c: &Vector3<f64>, u: &Vector3<f64>, k: usize) -> Vec<u32> {
+    let mut d: Vec<(f64, u32)> = points
+        .iter()
+        .enumerate()
+        .map(|(i, p)| {
+            let v = Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64) - c;
+            (v.dot(u), i as u32)
+        })
+        .collect();
+    // descending by distance along u, ties by index (deterministic)
+    d.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let mut idx: Vec<u32> = d[..k.min(d.len())].iter().map(|x| x.1).collect();
+    idx.sort_unstable();
+    idx
+}
+
+fn overlap_of(a: &[u32], b: &[u32]) -> f64 {
+    let (mut i, mut j, mut n) = (0, 0, 0usize);
+    while i < a.len() && j < b.len() {
+        match a[i].cmp(&b[j]) {
+            std::cmp::Ordering::Less => i += 1,
+            std::cmp::Ordering::Greater => j += 1,
+            std::cmp::Ordering::Equal => {
+                n += 1;
+                i += 1;
+                j += 1;
+            }
+        }
+    }
+    n as f64 / a.len().min(b.len()).max(1) as f64
+}
+
+/// `n` of `idx` without replacement (a partial Fisher–Yates), padded with replacement if short.
+fn resample(idx: &[u32], n: usize, rng: &mut ChaCha8Rng) -> Vec<u32> {
+    let mut pool = idx.to_vec();
+    let take = n.min(pool.len());
+    for i in 0..take {
+        let j = rng.random_range(i..pool.len());
+        pool.swap(i, j);
+    }
+    let mut out: Vec<u32> = pool[..take].to_vec();
+    while out.len() < n && !idx.is_empty() {
+        out.push(idx[rng.random_range(0..idx.len())]);
+    }
+    out
+}
+
+fn shuffle<T>(v: &mut [T], rng: &mut ChaCha8Rng) {
+    for i in (1..v.len()).rev() {
+        let j = rng.random_range(0..=i);
+        v.swap(i, j);
+    }
+}
+
+/// A pair from a mesh: samples `params.dense_points` on its surface (seeded from `seed`), then
+/// [`pair_from_dense`]. Fails if the mesh has no area to sample.
+pub fn make_pair(mesh: &Mesh, shape: &str, params: &PairParams, seed: u64) -> Result<Pair> {
+    let dense = mesh.sample_surface(params.dense_points.max(1), super::mix(seed, 0xDE45E))?;
+    Ok(pair_from_dense(&dense, shape, params, seed))
+}
+
+/// A pair from a dense cloud of a full shape (any units; it is normalised here, step 2).
+pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, seed: u64) -> Pair {
+    let mut rng = sampling::rng(super::mix(seed, 0x9A1F));
+    let (p, _, _) = normalize_shape(dense);
+    let c = p.centroid();
+    let cv = Vector3::from(c);
+    let m = p.len();
+    let k = ((params.keep_ratio.clamp(0.0, 1.0) * m as f64).round() as usize).clamp(1, m.max(1));
+
+    // 3. crops with rejection
+    let mut best = None;
+    for _ in 0..params.max_crop_tries.max(1) {
+        let (u1, u2) = (unit_vector(&mut rng), unit_vector(&mut rng));
+        let s = half_space(&p.points, &cv, &u1, k);
+        let t = half_space(&p.points, &cv, &u2, k);
+        let o = overlap_of(&s, &t);
+        if o >= params.min_overlap {
+            best = Some((s, t, o));
+            break;
+        }
+    }
+    let (s_idx, t_idx, overlap) = best.unwrap_or_else(|| {
+        let u = unit_vector(&mut rng);
+        let s = half_space(&p.points, &cv, &u, k);
+        (s.clone(), s, 1.0)
+    });
+
+    // 4. independent resampling
+    let mut src_i = resample(&s_idx, params.points, &mut rng);
+    let mut tgt_i = resample(&t_idx, params.points, &mut rng);
+
+    // 5. rigid motion
+    let a = params.max_angle_deg.to_radians();
+    let mut angle = || (rng.random::<f64>() * 2.0 - 1.0) * a;
+    let (ax, ay, az) = (angle(), angle(), angle());
+    let r = euler_xyz(ax, ay, az);
+    let t = unit_vector(&mut rng) * (rng.random::<f64>() * params.max_translation);
+    let gt = from_rotation_translation(&r, &t);
+
+    // 7. shuffle (the order of the index lists is already random; shuffle once more so the
+    // order does not depend on the resampling scheme), then 6. noise
+    shuffle(&mut src_i, &mut rng);
+    shuffle(&mut tgt_i, &mut rng);
+    let sigma = params.noise_sigma.max(0.0);
+    let clip = params.noise_clip.max(0.0);
+    let jitter = |rng: &mut ChaCha8Rng, q: Vector3<f64>| -> [f32; 3] {
+        let mut out = [0.0f32; 3];
+        for a in 0..3 {
+            let n = if sigma > 0.0 {
+                (normal(rng) * sigma).clamp(-clip, clip)
+            } else {
+                0.0
+            };
+            out[a] = (q[a] + n) as f32;
+        }
+        out
+    };
+    let pt = |i: u32| {
+        let v = p.points[i as usize];
+        Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)
+    };
+    let source: Vec<[f32; 3]> = src_i.iter().map(|&i| jitter(&mut rng, pt(i))).collect();
+    let target: Vec<[f32; 3]> = tgt_i
+        .iter()
+        .map(|&i| jitter(&mut rng, r * pt(i) + t))
+        .collect();
+    let ct = r * cv + t;
+    Pair {
+        shape: shape.to_string(),
+        seed,
+        source,
+        target,
+        T_target_source: gt,
+        centroid_source: c,
+        centroid_target: [ct.x, ct.y, ct.z],
+        overlap,
+        source_dense_index: src_i,
+        target_dense_index: tgt_i,
+    }
+}
+
+/// A pair in the frames the engine's network sees ([`crate::Registrar::register`]): each cloud
+/// centred on its own bounding-box centre and both divided by one shared scale
+/// ([`JointNormalization::of_pair`]); the GT and the centroids mapped accordingly.
+#[allow(non_snake_case)]
+#[derive(Clone, Debug, PartialEq)]
+pub struct EnginePair {
+    /// The source, normalised.
+    pub source: PointCloud,
+    /// The target, normalised.
+    pub target: PointCloud,
+    /// GT in the normalised frames: `N_t · T · N_s⁻¹` (still rigid: the scale is shared).
+    pub T_target_source: Matrix4<f64>,
+    /// The full-shape centroid in the normalised source frame (not pre-centred).
+    pub centroid_source: [f64; 3],
+    /// The full-shape centroid in the normalised target frame (not pre-centred).
+    pub centroid_target: [f64; 3],
+    /// The normalisation used (to map results back to the pair's units).
+    pub norm: JointNormalization,
+}
+
+/// The seed offset the engine uses for the target's network sample (the source uses the seed
+/// itself). Mirrors `register.rs`; keep in sync.
+pub const TARGET_SAMPLE_SEED_XOR: u64 = sampling::TARGET_SEED_XOR;
+
+impl Pair {
+    /// The pair in the engine's network frames (see [`EnginePair`]).
+    pub fn engine_frames(&self) -> EnginePair {
+        let src = PointCloud::new(self.source.clone());
+        let tgt = PointCloud::new(self.target.clone());
+        let norm = JointNormalization::of_pair(&src, &tgt);
+        let ns = norm.source_to_normalized();
+        let nt = norm.target_to_normalized();
+        let map = |m: &Matrix4<f64>, c: [f64; 3]| {
+            let v = m * nalgebra::Vector4::new(c[0], c[1], c[2], 1.0);
+            [v.x, v.y, v.z]
+        };
+        EnginePair {
+            source: src.transformed(&ns),
+            target: tgt.transformed(&nt),
+            T_target_source: norm.normalize_transform(&self.T_target_source),
+            centroid_source: map(&ns, self.centroid_source),
+            centroid_target: map(&nt, self.centroid_target),
+            norm,
+        }
+    }
+}
+
+impl EnginePair {
+    /// The `n` network points of each cloud, drawn exactly as the engine draws them for
+    /// `Options::seed = seed` ([`sampling::network_sample`]; the target's seed is
+    /// `seed ^ TARGET_SAMPLE_SEED_XOR`), so training inputs match inference inputs.
+    pub fn network_sample(&self, n: usize, seed: u64) -> (PointCloud, PointCloud) {
+        (
+            sampling::network_sample(&self.source, n, seed),
+            sampling::network_sample(&self.target, n, seed ^ TARGET_SAMPLE_SEED_XOR),
+        )
+    }
+}
