@@ -202,40 +202,23 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
             "invalid options: expected a plain object (or undefined)",
         ));
     }
-    let key = JsValue::from_str("initialTransform");
-    let init = Reflect::get(&options, &key).unwrap_or(JsValue::UNDEFINED);
-    let options = match column_major_16(&init)? {
-        Some(elements) => {
-            // A shallow copy, so the caller's object is left as it was.
-            let copy = Object::assign(&Object::new(), options.unchecked_ref());
-            let rows = transform::to_rows(&transform::from_column_major(&elements));
-            let rows_js: Array = rows
-                .iter()
-                .map(|r| -> JsValue {
-                    r.iter()
-                        .map(|v| JsValue::from_f64(*v))
-                        .collect::<Array>()
-                        .into()
-                })
-                .collect();
-            Reflect::set(&copy, &key, &rows_js)
-                .map_err(|_| JsError::new("internal: could not convert initialTransform"))?;
-            copy.into()
-        }
-        None => options,
-    };
-    // serde-wasm-bindgen reads a struct by asking for each known field, so it never sees unknown
-    // ones and `deny_unknown_fields` has no effect: check the keys here, against the core's own
-    // field list (taken from its `Deserialize` impl, so it cannot drift).
+    // A clean copy (the caller's object is never modified) holding only the fields that are
+    // given: `undefined` and `null` mean "not given", so the default applies (serde-wasm-bindgen
+    // would reject `seed: undefined`). serde-wasm-bindgen reads a struct by asking for each known
+    // field, so it never sees unknown ones and `deny_unknown_fields` has no effect: unknown keys
+    // are rejected here, against the core's own field list (taken from its `Deserialize` impl,
+    // so it cannot drift).
     let fields = struct_fields::<Options>();
+    let clean = Object::new();
     for key in Object::keys(options.unchecked_ref::<Object>()).iter() {
-        let key = key.as_string().unwrap_or_default();
-        let defined = !Reflect::get(&options, &JsValue::from_str(&key))
-            .unwrap_or(JsValue::UNDEFINED)
-            .is_undefined();
-        if defined && !fields.contains(&key.as_str()) {
+        let name = key.as_string().unwrap_or_default();
+        let value = Reflect::get(&options, &key).unwrap_or(JsValue::UNDEFINED);
+        if value.is_undefined() || value.is_null() {
+            continue;
+        }
+        if !fields.contains(&name.as_str()) {
             return Err(JsError::new(&format!(
-                "invalid options: unknown field `{key}`, expected one of {}",
+                "invalid options: unknown field `{name}`, expected one of {}",
                 fields
                     .iter()
                     .map(|f| format!("`{f}`"))
@@ -243,8 +226,16 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
                     .join(", ")
             )));
         }
+        let value = match column_major_16(&name, &value)? {
+            Some(elements) => rows_js(&transform::to_rows(&transform::from_column_major(
+                &elements,
+            ))),
+            None => value,
+        };
+        Reflect::set(&clean, &key, &value)
+            .map_err(|_| JsError::new(&format!("internal: could not copy option {name}")))?;
     }
-    serde_wasm_bindgen::from_value::<Options>(options)
+    serde_wasm_bindgen::from_value::<Options>(clean.into())
         .map_err(|e| JsError::new(&format!("invalid options: {e}")))
 }
 
@@ -278,9 +269,27 @@ fn struct_fields<T: serde::de::DeserializeOwned>() -> &'static [&'static str] {
     fields
 }
 
-/// `Some` when `v` is a flat array-like of 16 numbers (column-major), `None` for anything else
-/// (rows, `undefined`, or a wrong shape, which serde then reports).
-fn column_major_16(v: &JsValue) -> Result<Option<[f64; 16]>, JsError> {
+/// Four row-major rows as a JS array of arrays (the core's `initialTransform` layout).
+fn rows_js(rows: &[[f64; 4]; 4]) -> JsValue {
+    let out: Array = rows
+        .iter()
+        .map(|r| -> JsValue {
+            r.iter()
+                .map(|v| JsValue::from_f64(*v))
+                .collect::<Array>()
+                .into()
+        })
+        .collect();
+    out.into()
+}
+
+/// For the `initialTransform` option: `Some` when `v` is a flat array-like of 16 numbers
+/// (column-major); `None` for any other option, and for rows or other shapes (serde reports
+/// those); an error for a typed array of the wrong length or a non-number element.
+fn column_major_16(name: &str, v: &JsValue) -> Result<Option<[f64; 16]>, JsError> {
+    if name != "initialTransform" {
+        return Ok(None);
+    }
     let flat: Option<Vec<JsValue>> =
         if v.is_instance_of::<Float32Array>() || v.is_instance_of::<js_sys::Float64Array>() {
             Some(Array::from(v).to_vec())

@@ -122,9 +122,10 @@ fn options_are_honoured() {
 
     // ICP alone (the classical baseline): the coarse estimate is the identity.
     let icp_only = register_ok(&mut r, options(r#"{"network": false}"#));
-    assert_eq!(
-        matrix(&icp_only, "networkMatrix"),
-        nalgebra::Matrix4::identity()
+    let coarse = matrix(&icp_only, "networkMatrix");
+    assert!(
+        (coarse - nalgebra::Matrix4::identity()).abs().max() < 1e-6,
+        "network off: the coarse estimate is the identity, got {coarse}"
     );
     let (rot, tr) = errors(&icp_only);
     assert!(rot < 1.0 && tr < 0.02, "network off: {rot:.3} deg, {tr:.4}");
@@ -151,10 +152,12 @@ fn options_are_honoured() {
     let opts = options("{}");
     js_sys::Reflect::set(&opts, &"initialTransform".into(), &column_major_js(&gt)).unwrap();
     let from_cm = register_ok(&mut r, opts.clone());
-    assert_eq!(
-        matrix(&from_rows, "matrix"),
-        matrix(&from_cm, "matrix"),
-        "rows and column-major give the same"
+    assert!(
+        (matrix(&from_rows, "matrix") - matrix(&from_cm, "matrix"))
+            .abs()
+            .max()
+            < 1e-5,
+        "rows and column-major (f32) give the same, up to f32 rounding of the initial guess"
     );
     assert!(
         get(&opts, "initialTransform").is_instance_of::<Float32Array>(),
@@ -163,9 +166,11 @@ fn options_are_honoured() {
     let flat: Array = transform_flat_array(&gt);
     js_sys::Reflect::set(&opts, &"initialTransform".into(), &flat).unwrap();
     let from_array = register_ok(&mut r, opts);
-    assert_eq!(
-        matrix(&from_rows, "matrix"),
-        matrix(&from_array, "matrix"),
+    assert!(
+        (matrix(&from_rows, "matrix") - matrix(&from_array, "matrix"))
+            .abs()
+            .max()
+            < 1e-5,
         "a plain array of 16 works too"
     );
 }
