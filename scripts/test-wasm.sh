@@ -23,8 +23,8 @@ scripts/build-pkg.sh
 step "size and SIMD checks"
 scripts/check-wasm.sh
 
-step "the package from JavaScript (node --test js/test/)"
-node --test js/test/
+step "the package from JavaScript (node --test js/test/*.test.mjs)"
+node --test js/test/*.test.mjs
 
 step "TypeScript declarations (tsc -p js/test)"
 node_modules/.bin/tsc -p js/test

@@ -31,6 +31,3 @@ export function errors(colMajor, rows = groundTruth) {
   const tr = Math.hypot(m(0, 3) - rows[0][3], m(1, 3) - rows[1][3], m(2, 3) - rows[2][3]);
   return { rot, tr };
 }
-
-/** True when the engine's core stages are implemented (set ARPS_CORE_STUBS=1 to skip those tests while it is not). */
-export const coreStubbed = process.env.ARPS_CORE_STUBS === "1";

@@ -9,7 +9,7 @@ import { createRequire } from "node:module";
 import os from "node:os";
 import path from "node:path";
 import { pathToFileURL } from "node:url";
-import { pkg, source, target, sourcePly, errors, coreStubbed } from "./common.mjs";
+import { pkg, source, target, sourcePly, errors } from "./common.mjs";
 
 const nodeBuild = await import(pathToFileURL(path.join(pkg, "node", "index.mjs")).href);
 const webBuild = await import(pathToFileURL(path.join(pkg, "arps.js")).href);
@@ -46,7 +46,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     r.free();
   });
 
-  test(`${name}: registers the fixture pair, before and after errors`, { skip: coreStubbed && "core stubbed" }, () => {
+  test(`${name}: registers the fixture pair, before and after errors`, () => {
     const r = arps.Registrar.withDefaultModel();
     const check = (res) => {
       assert.ok(res.matrix instanceof Float32Array && res.matrix.length === 16);
