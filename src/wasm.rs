@@ -53,7 +53,7 @@ fn js_clock() -> crate::timing::Clock {
 
 /// Installs the panic hook once, so that a core bug (a panic) at least prints its message to
 /// the console before the instance traps. Runs when the module is instantiated.
-#[wasm_bindgen(start)]
+#[wasm_bindgen(start, skip_typescript)]
 fn start() {
     console_error_panic_hook::set_once();
 }

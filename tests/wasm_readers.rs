@@ -124,7 +124,7 @@ fn ascii_and_binary_agree_and_meshes_give_vertices() {
             .map_err(message)
             .unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(
-            xyz.len() >= 9 && xyz.len() % 3 == 0,
+            xyz.len() >= 9 && xyz.len().is_multiple_of(3),
             "{name}: {} values",
             xyz.len()
         );
