@@ -6,7 +6,11 @@ use std::path::{Path, PathBuf};
 
 fn shared_root() -> Option<PathBuf> {
     let beside = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/data");
-    let candidates = [std::env::var_os("ARPS_SHARED_DATA").map(PathBuf::from), Some(beside), Some(PathBuf::from("/work/shared/data"))];
+    let candidates = [
+        std::env::var_os("ARPS_SHARED_DATA").map(PathBuf::from),
+        Some(beside),
+        Some(PathBuf::from("/work/shared/data")),
+    ];
     candidates.into_iter().flatten().find(|p| p.join("formats").is_dir())
 }
 
@@ -65,7 +69,10 @@ fn every_shared_file_reads() {
         }
     }
     // Known-bad inputs: a scan without faces, and assimp's deliberately truncated ant-half.ply.
-    let expected = ["bun000.ply: mesh: PLY parse error: the file has no 'face' element", "ant-half.ply: mesh: PLY parse error: the file ends after 259 of the 912 'face' lines"];
+    let expected = [
+        "bun000.ply: mesh: PLY parse error: the file has no 'face' element",
+        "ant-half.ply: mesh: PLY parse error: the file ends after 259 of the 912 'face' lines",
+    ];
     failures.retain(|f| !expected.iter().any(|e| f.contains(e)));
     assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
 }

@@ -61,7 +61,8 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
     let mut data = None;
     let mut fields_line = 0;
     for (n, raw) in lines.by_ref() {
-        let line = utf8_line(F, n, raw).map_err(|_| Error::parse(F, format!("header line {n} is not valid UTF-8 text")))?;
+        let line =
+            utf8_line(F, n, raw).map_err(|_| Error::parse(F, format!("header line {n} is not valid UTF-8 text")))?;
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
             continue;
@@ -116,7 +117,10 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                     _ => {
                         return Err(Error::parse(
                             F,
-                            format!("line {n}: unknown DATA {} (expected ascii, binary or binary_compressed)", show(values.first().copied().unwrap_or(""))),
+                            format!(
+                                "line {n}: unknown DATA {} (expected ascii, binary or binary_compressed)",
+                                show(values.first().copied().unwrap_or(""))
+                            ),
                         ))
                     }
                 });
@@ -145,18 +149,16 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
     let counts = counts.map(|(_, c)| c).unwrap_or_else(|| vec![1; nf]);
     let mut fields = Vec::with_capacity(nf);
     for i in 0..nf {
-        let f = Field {
-            name: names[i].clone(),
-            size: sizes[i],
-            ty: types[i],
-            count: counts[i],
-        };
+        let f = Field { name: names[i].clone(), size: sizes[i], ty: types[i], count: counts[i] };
         let ok = match f.ty {
             'F' => f.size == 4 || f.size == 8,
             _ => matches!(f.size, 1 | 2 | 4 | 8),
         };
         if !ok {
-            return Err(Error::parse(F, format!("field '{}' has TYPE {} with SIZE {}, which is not a valid combination", f.name, f.ty, f.size)));
+            return Err(Error::parse(
+                F,
+                format!("field '{}' has TYPE {} with SIZE {}, which is not a valid combination", f.name, f.ty, f.size),
+            ));
         }
         fields.push(f);
     }
@@ -199,7 +201,10 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                 let Some((n, raw)) = lines.next() else {
                     return Err(Error::parse(
                         F,
-                        format!("the file ends after {read} of the {n_points} points the header declares (line {})", lines.line_no()),
+                        format!(
+                            "the file ends after {read} of the {n_points} points the header declares (line {})",
+                            lines.line_no()
+                        ),
                     ));
                 };
                 let line = utf8_line(F, n, raw)?;
@@ -208,7 +213,10 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                     continue;
                 }
                 if toks.len() < n_tokens {
-                    return Err(Error::parse(F, format!("line {n}: expected {n_tokens} values per point, found {}", toks.len())));
+                    return Err(Error::parse(
+                        F,
+                        format!("line {n}: expected {n_tokens} values per point, found {}", toks.len()),
+                    ));
                 }
                 let mut p = [0.0f32; 3];
                 for a in 0..3 {
@@ -245,9 +253,14 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
             }
         }
         Data::Compressed => {
-            let head = body
-                .get(..8)
-                .ok_or_else(|| Error::parse(F, format!("binary_compressed data is cut off at byte offset {body_at}: the 8-byte size header is missing")))?;
+            let head = body.get(..8).ok_or_else(|| {
+                Error::parse(
+                    F,
+                    format!(
+                        "binary_compressed data is cut off at byte offset {body_at}: the 8-byte size header is missing"
+                    ),
+                )
+            })?;
             let comp = u32::from_le_bytes([head[0], head[1], head[2], head[3]]) as usize;
             let uncomp = u32::from_le_bytes([head[4], head[5], head[6], head[7]]) as u64;
             let payload = 8usize.checked_add(comp).and_then(|end| body.get(8..end)).ok_or_else(|| {
@@ -276,13 +289,12 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                     format!("binary_compressed data declares {uncomp} uncompressed bytes from {comp} compressed bytes, more than LZF can produce"),
                 ));
             }
-            let raw = lzf::decompress(payload, uncomp as usize)
-                .map_err(|e| Error::parse(F, format!("binary_compressed data (from byte offset {}): {e}", body_at + 8)))?;
+            let raw = lzf::decompress(payload, uncomp as usize).map_err(|e| {
+                Error::parse(F, format!("binary_compressed data (from byte offset {}): {e}", body_at + 8))
+            })?;
             // Field-major layout: all points' values of field 0, then of field 1, ...
             let n = n_points as usize;
-            let starts: Vec<usize> = (0..3)
-                .map(|a| fields[..axes[a].0].iter().map(|f| f.bytes() * n).sum())
-                .collect();
+            let starts: Vec<usize> = (0..3).map(|a| fields[..axes[a].0].iter().map(|f| f.bytes() * n).sum()).collect();
             out.reserve(n);
             for i in 0..n {
                 out.push([0, 1, 2].map(|a| {
@@ -293,8 +305,5 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
             }
         }
     }
-    Ok(Mesh {
-        vertices: out,
-        triangles: Vec::new(),
-    })
+    Ok(Mesh { vertices: out, triangles: Vec::new() })
 }
