@@ -29,6 +29,8 @@ pub mod normals;
 pub mod register;
 pub mod sampling;
 pub mod timing;
+#[cfg(feature = "train")]
+pub mod train;
 pub mod transform;
 pub mod weights;
 
