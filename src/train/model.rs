@@ -50,10 +50,6 @@ pub struct Forward {
     pub shifts_source: Vec<Id>,
     /// Target shifts (`[1, 3]` each).
     pub shifts_target: Vec<Id>,
-    /// Source GMM `[J, 5]` rows `(pi, mu, var)` on the raw source coordinates.
-    pub gmm_source: Id,
-    /// Target GMM `[J, 5]`.
-    pub gmm_target: Id,
     /// `T_12` (source -> target), `[4, 4]` row-major.
     pub t12: Id,
     /// `T_21` (target -> source), `[4, 4]` row-major.
@@ -238,10 +234,8 @@ pub fn forward(t: &mut Tape, config: &ModelConfig, params: &Params, source: &[[f
         let logits = net.mlp(t, h, "head", nhead, false);
         ops::softmax_rows(t, logits)
     });
-    let gmm_source = ops::gmm_params(t, gamma[0], source);
-    let gmm_target = ops::gmm_params(t, gamma[1], target);
-    let t12 = ops::procrustes(t, gmm_source, gmm_target);
-    let t21 = ops::procrustes(t, gmm_target, gmm_source);
+    let t12 = ops::gmr(t, gamma[0], gamma[1], source, target);
+    let t21 = ops::gmr(t, gamma[1], gamma[0], target, source);
     Forward {
         params: ids,
         gamma_source: gamma[0],
@@ -250,8 +244,6 @@ pub fn forward(t: &mut Tape, config: &ModelConfig, params: &Params, source: &[[f
         steps,
         shifts_source: shifts_s,
         shifts_target: shifts_t,
-        gmm_source,
-        gmm_target,
         t12,
         t21,
     }
