@@ -251,7 +251,7 @@ fn procrustes_f64_including_near_degenerate() {
 /// where it is consistent: the differences at `h` and `h/2` must agree (otherwise a kink lies in
 /// the interval and another random direction is drawn). The rounding noise is measured on
 /// directions whose true derivative is exactly zero (the attention key biases: softmax is
-/// invariant to them). A tensor passes when analytic and numeric agree within 3 % plus three
+/// invariant to them). A tensor passes when analytic and numeric agree within 3 % plus five
 /// times that noise.
 fn model_check_with(reference: Reference, loss: LossConfig, strict: bool) -> f64 {
     let mut cfg = ModelConfig::tiny();
@@ -267,7 +267,7 @@ fn model_check_with(reference: Reference, loss: LossConfig, strict: bool) -> f64
         let mut t = Tape::new();
         let fwd = train::forward(&mut t, &cfg, p, &pair.source, &pair.target);
         let (total, _) = losses::record(&mut t, &fwd, &pair, &loss);
-        t.scalar(total) as f64
+        t.scalar64(total)
     };
     // top-H switches its selection (a jump) under larger steps
     let h = if reference == Reference::TopH { 2e-4f32 } else { 1e-3 };
@@ -308,7 +308,7 @@ fn model_check_with(reference: Reference, loss: LossConfig, strict: bool) -> f64
             if (n1 - n2).abs() > 0.01 * n1.abs().max(n2.abs()) + 2.0 * noise {
                 continue; // a kink or a selection change inside the interval
             }
-            let err = (n2 - ana).abs() / (0.03 * n2.abs().max(ana.abs()) + 3.0 * noise);
+            let err = (n2 - ana).abs() / (0.03 * n2.abs().max(ana.abs()) + 5.0 * noise);
             worst = worst.max(err);
             if !strict {
                 eprintln!("{name}: analytic {ana:.6e} numeric {n2:.6e} score {err:.2}");
@@ -386,7 +386,7 @@ fn fd_sweep_one_tensor() {
         let mut t = Tape::new();
         let fwd = train::forward(&mut t, &cfg, p, &pair.source, &pair.target);
         let (total, _) = losses::record(&mut t, &fwd, &pair, &loss);
-        t.scalar(total) as f64
+        t.scalar64(total)
     };
     for i in 0..grads[&name].len().min(4) {
         let mut line = format!("{name}[{i}] analytic {:.6e}:", grads[&name][i]);

@@ -190,7 +190,7 @@ pub fn record(t: &mut Tape, fwd: &Forward, pair: &Pair, cfg: &LossConfig) -> (Id
     let la = ops::sq_err(t, a, &IDENTITY, 1.0 / 16.0);
     let lb = ops::sq_err(t, b, &IDENTITY, 1.0 / 16.0);
     let sup = ops::weighted_total(t, &[(la, 1.0), (lb, 1.0)]);
-    parts.sup = t.scalar(sup) as f64;
+    parts.sup = t.scalar64(sup);
     if cfg.sup != 0.0 {
         terms.push((sup, cfg.sup));
     }
@@ -216,7 +216,7 @@ pub fn record(t: &mut Tape, fwd: &Forward, pair: &Pair, cfg: &LossConfig) -> (Id
     }
     if !ctr_terms.is_empty() {
         let ctr = ops::weighted_total(t, &ctr_terms);
-        parts.ctr = t.scalar(ctr) as f64;
+        parts.ctr = t.scalar64(ctr);
         if cfg.ctr != 0.0 {
             terms.push((ctr, cfg.ctr));
         }
@@ -226,7 +226,7 @@ pub fn record(t: &mut Tape, fwd: &Forward, pair: &Pair, cfg: &LossConfig) -> (Id
     parts.steps = fwd.steps.iter().map(|&s| t.scalar(s) as f64).collect();
     if !sq.is_empty() {
         let stp = ops::weighted_total(t, &sq);
-        parts.stp = t.scalar(stp) as f64;
+        parts.stp = t.scalar64(stp);
         if cfg.stp != 0.0 {
             terms.push((stp, cfg.stp));
         }
@@ -234,7 +234,7 @@ pub fn record(t: &mut Tape, fwd: &Forward, pair: &Pair, cfg: &LossConfig) -> (Id
     // affine (cycle) loss
     let cyc = ops::matmul(t, fwd.t12, fwd.t21);
     let aff = ops::sq_err(t, cyc, &IDENTITY, 3.0 / 16.0);
-    parts.aff = t.scalar(aff) as f64;
+    parts.aff = t.scalar64(aff);
     if cfg.aff != 0.0 {
         terms.push((aff, cfg.aff));
     }
@@ -246,7 +246,7 @@ pub fn record(t: &mut Tape, fwd: &Forward, pair: &Pair, cfg: &LossConfig) -> (Id
         let x = t.constant(&tgt, pair.target.len(), 3);
         let moved = ops::transform_points(t, fwd.t12, s);
         let reg = ops::chamfer_sq(t, moved, x);
-        parts.reg = t.scalar(reg) as f64;
+        parts.reg = t.scalar64(reg);
         terms.push((reg, cfg.reg));
     }
     // dense membership consistency
@@ -254,10 +254,10 @@ pub fn record(t: &mut Tape, fwd: &Forward, pair: &Pair, cfg: &LossConfig) -> (Id
         let pairs = correspondences(pair, cfg.consistency_radius);
         parts.consistency_pairs = pairs.len() as f64;
         let c = ops::membership_consistency(t, fwd.gamma_source, fwd.gamma_target, &pairs, cfg.consistency_kind);
-        parts.consistency = t.scalar(c) as f64;
+        parts.consistency = t.scalar64(c);
         terms.push((c, cfg.consistency));
     }
     let total = ops::weighted_total(t, &terms);
-    parts.total = t.scalar(total) as f64;
+    parts.total = t.scalar64(total);
     (total, parts)
 }

@@ -109,12 +109,46 @@ impl Pool {
     }
 }
 
+/// Time spent per op kind (when profiling is on).
+#[derive(Clone, Debug, Default)]
+pub struct Profile {
+    /// `(op name, forward seconds, backward seconds, count)`, in first-seen order.
+    pub ops: Vec<(&'static str, f64, f64, usize)>,
+    mark: Option<std::time::Instant>,
+}
+
+impl Profile {
+    fn entry(&mut self, name: &'static str) -> &mut (&'static str, f64, f64, usize) {
+        let i = match self.ops.iter().position(|e| e.0 == name) {
+            Some(i) => i,
+            None => {
+                self.ops.push((name, 0.0, 0.0, 0));
+                self.ops.len() - 1
+            }
+        };
+        &mut self.ops[i]
+    }
+
+    /// Attributes the time since the last mark to `name`'s forward.
+    fn forward(&mut self, name: &'static str) {
+        let now = std::time::Instant::now();
+        if let Some(m) = self.mark {
+            let e = self.entry(name);
+            e.1 += (now - m).as_secs_f64();
+            e.3 += 1;
+        }
+        self.mark = Some(now);
+    }
+}
+
 /// The tape.
 #[derive(Default)]
 pub struct Tape {
     pub(crate) nodes: Vec<Node>,
     grads: Vec<Vec<f32>>,
     pub(crate) pool: Pool,
+    profile: Option<Profile>,
+    scalars64: Vec<(usize, f64)>,
 }
 
 impl fmt::Debug for Tape {
@@ -195,6 +229,32 @@ impl Tape {
         for g in self.grads.drain(..) {
             self.pool.give(g);
         }
+        self.scalars64.clear();
+    }
+
+    /// Records the unrounded value of a `1 x 1` node (ops that accumulate in `f64` call this).
+    pub fn set_scalar64(&mut self, id: Id, v: f64) {
+        self.scalars64.push((id.0, v));
+    }
+
+    /// The value of a `1 x 1` node in `f64`: the unrounded value if its op recorded one,
+    /// else the `f32` value.
+    pub fn scalar64(&self, id: Id) -> f64 {
+        self.scalars64.iter().rev().find(|(i, _)| *i == id.0).map_or_else(|| self.scalar(id) as f64, |&(_, v)| v)
+    }
+
+    /// Turns on per-op timing (forward time is the time between consecutive node records,
+    /// so it includes the caller's glue).
+    pub fn enable_profile(&mut self) {
+        self.profile = Some(Profile {
+            mark: Some(std::time::Instant::now()),
+            ..Profile::default()
+        });
+    }
+
+    /// The timing so far (None unless [`Tape::enable_profile`] was called).
+    pub fn profile(&self) -> Option<&Profile> {
+        self.profile.as_ref()
     }
 
     /// Number of nodes.
@@ -226,6 +286,9 @@ impl Tape {
     /// A leaf from an owned buffer.
     pub fn leaf(&mut self, value: Vec<f32>, rows: usize, cols: usize, needs_grad: bool) -> Id {
         assert_eq!(value.len(), rows * cols, "leaf: data length vs shape");
+        if let Some(p) = &mut self.profile {
+            p.forward("leaf");
+        }
         self.nodes.push(Node {
             value,
             rows,
@@ -240,6 +303,9 @@ impl Tape {
     /// needs no gradient is stored without its backward.
     pub fn push(&mut self, value: Vec<f32>, rows: usize, cols: usize, op: Box<dyn Op>, needs_grad: bool) -> Id {
         debug_assert_eq!(value.len(), rows * cols, "{}: output length vs shape", op.name());
+        if let Some(p) = &mut self.profile {
+            p.forward(op.name());
+        }
         let op = if needs_grad {
             Some(op)
         } else {
@@ -313,11 +379,16 @@ impl Tape {
                 continue;
             }
             let g = std::mem::take(&mut self.grads[i]);
+            let start = self.profile.as_ref().map(|_| std::time::Instant::now());
             {
                 let (nodes, grads, pool) = (&self.nodes, &mut self.grads, &mut self.pool);
                 let op = nodes[i].op.as_ref().expect("checked");
                 let mut ctx = Backward { nodes, grads, pool };
                 op.backward(&mut ctx, Id(i), &g);
+            }
+            if let (Some(p), Some(s)) = (&mut self.profile, start) {
+                let name = self.nodes[i].op.as_ref().map_or("leaf", |o| o.name());
+                p.entry(name).2 += s.elapsed().as_secs_f64();
             }
             self.pool.give(g);
         }

@@ -3,7 +3,7 @@
 //! ops). The per-head probabilities are kept for the backward pass.
 
 use crate::nn::matmul::gemm;
-use crate::nn::softmax_rows_inplace;
+use crate::train::simd;
 use crate::train::tape::{Backward, Id, Op, Pool, Tape};
 
 struct Attention {
@@ -35,7 +35,7 @@ pub fn attention(t: &mut Tape, q: Id, k: Id, v: Id, heads: usize) -> Id {
         let off = h * dk;
         let p = &mut probs[h * nq * nk..(h + 1) * nq * nk];
         gemm(nq, dk, nk, scale, &qv[off..], d as isize, 1, &kv[off..], 1, d as isize, 0.0, p, nk as isize, 1);
-        softmax_rows_inplace(p, nk);
+        simd::softmax_rows(p, nk);
         gemm(nq, nk, dk, 1.0, p, nk as isize, 1, &vv[off..], d as isize, 1, 0.0, &mut out[off..], d as isize, 1);
     }
     let needs = t.any_needs(&[q, k, v]);
@@ -78,16 +78,11 @@ impl Op for Attention {
             gemm(nk, nq, dk, 1.0, p, 1, nk as isize, &g[off..], d as isize, 1, 1.0, &mut dv[off..], d as isize, 1);
             // dP = dO_h V_h^T
             gemm(nq, dk, nk, 1.0, &g[off..], d as isize, 1, &vv[off..], 1, d as isize, 0.0, &mut ds, nk as isize, 1);
-            // dS = P * (dP - rowsum(dP * P))
-            for (dr, pr) in ds.chunks_exact_mut(nk).zip(p.chunks_exact(nk)) {
-                let dot: f32 = dr.iter().zip(pr).map(|(a, b)| a * b).sum();
-                for (x, p) in dr.iter_mut().zip(pr) {
-                    *x = p * (*x - dot);
-                }
-            }
-            // dQ_h += scale dS K_h ; dK_h += scale dS^T Q_h
-            gemm(nq, nk, dk, scale, &ds, nk as isize, 1, &kv[off..], d as isize, 1, 1.0, &mut dq[off..], d as isize, 1);
-            gemm(nk, nq, dk, scale, &ds, 1, nk as isize, &qv[off..], d as isize, 1, 1.0, &mut dkb[off..], d as isize, 1);
+            // dS = scale * P * (dP - rowsum(dP * P))
+            simd::softmax_backward(&mut ds, p, nk, scale);
+            // dQ_h += dS K_h ; dK_h += dS^T Q_h
+            gemm(nq, nk, dk, 1.0, &ds, nk as isize, 1, &kv[off..], d as isize, 1, 1.0, &mut dq[off..], d as isize, 1);
+            gemm(nk, nq, dk, 1.0, &ds, 1, nk as isize, &qv[off..], d as isize, 1, 1.0, &mut dkb[off..], d as isize, 1);
         }
         ctx.accumulate(self.q, &dq);
         ctx.accumulate(self.k, &dkb);

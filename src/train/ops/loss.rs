@@ -16,9 +16,10 @@ pub fn sq_err(t: &mut Tape, a: Id, target: &[f32], scale: f32) -> Id {
     assert_eq!(v.len(), target.len(), "sq_err: target length");
     let s: f64 = v.iter().zip(target).map(|(&x, &y)| ((x - y) as f64).powi(2)).sum();
     let mut y = t.uninit(1);
-    y[0] = (scale as f64 * s) as f32;
+    let v64 = scale as f64 * s;
+    y[0] = v64 as f32;
     let needs = t.needs_grad(a);
-    t.push(
+    let id = t.push(
         y,
         1,
         1,
@@ -28,7 +29,9 @@ pub fn sq_err(t: &mut Tape, a: Id, target: &[f32], scale: f32) -> Id {
             scale,
         }),
         needs,
-    )
+    );
+    t.set_scalar64(id, v64);
+    id
 }
 
 impl Op for SqErr {
@@ -77,7 +80,7 @@ pub fn chamfer_sq(t: &mut Tape, a: Id, b: Id) -> Id {
     let mut y = t.uninit(1);
     y[0] = (s_ab + s_ba) as f32;
     let needs = t.any_needs(&[a, b]);
-    t.push(
+    let id = t.push(
         y,
         1,
         1,
@@ -88,7 +91,9 @@ pub fn chamfer_sq(t: &mut Tape, a: Id, b: Id) -> Id {
             nn_ba: best_ba.iter().map(|x| x.1).collect(),
         }),
         needs,
-    )
+    );
+    t.set_scalar64(id, s_ab + s_ba);
+    id
 }
 
 impl Op for Chamfer {
@@ -163,9 +168,10 @@ pub fn membership_consistency(t: &mut Tape, a: Id, b: Id, pairs: &[(usize, usize
         }
     }
     let mut y = t.uninit(1);
-    y[0] = if pairs.is_empty() { 0.0 } else { (s / pairs.len() as f64) as f32 };
+    let v64 = if pairs.is_empty() { 0.0 } else { s / pairs.len() as f64 };
+    y[0] = v64 as f32;
     let needs = !pairs.is_empty() && t.any_needs(&[a, b]);
-    t.push(
+    let id = t.push(
         y,
         1,
         1,
@@ -177,7 +183,9 @@ pub fn membership_consistency(t: &mut Tape, a: Id, b: Id, pairs: &[(usize, usize
             kind,
         }),
         needs,
-    )
+    );
+    t.set_scalar64(id, v64);
+    id
 }
 
 impl Op for Consistency {

@@ -92,13 +92,15 @@ pub fn weighted_total(t: &mut Tape, terms: &[(Id, f32)]) -> Id {
     let mut s = 0.0f64;
     for &(a, c) in terms {
         assert_eq!(t.shape(a), (1, 1), "weighted_total: terms must be 1x1");
-        s += c as f64 * t.value(a)[0] as f64;
+        s += c as f64 * t.scalar64(a);
     }
     let mut y = t.uninit(1);
     y[0] = s as f32;
     let ids: Vec<Id> = terms.iter().map(|&(a, _)| a).collect();
     let needs = t.any_needs(&ids);
-    t.push(y, 1, 1, Box::new(WeightedTotal { terms: terms.to_vec() }), needs)
+    let id = t.push(y, 1, 1, Box::new(WeightedTotal { terms: terms.to_vec() }), needs);
+    t.set_scalar64(id, s);
+    id
 }
 
 impl Op for WeightedTotal {
