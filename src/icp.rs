@@ -1,6 +1,9 @@
 //! ICP refinement: point-to-point and point-to-plane.
 
-use nalgebra::Matrix4;
+use crate::spatial::KdIndex;
+use crate::{gmr, normals, transform};
+use nalgebra::{Matrix4, Matrix6, Rotation3, SymmetricEigen, Vector3, Vector6};
+use std::sync::OnceLock;
 
 /// Which ICP to run after the network.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -46,30 +49,293 @@ pub struct IcpResult {
     pub converged: bool,
 }
 
+
+impl IcpParams {
+    /// Open3D's defaults for a given distance: point-to-plane, 30 iterations, relative
+    /// fitness and RMSE changes of 1e-6.
+    pub fn new(kind: IcpKind, max_correspondence_distance: f64) -> Self {
+        Self {
+            kind,
+            max_correspondence_distance,
+            max_iterations: 30,
+            relative_fitness: 1e-6,
+            relative_rmse: 1e-6,
+        }
+    }
+}
+
+/// Neighbours used for the target normals of point-to-plane ICP.
+pub const NORMAL_NEIGHBOURS: usize = 20;
+
+/// Eigenvalues of the point-to-plane normal matrix below this fraction of the largest are
+/// treated as zero (no motion along those directions): a planar or otherwise degenerate target
+/// leaves some motions unconstrained, and they are left alone rather than guessed.
+pub const PLANE_RANK_TOL: f64 = 1e-9;
+
 /// A target prepared once (kd-tree, normals) and reused by several ICP runs.
 pub struct IcpTarget {
-    _private: (),
+    points: Vec<[f32; 3]>,
+    index: KdIndex,
+    normals: OnceLock<Vec<[f32; 3]>>,
+}
+
+impl std::fmt::Debug for IcpTarget {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("IcpTarget")
+            .field("points", &self.points.len())
+            .field("normals", &self.normals.get().is_some())
+            .finish()
+    }
+}
+
+/// Buffers reused across the iterations of one run.
+#[derive(Default)]
+struct Scratch {
+    /// Inlier pairs `(moved source point, target index)`.
+    moved: Vec<[f64; 3]>,
+    target: Vec<usize>,
+    /// Contiguous copies for [`gmr::kabsch`].
+    target_xyz: Vec<[f64; 3]>,
 }
 
 impl IcpTarget {
     /// Builds the kd-tree (and the normals, for point-to-plane) of the target.
+    ///
+    /// With `with_normals = false` the normals are still computed on first use if a
+    /// point-to-plane run asks for them. Normals use [`NORMAL_NEIGHBOURS`] neighbours.
     pub fn new(points: &[[f32; 3]], with_normals: bool) -> Self {
-        let _ = (points, with_normals);
-        todo!("helper: icp")
+        let target = Self {
+            points: points.to_vec(),
+            index: KdIndex::new(points),
+            normals: OnceLock::new(),
+        };
+        if with_normals {
+            target.normals();
+        }
+        target
+    }
+
+    /// A target with caller-supplied normals (one per point, any orientation; they are
+    /// normalised, and a zero or non-finite one is replaced by [`normals::DEFAULT_NORMAL`]).
+    /// If the counts differ the normals are estimated instead.
+    pub fn with_normals(points: &[[f32; 3]], normals: &[[f32; 3]]) -> Self {
+        let target = Self::new(points, false);
+        if normals.len() == points.len() {
+            let clean = normals
+                .iter()
+                .map(|n| {
+                    let len = (n[0] as f64).hypot(n[1] as f64).hypot(n[2] as f64);
+                    if len > 0.0 && len.is_finite() {
+                        n.map(|v| (v as f64 / len) as f32)
+                    } else {
+                        normals::DEFAULT_NORMAL
+                    }
+                })
+                .collect();
+            let _ = target.normals.set(clean);
+        }
+        target
+    }
+
+    /// The target points.
+    pub fn points(&self) -> &[[f32; 3]] {
+        &self.points
+    }
+
+    /// The target normals, estimating them now if they were not yet.
+    pub fn normals(&self) -> &[[f32; 3]] {
+        self.normals
+            .get_or_init(|| normals::estimate_normals(&self.points, NORMAL_NEIGHBOURS))
     }
 
     /// Runs ICP from `init` (`T_target_source`).
+    ///
+    /// Each iteration: move the source by the current transform, pair every moved point with
+    /// its nearest target point, keep pairs closer than `max_correspondence_distance`
+    /// (strictly), solve an update on them and compose it on the left (`T <- dT * T`).
+    /// * [`IcpKind::Point`]: the closed-form [`gmr::kabsch`] fit of the inlier pairs.
+    /// * [`IcpKind::Plane`]: minimises `sum ((R p + t - q) . n_q)^2` linearised about the
+    ///   inliers' centroid (small-angle `R ~ I + [w]x`), a 6x6 least-squares problem in `f64`
+    ///   solved by a truncated eigen-decomposition (directions with eigenvalue below
+    ///   [`PLANE_RANK_TOL`] times the largest are not moved); the rotation is then built exactly
+    ///   from `w` (axis-angle), and the composed rotation re-orthonormalised every iteration.
+    /// * Stops as Open3D's `ICPConvergenceCriteria` does: after an update, when the change of
+    ///   fitness is below `relative_fitness` **and** the change of inlier RMSE below
+    ///   `relative_rmse` (Open3D compares absolute differences of the two figures, and so does
+    ///   this), or after `max_iterations` updates.
+    /// * [`IcpKind::Off`], `max_iterations == 0`, or no inlier pair at `init`: returns `init`
+    ///   with its fitness and RMSE, 0 iterations, `converged = false`. If a step loses every
+    ///   inlier, the run stops there with `converged = false`. A non-finite update is discarded
+    ///   and the run stops.
+    ///
+    /// The result's `fitness` and `inlier_rmse` are those of the returned transform.
     pub fn align(&self, source: &[[f32; 3]], init: &Matrix4<f64>, params: &IcpParams) -> IcpResult {
-        let _ = (source, init, params);
-        todo!("helper: icp")
+        let d = params.max_correspondence_distance;
+        let mut scratch = Scratch::default();
+        let (mut fitness, mut rmse) = self.correspond(source, init, d, &mut scratch);
+        let mut result = IcpResult {
+            T_target_source: *init,
+            fitness,
+            inlier_rmse: rmse,
+            iterations: 0,
+            converged: false,
+        };
+        if params.kind == IcpKind::Off || scratch.moved.is_empty() {
+            return result;
+        }
+        let target_normals = if params.kind == IcpKind::Plane { Some(self.normals()) } else { None };
+        let mut t = *init;
+        for it in 1..=params.max_iterations {
+            let update = match target_normals {
+                Some(n) => self.plane_update(&scratch, n),
+                None => self.point_update(&mut scratch),
+            };
+            let Some(update) = update else { break };
+            let next = compose_rigid(&update, &t);
+            if next.iter().any(|v| !v.is_finite()) {
+                break;
+            }
+            t = next;
+            let (f, r) = self.correspond(source, &t, d, &mut scratch);
+            result.iterations = it;
+            result.T_target_source = t;
+            let done = (f - fitness).abs() < params.relative_fitness && (r - rmse).abs() < params.relative_rmse;
+            fitness = f;
+            rmse = r;
+            result.fitness = f;
+            result.inlier_rmse = r;
+            if scratch.moved.is_empty() {
+                break;
+            }
+            if done {
+                result.converged = true;
+                break;
+            }
+        }
+        result
+    }
+
+    /// Fitness and inlier RMSE of `source` under `T_target_source` at `max_distance`
+    /// (the definitions of [`IcpResult`]), without iterating.
+    ///
+    /// `fitness` = (source points whose nearest target point is closer than `max_distance`) /
+    /// (all source points); `inlier_rmse` = the RMS of those distances (0 when there are none).
+    /// An empty source or target, or a `max_distance` that is not positive, gives `(0, 0)`.
+    pub fn evaluate(&self, source: &[[f32; 3]], t: &Matrix4<f64>, max_distance: f64) -> (f64, f64) {
+        self.correspond(source, t, max_distance, &mut Scratch::default())
+    }
+
+    /// One correspondence pass: fills `scratch` with the inlier pairs and returns
+    /// `(fitness, inlier_rmse)`.
+    fn correspond(&self, source: &[[f32; 3]], t: &Matrix4<f64>, max_distance: f64, scratch: &mut Scratch) -> (f64, f64) {
+        scratch.moved.clear();
+        scratch.target.clear();
+        if source.is_empty() || self.index.is_empty() || !(max_distance > 0.0) {
+            return (0.0, 0.0);
+        }
+        let max2 = max_distance * max_distance;
+        let r = transform::rotation(t);
+        let tr = transform::translation(t);
+        let mut sum2 = 0.0f64;
+        for s in source {
+            let p = r * Vector3::new(s[0] as f64, s[1] as f64, s[2] as f64) + tr;
+            let q32 = [p.x as f32, p.y as f32, p.z as f32];
+            let Some((j, _)) = self.index.nearest(&q32) else { continue };
+            let q = self.points[j];
+            let d2 = (p.x - q[0] as f64).powi(2) + (p.y - q[1] as f64).powi(2) + (p.z - q[2] as f64).powi(2);
+            if d2 < max2 {
+                sum2 += d2;
+                scratch.moved.push([p.x, p.y, p.z]);
+                scratch.target.push(j);
+            }
+        }
+        let inliers = scratch.moved.len();
+        if inliers == 0 {
+            return (0.0, 0.0);
+        }
+        (inliers as f64 / source.len() as f64, (sum2 / inliers as f64).sqrt())
+    }
+
+    /// Point-to-point update: Kabsch on the current inlier pairs.
+    fn point_update(&self, scratch: &mut Scratch) -> Option<Matrix4<f64>> {
+        scratch.target_xyz.clear();
+        scratch
+            .target_xyz
+            .extend(scratch.target.iter().map(|&j| self.points[j].map(|v| v as f64)));
+        Some(gmr::kabsch(&scratch.moved, &scratch.target_xyz, None))
+    }
+
+    /// Point-to-plane update on the current inlier pairs (see [`IcpTarget::align`]).
+    fn plane_update(&self, scratch: &Scratch, normals: &[[f32; 3]]) -> Option<Matrix4<f64>> {
+        let n = scratch.moved.len();
+        if n == 0 {
+            return None;
+        }
+        // Linearise about the centroid of the moved source: better conditioned far from the
+        // origin, and the rotation part is then about the data, not about (0, 0, 0).
+        let mut c = Vector3::zeros();
+        for p in &scratch.moved {
+            c += Vector3::from(*p);
+        }
+        c /= n as f64;
+        let mut ata = Matrix6::<f64>::zeros();
+        let mut atb = Vector6::<f64>::zeros();
+        for (p, &j) in scratch.moved.iter().zip(&scratch.target) {
+            let p = Vector3::from(*p) - c;
+            let q = Vector3::from(self.points[j].map(|v| v as f64)) - c;
+            let nq = Vector3::from(normals[j].map(|v| v as f64));
+            let pxn = p.cross(&nq);
+            let a = Vector6::new(pxn.x, pxn.y, pxn.z, nq.x, nq.y, nq.z);
+            let b = (q - p).dot(&nq);
+            // Upper triangle only; mirrored below.
+            for r in 0..6 {
+                let ar = a[r];
+                for s in r..6 {
+                    ata[(r, s)] += ar * a[s];
+                }
+                atb[r] += ar * b;
+            }
+        }
+        for r in 0..6 {
+            for s in 0..r {
+                ata[(r, s)] = ata[(s, r)];
+            }
+        }
+        if !ata.iter().chain(atb.iter()).all(|v| v.is_finite()) {
+            return None;
+        }
+        let scale = ata.abs().max();
+        if !(scale > 0.0) {
+            return None;
+        }
+        let eig = SymmetricEigen::new(ata / scale);
+        let rhs = atb / scale;
+        let lmax = eig.eigenvalues.max();
+        if !(lmax > 0.0) {
+            return None;
+        }
+        let mut x = Vector6::<f64>::zeros();
+        for k in 0..6 {
+            let l = eig.eigenvalues[k];
+            if l > PLANE_RANK_TOL * lmax {
+                let v = eig.eigenvectors.column(k);
+                x += v * (v.dot(&rhs) / l);
+            }
+        }
+        let w = Vector3::new(x[0], x[1], x[2]);
+        let dt = Vector3::new(x[3], x[4], x[5]);
+        let r = Rotation3::new(w).into_inner();
+        // x -> R (x - c) + c + dt
+        let t = c + dt - r * c;
+        let m = transform::from_rotation_translation(&r, &t);
+        m.iter().all(|v| v.is_finite()).then_some(m)
     }
 }
 
-impl IcpTarget {
-    /// Fitness and inlier RMSE of `source` under `T_target_source` at `max_distance`
-    /// (the definitions of [`IcpResult`]), without iterating.
-    pub fn evaluate(&self, source: &[[f32; 3]], t: &Matrix4<f64>, max_distance: f64) -> (f64, f64) {
-        let _ = (source, t, max_distance);
-        todo!("helper: icp")
-    }
+/// `a * b` for rigid transforms, with the rotation re-orthonormalised so that many
+/// compositions do not drift.
+fn compose_rigid(a: &Matrix4<f64>, b: &Matrix4<f64>) -> Matrix4<f64> {
+    let m = a * b;
+    let r = gmr::nearest_rotation(&transform::rotation(&m));
+    transform::from_rotation_translation(&r, &transform::translation(&m))
 }

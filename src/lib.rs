@@ -28,6 +28,7 @@ pub mod nn;
 pub mod normals;
 pub mod register;
 pub mod sampling;
+pub mod spatial;
 pub mod timing;
 #[cfg(feature = "train")]
 pub mod train;

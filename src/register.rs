@@ -22,6 +22,10 @@ pub struct Options {
     pub seed: u64,
     /// Refinement after the network. Default [`IcpKind::Plane`] (point-to-plane).
     pub icp: IcpKind,
+    /// Run the network. Default `true`. With `false` the coarse estimate is the initial transform
+    /// (identity unless [`Options::initial_transform`] is set) and only ICP runs: the classical
+    /// baseline, or a refinement when a good initial guess is known.
+    pub network: bool,
     /// ICP's final max correspondence distance, in the **user's units**. Default `None`: 0.025
     /// normalised units (2.5% of the clouds' shared half-extent). ICP runs coarse to fine at
     /// 4x, 2x and 1x this distance; `fitness` and `inlier_rmse` are measured at 1x.
@@ -44,6 +48,7 @@ impl Default for Options {
             network_points: None,
             seed: 0,
             icp: IcpKind::Plane,
+            network: true,
             max_correspondence_distance: None,
             icp_max_iterations: 30,
             voxel_size: None,
@@ -118,6 +123,11 @@ impl Registrar {
         })
     }
 
+    /// A registrar on the embedded default model ([`crate::weights::DEFAULT_MODEL`]).
+    pub fn with_default_model() -> Result<Self> {
+        Self::from_bytes(crate::weights::DEFAULT_MODEL)
+    }
+
     /// A registrar from weights-file bytes.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
         Self::new(&Weights::from_bytes(bytes)?)
@@ -141,7 +151,12 @@ impl Registrar {
     /// Registers `source` onto `target`: returns `T_target_source` and quality figures.
     /// The clouds may be in any unit (the same for both) and any size >= 16 points.
     #[allow(non_snake_case)]
-    pub fn register(&mut self, source: &PointCloud, target: &PointCloud, options: &Options) -> Result<Registration> {
+    pub fn register(
+        &mut self,
+        source: &PointCloud,
+        target: &PointCloud,
+        options: &Options,
+    ) -> Result<Registration> {
         let mut watch = Stopwatch::start(self.clock);
         let mut total = Stopwatch::start(self.clock);
         let mut warnings = Vec::new();
@@ -153,20 +168,29 @@ impl Registrar {
             )));
         }
         if options.icp_max_iterations > 10_000 {
-            return Err(Error::InvalidOption(format!("icpMaxIterations = {} is more than 10000", options.icp_max_iterations)));
+            return Err(Error::InvalidOption(format!(
+                "icpMaxIterations = {} is more than 10000",
+                options.icp_max_iterations
+            )));
         }
         let source = source.validated("source", MIN_POINTS, options.non_finite)?;
         let target = target.validated("target", MIN_POINTS, options.non_finite)?;
         let init = match &options.initial_transform {
             Some(rows) => {
                 let m = transform::from_rows(rows);
-                transform::check_rigid(&m, 1e-4).map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?;
+                transform::check_rigid(&m, 1e-4).map_err(|e| {
+                    Error::InvalidOption(format!("initialTransform is not rigid: {e}"))
+                })?;
                 m
             }
             None => Matrix4::identity(),
         };
         // The network sees the source already moved by the initial guess.
-        let source_init = if options.initial_transform.is_some() { source.transformed(&init) } else { source.clone() };
+        let source_init = if options.initial_transform.is_some() {
+            source.transformed(&init)
+        } else {
+            source.clone()
+        };
         let norm = JointNormalization::of_pair(&source_init, &target);
         let s = norm.scale;
         let src_n = source_init.transformed(&norm.source_to_normalized());
@@ -174,17 +198,28 @@ impl Registrar {
 
         let d_final = match options.max_correspondence_distance {
             Some(d) if d.is_finite() && d > 0.0 => d / s,
-            Some(d) => return Err(Error::InvalidOption(format!("maxCorrespondenceDistance = {d} must be a positive number"))),
+            Some(d) => {
+                return Err(Error::InvalidOption(format!(
+                    "maxCorrespondenceDistance = {d} must be a positive number"
+                )))
+            }
             None => DEFAULT_MAX_CORRESPONDENCE,
         };
         let voxel = match options.voxel_size {
             Some(v) if v.is_finite() && v >= 0.0 => v / s,
-            Some(v) => return Err(Error::InvalidOption(format!("voxelSize = {v} must be >= 0"))),
+            Some(v) => {
+                return Err(Error::InvalidOption(format!(
+                    "voxelSize = {v} must be >= 0"
+                )))
+            }
             None => d_final * 0.5,
         };
         for (what, c) in [("source", &src_n), ("target", &tgt_n)] {
             if c.len() < n_net {
-                warnings.push(format!("{what} has {} points, fewer than the network's {n_net}: some were used twice", c.len()));
+                warnings.push(format!(
+                    "{what} has {} points, fewer than the network's {n_net}: some were used twice",
+                    c.len()
+                ));
             }
         }
         let net_src = sampling::network_sample(&src_n, n_net, options.seed);
@@ -193,14 +228,20 @@ impl Registrar {
         let icp_tgt = sampling::voxel_downsample(&tgt_n, voxel as f32);
         let preprocess_ms = watch.lap();
 
-        let out = self.model.forward(&net_src.points, &net_tgt.points, &mut self.workspace)?;
-        let network_ms = watch.lap();
-
-        let j = self.model.config.gaussians;
-        let g_src = gmr::gmm_params(&net_src.points, &out.gamma_source, j);
-        let g_tgt = gmr::gmm_params(&net_tgt.points, &out.gamma_target, j);
-        let t_net_n = gmr::solve(&g_src, &g_tgt);
-        let gmr_ms = watch.lap();
+        let (t_net_n, network_ms, gmr_ms) = if options.network {
+            let out = self
+                .model
+                .forward(&net_src.points, &net_tgt.points, &mut self.workspace)?;
+            let network_ms = watch.lap();
+            let j = self.model.config.gaussians;
+            let g_src = gmr::gmm_params(&net_src.points, &out.gamma_source, j);
+            let g_tgt = gmr::gmm_params(&net_tgt.points, &out.gamma_target, j);
+            let t = gmr::solve(&g_src, &g_tgt);
+            (t, network_ms, watch.lap())
+        } else {
+            // identity in user units (relative to the initial guess), in normalised units
+            (norm.normalize_transform(&Matrix4::identity()), 0.0, 0.0)
+        };
 
         let with_normals = options.icp == IcpKind::Plane;
         let target_index = IcpTarget::new(&icp_tgt.points, with_normals);

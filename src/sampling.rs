@@ -1,7 +1,9 @@
 //! Deterministic downsampling: to the network's N points, and voxel grids for ICP.
 
 use crate::cloud::PointCloud;
+use rand::Rng;
 use rand_chacha::ChaCha8Rng;
+use std::collections::HashMap;
 
 /// The crate's seeded random generator (ChaCha8): the same seed gives the same stream on every
 /// platform, native and wasm32.
@@ -12,14 +14,124 @@ pub fn rng(seed: u64) -> ChaCha8Rng {
 
 /// Voxel-grid downsampling: one point per occupied cube of side `voxel` (the centroid of the
 /// points in it), in a deterministic order. `voxel <= 0` returns a copy.
+///
+/// * Voxel keys are `floor(x / voxel)` per axis, computed in `f64` and converted to `i64` with
+///   saturation, so huge coordinate ranges (or tiny voxels) cannot overflow; at worst far-apart
+///   points beyond `+-9.2e18` voxels share an edge voxel.
+/// * Centroids are accumulated in `f64`.
+/// * Output order: ascending voxel key `(x, y, z)` lexicographically. It depends only on the
+///   input points (not on their order, up to floating-point summation order within a voxel),
+///   and keeps neighbouring voxels close in memory.
+/// * Points with a NaN or infinite coordinate are dropped (validation normally removed them).
+/// * `voxel` not finite or `<= 0`: a copy of the cloud, unchanged.
 pub fn voxel_downsample(cloud: &PointCloud, voxel: f32) -> PointCloud {
-    let _ = (cloud, voxel);
-    todo!("helper: sampling")
+    if !(voxel.is_finite() && voxel > 0.0) {
+        return cloud.clone();
+    }
+    let inv = 1.0 / voxel as f64;
+    let mut keyed: Vec<([i64; 3], usize)> = cloud
+        .points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.iter().all(|v| v.is_finite()))
+        // `as i64` saturates (and a finite f64 floor is never NaN).
+        .map(|(i, p)| (p.map(|v| (v as f64 * inv).floor() as i64), i))
+        .collect();
+    // (key, index) pairs are unique, so the unstable sort is deterministic.
+    keyed.sort_unstable();
+    let mut out = Vec::new();
+    let mut run = keyed.as_slice();
+    while let Some(&(key, _)) = run.first() {
+        let len = run.iter().take_while(|(k, _)| *k == key).count();
+        let mut s = [0.0f64; 3];
+        for &(_, i) in &run[..len] {
+            let p = cloud.points[i];
+            for a in 0..3 {
+                s[a] += p[a] as f64;
+            }
+        }
+        let n = len as f64;
+        out.push([(s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32]);
+        run = &run[len..];
+    }
+    PointCloud::new(out)
 }
 
-/// Draws exactly `n` points for the network, deterministically for a seed (rule documented here
-/// by the implementation).
+/// Draws exactly `n` points for the network, deterministically for a seed.
+///
+/// **Rule** (the same on every platform, native and wasm32):
+/// * If the cloud has at least `n` points: `n` distinct indices drawn uniformly **without
+///   replacement** by a partial Fisher-Yates shuffle driven by [`rng`]`(seed)`, kept in the
+///   order drawn. Step `i` (0-based) draws `j` uniformly in `i..len` (a `u64` range) and swaps
+///   positions `i` and `j` of the virtual index array `0..len`. This matches the training
+///   protocol's independent uniform resampling of each cloud.
+/// * If it has fewer (but at least one): all points in their original order, then
+///   `n - len` more drawn uniformly **with replacement** (indices in `0..len`, same generator).
+/// * An empty cloud gives an empty cloud (there is nothing to pad with); `n == 0` too.
+///
+/// No density equalisation is done here: the network was trained on uniform random subsets of
+/// the raw clouds, so that is what it is fed. For very uneven scans (LiDAR: dense near the
+/// sensor, sparse far away) a caller can voxel-equalise first,
+/// `network_sample(&voxel_downsample(c, v), n, seed)`, with `v` small enough to keep well over
+/// `n` voxels; this changes the input distribution the network sees, so it is a choice for the
+/// caller, not a default.
 pub fn network_sample(cloud: &PointCloud, n: usize, seed: u64) -> PointCloud {
-    let _ = (cloud, n, seed);
-    todo!("helper: sampling")
+    let len = cloud.points.len();
+    if len == 0 || n == 0 {
+        return PointCloud::default();
+    }
+    let mut r = rng(seed);
+    let mut out = Vec::with_capacity(n);
+    if len >= n {
+        // Sparse partial Fisher-Yates: `moved[k]` holds the index now at virtual position k
+        // (absent = k itself). O(n) time and memory whatever `len` is.
+        let mut moved: HashMap<u64, u64> = HashMap::with_capacity(n);
+        let len = len as u64;
+        for i in 0..n as u64 {
+            let j = r.random_range(i..len);
+            let at_i = moved.get(&i).copied().unwrap_or(i);
+            let at_j = moved.get(&j).copied().unwrap_or(j);
+            moved.insert(j, at_i);
+            out.push(cloud.points[at_j as usize]);
+        }
+    } else {
+        out.extend_from_slice(&cloud.points);
+        for _ in len..n {
+            let j = r.random_range(0..len as u64);
+            out.push(cloud.points[j as usize]);
+        }
+    }
+    PointCloud::new(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn voxel_grid_merges_and_orders() {
+        let c = PointCloud::new(vec![[0.1, 0.1, 0.1], [5.0, 0.0, 0.0], [0.3, 0.3, 0.3], [-0.5, 0.0, 0.0]]);
+        let v = voxel_downsample(&c, 1.0);
+        assert_eq!(v.points, vec![[-0.5, 0.0, 0.0], [0.2, 0.2, 0.2], [5.0, 0.0, 0.0]]);
+        assert_eq!(voxel_downsample(&c, 0.0), c);
+        assert_eq!(voxel_downsample(&c, f32::NAN), c);
+        assert_eq!(voxel_downsample(&c, -1.0), c);
+    }
+
+    #[test]
+    fn huge_coordinates_do_not_overflow() {
+        let c = PointCloud::new(vec![[3e38, -3e38, 0.0], [1.0, 1.0, 1.0], [3e38, -3e38, 0.0]]);
+        let v = voxel_downsample(&c, 1e-30);
+        assert_eq!(v.len(), 2);
+        assert!(v.points.iter().flatten().all(|x| x.is_finite()));
+    }
+
+    #[test]
+    fn padding_keeps_all_then_repeats() {
+        let c = PointCloud::new((0..10).map(|i| [i as f32, 0.0, 0.0]).collect());
+        let s = network_sample(&c, 25, 3);
+        assert_eq!(s.len(), 25);
+        assert_eq!(&s.points[..10], &c.points[..]);
+        assert!(network_sample(&PointCloud::default(), 5, 0).is_empty());
+    }
 }

@@ -115,7 +115,9 @@ impl ModelConfig {
             "web" => Ok(Self::web()),
             "paper" => Ok(Self::paper()),
             "tiny" => Ok(Self::tiny()),
-            other => Err(Error::InvalidOption(format!("unknown model preset '{other}' (expected web, paper or tiny)"))),
+            other => Err(Error::InvalidOption(format!(
+                "unknown model preset '{other}' (expected web, paper or tiny)"
+            ))),
         }
     }
 
@@ -152,16 +154,29 @@ impl ModelConfig {
             return bad(format!("n_points = {} is fewer than 16", self.n_points));
         }
         if self.token_dim() % self.heads != 0 {
-            return bad(format!("token width {} is not divisible by heads = {}", self.token_dim(), self.heads));
+            return bad(format!(
+                "token width {} is not divisible by heads = {}",
+                self.token_dim(),
+                self.heads
+            ));
         }
         if self.top_h > self.n_points {
-            return bad(format!("top_h = {} exceeds n_points = {}", self.top_h, self.n_points));
+            return bad(format!(
+                "top_h = {} exceeds n_points = {}",
+                self.top_h, self.n_points
+            ));
         }
         if !(self.soft_temperature.is_finite() && self.soft_temperature > 0.0) {
-            return bad(format!("soft_temperature = {} must be positive", self.soft_temperature));
+            return bad(format!(
+                "soft_temperature = {} must be positive",
+                self.soft_temperature
+            ));
         }
         if !(self.layer_norm_eps.is_finite() && self.layer_norm_eps > 0.0) {
-            return bad(format!("layer_norm_eps = {} must be positive", self.layer_norm_eps));
+            return bad(format!(
+                "layer_norm_eps = {} must be positive",
+                self.layer_norm_eps
+            ));
         }
         Ok(())
     }
@@ -179,7 +194,12 @@ impl ModelConfig {
         for l in 0..self.layers {
             let p = format!("layers.{l}");
             let mut prev = 3;
-            for (i, &h) in self.pos_hidden.iter().chain(std::iter::once(&c)).enumerate() {
+            for (i, &h) in self
+                .pos_hidden
+                .iter()
+                .chain(std::iter::once(&c))
+                .enumerate()
+            {
                 linear(&mut specs, format!("{p}.pos.{i}"), prev, h);
                 prev = h;
             }
@@ -203,7 +223,12 @@ impl ModelConfig {
             linear(&mut specs, format!("{p}.step.1"), self.step_hidden, 1);
         }
         let mut prev = 2 * c;
-        for (i, &h) in self.head_hidden.iter().chain(std::iter::once(&self.gaussians)).enumerate() {
+        for (i, &h) in self
+            .head_hidden
+            .iter()
+            .chain(std::iter::once(&self.gaussians))
+            .enumerate()
+        {
             linear(&mut specs, format!("head.{i}"), prev, h);
             prev = h;
         }
@@ -212,7 +237,10 @@ impl ModelConfig {
 
     /// Total number of parameters.
     pub fn parameter_count(&self) -> usize {
-        self.tensor_specs().iter().map(|(_, s)| s.iter().product::<usize>()).sum()
+        self.tensor_specs()
+            .iter()
+            .map(|(_, s)| s.iter().product::<usize>())
+            .sum()
     }
 }
 

@@ -1,7 +1,10 @@
 //! One ARPS layer (method.md B §2).
 
 use super::config::{ModelConfig, Reference};
-use crate::nn::{sigmoid, softmax_rows_inplace, workspace::take, AttentionBlock, LayerNorm, Linear, Mlp, MultiHeadAttention, Workspace};
+use crate::nn::{
+    sigmoid, softmax_rows_inplace, workspace::take, AttentionBlock, LayerNorm, Linear, Mlp,
+    MultiHeadAttention, Workspace,
+};
 use crate::weights::Weights;
 
 /// Weights of one ARPS layer (shared by source and target).
@@ -91,7 +94,9 @@ pub(crate) fn linear(w: &Weights, name: &str) -> Linear {
 
 pub(crate) fn mlp(w: &Weights, prefix: &str, layers: usize, relu_last: bool) -> Mlp {
     Mlp {
-        layers: (0..layers).map(|i| linear(w, &format!("{prefix}.{i}"))).collect(),
+        layers: (0..layers)
+            .map(|i| linear(w, &format!("{prefix}.{i}")))
+            .collect(),
         relu_last,
     }
 }
@@ -144,9 +149,14 @@ impl ArpsLayer {
         for st in [&mut ws.source, &mut ws.target] {
             let n = st.n;
             let phi = take(&mut ws.phi, n * c);
-            self.pos.forward(&st.x[..n * 3], n, phi, &mut ws.a, &mut ws.b);
+            self.pos
+                .forward(&st.x[..n * 3], n, phi, &mut ws.a, &mut ws.b);
             let g = take(&mut st.g, n * d);
-            for ((gr, fr), pr) in g.chunks_exact_mut(d).zip(st.f.chunks_exact(c)).zip(phi.chunks_exact(c)) {
+            for ((gr, fr), pr) in g
+                .chunks_exact_mut(d)
+                .zip(st.f.chunks_exact(c))
+                .zip(phi.chunks_exact(c))
+            {
                 gr[..c].copy_from_slice(fr);
                 gr[c..].copy_from_slice(pr);
             }
@@ -155,17 +165,38 @@ impl ArpsLayer {
         for st in [&mut ws.source, &mut ws.target] {
             let n = st.n;
             let g1 = take(&mut st.g1, n * d);
-            self.self_attn.forward(&st.g[..n * d], n, &st.g[..n * d], n, g1, &mut ws.attn);
+            self.self_attn
+                .forward(&st.g[..n * d], n, &st.g[..n * d], n, g1, &mut ws.attn);
         }
         // cross attention: each cloud's self-attended tokens attend to the other's
         let (s, t) = (&mut ws.source, &mut ws.target);
         let gs2 = take(&mut s.g2, s.n * d);
-        self.cross_attn.forward(&s.g1[..s.n * d], s.n, &t.g1[..t.n * d], t.n, gs2, &mut ws.attn);
+        self.cross_attn.forward(
+            &s.g1[..s.n * d],
+            s.n,
+            &t.g1[..t.n * d],
+            t.n,
+            gs2,
+            &mut ws.attn,
+        );
         let gt2 = take(&mut t.g2, t.n * d);
-        self.cross_attn.forward(&t.g1[..t.n * d], t.n, &s.g1[..s.n * d], s.n, gt2, &mut ws.attn);
+        self.cross_attn.forward(
+            &t.g1[..t.n * d],
+            t.n,
+            &s.g1[..s.n * d],
+            s.n,
+            gt2,
+            &mut ws.attn,
+        );
         // features and reference points
-        let mut mu = [([0.0f32; 3], vec![0.0f32; c]), ([0.0f32; 3], vec![0.0f32; c])];
-        for (st, (mx, mf)) in [&mut ws.source, &mut ws.target].into_iter().zip(mu.iter_mut()) {
+        let mut mu = [
+            ([0.0f32; 3], vec![0.0f32; c]),
+            ([0.0f32; 3], vec![0.0f32; c]),
+        ];
+        for (st, (mx, mf)) in [&mut ws.source, &mut ws.target]
+            .into_iter()
+            .zip(mu.iter_mut())
+        {
             let n = st.n;
             let f = take(&mut st.f, n * c);
             self.out.forward(&st.g2[..n * d], n, f);
@@ -193,10 +224,15 @@ impl ArpsLayer {
             step_in[3 + k] = mu[0].1[k] - mu[1].1[k];
         }
         let mut alpha = [0.0f32];
-        self.step.forward(&step_in, 1, &mut alpha, &mut ws.a, &mut ws.b);
+        self.step
+            .forward(&step_in, 1, &mut alpha, &mut ws.a, &mut ws.b);
         let s = sigmoid(alpha[0]);
         let mut shifts = [[0.0f32; 3]; 2];
-        for ((st, (mx, _)), shift) in [&mut ws.source, &mut ws.target].into_iter().zip(mu.iter()).zip(shifts.iter_mut()) {
+        for ((st, (mx, _)), shift) in [&mut ws.source, &mut ws.target]
+            .into_iter()
+            .zip(mu.iter())
+            .zip(shifts.iter_mut())
+        {
             *shift = mx.map(|v| s * v);
             for xi in st.x[..st.n * 3].chunks_exact_mut(3) {
                 for a in 0..3 {
@@ -224,7 +260,10 @@ fn reference_weights(layer: &ArpsLayer, cfg: &ModelConfig, f: &[f32], n: usize, 
         }
         _ => {
             let h = cfg.top_h.min(n);
-            let norms: Vec<f32> = f.chunks_exact(c).map(|r| r.iter().map(|v| v * v).sum()).collect();
+            let norms: Vec<f32> = f
+                .chunks_exact(c)
+                .map(|r| r.iter().map(|v| v * v).sum())
+                .collect();
             let mut idx: Vec<usize> = (0..n).collect();
             idx.sort_by(|&a, &b| norms[b].total_cmp(&norms[a]).then(a.cmp(&b)));
             w.fill(0.0);

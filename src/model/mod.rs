@@ -55,7 +55,9 @@ impl Model {
     /// Builds the network from validated weights.
     pub fn from_weights(w: &Weights) -> Result<Self> {
         w.config.validate()?;
-        let layers = (0..w.config.layers).map(|l| ArpsLayer::from_weights(w, l)).collect();
+        let layers = (0..w.config.layers)
+            .map(|l| ArpsLayer::from_weights(w, l))
+            .collect();
         let head = layer::mlp(w, "head", w.config.head_hidden.len() + 1, false);
         Ok(Self {
             config: w.config.clone(),
@@ -66,11 +68,19 @@ impl Model {
 
     /// Runs the network on a pair. Points are in normalised units; each cloud is pre-centred
     /// here (its own mean subtracted), so the output does not depend on where the clouds sit.
-    pub fn forward(&self, source: &[[f32; 3]], target: &[[f32; 3]], ws: &mut ModelWorkspace) -> Result<ForwardOutput> {
+    pub fn forward(
+        &self,
+        source: &[[f32; 3]],
+        target: &[[f32; 3]],
+        ws: &mut ModelWorkspace,
+    ) -> Result<ForwardOutput> {
         let min = self.min_points();
         for (what, c) in [("source", source), ("target", target)] {
             if c.len() < min {
-                return Err(Error::InvalidCloud(format!("{what} has {} points; the network needs at least {min}", c.len())));
+                return Err(Error::InvalidCloud(format!(
+                    "{what} has {} points; the network needs at least {min}",
+                    c.len()
+                )));
             }
         }
         let c = self.config.feature_dim;
@@ -85,7 +95,10 @@ impl Model {
             out.shifts_target.push(dt);
         }
         let j = self.config.gaussians;
-        for (f, n, gamma) in [(&lw.source.f, ns, &mut out.gamma_source), (&lw.target.f, nt, &mut out.gamma_target)] {
+        for (f, n, gamma) in [
+            (&lw.source.f, ns, &mut out.gamma_source),
+            (&lw.target.f, nt, &mut out.gamma_target),
+        ] {
             let h = take(&mut ws.head_in, n * 2 * c);
             let mut max = vec![f32::NEG_INFINITY; c];
             for row in f[..n * c].chunks_exact(c) {
@@ -102,6 +115,41 @@ impl Model {
             softmax_rows_inplace(gamma, j);
         }
         Ok(out)
+    }
+
+    /// Floating-point operations of one forward pass on `ns` + `nt` points (multiply-adds count
+    /// as 2; matrix products only, which dominate).
+    pub fn flops(&self, ns: usize, nt: usize) -> u64 {
+        let c = &self.config;
+        let (ns, nt) = (ns as u64, nt as u64);
+        let lin = |rows: u64, i: usize, o: usize| 2 * rows * i as u64 * o as u64;
+        let d = c.token_dim();
+        let block = |nq: u64, nk: u64| {
+            lin(nq, d, d) * 2
+                + lin(nk, d, d) * 2
+                + 4 * nq * nk * d as u64
+                + lin(nq, d, c.ffn_dim)
+                + lin(nq, c.ffn_dim, d)
+        };
+        let mut per_cloud_pos = 0;
+        let mut prev = 3;
+        for &h in c.pos_hidden.iter().chain(std::iter::once(&c.feature_dim)) {
+            per_cloud_pos += lin(1, prev, h);
+            prev = h;
+        }
+        let mut head = 0;
+        let mut prev = 2 * c.feature_dim;
+        for &h in c.head_hidden.iter().chain(std::iter::once(&c.gaussians)) {
+            head += lin(1, prev, h);
+            prev = h;
+        }
+        let layer = per_cloud_pos * (ns + nt)
+            + block(ns, ns)
+            + block(nt, nt)
+            + block(ns, nt)
+            + block(nt, ns)
+            + lin(ns + nt, d, c.feature_dim);
+        layer * c.layers as u64 + head * (ns + nt)
     }
 
     /// Fewest points per cloud the network accepts (the top-H size, and at least 16).

@@ -1,0 +1,270 @@
+//! `arps`: register two point clouds from the command line, describe a weights file, or benchmark
+//! the pipeline.
+//!
+//! Errors print one line on stderr (`arps: ...`) and exit with status 1 (2 for usage errors).
+
+use arps::{io, transform, IcpKind, ModelConfig, NonFinite, Options, Registrar, StoreAs, Weights};
+use clap::{Parser, Subcommand, ValueEnum};
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+mod bench;
+
+#[derive(Parser)]
+#[command(
+    name = "arps",
+    version,
+    about = "Partial-to-partial point-cloud registration (DGMR-ARPS + ICP)"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum IcpArg {
+    /// Point-to-point ICP.
+    Point,
+    /// Point-to-plane ICP (default).
+    Plane,
+    /// No refinement.
+    Off,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Register SOURCE onto TARGET and print T_target_source (maps source points into the target frame).
+    Register {
+        /// Source cloud (PLY, PCD, XYZ/PTS/CSV, OBJ, OFF, STL).
+        source: PathBuf,
+        /// Target cloud.
+        target: PathBuf,
+        /// Weights file (safetensors); default: the embedded model.
+        #[arg(long)]
+        weights: Option<PathBuf>,
+        /// Refinement after the network.
+        #[arg(long, value_enum, default_value_t = IcpArg::Plane)]
+        icp: IcpArg,
+        /// Final ICP max correspondence distance, in the clouds' units (default: 2.5% of their half-extent).
+        #[arg(long)]
+        max_correspondence_distance: Option<f64>,
+        /// Points per cloud fed to the network (default: the model's N).
+        #[arg(long)]
+        network_points: Option<usize>,
+        /// Seed of the network's point sampling.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Drop NaN/Inf points instead of failing.
+        #[arg(long)]
+        drop_non_finite: bool,
+        /// Print exactly one JSON object on stdout.
+        #[arg(long)]
+        json: bool,
+    },
+    /// Describe a weights file: config, parameter count, provenance.
+    Info {
+        /// Weights file (safetensors).
+        weights: PathBuf,
+    },
+    /// Time each stage (read, downsample, network, GMR, ICP) on a 1024 + 1024-point pair and compare the
+    /// network's GFLOP/s with the matmul peak measured in the same run.
+    Bench(bench::BenchArgs),
+    /// Write deterministic random (untrained) weights for a preset; for development and tests.
+    RandomWeights {
+        /// Preset: web, paper or tiny.
+        #[arg(long, default_value = "web")]
+        preset: String,
+        /// Seed.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        /// Store as f16 (half the size).
+        #[arg(long)]
+        f16: bool,
+        /// Output path.
+        #[arg(long)]
+        out: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match run(cli.command) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("arps: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn read_cloud(path: &Path) -> Result<arps::PointCloud, String> {
+    io::read_path(path).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// The weights at `path`, or the embedded default model.
+pub(crate) fn load_registrar(path: Option<&Path>) -> Result<Registrar, String> {
+    match path {
+        Some(p) => {
+            let bytes = std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            Registrar::from_bytes(&bytes).map_err(|e| format!("{}: {e}", p.display()))
+        }
+        None => Registrar::with_default_model().map_err(|e| e.to_string()),
+    }
+}
+
+fn run(command: Command) -> Result<(), String> {
+    match command {
+        Command::Register {
+            source,
+            target,
+            weights,
+            icp,
+            max_correspondence_distance,
+            network_points,
+            seed,
+            drop_non_finite,
+            json,
+        } => {
+            let mut registrar = load_registrar(weights.as_deref())?;
+            let t0 = std::time::Instant::now();
+            let src = read_cloud(&source)?;
+            let tgt = read_cloud(&target)?;
+            let options = Options {
+                icp: match icp {
+                    IcpArg::Point => IcpKind::Point,
+                    IcpArg::Plane => IcpKind::Plane,
+                    IcpArg::Off => IcpKind::Off,
+                },
+                max_correspondence_distance,
+                network_points,
+                seed,
+                non_finite: if drop_non_finite {
+                    NonFinite::Drop
+                } else {
+                    NonFinite::Error
+                },
+                ..Options::default()
+            };
+            let r = registrar
+                .register(&src, &tgt, &options)
+                .map_err(|e| e.to_string())?;
+            let time_ms = t0.elapsed().as_secs_f64() * 1e3;
+            if json {
+                let out = serde_json::json!({
+                    "T_target_source": transform::to_rows(&r.T_target_source),
+                    "T_target_source_network": transform::to_rows(&r.T_target_source_network),
+                    "fitness": r.fitness,
+                    "inlier_rmse": r.inlier_rmse,
+                    "icp_iterations": r.icp_iterations,
+                    "icp_converged": r.icp_converged,
+                    "max_correspondence_distance": r.max_correspondence_distance,
+                    "time_ms": time_ms,
+                    "timings_ms": r.timings,
+                    "warnings": r.warnings,
+                });
+                println!("{out}");
+            } else {
+                println!("T_target_source (maps source points into the target frame):");
+                for row in transform::to_rows(&r.T_target_source) {
+                    println!(
+                        "  {:>12.6} {:>12.6} {:>12.6} {:>12.6}",
+                        row[0], row[1], row[2], row[3]
+                    );
+                }
+                println!(
+                    "rotation {:.3} deg, translation {:.6}",
+                    transform::rotation_angle_deg(&r.T_target_source),
+                    transform::translation(&r.T_target_source).norm()
+                );
+                println!(
+                    "fitness {:.4} (within {:.4}), inlier RMSE {:.6}, ICP iterations {} ({})",
+                    r.fitness,
+                    r.max_correspondence_distance,
+                    r.inlier_rmse,
+                    r.icp_iterations,
+                    if r.icp_converged {
+                        "converged"
+                    } else {
+                        "not converged"
+                    }
+                );
+                let t = r.timings;
+                println!(
+                    "time {time_ms:.1} ms (read+all); preprocess {:.1}, network {:.1}, GMR {:.2}, ICP {:.1} ms",
+                    t.preprocess_ms, t.network_ms, t.gmr_ms, t.icp_ms
+                );
+                for w in &r.warnings {
+                    println!("warning: {w}");
+                }
+            }
+            Ok(())
+        }
+        Command::Info { weights } => {
+            let bytes =
+                std::fs::read(&weights).map_err(|e| format!("{}: {e}", weights.display()))?;
+            let w =
+                Weights::from_bytes(&bytes).map_err(|e| format!("{}: {e}", weights.display()))?;
+            let c = &w.config;
+            println!(
+                "{}: arps weights, format version {}",
+                weights.display(),
+                arps::weights::FORMAT_VERSION
+            );
+            println!("  file size     {} bytes", bytes.len());
+            println!("  parameters    {}", c.parameter_count());
+            println!("  preset        {}", c.preset);
+            println!(
+                "  network       N = {}, C = {} (tokens {}), heads {}, FFN {}, layers {}, J = {}",
+                c.n_points,
+                c.feature_dim,
+                c.token_dim(),
+                c.heads,
+                c.ffn_dim,
+                c.layers,
+                c.gaussians
+            );
+            println!(
+                "  reference     {:?} (top_h {}, temperature {})",
+                c.reference, c.top_h, c.soft_temperature
+            );
+            println!(
+                "  pos MLP       3 -> {:?} -> {}",
+                c.pos_hidden, c.feature_dim
+            );
+            println!(
+                "  head          {} -> {:?} -> {}",
+                2 * c.feature_dim,
+                c.head_hidden,
+                c.gaussians
+            );
+            println!(
+                "  provenance    {}",
+                serde_json::to_string_pretty(&w.provenance)
+                    .unwrap_or_default()
+                    .replace('\n', "\n                ")
+            );
+            Ok(())
+        }
+        Command::Bench(args) => bench::run(args),
+        Command::RandomWeights {
+            preset,
+            seed,
+            f16,
+            out,
+        } => {
+            let config = ModelConfig::preset(&preset).map_err(|e| e.to_string())?;
+            let w = Weights::random(&config, seed).map_err(|e| e.to_string())?;
+            let bytes = w
+                .to_bytes(if f16 { StoreAs::F16 } else { StoreAs::F32 })
+                .map_err(|e| e.to_string())?;
+            std::fs::write(&out, &bytes).map_err(|e| format!("{}: {e}", out.display()))?;
+            println!(
+                "wrote {} ({} bytes, {} parameters)",
+                out.display(),
+                bytes.len(),
+                config.parameter_count()
+            );
+            Ok(())
+        }
+    }
+}

@@ -1,0 +1,53 @@
+//! Shared test helpers: deterministic synthetic surfaces and transform checks.
+#![allow(dead_code)]
+
+use arps::transform::{euler_xyz, from_rotation_translation};
+use arps::PointCloud;
+use nalgebra::{Matrix4, Vector3};
+
+/// `n` points on a bumpy, asymmetric closed surface (about 2 units across), from a low-discrepancy
+/// sequence: deterministic, no RNG.
+pub fn bumpy_surface(n: usize, phase: f64) -> PointCloud {
+    let mut pts = Vec::with_capacity(n);
+    for i in 0..n as u64 {
+        let a = (0.5 + (i as f64 + phase * 1000.0) * 0.754_877_666_246_692_7) % 1.0;
+        let b = (0.5 + (i as f64 + phase * 1000.0) * 0.569_840_290_998_053_3) % 1.0;
+        let u = a * std::f64::consts::TAU;
+        let v = (2.0 * b - 1.0).acos();
+        let r = 0.8 + 0.12 * (3.0 * u).sin() * (2.0 * v).cos() + 0.08 * (5.0 * v).sin();
+        let p = [
+            r * v.sin() * u.cos() * 1.2,
+            r * v.sin() * u.sin() * 0.8,
+            r * v.cos() + 0.2 * (u).cos(),
+        ];
+        pts.push(p.map(|x| x as f32));
+    }
+    PointCloud::new(pts)
+}
+
+/// `R = Rx Ry Rz` from degrees, plus a translation.
+pub fn motion(deg: [f64; 3], t: [f64; 3]) -> Matrix4<f64> {
+    let r = deg.map(f64::to_radians);
+    from_rotation_translation(&euler_xyz(r[0], r[1], r[2]), &Vector3::from(t))
+}
+
+/// Keeps the points whose dot product with `dir` (about the centroid) is above the given quantile:
+/// a half-space crop, as in the training protocol.
+pub fn crop(cloud: &PointCloud, dir: [f32; 3], keep: f64) -> PointCloud {
+    let c = cloud.centroid();
+    let mut d: Vec<(f32, [f32; 3])> = cloud
+        .points
+        .iter()
+        .map(|p| {
+            (
+                ((p[0] as f64 - c[0]) * dir[0] as f64
+                    + (p[1] as f64 - c[1]) * dir[1] as f64
+                    + (p[2] as f64 - c[2]) * dir[2] as f64) as f32,
+                *p,
+            )
+        })
+        .collect();
+    d.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let k = (cloud.len() as f64 * keep) as usize;
+    PointCloud::new(d[..k].iter().map(|x| x.1).collect())
+}

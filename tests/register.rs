@@ -1,0 +1,262 @@
+//! The pipeline end to end on synthetic clouds: known transforms recovered, determinism, units,
+//! options, and every bad input gets an error that leaves the registrar usable.
+
+mod common;
+
+use arps::transform::{rotation_error_deg, translation_error};
+use arps::{IcpKind, ModelConfig, NonFinite, Options, PointCloud, Registrar, Weights};
+use common::{bumpy_surface, crop, motion};
+
+fn registrar() -> Registrar {
+    Registrar::new(&Weights::random(&ModelConfig::web(), 0).unwrap()).unwrap()
+}
+
+#[test]
+fn recovers_a_known_transform_with_icp() {
+    let source = bumpy_surface(3000, 0.0);
+    let truth = motion([10.0, -6.0, 8.0], [0.05, -0.03, 0.04]);
+    let target = bumpy_surface(3000, 0.37).transformed(&truth);
+    for icp in [IcpKind::Plane, IcpKind::Point] {
+        let r = registrar()
+            .register(
+                &source,
+                &target,
+                &Options {
+                    icp,
+                    ..Options::default()
+                },
+            )
+            .unwrap();
+        let (re, te) = (
+            rotation_error_deg(&r.T_target_source, &truth),
+            translation_error(&r.T_target_source, &truth),
+        );
+        assert!(re < 0.5 && te < 0.01, "{icp:?}: {re} deg, {te}");
+        assert!(r.fitness > 0.9, "{icp:?}: fitness {}", r.fitness);
+        assert!(r.icp_iterations > 0);
+        arps::transform::check_rigid(&r.T_target_source, 1e-6).unwrap();
+        arps::transform::check_rigid(&r.T_target_source_network, 1e-6).unwrap();
+    }
+}
+
+#[test]
+fn partial_overlap_pair_with_icp() {
+    let full = bumpy_surface(6000, 0.0);
+    let truth = motion([-12.0, 9.0, 5.0], [0.1, 0.05, -0.08]);
+    let source = crop(&full, [1.0, 0.2, 0.0], 0.75);
+    let target = crop(&bumpy_surface(6000, 0.5), [-0.3, 1.0, 0.2], 0.75).transformed(&truth);
+    let r = registrar()
+        .register(&source, &target, &Options::default())
+        .unwrap();
+    let re = rotation_error_deg(&r.T_target_source, &truth);
+    let te = translation_error(&r.T_target_source, &truth);
+    assert!(re < 1.0 && te < 0.02, "{re} deg, {te}");
+}
+
+#[test]
+fn same_seed_same_output_and_units_are_respected() {
+    let source = bumpy_surface(2000, 0.0);
+    let truth = motion([8.0, 4.0, -7.0], [0.04, 0.02, 0.05]);
+    let target = bumpy_surface(2000, 0.2).transformed(&truth);
+    let mut reg = registrar();
+    let a = reg.register(&source, &target, &Options::default()).unwrap();
+    let b = reg.register(&source, &target, &Options::default()).unwrap();
+    assert_eq!(a.T_target_source, b.T_target_source);
+    assert_eq!(a.T_target_source_network, b.T_target_source_network);
+    assert_eq!(a.fitness, b.fitness);
+    // millimetres instead of metres: same rotation, translation x 1000
+    let scale = nalgebra::Matrix4::new_scaling(1000.0);
+    let mm = reg
+        .register(
+            &source.transformed(&scale),
+            &target.transformed(&scale),
+            &Options::default(),
+        )
+        .unwrap();
+    assert!(rotation_error_deg(&mm.T_target_source, &a.T_target_source) < 0.05);
+    let (ta, tm) = (
+        arps::transform::translation(&a.T_target_source),
+        arps::transform::translation(&mm.T_target_source),
+    );
+    assert!((tm / 1000.0 - ta).norm() < 1e-3, "{ta} vs {tm}");
+    assert!((mm.inlier_rmse / 1000.0 - a.inlier_rmse).abs() < 1e-3);
+}
+
+#[test]
+fn initial_transform_and_icp_only() {
+    let source = bumpy_surface(2500, 0.0);
+    let truth = motion([80.0, 0.0, 30.0], [0.5, 0.0, 0.2]);
+    let target = bumpy_surface(2500, 0.3).transformed(&truth);
+    // a guess 5 degrees off
+    let guess = motion([75.0, 3.0, 28.0], [0.48, 0.02, 0.18]);
+    let rows = arps::transform::to_rows(&guess);
+    for network in [true, false] {
+        let options = Options {
+            initial_transform: Some(rows),
+            network,
+            ..Options::default()
+        };
+        let r = registrar().register(&source, &target, &options).unwrap();
+        let re = rotation_error_deg(&r.T_target_source, &truth);
+        assert!(re < 0.5, "network {network}: {re}");
+    }
+    // ICP alone from identity: the network transform is the identity
+    let r = registrar()
+        .register(
+            &source,
+            &target,
+            &Options {
+                network: false,
+                icp: IcpKind::Off,
+                ..Options::default()
+            },
+        )
+        .unwrap();
+    assert!(
+        (r.T_target_source_network - nalgebra::Matrix4::identity())
+            .abs()
+            .max()
+            < 1e-9
+    );
+    assert_eq!(r.icp_iterations, 0);
+}
+
+#[test]
+fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
+    let mut reg = registrar();
+    let good = bumpy_surface(600, 0.0);
+    let mut nan = good.clone();
+    nan.points[42][2] = f32::NAN;
+    let cases: Vec<(PointCloud, PointCloud, Options, &str)> = vec![
+        (
+            nan.clone(),
+            good.clone(),
+            Options::default(),
+            "source point 42",
+        ),
+        (
+            good.clone(),
+            PointCloud::new(vec![[0.0, 0.0, 0.0]; 5]),
+            Options::default(),
+            "target has 5 finite points",
+        ),
+        (
+            good.clone(),
+            PointCloud::default(),
+            Options::default(),
+            "target has 0",
+        ),
+        (
+            good.clone(),
+            PointCloud::new(vec![[1.0, 2.0, 3.0]; 100]),
+            Options::default(),
+            "zero extent",
+        ),
+        (
+            good.clone(),
+            good.clone(),
+            Options {
+                network_points: Some(3),
+                ..Options::default()
+            },
+            "networkPoints",
+        ),
+        (
+            good.clone(),
+            good.clone(),
+            Options {
+                max_correspondence_distance: Some(-1.0),
+                ..Options::default()
+            },
+            "maxCorrespondenceDistance",
+        ),
+        (
+            good.clone(),
+            good.clone(),
+            Options {
+                max_correspondence_distance: Some(f64::NAN),
+                ..Options::default()
+            },
+            "maxCorrespondenceDistance",
+        ),
+        (
+            good.clone(),
+            good.clone(),
+            Options {
+                voxel_size: Some(-0.1),
+                ..Options::default()
+            },
+            "voxelSize",
+        ),
+        (
+            good.clone(),
+            good.clone(),
+            Options {
+                icp_max_iterations: 1_000_000,
+                ..Options::default()
+            },
+            "icpMaxIterations",
+        ),
+        (
+            good.clone(),
+            good.clone(),
+            Options {
+                initial_transform: Some([
+                    [2.0, 0.0, 0.0, 0.0],
+                    [0.0, 1.0, 0.0, 0.0],
+                    [0.0, 0.0, 1.0, 0.0],
+                    [0.0, 0.0, 0.0, 1.0],
+                ]),
+                ..Options::default()
+            },
+            "initialTransform",
+        ),
+    ];
+    let expected = reg.register(&good, &good, &Options::default()).unwrap();
+    for (s, t, o, hint) in cases {
+        let e = reg.register(&s, &t, &o).unwrap_err().to_string();
+        assert!(e.contains(hint), "expected '{hint}' in: {e}");
+        // still works, and gives the same answer as before the error
+        let again = reg.register(&good, &good, &Options::default()).unwrap();
+        assert_eq!(again.T_target_source, expected.T_target_source);
+    }
+    // dropping non-finite points is an explicit choice
+    assert!(reg
+        .register(
+            &nan,
+            &good,
+            &Options {
+                non_finite: NonFinite::Drop,
+                ..Options::default()
+            }
+        )
+        .is_ok());
+}
+
+#[test]
+fn small_clouds_are_padded_with_a_warning() {
+    let source = bumpy_surface(200, 0.0);
+    let target = bumpy_surface(200, 0.1);
+    let r = registrar()
+        .register(&source, &target, &Options::default())
+        .unwrap();
+    assert!(
+        r.warnings
+            .iter()
+            .any(|w| w.contains("fewer than the network's")),
+        "{:?}",
+        r.warnings
+    );
+}
+
+#[test]
+fn options_deserialize_with_defaults_and_reject_unknown_fields() {
+    let o: Options = serde_json::from_str(r#"{"icp": "point", "seed": 3}"#).unwrap();
+    assert_eq!(o.icp, IcpKind::Point);
+    assert_eq!(o.seed, 3);
+    assert_eq!(o.icp_max_iterations, Options::default().icp_max_iterations);
+    let e = serde_json::from_str::<Options>(r#"{"icpp": "point"}"#)
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("icpp"), "{e}");
+}

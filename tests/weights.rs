@@ -1,0 +1,193 @@
+//! The weights file: round trips, and every kind of corrupt or mismatched file gets a clear error.
+
+use arps::model::{ModelConfig, Reference};
+use arps::{StoreAs, Weights};
+use safetensors::tensor::{Dtype, TensorView};
+use std::collections::HashMap;
+
+fn tiny() -> Weights {
+    Weights::random(&ModelConfig::tiny(), 7).unwrap()
+}
+
+fn err(bytes: &[u8]) -> String {
+    Weights::from_bytes(bytes).unwrap_err().to_string()
+}
+
+/// Serialises arbitrary tensors with the given metadata (for crafting bad files).
+fn craft(
+    tensors: &[(String, Dtype, Vec<usize>, Vec<u8>)],
+    meta: HashMap<String, String>,
+) -> Vec<u8> {
+    let views: Vec<(String, TensorView<'_>)> = tensors
+        .iter()
+        .map(|(n, d, s, b)| (n.clone(), TensorView::new(*d, s.clone(), b).unwrap()))
+        .collect();
+    safetensors::serialize(views, Some(meta)).unwrap()
+}
+
+fn good_meta(config: &ModelConfig) -> HashMap<String, String> {
+    HashMap::from([
+        ("format".to_string(), "arps-weights".to_string()),
+        ("format_version".to_string(), "1".to_string()),
+        ("config".to_string(), serde_json::to_string(config).unwrap()),
+    ])
+}
+
+fn f32_tensors(w: &Weights) -> Vec<(String, Dtype, Vec<usize>, Vec<u8>)> {
+    w.config
+        .tensor_specs()
+        .into_iter()
+        .map(|(n, s)| {
+            let b = w.tensors[&n].iter().flat_map(|v| v.to_le_bytes()).collect();
+            (n, Dtype::F32, s, b)
+        })
+        .collect()
+}
+
+#[test]
+fn random_is_deterministic_and_seeded() {
+    assert_eq!(tiny(), tiny());
+    assert_ne!(
+        tiny().tensors,
+        Weights::random(&ModelConfig::tiny(), 8).unwrap().tensors
+    );
+}
+
+#[test]
+fn f32_round_trip_is_exact_and_f16_is_close() {
+    let w = tiny();
+    let back = Weights::from_bytes(&w.to_bytes(StoreAs::F32).unwrap()).unwrap();
+    assert_eq!(back, w);
+    let half = Weights::from_bytes(&w.to_bytes(StoreAs::F16).unwrap()).unwrap();
+    assert_eq!(half.config, w.config);
+    for (name, v) in &w.tensors {
+        for (a, b) in v.iter().zip(&half.tensors[name]) {
+            assert!(
+                (a - b).abs() <= 1e-3 * a.abs().max(1e-2),
+                "{name}: {a} vs {b}"
+            );
+        }
+    }
+}
+
+#[test]
+fn both_reference_kinds_round_trip() {
+    let mut c = ModelConfig::tiny();
+    c.reference = Reference::TopH;
+    let w = Weights::random(&c, 1).unwrap();
+    assert!(!w.tensors.keys().any(|k| k.contains(".score.")));
+    assert_eq!(
+        Weights::from_bytes(&w.to_bytes(StoreAs::F32).unwrap()).unwrap(),
+        w
+    );
+}
+
+#[test]
+fn missing_tensor_is_named() {
+    let w = tiny();
+    let mut t = f32_tensors(&w);
+    let removed = t.remove(5).0;
+    let e = err(&craft(&t, good_meta(&w.config)));
+    assert!(e.contains(&format!("tensor '{removed}' is missing")), "{e}");
+}
+
+#[test]
+fn wrong_shape_is_named() {
+    let w = tiny();
+    let mut t = f32_tensors(&w);
+    let (name, _, shape, bytes) = t[0].clone();
+    t[0] = (
+        name.clone(),
+        Dtype::F32,
+        vec![shape.iter().product::<usize>()],
+        bytes,
+    );
+    let e = err(&craft(&t, good_meta(&w.config)));
+    assert!(e.contains(&format!("tensor '{name}' has shape")), "{e}");
+}
+
+#[test]
+fn wrong_dtype_is_named() {
+    let w = tiny();
+    let mut t = f32_tensors(&w);
+    let (name, _, shape, bytes) = t[2].clone();
+    t[2] = (name.clone(), Dtype::I32, shape, bytes);
+    let e = err(&craft(&t, good_meta(&w.config)));
+    assert!(e.contains(&format!("tensor '{name}' has dtype")), "{e}");
+}
+
+#[test]
+fn extra_tensor_is_named() {
+    let w = tiny();
+    let mut t = f32_tensors(&w);
+    t.push((
+        "layers.9.bogus.weight".into(),
+        Dtype::F32,
+        vec![2],
+        vec![0; 8],
+    ));
+    let e = err(&craft(&t, good_meta(&w.config)));
+    assert!(e.contains("layers.9.bogus.weight"), "{e}");
+}
+
+#[test]
+fn config_mismatch_with_tensors_is_reported() {
+    // tensors of the tiny config, metadata claiming a wider model
+    let w = tiny();
+    let mut c = w.config.clone();
+    c.feature_dim = 16;
+    let e = err(&craft(&f32_tensors(&w), good_meta(&c)));
+    assert!(e.contains("has shape"), "{e}");
+}
+
+#[test]
+fn non_finite_values_are_rejected() {
+    let w = tiny();
+    let mut t = f32_tensors(&w);
+    t[3].3[4..8].copy_from_slice(&f32::NAN.to_le_bytes());
+    let e = err(&craft(&t, good_meta(&w.config)));
+    assert!(e.contains("non-finite value at element 1"), "{e}");
+}
+
+#[test]
+fn metadata_problems_are_reported() {
+    let w = tiny();
+    let t = f32_tensors(&w);
+    let mut m = good_meta(&w.config);
+    m.insert("format".into(), "something-else".into());
+    assert!(err(&craft(&t, m)).contains("format is 'something-else'"));
+    let mut m = good_meta(&w.config);
+    m.insert("format_version".into(), "99".into());
+    assert!(err(&craft(&t, m)).contains("format_version '99'"));
+    let mut m = good_meta(&w.config);
+    m.remove("config");
+    assert!(err(&craft(&t, m)).contains("'config' is missing"));
+    let mut m = good_meta(&w.config);
+    m.insert("config".into(), "{not json".into());
+    assert!(err(&craft(&t, m)).contains("not a valid model config"));
+    let mut c = w.config.clone();
+    c.heads = 3;
+    assert!(err(&craft(&t, good_meta(&c))).contains("invalid model config"));
+    assert!(err(&craft(&t, HashMap::new())).contains("missing"));
+}
+
+#[test]
+fn truncated_and_garbage_files_are_rejected() {
+    let bytes = tiny().to_bytes(StoreAs::F32).unwrap();
+    for cut in [0, 4, 8, 20, bytes.len() / 2, bytes.len() - 1] {
+        let e = err(&bytes[..cut]);
+        assert!(e.starts_with("weights:"), "cut {cut}: {e}");
+    }
+    assert!(err(b"hello world, definitely not safetensors").starts_with("weights:"));
+    // a header length far beyond the buffer
+    let mut hostile = (u64::MAX / 2).to_le_bytes().to_vec();
+    hostile.extend_from_slice(b"{}");
+    assert!(err(&hostile).starts_with("weights:"));
+}
+
+#[test]
+fn embedded_default_model_loads() {
+    let w = Weights::from_bytes(arps::weights::DEFAULT_MODEL).unwrap();
+    assert_eq!(w.config.preset, "web");
+    w.config.validate().unwrap();
+}
