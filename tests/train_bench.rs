@@ -46,10 +46,17 @@ fn web_step_time() {
     let mut state = TrainState::new(cfg.clone(), params, 1e-4, Some(1.0));
     let _ = train::train_step(&mut state, &pairs, &loss, threads); // warm-up (buffer pools)
     let mut secs = Vec::new();
+    let cpu0 = process_cpu();
     for _ in 0..steps {
         let r = train::train_step(&mut state, &pairs, &loss, threads);
         secs.push(r.seconds);
     }
+    let cpu_per_pair = (process_cpu() - cpu0) / (steps * batch) as f64;
+    eprintln!(
+        "CPU time {:.3} s per pair -> {:.2} pairs/s on {threads} idle cores (the machine is shared: wall times below include waiting)",
+        cpu_per_pair,
+        threads as f64 / cpu_per_pair
+    );
     let mean = secs.iter().sum::<f64>() / secs.len() as f64;
     let best = secs.iter().copied().fold(f64::INFINITY, f64::min);
     eprintln!(
@@ -60,6 +67,15 @@ fn web_step_time() {
         batch as f64 / mean,
         batch as f64 / best
     );
+}
+
+/// CPU seconds used by this process so far (Linux; 10 ms resolution).
+fn process_cpu() -> f64 {
+    let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
+    let rest = s.rsplit(')').next().unwrap_or("");
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    let ticks = f.get(11).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0) + f.get(12).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    ticks / 100.0
 }
 
 /// CPU seconds used by this thread so far (Linux; 10 ms resolution).

@@ -44,9 +44,15 @@ fn tape_forward_matches_engine() {
             let flat = |v: &Vec<[f32; 3]>| v.iter().flatten().copied().collect::<Vec<f32>>();
             let dd = max_diff(&flat(&ours.shifts_source), &flat(&engine.shifts_source)).max(max_diff(&flat(&ours.shifts_target), &flat(&engine.shifts_target)));
             assert!(dd < 1e-4, "{what}: shifts differ by {dd}");
-            // T from the tape is a proper rigid transform
-            arps::transform::check_rigid(&fwd.t12(&t), 1e-4).unwrap();
-            arps::transform::check_rigid(&fwd.t21(&t), 1e-4).unwrap();
+            // T from the tape is the engine's GMR solve on the engine's memberships
+            let j = cfg.gaussians;
+            let gs = arps::gmr::gmm_params(&pair.source, &engine.gamma_source, j);
+            let gt = arps::gmr::gmm_params(&pair.target, &engine.gamma_target, j);
+            for (ours, theirs, name) in [(fwd.t12(&t), arps::gmr::solve(&gs, &gt), "T12"), (fwd.t21(&t), arps::gmr::solve(&gt, &gs), "T21")] {
+                arps::transform::check_rigid(&ours, 1e-4).unwrap();
+                let d = (ours - theirs).abs().max();
+                assert!(d < 1e-4, "{what}: {name} differs from the engine's by {d}\n{ours}\n{theirs}");
+            }
         }
     }
 }
@@ -65,6 +71,10 @@ fn exported_weights_reproduce_tape() {
         let ours = fwd.output(&t);
         assert!(max_diff(&ours.gamma_source, &engine.gamma_source) < 1e-4);
         assert!(max_diff(&ours.gamma_target, &engine.gamma_target) < 1e-4);
+        let j = cfg.gaussians;
+        let gs = arps::gmr::gmm_params(&pair.source, &engine.gamma_source, j);
+        let gt = arps::gmr::gmm_params(&pair.target, &engine.gamma_target, j);
+        assert!((fwd.t12(&t) - arps::gmr::solve(&gs, &gt)).abs().max() < 1e-4);
         // a wrong parameter set is rejected
         let mut bad = params.clone();
         bad.remove("head.0.bias");

@@ -176,6 +176,13 @@ fn layer_norm_backward_body<const FMA: bool>(
     }
 }
 
+#[inline(always)]
+fn relu_backward_body(d: &mut [f32], g: &[f32], y: &[f32]) {
+    for ((d, g), y) in d.iter_mut().zip(g).zip(y) {
+        *d += if *y > 0.0 { *g } else { 0.0 };
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 fn has_avx2_fma() -> bool {
     use std::sync::OnceLock;
@@ -188,6 +195,10 @@ mod avx2 {
     #[target_feature(enable = "avx2,fma")]
     pub(super) unsafe fn softmax_rows(x: &mut [f32], cols: usize) {
         super::softmax_rows_body::<true>(x, cols)
+    }
+    #[target_feature(enable = "avx2,fma")]
+    pub(super) unsafe fn relu_backward(d: &mut [f32], g: &[f32], y: &[f32]) {
+        super::relu_backward_body(d, g, y)
     }
     #[target_feature(enable = "avx2,fma")]
     pub(super) unsafe fn dot(a: &[f32], b: &[f32]) -> f32 {
@@ -228,6 +239,16 @@ pub fn softmax_rows(x: &mut [f32], cols: usize) {
         return unsafe { avx2::softmax_rows(x, cols) };
     }
     softmax_rows_body::<false>(x, cols)
+}
+
+/// ReLU backward: `d += g` where the output `y > 0`.
+pub fn relu_backward(d: &mut [f32], g: &[f32], y: &[f32]) {
+    #[cfg(target_arch = "x86_64")]
+    if has_avx2_fma() {
+        // SAFETY: the CPU supports AVX2 and FMA (checked at run time).
+        return unsafe { avx2::relu_backward(d, g, y) };
+    }
+    relu_backward_body(d, g, y)
 }
 
 /// `sum a_i b_i` (8 partial sums).

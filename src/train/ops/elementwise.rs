@@ -92,11 +92,7 @@ impl Op for Relu {
     }
     fn backward(&self, ctx: &mut Backward<'_>, out: Id, g: &[f32]) {
         let y = ctx.value(out);
-        for ((d, v), y) in ctx.grad(self.a).iter_mut().zip(g).zip(y) {
-            if *y > 0.0 {
-                *d += v;
-            }
-        }
+        crate::train::simd::relu_backward(ctx.grad(self.a), g, y);
     }
 }
 

@@ -132,7 +132,7 @@ impl Solve {
         let v = v_t.transpose();
         if s[1] <= RANK_ONE_TOL * s[0] {
             // The engine's rank-one rule: the smallest rotation taking u1 onto v1.
-            self.r = smallest_rotation_between(&u.column(0).into_owned(), &v.column(0).into_owned());
+            self.r = crate::gmr::rotation_from_cross_covariance(m);
             return;
         }
         let det = if (v * u.transpose()).determinant() < 0.0 { -1.0 } else { 1.0 };
@@ -216,32 +216,6 @@ impl Solve {
         }
         out
     }
-}
-
-/// The smallest rotation taking direction `a` onto `b` (the engine's rank-one rule).
-fn smallest_rotation_between(a: &Vector3<f64>, b: &Vector3<f64>) -> Matrix3<f64> {
-    use nalgebra::{Unit, UnitQuaternion};
-    let (Some(a), Some(b)) = (Unit::try_new(*a, 1e-300), Unit::try_new(*b, 1e-300)) else {
-        return Matrix3::identity();
-    };
-    let axis = a.cross(&b);
-    let cos = a.dot(&b).clamp(-1.0, 1.0);
-    let sin = axis.norm();
-    let q = if sin > 1e-12 {
-        UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), sin.atan2(cos))
-    } else if cos > 0.0 {
-        UnitQuaternion::identity()
-    } else {
-        let e = if a.x.abs() <= a.y.abs() && a.x.abs() <= a.z.abs() {
-            Vector3::x()
-        } else if a.y.abs() <= a.z.abs() {
-            Vector3::y()
-        } else {
-            Vector3::z()
-        };
-        UnitQuaternion::from_axis_angle(&Unit::new_normalize(a.cross(&e)), std::f64::consts::PI)
-    };
-    q.to_rotation_matrix().into_inner()
 }
 
 struct ProcrustesOp {
