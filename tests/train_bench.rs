@@ -49,6 +49,7 @@ fn web_step_time() {
     let cpu0 = process_cpu();
     for _ in 0..steps {
         let r = train::train_step(&mut state, &pairs, &loss, threads);
+        eprintln!("  step: loss {:.4} (sup {:.4}, ctr {:.4} vs no-shift {:.4}), grad norm {:.3}, steps {:?}", r.loss.total, r.loss.sup, r.loss.ctr, r.loss.ctr_no_shift, r.grad_norm, r.loss.steps);
         secs.push(r.seconds);
     }
     let cpu_per_pair = (process_cpu() - cpu0) / (steps * batch) as f64;
@@ -59,6 +60,8 @@ fn web_step_time() {
     );
     let mean = secs.iter().sum::<f64>() / secs.len() as f64;
     let best = secs.iter().copied().fold(f64::INFINITY, f64::min);
+    let hwm = std::fs::read_to_string("/proc/self/status").unwrap_or_default().lines().find(|l| l.starts_with("VmHWM")).unwrap_or("").to_string();
+    eprintln!("peak memory: {hwm}");
     eprintln!(
         "web config N = {}, batch {batch}, {threads} threads: step {:.3} s mean, {:.3} s best -> {:.2} pairs/s (best {:.2})",
         cfg.n_points,

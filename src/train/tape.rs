@@ -63,28 +63,20 @@ pub struct Pool {
 impl Pool {
     /// A zero-filled buffer of `len` elements (reusing the smallest free buffer that fits).
     pub fn zeros(&mut self, len: usize) -> Vec<f32> {
-        let mut v = self.take(len);
-        v.resize(len, 0.0);
+        let mut v = self.uninit(len);
+        v.fill(0.0);
         v
     }
 
-    /// A buffer of `len` elements with unspecified (but initialised) contents.
+    /// A buffer of `len` elements whose contents are unspecified (stale values of an earlier
+    /// use, or zeros): for outputs the caller overwrites entirely.
     pub fn uninit(&mut self, len: usize) -> Vec<f32> {
-        let mut v = self.take(len);
-        // Contents are whatever the reused buffer held; only the tail is zero-filled.
-        if v.capacity() >= len {
-            let old = v.len().min(len);
-            v.truncate(old);
-            v.resize(len, 0.0);
-        }
-        v
-    }
-
-    fn take(&mut self, len: usize) -> Vec<f32> {
+        // Free buffers are kept with len == capacity (all initialised), so truncating is safe
+        // and costs nothing.
         let mut best: Option<usize> = None;
         for (i, b) in self.free.iter().enumerate() {
-            let c = b.capacity();
-            if c >= len && best.is_none_or(|j| c < self.free[j].capacity()) {
+            let c = b.len();
+            if c >= len && best.is_none_or(|j| c < self.free[j].len()) {
                 best = Some(i);
                 if c == len {
                     break;
@@ -94,16 +86,18 @@ impl Pool {
         match best {
             Some(i) => {
                 let mut v = self.free.swap_remove(i);
-                v.clear();
+                v.truncate(len);
                 v
             }
-            None => Vec::with_capacity(len),
+            None => vec![0.0; len],
         }
     }
 
     /// Gives a buffer back.
-    pub fn give(&mut self, v: Vec<f32>) {
+    pub fn give(&mut self, mut v: Vec<f32>) {
         if v.capacity() > 0 {
+            let c = v.capacity();
+            v.resize(c, 0.0);
             self.free.push(v);
         }
     }
