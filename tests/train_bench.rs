@@ -121,3 +121,38 @@ fn attention_pieces() {
     let s = time(&mut || gemm(d, n, d, 1.0, &q, 1, d as isize, &k, d as isize, 1, 1.0, &mut y, d as isize, 1));
     eprintln!("dW 128x512x128 (A^T B): cpu {:.2} ms wall {:.2} ms  ({:.1} GFLOP/s cpu)", s.0, s.1, 2.0 * (n * d * d) as f64 / s.0 / 1e6);
 }
+
+/// Diagnostic: gradient norms per parameter group at initialisation (web config), per loss
+/// term, over a few pairs: where the gradient comes from and how large it is.
+#[test]
+#[ignore]
+fn gradient_norms_at_init() {
+    let mut cfg = ModelConfig::web();
+    cfg.n_points = env("BENCH_N", 256);
+    let params = train::init_params(&cfg, 0).unwrap();
+    let pairs = synthetic::pairs(6, cfg.n_points, 5);
+    for term in ["sup", "ctr", "aff", "reg", "consistency"] {
+        let mut l = LossConfig {
+            sup: 0.0,
+            ctr: 0.0,
+            stp: 0.0,
+            ..LossConfig::default()
+        };
+        match term {
+            "sup" => l.sup = 1.0,
+            "ctr" => l.ctr = 1.0,
+            "aff" => l.aff = 1.0,
+            "reg" => l.reg = 1.0,
+            _ => l.consistency = 1.0,
+        }
+        let (parts, g) = train::batch_gradients(&cfg, &params, &pairs, &l, 2);
+        let mut groups: std::collections::BTreeMap<String, f64> = Default::default();
+        for (name, v) in &g {
+            let key = name.split('.').take(if name.starts_with("layers") { 3 } else { 1 }).collect::<Vec<_>>().join(".");
+            *groups.entry(key).or_default() += v.iter().map(|x| (*x as f64).powi(2)).sum::<f64>();
+        }
+        let total: f64 = groups.values().sum::<f64>().sqrt();
+        let list: Vec<String> = groups.iter().map(|(k, v)| format!("{k} {:.2e}", v.sqrt())).collect();
+        eprintln!("{term}: loss {:.4}, grad norm {total:.3e}\n   {}", parts.total, list.join(", "));
+    }
+}

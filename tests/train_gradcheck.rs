@@ -1,4 +1,5 @@
 #![cfg(feature = "train")]
+#![allow(clippy::cloned_ref_to_slice_refs)]
 //! Every op's backward against central finite differences, the f64 Procrustes solve near
 //! degenerate singular values, and the whole model + losses on the tiny config.
 
@@ -388,8 +389,8 @@ fn fd_sweep_one_tensor() {
         let (total, _) = losses::record(&mut t, &fwd, &pair, &loss);
         t.scalar64(total)
     };
-    for i in 0..grads[&name].len().min(4) {
-        let mut line = format!("{name}[{i}] analytic {:.6e}:", grads[&name][i]);
+    for (i, gi) in grads[&name].iter().enumerate().take(4) {
+        let mut line = format!("{name}[{i}] analytic {gi:.6e}:");
         for h in [3e-2f32, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4] {
             let mut p = params.clone();
             p.get_mut(&name).unwrap()[i] += h;

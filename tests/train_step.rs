@@ -22,6 +22,7 @@ fn gradients_do_not_depend_on_threads() {
     assert_eq!(g1, g2);
     assert_eq!(g2, g3);
     assert_eq!(p1, p2);
+    assert_eq!(p2, p3);
     assert!(p1.total > 0.0 && p1.is_finite());
     assert!(optim::grad_norm(&g1) > 0.0);
 }

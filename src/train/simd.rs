@@ -24,7 +24,7 @@ fn exp1<const FMA: bool>(x: f32) -> f32 {
     const C1: f32 = 0.693_359_4;
     const C2: f32 = -2.121_944_4e-4;
     const MAGIC: f32 = 12_582_912.0; // 1.5 * 2^23: adding it rounds to an integer
-    let x = x.max(-87.3).min(88.3);
+    let x = x.clamp(-87.3, 88.3);
     let t = madd::<FMA>(x, LOG2E, MAGIC);
     let n = t - MAGIC;
     let ni = t.to_bits().wrapping_sub(MAGIC.to_bits()) as i32;
@@ -34,7 +34,7 @@ fn exp1<const FMA: bool>(x: f32) -> f32 {
     p = madd::<FMA>(p, r, 8.333_452e-3);
     p = madd::<FMA>(p, r, 4.166_579_6e-2);
     p = madd::<FMA>(p, r, 1.666_666_5e-1);
-    p = madd::<FMA>(p, r, 5.000_000_1e-1);
+    p = madd::<FMA>(p, r, 0.5);
     let y = madd::<FMA>(p * r, r, r) + 1.0;
     y * f32::from_bits(((ni + 127) as u32) << 23)
 }

@@ -110,6 +110,7 @@ impl Solve {
         out
     }
 
+    #[allow(clippy::neg_cmp_op_on_partial_ord)] // written to send NaN to the early returns
     fn rotation(&mut self, m: &Matrix3<f64>) {
         if !m.iter().all(|v| v.is_finite()) {
             return;
