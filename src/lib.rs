@@ -32,6 +32,8 @@ pub mod register;
 pub mod sampling;
 pub mod spatial;
 pub mod timing;
+#[cfg(feature = "train")]
+pub mod train;
 pub mod transform;
 pub mod weights;
 
