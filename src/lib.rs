@@ -41,5 +41,5 @@ pub use cloud::{NonFinite, PointCloud};
 pub use error::{Error, Result};
 pub use icp::IcpKind;
 pub use model::{Model, ModelConfig};
-pub use register::{Options, Registrar, Registration, Timings};
+pub use register::{Options, Registrar, Registration, Stage, Timings};
 pub use weights::{StoreAs, Weights};
