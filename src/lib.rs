@@ -35,6 +35,8 @@ pub mod timing;
 #[cfg(feature = "train")]
 pub mod train;
 pub mod transform;
+#[cfg(target_arch = "wasm32")]
+pub mod wasm;
 pub mod weights;
 
 pub use cloud::{NonFinite, PointCloud};
