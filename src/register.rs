@@ -233,8 +233,7 @@ impl Registrar {
             }
         }
         let net_src = sampling::network_sample(&src_n, n_net, options.seed);
-        let net_tgt =
-            sampling::network_sample(&tgt_n, n_net, options.seed ^ sampling::TARGET_SEED_XOR);
+        let net_tgt = sampling::network_sample(&tgt_n, n_net, options.seed ^ sampling::TARGET_SEED_XOR);
         let icp_src = sampling::voxel_downsample(&src_n, voxel as f32);
         let icp_tgt = sampling::voxel_downsample(&tgt_n, voxel as f32);
         let preprocess_ms = watch.lap();
