@@ -40,8 +40,11 @@ function getEngine() {
       (arps) => {
         const untrained = arps.provenance?.kind === "random";
         setBadge(
-          `engine ready · model “${arps.modelConfig?.preset ?? "?"}”${untrained ? " (untrained placeholder: ICP does the work)" : ""}`,
+          `engine ready · ${untrained ? "untrained placeholder model" : `model “${arps.modelConfig?.preset ?? "?"}”`}`,
           untrained ? "warn" : "ok",
+          untrained
+            ? "The embedded network weights are an untrained placeholder: ICP does the work until trained weights ship."
+            : `Model preset ${arps.modelConfig?.preset}, N = ${arps.modelConfig?.n_points}; provenance ${JSON.stringify(arps.provenance)}`,
         );
         return arps;
       },
@@ -68,10 +71,11 @@ async function maybeRestart(e) {
   }
 }
 
-function setBadge(text, kind) {
+function setBadge(text, kind, title = "") {
   const b = $("engine-status");
   b.textContent = text;
   b.className = `badge ${kind}`;
+  b.title = title;
 }
 
 // ---- errors and progress ------------------------------------------------------------------
@@ -113,6 +117,8 @@ function stopProgress() {
 function updateButtons() {
   $("align").disabled = state.busy || !state.source || !state.target;
   $("example").disabled = state.busy;
+  $("source-file").disabled = state.busy;
+  $("target-file").disabled = state.busy;
   $("view-after").disabled = !state.result;
 }
 
@@ -140,7 +146,7 @@ async function loadFile(which, file) {
 function setCloud(which, cloud) {
   state[which] = cloud;
   state.result = null;
-  if (which === "source" || which === "target") state.truth = null;
+  state.truth = null;
   const info = $(`${which}-info`);
   info.textContent = cloud
     ? `${cloud.name} · ${(cloud.points.length / 3).toLocaleString("en")} points${cloud.note ? ` · ${cloud.note}` : ""}`
@@ -189,9 +195,18 @@ function readOptions() {
   return options;
 }
 
+function clearResult() {
+  state.result = null;
+  showResult(null);
+  view.setAligned(null);
+  setView("before");
+  updateButtons();
+}
+
 async function align() {
   if (state.busy) return;
   clearError();
+  clearResult();
   if (!state.source || !state.target) {
     showError("Load a source and a target scan first (or try the example).");
     return;
@@ -204,8 +219,6 @@ async function align() {
     return;
   }
   state.busy = true;
-  state.result = null;
-  showResult(null);
   updateButtons();
   startProgress();
   try {
@@ -408,7 +421,8 @@ function createView(canvas) {
     },
     setAligned(matrix) {
       replace("aligned", null);
-      if (!objects.source) return;
+      requestRender();
+      if (!objects.source || !matrix) return;
       const aligned = new THREE.Points(objects.source.geometry, material(COLORS.aligned));
       aligned.matrixAutoUpdate = false;
       aligned.matrix.fromArray(matrix);
