@@ -129,6 +129,36 @@ test("aligns two uploaded scans with a known transform", { timeout: TIMEOUT * 2 
   assert.ok(Math.abs(result.rotationDeg - 15) < 5, `page says ${result.rotationDeg} deg`);
 });
 
+test("download the aligned source as PLY; copy the matrix as JSON", async () => {
+  const result = JSON.parse(await page.textContent("#result"));
+  const [download] = await Promise.all([page.waitForEvent("download"), page.click("#download-ply")]);
+  assert.equal(download.suggestedFilename(), "source-aligned.ply");
+  const file = join(dir, "aligned.ply");
+  await download.saveAs(file);
+  const aligned = readFloatPly(file);
+  const source = crop(readFloatPly(join(ROOT, "fixtures/scans/velodyne-small.ply")), [1, 0.2, 0], 0.85).points;
+  assert.equal(aligned.length, source.length);
+  // The file holds the source mapped through the result (row-major rows in #result).
+  const [r0, r1, r2] = result.T_target_source;
+  let worst = 0;
+  for (let i = 0; i < source.length; i += 3) {
+    const [x, y, z] = [source[i], source[i + 1], source[i + 2]];
+    worst = Math.max(
+      worst,
+      Math.abs(r0[0] * x + r0[1] * y + r0[2] * z + r0[3] - aligned[i]),
+      Math.abs(r1[0] * x + r1[1] * y + r1[2] * z + r1[3] - aligned[i + 1]),
+      Math.abs(r2[0] * x + r2[1] * y + r2[2] * z + r2[3] - aligned[i + 2]),
+    );
+  }
+  assert.ok(worst < 1e-3, `aligned PLY differs from the result's transform by ${worst}`);
+
+  await browser.grantPermissions(["clipboard-read", "clipboard-write"], { origin: new URL(url).origin });
+  await page.click("#copy-matrix");
+  await page.waitForFunction(() => /Copied/.test(document.getElementById("copy-matrix").textContent));
+  const copied = JSON.parse(await page.evaluate(() => navigator.clipboard.readText()));
+  assert.deepEqual(copied, { T_target_source: result.T_target_source });
+});
+
 test("the view is not blank (screenshot)", async () => {
   mkdirSync(OUT, { recursive: true });
   await page.screenshot({ path: join(OUT, "demo.png") });
