@@ -124,8 +124,11 @@ function updateButtons() {
 
 // ---- loading scans ------------------------------------------------------------------------
 
+const loads = { source: 0, target: 0 }; // the latest load of each slot wins
+
 async function loadFile(which, file) {
   if (!file || state.busy) return;
+  const token = ++loads[which];
   clearError();
   setCloud(which, null);
   $(`${which}-info`).textContent = `reading ${file.name}…`;
@@ -133,11 +136,13 @@ async function loadFile(which, file) {
     const bytes = new Uint8Array(await file.arrayBuffer());
     const arps = await getEngine();
     const parsed = await arps.parsePointCloud(bytes, file.name, { transfer: true });
+    if (token !== loads[which]) return;
     const { points, dropped } = finitePoints(parsed);
     if (points.length === 0) throw new Error("the file holds no (finite) points");
     setCloud(which, { points, name: file.name, note: dropped ? `${dropped} non-finite dropped` : "" });
   } catch (e) {
     await maybeRestart(e);
+    if (token !== loads[which]) return;
     setCloud(which, null);
     showError(`Could not read ${file.name}: ${e?.message ?? e}`);
   }
@@ -166,11 +171,11 @@ async function loadExample() {
     const response = await fetch(new URL("../node_modules/bunny/index.js", import.meta.url));
     if (!response.ok) throw new Error(`HTTP ${response.status} fetching the bunny mesh`);
     const example = makeExample(parseBunny(await response.text()));
+    loads.source++;
+    loads.target++;
     setCloud("source", { points: example.source, name: "bunny, view A (moved)" });
     setCloud("target", { points: example.target, name: "bunny, view B" });
     state.truth = example.truth;
-    $("source-file").value = "";
-    $("target-file").value = "";
   } catch (e) {
     showError(`Could not make the example: ${e?.message ?? e}`);
   }
@@ -480,7 +485,10 @@ const view = createView($("canvas"));
 
 for (const which of ["source", "target"]) {
   const input = $(`${which}-file`);
-  input.addEventListener("change", () => loadFile(which, input.files[0]));
+  input.addEventListener("change", () => {
+    loadFile(which, input.files[0]);
+    input.value = ""; // picking the same file again fires "change" again
+  });
   const zone = $(`${which}-drop`);
   zone.addEventListener("dragover", (e) => {
     e.preventDefault();
@@ -493,9 +501,19 @@ for (const which of ["source", "target"]) {
     loadFile(which, e.dataTransfer.files[0]);
   });
 }
-// A drop anywhere else must not navigate away from the page.
+// Files dropped on the view: two are source and target; one fills the empty slot (else the
+// source). A drop anywhere else must not navigate away from the page.
 window.addEventListener("dragover", (e) => e.preventDefault());
 window.addEventListener("drop", (e) => e.preventDefault());
+$("viewer").addEventListener("drop", (e) => {
+  const files = [...e.dataTransfer.files];
+  if (files.length >= 2) {
+    loadFile("source", files[0]);
+    loadFile("target", files[1]);
+  } else if (files.length === 1) {
+    loadFile(state.source && !state.target ? "target" : "source", files[0]);
+  }
+});
 
 $("example").addEventListener("click", loadExample);
 $("align").addEventListener("click", align);
