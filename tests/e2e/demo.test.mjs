@@ -212,3 +212,8 @@ test("the example: bunny views aligned back to the known 20 degree motion", { ti
   assert.ok(result.exampleError.rotationDeg < 5);
   await page.screenshot({ path: join(OUT, "example.png") });
 });
+
+test("no uncaught errors on the page", () => {
+  const errors = consoleLines.filter((l) => l.startsWith("pageerror:") || l.startsWith("console.error:"));
+  assert.deepEqual(errors, []);
+});
