@@ -35,11 +35,13 @@ pub mod timing;
 #[cfg(feature = "train")]
 pub mod train;
 pub mod transform;
+#[cfg(target_arch = "wasm32")]
+pub mod wasm;
 pub mod weights;
 
 pub use cloud::{NonFinite, PointCloud};
 pub use error::{Error, Result};
 pub use icp::IcpKind;
 pub use model::{Model, ModelConfig};
-pub use register::{Options, Registrar, Registration, Timings};
+pub use register::{Options, Registrar, Registration, Stage, Timings};
 pub use weights::{StoreAs, Weights};

@@ -58,6 +58,18 @@ impl Default for Options {
     }
 }
 
+/// A stage of [`Registrar::register_with_progress`], reported as it starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum Stage {
+    /// Validation, normalisation, downsampling.
+    Preparing,
+    /// The network forward pass and the GMR solve.
+    Network,
+    /// ICP refinement and the quality figures (reported even with ICP off, for the figures).
+    Refining,
+}
+
 /// Milliseconds spent in each stage of one registration (0 where no clock is available).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
@@ -152,6 +164,20 @@ impl Registrar {
     /// The clouds may be in any unit (the same for both) and any size >= 16 points.
     #[allow(non_snake_case)]
     pub fn register(&mut self, source: &PointCloud, target: &PointCloud, options: &Options) -> Result<Registration> {
+        self.register_with_progress(source, target, options, &mut |_| {})
+    }
+
+    /// [`Registrar::register`], calling `progress` as each stage starts (for progress bars and
+    /// worker messages). The calls come in [`Stage`] order; stages that do not run are skipped.
+    #[allow(non_snake_case)]
+    pub fn register_with_progress(
+        &mut self,
+        source: &PointCloud,
+        target: &PointCloud,
+        options: &Options,
+        progress: &mut dyn FnMut(Stage),
+    ) -> Result<Registration> {
+        progress(Stage::Preparing);
         let mut watch = Stopwatch::start(self.clock);
         let mut total = Stopwatch::start(self.clock);
         let mut warnings = Vec::new();
@@ -213,6 +239,7 @@ impl Registrar {
         let preprocess_ms = watch.lap();
 
         let (t_net_n, network_ms, gmr_ms) = if options.network {
+            progress(Stage::Network);
             let out = self.model.forward(&net_src.points, &net_tgt.points, &mut self.workspace)?;
             let network_ms = watch.lap();
             let j = self.model.config.gaussians;
@@ -225,6 +252,7 @@ impl Registrar {
             (norm.normalize_transform(&Matrix4::identity()), 0.0, 0.0)
         };
 
+        progress(Stage::Refining);
         let with_normals = options.icp == IcpKind::Plane;
         let target_index = IcpTarget::new(&icp_tgt.points, with_normals);
         let mut t_n = t_net_n;

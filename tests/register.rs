@@ -157,3 +157,16 @@ fn options_deserialize_with_defaults_and_reject_unknown_fields() {
     let e = serde_json::from_str::<Options>(r#"{"icpp": "point"}"#).unwrap_err().to_string();
     assert!(e.contains("icpp"), "{e}");
 }
+
+#[test]
+fn progress_reports_each_stage_in_order() {
+    use arps::Stage;
+    let (s, t) = (bumpy_surface(800, 0.0), bumpy_surface(800, 0.2));
+    let mut seen = Vec::new();
+    registrar().register_with_progress(&s, &t, &Options::default(), &mut |st| seen.push(st)).unwrap();
+    assert_eq!(seen, vec![Stage::Preparing, Stage::Network, Stage::Refining]);
+    seen.clear();
+    let icp_only = Options { network: false, ..Options::default() };
+    registrar().register_with_progress(&s, &t, &icp_only, &mut |st| seen.push(st)).unwrap();
+    assert_eq!(seen, vec![Stage::Preparing, Stage::Refining]);
+}

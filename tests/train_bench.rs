@@ -35,7 +35,12 @@ fn web_step_time() {
         let f = start.elapsed().as_secs_f64();
         t.backward(total);
         let b = start.elapsed().as_secs_f64() - f;
-        eprintln!("one pair, one thread (round {round}): forward {:.1} ms, backward {:.1} ms, {} nodes", f * 1e3, b * 1e3, t.len());
+        eprintln!(
+            "one pair, one thread (round {round}): forward {:.1} ms, backward {:.1} ms, {} nodes",
+            f * 1e3,
+            b * 1e3,
+            t.len()
+        );
     }
     let mut ops = t.profile().unwrap().ops.clone();
     ops.sort_by(|a, b| (b.1 + b.2).total_cmp(&(a.1 + a.2)));
@@ -49,7 +54,10 @@ fn web_step_time() {
     let cpu0 = process_cpu();
     for _ in 0..steps {
         let r = train::train_step(&mut state, &pairs, &loss, threads);
-        eprintln!("  step: loss {:.4} (sup {:.4}, ctr {:.4} vs no-shift {:.4}), grad norm {:.3}, steps {:?}", r.loss.total, r.loss.sup, r.loss.ctr, r.loss.ctr_no_shift, r.grad_norm, r.loss.steps);
+        eprintln!(
+            "  step: loss {:.4} (sup {:.4}, ctr {:.4} vs no-shift {:.4}), grad norm {:.3}, steps {:?}",
+            r.loss.total, r.loss.sup, r.loss.ctr, r.loss.ctr_no_shift, r.grad_norm, r.loss.steps
+        );
         secs.push(r.seconds);
     }
     let cpu_per_pair = (process_cpu() - cpu0) / (steps * batch) as f64;
@@ -60,7 +68,12 @@ fn web_step_time() {
     );
     let mean = secs.iter().sum::<f64>() / secs.len() as f64;
     let best = secs.iter().copied().fold(f64::INFINITY, f64::min);
-    let hwm = std::fs::read_to_string("/proc/self/status").unwrap_or_default().lines().find(|l| l.starts_with("VmHWM")).unwrap_or("").to_string();
+    let hwm = std::fs::read_to_string("/proc/self/status")
+        .unwrap_or_default()
+        .lines()
+        .find(|l| l.starts_with("VmHWM"))
+        .unwrap_or("")
+        .to_string();
     eprintln!("peak memory: {hwm}");
     eprintln!(
         "web config N = {}, batch {batch}, {threads} threads: step {:.3} s mean, {:.3} s best -> {:.2} pairs/s (best {:.2})",
@@ -77,7 +90,8 @@ fn process_cpu() -> f64 {
     let s = std::fs::read_to_string("/proc/self/stat").unwrap_or_default();
     let rest = s.rsplit(')').next().unwrap_or("");
     let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = f.get(11).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0) + f.get(12).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    let ticks = f.get(11).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0)
+        + f.get(12).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
     ticks / 100.0
 }
 
@@ -86,7 +100,8 @@ fn thread_cpu() -> f64 {
     let s = std::fs::read_to_string("/proc/thread-self/stat").unwrap_or_default();
     let rest = s.rsplit(')').next().unwrap_or("");
     let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = f.get(11).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0) + f.get(12).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    let ticks = f.get(11).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0)
+        + f.get(12).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
     ticks / 100.0
 }
 
@@ -109,17 +124,37 @@ fn attention_pieces() {
         ((thread_cpu() - c0) / reps as f64 * 1e3, w0.elapsed().as_secs_f64() / reps as f64 * 1e3)
     };
     let s = time(&mut || gemm(n, dk, n, 0.17, &q, d as isize, 1, &k, 1, d as isize, 0.0, &mut p, n as isize, 1));
-    eprintln!("QK^T one head: cpu {:.2} ms wall {:.2} ms  ({:.1} GFLOP/s cpu)", s.0, s.1, 2.0 * (n * n * dk) as f64 / s.0 / 1e6);
+    eprintln!(
+        "QK^T one head: cpu {:.2} ms wall {:.2} ms  ({:.1} GFLOP/s cpu)",
+        s.0,
+        s.1,
+        2.0 * (n * n * dk) as f64 / s.0 / 1e6
+    );
     let s = time(&mut || arps::nn::softmax_rows_inplace(&mut p, n));
     eprintln!("softmax 512x512: cpu {:.2} ms wall {:.2} ms", s.0, s.1);
     let s = time(&mut || gemm(n, n, dk, 1.0, &p, n as isize, 1, &k, d as isize, 1, 0.0, &mut out, d as isize, 1));
-    eprintln!("PV one head: cpu {:.2} ms wall {:.2} ms  ({:.1} GFLOP/s cpu)", s.0, s.1, 2.0 * (n * n * dk) as f64 / s.0 / 1e6);
+    eprintln!(
+        "PV one head: cpu {:.2} ms wall {:.2} ms  ({:.1} GFLOP/s cpu)",
+        s.0,
+        s.1,
+        2.0 * (n * n * dk) as f64 / s.0 / 1e6
+    );
     let w: Vec<f32> = q[..d * d].to_vec();
     let mut y = vec![0.0f32; n * d];
     let s = time(&mut || gemm(n, d, d, 1.0, &q, d as isize, 1, &w, 1, d as isize, 0.0, &mut y, d as isize, 1));
-    eprintln!("linear 512x128x128: cpu {:.2} ms wall {:.2} ms  ({:.1} GFLOP/s cpu)", s.0, s.1, 2.0 * (n * d * d) as f64 / s.0 / 1e6);
+    eprintln!(
+        "linear 512x128x128: cpu {:.2} ms wall {:.2} ms  ({:.1} GFLOP/s cpu)",
+        s.0,
+        s.1,
+        2.0 * (n * d * d) as f64 / s.0 / 1e6
+    );
     let s = time(&mut || gemm(d, n, d, 1.0, &q, 1, d as isize, &k, d as isize, 1, 1.0, &mut y, d as isize, 1));
-    eprintln!("dW 128x512x128 (A^T B): cpu {:.2} ms wall {:.2} ms  ({:.1} GFLOP/s cpu)", s.0, s.1, 2.0 * (n * d * d) as f64 / s.0 / 1e6);
+    eprintln!(
+        "dW 128x512x128 (A^T B): cpu {:.2} ms wall {:.2} ms  ({:.1} GFLOP/s cpu)",
+        s.0,
+        s.1,
+        2.0 * (n * d * d) as f64 / s.0 / 1e6
+    );
 }
 
 /// Diagnostic: gradient norms per parameter group at initialisation (web config), per loss
@@ -132,12 +167,7 @@ fn gradient_norms_at_init() {
     let params = train::init_params(&cfg, 0).unwrap();
     let pairs = synthetic::pairs(6, cfg.n_points, 5);
     for term in ["sup", "ctr", "aff", "reg", "consistency"] {
-        let mut l = LossConfig {
-            sup: 0.0,
-            ctr: 0.0,
-            stp: 0.0,
-            ..LossConfig::default()
-        };
+        let mut l = LossConfig { sup: 0.0, ctr: 0.0, stp: 0.0, ..LossConfig::default() };
         match term {
             "sup" => l.sup = 1.0,
             "ctr" => l.ctr = 1.0,
@@ -148,7 +178,8 @@ fn gradient_norms_at_init() {
         let (parts, g) = train::batch_gradients(&cfg, &params, &pairs, &l, 2);
         let mut groups: std::collections::BTreeMap<String, f64> = Default::default();
         for (name, v) in &g {
-            let key = name.split('.').take(if name.starts_with("layers") { 3 } else { 1 }).collect::<Vec<_>>().join(".");
+            let key =
+                name.split('.').take(if name.starts_with("layers") { 3 } else { 1 }).collect::<Vec<_>>().join(".");
             *groups.entry(key).or_default() += v.iter().map(|x| (*x as f64).powi(2)).sum::<f64>();
         }
         let total: f64 = groups.values().sum::<f64>().sqrt();

@@ -4,7 +4,11 @@
 //! degenerate singular values, and the whole model + losses on the tiny config.
 
 use arps::model::{ModelConfig, Reference};
-use arps::train::ops::{self, procrustes::{Solve, SolveInput}, ConsistencyKind};
+use arps::train::ops::{
+    self,
+    procrustes::{Solve, SolveInput},
+    ConsistencyKind,
+};
 use arps::train::{self, losses, synthetic, CentroidMode, Id, LossConfig, Tape};
 use nalgebra::{Matrix3, Vector3};
 use rand::{Rng, SeedableRng};
@@ -31,7 +35,8 @@ where
     let n_out = t.value(out).len();
     let proj: Vec<f32> = randv(&mut r, n_out, 1.0);
     t.backward_seeded(out, &proj);
-    let analytic: Vec<Vec<f32>> = ids.iter().zip(inputs).map(|(&id, (v, _, _))| t.grad(id).map_or(vec![0.0; v.len()], |g| g.to_vec())).collect();
+    let analytic: Vec<Vec<f32>> =
+        ids.iter().zip(inputs).map(|(&id, (v, _, _))| t.grad(id).map_or(vec![0.0; v.len()], |g| g.to_vec())).collect();
     let eval = |vals: &[Vec<f32>]| -> f64 {
         let mut t = Tape::new();
         let ids: Vec<Id> = vals.iter().zip(inputs).map(|(v, (_, a, b))| t.param(v, *a, *b)).collect();
@@ -54,7 +59,10 @@ where
             let ana = analytic[k][i] as f64;
             let err = ((num - ana).abs() - noise).max(0.0) / (num.abs().max(ana.abs()) + 1e-2 * scale);
             worst = worst.max(err);
-            assert!(err < tol, "{what}: input {k} element {i}: analytic {ana:.6e} vs numeric {num:.6e} (rel err {err:.2e})");
+            assert!(
+                err < tol,
+                "{what}: input {k} element {i}: analytic {ana:.6e} vs numeric {num:.6e} (rel err {err:.2e})"
+            );
         }
     }
     eprintln!("{what}: worst rel err {worst:.2e}");
@@ -74,12 +82,18 @@ fn elementwise_and_reductions() {
     check("sigmoid", &[a.clone()], 1e-2, 1e-3, |t, x| ops::sigmoid(t, x[0]));
     check("mul_scalar", &[a.clone(), s], 1e-2, 1e-3, |t, x| ops::mul_scalar(t, x[0], x[1]));
     check("sub_row", &[a.clone(), row], 1e-2, 1e-3, |t, x| ops::sub_row(t, x[0], x[1]));
-    check("concat_cols", &[a.clone(), (randv(&mut r, 6, 1.0), 3, 2)], 1e-2, 1e-3, |t, x| ops::concat_cols(t, x[0], x[1]));
+    check("concat_cols", &[a.clone(), (randv(&mut r, 6, 1.0), 3, 2)], 1e-2, 1e-3, |t, x| {
+        ops::concat_cols(t, x[0], x[1])
+    });
     check("concat_colmax", &[(randv(&mut r, 15, 1.0), 5, 3)], 1e-3, 1e-3, |t, x| ops::concat_colmax(t, x[0]));
-    check("weighted_sum", &[(randv(&mut r, 5, 1.0), 1, 5), (randv(&mut r, 15, 1.0), 5, 3)], 1e-2, 1e-3, |t, x| ops::weighted_sum(t, x[0], x[1]));
+    check("weighted_sum", &[(randv(&mut r, 5, 1.0), 1, 5), (randv(&mut r, 15, 1.0), 5, 3)], 1e-2, 1e-3, |t, x| {
+        ops::weighted_sum(t, x[0], x[1])
+    });
     check("mean_all", &[a.clone()], 1e-2, 1e-3, |t, x| ops::mean_all(t, x[0]));
     check("reshape", &[a.clone()], 1e-2, 1e-3, |t, x| ops::reshape(t, x[0], 2, 6));
-    check("weighted_total", &[(vec![0.3], 1, 1), (vec![-1.2], 1, 1)], 1e-2, 1e-3, |t, x| ops::weighted_total(t, &[(x[0], 2.0), (x[1], -0.5)]));
+    check("weighted_total", &[(vec![0.3], 1, 1), (vec![-1.2], 1, 1)], 1e-2, 1e-3, |t, x| {
+        ops::weighted_total(t, &[(x[0], 2.0), (x[1], -0.5)])
+    });
     check("softmax_rows", &[a.clone()], 1e-2, 1e-3, |t, x| ops::softmax_rows(t, x[0]));
     check("sq_err", &[a], 1e-2, 1e-3, |t, x| ops::sq_err(t, x[0], &[0.5; 12], 0.3));
 }
@@ -114,13 +128,24 @@ fn memberships(r: &mut ChaCha8Rng, n: usize, j: usize) -> Vec<f32> {
 fn gmm_procrustes_rigid_losses() {
     let mut r = rng(3);
     let (n, j) = (20, 4);
-    let pts: Vec<[f32; 3]> = (0..n).map(|_| [r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0)]).collect();
+    let pts: Vec<[f32; 3]> =
+        (0..n).map(|_| [r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0)]).collect();
     let gam = memberships(&mut r, n, j);
     let p2 = pts.clone();
     check("gmm_params", &[(gam.clone(), n, j)], 1e-2, 1e-3, move |t, x| ops::gmm_params(t, x[0], &p2));
     // procrustes on GMM-like inputs: pi > 0, var > 0
     let gm = |r: &mut ChaCha8Rng| -> Vec<f32> {
-        (0..j).flat_map(|_| [r.random_range(0.1f32..0.4), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(0.2f32..0.6)]).collect()
+        (0..j)
+            .flat_map(|_| {
+                [
+                    r.random_range(0.1f32..0.4),
+                    r.random_range(-1.0..1.0),
+                    r.random_range(-1.0..1.0),
+                    r.random_range(-1.0..1.0),
+                    r.random_range(0.2f32..0.6),
+                ]
+            })
+            .collect()
     };
     let (gs, gt) = (gm(&mut r), gm(&mut r));
     check("procrustes", &[(gs, j, 5), (gt, j, 5)], 1e-3, 5e-3, |t, x| ops::procrustes(t, x[0], x[1]));
@@ -141,8 +166,12 @@ fn gmm_procrustes_rigid_losses() {
     check("matmul", &[(mv.clone(), 4, 4), (m2, 4, 4)], 1e-2, 1e-3, |t, x| ops::matmul(t, x[0], x[1]));
     check("rigid_inverse", &[(mv.clone(), 4, 4)], 1e-2, 1e-3, |t, x| ops::rigid_inverse(t, x[0]));
     let p = randv(&mut r, 18, 1.0);
-    check("transform_points", &[(mv, 4, 4), (p.clone(), 6, 3)], 1e-2, 1e-3, |t, x| ops::transform_points(t, x[0], x[1]));
-    check("chamfer_sq", &[(p, 6, 3), (randv(&mut r, 24, 1.0), 8, 3)], 1e-3, 1e-3, |t, x| ops::chamfer_sq(t, x[0], x[1]));
+    check("transform_points", &[(mv, 4, 4), (p.clone(), 6, 3)], 1e-2, 1e-3, |t, x| {
+        ops::transform_points(t, x[0], x[1])
+    });
+    check("chamfer_sq", &[(p, 6, 3), (randv(&mut r, 24, 1.0), 8, 3)], 1e-3, 1e-3, |t, x| {
+        ops::chamfer_sq(t, x[0], x[1])
+    });
     let (ga, gb) = (memberships(&mut r, 5, j), memberships(&mut r, 6, j));
     let pairs = [(0, 1), (2, 2), (4, 5), (3, 0)];
     for kind in [ConsistencyKind::Squared, ConsistencyKind::SymmetricKl] {
@@ -162,7 +191,12 @@ fn check_solve(what: &str, x: &SolveInput, tol: f64) {
         s.r.component_mul(&gr).sum() + s.t.dot(&gt)
     };
     let g = Solve::new(x).backward(x, &gr, &gt);
-    let gmax = g.pi.iter().chain(&g.var_t).chain(g.mu_s.iter().flatten()).chain(g.mu_t.iter().flatten()).fold(0.0f64, |m, v| m.max(v.abs()));
+    let gmax =
+        g.pi.iter()
+            .chain(&g.var_t)
+            .chain(g.mu_s.iter().flatten())
+            .chain(g.mu_t.iter().flatten())
+            .fold(0.0f64, |m, v| m.max(v.abs()));
     let h = 1e-6;
     let mut worst = 0.0f64;
     let mut cmp = |ana: f64, plus: SolveInput, minus: SolveInput, label: String| {
@@ -199,12 +233,7 @@ fn check_solve(what: &str, x: &SolveInput, tol: f64) {
 /// close to `sigma^2 / 3` (times the variances) and the reflection fix is active when `det Q < 0`.
 fn solve_input(sig2: [f64; 3], q: Matrix3<f64>, seed: u64) -> SolveInput {
     let mut r = rng(seed);
-    let mut x = SolveInput {
-        pi: vec![],
-        mu_s: vec![],
-        mu_t: vec![],
-        var_t: vec![],
-    };
+    let mut x = SolveInput { pi: vec![], mu_s: vec![], mu_t: vec![], var_t: vec![] };
     for a in 0..3 {
         for sign in [1.0, -1.0] {
             let mut v = Vector3::zeros();
@@ -237,8 +266,12 @@ fn procrustes_f64_including_near_degenerate() {
     let mut r = rng(6);
     let x = SolveInput {
         pi: (0..5).map(|_| r.random_range(0.05..0.4)).collect(),
-        mu_s: (0..5).map(|_| [r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0)]).collect(),
-        mu_t: (0..5).map(|_| [r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0)]).collect(),
+        mu_s: (0..5)
+            .map(|_| [r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0)])
+            .collect(),
+        mu_t: (0..5)
+            .map(|_| [r.random_range(-1.0..1.0), r.random_range(-1.0..1.0), r.random_range(-1.0..1.0)])
+            .collect(),
         var_t: (0..5).map(|_| r.random_range(0.1..0.5)).collect(),
     };
     check_solve("random", &x, 1e-5);
@@ -379,8 +412,20 @@ fn fd_sweep_one_tensor() {
     let pair = synthetic::pair(synthetic::Shape::Box, cfg.n_points, 21);
     let mut loss = all_losses();
     if term != "all" {
-        loss.sup = 0.0; loss.ctr = 0.0; loss.stp = 0.0; loss.aff = 0.0; loss.reg = 0.0; loss.consistency = 0.0;
-        match term.as_str() { "sup" => loss.sup = 1.0, "ctr" => loss.ctr = 1.0, "stp" => loss.stp = 1.0, "aff" => loss.aff = 1.0, "reg" => loss.reg = 1.0, _ => loss.consistency = 1.0 }
+        loss.sup = 0.0;
+        loss.ctr = 0.0;
+        loss.stp = 0.0;
+        loss.aff = 0.0;
+        loss.reg = 0.0;
+        loss.consistency = 0.0;
+        match term.as_str() {
+            "sup" => loss.sup = 1.0,
+            "ctr" => loss.ctr = 1.0,
+            "stp" => loss.stp = 1.0,
+            "aff" => loss.aff = 1.0,
+            "reg" => loss.reg = 1.0,
+            _ => loss.consistency = 1.0,
+        }
     }
     let (_, grads) = train::pair_gradients(&cfg, &params, &pair, &loss);
     let eval = |p: &train::Params| -> f64 {

@@ -37,18 +37,22 @@ fn tape_forward_matches_engine() {
             let fwd = train::forward(&mut t, &cfg, &w.tensors, &pair.source, &pair.target);
             let ours = fwd.output(&t);
             let what = format!("{} {:?} seed {seed}", cfg.preset, cfg.reference);
-            let dg = max_diff(&ours.gamma_source, &engine.gamma_source).max(max_diff(&ours.gamma_target, &engine.gamma_target));
+            let dg = max_diff(&ours.gamma_source, &engine.gamma_source)
+                .max(max_diff(&ours.gamma_target, &engine.gamma_target));
             assert!(dg < 1e-4, "{what}: memberships differ by {dg}");
             let ds = max_diff(&ours.steps, &engine.steps);
             assert!(ds < 1e-4, "{what}: steps differ by {ds}");
             let flat = |v: &Vec<[f32; 3]>| v.iter().flatten().copied().collect::<Vec<f32>>();
-            let dd = max_diff(&flat(&ours.shifts_source), &flat(&engine.shifts_source)).max(max_diff(&flat(&ours.shifts_target), &flat(&engine.shifts_target)));
+            let dd = max_diff(&flat(&ours.shifts_source), &flat(&engine.shifts_source))
+                .max(max_diff(&flat(&ours.shifts_target), &flat(&engine.shifts_target)));
             assert!(dd < 1e-4, "{what}: shifts differ by {dd}");
             // T from the tape is the engine's GMR solve on the engine's memberships
             let j = cfg.gaussians;
             let gs = arps::gmr::gmm_params(&pair.source, &engine.gamma_source, j);
             let gt = arps::gmr::gmm_params(&pair.target, &engine.gamma_target, j);
-            for (ours, theirs, name) in [(fwd.t12(&t), arps::gmr::solve(&gs, &gt), "T12"), (fwd.t21(&t), arps::gmr::solve(&gt, &gs), "T21")] {
+            for (ours, theirs, name) in
+                [(fwd.t12(&t), arps::gmr::solve(&gs, &gt), "T12"), (fwd.t21(&t), arps::gmr::solve(&gt, &gs), "T21")]
+            {
                 arps::transform::check_rigid(&ours, 1e-4).unwrap();
                 let d = (ours - theirs).abs().max();
                 assert!(d < 1e-4, "{what}: {name} differs from the engine's by {d}\n{ours}\n{theirs}");

@@ -10,12 +10,7 @@ fn gradients_do_not_depend_on_threads() {
     let cfg = ModelConfig::tiny();
     let params = train::init_params(&cfg, 1).unwrap();
     let pairs = synthetic::pairs(5, cfg.n_points, 40);
-    let loss = LossConfig {
-        consistency: 0.5,
-        reg: 0.5,
-        aff: 0.5,
-        ..LossConfig::default()
-    };
+    let loss = LossConfig { consistency: 0.5, reg: 0.5, aff: 0.5, ..LossConfig::default() };
     let (p1, g1) = train::batch_gradients(&cfg, &params, &pairs, &loss, 1);
     let (p2, g2) = train::batch_gradients(&cfg, &params, &pairs, &loss, 2);
     let (p3, g3) = train::batch_gradients(&cfg, &params, &pairs, &loss, 2);

@@ -86,15 +86,7 @@ impl Default for LossConfig {
 impl LossConfig {
     /// The paper's unsupervised-transform recipe: `L_aff + L_reg + L_ctr (final layer) + L_stp`.
     pub fn paper() -> Self {
-        Self {
-            sup: 0.0,
-            ctr: 1.0,
-            ctr_mode: CentroidMode::FinalOnly,
-            stp: 1e-8,
-            aff: 1.0,
-            reg: 1.0,
-            ..Self::default()
-        }
+        Self { sup: 0.0, ctr: 1.0, ctr_mode: CentroidMode::FinalOnly, stp: 1e-8, aff: 1.0, reg: 1.0, ..Self::default() }
     }
 }
 

@@ -22,7 +22,9 @@ pub fn check_params(config: &ModelConfig, params: &Params) -> Result<()> {
         let len: usize = shape.iter().product();
         match params.get(name) {
             None => return Err(Error::Weights(format!("parameter '{name}' is missing"))),
-            Some(v) if v.len() != len => return Err(Error::Weights(format!("parameter '{name}' has {} values, expected {len}", v.len()))),
+            Some(v) if v.len() != len => {
+                return Err(Error::Weights(format!("parameter '{name}' has {} values, expected {len}", v.len())))
+            }
             _ => {}
         }
     }
@@ -133,7 +135,8 @@ impl Net<'_> {
         let h = ops::attention(t, q, k, v, self.cfg.heads);
         let o = self.linear(t, h, &format!("{name}.o"));
         let r = ops::add(t, x, o);
-        let a = ops::layer_norm(t, r, self.p(&format!("{name}.norm1.weight")), self.p(&format!("{name}.norm1.bias")), eps);
+        let a =
+            ops::layer_norm(t, r, self.p(&format!("{name}.norm1.weight")), self.p(&format!("{name}.norm1.bias")), eps);
         let h1 = self.linear(t, a, &format!("{name}.ffn1"));
         let h1 = ops::relu(t, h1);
         let h2 = self.linear(t, h1, &format!("{name}.ffn2"));
@@ -181,7 +184,13 @@ fn centred(points: &[[f32; 3]]) -> Vec<f32> {
 
 /// Records the full forward pass of a pair on `t`: parameters become leaves (with gradients),
 /// the clouds constants. Clouds are in normalised units (the trainer's pairs already are).
-pub fn forward(t: &mut Tape, config: &ModelConfig, params: &Params, source: &[[f32; 3]], target: &[[f32; 3]]) -> Forward {
+pub fn forward(
+    t: &mut Tape,
+    config: &ModelConfig,
+    params: &Params,
+    source: &[[f32; 3]],
+    target: &[[f32; 3]],
+) -> Forward {
     let mut ids = BTreeMap::new();
     for (name, shape) in config.tensor_specs() {
         let v = params.get(&name).unwrap_or_else(|| panic!("parameter {name} missing"));
@@ -204,7 +213,10 @@ pub fn forward(t: &mut Tape, config: &ModelConfig, params: &Params, source: &[[f
             g[s] = ops::concat_cols(t, f[s], phi);
         }
         let g1 = [0, 1].map(|s| net.block(t, g[s], g[s], &format!("{p}.self_attn")));
-        let g2 = [net.block(t, g1[0], g1[1], &format!("{p}.cross_attn")), net.block(t, g1[1], g1[0], &format!("{p}.cross_attn"))];
+        let g2 = [
+            net.block(t, g1[0], g1[1], &format!("{p}.cross_attn")),
+            net.block(t, g1[1], g1[0], &format!("{p}.cross_attn")),
+        ];
         let mut mux = [x[0]; 2];
         let mut muf = [x[0]; 2];
         for s in 0..2 {

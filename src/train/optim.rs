@@ -26,15 +26,7 @@ pub struct Adam {
 impl Adam {
     /// Adam with the usual betas (0.9, 0.999) and eps 1e-8.
     pub fn new(lr: f32) -> Self {
-        Self {
-            lr,
-            beta1: 0.9,
-            beta2: 0.999,
-            eps: 1e-8,
-            t: 0,
-            m: Params::new(),
-            v: Params::new(),
-        }
+        Self { lr, beta1: 0.9, beta2: 0.999, eps: 1e-8, t: 0, m: Params::new(), v: Params::new() }
     }
 
     /// One update `p -= lr * m_hat / (sqrt(v_hat) + eps)` for every parameter with a gradient.

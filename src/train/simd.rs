@@ -119,7 +119,14 @@ fn sum_body(a: &[f32]) -> f32 {
 
 /// LayerNorm forward of all rows: writes `y` and per-row `(mean, 1/sqrt(var + eps))` to `stats`.
 #[inline(always)]
-fn layer_norm_body<const FMA: bool>(x: &[f32], gamma: &[f32], beta: &[f32], eps: f32, y: &mut [f32], stats: &mut [f32]) {
+fn layer_norm_body<const FMA: bool>(
+    x: &[f32],
+    gamma: &[f32],
+    beta: &[f32],
+    eps: f32,
+    y: &mut [f32],
+    stats: &mut [f32],
+) {
     let dim = gamma.len();
     for ((yr, xr), st) in y.chunks_exact_mut(dim).zip(x.chunks_exact(dim)).zip(stats.chunks_exact_mut(2)) {
         let mean = sum_body(xr) / dim as f32;
@@ -287,7 +294,14 @@ mod avx2 {
         super::dot_body::<true>(a, b)
     }
     #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn layer_norm(x: &[f32], gamma: &[f32], beta: &[f32], eps: f32, y: &mut [f32], stats: &mut [f32]) {
+    pub(super) unsafe fn layer_norm(
+        x: &[f32],
+        gamma: &[f32],
+        beta: &[f32],
+        eps: f32,
+        y: &mut [f32],
+        stats: &mut [f32],
+    ) {
         super::layer_norm_body::<true>(x, gamma, beta, eps, y, stats)
     }
     #[target_feature(enable = "avx2,fma")]
@@ -370,7 +384,16 @@ pub fn layer_norm(x: &[f32], gamma: &[f32], beta: &[f32], eps: f32, y: &mut [f32
 /// LayerNorm backward (see [`layer_norm`]); accumulates into `dx` (if given), `dgamma`, `dbeta`.
 /// `scratch` must hold `2 * gamma.len()` values.
 #[allow(clippy::too_many_arguments)]
-pub fn layer_norm_backward(g: &[f32], x: &[f32], gamma: &[f32], stats: &[f32], dx: Option<&mut [f32]>, dgamma: &mut [f32], dbeta: &mut [f32], scratch: &mut [f32]) {
+pub fn layer_norm_backward(
+    g: &[f32],
+    x: &[f32],
+    gamma: &[f32],
+    stats: &[f32],
+    dx: Option<&mut [f32]>,
+    dgamma: &mut [f32],
+    dbeta: &mut [f32],
+    scratch: &mut [f32],
+) {
     #[cfg(target_arch = "x86_64")]
     if has_avx2_fma() {
         // SAFETY: the CPU supports AVX2 and FMA (checked at run time).

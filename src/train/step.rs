@@ -53,7 +53,13 @@ fn pool(threads: usize) -> Arc<rayon::ThreadPool> {
 
 /// Mean loss parts and mean gradients over a batch, computed on `threads` threads. The result
 /// does not depend on `threads` or on thread timing (pairs are reduced in order).
-pub fn batch_gradients(config: &ModelConfig, params: &Params, pairs: &[Pair], loss: &LossConfig, threads: usize) -> (LossParts, Params) {
+pub fn batch_gradients(
+    config: &ModelConfig,
+    params: &Params,
+    pairs: &[Pair],
+    loss: &LossConfig,
+    threads: usize,
+) -> (LossParts, Params) {
     use rayon::prelude::*;
     let per_pair: Vec<(LossParts, Params)> = if threads <= 1 {
         pairs.iter().map(|p| pair_gradients(config, params, p, loss)).collect()
@@ -97,14 +103,7 @@ pub struct TrainState {
 impl TrainState {
     /// A fresh state.
     pub fn new(config: ModelConfig, params: Params, lr: f32, clip_norm: Option<f64>) -> Self {
-        Self {
-            config,
-            params,
-            adam: Adam::new(lr),
-            clip_norm,
-            steps: 0,
-            skipped_steps: 0,
-        }
+        Self { config, params, adam: Adam::new(lr), clip_norm, steps: 0, skipped_steps: 0 }
     }
 }
 
@@ -141,11 +140,5 @@ pub fn train_step(state: &mut TrainState, pairs: &[Pair], loss: &LossConfig, thr
         state.skipped_steps += 1;
     }
     state.steps += 1;
-    StepReport {
-        loss: parts,
-        grad_norm: norm0,
-        clipped,
-        skipped,
-        seconds: start.elapsed().as_secs_f64(),
-    }
+    StepReport { loss: parts, grad_norm: norm0, clipped, skipped, seconds: start.elapsed().as_secs_f64() }
 }

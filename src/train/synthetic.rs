@@ -67,7 +67,8 @@ fn crop(points: &[[f32; 3]], keep: f32, r: &mut impl Rng) -> Vec<[f32; 3]> {
             break v.map(|x| x / l);
         }
     };
-    let mut d: Vec<(f32, usize)> = points.iter().enumerate().map(|(i, p)| (p[0] * dir[0] + p[1] * dir[1] + p[2] * dir[2], i)).collect();
+    let mut d: Vec<(f32, usize)> =
+        points.iter().enumerate().map(|(i, p)| (p[0] * dir[0] + p[1] * dir[1] + p[2] * dir[2], i)).collect();
     d.sort_by(|a, b| b.0.total_cmp(&a.0));
     let k = ((points.len() as f32) * keep) as usize;
     d[..k].iter().map(|&(_, i)| points[i]).collect()

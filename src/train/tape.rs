@@ -236,10 +236,7 @@ impl Tape {
     /// Turns on per-op timing (forward time is the time between consecutive node records,
     /// so it includes the caller's glue).
     pub fn enable_profile(&mut self) {
-        self.profile = Some(Profile {
-            mark: Some(std::time::Instant::now()),
-            ..Profile::default()
-        });
+        self.profile = Some(Profile { mark: Some(std::time::Instant::now()), ..Profile::default() });
     }
 
     /// The timing so far (None unless [`Tape::enable_profile`] was called).
@@ -279,13 +276,7 @@ impl Tape {
         if let Some(p) = &mut self.profile {
             p.forward("leaf");
         }
-        self.nodes.push(Node {
-            value,
-            rows,
-            cols,
-            op: None,
-            needs_grad,
-        });
+        self.nodes.push(Node { value, rows, cols, op: None, needs_grad });
         Id(self.nodes.len() - 1)
     }
 
@@ -302,13 +293,7 @@ impl Tape {
             op.recycle(&mut self.pool);
             None
         };
-        self.nodes.push(Node {
-            value,
-            rows,
-            cols,
-            op,
-            needs_grad,
-        });
+        self.nodes.push(Node { value, rows, cols, op, needs_grad });
         Id(self.nodes.len() - 1)
     }
 

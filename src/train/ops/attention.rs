@@ -39,22 +39,7 @@ pub fn attention(t: &mut Tape, q: Id, k: Id, v: Id, heads: usize) -> Id {
         gemm(nq, nk, dk, 1.0, p, nk as isize, 1, &vv[off..], d as isize, 1, 0.0, &mut out[off..], d as isize, 1);
     }
     let needs = t.any_needs(&[q, k, v]);
-    t.push(
-        out,
-        nq,
-        d,
-        Box::new(Attention {
-            q,
-            k,
-            v,
-            heads,
-            nq,
-            nk,
-            d,
-            probs,
-        }),
-        needs,
-    )
+    t.push(out, nq, d, Box::new(Attention { q, k, v, heads, nq, nk, d, probs }), needs)
 }
 
 impl Op for Attention {

@@ -16,7 +16,9 @@ pub fn concat_cols(t: &mut Tape, a: Id, b: Id) -> Id {
     assert_eq!(n, nb, "concat_cols: row counts differ");
     let w = ca + cb;
     let mut y = t.uninit(n * w);
-    for ((yr, ar), br) in y.chunks_exact_mut(w).zip(t.value(a).chunks_exact(ca.max(1))).zip(t.value(b).chunks_exact(cb.max(1))) {
+    for ((yr, ar), br) in
+        y.chunks_exact_mut(w).zip(t.value(a).chunks_exact(ca.max(1))).zip(t.value(b).chunks_exact(cb.max(1)))
+    {
         yr[..ca].copy_from_slice(&ar[..ca]);
         yr[ca..].copy_from_slice(&br[..cb]);
     }

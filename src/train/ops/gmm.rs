@@ -67,16 +67,7 @@ impl Gmm64 {
             }
         }
         let raw_var: Vec<f64> = (0..j).map(|k| sq[k] / mass[k]).collect();
-        Self {
-            pi,
-            mu,
-            var: raw_var.iter().map(|v| v.max(MIN_VAR)).collect(),
-            points: pts,
-            j,
-            mass,
-            raw_var,
-            e,
-        }
+        Self { pi, mu, var: raw_var.iter().map(|v| v.max(MIN_VAR)).collect(), points: pts, j, mass, raw_var, e }
     }
 
     /// Adds the membership gradient for parameter gradients `g_pi`, `g_mu`, `g_var` (any may be

@@ -27,12 +27,7 @@ pub fn gmr(t: &mut Tape, gamma_s: Id, gamma_t: Id, source: &[[f32; 3]], target: 
     assert!(ns == source.len() && nt == target.len(), "gmr: points vs membership rows");
     let gs = Gmm64::new(source, t.value(gamma_s), j);
     let gt = Gmm64::new(target, t.value(gamma_t), j);
-    let input = SolveInput {
-        pi: gs.pi.clone(),
-        mu_s: gs.mu.clone(),
-        mu_t: gt.mu.clone(),
-        var_t: gt.var.clone(),
-    };
+    let input = SolveInput { pi: gs.pi.clone(), mu_s: gs.mu.clone(), mu_t: gt.mu.clone(), var_t: gt.var.clone() };
     let solve = Solve::new(&input);
     let mut y = t.zeros(16);
     for r in 0..3 {
@@ -43,20 +38,7 @@ pub fn gmr(t: &mut Tape, gamma_s: Id, gamma_t: Id, source: &[[f32; 3]], target: 
     }
     y[15] = 1.0;
     let needs = t.any_needs(&[gamma_s, gamma_t]);
-    t.push(
-        y,
-        4,
-        4,
-        Box::new(GmrOp {
-            gamma_s,
-            gamma_t,
-            gs,
-            gt,
-            input,
-            solve,
-        }),
-        needs,
-    )
+    t.push(y, 4, 4, Box::new(GmrOp { gamma_s, gamma_t, gs, gt, input, solve }), needs)
 }
 
 impl Op for GmrOp {

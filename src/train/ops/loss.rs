@@ -19,17 +19,7 @@ pub fn sq_err(t: &mut Tape, a: Id, target: &[f32], scale: f32) -> Id {
     let v64 = scale as f64 * s;
     y[0] = v64 as f32;
     let needs = t.needs_grad(a);
-    let id = t.push(
-        y,
-        1,
-        1,
-        Box::new(SqErr {
-            a,
-            target: target.to_vec(),
-            scale,
-        }),
-        needs,
-    );
+    let id = t.push(y, 1, 1, Box::new(SqErr { a, target: target.to_vec(), scale }), needs);
     t.set_scalar64(id, v64);
     id
 }
@@ -163,7 +153,9 @@ pub fn membership_consistency(t: &mut Tape, a: Id, b: Id, pairs: &[(usize, usize
         for (&x, &y) in ra.iter().zip(rb) {
             s += match kind {
                 ConsistencyKind::Squared => ((x - y) as f64).powi(2),
-                ConsistencyKind::SymmetricKl => (x - y) as f64 * ((x.max(P_MIN) as f64).ln() - (y.max(P_MIN) as f64).ln()),
+                ConsistencyKind::SymmetricKl => {
+                    (x - y) as f64 * ((x.max(P_MIN) as f64).ln() - (y.max(P_MIN) as f64).ln())
+                }
             };
         }
     }
@@ -171,19 +163,7 @@ pub fn membership_consistency(t: &mut Tape, a: Id, b: Id, pairs: &[(usize, usize
     let v64 = if pairs.is_empty() { 0.0 } else { s / pairs.len() as f64 };
     y[0] = v64 as f32;
     let needs = !pairs.is_empty() && t.any_needs(&[a, b]);
-    let id = t.push(
-        y,
-        1,
-        1,
-        Box::new(Consistency {
-            a,
-            b,
-            j,
-            pairs: pairs.to_vec(),
-            kind,
-        }),
-        needs,
-    );
+    let id = t.push(y, 1, 1, Box::new(Consistency { a, b, j, pairs: pairs.to_vec(), kind }), needs);
     t.set_scalar64(id, v64);
     id
 }

@@ -18,7 +18,7 @@ pub mod rigid;
 pub mod softmax;
 
 pub use attention::attention;
-pub use concat::{concat_cols, concat_colmax};
+pub use concat::{concat_colmax, concat_cols};
 pub use elementwise::{add, mul_scalar, relu, scale, sigmoid, sub, sub_row};
 pub use gmm::gmm_params;
 pub use gmr::gmr;

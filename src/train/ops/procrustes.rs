@@ -71,7 +71,10 @@ impl Solve {
         let usable: Vec<bool> = (0..j)
             .map(|k| {
                 let p = x.pi[k];
-                p.is_finite() && p > 0.0 && x.mu_s[k].iter().chain(x.mu_t[k].iter()).all(|v| v.is_finite()) && !x.var_t[k].is_nan()
+                p.is_finite()
+                    && p > 0.0
+                    && x.mu_s[k].iter().chain(x.mu_t[k].iter()).all(|v| v.is_finite())
+                    && !x.var_t[k].is_nan()
             })
             .collect();
         let total: f64 = (0..j).filter(|&k| usable[k]).map(|k| x.pi[k]).sum();
@@ -149,12 +152,8 @@ impl Solve {
     /// The vector-Jacobian product: gradients of the inputs given `dL/dR` and `dL/dt`.
     pub fn backward(&self, x: &SolveInput, g_r: &Matrix3<f64>, g_t: &Vector3<f64>) -> SolveGrad {
         let j = x.pi.len();
-        let mut out = SolveGrad {
-            pi: vec![0.0; j],
-            mu_s: vec![[0.0; 3]; j],
-            mu_t: vec![[0.0; 3]; j],
-            var_t: vec![0.0; j],
-        };
+        let mut out =
+            SolveGrad { pi: vec![0.0; j], mu_s: vec![[0.0; 3]; j], mu_t: vec![[0.0; 3]; j], var_t: vec![0.0; j] };
         if !(self.total > 0.0 && self.total.is_finite()) {
             return out;
         }

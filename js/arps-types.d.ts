@@ -1,0 +1,120 @@
+/**
+ * Options of `Registrar.register`. Every field is optional; a missing, `undefined` or `null`
+ * field takes its default (the core `arps::Options`, field by field). Unknown or misspelled
+ * fields, wrong types and out-of-range values throw an `Error` naming the field.
+ */
+export interface RegisterOptions {
+  /**
+   * Points per cloud fed to the network (each cloud is resampled to exactly this many; a cloud
+   * with fewer points has some used twice, with a warning). Default: the model's N (512 for the
+   * embedded `web` model). Range: the model's minimum up to 65536.
+   */
+  networkPoints?: number | null;
+  /**
+   * Seed of every random choice (the network's point sampling). Default 0. The same inputs and
+   * seed give the same output, bit for bit, on a given build. A non-negative integer
+   * (a `bigint` for values above 2^53).
+   */
+  seed?: number | bigint;
+  /**
+   * Refinement after the network: `"plane"` (point-to-plane ICP, target normals; the default),
+   * `"point"` (point-to-point ICP) or `"off"` (the network + GMR estimate is the answer).
+   */
+  icp?: "plane" | "point" | "off";
+  /**
+   * Run the network. Default `true`. With `false` the coarse estimate is `initialTransform`
+   * (identity if unset) and only ICP runs: the classical baseline, or a refinement when a good
+   * initial guess is known.
+   */
+  network?: boolean;
+  /**
+   * ICP's final maximum correspondence distance, in **your units** (those of the clouds).
+   * Default: 2.5% of the clouds' shared half-extent. ICP runs coarse to fine at 4x, 2x and 1x
+   * this distance; `fitness` and `inlierRmse` are measured at 1x. Must be > 0.
+   */
+  maxCorrespondenceDistance?: number | null;
+  /** Iteration cap of each of the three ICP stages. Default 30; at most 10000. */
+  icpMaxIterations?: number;
+  /**
+   * Voxel size of the clouds ICP works on, in your units. Default: half the final max
+   * correspondence distance. `0` uses the full clouds. Must be >= 0.
+   */
+  voxelSize?: number | null;
+  /**
+   * An initial guess of `T_target_source` (rigid, your units); the network then estimates the
+   * remaining motion from there. Default: identity. Either 16 numbers in **column-major** order
+   * (a three.js `Matrix4.elements`, or a previous result's `matrix`), or four **row-major** rows
+   * `[[r00, r01, r02, tx], [r10, r11, r12, ty], [r20, r21, r22, tz], [0, 0, 0, 1]]`
+   * (the CLI's JSON layout). A non-rigid matrix throws.
+   */
+  initialTransform?: Float32Array | Float64Array | ArrayLike<number> | number[][] | null;
+  /**
+   * What to do with points that have a NaN or infinite coordinate: `"error"` (throw, naming
+   * the first bad point; the default) or `"drop"` (ignore them, e.g. PCD "no return" points).
+   */
+  nonFinite?: "error" | "drop";
+}
+
+/** Milliseconds spent in each stage of one registration (measured with `performance.now()`). */
+export interface RegistrationTimings {
+  /** Validation, normalisation, network sampling and ICP voxel downsampling. */
+  preprocessMs: number;
+  /** The network forward pass (0 with `network: false`). */
+  networkMs: number;
+  /** GMM parameters and the weighted Procrustes solve. */
+  gmrMs: number;
+  /** ICP (normals, kd-tree, iterations) and the final quality figures. */
+  icpMs: number;
+  /** The whole `register` call inside the engine. */
+  totalMs: number;
+}
+
+/** The result of `Registrar.register`: a plain object, safe to `postMessage` or `structuredClone`. */
+export interface RegistrationResult {
+  /**
+   * The answer, `T_target_source`: the rigid 4x4 transform that maps source points into the
+   * target frame (`p_target = R p_source + t`), in your units, after ICP. A `Float32Array(16)` in
+   * **column-major** order (element (row r, col c) at index `c * 4 + r`), ready for three.js:
+   * `sourceObject.matrix.fromArray(result.matrix)`.
+   */
+  matrix: Float32Array;
+  /**
+   * The coarse estimate before ICP (network + GMR, or `initialTransform` with `network: false`);
+   * same frames and layout as `matrix`.
+   */
+  networkMatrix: Float32Array;
+  /**
+   * Fraction of (voxelised) source points that have a target point within
+   * `maxCorrespondenceDistance` under `matrix`, in [0, 1]. Below 0.3 a warning is added: the
+   * alignment may have failed.
+   */
+  fitness: number;
+  /** RMS distance of those inlier pairs, in your units (0 when there are none). */
+  inlierRmse: number;
+  /** ICP iterations run over all stages (0 with `icp: "off"`). */
+  iterations: number;
+  /** True when the last ICP stage met its convergence criteria (false with `icp: "off"`). */
+  converged: boolean;
+  /** The final max correspondence distance used, in your units (the default resolved). */
+  maxCorrespondenceDistance: number;
+  /** Time per stage, in milliseconds. */
+  timingsMs: RegistrationTimings;
+  /** Things to know about this result (input resampled, low fitness, ...), as sentences. */
+  warnings: string[];
+}
+
+/** How a weights file was made (its `provenance` metadata); `kind: "random"` means untrained. */
+export interface ModelProvenance {
+  /** `"random"` for an untrained deterministic initialisation, else how it was trained. */
+  kind?: string;
+  [key: string]: unknown;
+}
+
+/** The network sizes read from a weights file (snake_case, as stored in the file). */
+export interface ModelConfig {
+  /** Preset the config started from (`"web"`, `"paper"`, `"tiny"` or a custom label). */
+  preset: string;
+  /** Network points per cloud, N (the default of `networkPoints`). */
+  n_points: number;
+  [key: string]: unknown;
+}

@@ -1,0 +1,112 @@
+// The built npm package (pkg/) from plain JavaScript: both builds, the package.json exports,
+// the result object's types, thrown Errors, and the instance surviving them.
+// Run after scripts/build-pkg.sh: node --test js/test/
+import test from "node:test";
+import assert from "node:assert/strict";
+import { readFileSync, mkdtempSync, mkdirSync, symlinkSync, writeFileSync, rmSync } from "node:fs";
+import { execFileSync } from "node:child_process";
+import { createRequire } from "node:module";
+import os from "node:os";
+import path from "node:path";
+import { pathToFileURL } from "node:url";
+import { pkg, source, target, sourcePly, errors, coreStubbed } from "./common.mjs";
+
+const nodeBuild = await import(pathToFileURL(path.join(pkg, "node", "index.mjs")).href);
+const webBuild = await import(pathToFileURL(path.join(pkg, "arps.js")).href);
+webBuild.initSync({ module: readFileSync(path.join(pkg, "arps_bg.wasm")) });
+
+for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]]) {
+  test(`${name}: API surface`, async () => {
+    assert.equal(typeof arps.default, "function", "default export init()");
+    await arps.default(name === "web build" ? { module_or_path: readFileSync(path.join(pkg, "arps_bg.wasm")) } : undefined);
+    assert.equal(arps.version(), JSON.parse(readFileSync(path.join(pkg, "package.json"), "utf8")).version);
+    const r = arps.Registrar.withDefaultModel();
+    assert.equal(typeof r.provenance, "object");
+    assert.equal(r.modelConfig.preset, "web");
+    r.free();
+  });
+
+  test(`${name}: errors are thrown Errors with the engine's message`, () => {
+    const r = arps.Registrar.withDefaultModel();
+    const s = source();
+    const t = target();
+    // A thrown Error with the message, never a wasm trap (a panic that reached JS).
+    const throws = (fn, re) =>
+      assert.throws(fn, (e) => e instanceof Error && !(e instanceof WebAssembly.RuntimeError) && re.test(e.message));
+    throws(() => r.register(s.subarray(1), t), /source: invalid point cloud: packed xyz buffer has length/);
+    const nan = s.slice();
+    nan[5] = NaN;
+    throws(() => r.register(nan, t), /source point 1 has a non-finite coordinate/);
+    throws(() => r.register(s.subarray(0, 30), t), /source has 10 finite points/);
+    throws(() => r.register(s, t, { icpMaxIteration: 3 }), /unknown field `icpMaxIteration`/);
+    throws(() => r.register(s, t, { icp: "planar" }), /invalid options/);
+    throws(() => r.register(s, t, { networkPoints: 1 }), /networkPoints = 1/);
+    throws(() => arps.Registrar.fromBytes(new Uint8Array([1, 2, 3])), /^weights: /);
+    throws(() => arps.parsePointCloud(new Uint8Array([0, 1, 2, 3]), "x.unknownext"), /./);
+    r.free();
+  });
+
+  test(`${name}: registers the fixture pair, before and after errors`, { skip: coreStubbed && "core stubbed" }, () => {
+    const r = arps.Registrar.withDefaultModel();
+    const check = (res) => {
+      assert.ok(res.matrix instanceof Float32Array && res.matrix.length === 16);
+      assert.ok(res.networkMatrix instanceof Float32Array && res.networkMatrix.length === 16);
+      for (const k of ["fitness", "inlierRmse", "iterations", "maxCorrespondenceDistance"]) assert.equal(typeof res[k], "number", k);
+      assert.equal(typeof res.converged, "boolean");
+      for (const k of ["preprocessMs", "networkMs", "gmrMs", "icpMs", "totalMs"]) assert.equal(typeof res.timingsMs[k], "number", k);
+      assert.ok(res.timingsMs.totalMs > 0);
+      assert.ok(Array.isArray(res.warnings));
+      const { rot, tr } = errors(res.matrix);
+      assert.ok(rot < 1 && tr < 0.02, `rotation ${rot} deg, translation ${tr}`);
+      structuredClone(res); // plain data: postMessage-able
+    };
+    check(r.register(source(), target()));
+    assert.throws(() => r.register(source(), target(), { bogus: 1 }));
+    assert.throws(() => r.register(new Float32Array(7), target()));
+    check(r.register(source(), target(), {}));
+    // A previous result's matrix as the initial guess (column-major, as three.js holds it).
+    const first = r.register(source(), target());
+    check(r.register(source(), target(), { initialTransform: first.matrix }));
+    // The readers' output registers as is.
+    check(r.register(arps.parsePointCloud(sourcePly, "source.ply"), target()));
+    r.free();
+  });
+}
+
+test("package.json exports resolve for import and require under Node", () => {
+  const dir = mkdtempSync(path.join(os.tmpdir(), "arps-exports-"));
+  try {
+    mkdirSync(path.join(dir, "node_modules"));
+    symlinkSync(pkg, path.join(dir, "node_modules", "arps"), "dir");
+    writeFileSync(
+      path.join(dir, "esm.mjs"),
+      `import init, { Registrar, version } from "arps";
+       import { createWorkerRegistrar, STAGES } from "arps/worker-client";
+       await init();
+       const r = Registrar.withDefaultModel();
+       console.log(JSON.stringify({ v: version(), preset: r.modelConfig.preset, w: typeof createWorkerRegistrar, s: STAGES.length }));`,
+    );
+    writeFileSync(
+      path.join(dir, "cjs.cjs"),
+      `const { Registrar, version } = require("arps");
+       console.log(JSON.stringify({ v: version(), preset: Registrar.withDefaultModel().modelConfig.preset }));`,
+    );
+    const esm = JSON.parse(execFileSync(process.execPath, ["esm.mjs"], { cwd: dir, encoding: "utf8" }));
+    assert.deepEqual(esm, { v: nodeBuild.version(), preset: "web", w: "function", s: 5 });
+    const cjs = JSON.parse(execFileSync(process.execPath, ["cjs.cjs"], { cwd: dir, encoding: "utf8" }));
+    assert.deepEqual(cjs, { v: nodeBuild.version(), preset: "web" });
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
+test("package files: what npm would publish, and nothing else", () => {
+  const out = execFileSync("npm", ["pack", "--dry-run", "--json"], { cwd: pkg, encoding: "utf8" });
+  const files = JSON.parse(out)[0].files.map((f) => f.path).sort();
+  for (const f of ["arps.js", "arps.d.ts", "arps_bg.wasm", "worker.js", "worker-client.js", "worker-client.d.ts", "node/arps.js", "node/index.mjs", "node/arps_bg.wasm", "package.json"]) {
+    assert.ok(files.includes(f), `${f} is published`);
+  }
+  for (const f of files) {
+    assert.ok(!/\.(ply|pcd|xyz|obj|off|stl|safetensors|bin|npz|h5)$/i.test(f), `${f}: no data files in the package`);
+  }
+});

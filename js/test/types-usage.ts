@@ -1,0 +1,33 @@
+// Compile-only check of the package's TypeScript declarations (tsc --noEmit -p js/test): typical
+// use must type-check, options are typed (not `any`), and misspelled options are rejected.
+import init, { Registrar, parsePointCloud, version } from "../../pkg/arps.js";
+import type { RegisterOptions, RegistrationResult } from "../../pkg/arps.js";
+import { createWorkerRegistrar, type Stage, type WorkerRegistrar } from "../../pkg/worker-client.js";
+
+export async function onMainThread(source: Float32Array, target: Float32Array): Promise<number> {
+  await init();
+  const r = Registrar.withDefaultModel();
+  const options: RegisterOptions = { icp: "plane", seed: 3, maxCorrespondenceDistance: 0.05, nonFinite: "drop" };
+  const result: RegistrationResult = r.register(source, target, options);
+  const m: Float32Array = result.matrix;
+  const again = r.register(source, target, { initialTransform: m, network: false });
+  r.register(source, target);
+  r.register(source, target, null);
+  const ms: number = again.timingsMs.totalMs + result.fitness + result.inlierRmse + result.iterations;
+  const w: string[] = result.warnings;
+  const kind: string | undefined = r.provenance.kind;
+  // @ts-expect-error misspelled option
+  r.register(source, target, { icpMaxIteration: 3 });
+  // @ts-expect-error wrong enum value
+  r.register(source, target, { icp: "planar" });
+  r.free();
+  return ms + w.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length;
+}
+
+export async function inAWorker(source: Float32Array, target: Float32Array): Promise<Float32Array> {
+  const arps: WorkerRegistrar = await createWorkerRegistrar({ onProgress: (s: Stage) => void s });
+  const result = await arps.register(source, target, { icp: "point" }, { onProgress: (s) => void s, transfer: true });
+  const points: Float32Array = await arps.parsePointCloud(new Uint8Array(), "cloud.pcd");
+  arps.terminate();
+  return points.length ? result.matrix : result.networkMatrix;
+}

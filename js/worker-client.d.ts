@@ -1,0 +1,80 @@
+import type { ModelConfig, ModelProvenance, RegisterOptions, RegistrationResult } from "./arps.js";
+
+/**
+ * Progress of a request, in order: `"loading"` (fetching and compiling the engine and the
+ * model, first request only), `"preparing"` (inputs received, registration starting),
+ * `"network"` and `"refining"` (the network, then ICP: sent once the engine reports stages),
+ * `"done"` (the result is on its way).
+ */
+export type Stage = "loading" | "preparing" | "network" | "refining" | "done";
+
+/** The stages, in order. */
+export declare const STAGES: readonly Stage[];
+
+/** Anything with the `Worker` methods the client uses (a DOM `Worker`, or an adapter in tests). */
+export interface WorkerLike {
+  postMessage(message: unknown, transfer: Transferable[]): void;
+  addEventListener(type: "message" | "error", listener: (event: any) => void): void;
+  terminate(): void;
+}
+
+export interface CreateWorkerRegistrarOptions {
+  /**
+   * Where the engine's `.wasm` comes from: a URL (string or `URL`), a `Response`, the bytes
+   * (`ArrayBuffer` / `Uint8Array`) or a compiled `WebAssembly.Module`. Default: `arps_bg.wasm`
+   * next to the package's `arps.js` (what bundlers resolve through `new URL(..., import.meta.url)`).
+   */
+  wasm?: string | URL | Response | BufferSource | WebAssembly.Module;
+  /**
+   * Custom weights (the bytes of an arps `.safetensors` file), copied to the worker. Default:
+   * the model embedded in the package.
+   */
+  weights?: ArrayBuffer | Uint8Array;
+  /** A worker to use instead of starting `worker.js` from this package. */
+  worker?: WorkerLike;
+  /** Progress of the initial load (`"loading"`). */
+  onProgress?: (stage: Stage) => void;
+}
+
+export interface WorkerRequestOptions {
+  /** Called with each progress stage of this request. */
+  onProgress?: (stage: Stage) => void;
+  /**
+   * Transfer the input buffers to the worker instead of copying them (faster for big clouds;
+   * the caller's arrays become detached, length 0). Default `false`.
+   */
+  transfer?: boolean;
+}
+
+/** A registrar living in a worker; every method returns a promise. */
+export interface WorkerRegistrar {
+  /** How the loaded weights were made; `kind: "random"` means an untrained placeholder. */
+  readonly provenance: ModelProvenance;
+  /** The network sizes of the loaded weights. */
+  readonly modelConfig: ModelConfig;
+  /**
+   * Registers `source` onto `target` (packed xyz `[x0, y0, z0, x1, ...]`, the same units) in the
+   * worker. Resolves to the same plain object as `Registrar.register`; its `matrix` and
+   * `networkMatrix` buffers were transferred, not copied. Rejects with an `Error` carrying the
+   * engine's message; the worker stays usable.
+   */
+  register(
+    source: Float32Array,
+    target: Float32Array,
+    options?: RegisterOptions,
+    request?: WorkerRequestOptions,
+  ): Promise<RegistrationResult>;
+  /**
+   * Reads a point cloud from a file's bytes in the worker (format from the file name's
+   * extension, else sniffed). Resolves to packed xyz.
+   */
+  parsePointCloud(bytes: Uint8Array | ArrayBuffer, fileName: string, request?: { transfer?: boolean }): Promise<Float32Array>;
+  /** Stops the worker; pending and later requests reject. */
+  terminate(): void;
+}
+
+/**
+ * Starts the arps worker, loads the engine and the model in it, and resolves once it is ready.
+ * Rejects (and stops the worker) if the engine or the weights cannot be loaded.
+ */
+export declare function createWorkerRegistrar(options?: CreateWorkerRegistrarOptions): Promise<WorkerRegistrar>;

@@ -1,0 +1,85 @@
+// arps worker: runs the engine off the main thread. A module worker; start it with
+// `createWorkerRegistrar()` from `arps/worker-client` (or `new Worker(new URL("./worker.js",
+// import.meta.url), { type: "module" })` and the message protocol below).
+//
+// Requests (main -> worker), each with a numeric `id`:
+//   { id, type: "init", wasm?, weights? }   load the engine and the model (once)
+//   { id, type: "register", source, target, options? }
+//   { id, type: "parse", bytes, fileName }
+// Replies (worker -> main), with the request's `id`:
+//   { id, type: "progress", stage }         stage: "loading" | "preparing" | "network" | "refining" | "done"
+//   { id, type: "ready", provenance, modelConfig }
+//   { id, type: "result", result }          result.matrix / result.networkMatrix buffers transferred
+//   { id, type: "parsed", points }          points (Float32Array) buffer transferred
+//   { id, type: "error", message, name }
+import init, { Registrar, parsePointCloud } from "./arps.js";
+
+let registrar = null;
+let loading = null;
+
+const post = (message, transfer = []) => self.postMessage(message, transfer);
+const progress = (id, stage) => post({ id, type: "progress", stage });
+
+function load(id, { wasm, weights } = {}) {
+  if (registrar) return Promise.resolve(registrar);
+  if (!loading) {
+    progress(id, "loading");
+    loading = (async () => {
+      await init(wasm === undefined || wasm === null ? undefined : { module_or_path: wasm });
+      registrar = weights ? Registrar.fromBytes(toBytes(weights)) : Registrar.withDefaultModel();
+      return registrar;
+    })();
+    // A failed load may be retried by a later request (e.g. with other `wasm`/`weights`).
+    loading.catch(() => {
+      loading = null;
+    });
+  }
+  return loading;
+}
+
+function toBytes(data) {
+  if (data instanceof Uint8Array) return data;
+  if (ArrayBuffer.isView(data)) return new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
+  return new Uint8Array(data);
+}
+
+async function handle(msg) {
+  const { id, type } = msg;
+  switch (type) {
+    case "init": {
+      const r = await load(id, msg);
+      post({ id, type: "ready", provenance: r.provenance, modelConfig: r.modelConfig });
+      return;
+    }
+    case "register": {
+      const r = await load(id);
+      progress(id, "preparing");
+      // The engine runs network, GMR and ICP in one call; per-stage events ("network",
+      // "refining") need a progress hook in the core and are not sent yet.
+      const result = r.register(msg.source, msg.target, msg.options ?? undefined);
+      progress(id, "done");
+      post({ id, type: "result", result }, [result.matrix.buffer, result.networkMatrix.buffer]);
+      return;
+    }
+    case "parse": {
+      await load(id);
+      const points = parsePointCloud(toBytes(msg.bytes), String(msg.fileName ?? ""));
+      post({ id, type: "parsed", points }, [points.buffer]);
+      return;
+    }
+    default:
+      throw new Error(`arps worker: unknown request type ${JSON.stringify(type)}`);
+  }
+}
+
+self.addEventListener("message", (event) => {
+  const msg = event.data ?? {};
+  handle(msg).catch((e) => {
+    post({
+      id: msg.id,
+      type: "error",
+      message: e instanceof Error ? e.message : String(e),
+      name: e instanceof Error ? e.name : "Error",
+    });
+  });
+});

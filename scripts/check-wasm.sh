@@ -1,0 +1,69 @@
+#!/usr/bin/env bash
+# Checks the built package's .wasm (scripts/build-pkg.sh first):
+#   1. size budget: the whole .wasm (embedded model included) and the engine alone (the .wasm
+#      minus models/web.safetensors), raw and gzip -9;
+#   2. SIMD: simd128 instructions are really in the code, and f32x4 arithmetic (add/sub/mul/fma:
+#      what the network's kernels compute with) is among them, not just lane moves; counted with
+#      npm binaryen's disassembler.
+# Budgets (bytes), overridable from the environment:
+#   ARPS_WASM_BUDGET       whole .wasm, raw               default 3,400,000
+#   ARPS_WASM_GZ_BUDGET    whole .wasm, gzip -9           default 3,000,000
+#   ARPS_ENGINE_BUDGET     .wasm minus the model, raw     default   900,000
+#   ARPS_SIMD_MIN          SIMD instructions, at least    default       200
+#   ARPS_SIMD_F32_MIN      f32x4 add/sub/mul/fma, at least default        16
+# Usage: scripts/check-wasm.sh [FILE.wasm ...]   (default: pkg/arps_bg.wasm pkg/node/arps_bg.wasm)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+budget=${ARPS_WASM_BUDGET:-3400000}
+gz_budget=${ARPS_WASM_GZ_BUDGET:-3000000}
+engine_budget=${ARPS_ENGINE_BUDGET:-900000}
+simd_min=${ARPS_SIMD_MIN:-200}
+simd_f32_min=${ARPS_SIMD_F32_MIN:-16}
+model=models/web.safetensors
+model_bytes=$(stat -c %s "$model")
+
+files=("$@")
+[ ${#files[@]} -eq 0 ] && files=(pkg/arps_bg.wasm pkg/node/arps_bg.wasm)
+
+fail=0
+for f in "${files[@]}"; do
+  if [ ! -f "$f" ]; then
+    echo "check-wasm: $f not found (run scripts/build-pkg.sh)" >&2
+    exit 1
+  fi
+  raw=$(stat -c %s "$f")
+  gz=$(gzip -9 -c "$f" | wc -c)
+  engine=$((raw - model_bytes))
+  printf 'check-wasm: %s: %d bytes raw (budget %d), %d gzip (budget %d); engine without the %d-byte model: %d (budget %d)\n' \
+    "$f" "$raw" "$budget" "$gz" "$gz_budget" "$model_bytes" "$engine" "$engine_budget"
+  [ "$raw" -le "$budget" ] || { echo "check-wasm: FAIL $f is over the raw size budget" >&2; fail=1; }
+  [ "$gz" -le "$gz_budget" ] || { echo "check-wasm: FAIL $f is over the gzip size budget" >&2; fail=1; }
+  [ "$engine" -le "$engine_budget" ] || { echo "check-wasm: FAIL $f: the engine is over its size budget" >&2; fail=1; }
+
+  node --input-type=module - "$f" "$simd_min" "$simd_f32_min" <<'JS' || fail=1
+import { readFileSync } from "node:fs";
+import binaryen from "binaryen";
+const [file, min, f32min] = process.argv.slice(2);
+const mod = binaryen.readBinary(readFileSync(file));
+mod.setFeatures(binaryen.Features.All);
+// Text of the code only (the data segments, i.e. the embedded model, are dropped first).
+const text = mod.emitText().split("\n").filter((l) => !l.trimStart().startsWith("(data ")).join("\n");
+mod.dispose();
+const ops = text.match(/\b(v128|[if](8x16|16x8|32x4|64x2)|i8x16|i16x8|i32x4|i64x2|f32x4|f64x2)\.[a-z_0-9]+/g) ?? [];
+const byOp = {};
+for (const op of ops) byOp[op] = (byOp[op] ?? 0) + 1;
+const top = Object.entries(byOp).sort((a, b) => b[1] - a[1]).slice(0, 8).map(([k, v]) => `${k} ${v}`).join(", ");
+const f32 = ops.filter((o) => /^f32x4\.(add|sub|mul|relaxed_madd|relaxed_nmadd)$/.test(o)).length;
+console.log(`check-wasm: ${file}: ${ops.length} SIMD instructions, ${f32} of them f32x4 add/sub/mul/fma; most used: ${top || "none"}`);
+if (ops.length < Number(min)) {
+  console.error(`check-wasm: FAIL ${file}: fewer than ${min} SIMD instructions (is +simd128 on? see .cargo/config.toml)`);
+  process.exit(1);
+}
+if (f32 < Number(f32min)) {
+  console.error(`check-wasm: FAIL ${file}: fewer than ${f32min} f32x4 add/sub/mul/fma instructions: the kernels compute in scalar`);
+  process.exit(1);
+}
+JS
+done
+[ "$fail" -eq 0 ] && echo "check-wasm: ok" || { echo "check-wasm: FAILED" >&2; exit 1; }

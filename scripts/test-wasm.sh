@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# The WebAssembly package's tests (scripts/test.sh runs this):
+#   1. wasm-pack test --node: tests/wasm_*.rs through the JS-facing binding (ground-truth
+#      registration, options, readers, every error case, instance reuse)
+#   2. scripts/build-pkg.sh: the npm package in pkg/
+#   3. scripts/check-wasm.sh: size budget and SIMD instructions
+#   4. node --test js/test/: the built package from JavaScript (both builds, exports, the worker)
+#   5. tsc: the .d.ts type-checks typical use and rejects misspelled options
+#   6. examples/node-register.mjs on the fixture pair
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+step() { printf '\n== wasm: %s\n' "$*"; }
+
+scripts/setup.sh
+
+step "wasm-pack test --node"
+wasm-pack test --node -- --test "wasm_*"
+
+step "build the package"
+scripts/build-pkg.sh
+
+step "size and SIMD checks"
+scripts/check-wasm.sh
+
+step "the package from JavaScript (node --test js/test/)"
+node --test js/test/
+
+step "TypeScript declarations (tsc -p js/test)"
+node_modules/.bin/tsc -p js/test
+
+step "examples/node-register.mjs"
+node examples/node-register.mjs fixtures/wasm/source.ply fixtures/wasm/target.ply

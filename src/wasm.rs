@@ -1,0 +1,285 @@
+//! The WebAssembly binding (wasm-bindgen), compiled only for `wasm32`.
+//!
+//! A thin layer: it converts JS values to core types and back, and core errors to thrown JS
+//! `Error`s. All logic lives in the core ([`crate::Registrar`], [`crate::io`]).
+//!
+//! JS API (see `js/arps-extra.d.ts` and the generated `arps.d.ts` for the documented types):
+//! * `Registrar.withDefaultModel()`, `Registrar.fromBytes(Uint8Array)`;
+//! * `registrar.register(source: Float32Array, target: Float32Array, options?)` -> a plain object
+//!   `{ matrix, networkMatrix, fitness, inlierRmse, iterations, converged,
+//!   maxCorrespondenceDistance, timingsMs, warnings }`;
+//! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`.
+//!
+//! Nothing here may panic on user input: a panic in wasm aborts the instance (there is no
+//! `catch_unwind`), so every fallible step returns `Result<_, JsError>`.
+
+use crate::{transform, Options, PointCloud};
+use js_sys::{Array, Float32Array, Object, Reflect};
+use wasm_bindgen::prelude::*;
+
+/// The documented option and result types (`RegisterOptions`, `RegistrationResult`, ...),
+/// hand-written in `js/arps-types.d.ts` and appended to the generated `arps.d.ts`.
+#[wasm_bindgen(typescript_custom_section)]
+const TS_TYPES: &'static str = include_str!("../js/arps-types.d.ts");
+
+#[wasm_bindgen]
+extern "C" {
+    #[wasm_bindgen(js_namespace = performance, js_name = now)]
+    fn performance_now() -> f64;
+}
+
+/// The clock handed to the core: `performance.now()` where it exists, else `Date.now()`.
+fn clock_performance() -> f64 {
+    performance_now()
+}
+
+fn clock_date() -> f64 {
+    js_sys::Date::now()
+}
+
+fn js_clock() -> crate::timing::Clock {
+    // `globalThis.performance` exists in browsers, workers and Node >= 16.
+    let has_performance = Reflect::get(&js_sys::global(), &JsValue::from_str("performance"))
+        .ok()
+        .filter(|p| p.is_object())
+        .and_then(|p| Reflect::get(&p, &JsValue::from_str("now")).ok())
+        .is_some_and(|f| f.is_function());
+    if has_performance {
+        clock_performance
+    } else {
+        clock_date
+    }
+}
+
+/// Installs the panic hook once, so that a core bug (a panic) at least prints its message to
+/// the console before the instance traps. Runs when the module is instantiated.
+#[wasm_bindgen(start)]
+fn start() {
+    console_error_panic_hook::set_once();
+}
+
+fn js_err(e: crate::Error) -> JsError {
+    JsError::new(&e.to_string())
+}
+
+/// The crate version (`"0.1.0"`).
+#[wasm_bindgen]
+pub fn version() -> String {
+    env!("CARGO_PKG_VERSION").to_string()
+}
+
+/// Reads a point cloud from a file's bytes with the core readers. The format comes from the
+/// file name's extension, else it is sniffed from the content; mesh formats give their
+/// vertices. Returns packed xyz (`[x0, y0, z0, x1, ...]`). Throws on unreadable input.
+#[wasm_bindgen(js_name = parsePointCloud)]
+pub fn parse_point_cloud(
+    bytes: &[u8],
+    #[wasm_bindgen(js_name = "fileName")] file_name: &str,
+) -> Result<Vec<f32>, JsError> {
+    let cloud = crate::io::read_point_cloud(bytes, file_name).map_err(js_err)?;
+    Ok(cloud.to_xyz())
+}
+
+/// Holds a loaded model and reusable buffers; registers pairs of clouds.
+#[wasm_bindgen]
+pub struct Registrar {
+    inner: crate::Registrar,
+}
+
+#[wasm_bindgen]
+impl Registrar {
+    /// A registrar on the model embedded in the package (`models/web.safetensors`).
+    #[wasm_bindgen(js_name = withDefaultModel)]
+    pub fn with_default_model() -> Result<Registrar, JsError> {
+        let mut inner = crate::Registrar::with_default_model().map_err(js_err)?;
+        inner.set_clock(Some(js_clock()));
+        Ok(Registrar { inner })
+    }
+
+    /// A registrar on custom weights (the bytes of an arps `.safetensors` file).
+    /// Throws if the bytes are not a valid arps weights file.
+    #[wasm_bindgen(js_name = fromBytes)]
+    pub fn from_bytes(bytes: &[u8]) -> Result<Registrar, JsError> {
+        let mut inner = crate::Registrar::from_bytes(bytes).map_err(js_err)?;
+        inner.set_clock(Some(js_clock()));
+        Ok(Registrar { inner })
+    }
+
+    /// Registers `source` onto `target` (packed xyz, same units) and returns the transform
+    /// mapping source points into the target frame, with quality figures. `options` is a plain
+    /// object (or `undefined`/`null`) mirroring the core `Options`; unknown fields throw.
+    #[wasm_bindgen(unchecked_return_type = "RegistrationResult")]
+    pub fn register(
+        &mut self,
+        source: &[f32],
+        target: &[f32],
+        #[wasm_bindgen(unchecked_optional_param_type = "RegisterOptions | null")] options: Option<JsValue>,
+    ) -> Result<JsValue, JsError> {
+        let options = options.unwrap_or(JsValue::UNDEFINED);
+        let options = parse_options(options)?;
+        let source = PointCloud::from_xyz(source).map_err(|e| prefixed("source", e))?;
+        let target = PointCloud::from_xyz(target).map_err(|e| prefixed("target", e))?;
+        let r = self.inner.register(&source, &target, &options).map_err(js_err)?;
+        let out = Object::new();
+        set(&out, "matrix", &matrix_js(&r.T_target_source))?;
+        set(&out, "networkMatrix", &matrix_js(&r.T_target_source_network))?;
+        set(&out, "fitness", &JsValue::from_f64(r.fitness))?;
+        set(&out, "inlierRmse", &JsValue::from_f64(r.inlier_rmse))?;
+        set(&out, "iterations", &JsValue::from_f64(r.icp_iterations as f64))?;
+        set(&out, "converged", &JsValue::from_bool(r.icp_converged))?;
+        set(&out, "maxCorrespondenceDistance", &JsValue::from_f64(r.max_correspondence_distance))?;
+        set(&out, "timingsMs", &to_js(&r.timings)?)?;
+        let warnings: Array = r.warnings.iter().map(|w| JsValue::from_str(w)).collect();
+        set(&out, "warnings", &warnings)?;
+        Ok(out.into())
+    }
+
+    /// How the loaded weights were made (the weights file's provenance JSON), e.g.
+    /// `{ kind: "random", seed: 0 }` for untrained placeholder weights.
+    #[wasm_bindgen(getter, unchecked_return_type = "ModelProvenance")]
+    pub fn provenance(&self) -> Result<JsValue, JsError> {
+        to_js(self.inner.provenance())
+    }
+
+    /// The network configuration of the loaded weights (sizes, preset name).
+    #[wasm_bindgen(getter, js_name = modelConfig, unchecked_return_type = "ModelConfig")]
+    pub fn model_config(&self) -> Result<JsValue, JsError> {
+        to_js(&self.inner.model().config)
+    }
+}
+
+/// Core error whose message is prefixed with which argument it concerns.
+fn prefixed(what: &str, e: crate::Error) -> JsError {
+    JsError::new(&format!("{what}: {e}"))
+}
+
+fn set(obj: &Object, key: &str, value: &JsValue) -> Result<(), JsError> {
+    Reflect::set(obj, &JsValue::from_str(key), value)
+        .map(|_| ())
+        .map_err(|_| JsError::new(&format!("internal: could not set result field {key}")))
+}
+
+/// Serialises with plain JS objects for maps (not `Map`s).
+fn to_js<T: serde::Serialize + ?Sized>(value: &T) -> Result<JsValue, JsError> {
+    let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
+    value.serialize(&ser).map_err(|e| JsError::new(&format!("internal: {e}")))
+}
+
+/// A 4x4 as `Float32Array(16)`, column-major (three.js `Matrix4.fromArray`).
+fn matrix_js(m: &nalgebra::Matrix4<f64>) -> Float32Array {
+    Float32Array::from(&transform::to_column_major_f32(m)[..])
+}
+
+/// JS options object -> core [`Options`]. `undefined`/`null` give the defaults; missing fields
+/// take their defaults; unknown fields and wrong types throw. `initialTransform` may be given as
+/// the core's four row-major rows, or as 16 numbers in column-major order (a three.js
+/// `Matrix4.elements`, or a previous result's `matrix`); the latter is converted to rows here.
+fn parse_options(options: JsValue) -> Result<Options, JsError> {
+    if options.is_undefined() || options.is_null() {
+        return Ok(Options::default());
+    }
+    if !options.is_object() || Array::is_array(&options) {
+        return Err(JsError::new("invalid options: expected a plain object (or undefined)"));
+    }
+    // A clean copy (the caller's object is never modified) holding only the fields that are
+    // given: `undefined` and `null` mean "not given", so the default applies (serde-wasm-bindgen
+    // would reject `seed: undefined`). serde-wasm-bindgen reads a struct by asking for each known
+    // field, so it never sees unknown ones and `deny_unknown_fields` has no effect: unknown keys
+    // are rejected here, against the core's own field list (taken from its `Deserialize` impl,
+    // so it cannot drift).
+    let fields = struct_fields::<Options>();
+    let clean = Object::new();
+    for key in Object::keys(options.unchecked_ref::<Object>()).iter() {
+        let name = key.as_string().unwrap_or_default();
+        let value = Reflect::get(&options, &key).unwrap_or(JsValue::UNDEFINED);
+        if value.is_undefined() || value.is_null() {
+            continue;
+        }
+        if !fields.contains(&name.as_str()) {
+            return Err(JsError::new(&format!(
+                "invalid options: unknown field `{name}`, expected one of {}",
+                fields.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ")
+            )));
+        }
+        let value = match column_major_16(&name, &value)? {
+            Some(elements) => rows_js(&transform::to_rows(&transform::from_column_major(&elements))),
+            None => value,
+        };
+        Reflect::set(&clean, &key, &value)
+            .map_err(|_| JsError::new(&format!("internal: could not copy option {name}")))?;
+    }
+    serde_wasm_bindgen::from_value::<Options>(clean.into()).map_err(|e| JsError::new(&format!("invalid options: {e}")))
+}
+
+/// The (renamed) field names of a `Deserialize` struct: serde's derive passes them to
+/// `Deserializer::deserialize_struct`, which this deserializer records and then stops.
+fn struct_fields<T: serde::de::DeserializeOwned>() -> &'static [&'static str] {
+    use serde::de::{self, Visitor};
+    struct Capture<'a>(&'a mut &'static [&'static str]);
+    impl<'de> de::Deserializer<'de> for Capture<'_> {
+        type Error = de::value::Error;
+        fn deserialize_any<V: Visitor<'de>>(self, _: V) -> Result<V::Value, Self::Error> {
+            Err(de::Error::custom("not a struct"))
+        }
+        fn deserialize_struct<V: Visitor<'de>>(
+            self,
+            _name: &'static str,
+            fields: &'static [&'static str],
+            _visitor: V,
+        ) -> Result<V::Value, Self::Error> {
+            *self.0 = fields;
+            Err(de::Error::custom("fields captured"))
+        }
+        serde::forward_to_deserialize_any! {
+            bool i8 i16 i32 i64 i128 u8 u16 u32 u64 u128 f32 f64 char str string bytes byte_buf
+            option unit unit_struct newtype_struct seq tuple tuple_struct map enum identifier
+            ignored_any
+        }
+    }
+    let mut fields: &'static [&'static str] = &[];
+    let _ = T::deserialize(Capture(&mut fields));
+    fields
+}
+
+/// Four row-major rows as a JS array of arrays (the core's `initialTransform` layout).
+fn rows_js(rows: &[[f64; 4]; 4]) -> JsValue {
+    let out: Array =
+        rows.iter().map(|r| -> JsValue { r.iter().map(|v| JsValue::from_f64(*v)).collect::<Array>().into() }).collect();
+    out.into()
+}
+
+/// For the `initialTransform` option: `Some` when `v` is a flat array-like of 16 numbers
+/// (column-major); `None` for any other option, and for rows or other shapes (serde reports
+/// those); an error for a typed array of the wrong length or a non-number element.
+fn column_major_16(name: &str, v: &JsValue) -> Result<Option<[f64; 16]>, JsError> {
+    if name != "initialTransform" {
+        return Ok(None);
+    }
+    let flat: Option<Vec<JsValue>> = if v.is_instance_of::<Float32Array>() || v.is_instance_of::<js_sys::Float64Array>()
+    {
+        Some(Array::from(v).to_vec())
+    } else if Array::is_array(v) {
+        let a: &Array = v.unchecked_ref();
+        if a.length() == 16 {
+            Some(a.to_vec())
+        } else {
+            None
+        }
+    } else {
+        None
+    };
+    let Some(flat) = flat else { return Ok(None) };
+    if flat.len() != 16 {
+        return Err(JsError::new(&format!(
+            "invalid options: initialTransform has {} elements; expected 16 (column-major) or 4 rows of 4",
+            flat.len()
+        )));
+    }
+    let mut out = [0.0; 16];
+    for (i, (o, x)) in out.iter_mut().zip(&flat).enumerate() {
+        *o = x
+            .as_f64()
+            .ok_or_else(|| JsError::new(&format!("invalid options: initialTransform[{i}] is not a number")))?;
+    }
+    Ok(Some(out))
+}
