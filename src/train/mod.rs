@@ -30,7 +30,7 @@
 //! (one fused op, [`ops::gmr`]). The forward pass matches the engine's memberships, steps,
 //! shifts and transforms to 1e-4 (tests/train_model.rs).
 //!
-//! Speed (web config, N = 512, batch 8, 2 threads): about 0.21 CPU-seconds per pair, i.e.
+//! Speed (web config, N = 512, batch 8, 2 threads): 0.21-0.23 CPU-seconds per pair, i.e.
 //! ~9 pairs/s on two otherwise idle cores; ~85 % of the time is sgemm (matrixmultiply,
 //! including ~20 % packing), the rest softmax, LayerNorm and bookkeeping
 //! (`cargo test --release --features train --test train_bench -- --ignored --nocapture`).
