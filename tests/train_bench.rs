@@ -187,3 +187,44 @@ fn gradient_norms_at_init() {
         eprintln!("{term}: loss {:.4}, grad norm {total:.3e}\n   {}", parts.total, list.join(", "));
     }
 }
+
+/// Diagnostic: a few hundred steps on small synthetic pairs with every loss on, printing the
+/// loss parts, step sizes and gradient norm (stability: NaN, collapse, dead shifting).
+#[test]
+#[ignore]
+fn small_run_all_losses() {
+    let mut cfg = ModelConfig::web();
+    cfg.n_points = env("BENCH_N", 128);
+    cfg.top_h = cfg.n_points / 4;
+    let steps = env("BENCH_STEPS", 200);
+    let params = train::init_params(&cfg, 1).unwrap();
+    let loss = LossConfig {
+        aff: 1.0,
+        reg: 1.0,
+        consistency: 1.0,
+        ..LossConfig::default()
+    };
+    let mut state = TrainState::new(cfg.clone(), params, 1e-3, Some(1.0));
+    for s in 0..steps {
+        let pairs = synthetic::pairs(8, cfg.n_points, 10_000 + 8 * s as u64);
+        let r = train::train_step(&mut state, &pairs, &loss, 2);
+        if s % 20 == 0 || s + 1 == steps {
+            let l = &r.loss;
+            eprintln!(
+                "step {s:4}: total {:.4} sup {:.4} ctr {:.4}/{:.4} aff {:.5} reg {:.4} cons {:.4} ({:.0} pairs) |g| {:.3}{} steps {:?}",
+                l.total,
+                l.sup,
+                l.ctr,
+                l.ctr_no_shift,
+                l.aff,
+                l.reg,
+                l.consistency,
+                l.consistency_pairs,
+                r.grad_norm,
+                if r.skipped { " SKIPPED" } else { "" },
+                l.steps.iter().map(|v| (v * 100.0).round() / 100.0).collect::<Vec<_>>()
+            );
+        }
+    }
+    eprintln!("skipped {} of {}", state.skipped_steps, state.steps);
+}

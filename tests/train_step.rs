@@ -72,3 +72,28 @@ fn short_run_lowers_the_loss() {
     let w = train::to_weights(&state.params, &cfg, serde_json::json!({"steps": state.steps})).unwrap();
     arps::Weights::from_bytes(&w.to_bytes(arps::StoreAs::F32).unwrap()).unwrap();
 }
+
+#[test]
+fn data_pipeline_pairs_convert() {
+    use arps::data::pairs::{pair_from_dense, PairParams};
+    let dense = arps::PointCloud::new(synthetic::pair(synthetic::Shape::Cylinder, 1024, 3).source);
+    let params = PairParams {
+        points: 32,
+        dense_points: 1024,
+        ..PairParams::default()
+    };
+    let dp = pair_from_dense(&dense, "test", &params, 9);
+    let p = train::Pair::from(&dp);
+    assert_eq!(p.t_gt, dp.T_target_source);
+    // the GT centroids, moved by T_gt, agree (the pre-centred v_gt differ by the clouds' means)
+    let mean = |c: &[[f32; 3]]| [0, 1, 2].map(|a| c.iter().map(|q| q[a] as f64).sum::<f64>() / c.len() as f64);
+    let (ms, mt) = (mean(&p.source), mean(&p.target));
+    let cs = [0, 1, 2].map(|a| p.v_gt_source[a] + ms[a] as f32);
+    let ct = arps::transform::apply(&p.t_gt, cs);
+    for a in 0..3 {
+        assert!((ct[a] - (p.v_gt_target[a] + mt[a] as f32)).abs() < 1e-4);
+    }
+    let cfg = ModelConfig::tiny();
+    let (parts, _) = train::pair_gradients(&cfg, &train::init_params(&cfg, 0).unwrap(), &p, &LossConfig::default());
+    assert!(parts.is_finite());
+}

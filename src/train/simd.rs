@@ -199,9 +199,91 @@ fn has_avx2_fma() -> bool {
 
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
+    use std::arch::x86_64::*;
+
+    /// Eight `exp`s, the same polynomial as [`super::exp1`].
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn exp8(x: __m256) -> __m256 {
+        const MAGIC: f32 = 12_582_912.0;
+        let x = _mm256_min_ps(_mm256_max_ps(x, _mm256_set1_ps(-87.3)), _mm256_set1_ps(88.3));
+        let t = _mm256_fmadd_ps(x, _mm256_set1_ps(std::f32::consts::LOG2_E), _mm256_set1_ps(MAGIC));
+        let n = _mm256_sub_ps(t, _mm256_set1_ps(MAGIC));
+        let ni = _mm256_sub_epi32(_mm256_castps_si256(t), _mm256_set1_epi32(MAGIC.to_bits() as i32));
+        let r = _mm256_fnmadd_ps(n, _mm256_set1_ps(0.693_359_4), x);
+        let r = _mm256_fnmadd_ps(n, _mm256_set1_ps(-2.121_944_4e-4), r);
+        let mut p = _mm256_set1_ps(1.987_569_1e-4);
+        p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.398_199_9e-3));
+        p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(8.333_452e-3));
+        p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(4.166_579_6e-2));
+        p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.666_666_5e-1));
+        p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(0.5));
+        let y = _mm256_add_ps(_mm256_fmadd_ps(_mm256_mul_ps(p, r), r, r), _mm256_set1_ps(1.0));
+        let scale = _mm256_castsi256_ps(_mm256_slli_epi32::<23>(_mm256_add_epi32(ni, _mm256_set1_epi32(127))));
+        _mm256_mul_ps(y, scale)
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn hsum(v: __m256) -> f32 {
+        let s = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
+        let s = _mm_add_ps(s, _mm_movehl_ps(s, s));
+        let s = _mm_add_ss(s, _mm_shuffle_ps::<1>(s, s));
+        _mm_cvtss_f32(s)
+    }
+
+    #[inline]
+    #[target_feature(enable = "avx2,fma")]
+    unsafe fn hmax(v: __m256) -> f32 {
+        let s = _mm_max_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
+        let s = _mm_max_ps(s, _mm_movehl_ps(s, s));
+        let s = _mm_max_ss(s, _mm_shuffle_ps::<1>(s, s));
+        _mm_cvtss_f32(s)
+    }
+
     #[target_feature(enable = "avx2,fma")]
     pub(super) unsafe fn softmax_rows(x: &mut [f32], cols: usize) {
-        super::softmax_rows_body::<true>(x, cols)
+        let main = cols / 8 * 8;
+        for row in x.chunks_exact_mut(cols) {
+            let ptr = row.as_mut_ptr();
+            let mut max = f32::NEG_INFINITY;
+            if main > 0 {
+                let mut m = _mm256_set1_ps(f32::NEG_INFINITY);
+                for k in (0..main).step_by(8) {
+                    m = _mm256_max_ps(m, _mm256_loadu_ps(ptr.add(k)));
+                }
+                max = hmax(m);
+            }
+            for &v in &row[main..] {
+                max = max.max(v);
+            }
+            let mut sum = 0.0f32;
+            if main > 0 {
+                let vmax = _mm256_set1_ps(max);
+                let mut s = _mm256_setzero_ps();
+                for k in (0..main).step_by(8) {
+                    let e = exp8(_mm256_sub_ps(_mm256_loadu_ps(ptr.add(k)), vmax));
+                    _mm256_storeu_ps(ptr.add(k), e);
+                    s = _mm256_add_ps(s, e);
+                }
+                sum = hsum(s);
+            }
+            for v in &mut row[main..] {
+                let e = super::exp1::<true>(*v - max);
+                *v = e;
+                sum += e;
+            }
+            let inv = 1.0 / sum;
+            if main > 0 {
+                let vinv = _mm256_set1_ps(inv);
+                for k in (0..main).step_by(8) {
+                    _mm256_storeu_ps(ptr.add(k), _mm256_mul_ps(_mm256_loadu_ps(ptr.add(k)), vinv));
+                }
+            }
+            for v in &mut row[main..] {
+                *v *= inv;
+            }
+        }
     }
     #[target_feature(enable = "avx2,fma")]
     pub(super) unsafe fn relu_backward(d: &mut [f32], g: &[f32], y: &[f32]) {
@@ -340,12 +422,14 @@ mod tests {
 
     #[test]
     fn softmax_matches_engine() {
-        let mut a: Vec<f32> = (0..3 * 37).map(|i| ((i * 7919) % 1000) as f32 / 50.0 - 10.0).collect();
-        let mut b = a.clone();
-        softmax_rows(&mut a, 37);
-        crate::nn::softmax_rows_inplace(&mut b, 37);
-        for (x, y) in a.iter().zip(&b) {
-            assert!((x - y).abs() <= 1e-6 * y.max(1e-3), "{x} vs {y}");
+        for cols in [1, 5, 8, 16, 37, 512] {
+            let mut a: Vec<f32> = (0..3 * cols).map(|i| ((i * 7919) % 1000) as f32 / 50.0 - 10.0).collect();
+            let mut b = a.clone();
+            softmax_rows(&mut a, cols);
+            crate::nn::softmax_rows_inplace(&mut b, cols);
+            for (x, y) in a.iter().zip(&b) {
+                assert!((x - y).abs() <= 1e-6 * y.max(1e-3), "{cols} columns: {x} vs {y}");
+            }
         }
     }
 }

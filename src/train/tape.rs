@@ -57,7 +57,8 @@ impl fmt::Debug for Node {
 /// A pool of reusable `f32` buffers.
 #[derive(Default, Debug)]
 pub struct Pool {
-    free: Vec<Vec<f32>>,
+    /// Free buffers by length (each has `len == capacity`).
+    free: std::collections::BTreeMap<usize, Vec<Vec<f32>>>,
 }
 
 impl Pool {
@@ -72,20 +73,15 @@ impl Pool {
     /// use, or zeros): for outputs the caller overwrites entirely.
     pub fn uninit(&mut self, len: usize) -> Vec<f32> {
         // Free buffers are kept with len == capacity (all initialised), so truncating is safe
-        // and costs nothing.
-        let mut best: Option<usize> = None;
-        for (i, b) in self.free.iter().enumerate() {
-            let c = b.len();
-            if c >= len && best.is_none_or(|j| c < self.free[j].len()) {
-                best = Some(i);
-                if c == len {
-                    break;
+        // and costs nothing. Best fit: the shortest free buffer that is long enough.
+        let key = self.free.range(len..).next().map(|(&k, _)| k);
+        match key {
+            Some(k) => {
+                let list = self.free.get_mut(&k).expect("key exists");
+                let mut v = list.pop().expect("lists are never left empty");
+                if list.is_empty() {
+                    self.free.remove(&k);
                 }
-            }
-        }
-        match best {
-            Some(i) => {
-                let mut v = self.free.swap_remove(i);
                 v.truncate(len);
                 v
             }
@@ -98,7 +94,7 @@ impl Pool {
         if v.capacity() > 0 {
             let c = v.capacity();
             v.resize(c, 0.0);
-            self.free.push(v);
+            self.free.entry(c).or_default().push(v);
         }
     }
 }
