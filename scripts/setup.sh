@@ -4,7 +4,9 @@
 #   - the wasm32-unknown-unknown Rust target
 #   - wasm-pack (WASM_PACK_VERSION below)
 #   - wasm-bindgen-cli at exactly the version Cargo.toml pins for the wasm-bindgen crate
-#   - npm dev dependencies from package-lock.json (binaryen's wasm-opt, used by build-pkg.sh)
+#   - npm dev dependencies from package-lock.json (binaryen's wasm-opt, used by build-pkg.sh;
+#     three, bunny, playwright-core, pngjs for the demo page www/ and its end-to-end test)
+#   - Debian's Chromium (apt) for the end-to-end test, when /usr/bin/chromium is missing
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -50,6 +52,13 @@ node_major=$(node -p 'process.versions.node.split(".")[0]')
 if [ "$node_major" -lt 18 ]; then
   echo "setup.sh: Node.js >= 18 is needed (found $(node --version))" >&2
   exit 1
+fi
+
+if [ -x /usr/bin/chromium ]; then
+  say "chromium present"
+else
+  say "installing Debian's chromium (apt) for the browser end-to-end test"
+  apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq chromium
 fi
 
 # npm ci only when node_modules does not hold exactly what package-lock.json lists.

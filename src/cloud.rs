@@ -38,15 +38,13 @@ impl PointCloud {
     /// From a packed `[x0, y0, z0, x1, ...]` buffer (the JS `Float32Array` layout).
     /// Fails if the length is not a multiple of 3.
     pub fn from_xyz(flat: &[f32]) -> Result<Self> {
-        if flat.len() % 3 != 0 {
+        if !flat.len().is_multiple_of(3) {
             return Err(Error::InvalidCloud(format!(
                 "packed xyz buffer has length {}, which is not a multiple of 3",
                 flat.len()
             )));
         }
-        Ok(Self {
-            points: flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect(),
-        })
+        Ok(Self { points: flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect() })
     }
 
     /// The packed `[x0, y0, z0, x1, ...]` layout.
@@ -68,16 +66,8 @@ impl PointCloud {
     /// index (or are dropped, with [`NonFinite::Drop`]); fewer than `min_points` points is an
     /// error; so is a cloud whose points all coincide. `what` names the cloud in messages
     /// (`"source"`, `"target"`).
-    pub fn validated(
-        &self,
-        what: &str,
-        min_points: usize,
-        non_finite: NonFinite,
-    ) -> Result<PointCloud> {
-        let bad = self
-            .points
-            .iter()
-            .position(|p| !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()));
+    pub fn validated(&self, what: &str, min_points: usize, non_finite: NonFinite) -> Result<PointCloud> {
+        let bad = self.points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()));
         let cloud = match (bad, non_finite) {
             (None, _) => self.clone(),
             (Some(i), NonFinite::Error) => {
@@ -103,10 +93,7 @@ impl PointCloud {
         let (lo, hi) = cloud.bounds();
         let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
         if extent <= 0.0 {
-            return Err(Error::InvalidCloud(format!(
-                "{what} has zero extent: all {} points coincide",
-                cloud.len()
-            )));
+            return Err(Error::InvalidCloud(format!("{what} has zero extent: all {} points coincide", cloud.len())));
         }
         Ok(cloud)
     }
@@ -141,12 +128,7 @@ impl PointCloud {
 
     /// A copy with every point mapped by the rigid (or similarity) transform `m`.
     pub fn transformed(&self, m: &Matrix4<f64>) -> PointCloud {
-        PointCloud::new(
-            self.points
-                .iter()
-                .map(|&p| crate::transform::apply(m, p))
-                .collect(),
-        )
+        PointCloud::new(self.points.iter().map(|&p| crate::transform::apply(m, p)).collect())
     }
 }
 
@@ -173,24 +155,14 @@ impl JointNormalization {
         let box_of = |c: &PointCloud| {
             let (lo, hi) = c.bounds();
             let center = [0, 1, 2].map(|a| (lo[a] as f64 + hi[a] as f64) * 0.5);
-            let half = (0..3)
-                .map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5)
-                .fold(0.0, f64::max);
+            let half = (0..3).map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5).fold(0.0, f64::max);
             (center, half)
         };
         let (source_center, hs) = box_of(source);
         let (target_center, ht) = box_of(target);
         let scale = hs.max(ht);
-        let scale = if scale > 0.0 && scale.is_finite() {
-            scale
-        } else {
-            1.0
-        };
-        Self {
-            source_center,
-            target_center,
-            scale,
-        }
+        let scale = if scale > 0.0 && scale.is_finite() { scale } else { 1.0 };
+        Self { source_center, target_center, scale }
     }
 
     /// `N_source`: user source units to normalised units.
@@ -221,10 +193,7 @@ impl JointNormalization {
 
     /// Maps a user-units `T_target_source` into normalised units.
     pub fn normalize_transform(&self, t_user: &Matrix4<f64>) -> Matrix4<f64> {
-        let ns_inv = self
-            .source_to_normalized()
-            .try_inverse()
-            .unwrap_or_else(Matrix4::identity);
+        let ns_inv = self.source_to_normalized().try_inverse().unwrap_or_else(Matrix4::identity);
         self.target_to_normalized() * t_user * ns_inv
     }
 }
@@ -235,20 +204,13 @@ mod tests {
     use crate::transform::{check_rigid, euler_xyz, from_rotation_translation};
 
     fn cube(n: usize) -> PointCloud {
-        PointCloud::new(
-            (0..n)
-                .map(|i| [(i % 7) as f32, (i % 5) as f32 * 2.0, (i % 3) as f32 * 0.5])
-                .collect(),
-        )
+        PointCloud::new((0..n).map(|i| [(i % 7) as f32, (i % 5) as f32 * 2.0, (i % 3) as f32 * 0.5]).collect())
     }
 
     #[test]
     fn packed_length_must_be_multiple_of_three() {
         assert!(PointCloud::from_xyz(&[0.0; 7]).is_err());
-        assert_eq!(
-            PointCloud::from_xyz(&[1.0, 2.0, 3.0]).unwrap().points,
-            vec![[1.0, 2.0, 3.0]]
-        );
+        assert_eq!(PointCloud::from_xyz(&[1.0, 2.0, 3.0]).unwrap().points, vec![[1.0, 2.0, 3.0]]);
     }
 
     #[test]
@@ -256,42 +218,23 @@ mod tests {
         let mut c = cube(40);
         c.points[17][1] = f32::NAN;
         c.points[30][0] = f32::INFINITY;
-        let err = c
-            .validated("source", MIN_POINTS, NonFinite::Error)
-            .unwrap_err()
-            .to_string();
+        let err = c.validated("source", MIN_POINTS, NonFinite::Error).unwrap_err().to_string();
         assert!(err.contains("source point 17"), "{err}");
-        assert_eq!(
-            c.validated("source", MIN_POINTS, NonFinite::Drop)
-                .unwrap()
-                .len(),
-            38
-        );
-        let err = cube(5)
-            .validated("target", MIN_POINTS, NonFinite::Error)
-            .unwrap_err()
-            .to_string();
+        assert_eq!(c.validated("source", MIN_POINTS, NonFinite::Drop).unwrap().len(), 38);
+        let err = cube(5).validated("target", MIN_POINTS, NonFinite::Error).unwrap_err().to_string();
         assert!(err.contains("target has 5 finite points"), "{err}");
         let same = PointCloud::new(vec![[1.0, 1.0, 1.0]; 30]);
-        assert!(same
-            .validated("source", MIN_POINTS, NonFinite::Error)
-            .is_err());
-        assert!(PointCloud::default()
-            .validated("source", MIN_POINTS, NonFinite::Error)
-            .is_err());
+        assert!(same.validated("source", MIN_POINTS, NonFinite::Error).is_err());
+        assert!(PointCloud::default().validated("source", MIN_POINTS, NonFinite::Error).is_err());
     }
 
     #[test]
     fn normalization_maps_into_unit_box_and_back() {
         let s = cube(100);
-        let t_user =
-            from_rotation_translation(&euler_xyz(0.2, 0.1, -0.3), &Vector3::new(5.0, -2.0, 1.0));
+        let t_user = from_rotation_translation(&euler_xyz(0.2, 0.1, -0.3), &Vector3::new(5.0, -2.0, 1.0));
         let t = s.transformed(&t_user);
         let n = JointNormalization::of_pair(&s, &t);
-        for (c, nm) in [
-            (&s, n.source_to_normalized()),
-            (&t, n.target_to_normalized()),
-        ] {
+        for (c, nm) in [(&s, n.source_to_normalized()), (&t, n.target_to_normalized())] {
             let (lo, hi) = c.transformed(&nm).bounds();
             assert!(lo.iter().chain(hi.iter()).all(|v| v.abs() <= 1.0 + 1e-5));
         }

@@ -35,10 +35,7 @@ pub enum Error {
 impl Error {
     /// Shorthand for a [`Error::Parse`].
     pub fn parse(format: &'static str, message: impl Into<String>) -> Self {
-        Error::Parse {
-            format,
-            message: message.into(),
-        }
+        Error::Parse { format, message: message.into() }
     }
 }
 

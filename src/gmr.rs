@@ -48,11 +48,7 @@ pub const MIN_VAR: f64 = 1e-8;
 /// zero components (`j == 0`) or `j` empty components (`pi = 0`, `mu = 0`, `var = 1e-8`).
 pub fn gmm_params(points: &[[f32; 3]], gamma: &[f32], j: usize) -> Gmm {
     if j == 0 {
-        return Gmm {
-            pi: Vec::new(),
-            mu: Vec::new(),
-            var: Vec::new(),
-        };
+        return Gmm { pi: Vec::new(), mu: Vec::new(), var: Vec::new() };
     }
     let n = points.len().min(gamma.len() / j);
     let rows = || points[..n].iter().zip(gamma.chunks_exact(j));
@@ -83,9 +79,7 @@ pub fn gmm_params(points: &[[f32; 3]], gamma: &[f32], j: usize) -> Gmm {
             sq[k] += w as f64 * d2;
         }
     }
-    let var = (0..j)
-        .map(|k| (sq[k] / (mass[k] + GMM_EPS)).max(MIN_VAR))
-        .collect();
+    let var = (0..j).map(|k| (sq[k] / (mass[k] + GMM_EPS)).max(MIN_VAR)).collect();
     let inv_n = if n > 0 { 1.0 / n as f64 } else { 0.0 };
     let pi = mass.iter().map(|m| m * inv_n).collect();
     Gmm { pi, mu, var }
@@ -106,20 +100,12 @@ pub fn gmm_params(points: &[[f32; 3]], gamma: &[f32], j: usize) -> Gmm {
 /// [`rotation_from_cross_covariance`] (identity when all mass sits in one component, so then
 /// `T` is the pure translation between the two means).
 pub fn solve(source: &Gmm, target: &Gmm) -> Matrix4<f64> {
-    let j = source
-        .pi
-        .len()
-        .min(source.mu.len())
-        .min(target.mu.len())
-        .min(target.var.len());
+    let j = source.pi.len().min(source.mu.len()).min(target.mu.len()).min(target.var.len());
     let usable = |k: usize| {
         let p = source.pi[k];
         p.is_finite()
             && p > 0.0
-            && source.mu[k]
-                .iter()
-                .chain(target.mu[k].iter())
-                .all(|v| v.is_finite())
+            && source.mu[k].iter().chain(target.mu[k].iter()).all(|v| v.is_finite())
             && !target.var[k].is_nan()
     };
     let mut total = 0.0f64;
@@ -161,12 +147,7 @@ pub fn kabsch(source: &[[f64; 3]], target: &[[f64; 3]], weights: Option<&[f64]>)
     }
     let weight = |i: usize| -> f64 {
         let w = weights.map_or(1.0, |w| w[i]);
-        let ok = w.is_finite()
-            && w > 0.0
-            && source[i]
-                .iter()
-                .chain(target[i].iter())
-                .all(|v| v.is_finite());
+        let ok = w.is_finite() && w > 0.0 && source[i].iter().chain(target[i].iter()).all(|v| v.is_finite());
         if ok {
             w
         } else {
@@ -306,12 +287,7 @@ mod tests {
 
     #[test]
     fn gmm_params_of_hard_assignments() {
-        let pts = [
-            [0.0f32, 0.0, 0.0],
-            [2.0, 0.0, 0.0],
-            [10.0, 10.0, 10.0],
-            [10.0, 10.0, 12.0],
-        ];
+        let pts = [[0.0f32, 0.0, 0.0], [2.0, 0.0, 0.0], [10.0, 10.0, 10.0], [10.0, 10.0, 12.0]];
         let gamma = [1.0f32, 0.0, 1.0, 0.0, 0.0, 1.0, 0.0, 1.0];
         let g = gmm_params(&pts, &gamma, 2);
         assert!((g.pi[0] - 0.5).abs() < 1e-12 && (g.pi[1] - 0.5).abs() < 1e-12);
@@ -330,11 +306,7 @@ mod tests {
         assert_eq!(g.var[1], MIN_VAR);
         assert_eq!(g.var[0], MIN_VAR);
         assert!(g.mu.iter().flatten().all(|v| v.is_finite()));
-        assert!(gmm_params(&[], &[], 3)
-            .mu
-            .iter()
-            .flatten()
-            .all(|v| *v == 0.0));
+        assert!(gmm_params(&[], &[], 3).mu.iter().flatten().all(|v| *v == 0.0));
         assert!(gmm_params(&pts, &gamma, 0).is_empty());
     }
 
@@ -346,8 +318,7 @@ mod tests {
                 [(f * 0.7).sin(), (f * 1.3).cos(), (f * 0.3).sin() * 0.5]
             })
             .collect();
-        let t =
-            from_rotation_translation(&euler_xyz(2.5, -0.4, 1.0), &Vector3::new(0.3, -1.0, 2.0));
+        let t = from_rotation_translation(&euler_xyz(2.5, -0.4, 1.0), &Vector3::new(0.3, -1.0, 2.0));
         let dst: Vec<[f64; 3]> = src
             .iter()
             .map(|p| {
@@ -370,12 +341,7 @@ mod tests {
         let r = euler_xyz(0.3, 0.2, 0.1);
         let drifted = r * 1.001 + Matrix3::from_element(1e-4);
         let fixed = nearest_rotation(&drifted);
-        assert!(
-            (fixed.transpose() * fixed - Matrix3::identity())
-                .abs()
-                .max()
-                < 1e-12
-        );
+        assert!((fixed.transpose() * fixed - Matrix3::identity()).abs().max() < 1e-12);
         assert!((fixed.determinant() - 1.0).abs() < 1e-12);
         assert!((fixed - r).abs().max() < 1e-3);
         assert!((nearest_rotation(&r) - r).abs().max() < 1e-12);

@@ -53,13 +53,7 @@ impl IcpParams {
     /// Open3D's defaults for a given distance: point-to-plane, 30 iterations, relative
     /// fitness and RMSE changes of 1e-6.
     pub fn new(kind: IcpKind, max_correspondence_distance: f64) -> Self {
-        Self {
-            kind,
-            max_correspondence_distance,
-            max_iterations: 30,
-            relative_fitness: 1e-6,
-            relative_rmse: 1e-6,
-        }
+        Self { kind, max_correspondence_distance, max_iterations: 30, relative_fitness: 1e-6, relative_rmse: 1e-6 }
     }
 }
 
@@ -106,11 +100,7 @@ impl IcpTarget {
     /// With `with_normals = false` the normals are still computed on first use if a
     /// point-to-plane run asks for them. Normals use [`NORMAL_NEIGHBOURS`] neighbours.
     pub fn new(points: &[[f32; 3]], with_normals: bool) -> Self {
-        let target = Self {
-            points: points.to_vec(),
-            index: KdIndex::new(points),
-            normals: OnceLock::new(),
-        };
+        let target = Self { points: points.to_vec(), index: KdIndex::new(points), normals: OnceLock::new() };
         if with_normals {
             target.normals();
         }
@@ -146,8 +136,7 @@ impl IcpTarget {
 
     /// The target normals, estimating them now if they were not yet.
     pub fn normals(&self) -> &[[f32; 3]] {
-        self.normals
-            .get_or_init(|| normals::estimate_normals(&self.points, NORMAL_NEIGHBOURS))
+        self.normals.get_or_init(|| normals::estimate_normals(&self.points, NORMAL_NEIGHBOURS))
     }
 
     /// Runs ICP from `init` (`T_target_source`).
@@ -175,21 +164,12 @@ impl IcpTarget {
         let d = params.max_correspondence_distance;
         let mut scratch = Scratch::default();
         let (mut fitness, mut rmse) = self.correspond(source, init, d, &mut scratch);
-        let mut result = IcpResult {
-            T_target_source: *init,
-            fitness,
-            inlier_rmse: rmse,
-            iterations: 0,
-            converged: false,
-        };
+        let mut result =
+            IcpResult { T_target_source: *init, fitness, inlier_rmse: rmse, iterations: 0, converged: false };
         if params.kind == IcpKind::Off || scratch.moved.is_empty() {
             return result;
         }
-        let target_normals = if params.kind == IcpKind::Plane {
-            Some(self.normals())
-        } else {
-            None
-        };
+        let target_normals = if params.kind == IcpKind::Plane { Some(self.normals()) } else { None };
         let mut t = *init;
         for it in 1..=params.max_iterations {
             let update = match target_normals {
@@ -209,8 +189,7 @@ impl IcpTarget {
             }
             t = next;
             result.T_target_source = t;
-            let done = (f - fitness).abs() < params.relative_fitness
-                && (r - rmse).abs() < params.relative_rmse;
+            let done = (f - fitness).abs() < params.relative_fitness && (r - rmse).abs() < params.relative_rmse;
             fitness = f;
             rmse = r;
             result.fitness = f;
@@ -244,21 +223,13 @@ impl IcpTarget {
     ) -> (f64, f64) {
         scratch.moved.clear();
         scratch.target.clear();
-        if source.is_empty()
-            || self.index.is_empty()
-            || max_distance.is_nan()
-            || max_distance <= 0.0
-        {
+        if source.is_empty() || self.index.is_empty() || max_distance.is_nan() || max_distance <= 0.0 {
             return (0.0, 0.0);
         }
         let max2 = max_distance * max_distance;
         // The tree works in f32: search a hair wider, then decide in f64.
         let search2 = (max2 * (1.0 + 1e-5)) as f32;
-        let search2 = if search2.is_finite() {
-            search2
-        } else {
-            f32::INFINITY
-        };
+        let search2 = if search2.is_finite() { search2 } else { f32::INFINITY };
         let r = transform::rotation(t);
         let tr = transform::translation(t);
         if scratch.prev.len() != source.len() {
@@ -276,9 +247,7 @@ impl IcpTarget {
             };
             *prev = j as u32;
             let q = self.points[j];
-            let d2 = (p.x - q[0] as f64).powi(2)
-                + (p.y - q[1] as f64).powi(2)
-                + (p.z - q[2] as f64).powi(2);
+            let d2 = (p.x - q[0] as f64).powi(2) + (p.y - q[1] as f64).powi(2) + (p.z - q[2] as f64).powi(2);
             if d2 < max2 {
                 sum2 += d2;
                 scratch.moved.push([p.x, p.y, p.z]);
@@ -289,21 +258,13 @@ impl IcpTarget {
         if inliers == 0 {
             return (0.0, 0.0);
         }
-        (
-            inliers as f64 / source.len() as f64,
-            (sum2 / inliers as f64).sqrt(),
-        )
+        (inliers as f64 / source.len() as f64, (sum2 / inliers as f64).sqrt())
     }
 
     /// Point-to-point update: Kabsch on the current inlier pairs.
     fn point_update(&self, scratch: &mut Scratch) -> Option<Matrix4<f64>> {
         scratch.target_xyz.clear();
-        scratch.target_xyz.extend(
-            scratch
-                .target
-                .iter()
-                .map(|&j| self.points[j].map(|v| v as f64)),
-        );
+        scratch.target_xyz.extend(scratch.target.iter().map(|&j| self.points[j].map(|v| v as f64)));
         Some(gmr::kabsch(&scratch.moved, &scratch.target_xyz, None))
     }
 

@@ -32,6 +32,8 @@ pub mod register;
 pub mod sampling;
 pub mod spatial;
 pub mod timing;
+#[cfg(feature = "train")]
+pub mod train;
 pub mod transform;
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
@@ -41,5 +43,5 @@ pub use cloud::{NonFinite, PointCloud};
 pub use error::{Error, Result};
 pub use icp::IcpKind;
 pub use model::{Model, ModelConfig};
-pub use register::{Options, Registrar, Registration, Timings};
+pub use register::{Options, Registrar, Registration, Stage, Timings};
 pub use weights::{StoreAs, Weights};

@@ -77,11 +77,7 @@ fn normal_of(points: &[[f32; 3]], idx: impl Iterator<Item = usize> + Clone) -> [
     if !(norm > 0.0 && norm.is_finite()) {
         return DEFAULT_NORMAL;
     }
-    let out = [
-        (v[0] / norm) as f32,
-        (v[1] / norm) as f32,
-        (v[2] / norm) as f32,
-    ];
+    let out = [(v[0] / norm) as f32, (v[1] / norm) as f32, (v[2] / norm) as f32];
     if out.iter().all(|x| x.is_finite()) {
         out
     } else {
@@ -95,14 +91,8 @@ mod tests {
 
     #[test]
     fn degenerate_neighbourhoods_get_default() {
-        assert_eq!(
-            estimate_normals(&[[1.0, 2.0, 3.0]; 2], 10),
-            vec![DEFAULT_NORMAL; 2]
-        );
-        assert_eq!(
-            estimate_normals(&[[1.0, 2.0, 3.0]; 30], 10),
-            vec![DEFAULT_NORMAL; 30]
-        );
+        assert_eq!(estimate_normals(&[[1.0, 2.0, 3.0]; 2], 10), vec![DEFAULT_NORMAL; 2]);
+        assert_eq!(estimate_normals(&[[1.0, 2.0, 3.0]; 30], 10), vec![DEFAULT_NORMAL; 30]);
         assert!(estimate_normals(&[], 10).is_empty());
         let line: Vec<[f32; 3]> = (0..30).map(|i| [i as f32, 0.0, 0.0]).collect();
         for n in estimate_normals(&line, 5) {

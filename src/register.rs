@@ -58,6 +58,18 @@ impl Default for Options {
     }
 }
 
+/// A stage of [`Registrar::register_with_progress`], reported as it starts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum Stage {
+    /// Validation, normalisation, downsampling.
+    Preparing,
+    /// The network forward pass and the GMR solve.
+    Network,
+    /// ICP refinement and the quality figures (reported even with ICP off, for the figures).
+    Refining,
+}
+
 /// Milliseconds spent in each stage of one registration (0 where no clock is available).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
@@ -151,12 +163,21 @@ impl Registrar {
     /// Registers `source` onto `target`: returns `T_target_source` and quality figures.
     /// The clouds may be in any unit (the same for both) and any size >= 16 points.
     #[allow(non_snake_case)]
-    pub fn register(
+    pub fn register(&mut self, source: &PointCloud, target: &PointCloud, options: &Options) -> Result<Registration> {
+        self.register_with_progress(source, target, options, &mut |_| {})
+    }
+
+    /// [`Registrar::register`], calling `progress` as each stage starts (for progress bars and
+    /// worker messages). The calls come in [`Stage`] order; stages that do not run are skipped.
+    #[allow(non_snake_case)]
+    pub fn register_with_progress(
         &mut self,
         source: &PointCloud,
         target: &PointCloud,
         options: &Options,
+        progress: &mut dyn FnMut(Stage),
     ) -> Result<Registration> {
+        progress(Stage::Preparing);
         let mut watch = Stopwatch::start(self.clock);
         let mut total = Stopwatch::start(self.clock);
         let mut warnings = Vec::new();
@@ -178,19 +199,14 @@ impl Registrar {
         let init = match &options.initial_transform {
             Some(rows) => {
                 let m = transform::from_rows(rows);
-                transform::check_rigid(&m, 1e-4).map_err(|e| {
-                    Error::InvalidOption(format!("initialTransform is not rigid: {e}"))
-                })?;
+                transform::check_rigid(&m, 1e-4)
+                    .map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?;
                 m
             }
             None => Matrix4::identity(),
         };
         // The network sees the source already moved by the initial guess.
-        let source_init = if options.initial_transform.is_some() {
-            source.transformed(&init)
-        } else {
-            source.clone()
-        };
+        let source_init = if options.initial_transform.is_some() { source.transformed(&init) } else { source.clone() };
         let norm = JointNormalization::of_pair(&source_init, &target);
         let s = norm.scale;
         let src_n = source_init.transformed(&norm.source_to_normalized());
@@ -199,19 +215,13 @@ impl Registrar {
         let d_final = match options.max_correspondence_distance {
             Some(d) if d.is_finite() && d > 0.0 => d / s,
             Some(d) => {
-                return Err(Error::InvalidOption(format!(
-                    "maxCorrespondenceDistance = {d} must be a positive number"
-                )))
+                return Err(Error::InvalidOption(format!("maxCorrespondenceDistance = {d} must be a positive number")))
             }
             None => DEFAULT_MAX_CORRESPONDENCE,
         };
         let voxel = match options.voxel_size {
             Some(v) if v.is_finite() && v >= 0.0 => v / s,
-            Some(v) => {
-                return Err(Error::InvalidOption(format!(
-                    "voxelSize = {v} must be >= 0"
-                )))
-            }
+            Some(v) => return Err(Error::InvalidOption(format!("voxelSize = {v} must be >= 0"))),
             None => d_final * 0.5,
         };
         for (what, c) in [("source", &src_n), ("target", &tgt_n)] {
@@ -223,16 +233,14 @@ impl Registrar {
             }
         }
         let net_src = sampling::network_sample(&src_n, n_net, options.seed);
-        let net_tgt =
-            sampling::network_sample(&tgt_n, n_net, options.seed ^ sampling::TARGET_SEED_XOR);
+        let net_tgt = sampling::network_sample(&tgt_n, n_net, options.seed ^ sampling::TARGET_SEED_XOR);
         let icp_src = sampling::voxel_downsample(&src_n, voxel as f32);
         let icp_tgt = sampling::voxel_downsample(&tgt_n, voxel as f32);
         let preprocess_ms = watch.lap();
 
         let (t_net_n, network_ms, gmr_ms) = if options.network {
-            let out = self
-                .model
-                .forward(&net_src.points, &net_tgt.points, &mut self.workspace)?;
+            progress(Stage::Network);
+            let out = self.model.forward(&net_src.points, &net_tgt.points, &mut self.workspace)?;
             let network_ms = watch.lap();
             let j = self.model.config.gaussians;
             let g_src = gmr::gmm_params(&net_src.points, &out.gamma_source, j);
@@ -244,6 +252,7 @@ impl Registrar {
             (norm.normalize_transform(&Matrix4::identity()), 0.0, 0.0)
         };
 
+        progress(Stage::Refining);
         let with_normals = options.icp == IcpKind::Plane;
         let target_index = IcpTarget::new(&icp_tgt.points, with_normals);
         let mut t_n = t_net_n;
@@ -284,13 +293,7 @@ impl Registrar {
             icp_iterations: iterations,
             icp_converged: converged,
             max_correspondence_distance: d_final * s,
-            timings: Timings {
-                preprocess_ms,
-                network_ms,
-                gmr_ms,
-                icp_ms,
-                total_ms: total.lap(),
-            },
+            timings: Timings { preprocess_ms, network_ms, gmr_ms, icp_ms, total_ms: total.lap() },
             warnings,
         })
     }

@@ -117,17 +117,9 @@ mod tests {
 
     #[test]
     fn voxel_grid_merges_and_orders() {
-        let c = PointCloud::new(vec![
-            [0.1, 0.1, 0.1],
-            [5.0, 0.0, 0.0],
-            [0.3, 0.3, 0.3],
-            [-0.5, 0.0, 0.0],
-        ]);
+        let c = PointCloud::new(vec![[0.1, 0.1, 0.1], [5.0, 0.0, 0.0], [0.3, 0.3, 0.3], [-0.5, 0.0, 0.0]]);
         let v = voxel_downsample(&c, 1.0);
-        assert_eq!(
-            v.points,
-            vec![[-0.5, 0.0, 0.0], [0.2, 0.2, 0.2], [5.0, 0.0, 0.0]]
-        );
+        assert_eq!(v.points, vec![[-0.5, 0.0, 0.0], [0.2, 0.2, 0.2], [5.0, 0.0, 0.0]]);
         assert_eq!(voxel_downsample(&c, 0.0), c);
         assert_eq!(voxel_downsample(&c, f32::NAN), c);
         assert_eq!(voxel_downsample(&c, -1.0), c);
@@ -135,11 +127,7 @@ mod tests {
 
     #[test]
     fn huge_coordinates_do_not_overflow() {
-        let c = PointCloud::new(vec![
-            [3e38, -3e38, 0.0],
-            [1.0, 1.0, 1.0],
-            [3e38, -3e38, 0.0],
-        ]);
+        let c = PointCloud::new(vec![[3e38, -3e38, 0.0], [1.0, 1.0, 1.0], [3e38, -3e38, 0.0]]);
         let v = voxel_downsample(&c, 1e-30);
         assert_eq!(v.len(), 2);
         assert!(v.points.iter().flatten().all(|x| x.is_finite()));

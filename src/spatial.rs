@@ -47,11 +47,7 @@ struct Pending {
 }
 
 impl Pending {
-    const ROOT: Pending = Pending {
-        node: 0,
-        rd: 0.0,
-        off: [0.0; 3],
-    };
+    const ROOT: Pending = Pending { node: 0, rd: 0.0, off: [0.0; 3] };
 }
 
 /// A static k-d tree; the item of a point is its index in the slice the index was built from.
@@ -73,13 +69,9 @@ impl KdIndex {
     /// # Panics
     /// If there are `u32::MAX` points or more.
     pub fn new(points: &[[f32; 3]]) -> Self {
-        assert!(
-            points.len() < u32::MAX as usize,
-            "KdIndex holds fewer than u32::MAX points"
-        );
-        let mut order: Vec<u32> = (0..points.len() as u32)
-            .filter(|&i| points[i as usize].iter().all(|v| v.is_finite()))
-            .collect();
+        assert!(points.len() < u32::MAX as usize, "KdIndex holds fewer than u32::MAX points");
+        let mut order: Vec<u32> =
+            (0..points.len() as u32).filter(|&i| points[i as usize].iter().all(|v| v.is_finite())).collect();
         let mut nodes = Vec::with_capacity(4 * order.len() / LEAF + 1);
         if !order.is_empty() {
             build(points, &mut order, 0, &mut nodes);
@@ -89,12 +81,7 @@ impl KdIndex {
         for (p, &i) in order.iter().enumerate() {
             pos[i as usize] = p as u32;
         }
-        Self {
-            pts,
-            ids: order,
-            pos,
-            nodes,
-        }
+        Self { pts, ids: order, pos, nodes }
     }
 
     /// Number of indexed (finite) points.
@@ -119,12 +106,7 @@ impl KdIndex {
     /// iteration's partner); it only speeds the search up, never changes which distance is
     /// found (among points at exactly equal distance, which one is returned may depend on it).
     #[inline]
-    pub fn nearest_within(
-        &self,
-        q: &[f32; 3],
-        max_d2: f32,
-        hint: Option<usize>,
-    ) -> Option<(usize, f32)> {
+    pub fn nearest_within(&self, q: &[f32; 3], max_d2: f32, hint: Option<usize>) -> Option<(usize, f32)> {
         if self.nodes.is_empty() {
             return None;
         }
@@ -166,11 +148,7 @@ impl KdIndex {
                 if far_rd < best.1 {
                     let mut far_off = off;
                     far_off[d] = diff;
-                    stack[sp] = Pending {
-                        node: far,
-                        rd: far_rd,
-                        off: far_off,
-                    };
+                    stack[sp] = Pending { node: far, rd: far_rd, off: far_off };
                     sp += 1;
                 }
                 ni = near;
@@ -225,11 +203,7 @@ impl KdIndex {
                 if far_rd < worst {
                     let mut far_off = off;
                     far_off[d] = diff;
-                    stack[sp] = Pending {
-                        node: far,
-                        rd: far_rd,
-                        off: far_off,
-                    };
+                    stack[sp] = Pending { node: far, rd: far_rd, off: far_off };
                     sp += 1;
                 }
                 ni = near;
@@ -253,12 +227,7 @@ fn dist2(p: &[f32; 3], q: &[f32; 3]) -> f32 {
 /// reordered array) and returns its node index.
 fn build(points: &[[f32; 3]], idx: &mut [u32], offset: u32, nodes: &mut Vec<Node>) -> u32 {
     let me = nodes.len() as u32;
-    let leaf = Node {
-        dim: IS_LEAF,
-        split: 0.0,
-        a: offset,
-        b: offset + idx.len() as u32,
-    };
+    let leaf = Node { dim: IS_LEAF, split: 0.0, a: offset, b: offset + idx.len() as u32 };
     nodes.push(leaf);
     if idx.len() <= LEAF {
         return me;
@@ -283,19 +252,12 @@ fn build(points: &[[f32; 3]], idx: &mut [u32], offset: u32, nodes: &mut Vec<Node
         return me;
     }
     let mid = idx.len() / 2;
-    idx.select_nth_unstable_by(mid, |&a, &b| {
-        points[a as usize][dim].total_cmp(&points[b as usize][dim])
-    });
+    idx.select_nth_unstable_by(mid, |&a, &b| points[a as usize][dim].total_cmp(&points[b as usize][dim]));
     let split = points[idx[mid] as usize][dim];
     let (l, r) = idx.split_at_mut(mid);
     let left = build(points, l, offset, nodes);
     let right = build(points, r, offset + mid as u32, nodes);
-    nodes[me as usize] = Node {
-        dim: dim as u32,
-        split,
-        a: left,
-        b: right,
-    };
+    nodes[me as usize] = Node { dim: dim as u32, split, a: left, b: right };
     me
 }
 
@@ -307,21 +269,13 @@ mod tests {
         (0..n)
             .map(|i| {
                 let f = i as f32;
-                [
-                    (f * 0.37).sin() * 3.0,
-                    (f * 0.11).cos() * 2.0,
-                    ((f * 0.05).sin() * 4.0).round() * 0.25,
-                ]
+                [(f * 0.37).sin() * 3.0, (f * 0.11).cos() * 2.0, ((f * 0.05).sin() * 4.0).round() * 0.25]
             })
             .collect()
     }
 
     fn brute(pts: &[[f32; 3]], q: &[f32; 3]) -> Vec<f32> {
-        let mut d: Vec<f32> = pts
-            .iter()
-            .filter(|p| p.iter().all(|v| v.is_finite()))
-            .map(|p| dist2(p, q))
-            .collect();
+        let mut d: Vec<f32> = pts.iter().filter(|p| p.iter().all(|v| v.is_finite())).map(|p| dist2(p, q)).collect();
         d.sort_by(f32::total_cmp);
         d
     }
@@ -335,16 +289,10 @@ mod tests {
         let idx = KdIndex::new(&pts);
         assert_eq!(idx.len(), 2040);
         let mut out = Vec::new();
-        for (k, q) in [
-            [0.1f32, 0.2, 0.3],
-            [3.0, -2.0, 1.0],
-            [-10.0, 0.0, 0.0],
-            [0.5, 0.5, 0.5],
-            [0.0, 0.0, 0.25],
-        ]
-        .iter()
-        .chain(pts[..300].iter().step_by(7))
-        .enumerate()
+        for (k, q) in [[0.1f32, 0.2, 0.3], [3.0, -2.0, 1.0], [-10.0, 0.0, 0.0], [0.5, 0.5, 0.5], [0.0, 0.0, 0.25]]
+            .iter()
+            .chain(pts[..300].iter().step_by(7))
+            .enumerate()
         {
             let all = brute(&pts, q);
             let (i, d) = idx.nearest(q).unwrap();
@@ -352,17 +300,10 @@ mod tests {
             assert_eq!(dist2(&pts[i], q), d);
             // bounded: strictly below the bound, else None
             assert_eq!(idx.nearest_within(q, all[0], None), None);
-            assert_eq!(
-                idx.nearest_within(q, all[0] * 1.5 + 1e-6, None)
-                    .map(|r| r.1),
-                Some(all[0])
-            );
+            assert_eq!(idx.nearest_within(q, all[0] * 1.5 + 1e-6, None).map(|r| r.1), Some(all[0]));
             // a hint never changes the distance found
             for h in [0, k * 13 % 2000, i, 2040, 5000] {
-                assert_eq!(
-                    idx.nearest_within(q, f32::INFINITY, Some(h)).unwrap().1,
-                    all[0]
-                );
+                assert_eq!(idx.nearest_within(q, f32::INFINITY, Some(h)).unwrap().1, all[0]);
             }
             idx.knn_into(q, 15, &mut out);
             let got: Vec<f32> = out

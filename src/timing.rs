@@ -37,10 +37,7 @@ pub struct Stopwatch {
 impl Stopwatch {
     /// Starts now.
     pub fn start(clock: Option<Clock>) -> Self {
-        Self {
-            clock,
-            last: clock.map_or(0.0, |c| c()),
-        }
+        Self { clock, last: clock.map_or(0.0, |c| c()) }
     }
 
     /// Milliseconds since the previous lap (or the start); 0 without a clock.

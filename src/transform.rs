@@ -106,15 +106,11 @@ pub fn check_rigid(m: &Matrix4<f64>, tol: f64) -> Result<(), String> {
     let r = rotation(m);
     let ortho = (r.transpose() * r - Matrix3::identity()).abs().max();
     if ortho > tol {
-        return Err(format!(
-            "rotation block is not orthonormal (|R^T R - I| = {ortho:.2e})"
-        ));
+        return Err(format!("rotation block is not orthonormal (|R^T R - I| = {ortho:.2e})"));
     }
     let det = r.determinant();
     if (det - 1.0).abs() > tol {
-        return Err(format!(
-            "rotation block has determinant {det:.6}, expected +1"
-        ));
+        return Err(format!("rotation block has determinant {det:.6}, expected +1"));
     }
     Ok(())
 }
@@ -147,13 +143,11 @@ mod tests {
 
     #[test]
     fn inverse_and_errors() {
-        let m =
-            from_rotation_translation(&euler_xyz(0.3, 0.2, -0.5), &Vector3::new(0.1, -0.4, 0.2));
+        let m = from_rotation_translation(&euler_xyz(0.3, 0.2, -0.5), &Vector3::new(0.1, -0.4, 0.2));
         let id = m * rigid_inverse(&m);
         assert!((id - Matrix4::identity()).abs().max() < 1e-12);
         assert!(check_rigid(&m, 1e-9).is_ok());
-        let ten =
-            from_rotation_translation(&euler_xyz(10f64.to_radians(), 0.0, 0.0), &Vector3::zeros());
+        let ten = from_rotation_translation(&euler_xyz(10f64.to_radians(), 0.0, 0.0), &Vector3::zeros());
         assert!((rotation_angle_deg(&ten) - 10.0).abs() < 1e-9);
         let mut bad = m;
         bad[(0, 0)] = 2.0;

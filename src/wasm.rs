@@ -113,38 +113,21 @@ impl Registrar {
         &mut self,
         source: &[f32],
         target: &[f32],
-        #[wasm_bindgen(unchecked_optional_param_type = "RegisterOptions | null")] options: Option<
-            JsValue,
-        >,
+        #[wasm_bindgen(unchecked_optional_param_type = "RegisterOptions | null")] options: Option<JsValue>,
     ) -> Result<JsValue, JsError> {
         let options = options.unwrap_or(JsValue::UNDEFINED);
         let options = parse_options(options)?;
         let source = PointCloud::from_xyz(source).map_err(|e| prefixed("source", e))?;
         let target = PointCloud::from_xyz(target).map_err(|e| prefixed("target", e))?;
-        let r = self
-            .inner
-            .register(&source, &target, &options)
-            .map_err(js_err)?;
+        let r = self.inner.register(&source, &target, &options).map_err(js_err)?;
         let out = Object::new();
         set(&out, "matrix", &matrix_js(&r.T_target_source))?;
-        set(
-            &out,
-            "networkMatrix",
-            &matrix_js(&r.T_target_source_network),
-        )?;
+        set(&out, "networkMatrix", &matrix_js(&r.T_target_source_network))?;
         set(&out, "fitness", &JsValue::from_f64(r.fitness))?;
         set(&out, "inlierRmse", &JsValue::from_f64(r.inlier_rmse))?;
-        set(
-            &out,
-            "iterations",
-            &JsValue::from_f64(r.icp_iterations as f64),
-        )?;
+        set(&out, "iterations", &JsValue::from_f64(r.icp_iterations as f64))?;
         set(&out, "converged", &JsValue::from_bool(r.icp_converged))?;
-        set(
-            &out,
-            "maxCorrespondenceDistance",
-            &JsValue::from_f64(r.max_correspondence_distance),
-        )?;
+        set(&out, "maxCorrespondenceDistance", &JsValue::from_f64(r.max_correspondence_distance))?;
         set(&out, "timingsMs", &to_js(&r.timings)?)?;
         let warnings: Array = r.warnings.iter().map(|w| JsValue::from_str(w)).collect();
         set(&out, "warnings", &warnings)?;
@@ -179,9 +162,7 @@ fn set(obj: &Object, key: &str, value: &JsValue) -> Result<(), JsError> {
 /// Serialises with plain JS objects for maps (not `Map`s).
 fn to_js<T: serde::Serialize + ?Sized>(value: &T) -> Result<JsValue, JsError> {
     let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
-    value
-        .serialize(&ser)
-        .map_err(|e| JsError::new(&format!("internal: {e}")))
+    value.serialize(&ser).map_err(|e| JsError::new(&format!("internal: {e}")))
 }
 
 /// A 4x4 as `Float32Array(16)`, column-major (three.js `Matrix4.fromArray`).
@@ -198,9 +179,7 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
         return Ok(Options::default());
     }
     if !options.is_object() || Array::is_array(&options) {
-        return Err(JsError::new(
-            "invalid options: expected a plain object (or undefined)",
-        ));
+        return Err(JsError::new("invalid options: expected a plain object (or undefined)"));
     }
     // A clean copy (the caller's object is never modified) holding only the fields that are
     // given: `undefined` and `null` mean "not given", so the default applies (serde-wasm-bindgen
@@ -219,24 +198,17 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
         if !fields.contains(&name.as_str()) {
             return Err(JsError::new(&format!(
                 "invalid options: unknown field `{name}`, expected one of {}",
-                fields
-                    .iter()
-                    .map(|f| format!("`{f}`"))
-                    .collect::<Vec<_>>()
-                    .join(", ")
+                fields.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ")
             )));
         }
         let value = match column_major_16(&name, &value)? {
-            Some(elements) => rows_js(&transform::to_rows(&transform::from_column_major(
-                &elements,
-            ))),
+            Some(elements) => rows_js(&transform::to_rows(&transform::from_column_major(&elements))),
             None => value,
         };
         Reflect::set(&clean, &key, &value)
             .map_err(|_| JsError::new(&format!("internal: could not copy option {name}")))?;
     }
-    serde_wasm_bindgen::from_value::<Options>(clean.into())
-        .map_err(|e| JsError::new(&format!("invalid options: {e}")))
+    serde_wasm_bindgen::from_value::<Options>(clean.into()).map_err(|e| JsError::new(&format!("invalid options: {e}")))
 }
 
 /// The (renamed) field names of a `Deserialize` struct: serde's derive passes them to
@@ -271,15 +243,8 @@ fn struct_fields<T: serde::de::DeserializeOwned>() -> &'static [&'static str] {
 
 /// Four row-major rows as a JS array of arrays (the core's `initialTransform` layout).
 fn rows_js(rows: &[[f64; 4]; 4]) -> JsValue {
-    let out: Array = rows
-        .iter()
-        .map(|r| -> JsValue {
-            r.iter()
-                .map(|v| JsValue::from_f64(*v))
-                .collect::<Array>()
-                .into()
-        })
-        .collect();
+    let out: Array =
+        rows.iter().map(|r| -> JsValue { r.iter().map(|v| JsValue::from_f64(*v)).collect::<Array>().into() }).collect();
     out.into()
 }
 
@@ -290,19 +255,19 @@ fn column_major_16(name: &str, v: &JsValue) -> Result<Option<[f64; 16]>, JsError
     if name != "initialTransform" {
         return Ok(None);
     }
-    let flat: Option<Vec<JsValue>> =
-        if v.is_instance_of::<Float32Array>() || v.is_instance_of::<js_sys::Float64Array>() {
-            Some(Array::from(v).to_vec())
-        } else if Array::is_array(v) {
-            let a: &Array = v.unchecked_ref();
-            if a.length() == 16 {
-                Some(a.to_vec())
-            } else {
-                None
-            }
+    let flat: Option<Vec<JsValue>> = if v.is_instance_of::<Float32Array>() || v.is_instance_of::<js_sys::Float64Array>()
+    {
+        Some(Array::from(v).to_vec())
+    } else if Array::is_array(v) {
+        let a: &Array = v.unchecked_ref();
+        if a.length() == 16 {
+            Some(a.to_vec())
         } else {
             None
-        };
+        }
+    } else {
+        None
+    };
     let Some(flat) = flat else { return Ok(None) };
     if flat.len() != 16 {
         return Err(JsError::new(&format!(
@@ -312,11 +277,9 @@ fn column_major_16(name: &str, v: &JsValue) -> Result<Option<[f64; 16]>, JsError
     }
     let mut out = [0.0; 16];
     for (i, (o, x)) in out.iter_mut().zip(&flat).enumerate() {
-        *o = x.as_f64().ok_or_else(|| {
-            JsError::new(&format!(
-                "invalid options: initialTransform[{i}] is not a number"
-            ))
-        })?;
+        *o = x
+            .as_f64()
+            .ok_or_else(|| JsError::new(&format!("invalid options: initialTransform[{i}] is not a number")))?;
     }
     Ok(Some(out))
 }

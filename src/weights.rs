@@ -55,10 +55,7 @@ impl Weights {
         let mut tensors = BTreeMap::new();
         for (i, (name, shape)) in config.tensor_specs().into_iter().enumerate() {
             let len: usize = shape.iter().product();
-            let mut rng = crate::sampling::rng(
-                seed.wrapping_mul(0x9E37_79B9_7F4A_7C15)
-                    .wrapping_add(i as u64),
-            );
+            let mut rng = crate::sampling::rng(seed.wrapping_mul(0x9E37_79B9_7F4A_7C15).wrapping_add(i as u64));
             let is_norm = name.contains(".norm");
             let data = if is_norm {
                 vec![if name.ends_with(".weight") { 1.0 } else { 0.0 }; len]
@@ -70,11 +67,7 @@ impl Weights {
                     shape[1]
                 } else {
                     let w = name.trim_end_matches(".bias").to_string() + ".weight";
-                    config
-                        .tensor_specs()
-                        .iter()
-                        .find(|(n, _)| *n == w)
-                        .map_or(1, |(_, s)| s[1])
+                    config.tensor_specs().iter().find(|(n, _)| *n == w).map_or(1, |(_, s)| s[1])
                 };
                 let bound = 1.0 / (fan_in as f32).sqrt();
                 (0..len).map(|_| rng.random_range(-bound..bound)).collect()
@@ -95,53 +88,45 @@ impl Weights {
     /// The tensor `name`. Panics if absent: loaded and random weights always hold every tensor
     /// of their config (checked at load).
     pub fn get(&self, name: &str) -> &[f32] {
-        self.tensors
-            .get(name)
-            .map(|v| v.as_slice())
-            .unwrap_or_else(|| panic!("tensor {name} missing"))
+        self.tensors.get(name).map(|v| v.as_slice()).unwrap_or_else(|| panic!("tensor {name} missing"))
     }
 
     /// Parses and validates a weights file.
     pub fn from_bytes(bytes: &[u8]) -> Result<Self> {
         let st = SafeTensors::deserialize(bytes)
             .map_err(|e| Error::Weights(format!("not a valid safetensors file: {e}")))?;
-        let (_, meta) = SafeTensors::read_metadata(bytes)
-            .map_err(|e| Error::Weights(format!("bad safetensors header: {e}")))?;
+        let (_, meta) =
+            SafeTensors::read_metadata(bytes).map_err(|e| Error::Weights(format!("bad safetensors header: {e}")))?;
         let meta = meta.metadata().clone().unwrap_or_default();
         let get = |k: &str| {
-            meta.get(k).ok_or_else(|| {
-                Error::Weights(format!(
-                    "metadata key '{k}' is missing (not an arps weights file?)"
-                ))
-            })
+            meta.get(k)
+                .ok_or_else(|| Error::Weights(format!("metadata key '{k}' is missing (not an arps weights file?)")))
         };
         let format = get("format")?;
         if format != FORMAT {
-            return Err(Error::Weights(format!(
-                "metadata format is '{format}', expected '{FORMAT}'"
-            )));
+            return Err(Error::Weights(format!("metadata format is '{format}', expected '{FORMAT}'")));
         }
         let version = get("format_version")?;
         if version.parse::<u32>().ok() != Some(FORMAT_VERSION) {
-            return Err(Error::Weights(format!("format_version '{version}' is not supported (this engine reads version {FORMAT_VERSION})")));
+            return Err(Error::Weights(format!(
+                "format_version '{version}' is not supported (this engine reads version {FORMAT_VERSION})"
+            )));
         }
-        let config: ModelConfig = serde_json::from_str(get("config")?).map_err(|e| {
-            Error::Weights(format!("config metadata is not a valid model config: {e}"))
-        })?;
+        let config: ModelConfig = serde_json::from_str(get("config")?)
+            .map_err(|e| Error::Weights(format!("config metadata is not a valid model config: {e}")))?;
         config.validate()?;
         let provenance = match meta.get("provenance") {
-            Some(p) => serde_json::from_str(p)
-                .map_err(|e| Error::Weights(format!("provenance metadata is not JSON: {e}")))?,
+            Some(p) => {
+                serde_json::from_str(p).map_err(|e| Error::Weights(format!("provenance metadata is not JSON: {e}")))?
+            }
             None => serde_json::Value::Null,
         };
         let specs = config.tensor_specs();
         let mut tensors = BTreeMap::new();
         for (name, shape) in &specs {
-            let view = st.tensor(name).map_err(|_| {
-                Error::Weights(format!(
-                    "tensor '{name}' is missing (config needs shape {shape:?})"
-                ))
-            })?;
+            let view = st
+                .tensor(name)
+                .map_err(|_| Error::Weights(format!("tensor '{name}' is missing (config needs shape {shape:?})")))?;
             if view.shape() != shape.as_slice() {
                 return Err(Error::Weights(format!(
                     "tensor '{name}' has shape {:?}, config needs {shape:?}",
@@ -150,46 +135,28 @@ impl Weights {
             }
             let data = decode(name, &view)?;
             if let Some(i) = data.iter().position(|v| !v.is_finite()) {
-                return Err(Error::Weights(format!(
-                    "tensor '{name}' has a non-finite value at element {i}"
-                )));
+                return Err(Error::Weights(format!("tensor '{name}' has a non-finite value at element {i}")));
             }
             tensors.insert(name.clone(), data);
         }
         if st.len() != specs.len() {
-            let known: std::collections::HashSet<&str> =
-                specs.iter().map(|(n, _)| n.as_str()).collect();
-            let extra = st
-                .names()
-                .into_iter()
-                .find(|n| !known.contains(n))
-                .unwrap_or_default()
-                .to_string();
+            let known: std::collections::HashSet<&str> = specs.iter().map(|(n, _)| n.as_str()).collect();
+            let extra = st.names().into_iter().find(|n| !known.contains(n)).unwrap_or_default().to_string();
             return Err(Error::Weights(format!(
                 "tensor '{extra}' is not part of the declared config (wrong config or wrong file)"
             )));
         }
-        Ok(Self {
-            config,
-            provenance,
-            tensors,
-        })
+        Ok(Self { config, provenance, tensors })
     }
 
     /// Serialises to safetensors bytes.
     pub fn to_bytes(&self, store: StoreAs) -> Result<Vec<u8>> {
         let mut raw: Vec<(String, Vec<usize>, Vec<u8>)> = Vec::new();
         for (name, shape) in self.config.tensor_specs() {
-            let data = self
-                .tensors
-                .get(&name)
-                .ok_or_else(|| Error::Weights(format!("tensor '{name}' is missing")))?;
+            let data = self.tensors.get(&name).ok_or_else(|| Error::Weights(format!("tensor '{name}' is missing")))?;
             let bytes: Vec<u8> = match store {
                 StoreAs::F32 => data.iter().flat_map(|v| v.to_le_bytes()).collect(),
-                StoreAs::F16 => data
-                    .iter()
-                    .flat_map(|v| f16::from_f32(*v).to_le_bytes())
-                    .collect(),
+                StoreAs::F16 => data.iter().flat_map(|v| f16::from_f32(*v).to_le_bytes()).collect(),
             };
             raw.push((name, shape, bytes));
         }
@@ -200,11 +167,7 @@ impl Weights {
         let views = raw
             .iter()
             .map(|(n, s, b)| {
-                Ok((
-                    n.clone(),
-                    TensorView::new(dtype, s.clone(), b)
-                        .map_err(|e| Error::Weights(format!("{n}: {e}")))?,
-                ))
+                Ok((n.clone(), TensorView::new(dtype, s.clone(), b).map_err(|e| Error::Weights(format!("{n}: {e}")))?))
             })
             .collect::<Result<Vec<_>>>()?;
         let mut meta = HashMap::new();
@@ -215,24 +178,15 @@ impl Weights {
             serde_json::to_string(&self.config).map_err(|e| Error::Weights(e.to_string()))?,
         );
         meta.insert("provenance".to_string(), self.provenance.to_string());
-        safetensors::serialize(views, Some(meta))
-            .map_err(|e| Error::Weights(format!("serialising: {e}")))
+        safetensors::serialize(views, Some(meta)).map_err(|e| Error::Weights(format!("serialising: {e}")))
     }
 }
 
 fn decode(name: &str, view: &TensorView<'_>) -> Result<Vec<f32>> {
     let data = view.data();
     match view.dtype() {
-        Dtype::F32 => Ok(data
-            .chunks_exact(4)
-            .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-            .collect()),
-        Dtype::F16 => Ok(data
-            .chunks_exact(2)
-            .map(|c| f16::from_le_bytes([c[0], c[1]]).to_f32())
-            .collect()),
-        other => Err(Error::Weights(format!(
-            "tensor '{name}' has dtype {other:?}; only F32 and F16 are supported"
-        ))),
+        Dtype::F32 => Ok(data.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()),
+        Dtype::F16 => Ok(data.chunks_exact(2).map(|c| f16::from_le_bytes([c[0], c[1]]).to_f32()).collect()),
+        other => Err(Error::Weights(format!("tensor '{name}' has dtype {other:?}; only F32 and F16 are supported"))),
     }
 }

@@ -14,8 +14,7 @@ fn temp_dir(tag: &str) -> std::path::PathBuf {
 }
 
 const TETRA_OBJ: &str = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
-const TETRA_OFF: &str =
-    "OFF\n4 4 0\n0 0 0\n2 0 0\n0 2 0\n0 0 2\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+const TETRA_OFF: &str = "OFF\n4 4 0\n0 0 0\n2 0 0\n0 2 0\n0 0 2\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
 /// A 4 x 4 grid of quads in the plane z = 0: many triangles, but flat.
 fn flat_obj() -> String {
     let mut s = String::new();
@@ -35,20 +34,11 @@ fn flat_obj() -> String {
 
 #[test]
 fn degenerate_meshes_are_rejected_with_a_reason() {
-    let tri = Mesh {
-        vertices: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-        triangles: vec![[0, 1, 2]],
-    };
+    let tri = Mesh { vertices: vec![[0.0; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], triangles: vec![[0, 1, 2]] };
     assert!(check_mesh(&tri).unwrap_err().contains("too few triangles"));
-    let zero = Mesh {
-        vertices: vec![[0.0; 3]; 3],
-        triangles: vec![[0, 1, 2]; 6],
-    };
+    let zero = Mesh { vertices: vec![[0.0; 3]; 3], triangles: vec![[0, 1, 2]; 6] };
     assert!(check_mesh(&zero).unwrap_err().contains("no surface area"));
-    let bad = Mesh {
-        vertices: vec![[0.0; 3]; 3],
-        triangles: vec![[0, 1, 7]; 6],
-    };
+    let bad = Mesh { vertices: vec![[0.0; 3]; 3], triangles: vec![[0, 1, 7]; 6] };
     assert!(check_mesh(&bad).unwrap_err().contains("refers beyond"));
 }
 
@@ -64,28 +54,19 @@ fn loads_recursively_and_skips_with_reasons() {
     let names: Vec<&str> = bank.meshes.iter().map(|m| m.name.as_str()).collect();
     assert_eq!(names, ["a.obj", "sub/b.OFF"]);
     assert_eq!(bank.meshes[1].mesh.triangles.len(), 4);
-    let skipped: Vec<(&str, &str)> = bank
-        .skipped
-        .iter()
-        .map(|s| (s.name.as_str(), s.reason.as_str()))
-        .collect();
+    let skipped: Vec<(&str, &str)> = bank.skipped.iter().map(|s| (s.name.as_str(), s.reason.as_str())).collect();
     assert_eq!(skipped.len(), 2, "{skipped:?}");
     assert_eq!(skipped[0].0, "sub/broken.ply");
     assert_eq!(skipped[1].0, "sub/deeper/flat.obj");
     assert!(skipped[1].1.starts_with("flat"), "{skipped:?}");
-    assert!(bank
-        .skipped_report()
-        .contains("skipped sub/deeper/flat.obj: flat"));
+    assert!(bank.skipped_report().contains("skipped sub/deeper/flat.obj: flat"));
     let _ = std::fs::remove_dir_all(&d);
 }
 
 #[test]
 fn split_is_by_name_and_stable() {
     let names: Vec<String> = (0..1000).map(|i| format!("set/mesh{i}.obj")).collect();
-    let val = names
-        .iter()
-        .filter(|n| split_of(n, 0.2) == Split::Val)
-        .count();
+    let val = names.iter().filter(|n| split_of(n, 0.2) == Split::Val).count();
     assert!((150..250).contains(&val), "{val}");
     for n in &names {
         assert_eq!(split_of(n, 0.2), split_of(n, 0.2));

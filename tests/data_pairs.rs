@@ -12,10 +12,7 @@ fn close(a: [f32; 3], b: [f32; 3], tol: f32) -> bool {
 }
 
 fn quiet() -> PairParams {
-    PairParams {
-        noise_sigma: 0.0,
-        ..PairParams::default()
-    }
+    PairParams { noise_sigma: 0.0, ..PairParams::default() }
 }
 
 /// Euler angles of R = Rx(ax) Ry(ay) Rz(az).
@@ -46,11 +43,7 @@ fn protocol_sizes_overlap_and_ranges() {
             s.sort_unstable();
             s.dedup();
             assert_eq!(s.len(), 1024);
-            assert!(pair
-                .source
-                .iter()
-                .chain(&pair.target)
-                .all(|q| q.iter().all(|v| v.is_finite())));
+            assert!(pair.source.iter().chain(&pair.target).all(|q| q.iter().all(|v| v.is_finite())));
         }
     }
 }
@@ -66,10 +59,7 @@ fn angles_span_the_range() {
             max[a] = max[a].max(e[a].abs());
         }
     }
-    assert!(
-        max.iter().all(|&m| m > 35.0),
-        "angles never get large: {max:?}"
-    );
+    assert!(max.iter().all(|&m| m > 35.0), "angles never get large: {max:?}");
 }
 
 #[test]
@@ -84,28 +74,16 @@ fn ground_truth_maps_source_onto_target_counterparts_without_noise() {
             assert!(close(*q, normed.points[i as usize], 1e-6));
         }
         for (q, &i) in pair.target.iter().zip(&pair.target_dense_index) {
-            assert!(close(
-                *q,
-                apply(&pair.T_target_source, normed.points[i as usize]),
-                1e-5
-            ));
+            assert!(close(*q, apply(&pair.T_target_source, normed.points[i as usize]), 1e-5));
         }
         // counterparts: equal dense indices
         let mut matched = 0;
-        let pos: std::collections::HashMap<u32, usize> = pair
-            .target_dense_index
-            .iter()
-            .enumerate()
-            .map(|(k, &i)| (i, k))
-            .collect();
+        let pos: std::collections::HashMap<u32, usize> =
+            pair.target_dense_index.iter().enumerate().map(|(k, &i)| (i, k)).collect();
         for (j, i) in pair.source_dense_index.iter().enumerate() {
             if let Some(&k) = pos.get(i) {
                 matched += 1;
-                assert!(close(
-                    apply(&pair.T_target_source, pair.source[j]),
-                    pair.target[k],
-                    1e-5
-                ));
+                assert!(close(apply(&pair.T_target_source, pair.source[j]), pair.target[k], 1e-5));
             }
         }
         assert!(matched > 200, "only {matched} shared samples");
@@ -140,14 +118,8 @@ fn noise_is_clipped_and_has_the_right_scale() {
 fn deterministic_per_seed() {
     let mesh = generate(Category::Lamp, 2);
     let p = PairParams::default();
-    assert_eq!(
-        make_pair(&mesh, "lamp", &p, 4).unwrap(),
-        make_pair(&mesh, "lamp", &p, 4).unwrap()
-    );
-    assert_ne!(
-        make_pair(&mesh, "lamp", &p, 4).unwrap().source,
-        make_pair(&mesh, "lamp", &p, 5).unwrap().source
-    );
+    assert_eq!(make_pair(&mesh, "lamp", &p, 4).unwrap(), make_pair(&mesh, "lamp", &p, 4).unwrap());
+    assert_ne!(make_pair(&mesh, "lamp", &p, 4).unwrap().source, make_pair(&mesh, "lamp", &p, 5).unwrap().source);
 }
 
 #[test]
@@ -162,22 +134,12 @@ fn curriculum_knobs() {
         ..PairParams::default()
     };
     let pair = make_pair(&mesh, "desk", &p, 1).unwrap();
-    assert!(
-        (pair.T_target_source - nalgebra::Matrix4::identity())
-            .abs()
-            .max()
-            < 1e-12
-    );
+    assert!((pair.T_target_source - nalgebra::Matrix4::identity()).abs().max() < 1e-12);
     assert!(pair.overlap >= 0.9);
-    let p = PairParams {
-        max_angle_deg: 10.0,
-        ..quiet()
-    };
+    let p = PairParams { max_angle_deg: 10.0, ..quiet() };
     for seed in 0..10 {
         let pair = make_pair(&mesh, "desk", &p, seed).unwrap();
-        assert!(euler(&rotation(&pair.T_target_source))
-            .iter()
-            .all(|a| a.abs() <= 10.0 + 1e-9));
+        assert!(euler(&rotation(&pair.T_target_source)).iter().all(|a| a.abs() <= 10.0 + 1e-9));
     }
 }
 
@@ -193,21 +155,13 @@ fn engine_frames_are_consistent() {
             assert!(lo.iter().chain(&hi).all(|v| v.abs() <= 1.0 + 1e-5));
         }
         // the engine-frame GT maps the normalised source onto the normalised target
-        let pos: std::collections::HashMap<u32, usize> = pair
-            .target_dense_index
-            .iter()
-            .enumerate()
-            .map(|(k, &i)| (i, k))
-            .collect();
+        let pos: std::collections::HashMap<u32, usize> =
+            pair.target_dense_index.iter().enumerate().map(|(k, &i)| (i, k)).collect();
         let mut matched = 0;
         for (j, i) in pair.source_dense_index.iter().enumerate() {
             if let Some(&k) = pos.get(i) {
                 matched += 1;
-                assert!(close(
-                    apply(&e.T_target_source, e.source.points[j]),
-                    e.target.points[k],
-                    1e-5
-                ));
+                assert!(close(apply(&e.T_target_source, e.source.points[j]), e.target.points[k], 1e-5));
             }
         }
         assert!(matched > 100);
@@ -215,65 +169,38 @@ fn engine_frames_are_consistent() {
         let ct = e.T_target_source * Vector4::new(cs[0], cs[1], cs[2], 1.0);
         assert!((0..3).all(|a| (ct[a] - e.centroid_target[a]).abs() < 1e-9));
         // and maps back to the pair's units
-        assert!(
-            (e.norm.denormalize(&e.T_target_source) - pair.T_target_source)
-                .abs()
-                .max()
-                < 1e-9
-        );
+        assert!((e.norm.denormalize(&e.T_target_source) - pair.T_target_source).abs().max() < 1e-9);
     }
 }
 
 #[test]
 fn shape_source_splits_by_shape() {
     let src = ShapeSource::procedural();
-    let train: std::collections::HashSet<String> = (0..400)
-        .map(|i| src.shape(Split::Train, i).unwrap().name)
-        .collect();
-    let val: std::collections::HashSet<String> = (0..400)
-        .map(|i| src.shape(Split::Val, i).unwrap().name)
-        .collect();
+    let train: std::collections::HashSet<String> = (0..400).map(|i| src.shape(Split::Train, i).unwrap().name).collect();
+    let val: std::collections::HashSet<String> = (0..400).map(|i| src.shape(Split::Val, i).unwrap().name).collect();
     assert!(train.is_disjoint(&val));
     assert_eq!(val.len(), 200, "10 validation shapes per category");
     assert_eq!(train.len(), 400, "a new training shape per pair");
     let p = PairParams::default();
-    assert_eq!(
-        src.pair(Split::Val, 3, &p).unwrap(),
-        src.pair(Split::Val, 3, &p).unwrap()
-    );
+    assert_eq!(src.pair(Split::Val, 3, &p).unwrap(), src.pair(Split::Val, 3, &p).unwrap());
 
     // a bank: names decide the split, independently of the rest of the bank
     let meshes: Vec<NamedMesh> = (0..40)
-        .map(|i| NamedMesh {
-            name: format!("dir/mesh{i}.obj"),
-            mesh: generate(CATEGORIES[i % 20], i as u64),
-        })
+        .map(|i| NamedMesh { name: format!("dir/mesh{i}.obj"), mesh: generate(CATEGORIES[i % 20], i as u64) })
         .collect();
-    let bank = Bank {
-        meshes,
-        skipped: vec![],
-    };
+    let bank = Bank { meshes, skipped: vec![] };
     let src = ShapeSource::with_bank(bank.clone(), 0.25);
     assert!(!src.bank_val.is_empty() && !src.bank_train.is_empty());
     assert_eq!(src.bank_val.len(), bank.split(Split::Val, 0.25).len());
-    let bank_train: std::collections::HashSet<String> = src
-        .bank_train
-        .iter()
-        .map(|m| format!("bank/{}", m.name))
-        .collect();
+    let bank_train: std::collections::HashSet<String> =
+        src.bank_train.iter().map(|m| format!("bank/{}", m.name)).collect();
     let mut seen_bank = 0;
     for i in 0..300 {
         let name = src.shape(Split::Val, i).unwrap().name;
-        assert!(
-            !bank_train.contains(&name),
-            "validation pair {i} uses training shape {name}"
-        );
+        assert!(!bank_train.contains(&name), "validation pair {i} uses training shape {name}");
         seen_bank += name.starts_with("bank/") as usize;
     }
-    assert!(
-        seen_bank > 40 && seen_bank < 150,
-        "bank fraction off: {seen_bank}/300"
-    );
+    assert!(seen_bank > 40 && seen_bank < 150, "bank fraction off: {seen_bank}/300");
 }
 
 #[test]

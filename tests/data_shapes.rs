@@ -43,15 +43,8 @@ fn every_category_gives_valid_meshes() {
     for c in CATEGORIES {
         for seed in 0..6 {
             let m = generate(c, seed);
-            assert!(
-                m.triangles.len() >= 12,
-                "{c} {seed}: {} triangles",
-                m.triangles.len()
-            );
-            assert!(
-                m.vertices.iter().all(|p| p.iter().all(|v| v.is_finite())),
-                "{c} {seed}: non-finite vertex"
-            );
+            assert!(m.triangles.len() >= 12, "{c} {seed}: {} triangles", m.triangles.len());
+            assert!(m.vertices.iter().all(|p| p.iter().all(|v| v.is_finite())), "{c} {seed}: non-finite vertex");
             assert!(m.surface_area() > 0.0, "{c} {seed}: no area");
             // in range, positive area, not flat
             check_mesh(&m).unwrap_or_else(|e| panic!("{c} {seed}: {e}"));
@@ -60,16 +53,10 @@ fn every_category_gives_valid_meshes() {
             assert!(s > 0.0);
             let (lo, hi) = n.bounds();
             for a in 0..3 {
-                assert!(
-                    lo[a] >= -1.0 - 1e-5 && hi[a] <= 1.0 + 1e-5,
-                    "{c} {seed}: {lo:?} {hi:?}"
-                );
+                assert!(lo[a] >= -1.0 - 1e-5 && hi[a] <= 1.0 + 1e-5, "{c} {seed}: {lo:?} {hi:?}");
             }
             let max_ext = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
-            assert!(
-                (max_ext - 2.0).abs() < 1e-4,
-                "{c} {seed}: largest extent {max_ext}"
-            );
+            assert!((max_ext - 2.0).abs() < 1e-4, "{c} {seed}: largest extent {max_ext}");
         }
     }
 }
@@ -81,10 +68,7 @@ fn deterministic_per_seed_and_distinct_across_seeds() {
         let meshes: Vec<_> = (0..8).map(|s| generate(c, s)).collect();
         for i in 0..meshes.len() {
             for j in i + 1..meshes.len() {
-                assert_ne!(
-                    meshes[i].vertices, meshes[j].vertices,
-                    "{c}: seeds {i} and {j} coincide"
-                );
+                assert_ne!(meshes[i].vertices, meshes[j].vertices, "{c}: seeds {i} and {j} coincide");
             }
         }
     }

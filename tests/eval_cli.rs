@@ -5,19 +5,11 @@
 use std::path::Path;
 use std::process::Command;
 
-const METHODS: [&str; 5] = [
-    "network",
-    "network + ICP",
-    "ICP from identity",
-    "ICP from centroids",
-    "untrained network + ICP",
-];
+const METHODS: [&str; 5] =
+    ["network", "network + ICP", "ICP from identity", "ICP from centroids", "untrained network + ICP"];
 
 fn arps(args: &[&str]) -> (bool, String, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_arps"))
-        .args(args)
-        .output()
-        .unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_arps")).args(args).output().unwrap();
     (
         out.status.success(),
         String::from_utf8_lossy(&out.stdout).into_owned(),
@@ -29,24 +21,14 @@ fn arps(args: &[&str]) -> (bool, String, String) {
 fn eval_prints_the_table_for_every_method_on_the_fixture_pairs() {
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs/pairs.tsv");
     let svg = std::env::temp_dir().join(format!("arps-eval-{}.svg", std::process::id()));
-    let (ok, out, err) = arps(&[
-        "eval",
-        manifest.to_str().unwrap(),
-        "--limit",
-        "6",
-        "--svg",
-        svg.to_str().unwrap(),
-    ]);
+    let (ok, out, err) = arps(&["eval", manifest.to_str().unwrap(), "--limit", "6", "--svg", svg.to_str().unwrap()]);
     assert!(ok, "stdout:\n{out}\nstderr:\n{err}");
     assert!(out.contains("6 pairs"), "{out}");
     for h in ["MRE(deg)", "MTE", "Recall", "RRE(deg)", "RTE", "ms/pair"] {
         assert!(out.contains(h), "missing column {h}:\n{out}");
     }
     for m in METHODS {
-        assert!(
-            out.lines().any(|l| l.starts_with(&format!("{m} "))),
-            "missing method {m}:\n{out}"
-        );
+        assert!(out.lines().any(|l| l.starts_with(&format!("{m} "))), "missing method {m}:\n{out}");
     }
     assert!(out.contains("normalised shape units"), "{out}");
     let s = std::fs::read_to_string(&svg).unwrap();
@@ -57,15 +39,7 @@ fn eval_prints_the_table_for_every_method_on_the_fixture_pairs() {
 #[test]
 fn eval_json_and_perturbation() {
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs/pairs.tsv");
-    let (ok, out, err) = arps(&[
-        "eval",
-        manifest.to_str().unwrap(),
-        "--limit",
-        "2",
-        "--perturb",
-        "3",
-        "--json",
-    ]);
+    let (ok, out, err) = arps(&["eval", manifest.to_str().unwrap(), "--limit", "2", "--perturb", "3", "--json"]);
     assert!(ok, "{err}");
     let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
     assert_eq!(v["pairs"], 2);
@@ -85,16 +59,8 @@ fn eval_json_and_perturbation() {
 fn make_pairs_writes_a_set_that_eval_reads() {
     let dir = std::env::temp_dir().join(format!("arps-make-pairs-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
-    let (ok, out, err) = arps(&[
-        "make-pairs",
-        "--out",
-        dir.to_str().unwrap(),
-        "--count",
-        "3",
-        "--seed",
-        "5",
-        "--procedural-only",
-    ]);
+    let (ok, out, err) =
+        arps(&["make-pairs", "--out", dir.to_str().unwrap(), "--count", "3", "--seed", "5", "--procedural-only"]);
     assert!(ok, "{out}{err}");
     let tsv = std::fs::read_to_string(dir.join("pairs.tsv")).unwrap();
     assert_eq!(tsv.lines().count(), 4);
@@ -111,13 +77,7 @@ fn make_pairs_writes_a_set_that_eval_reads() {
         // the files hold exactly the generated pair
         let src = arps::data::ShapeSource::procedural();
         let idx = (5u64 << 32) + entries.iter().position(|x| x.name == e.name).unwrap() as u64;
-        let pair = src
-            .pair(
-                arps::data::Split::Val,
-                idx,
-                &arps::data::PairParams::default(),
-            )
-            .unwrap();
+        let pair = src.pair(arps::data::Split::Val, idx, &arps::data::PairParams::default()).unwrap();
         assert_eq!(s.points, pair.source);
         assert_eq!(t.points, pair.target);
         assert_eq!(e.T_target_source, pair.T_target_source);
@@ -126,12 +86,7 @@ fn make_pairs_writes_a_set_that_eval_reads() {
             assert!((meta.centroid_target[a] - pair.centroid_target[a]).abs() < 1e-12);
         }
     }
-    let (ok, out, err) = arps(&[
-        "eval",
-        dir.join("pairs.tsv").to_str().unwrap(),
-        "--limit",
-        "1",
-    ]);
+    let (ok, out, err) = arps(&["eval", dir.join("pairs.tsv").to_str().unwrap(), "--limit", "1"]);
     assert!(ok, "{out}{err}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -2,9 +2,7 @@
 #![cfg(feature = "cli")]
 
 use arps::data::manifest::{self, Entry};
-use arps::data::metrics::{
-    pair_error, recall_svg, recall_vs_rotation, recall_vs_translation, summarize, PairError,
-};
+use arps::data::metrics::{pair_error, recall_svg, recall_vs_rotation, recall_vs_translation, summarize, PairError};
 use arps::transform::{euler_xyz, from_rotation_translation};
 use nalgebra::{Matrix4, Vector3};
 
@@ -15,16 +13,12 @@ fn e(rot_deg: f64, trans: f64) -> PairError {
 #[test]
 fn errors_are_geodesic_degrees_and_scaled_translation() {
     let gt = from_rotation_translation(&euler_xyz(0.2, -0.1, 0.3), &Vector3::new(1.0, 2.0, 3.0));
-    let d = from_rotation_translation(
-        &euler_xyz(10f64.to_radians(), 0.0, 0.0),
-        &Vector3::new(0.0, 0.4, 0.0),
-    );
+    let d = from_rotation_translation(&euler_xyz(10f64.to_radians(), 0.0, 0.0), &Vector3::new(0.0, 0.4, 0.0));
     let pred = d * gt;
     let err = pair_error(&pred, &gt, 2.0);
     assert!((err.rot_deg - 10.0).abs() < 1e-9, "{err:?}");
     // t_pred - t_gt = R_d t_gt + t_d - t_gt
-    let expect = (d.fixed_view::<3, 3>(0, 0) * Vector3::new(1.0, 2.0, 3.0)
-        + Vector3::new(0.0, 0.4, 0.0)
+    let expect = (d.fixed_view::<3, 3>(0, 0) * Vector3::new(1.0, 2.0, 3.0) + Vector3::new(0.0, 0.4, 0.0)
         - Vector3::new(1.0, 2.0, 3.0))
     .norm()
         / 2.0;
@@ -35,13 +29,7 @@ fn errors_are_geodesic_degrees_and_scaled_translation() {
 
 #[test]
 fn table_figures_follow_the_paper() {
-    let errs = [
-        e(1.0, 0.01),
-        e(14.9, 0.19),
-        e(15.0, 0.05),
-        e(3.0, 0.2),
-        e(40.0, 1.0),
-    ];
+    let errs = [e(1.0, 0.01), e(14.9, 0.19), e(15.0, 0.05), e(3.0, 0.2), e(40.0, 1.0)];
     let s = summarize(&errs, &[1.0, 2.0, 3.0, 4.0, 5.0], 15.0, 0.2);
     assert_eq!(s.pairs, 5);
     assert!((s.recall - 0.4).abs() < 1e-12, "strict thresholds: {s:?}");

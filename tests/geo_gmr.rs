@@ -3,8 +3,7 @@
 
 use arps::gmr::{gmm_params, kabsch, solve, Gmm};
 use arps::transform::{
-    check_rigid, euler_xyz, from_rotation_translation, rotation, rotation_error_deg, translation,
-    translation_error,
+    check_rigid, euler_xyz, from_rotation_translation, rotation, rotation_error_deg, translation, translation_error,
 };
 use arps::PointCloud;
 use nalgebra::{Matrix4, Unit, UnitQuaternion, Vector3};
@@ -17,9 +16,7 @@ fn rng(seed: u64) -> rand_chacha::ChaCha8Rng {
 /// A lumpy unit-scale cloud: points around a few random centres.
 fn cloud(n: usize, seed: u64) -> Vec<[f32; 3]> {
     let mut r = rng(seed);
-    let centres: Vec<[f32; 3]> = (0..6)
-        .map(|_| [0; 3].map(|_| r.random_range(-0.8f32..0.8)))
-        .collect();
+    let centres: Vec<[f32; 3]> = (0..6).map(|_| [0; 3].map(|_| r.random_range(-0.8f32..0.8))).collect();
     (0..n)
         .map(|i| {
             let c = centres[i % centres.len()];
@@ -53,9 +50,7 @@ fn random_transform(r: &mut impl Rng, angle: f64, t_norm: f64) -> Matrix4<f64> {
         r.random_range(-1.0..1.0),
         r.random_range(-1.0..1.0),
     ));
-    let rot = UnitQuaternion::from_axis_angle(&axis, angle)
-        .to_rotation_matrix()
-        .into_inner();
+    let rot = UnitQuaternion::from_axis_angle(&axis, angle).to_rotation_matrix().into_inner();
     from_rotation_translation(&rot, &(dir.into_inner() * t_norm))
 }
 
@@ -77,16 +72,9 @@ fn recovers_random_transforms_exactly() {
     let gamma = softmax_gamma(1024, 16, 2);
     let gs = gmm_params(&pts, &gamma, 16);
     let mut r = rng(3);
-    let mut angles: Vec<f64> = (0..12)
-        .map(|_| r.random_range(0.0..std::f64::consts::PI))
-        .collect();
+    let mut angles: Vec<f64> = (0..12).map(|_| r.random_range(0.0..std::f64::consts::PI)).collect();
     // near and at a half-turn, and tiny
-    angles.extend([
-        179.0f64.to_radians(),
-        179.99f64.to_radians(),
-        std::f64::consts::PI,
-        1e-6,
-    ]);
+    angles.extend([179.0f64.to_radians(), 179.99f64.to_radians(), std::f64::consts::PI, 1e-6]);
     let mut worst = (0.0f64, 0.0f64);
     for (k, &angle) in angles.iter().enumerate() {
         let t_gt = random_transform(&mut r, angle, 0.5 + k as f64 * 0.3);
@@ -101,10 +89,7 @@ fn recovers_random_transforms_exactly() {
             angle.to_degrees()
         );
     }
-    eprintln!(
-        "worst: rotation {:.2e} rad, translation {:.2e}",
-        worst.0, worst.1
-    );
+    eprintln!("worst: rotation {:.2e} rad, translation {:.2e}", worst.0, worst.1);
 }
 
 #[test]
@@ -143,17 +128,9 @@ fn all_mass_in_one_component_gives_pure_translation() {
 #[test]
 fn zero_variance_components_still_solve() {
     // Every point sits exactly on one of 5 sites: all variances clamp to 1e-8.
-    let sites = [
-        [0.0f32, 0.0, 0.0],
-        [1.0, 0.0, 0.0],
-        [0.0, 1.0, 0.0],
-        [0.0, 0.0, 1.0],
-        [1.0, 1.0, 0.5],
-    ];
+    let sites = [[0.0f32, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [1.0, 1.0, 0.5]];
     let pts: Vec<[f32; 3]> = (0..100).map(|i| sites[i % 5]).collect();
-    let gamma: Vec<f32> = (0..100)
-        .flat_map(|i| (0..5).map(move |k| if k == i % 5 { 1.0f32 } else { 0.0 }))
-        .collect();
+    let gamma: Vec<f32> = (0..100).flat_map(|i| (0..5).map(move |k| if k == i % 5 { 1.0f32 } else { 0.0 })).collect();
     let gs = gmm_params(&pts, &gamma, 5);
     assert!(gs.var.iter().all(|&v| v == 1e-8));
     let t_gt = from_rotation_translation(&euler_xyz(0.5, -0.2, 0.9), &Vector3::new(0.1, 0.2, -0.3));
@@ -164,10 +141,7 @@ fn zero_variance_components_still_solve() {
     // All points at one spot: no spread at all.
     let same = vec![[0.3f32, 0.3, 0.3]; 50];
     let g = softmax_gamma(50, 4, 7);
-    let est = solve(
-        &gmm_params(&same, &g, 4),
-        &gmm_params(&apply_all(&t_gt, &same), &g, 4),
-    );
+    let est = solve(&gmm_params(&same, &g, 4), &gmm_params(&apply_all(&t_gt, &same), &g, 4));
     assert_finite_rigid(&est);
     assert!(
         (arps::transform::apply(&est, [0.3, 0.3, 0.3])[0] as f64
@@ -206,9 +180,8 @@ fn collinear_points_give_a_proper_rotation_aligning_the_line() {
 fn two_components_rank_one_and_empty_components() {
     // J = 8 but only components 2 and 5 hold mass: M has rank one, six components are empty.
     let pts = cloud(100, 10);
-    let gamma: Vec<f32> = (0..100)
-        .flat_map(|i| (0..8).map(move |k| if k == [2, 5][i % 2] { 1.0f32 } else { 0.0 }))
-        .collect();
+    let gamma: Vec<f32> =
+        (0..100).flat_map(|i| (0..8).map(move |k| if k == [2, 5][i % 2] { 1.0f32 } else { 0.0 })).collect();
     let t_gt = from_rotation_translation(&euler_xyz(0.5, 0.5, 0.5), &Vector3::new(0.0, 0.0, 1.0));
     let gs = gmm_params(&pts, &gamma, 8);
     let gt = gmm_params(&apply_all(&t_gt, &pts), &gamma, 8);
@@ -218,10 +191,7 @@ fn two_components_rank_one_and_empty_components() {
     for k in [2, 5] {
         let m = gs.mu[k];
         let e = arps::transform::apply(&est, m.map(|v| v as f32));
-        let d: f64 = (0..3)
-            .map(|a| (e[a] as f64 - gt.mu[k][a]).powi(2))
-            .sum::<f64>()
-            .sqrt();
+        let d: f64 = (0..3).map(|a| (e[a] as f64 - gt.mu[k][a]).powi(2)).sum::<f64>().sqrt();
         assert!(d < 1e-5, "component {k} mean off by {d}");
     }
 }
@@ -234,30 +204,12 @@ fn garbage_mixtures_never_give_nan() {
     nan.var[2] = f64::NAN;
     let mut inf_pi = ok.clone();
     inf_pi.pi[0] = f64::INFINITY;
-    let empty = Gmm {
-        pi: vec![],
-        mu: vec![],
-        var: vec![],
-    };
-    let zero = Gmm {
-        pi: vec![0.0; 4],
-        mu: vec![[0.0; 3]; 4],
-        var: vec![0.0; 4],
-    };
-    let short = Gmm {
-        pi: ok.pi[..2].to_vec(),
-        mu: ok.mu[..2].to_vec(),
-        var: ok.var[..2].to_vec(),
-    };
-    for (a, b) in [
-        (&ok, &nan),
-        (&nan, &ok),
-        (&inf_pi, &ok),
-        (&empty, &ok),
-        (&ok, &empty),
-        (&zero, &zero),
-        (&short, &ok),
-    ] {
+    let empty = Gmm { pi: vec![], mu: vec![], var: vec![] };
+    let zero = Gmm { pi: vec![0.0; 4], mu: vec![[0.0; 3]; 4], var: vec![0.0; 4] };
+    let short = Gmm { pi: ok.pi[..2].to_vec(), mu: ok.mu[..2].to_vec(), var: ok.var[..2].to_vec() };
+    for (a, b) in
+        [(&ok, &nan), (&nan, &ok), (&inf_pi, &ok), (&empty, &ok), (&ok, &empty), (&zero, &zero), (&short, &ok)]
+    {
         assert_finite_rigid(&solve(a, b));
     }
     assert_eq!(solve(&empty, &empty), Matrix4::identity());
@@ -285,10 +237,7 @@ fn kabsch_matches_solve_conventions() {
     let est = kabsch(&line, &line2, None);
     assert_finite_rigid(&est);
     let e = arps::transform::apply(&est, [9.0, 0.0, 0.0]);
-    assert!(
-        (e[1] + 9.0).abs() < 1e-9 && (e[2] - 5.0).abs() < 1e-9,
-        "{e:?}"
-    );
+    assert!((e[1] + 9.0).abs() < 1e-9 && (e[2] - 5.0).abs() < 1e-9, "{e:?}");
     assert_finite_rigid(&kabsch(&[[1.0; 3]; 5], &[[2.0; 3]; 5], None));
     assert_finite_rigid(&kabsch(&a, &b, Some(&[0.0; 300])));
 }

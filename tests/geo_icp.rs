@@ -2,9 +2,7 @@
 //! variants recover a known 10-degree / 0.05-unit motion from the identity.
 
 use arps::icp::{IcpKind, IcpParams, IcpTarget};
-use arps::transform::{
-    check_rigid, from_rotation_translation, rotation_error_deg, translation_error,
-};
+use arps::transform::{check_rigid, from_rotation_translation, rotation_error_deg, translation_error};
 use arps::PointCloud;
 use nalgebra::{Matrix4, Unit, UnitQuaternion, Vector3};
 use std::time::Instant;
@@ -18,26 +16,18 @@ fn read_xyz(path: &str) -> Vec<[f32; 3]> {
 /// The fixture, centred on its bounding-box centre and scaled so its largest half-extent is 1
 /// (the pipeline's normalisation), so its extent along the longest axis is 2 units.
 fn fixture() -> Vec<[f32; 3]> {
-    let pts = PointCloud::new(read_xyz(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/fixtures/scans/velodyne-small.ply"
-    )));
+    let pts = PointCloud::new(read_xyz(concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/scans/velodyne-small.ply")));
     assert_eq!(pts.len(), 5000);
     let (lo, hi) = pts.bounds();
     let c = [0, 1, 2].map(|a| (lo[a] + hi[a]) * 0.5);
     let s = (0..3).map(|a| (hi[a] - lo[a]) * 0.5).fold(0.0f32, f32::max);
-    pts.points
-        .iter()
-        .map(|p| [0, 1, 2].map(|a| (p[a] - c[a]) / s))
-        .collect()
+    pts.points.iter().map(|p| [0, 1, 2].map(|a| (p[a] - c[a]) / s)).collect()
 }
 
 /// 10 degrees about an oblique axis, 0.05 units along an oblique direction.
 fn ten_degrees() -> Matrix4<f64> {
     let axis = Unit::new_normalize(Vector3::new(0.3, -0.5, 1.0));
-    let r = UnitQuaternion::from_axis_angle(&axis, 10f64.to_radians())
-        .to_rotation_matrix()
-        .into_inner();
+    let r = UnitQuaternion::from_axis_angle(&axis, 10f64.to_radians()).to_rotation_matrix().into_inner();
     from_rotation_translation(&r, &(Vector3::new(1.0, 0.6, -0.4).normalize() * 0.05))
 }
 
@@ -96,18 +86,12 @@ fn off_returns_init_with_its_fitness() {
     let source = fixture();
     let t_gt = ten_degrees();
     let target = IcpTarget::new(&moved(&t_gt, &source), false);
-    let init = from_rotation_translation(
-        &nalgebra::Matrix3::identity(),
-        &Vector3::new(0.01, 0.0, 0.0),
-    );
+    let init = from_rotation_translation(&nalgebra::Matrix3::identity(), &Vector3::new(0.01, 0.0, 0.0));
     let r = target.align(&source, &init, &IcpParams::new(IcpKind::Off, 0.1));
     assert_eq!(r.T_target_source, init);
     assert_eq!(r.iterations, 0);
     assert!(!r.converged);
-    assert_eq!(
-        (r.fitness, r.inlier_rmse),
-        target.evaluate(&source, &init, 0.1)
-    );
+    assert_eq!((r.fitness, r.inlier_rmse), target.evaluate(&source, &init, 0.1));
     assert!(r.fitness > 0.0 && r.fitness < 1.0);
     // At the true transform every point has its exact partner.
     let (f, rmse) = target.evaluate(&source, &t_gt, 0.01);
@@ -127,10 +111,7 @@ fn partial_overlap_converges_close() {
         let (r, _) = run(kind, &target, &source);
         let er = rotation_error_deg(&r.T_target_source, &t_gt);
         let et = translation_error(&r.T_target_source, &t_gt);
-        eprintln!(
-            "partial {kind:?}: {er:.3e} deg, {et:.2e}, fitness {:.3}",
-            r.fitness
-        );
+        eprintln!("partial {kind:?}: {er:.3e} deg, {et:.2e}, fitness {:.3}", r.fitness);
         assert!(er < 0.5 && et < 0.01, "{kind:?}: {er} deg, {et}");
         assert!(r.fitness > 0.2 && r.fitness < 0.95);
     }
@@ -140,52 +121,25 @@ fn partial_overlap_converges_close() {
 fn empty_and_degenerate_inputs() {
     let source = fixture();
     let empty = IcpTarget::new(&[], true);
-    let r = empty.align(
-        &source,
-        &Matrix4::identity(),
-        &IcpParams::new(IcpKind::Plane, 0.1),
-    );
-    assert_eq!(
-        (r.fitness, r.inlier_rmse, r.iterations, r.converged),
-        (0.0, 0.0, 0, false)
-    );
+    let r = empty.align(&source, &Matrix4::identity(), &IcpParams::new(IcpKind::Plane, 0.1));
+    assert_eq!((r.fitness, r.inlier_rmse, r.iterations, r.converged), (0.0, 0.0, 0, false));
     let target = IcpTarget::new(&source, true);
     assert_eq!(target.evaluate(&[], &Matrix4::identity(), 0.1), (0.0, 0.0));
-    assert_eq!(
-        target.evaluate(&source, &Matrix4::identity(), 0.0),
-        (0.0, 0.0)
-    );
-    assert_eq!(
-        target.evaluate(&source, &Matrix4::identity(), f64::NAN),
-        (0.0, 0.0)
-    );
+    assert_eq!(target.evaluate(&source, &Matrix4::identity(), 0.0), (0.0, 0.0));
+    assert_eq!(target.evaluate(&source, &Matrix4::identity(), f64::NAN), (0.0, 0.0));
     // Far away: no inliers, init returned untouched.
-    let far = from_rotation_translation(
-        &nalgebra::Matrix3::identity(),
-        &Vector3::new(100.0, 0.0, 0.0),
-    );
+    let far = from_rotation_translation(&nalgebra::Matrix3::identity(), &Vector3::new(100.0, 0.0, 0.0));
     let r = target.align(&source, &far, &IcpParams::new(IcpKind::Point, 0.1));
     assert_eq!((r.T_target_source, r.iterations, r.fitness), (far, 0, 0.0));
     // A plane target (rank-deficient point-to-plane system): finite, rigid, no drift along it.
-    let plane: Vec<[f32; 3]> = (0..400)
-        .map(|i| [(i % 20) as f32 * 0.05, (i / 20) as f32 * 0.05, 0.0])
-        .collect();
-    let lifted = moved(
-        &from_rotation_translation(
-            &nalgebra::Matrix3::identity(),
-            &Vector3::new(0.0, 0.0, 0.02),
-        ),
-        &plane,
-    );
+    let plane: Vec<[f32; 3]> = (0..400).map(|i| [(i % 20) as f32 * 0.05, (i / 20) as f32 * 0.05, 0.0]).collect();
+    let lifted =
+        moved(&from_rotation_translation(&nalgebra::Matrix3::identity(), &Vector3::new(0.0, 0.0, 0.02)), &plane);
     let t = IcpTarget::new(&plane, true);
     for kind in [IcpKind::Point, IcpKind::Plane] {
         let r = t.align(&lifted, &Matrix4::identity(), &IcpParams::new(kind, 0.1));
         check_rigid(&r.T_target_source, 1e-9).unwrap();
-        assert!(
-            (r.T_target_source[(2, 3)] + 0.02).abs() < 1e-4,
-            "{kind:?}: {}",
-            r.T_target_source
-        );
+        assert!((r.T_target_source[(2, 3)] + 0.02).abs() < 1e-4, "{kind:?}: {}", r.T_target_source);
         assert!(r.fitness == 1.0 && r.inlier_rmse < 1e-4);
     }
 }
@@ -218,10 +172,7 @@ fn best_of_5<T>(mut f: impl FnMut() -> T) -> (f64, T) {
 #[test]
 #[ignore]
 fn timing_full_scan() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../shared/data/scans/velodyne-source.ply"
-    );
+    let path = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/data/scans/velodyne-source.ply");
     if !std::path::Path::new(path).exists() {
         eprintln!("skipped: {path} not found");
         return;
@@ -230,12 +181,7 @@ fn timing_full_scan() {
     let (lo, hi) = full.bounds();
     let c = [0, 1, 2].map(|a| (lo[a] + hi[a]) * 0.5);
     let s = (0..3).map(|a| (hi[a] - lo[a]) * 0.5).fold(0.0f32, f32::max);
-    let full = PointCloud::new(
-        full.points
-            .iter()
-            .map(|p| [0, 1, 2].map(|a| (p[a] - c[a]) / s))
-            .collect(),
-    );
+    let full = PointCloud::new(full.points.iter().map(|p| [0, 1, 2].map(|a| (p[a] - c[a]) / s)).collect());
     for voxel in [0.008f32, 0.005, 0.0035] {
         let pts = arps::sampling::voxel_downsample(&full, voxel).points;
         let t_gt = ten_degrees();

@@ -10,11 +10,7 @@ use std::collections::HashSet;
 
 fn random_cloud(n: usize, seed: u64) -> PointCloud {
     let mut r = rng(seed);
-    PointCloud::new(
-        (0..n)
-            .map(|_| [0; 3].map(|_| r.random_range(-1.0f32..1.0)))
-            .collect(),
-    )
+    PointCloud::new((0..n).map(|_| [0; 3].map(|_| r.random_range(-1.0f32..1.0))).collect())
 }
 
 fn bits(p: &[f32; 3]) -> [u32; 3] {
@@ -24,9 +20,8 @@ fn bits(p: &[f32; 3]) -> [u32; 3] {
 #[test]
 fn voxel_counts_on_a_lattice() {
     // 10x10x10 lattice at (i + 0.5) * 0.1: a 0.2 grid holds 2x2x2 points per voxel.
-    let pts: Vec<[f32; 3]> = (0..1000)
-        .map(|i| [i % 10, (i / 10) % 10, i / 100].map(|k| (k as f32 + 0.5) * 0.1))
-        .collect();
+    let pts: Vec<[f32; 3]> =
+        (0..1000).map(|i| [i % 10, (i / 10) % 10, i / 100].map(|k| (k as f32 + 0.5) * 0.1)).collect();
     let c = PointCloud::new(pts);
     let v = voxel_downsample(&c, 0.2);
     assert_eq!(v.len(), 125);
@@ -38,11 +33,7 @@ fn voxel_counts_on_a_lattice() {
         }
     }
     // sorted by voxel key (x, then y, then z)
-    let keys: Vec<[i64; 3]> = v
-        .points
-        .iter()
-        .map(|p| p.map(|x| (x / 0.2).floor() as i64))
-        .collect();
+    let keys: Vec<[i64; 3]> = v.points.iter().map(|p| p.map(|x| (x / 0.2).floor() as i64)).collect();
     assert!(keys.windows(2).all(|w| w[0] < w[1]));
     assert_eq!(voxel_downsample(&c, 1000.0).len(), 1);
     assert_eq!(voxel_downsample(&c, 0.05).len(), 1000);
@@ -89,11 +80,7 @@ fn network_sample_exact_count_distinct_and_deterministic() {
     }
     assert_ne!(network_sample(&c, 512, 7), network_sample(&c, 512, 8));
     // n == len is a permutation
-    let perm: HashSet<[u32; 3]> = network_sample(&c, 3000, 9)
-        .points
-        .iter()
-        .map(bits)
-        .collect();
+    let perm: HashSet<[u32; 3]> = network_sample(&c, 3000, 9).points.iter().map(bits).collect();
     assert_eq!(perm.len(), 3000);
     assert!(network_sample(&c, 0, 1).is_empty());
 }
@@ -103,11 +90,7 @@ fn network_sample_pads_with_replacement() {
     let c = random_cloud(100, 4);
     let s = network_sample(&c, 512, 5);
     assert_eq!(s.len(), 512);
-    assert_eq!(
-        &s.points[..100],
-        &c.points[..],
-        "all points first, in order"
-    );
+    assert_eq!(&s.points[..100], &c.points[..], "all points first, in order");
     let all: HashSet<[u32; 3]> = c.points.iter().map(bits).collect();
     assert!(s.points[100..].iter().all(|p| all.contains(&bits(p))));
     assert_eq!(s, network_sample(&c, 512, 5));
@@ -121,11 +104,7 @@ fn network_sample_golden_indices() {
     // Pins the rule (partial Fisher-Yates on ChaCha8, u64 ranges): if this changes, every
     // seeded registration result changes, on native and wasm32 alike.
     let c = PointCloud::new((0..1000).map(|i| [i as f32, 0.0, 0.0]).collect());
-    let idx: Vec<usize> = network_sample(&c, 8, 0)
-        .points
-        .iter()
-        .map(|p| p[0] as usize)
-        .collect();
+    let idx: Vec<usize> = network_sample(&c, 8, 0).points.iter().map(|p| p[0] as usize).collect();
     let mut r = rng(0);
     let mut virt: Vec<usize> = (0..1000).collect();
     let mut want = Vec::new();
@@ -149,10 +128,7 @@ fn network_sample_is_roughly_uniform() {
         }
     }
     // expected 400 each; binomial sd ~18
-    assert!(
-        counts.iter().all(|&k| (300..=500).contains(&k)),
-        "{counts:?}"
-    );
+    assert!(counts.iter().all(|&k| (300..=500).contains(&k)), "{counts:?}");
 }
 
 fn dot(a: [f32; 3], b: [f32; 3]) -> f32 {
@@ -172,11 +148,7 @@ fn normals_of_a_plane() {
         let l = dot(v, v).sqrt();
         v.map(|x| x / l)
     };
-    let w = [
-        n[1] * u[2] - n[2] * u[1],
-        n[2] * u[0] - n[0] * u[2],
-        n[0] * u[1] - n[1] * u[0],
-    ];
+    let w = [n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0]];
     let mut r = rng(6);
     let pts: Vec<[f32; 3]> = (0..2000)
         .map(|_| {
@@ -221,15 +193,9 @@ fn normals_never_nan() {
         let normals = estimate_normals(&pts, k);
         assert_eq!(normals.len(), pts.len());
         for m in &normals {
-            assert!(
-                m.iter().all(|x| x.is_finite()) && (dot(*m, *m) - 1.0).abs() < 1e-5,
-                "k = {k}: {m:?}"
-            );
+            assert!(m.iter().all(|x| x.is_finite()) && (dot(*m, *m) - 1.0).abs() < 1e-5, "k = {k}: {m:?}");
         }
     }
     // duplicates only: the defined fallback
-    assert_eq!(
-        estimate_normals(&[[2.0, 2.0, 2.0]; 10], 5),
-        vec![DEFAULT_NORMAL; 10]
-    );
+    assert_eq!(estimate_normals(&[[2.0, 2.0, 2.0]; 10], 5), vec![DEFAULT_NORMAL; 10]);
 }

@@ -72,20 +72,10 @@ fn lying_headers_do_not_allocate() {
         let r = arps::io::read_point_cloud(bytes, name);
         let largest = LARGEST.load(Ordering::Relaxed);
         let msg = r.as_ref().err().map(|e| e.to_string()).unwrap_or_default();
-        assert!(
-            r.is_err(),
-            "{name}: a {}-byte file claiming 4e9 items read fine",
-            bytes.len()
-        );
-        assert!(
-            largest < 64 * 1024,
-            "{name}: allocated {largest} bytes at once ({msg})"
-        );
+        assert!(r.is_err(), "{name}: a {}-byte file claiming 4e9 items read fine", bytes.len());
+        assert!(largest < 64 * 1024, "{name}: allocated {largest} bytes at once ({msg})");
         LARGEST.store(0, Ordering::Relaxed);
         assert!(arps::io::read_mesh(bytes, name).is_err() || name.ends_with(".pcd"));
-        assert!(
-            LARGEST.load(Ordering::Relaxed) < 64 * 1024,
-            "{name}: read_mesh allocated too much"
-        );
+        assert!(LARGEST.load(Ordering::Relaxed) < 64 * 1024, "{name}: read_mesh allocated too much");
     }
 }

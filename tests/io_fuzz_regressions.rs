@@ -4,33 +4,16 @@
 
 use std::path::Path;
 
-const PC_NAMES: [&str; 10] = [
-    "a.ply",
-    "a.pcd",
-    "a.xyz",
-    "a.pts",
-    "a.csv",
-    "a.obj",
-    "a.off",
-    "a.stl",
-    "a.txt",
-    "no_extension",
-];
+const PC_NAMES: [&str; 10] =
+    ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension"];
 const MESH_NAMES: [&str; 5] = ["a.ply", "a.obj", "a.off", "a.stl", "no_extension"];
 
 fn inputs(dir: &str) -> Vec<(String, Vec<u8>)> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz").join(dir);
-    let Ok(rd) = std::fs::read_dir(&dir) else {
-        return Vec::new();
-    };
+    let Ok(rd) = std::fs::read_dir(&dir) else { return Vec::new() };
     let mut v: Vec<_> = rd
         .flatten()
-        .map(|e| {
-            (
-                e.file_name().to_string_lossy().into_owned(),
-                std::fs::read(e.path()).unwrap(),
-            )
-        })
+        .map(|e| (e.file_name().to_string_lossy().into_owned(), std::fs::read(e.path()).unwrap()))
         .collect();
     v.sort();
     v
@@ -38,25 +21,16 @@ fn inputs(dir: &str) -> Vec<(String, Vec<u8>)> {
 
 /// The `read_point_cloud` fuzz target's body; `Ok(points)` or the error text.
 fn point_cloud_target(data: &[u8]) -> Result<usize, String> {
-    let Some((&choice, bytes)) = data.split_first() else {
-        return Err("empty".into());
-    };
+    let Some((&choice, bytes)) = data.split_first() else { return Err("empty".into()) };
     let name = PC_NAMES[choice as usize % PC_NAMES.len()];
     let cloud = arps::io::read_point_cloud(bytes, name).map_err(|e| e.to_string())?;
-    let back = arps::io::read_point_cloud(&arps::io::write_ply_binary(&cloud), "b.ply")
-        .expect("own PLY reads back");
-    assert!(back
-        .points
-        .iter()
-        .zip(&cloud.points)
-        .all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits)));
+    let back = arps::io::read_point_cloud(&arps::io::write_ply_binary(&cloud), "b.ply").expect("own PLY reads back");
+    assert!(back.points.iter().zip(&cloud.points).all(|(a, b)| a.map(f32::to_bits) == b.map(f32::to_bits)));
     Ok(cloud.len())
 }
 
 fn mesh_target(data: &[u8]) -> Result<usize, String> {
-    let Some((&choice, bytes)) = data.split_first() else {
-        return Err("empty".into());
-    };
+    let Some((&choice, bytes)) = data.split_first() else { return Err("empty".into()) };
     let name = MESH_NAMES[choice as usize % MESH_NAMES.len()];
     let mesh = arps::io::read_mesh(bytes, name).map_err(|e| e.to_string())?;
     let n = mesh.vertices.len();
@@ -77,11 +51,7 @@ fn seeds_read() {
         assert!(n >= 4, "seed {name}: {n} points");
     }
     for (name, data) in inputs("seeds/read_mesh") {
-        assert_eq!(
-            mesh_target(&data).unwrap_or_else(|e| panic!("seed {name}: {e}")),
-            4,
-            "seed {name}"
-        );
+        assert_eq!(mesh_target(&data).unwrap_or_else(|e| panic!("seed {name}: {e}")), 4, "seed {name}");
     }
 }
 

@@ -28,27 +28,15 @@ fn obj_quads_are_fan_triangulated() {
 #[test]
 fn off_variants_read_the_same_cube() {
     let cube = cube();
-    let verts: String = cube
-        .vertices
-        .iter()
-        .map(|v| format!("{} {} {}\n", v[0], v[1], v[2]))
-        .collect();
-    let coloured: String = cube
-        .vertices
-        .iter()
-        .map(|v| format!("{} {} {} 255 0 0 255\n", v[0], v[1], v[2]))
-        .collect();
+    let verts: String = cube.vertices.iter().map(|v| format!("{} {} {}\n", v[0], v[1], v[2])).collect();
+    let coloured: String = cube.vertices.iter().map(|v| format!("{} {} {} 255 0 0 255\n", v[0], v[1], v[2])).collect();
     let faces = "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 3 7 6 2\n4 0 4 7 3\n";
     let coloured_faces = faces.replace('\n', " 1 0 0\n");
     let variants = [
         format!("OFF\n8 6 12\n{verts}{faces}"),
         format!("# comment\nOFF 8 6 12 # counts on the header line\n\n{verts}{faces}"),
         format!("COFF\n8 6 0\n{coloured}{coloured_faces}"),
-        format!(
-            "OFF8 6 0\r\n{}{}",
-            verts.replace('\n', "\r\n"),
-            faces.replace('\n', "\r\n")
-        ),
+        format!("OFF8 6 0\r\n{}{}", verts.replace('\n', "\r\n"), faces.replace('\n', "\r\n")),
         format!("OFF\n8 6 0\n{verts}{}", faces.replace(' ', "\n")),
     ];
     for text in variants {
@@ -130,49 +118,28 @@ fn sampling_is_area_weighted_and_uniform_inside_a_triangle() {
     let big: Vec<_> = s.points.iter().filter(|p| p[2] == 1.0).collect();
     let mx = big.iter().map(|p| p[0] as f64).sum::<f64>() / big.len() as f64;
     let my = big.iter().map(|p| p[1] as f64).sum::<f64>() / big.len() as f64;
-    assert!(
-        (mx - 1.0).abs() < 0.02 && (my - 2.0 / 3.0).abs() < 0.02,
-        "{mx} {my}"
-    );
+    assert!((mx - 1.0).abs() < 0.02 && (my - 2.0 / 3.0).abs() < 0.02, "{mx} {my}");
     // Every sample inside its triangle: x/3 + y/2 <= 1.
-    assert!(big.iter().all(|p| p[0] >= 0.0
-        && p[1] >= 0.0
-        && p[0] as f64 / 3.0 + p[1] as f64 / 2.0 <= 1.0 + 1e-6));
+    assert!(big.iter().all(|p| p[0] >= 0.0 && p[1] >= 0.0 && p[0] as f64 / 3.0 + p[1] as f64 / 2.0 <= 1.0 + 1e-6));
 }
 
 #[test]
 fn sampling_errors() {
-    let flat = Mesh {
-        vertices: vec![[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]],
-        triangles: vec![[0, 1, 2]],
-    };
+    let flat = Mesh { vertices: vec![[0.0; 3], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]], triangles: vec![[0, 1, 2]] };
     assert_eq!(flat.surface_area(), 0.0);
     let e = flat.sample_surface(10, 0).unwrap_err().to_string();
     assert!(e.contains("positive, finite area"), "{e}");
     assert!(Mesh::default().sample_surface(10, 0).is_err());
-    let nan = Mesh {
-        vertices: vec![[f32::NAN; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-        triangles: vec![[0, 1, 2]],
-    };
+    let nan = Mesh { vertices: vec![[f32::NAN; 3], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], triangles: vec![[0, 1, 2]] };
     assert!(nan.sample_surface(10, 0).is_err());
-    let bad = Mesh {
-        vertices: vec![[0.0; 3]],
-        triangles: vec![[0, 0, 5]],
-    };
+    let bad = Mesh { vertices: vec![[0.0; 3]], triangles: vec![[0, 0, 5]] };
     let e = bad.sample_surface(10, 0).unwrap_err().to_string();
-    assert!(
-        e.contains("triangle 0") && e.contains("out of range"),
-        "{e}"
-    );
+    assert!(e.contains("triangle 0") && e.contains("out of range"), "{e}");
     assert!(cube().sample_surface(0, 0).unwrap().is_empty());
 }
 
 #[test]
 fn faces_with_fewer_than_three_corners_are_dropped() {
-    let m = read_mesh(
-        b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\nf 1 2 3\nl 1 2\n",
-        "a.obj",
-    )
-    .unwrap();
+    let m = read_mesh(b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\nf 1 2 3\nl 1 2\n", "a.obj").unwrap();
     assert_eq!(m.triangles, vec![[0, 1, 2]]);
 }

@@ -4,9 +4,7 @@ use arps::io::{self, detect_format, read_mesh, read_point_cloud, Format};
 use arps::PointCloud;
 
 fn fixture(name: &str) -> Vec<u8> {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures/formats")
-        .join(name);
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/formats").join(name);
     std::fs::read(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
@@ -19,14 +17,7 @@ fn close(a: [f32; 3], b: [f32; 3]) -> bool {
 }
 
 fn finite_bounds(c: &PointCloud) -> ([f32; 3], [f32; 3]) {
-    PointCloud::new(
-        c.points
-            .iter()
-            .copied()
-            .filter(|p| p.iter().all(|v| v.is_finite()))
-            .collect(),
-    )
-    .bounds()
+    PointCloud::new(c.points.iter().copied().filter(|p| p.iter().all(|v| v.is_finite())).collect()).bounds()
 }
 
 #[test]
@@ -43,11 +34,7 @@ fn pcd_binary_compressed_milk() {
 fn pcd_organized_compressed_keeps_nan() {
     let c = read("table_scene_80x60_compressed.pcd");
     assert_eq!(c.len(), 80 * 60);
-    let nan = c
-        .points
-        .iter()
-        .filter(|p| p.iter().any(|v| v.is_nan()))
-        .count();
+    let nan = c.points.iter().filter(|p| p.iter().any(|v| v.is_nan())).count();
     assert_eq!(nan, 1577);
     assert!(c.points[0].iter().all(|v| v.is_nan()));
     assert!(close(c.points[178], [-0.36877, -0.43496, 2.0228]));
@@ -63,15 +50,9 @@ fn pcd_binary_and_ascii_velodyne_agree() {
     let b = read("velodyne_2000_binary.pcd");
     let a = read("velodyne_2000_ascii.pcd");
     assert_eq!(b.len(), 2000);
-    assert!(close(
-        b.points[0],
-        [0.003_139_891_7, 2.570_035, -1.524_156_8]
-    ));
+    assert!(close(b.points[0], [0.003_139_891_7, 2.570_035, -1.524_156_8]));
     assert!(close(b.points[1999], [0.509_285_45, 2.785_830_7, 0.0]));
-    assert_eq!(
-        a, b,
-        "ascii (9 significant digits) and binary give the same f32 values"
-    );
+    assert_eq!(a, b, "ascii (9 significant digits) and binary give the same f32 values");
 }
 
 #[test]
@@ -79,10 +60,7 @@ fn pcd_binary_with_normals_and_rgb() {
     let c = read("cloud_bin_0_binary.pcd");
     assert_eq!(c.len(), 3903);
     assert!(close(c.points[0], [2.848_907_7, 0.031_390_607, -1.747_166]));
-    assert!(close(
-        c.points[3902],
-        [2.832_442_3, 0.349_908_68, -1.441_496_7]
-    ));
+    assert!(close(c.points[3902], [2.832_442_3, 0.349_908_68, -1.441_496_7]));
 }
 
 #[test]
@@ -91,15 +69,9 @@ fn ply_binary_with_normals_colours_faces() {
     let c = read(name);
     assert_eq!(c.len(), 2000);
     assert!(close(c.points[0], [0.847_656_25, 2.679_497_7, 1.597_656_3]));
-    assert!(close(
-        c.points[1999],
-        [0.957_031_25, 1.121_093_8, 1.315_260_6]
-    ));
+    assert!(close(c.points[1999], [0.957_031_25, 1.121_093_8, 1.315_260_6]));
     let (lo, hi) = c.bounds();
-    assert!(
-        close(lo, [0.839_843_75, 1.004_519_7, 1.308_593_8])
-            && close(hi, [0.957_031_25, 2.813_548, 1.608_872_4])
-    );
+    assert!(close(lo, [0.839_843_75, 1.004_519_7, 1.308_593_8]) && close(hi, [0.957_031_25, 2.813_548, 1.608_872_4]));
     let m = read_mesh(&fixture(name), name).unwrap();
     assert_eq!(m.vertices, c.points);
     assert_eq!(m.triangles.len(), 3270);
@@ -162,10 +134,7 @@ fn csv_with_header_row() {
     assert!(close(c.points[0], [-3.5376, 0.639553, -1.37678]));
     assert!(close(c.points[999], [-4.08528, 2.11434, -1.64961]));
     let (lo, hi) = c.bounds();
-    assert!(
-        close([lo[0], hi[0], lo[2]], [-51.5864, 0.015_841_9, -6.32885])
-            && (hi[2] - 10.9596).abs() < 1e-5
-    );
+    assert!(close([lo[0], hi[0], lo[2]], [-51.5864, 0.015_841_9, -6.32885]) && (hi[2] - 10.9596).abs() < 1e-5);
 }
 
 #[test]
@@ -183,16 +152,8 @@ fn sniffing_without_extension_matches_extension() {
     ] {
         let bytes = fixture(name);
         let by_ext = detect_format(&bytes, name).unwrap();
-        assert_eq!(
-            detect_format(&bytes, "upload.bin").unwrap(),
-            by_ext,
-            "{name}"
-        );
-        assert_eq!(
-            read_point_cloud(&bytes, "upload").unwrap(),
-            read(name),
-            "{name}"
-        );
+        assert_eq!(detect_format(&bytes, "upload.bin").unwrap(), by_ext, "{name}");
+        assert_eq!(read_point_cloud(&bytes, "upload").unwrap(), read(name), "{name}");
     }
 }
 
@@ -219,8 +180,6 @@ fn extensions_are_case_insensitive() {
 fn read_path_uses_the_file_name() {
     let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/formats/ballA.off");
     assert_eq!(io::read_path(&p).unwrap().len(), 1900);
-    let err = io::read_path(std::path::Path::new("/nonexistent/x.ply"))
-        .unwrap_err()
-        .to_string();
+    let err = io::read_path(std::path::Path::new("/nonexistent/x.ply")).unwrap_err().to_string();
     assert!(err.contains("/nonexistent/x.ply"), "{err}");
 }

@@ -8,9 +8,7 @@ use rand::Rng;
 /// 500 points on a 25 x 20 grid, with a few NaN "no return" points and extreme values.
 fn cloud() -> PointCloud {
     let mut rng = arps::sampling::rng(7);
-    let mut pts: Vec<[f32; 3]> = (0..500)
-        .map(|_| [0, 1, 2].map(|_| rng.random_range(-100.0f32..100.0)))
-        .collect();
+    let mut pts: Vec<[f32; 3]> = (0..500).map(|_| [0, 1, 2].map(|_| rng.random_range(-100.0f32..100.0))).collect();
     pts[3] = [f32::NAN; 3];
     pts[77] = [f32::NAN; 3];
     pts[10] = [1e-30, -0.0, 3.4e38];
@@ -52,28 +50,11 @@ fn write_ply(c: &PointCloud, enc: Ply) -> Vec<u8> {
         Ply::Ascii => {
             let mut s = String::new();
             for f in faces {
-                s += &format!(
-                    "{} {} 0.5\n",
-                    f.len(),
-                    f.iter()
-                        .map(|i| i.to_string())
-                        .collect::<Vec<_>>()
-                        .join(" ")
-                );
+                s += &format!("{} {} 0.5\n", f.len(), f.iter().map(|i| i.to_string()).collect::<Vec<_>>().join(" "));
             }
             for (i, p) in c.points.iter().enumerate() {
-                let tags = (0..i % 3)
-                    .map(|k| format!(" {}", k as i32 - 1))
-                    .collect::<String>();
-                s += &format!(
-                    "{} {} 0.25 {}{tags} {} {} {}\n",
-                    i % 256,
-                    p[0] as f64,
-                    i % 3,
-                    p[1],
-                    i % 65536,
-                    p[2]
-                );
+                let tags = (0..i % 3).map(|k| format!(" {}", k as i32 - 1)).collect::<String>();
+                s += &format!("{} {} 0.25 {}{tags} {} {} {}\n", i % 256, p[0] as f64, i % 3, p[1], i % 65536, p[2]);
             }
             s += "0 1\n";
             out.extend_from_slice(s.as_bytes());
@@ -133,14 +114,8 @@ fn write_ply_binary_round_trips() {
     let c = cloud();
     let bytes = write_ply_binary(&c);
     assert!(bytes.starts_with(b"ply\nformat binary_little_endian 1.0\n"));
-    assert_eq!(
-        bits(&read_point_cloud(&bytes, "out.ply").unwrap()),
-        bits(&c)
-    );
-    assert_eq!(
-        bits(&read_point_cloud(&bytes, "no-extension").unwrap()),
-        bits(&c)
-    );
+    assert_eq!(bits(&read_point_cloud(&bytes, "out.ply").unwrap()), bits(&c));
+    assert_eq!(bits(&read_point_cloud(&bytes, "no-extension").unwrap()), bits(&c));
     let empty = write_ply_binary(&PointCloud::default());
     assert!(read_point_cloud(&empty, "e.ply").unwrap().is_empty());
 }
@@ -184,10 +159,7 @@ fn write_pcd(c: &PointCloud, data: Pcd) -> Vec<u8> {
     match data {
         Pcd::Ascii => {
             for (i, p) in c.points.iter().enumerate() {
-                out.extend_from_slice(
-                    format!("4.2e6 {} {} 0 0 0 {} -0.5 {}\n", p[0], p[1] as f64, p[2], i)
-                        .as_bytes(),
-                );
+                out.extend_from_slice(format!("4.2e6 {} {} 0 0 0 {} -0.5 {}\n", p[0], p[1] as f64, p[2], i).as_bytes());
             }
         }
         Pcd::Binary => {
@@ -265,10 +237,7 @@ fn pcd_variants_read_back_identical() {
         let bytes = write_pcd(&c, data);
         let back = read_point_cloud(&bytes, "cloud.pcd").unwrap_or_else(|e| panic!("{e}"));
         assert_eq!(bits(&back), bits(&c));
-        assert_eq!(
-            bits(&read_point_cloud(&bytes, "sniffed").unwrap()),
-            bits(&c)
-        );
+        assert_eq!(bits(&read_point_cloud(&bytes, "sniffed").unwrap()), bits(&c));
     }
 }
 
@@ -284,25 +253,18 @@ fn pcd_compressed_actually_compresses_repetitive_fields() {
 fn text_variants_read_back_identical() {
     let c = cloud();
     let rows = |sep: &str| -> String {
-        c.points
-            .iter()
-            .map(|p| format!("{}{sep}{}{sep}{}{sep}7{sep}8\n", p[0], p[1], p[2]))
-            .collect()
+        c.points.iter().map(|p| format!("{}{sep}{}{sep}{}{sep}7{sep}8\n", p[0], p[1], p[2])).collect()
     };
     let variants = [
         ("c.xyz", rows(" ")),
         ("c.txt", format!("# exported\n{}", rows("\t"))),
         ("c.pts", format!("{}\n{}", c.len(), rows(" "))),
         ("c.csv", format!("x,y,z,i,j\n{}", rows(","))),
-        (
-            "c.csv",
-            format!("X;Y;Z;A;B\r\n{}", rows(";").replace('\n', "\r\n")),
-        ),
+        ("c.csv", format!("X;Y;Z;A;B\r\n{}", rows(";").replace('\n', "\r\n"))),
         ("c.csv", format!("x, y, z\n\n{}", rows(", "))),
     ];
     for (name, text) in variants {
-        let back =
-            read_point_cloud(text.as_bytes(), name).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let back = read_point_cloud(text.as_bytes(), name).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(bits(&back), bits(&c), "{name}");
     }
 }

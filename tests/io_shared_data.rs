@@ -11,23 +11,16 @@ fn shared_root() -> Option<PathBuf> {
         Some(beside),
         Some(PathBuf::from("/work/shared/data")),
     ];
-    candidates
-        .into_iter()
-        .flatten()
-        .find(|p| p.join("formats").is_dir())
+    candidates.into_iter().flatten().find(|p| p.join("formats").is_dir())
 }
 
 fn files(dir: &Path, out: &mut Vec<PathBuf>) {
-    let Ok(rd) = std::fs::read_dir(dir) else {
-        return;
-    };
+    let Ok(rd) = std::fs::read_dir(dir) else { return };
     for e in rd.flatten() {
         let p = e.path();
         if p.is_dir() {
             files(&p, out);
-        } else if arps::io::Format::from_file_name(&p.file_name().unwrap().to_string_lossy())
-            .is_some()
-        {
+        } else if arps::io::Format::from_file_name(&p.file_name().unwrap().to_string_lossy()).is_some() {
             out.push(p);
         }
     }
@@ -50,18 +43,10 @@ fn every_shared_file_reads() {
         let format = arps::io::detect_format(&bytes, &name).unwrap();
         match arps::io::read_point_cloud(&bytes, &name) {
             Ok(c) => {
-                let nan = c
-                    .points
-                    .iter()
-                    .filter(|p| p.iter().any(|v| !v.is_finite()))
-                    .count();
+                let nan = c.points.iter().filter(|p| p.iter().any(|v| !v.is_finite())).count();
                 let mesh = if format.has_faces() {
                     match arps::io::read_mesh(&bytes, &name) {
-                        Ok(m) => format!(
-                            "{} triangles, area {:.4}",
-                            m.triangles.len(),
-                            m.surface_area()
-                        ),
+                        Ok(m) => format!("{} triangles, area {:.4}", m.triangles.len(), m.surface_area()),
                         Err(e) => {
                             failures.push(format!("{}: mesh: {e}", p.display()));
                             String::new()
@@ -70,22 +55,14 @@ fn every_shared_file_reads() {
                 } else {
                     String::new()
                 };
-                eprintln!(
-                    "{:?} {}: {} points ({nan} non-finite) {mesh}",
-                    format,
-                    p.display(),
-                    c.len()
-                );
+                eprintln!("{:?} {}: {} points ({nan} non-finite) {mesh}", format, p.display(), c.len());
             }
             Err(e) => failures.push(format!("{}: {e}", p.display())),
         }
         // Sniffing agrees with the extension.
         if let Ok(sniffed) = arps::io::detect_format(&bytes, "noext") {
             if sniffed != format && !(format == arps::io::Format::Xyz) {
-                failures.push(format!(
-                    "{}: sniffed as {sniffed:?}, extension says {format:?}",
-                    p.display()
-                ));
+                failures.push(format!("{}: sniffed as {sniffed:?}, extension says {format:?}", p.display()));
             }
         } else {
             failures.push(format!("{}: could not sniff", p.display()));
@@ -97,10 +74,5 @@ fn every_shared_file_reads() {
         "ant-half.ply: mesh: PLY parse error: the file ends after 259 of the 912 'face' lines",
     ];
     failures.retain(|f| !expected.iter().any(|e| f.contains(e)));
-    assert!(
-        failures.is_empty(),
-        "{} failures:\n{}",
-        failures.len(),
-        failures.join("\n")
-    );
+    assert!(failures.is_empty(), "{} failures:\n{}", failures.len(), failures.join("\n"));
 }

@@ -2,9 +2,7 @@
 
 use arps::gmr;
 use arps::model::{ModelConfig, ModelWorkspace, Reference};
-use arps::transform::{
-    check_rigid, euler_xyz, from_rotation_translation, rotation_error_deg, translation_error,
-};
+use arps::transform::{check_rigid, euler_xyz, from_rotation_translation, rotation_error_deg, translation_error};
 use arps::{Model, Weights};
 use nalgebra::{Matrix4, Vector3};
 
@@ -16,19 +14,13 @@ fn blob(n: usize, phase: f32) -> Vec<[f32; 3]> {
             let u = (t.fract()) * std::f32::consts::TAU;
             let v = ((i as f32 + 0.5) / n as f32 * 2.0 - 1.0).acos();
             let r = 0.8 + 0.15 * (3.0 * u).sin() * (2.0 * v).cos();
-            [
-                r * v.sin() * u.cos(),
-                r * v.sin() * u.sin() * 0.7,
-                r * v.cos(),
-            ]
+            [r * v.sin() * u.cos(), r * v.sin() * u.sin() * 0.7, r * v.cos()]
         })
         .collect()
 }
 
 fn shift(pts: &[[f32; 3]], d: [f32; 3]) -> Vec<[f32; 3]> {
-    pts.iter()
-        .map(|p| [p[0] + d[0], p[1] + d[1], p[2] + d[2]])
-        .collect()
+    pts.iter().map(|p| [p[0] + d[0], p[1] + d[1], p[2] + d[2]]).collect()
 }
 
 fn model(reference: Reference) -> Model {
@@ -41,10 +33,7 @@ fn model(reference: Reference) -> Model {
 fn network_transform(m: &Model, s: &[[f32; 3]], t: &[[f32; 3]]) -> Matrix4<f64> {
     let out = m.forward(s, t, &mut ModelWorkspace::default()).unwrap();
     let j = m.config.gaussians;
-    gmr::solve(
-        &gmr::gmm_params(s, &out.gamma_source, j),
-        &gmr::gmm_params(t, &out.gamma_target, j),
-    )
+    gmr::solve(&gmr::gmm_params(s, &out.gamma_source, j), &gmr::gmm_params(t, &out.gamma_target, j))
 }
 
 #[test]
@@ -56,11 +45,7 @@ fn memberships_are_distributions_and_deterministic() {
         let a = m.forward(&s, &t, &mut ws).unwrap();
         assert_eq!(a.gamma_source.len(), 64 * m.config.gaussians);
         assert_eq!(a.gamma_target.len(), 80 * m.config.gaussians);
-        for row in a
-            .gamma_source
-            .chunks(m.config.gaussians)
-            .chain(a.gamma_target.chunks(m.config.gaussians))
-        {
+        for row in a.gamma_source.chunks(m.config.gaussians).chain(a.gamma_target.chunks(m.config.gaussians)) {
             let sum: f32 = row.iter().sum();
             assert!((sum - 1.0).abs() < 1e-5 && row.iter().all(|v| v.is_finite() && *v >= 0.0));
         }
@@ -80,18 +65,9 @@ fn memberships_do_not_depend_on_where_each_cloud_sits() {
     let (s, t) = (blob(64, 0.0), blob(64, 0.4));
     let a = m.forward(&s, &t, &mut ModelWorkspace::default()).unwrap();
     let b = m
-        .forward(
-            &shift(&s, [0.3, -0.2, 0.1]),
-            &shift(&t, [-0.4, 0.25, 0.05]),
-            &mut ModelWorkspace::default(),
-        )
+        .forward(&shift(&s, [0.3, -0.2, 0.1]), &shift(&t, [-0.4, 0.25, 0.05]), &mut ModelWorkspace::default())
         .unwrap();
-    for (x, y) in a
-        .gamma_source
-        .iter()
-        .zip(&b.gamma_source)
-        .chain(a.gamma_target.iter().zip(&b.gamma_target))
-    {
+    for (x, y) in a.gamma_source.iter().zip(&b.gamma_source).chain(a.gamma_target.iter().zip(&b.gamma_target)) {
         assert!((x - y).abs() < 1e-4, "{x} vs {y}");
     }
 }
@@ -101,33 +77,17 @@ fn network_plus_gmr_is_translation_equivariant_and_proper() {
     for reference in [Reference::Soft, Reference::TopH] {
         let m = model(reference);
         let s = blob(64, 0.0);
-        let motion =
-            from_rotation_translation(&euler_xyz(0.3, -0.2, 0.25), &Vector3::new(0.1, 0.2, -0.1));
-        let t: Vec<[f32; 3]> = blob(64, 0.2)
-            .iter()
-            .map(|&p| arps::transform::apply(&motion, p))
-            .collect();
+        let motion = from_rotation_translation(&euler_xyz(0.3, -0.2, 0.25), &Vector3::new(0.1, 0.2, -0.1));
+        let t: Vec<[f32; 3]> = blob(64, 0.2).iter().map(|&p| arps::transform::apply(&motion, p)).collect();
         let base = network_transform(&m, &s, &t);
         check_rigid(&base, 1e-6).unwrap();
         // translate both inputs by the same vector a: T' = Tr(a) T Tr(-a)
         let a = Vector3::new(0.37, -0.21, 0.44);
-        let moved = network_transform(
-            &m,
-            &shift(&s, [0.37, -0.21, 0.44]),
-            &shift(&t, [0.37, -0.21, 0.44]),
-        );
+        let moved = network_transform(&m, &shift(&s, [0.37, -0.21, 0.44]), &shift(&t, [0.37, -0.21, 0.44]));
         let tr = |v: Vector3<f64>| from_rotation_translation(&nalgebra::Matrix3::identity(), &v);
         let expected = tr(a) * base * tr(-a);
-        assert!(
-            rotation_error_deg(&moved, &expected) < 1e-3,
-            "{}",
-            rotation_error_deg(&moved, &expected)
-        );
-        assert!(
-            translation_error(&moved, &expected) < 1e-4,
-            "{}",
-            translation_error(&moved, &expected)
-        );
+        assert!(rotation_error_deg(&moved, &expected) < 1e-3, "{}", rotation_error_deg(&moved, &expected));
+        assert!(translation_error(&moved, &expected) < 1e-4, "{}", translation_error(&moved, &expected));
         check_rigid(&moved, 1e-6).unwrap();
     }
 }
@@ -135,14 +95,7 @@ fn network_plus_gmr_is_translation_equivariant_and_proper() {
 #[test]
 fn too_few_points_is_an_error() {
     let m = model(Reference::Soft);
-    let e = m
-        .forward(
-            &blob(10, 0.0),
-            &blob(64, 0.0),
-            &mut ModelWorkspace::default(),
-        )
-        .unwrap_err()
-        .to_string();
+    let e = m.forward(&blob(10, 0.0), &blob(64, 0.0), &mut ModelWorkspace::default()).unwrap_err().to_string();
     assert!(e.contains("source has 10 points"), "{e}");
 }
 

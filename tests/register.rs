@@ -17,20 +17,8 @@ fn recovers_a_known_transform_with_icp() {
     let truth = motion([10.0, -6.0, 8.0], [0.05, -0.03, 0.04]);
     let target = bumpy_surface(3000, 0.37).transformed(&truth);
     for icp in [IcpKind::Plane, IcpKind::Point] {
-        let r = registrar()
-            .register(
-                &source,
-                &target,
-                &Options {
-                    icp,
-                    ..Options::default()
-                },
-            )
-            .unwrap();
-        let (re, te) = (
-            rotation_error_deg(&r.T_target_source, &truth),
-            translation_error(&r.T_target_source, &truth),
-        );
+        let r = registrar().register(&source, &target, &Options { icp, ..Options::default() }).unwrap();
+        let (re, te) = (rotation_error_deg(&r.T_target_source, &truth), translation_error(&r.T_target_source, &truth));
         assert!(re < 0.5 && te < 0.01, "{icp:?}: {re} deg, {te}");
         assert!(r.fitness > 0.9, "{icp:?}: fitness {}", r.fitness);
         assert!(r.icp_iterations > 0);
@@ -45,9 +33,7 @@ fn partial_overlap_pair_with_icp() {
     let truth = motion([-12.0, 9.0, 5.0], [0.1, 0.05, -0.08]);
     let source = crop(&full, [1.0, 0.2, 0.0], 0.75);
     let target = crop(&bumpy_surface(6000, 0.5), [-0.3, 1.0, 0.2], 0.75).transformed(&truth);
-    let r = registrar()
-        .register(&source, &target, &Options::default())
-        .unwrap();
+    let r = registrar().register(&source, &target, &Options::default()).unwrap();
     let re = rotation_error_deg(&r.T_target_source, &truth);
     let te = translation_error(&r.T_target_source, &truth);
     assert!(re < 1.0 && te < 0.02, "{re} deg, {te}");
@@ -66,18 +52,10 @@ fn same_seed_same_output_and_units_are_respected() {
     assert_eq!(a.fitness, b.fitness);
     // millimetres instead of metres: same rotation, translation x 1000
     let scale = nalgebra::Matrix4::new_scaling(1000.0);
-    let mm = reg
-        .register(
-            &source.transformed(&scale),
-            &target.transformed(&scale),
-            &Options::default(),
-        )
-        .unwrap();
+    let mm = reg.register(&source.transformed(&scale), &target.transformed(&scale), &Options::default()).unwrap();
     assert!(rotation_error_deg(&mm.T_target_source, &a.T_target_source) < 0.05);
-    let (ta, tm) = (
-        arps::transform::translation(&a.T_target_source),
-        arps::transform::translation(&mm.T_target_source),
-    );
+    let (ta, tm) =
+        (arps::transform::translation(&a.T_target_source), arps::transform::translation(&mm.T_target_source));
     assert!((tm / 1000.0 - ta).norm() < 1e-3, "{ta} vs {tm}");
     assert!((mm.inlier_rmse / 1000.0 - a.inlier_rmse).abs() < 1e-3);
 }
@@ -91,33 +69,16 @@ fn initial_transform_and_icp_only() {
     let guess = motion([75.0, 3.0, 28.0], [0.48, 0.02, 0.18]);
     let rows = arps::transform::to_rows(&guess);
     for network in [true, false] {
-        let options = Options {
-            initial_transform: Some(rows),
-            network,
-            ..Options::default()
-        };
+        let options = Options { initial_transform: Some(rows), network, ..Options::default() };
         let r = registrar().register(&source, &target, &options).unwrap();
         let re = rotation_error_deg(&r.T_target_source, &truth);
         assert!(re < 0.5, "network {network}: {re}");
     }
     // ICP alone from identity: the network transform is the identity
     let r = registrar()
-        .register(
-            &source,
-            &target,
-            &Options {
-                network: false,
-                icp: IcpKind::Off,
-                ..Options::default()
-            },
-        )
+        .register(&source, &target, &Options { network: false, icp: IcpKind::Off, ..Options::default() })
         .unwrap();
-    assert!(
-        (r.T_target_source_network - nalgebra::Matrix4::identity())
-            .abs()
-            .max()
-            < 1e-9
-    );
+    assert!((r.T_target_source_network - nalgebra::Matrix4::identity()).abs().max() < 1e-9);
     assert_eq!(r.icp_iterations, 0);
 }
 
@@ -128,73 +89,28 @@ fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
     let mut nan = good.clone();
     nan.points[42][2] = f32::NAN;
     let cases: Vec<(PointCloud, PointCloud, Options, &str)> = vec![
-        (
-            nan.clone(),
-            good.clone(),
-            Options::default(),
-            "source point 42",
-        ),
-        (
-            good.clone(),
-            PointCloud::new(vec![[0.0, 0.0, 0.0]; 5]),
-            Options::default(),
-            "target has 5 finite points",
-        ),
-        (
-            good.clone(),
-            PointCloud::default(),
-            Options::default(),
-            "target has 0",
-        ),
-        (
-            good.clone(),
-            PointCloud::new(vec![[1.0, 2.0, 3.0]; 100]),
-            Options::default(),
-            "zero extent",
-        ),
+        (nan.clone(), good.clone(), Options::default(), "source point 42"),
+        (good.clone(), PointCloud::new(vec![[0.0, 0.0, 0.0]; 5]), Options::default(), "target has 5 finite points"),
+        (good.clone(), PointCloud::default(), Options::default(), "target has 0"),
+        (good.clone(), PointCloud::new(vec![[1.0, 2.0, 3.0]; 100]), Options::default(), "zero extent"),
+        (good.clone(), good.clone(), Options { network_points: Some(3), ..Options::default() }, "networkPoints"),
         (
             good.clone(),
             good.clone(),
-            Options {
-                network_points: Some(3),
-                ..Options::default()
-            },
-            "networkPoints",
-        ),
-        (
-            good.clone(),
-            good.clone(),
-            Options {
-                max_correspondence_distance: Some(-1.0),
-                ..Options::default()
-            },
+            Options { max_correspondence_distance: Some(-1.0), ..Options::default() },
             "maxCorrespondenceDistance",
         ),
         (
             good.clone(),
             good.clone(),
-            Options {
-                max_correspondence_distance: Some(f64::NAN),
-                ..Options::default()
-            },
+            Options { max_correspondence_distance: Some(f64::NAN), ..Options::default() },
             "maxCorrespondenceDistance",
         ),
+        (good.clone(), good.clone(), Options { voxel_size: Some(-0.1), ..Options::default() }, "voxelSize"),
         (
             good.clone(),
             good.clone(),
-            Options {
-                voxel_size: Some(-0.1),
-                ..Options::default()
-            },
-            "voxelSize",
-        ),
-        (
-            good.clone(),
-            good.clone(),
-            Options {
-                icp_max_iterations: 1_000_000,
-                ..Options::default()
-            },
+            Options { icp_max_iterations: 1_000_000, ..Options::default() },
             "icpMaxIterations",
         ),
         (
@@ -221,32 +137,15 @@ fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
         assert_eq!(again.T_target_source, expected.T_target_source);
     }
     // dropping non-finite points is an explicit choice
-    assert!(reg
-        .register(
-            &nan,
-            &good,
-            &Options {
-                non_finite: NonFinite::Drop,
-                ..Options::default()
-            }
-        )
-        .is_ok());
+    assert!(reg.register(&nan, &good, &Options { non_finite: NonFinite::Drop, ..Options::default() }).is_ok());
 }
 
 #[test]
 fn small_clouds_are_padded_with_a_warning() {
     let source = bumpy_surface(200, 0.0);
     let target = bumpy_surface(200, 0.1);
-    let r = registrar()
-        .register(&source, &target, &Options::default())
-        .unwrap();
-    assert!(
-        r.warnings
-            .iter()
-            .any(|w| w.contains("fewer than the network's")),
-        "{:?}",
-        r.warnings
-    );
+    let r = registrar().register(&source, &target, &Options::default()).unwrap();
+    assert!(r.warnings.iter().any(|w| w.contains("fewer than the network's")), "{:?}", r.warnings);
 }
 
 #[test]
@@ -255,8 +154,19 @@ fn options_deserialize_with_defaults_and_reject_unknown_fields() {
     assert_eq!(o.icp, IcpKind::Point);
     assert_eq!(o.seed, 3);
     assert_eq!(o.icp_max_iterations, Options::default().icp_max_iterations);
-    let e = serde_json::from_str::<Options>(r#"{"icpp": "point"}"#)
-        .unwrap_err()
-        .to_string();
+    let e = serde_json::from_str::<Options>(r#"{"icpp": "point"}"#).unwrap_err().to_string();
     assert!(e.contains("icpp"), "{e}");
+}
+
+#[test]
+fn progress_reports_each_stage_in_order() {
+    use arps::Stage;
+    let (s, t) = (bumpy_surface(800, 0.0), bumpy_surface(800, 0.2));
+    let mut seen = Vec::new();
+    registrar().register_with_progress(&s, &t, &Options::default(), &mut |st| seen.push(st)).unwrap();
+    assert_eq!(seen, vec![Stage::Preparing, Stage::Network, Stage::Refining]);
+    seen.clear();
+    let icp_only = Options { network: false, ..Options::default() };
+    registrar().register_with_progress(&s, &t, &icp_only, &mut |st| seen.push(st)).unwrap();
+    assert_eq!(seen, vec![Stage::Preparing, Stage::Refining]);
 }

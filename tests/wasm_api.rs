@@ -30,10 +30,7 @@ fn register_ok(r: &mut Registrar, options: JsValue) -> JsValue {
 fn still_works(r: &mut Registrar) {
     let res = register_ok(r, JsValue::UNDEFINED);
     let (rot, tr) = errors(&res);
-    assert!(
-        rot < 1.0 && tr < 0.02,
-        "after an error: rotation error {rot:.3} deg, translation error {tr:.4}"
-    );
+    assert!(rot < 1.0 && tr < 0.02, "after an error: rotation error {rot:.3} deg, translation error {tr:.4}");
 }
 
 #[wasm_bindgen_test]
@@ -47,33 +44,21 @@ fn known_transform_is_recovered_with_default_options() {
     let res = register_ok(&mut r, JsValue::UNDEFINED);
     let (rot, tr) = errors(&res);
     assert!(rot < 1.0, "rotation error {rot:.3} deg");
-    assert!(
-        tr < 0.02,
-        "translation error {tr:.4} (clouds are ~2 units across)"
-    );
+    assert!(tr < 0.02, "translation error {tr:.4} (clouds are ~2 units across)");
     // The rest of the result object.
     let net = matrix(&res, "networkMatrix");
-    assert!(
-        arps::transform::check_rigid(&net, 1e-3).is_ok(),
-        "networkMatrix is rigid: {net}"
-    );
+    assert!(arps::transform::check_rigid(&net, 1e-3).is_ok(), "networkMatrix is rigid: {net}");
     let fitness = num(&res, "fitness");
     assert!((0.5..=1.0).contains(&fitness), "fitness {fitness}");
     let rmse = num(&res, "inlierRmse");
-    assert!(
-        rmse > 0.0 && rmse < num(&res, "maxCorrespondenceDistance"),
-        "inlierRmse {rmse}"
-    );
+    assert!(rmse > 0.0 && rmse < num(&res, "maxCorrespondenceDistance"), "inlierRmse {rmse}");
     assert!(num(&res, "iterations") >= 1.0);
     assert!(get(&res, "converged").as_bool().is_some());
     let timings = get(&res, "timingsMs");
     for k in ["preprocessMs", "networkMs", "gmrMs", "icpMs", "totalMs"] {
         assert!(num(&timings, k) >= 0.0, "timingsMs.{k}");
     }
-    assert!(
-        num(&timings, "totalMs") > 0.0,
-        "the performance.now clock is installed"
-    );
+    assert!(num(&timings, "totalMs") > 0.0, "the performance.now clock is installed");
     let _ = strings(&get(&res, "warnings"));
 }
 
@@ -83,10 +68,7 @@ fn empty_and_null_options_mean_defaults_and_results_are_deterministic() {
     let a = register_ok(&mut r, JsValue::UNDEFINED);
     let b = register_ok(&mut r, JsValue::NULL);
     let c = register_ok(&mut r, empty_object());
-    let d = register_ok(
-        &mut r,
-        options(r#"{"seed": 0, "icp": "plane", "icpMaxIterations": 30}"#),
-    );
+    let d = register_ok(&mut r, options(r#"{"seed": 0, "icp": "plane", "icpMaxIterations": 30}"#));
     // `undefined` and `null` fields are "not given" (JS callers spread optional settings).
     let e_opts = options(r#"{"networkPoints": null, "maxCorrespondenceDistance": null}"#);
     js_sys::Reflect::set(&e_opts, &"seed".into(), &JsValue::UNDEFINED).unwrap();
@@ -104,21 +86,11 @@ fn options_are_honoured() {
     let off = register_ok(&mut r, options(r#"{"icp": "off"}"#));
     assert_eq!(num(&off, "iterations"), 0.0);
     assert_eq!(get(&off, "converged").as_bool(), Some(false));
-    assert_eq!(
-        matrix(&off, "matrix"),
-        matrix(&off, "networkMatrix"),
-        "with ICP off the answer is the network's"
-    );
+    assert_eq!(matrix(&off, "matrix"), matrix(&off, "networkMatrix"), "with ICP off the answer is the network's");
 
-    let point = register_ok(
-        &mut r,
-        options(r#"{"icp": "point", "seed": 7, "networkPoints": 256}"#),
-    );
+    let point = register_ok(&mut r, options(r#"{"icp": "point", "seed": 7, "networkPoints": 256}"#));
     let (rot, tr) = errors(&point);
-    assert!(
-        rot < 1.0 && tr < 0.02,
-        "point-to-point: {rot:.3} deg, {tr:.4}"
-    );
+    assert!(rot < 1.0 && tr < 0.02, "point-to-point: {rot:.3} deg, {tr:.4}");
 
     // ICP alone (the classical baseline): the coarse estimate is the identity.
     let icp_only = register_ok(&mut r, options(r#"{"network": false}"#));
@@ -130,47 +102,29 @@ fn options_are_honoured() {
     let (rot, tr) = errors(&icp_only);
     assert!(rot < 1.0 && tr < 0.02, "network off: {rot:.3} deg, {tr:.4}");
 
-    let d = register_ok(
-        &mut r,
-        options(r#"{"maxCorrespondenceDistance": 0.08, "voxelSize": 0}"#),
-    );
+    let d = register_ok(&mut r, options(r#"{"maxCorrespondenceDistance": 0.08, "voxelSize": 0}"#));
     assert!((num(&d, "maxCorrespondenceDistance") - 0.08).abs() < 1e-9);
 
     // initialTransform as the core's row-major rows, and as a column-major Float32Array(16)
     // (three.js `matrix.elements`, or a previous result's `matrix`); both start at the answer.
     let gt = ground_truth();
     let rows = serde_json::to_string(&arps::transform::to_rows(&gt)).unwrap();
-    let from_rows = register_ok(
-        &mut r,
-        options(&format!(r#"{{"initialTransform": {rows}}}"#)),
-    );
+    let from_rows = register_ok(&mut r, options(&format!(r#"{{"initialTransform": {rows}}}"#)));
     let (rot, tr) = errors(&from_rows);
-    assert!(
-        rot < 1.0 && tr < 0.02,
-        "initialTransform rows: {rot:.3} deg, {tr:.4}"
-    );
+    assert!(rot < 1.0 && tr < 0.02, "initialTransform rows: {rot:.3} deg, {tr:.4}");
     let opts = options("{}");
     js_sys::Reflect::set(&opts, &"initialTransform".into(), &column_major_js(&gt)).unwrap();
     let from_cm = register_ok(&mut r, opts.clone());
     assert!(
-        (matrix(&from_rows, "matrix") - matrix(&from_cm, "matrix"))
-            .abs()
-            .max()
-            < 1e-5,
+        (matrix(&from_rows, "matrix") - matrix(&from_cm, "matrix")).abs().max() < 1e-5,
         "rows and column-major (f32) give the same, up to f32 rounding of the initial guess"
     );
-    assert!(
-        get(&opts, "initialTransform").is_instance_of::<Float32Array>(),
-        "the caller's object is not modified"
-    );
+    assert!(get(&opts, "initialTransform").is_instance_of::<Float32Array>(), "the caller's object is not modified");
     let flat: Array = transform_flat_array(&gt);
     js_sys::Reflect::set(&opts, &"initialTransform".into(), &flat).unwrap();
     let from_array = register_ok(&mut r, opts);
     assert!(
-        (matrix(&from_rows, "matrix") - matrix(&from_array, "matrix"))
-            .abs()
-            .max()
-            < 1e-5,
+        (matrix(&from_rows, "matrix") - matrix(&from_array, "matrix")).abs().max() < 1e-5,
         "a plain array of 16 works too"
     );
 }
@@ -191,10 +145,7 @@ fn nan_points_can_be_dropped() {
     let mut src = source();
     src[3 * 10 + 1] = f32::NAN;
     src[3 * 20] = f32::INFINITY;
-    let res = r
-        .register(&src, &target(), Some(options(r#"{"nonFinite": "drop"}"#)))
-        .map_err(message)
-        .unwrap();
+    let res = r.register(&src, &target(), Some(options(r#"{"nonFinite": "drop"}"#))).map_err(message).unwrap();
     let (rot, tr) = errors(&res);
     assert!(rot < 1.0 && tr < 0.02, "{rot:.3} deg, {tr:.4}");
 }
@@ -221,164 +172,39 @@ fn every_error_throws_and_the_registrar_keeps_working() {
         JsValue::UNDEFINED,
         "source: invalid point cloud: packed xyz buffer has length",
     );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt[..tgt.len() - 2],
-        JsValue::UNDEFINED,
-        "target: invalid point cloud",
-    );
+    expect_err(&mut r, &src, &tgt[..tgt.len() - 2], JsValue::UNDEFINED, "target: invalid point cloud");
     still_works(&mut r);
     // NaN / Inf.
     let mut bad = src.clone();
     bad[3 * 17 + 2] = f32::NAN;
-    expect_err(
-        &mut r,
-        &bad,
-        &tgt,
-        JsValue::UNDEFINED,
-        "source point 17 has a non-finite coordinate",
-    );
+    expect_err(&mut r, &bad, &tgt, JsValue::UNDEFINED, "source point 17 has a non-finite coordinate");
     let mut bad = tgt.clone();
     bad[0] = f32::NEG_INFINITY;
-    expect_err(
-        &mut r,
-        &src,
-        &bad,
-        JsValue::UNDEFINED,
-        "target point 0 has a non-finite coordinate",
-    );
+    expect_err(&mut r, &src, &bad, JsValue::UNDEFINED, "target point 0 has a non-finite coordinate");
     still_works(&mut r);
     // Too few points, empty, all coincident.
-    expect_err(
-        &mut r,
-        &src[..3 * 5],
-        &tgt,
-        JsValue::UNDEFINED,
-        "source has 5 finite points",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &[],
-        JsValue::UNDEFINED,
-        "target has 0 finite points",
-    );
-    expect_err(
-        &mut r,
-        &[1.0; 3 * 40],
-        &tgt,
-        JsValue::UNDEFINED,
-        "zero extent",
-    );
+    expect_err(&mut r, &src[..3 * 5], &tgt, JsValue::UNDEFINED, "source has 5 finite points");
+    expect_err(&mut r, &src, &[], JsValue::UNDEFINED, "target has 0 finite points");
+    expect_err(&mut r, &[1.0; 3 * 40], &tgt, JsValue::UNDEFINED, "zero extent");
     still_works(&mut r);
     // Bad options: unknown/misspelled field, wrong enum value, wrong type, out of range, not an object.
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(r#"{"icpMaxIteration": 10}"#),
-        "unknown field `icpMaxIteration`",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(r#"{"icp": "planar"}"#),
-        "invalid options",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(r#"{"seed": "seven"}"#),
-        "invalid options",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(r#"{"seed": -1}"#),
-        "invalid options",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(r#"{"networkPoints": 2}"#),
-        "networkPoints = 2",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(r#"{"icpMaxIterations": 100000}"#),
-        "icpMaxIterations",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(r#"{"maxCorrespondenceDistance": -1}"#),
-        "maxCorrespondenceDistance",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(r#"{"voxelSize": -0.5}"#),
-        "voxelSize",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(r#"{"nonFinite": "keep"}"#),
-        "invalid options",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(r#"{"network": "yes"}"#),
-        "invalid options",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options("[1, 2]"),
-        "expected a plain object",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        JsValue::from_f64(3.0),
-        "expected a plain object",
-    );
+    expect_err(&mut r, &src, &tgt, options(r#"{"icpMaxIteration": 10}"#), "unknown field `icpMaxIteration`");
+    expect_err(&mut r, &src, &tgt, options(r#"{"icp": "planar"}"#), "invalid options");
+    expect_err(&mut r, &src, &tgt, options(r#"{"seed": "seven"}"#), "invalid options");
+    expect_err(&mut r, &src, &tgt, options(r#"{"seed": -1}"#), "invalid options");
+    expect_err(&mut r, &src, &tgt, options(r#"{"networkPoints": 2}"#), "networkPoints = 2");
+    expect_err(&mut r, &src, &tgt, options(r#"{"icpMaxIterations": 100000}"#), "icpMaxIterations");
+    expect_err(&mut r, &src, &tgt, options(r#"{"maxCorrespondenceDistance": -1}"#), "maxCorrespondenceDistance");
+    expect_err(&mut r, &src, &tgt, options(r#"{"voxelSize": -0.5}"#), "voxelSize");
+    expect_err(&mut r, &src, &tgt, options(r#"{"nonFinite": "keep"}"#), "invalid options");
+    expect_err(&mut r, &src, &tgt, options(r#"{"network": "yes"}"#), "invalid options");
+    expect_err(&mut r, &src, &tgt, options("[1, 2]"), "expected a plain object");
+    expect_err(&mut r, &src, &tgt, JsValue::from_f64(3.0), "expected a plain object");
     let scaled = r#"{"initialTransform": [[2,0,0,0],[0,2,0,0],[0,0,2,0],[0,0,0,1]]}"#;
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(scaled),
-        "initialTransform is not rigid",
-    );
-    expect_err(
-        &mut r,
-        &src,
-        &tgt,
-        options(r#"{"initialTransform": [1, 0, 0]}"#),
-        "invalid options",
-    );
+    expect_err(&mut r, &src, &tgt, options(scaled), "initialTransform is not rigid");
+    expect_err(&mut r, &src, &tgt, options(r#"{"initialTransform": [1, 0, 0]}"#), "invalid options");
     let opts = options("{}");
-    js_sys::Reflect::set(
-        &opts,
-        &"initialTransform".into(),
-        &Float32Array::new_with_length(9),
-    )
-    .unwrap();
+    js_sys::Reflect::set(&opts, &"initialTransform".into(), &Float32Array::new_with_length(9)).unwrap();
     expect_err(&mut r, &src, &tgt, opts, "initialTransform has 9 elements");
     still_works(&mut r);
     // Reader and weights errors do not touch the registrar; it still works after them too.
@@ -394,25 +220,16 @@ fn corrupt_weights_bytes_throw() {
         (&b"\x08\x00\x00\x00\x00\x00\x00\x00{}"[..], "tiny header"),
         (&b"definitely not a safetensors file"[..], "text"),
     ] {
-        let e = Registrar::from_bytes(bytes)
-            .err()
-            .map(message)
-            .unwrap_or_else(|| panic!("{what}: expected an error"));
+        let e = Registrar::from_bytes(bytes).err().map(message).unwrap_or_else(|| panic!("{what}: expected an error"));
         assert!(e.starts_with("weights: "), "{what}: {e}");
     }
     // The real file, truncated and bit-flipped in its header.
     let good = default_model_bytes();
-    let e = Registrar::from_bytes(&good[..good.len() / 2])
-        .err()
-        .map(message)
-        .expect("truncated");
+    let e = Registrar::from_bytes(&good[..good.len() / 2]).err().map(message).expect("truncated");
     assert!(e.starts_with("weights: "), "{e}");
     let mut flipped = good.clone();
     flipped[8] ^= 0x55; // the header JSON's opening brace
-    let e = Registrar::from_bytes(&flipped)
-        .err()
-        .map(message)
-        .expect("flipped header byte");
+    let e = Registrar::from_bytes(&flipped).err().map(message).expect("flipped header byte");
     assert!(e.starts_with("weights: "), "{e}");
     // The untouched bytes load and work.
     let mut r = Registrar::from_bytes(&good).map_err(message).unwrap();
@@ -426,57 +243,31 @@ fn default_model_bytes() -> Vec<u8> {
 #[wasm_bindgen_test]
 fn custom_weights_from_bytes_match_the_default_model() {
     let mut a = Registrar::with_default_model().map_err(message).unwrap();
-    let mut b = Registrar::from_bytes(&default_model_bytes())
-        .map_err(message)
-        .unwrap();
+    let mut b = Registrar::from_bytes(&default_model_bytes()).map_err(message).unwrap();
     let ra = register_ok(&mut a, JsValue::UNDEFINED);
     let rb = register_ok(&mut b, JsValue::UNDEFINED);
     assert_eq!(matrix(&ra, "matrix"), matrix(&rb, "matrix"));
     // A different (tiny) model loads from bytes, reports its config, and registers.
-    let tiny = arps::Weights::random(&arps::ModelConfig::tiny(), 1)
-        .unwrap()
-        .to_bytes(arps::StoreAs::F32)
-        .unwrap();
+    let tiny = arps::Weights::random(&arps::ModelConfig::tiny(), 1).unwrap().to_bytes(arps::StoreAs::F32).unwrap();
     let mut t = Registrar::from_bytes(&tiny).map_err(message).unwrap();
-    assert_eq!(
-        get(&t.model_config().map_err(message).unwrap(), "preset")
-            .as_string()
-            .as_deref(),
-        Some("tiny")
-    );
-    assert_eq!(
-        get(&t.provenance().map_err(message).unwrap(), "kind")
-            .as_string()
-            .as_deref(),
-        Some("random")
-    );
-    let res = t
-        .register(&source(), &target(), None)
-        .map_err(message)
-        .unwrap();
+    assert_eq!(get(&t.model_config().map_err(message).unwrap(), "preset").as_string().as_deref(), Some("tiny"));
+    assert_eq!(get(&t.provenance().map_err(message).unwrap(), "kind").as_string().as_deref(), Some("random"));
+    let res = t.register(&source(), &target(), None).map_err(message).unwrap();
     assert!(arps::transform::check_rigid(&matrix(&res, "matrix"), 1e-3).is_ok());
 }
 
 #[wasm_bindgen_test]
 fn parse_point_cloud_reads_real_bytes() {
     let want = source();
-    let got = parse_point_cloud(SOURCE_PLY, "source.ply")
-        .map_err(message)
-        .unwrap();
+    let got = parse_point_cloud(SOURCE_PLY, "source.ply").map_err(message).unwrap();
     assert_eq!(got, want, "PLY by extension");
-    let got = parse_point_cloud(SOURCE_PLY, "no-extension")
-        .map_err(message)
-        .unwrap();
+    let got = parse_point_cloud(SOURCE_PLY, "no-extension").map_err(message).unwrap();
     assert_eq!(got, want, "PLY sniffed from the content");
-    let got = parse_point_cloud(SOURCE_PLY, "SOURCE.PLY")
-        .map_err(message)
-        .unwrap();
+    let got = parse_point_cloud(SOURCE_PLY, "SOURCE.PLY").map_err(message).unwrap();
     assert_eq!(got, want, "upper-case extension");
     // The readers' output registers as is.
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
-    let tgt = parse_point_cloud(TARGET_PLY, "target.ply")
-        .map_err(message)
-        .unwrap();
+    let tgt = parse_point_cloud(TARGET_PLY, "target.ply").map_err(message).unwrap();
     let res = r.register(&got, &tgt, None).map_err(message).unwrap();
     let (rot, tr) = errors(&res);
     assert!(rot < 1.0 && tr < 0.02, "{rot:.3} deg, {tr:.4}");
@@ -484,29 +275,16 @@ fn parse_point_cloud_reads_real_bytes() {
 
 #[wasm_bindgen_test]
 fn parse_point_cloud_errors_are_thrown() {
-    let e = parse_point_cloud(
-        b"\x00\x01\x02 certainly not a point cloud",
-        "cloud.unknownext",
-    )
-    .err()
-    .map(message);
+    let e = parse_point_cloud(b"\x00\x01\x02 certainly not a point cloud", "cloud.unknownext").err().map(message);
     assert!(e.is_some(), "unknown format throws");
-    let e = parse_point_cloud(b"\x00\x01\x02 certainly not a point cloud", "cloud")
-        .err()
-        .map(message);
+    let e = parse_point_cloud(b"\x00\x01\x02 certainly not a point cloud", "cloud").err().map(message);
     assert!(e.is_some(), "unsniffable content throws");
     let truncated = &SOURCE_PLY[..SOURCE_PLY.len() / 2 - 7];
-    let e = parse_point_cloud(truncated, "source.ply")
-        .err()
-        .map(message)
-        .expect("truncated PLY throws");
+    let e = parse_point_cloud(truncated, "source.ply").err().map(message).expect("truncated PLY throws");
     assert!(e.contains("PLY"), "{e}");
-    let e = parse_point_cloud(
-        b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n",
-        "x.ply",
-    )
-    .err()
-    .map(message);
+    let e = parse_point_cloud(b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n", "x.ply")
+        .err()
+        .map(message);
     assert!(e.is_some(), "PLY without y/z throws");
 }
 

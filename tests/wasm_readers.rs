@@ -6,9 +6,7 @@
 
 mod wasm_common;
 
-use arps::transform::{
-    euler_xyz, from_rotation_translation, rotation_error_deg, translation_error,
-};
+use arps::transform::{euler_xyz, from_rotation_translation, rotation_error_deg, translation_error};
 use arps::wasm::{parse_point_cloud, Registrar};
 use nalgebra::Vector3;
 use wasm_bindgen_test::wasm_bindgen_test;
@@ -16,18 +14,10 @@ use wasm_common::*;
 
 macro_rules! fixture {
     ($name:literal) => {
-        (
-            $name,
-            include_bytes!(concat!("../fixtures/formats/", $name)) as &[u8],
-        )
+        ($name, include_bytes!(concat!("../fixtures/formats/", $name)) as &[u8])
     };
     ($name:literal, $n:expr, $first:expr) => {
-        (
-            $name,
-            include_bytes!(concat!("../fixtures/formats/", $name)) as &[u8],
-            $n,
-            $first,
-        )
+        ($name, include_bytes!(concat!("../fixtures/formats/", $name)) as &[u8], $n, $first)
     };
 }
 
@@ -35,31 +25,11 @@ const NONE: [f32; 3] = [f32::NAN; 3];
 
 /// (file, bytes, points the reader returns, first point or NaN when not checked).
 const FILES: &[(&str, &[u8], usize, [f32; 3])] = &[
-    fixture!(
-        "milk_compressed.pcd",
-        13704,
-        [-0.131_607_6, -0.209_542_9, 0.772]
-    ),
-    fixture!(
-        "velodyne_2000_binary.pcd",
-        2000,
-        [0.003_139_891_7, 2.570_035, -1.524_156_8]
-    ),
-    fixture!(
-        "velodyne_2000_ascii.pcd",
-        2000,
-        [0.003_139_891_7, 2.570_035, -1.524_156_8]
-    ),
-    fixture!(
-        "cloud_bin_0_binary.pcd",
-        3903,
-        [2.848_907_7, 0.031_390_607, -1.747_166]
-    ),
-    fixture!(
-        "frag_115_2000_binary.ply",
-        2000,
-        [0.847_656_25, 2.679_497_7, 1.597_656_3]
-    ),
+    fixture!("milk_compressed.pcd", 13704, [-0.131_607_6, -0.209_542_9, 0.772]),
+    fixture!("velodyne_2000_binary.pcd", 2000, [0.003_139_891_7, 2.570_035, -1.524_156_8]),
+    fixture!("velodyne_2000_ascii.pcd", 2000, [0.003_139_891_7, 2.570_035, -1.524_156_8]),
+    fixture!("cloud_bin_0_binary.pcd", 3903, [2.848_907_7, 0.031_390_607, -1.747_166]),
+    fixture!("frag_115_2000_binary.ply", 2000, [0.847_656_25, 2.679_497_7, 1.597_656_3]),
     fixture!("eth_car_1000.csv", 1000, NONE),
     fixture!("ballA.off", 1900, NONE),
     fixture!("fuze_binary.ply", 502, NONE),
@@ -68,66 +38,40 @@ const FILES: &[(&str, &[u8], usize, [f32; 3])] = &[
 ];
 
 fn close(a: &[f32], b: [f32; 3]) -> bool {
-    a.iter()
-        .zip(b)
-        .all(|(x, y)| (x - y).abs() <= 1e-5 * (1.0 + y.abs()))
+    a.iter().zip(b).all(|(x, y)| (x - y).abs() <= 1e-5 * (1.0 + y.abs()))
 }
 
 #[wasm_bindgen_test]
 fn every_format_by_extension_and_by_sniffing() {
     for &(name, bytes, n, first) in FILES {
-        let xyz = parse_point_cloud(bytes, name)
-            .map_err(message)
-            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let xyz = parse_point_cloud(bytes, name).map_err(message).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(xyz.len(), 3 * n, "{name}: point count");
         if !first[0].is_nan() {
-            assert!(
-                close(&xyz[..3], first),
-                "{name}: first point {:?}",
-                &xyz[..3]
-            );
+            assert!(close(&xyz[..3], first), "{name}: first point {:?}", &xyz[..3]);
         }
         // No extension: the content decides (CSV has no magic; skip it).
         if !name.ends_with(".csv") {
             let sniffed = parse_point_cloud(bytes, "upload").map_err(message);
-            assert_eq!(
-                sniffed.as_deref().ok(),
-                Some(&xyz[..]),
-                "{name}: sniffed without an extension"
-            );
+            assert_eq!(sniffed.as_deref().ok(), Some(&xyz[..]), "{name}: sniffed without an extension");
         }
     }
 }
 
 #[wasm_bindgen_test]
 fn ascii_and_binary_agree_and_meshes_give_vertices() {
-    let bin = parse_point_cloud(FILES[1].1, FILES[1].0)
-        .map_err(message)
-        .unwrap();
-    let asc = parse_point_cloud(FILES[2].1, FILES[2].0)
-        .map_err(message)
-        .unwrap();
+    let bin = parse_point_cloud(FILES[1].1, FILES[1].0).map_err(message).unwrap();
+    let asc = parse_point_cloud(FILES[2].1, FILES[2].0).map_err(message).unwrap();
     assert_eq!(bin, asc, "velodyne ascii and binary PCD");
-    let ply = parse_point_cloud(FILES[7].1, FILES[7].0)
-        .map_err(message)
-        .unwrap();
-    let obj = parse_point_cloud(FILES[9].1, FILES[9].0)
-        .map_err(message)
-        .unwrap();
+    let ply = parse_point_cloud(FILES[7].1, FILES[7].0).map_err(message).unwrap();
+    let obj = parse_point_cloud(FILES[9].1, FILES[9].0).map_err(message).unwrap();
     assert_eq!(ply, obj, "fuze PLY and OBJ vertices");
     for (name, bytes) in [
         fixture!("angle_block_binary_solid.stl"),
         fixture!("cylinder_binary.stl"),
         fixture!("tray_bottom_150_ascii.stl"),
     ] {
-        let xyz = parse_point_cloud(bytes, name)
-            .map_err(message)
-            .unwrap_or_else(|e| panic!("{name}: {e}"));
-        assert!(
-            xyz.len() >= 9 && xyz.len().is_multiple_of(3),
-            "{name}: {} values",
-            xyz.len()
-        );
+        let xyz = parse_point_cloud(bytes, name).map_err(message).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(xyz.len() >= 9 && xyz.len().is_multiple_of(3), "{name}: {} values", xyz.len());
     }
 }
 
@@ -136,47 +80,25 @@ fn organised_pcd_keeps_nan_and_drop_option_registers_it() {
     let (name, bytes) = fixture!("table_scene_80x60_compressed.pcd");
     let xyz = parse_point_cloud(bytes, name).map_err(message).unwrap();
     assert_eq!(xyz.len(), 3 * 80 * 60);
-    let nan = xyz
-        .chunks(3)
-        .filter(|p| p.iter().any(|v| v.is_nan()))
-        .count();
+    let nan = xyz.chunks(3).filter(|p| p.iter().any(|v| v.is_nan())).count();
     assert_eq!(nan, 1577, "no-return points stay NaN in the Float32Array");
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
-    let e = r
-        .register(&xyz, &xyz, None)
-        .err()
-        .map(message)
-        .expect("NaN rejected by default");
+    let e = r.register(&xyz, &xyz, None).err().map(message).expect("NaN rejected by default");
     assert!(e.contains("non-finite"), "{e}");
-    let res = r
-        .register(&xyz, &xyz, Some(options(r#"{"nonFinite": "drop"}"#)))
-        .map_err(message)
-        .unwrap();
+    let res = r.register(&xyz, &xyz, Some(options(r#"{"nonFinite": "drop"}"#))).map_err(message).unwrap();
     let m = matrix(&res, "matrix");
-    assert!(
-        rotation_error_deg(&m, &nalgebra::Matrix4::identity()) < 0.5,
-        "a cloud onto itself: {m}"
-    );
+    assert!(rotation_error_deg(&m, &nalgebra::Matrix4::identity()) < 0.5, "a cloud onto itself: {m}");
 }
 
 #[wasm_bindgen_test]
 fn real_scan_recovers_a_known_motion() {
     let bytes = include_bytes!("../fixtures/scans/velodyne-small.ply");
-    let src = parse_point_cloud(bytes, "velodyne-small.ply")
-        .map_err(message)
-        .unwrap();
-    let gt =
-        from_rotation_translation(&euler_xyz(0.08, -0.12, 0.18), &Vector3::new(0.4, -0.3, 0.1));
-    let tgt: Vec<f32> = src
-        .chunks(3)
-        .flat_map(|p| arps::transform::apply(&gt, [p[0], p[1], p[2]]))
-        .collect();
+    let src = parse_point_cloud(bytes, "velodyne-small.ply").map_err(message).unwrap();
+    let gt = from_rotation_translation(&euler_xyz(0.08, -0.12, 0.18), &Vector3::new(0.4, -0.3, 0.1));
+    let tgt: Vec<f32> = src.chunks(3).flat_map(|p| arps::transform::apply(&gt, [p[0], p[1], p[2]])).collect();
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
     let res = r.register(&src, &tgt, None).map_err(message).unwrap();
     let m = matrix(&res, "matrix");
     let (rot, tr) = (rotation_error_deg(&m, &gt), translation_error(&m, &gt));
-    assert!(
-        rot < 1.0 && tr < 0.05,
-        "rotation error {rot:.3} deg, translation error {tr:.4}"
-    );
+    assert!(rot < 1.0 && tr < 0.05, "rotation error {rot:.3} deg, translation error {tr:.4}");
 }

@@ -14,14 +14,9 @@ fn err(bytes: &[u8]) -> String {
 }
 
 /// Serialises arbitrary tensors with the given metadata (for crafting bad files).
-fn craft(
-    tensors: &[(String, Dtype, Vec<usize>, Vec<u8>)],
-    meta: HashMap<String, String>,
-) -> Vec<u8> {
-    let views: Vec<(String, TensorView<'_>)> = tensors
-        .iter()
-        .map(|(n, d, s, b)| (n.clone(), TensorView::new(*d, s.clone(), b).unwrap()))
-        .collect();
+fn craft(tensors: &[(String, Dtype, Vec<usize>, Vec<u8>)], meta: HashMap<String, String>) -> Vec<u8> {
+    let views: Vec<(String, TensorView<'_>)> =
+        tensors.iter().map(|(n, d, s, b)| (n.clone(), TensorView::new(*d, s.clone(), b).unwrap())).collect();
     safetensors::serialize(views, Some(meta)).unwrap()
 }
 
@@ -47,10 +42,7 @@ fn f32_tensors(w: &Weights) -> Vec<(String, Dtype, Vec<usize>, Vec<u8>)> {
 #[test]
 fn random_is_deterministic_and_seeded() {
     assert_eq!(tiny(), tiny());
-    assert_ne!(
-        tiny().tensors,
-        Weights::random(&ModelConfig::tiny(), 8).unwrap().tensors
-    );
+    assert_ne!(tiny().tensors, Weights::random(&ModelConfig::tiny(), 8).unwrap().tensors);
 }
 
 #[test]
@@ -62,10 +54,7 @@ fn f32_round_trip_is_exact_and_f16_is_close() {
     assert_eq!(half.config, w.config);
     for (name, v) in &w.tensors {
         for (a, b) in v.iter().zip(&half.tensors[name]) {
-            assert!(
-                (a - b).abs() <= 1e-3 * a.abs().max(1e-2),
-                "{name}: {a} vs {b}"
-            );
+            assert!((a - b).abs() <= 1e-3 * a.abs().max(1e-2), "{name}: {a} vs {b}");
         }
     }
 }
@@ -76,10 +65,7 @@ fn both_reference_kinds_round_trip() {
     c.reference = Reference::TopH;
     let w = Weights::random(&c, 1).unwrap();
     assert!(!w.tensors.keys().any(|k| k.contains(".score.")));
-    assert_eq!(
-        Weights::from_bytes(&w.to_bytes(StoreAs::F32).unwrap()).unwrap(),
-        w
-    );
+    assert_eq!(Weights::from_bytes(&w.to_bytes(StoreAs::F32).unwrap()).unwrap(), w);
 }
 
 #[test]
@@ -96,12 +82,7 @@ fn wrong_shape_is_named() {
     let w = tiny();
     let mut t = f32_tensors(&w);
     let (name, _, shape, bytes) = t[0].clone();
-    t[0] = (
-        name.clone(),
-        Dtype::F32,
-        vec![shape.iter().product::<usize>()],
-        bytes,
-    );
+    t[0] = (name.clone(), Dtype::F32, vec![shape.iter().product::<usize>()], bytes);
     let e = err(&craft(&t, good_meta(&w.config)));
     assert!(e.contains(&format!("tensor '{name}' has shape")), "{e}");
 }
@@ -120,12 +101,7 @@ fn wrong_dtype_is_named() {
 fn extra_tensor_is_named() {
     let w = tiny();
     let mut t = f32_tensors(&w);
-    t.push((
-        "layers.9.bogus.weight".into(),
-        Dtype::F32,
-        vec![2],
-        vec![0; 8],
-    ));
+    t.push(("layers.9.bogus.weight".into(), Dtype::F32, vec![2], vec![0; 8]));
     let e = err(&craft(&t, good_meta(&w.config)));
     assert!(e.contains("layers.9.bogus.weight"), "{e}");
 }

@@ -6,10 +6,7 @@
 use arps::{ModelConfig, StoreAs, Weights};
 
 fn valid() -> Vec<u8> {
-    Weights::random(&ModelConfig::tiny(), 3)
-        .unwrap()
-        .to_bytes(StoreAs::F16)
-        .unwrap()
+    Weights::random(&ModelConfig::tiny(), 3).unwrap().to_bytes(StoreAs::F16).unwrap()
 }
 
 #[test]
@@ -17,10 +14,7 @@ fn truncations_are_errors() {
     let b = valid();
     assert!(Weights::from_bytes(&b).is_ok());
     for len in (0..b.len()).step_by(7).chain([1, 7, 8, 9, b.len() - 1]) {
-        assert!(
-            Weights::from_bytes(&b[..len]).is_err(),
-            "truncated to {len} bytes read fine"
-        );
+        assert!(Weights::from_bytes(&b[..len]).is_err(), "truncated to {len} bytes read fine");
     }
 }
 

@@ -42,17 +42,10 @@ pub struct Bank {
 /// Why a mesh is unusable for sampling pairs, or `Ok`.
 pub fn check_mesh(mesh: &Mesh) -> Result<(), String> {
     if mesh.triangles.len() < MIN_TRIANGLES {
-        return Err(format!(
-            "too few triangles ({} < {MIN_TRIANGLES})",
-            mesh.triangles.len()
-        ));
+        return Err(format!("too few triangles ({} < {MIN_TRIANGLES})", mesh.triangles.len()));
     }
     let nv = mesh.vertices.len();
-    if let Some(t) = mesh
-        .triangles
-        .iter()
-        .find(|t| t.iter().any(|&i| i as usize >= nv))
-    {
+    if let Some(t) = mesh.triangles.iter().find(|t| t.iter().any(|&i| i as usize >= nv)) {
         return Err(format!("triangle {t:?} refers beyond the {nv} vertices"));
     }
     let mut lo = [f64::INFINITY; 3];
@@ -91,12 +84,7 @@ pub fn check_mesh(mesh: &Mesh) -> Result<(), String> {
 fn is_mesh_file(p: &Path) -> bool {
     p.extension()
         .and_then(|e| e.to_str())
-        .map(|e| {
-            matches!(
-                e.to_ascii_lowercase().as_str(),
-                "obj" | "off" | "ply" | "stl"
-            )
-        })
+        .map(|e| matches!(e.to_ascii_lowercase().as_str(), "obj" | "off" | "ply" | "stl"))
         .unwrap_or(false)
 }
 
@@ -130,18 +118,13 @@ pub fn load_dir(dir: &Path) -> std::io::Result<Bank> {
             .map(|c| c.as_os_str().to_string_lossy().into_owned())
             .collect::<Vec<_>>()
             .join("/");
-        let file_name = path
-            .file_name()
-            .map(|n| n.to_string_lossy().into_owned())
-            .unwrap_or_default();
-        let read = std::fs::read(&path)
-            .map_err(|e| e.to_string())
-            .and_then(|bytes| {
-                // the readers are new; a panic in one must not take the whole bank down
-                std::panic::catch_unwind(|| io::read_mesh(&bytes, &file_name))
-                    .map_err(|_| "the reader panicked".to_string())?
-                    .map_err(|e| e.to_string())
-            });
+        let file_name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let read = std::fs::read(&path).map_err(|e| e.to_string()).and_then(|bytes| {
+            // the readers are new; a panic in one must not take the whole bank down
+            std::panic::catch_unwind(|| io::read_mesh(&bytes, &file_name))
+                .map_err(|_| "the reader panicked".to_string())?
+                .map_err(|e| e.to_string())
+        });
         match read.and_then(|m| check_mesh(&m).map(|()| m)) {
             Ok(mesh) => bank.meshes.push(NamedMesh { name, mesh }),
             Err(reason) => bank.skipped.push(Skipped { name, reason }),
@@ -165,17 +148,11 @@ pub fn split_of(name: &str, val_fraction: f64) -> Split {
 impl Bank {
     /// The meshes of one split ([`split_of`]).
     pub fn split(&self, split: Split, val_fraction: f64) -> Vec<&NamedMesh> {
-        self.meshes
-            .iter()
-            .filter(|m| split_of(&m.name, val_fraction) == split)
-            .collect()
+        self.meshes.iter().filter(|m| split_of(&m.name, val_fraction) == split).collect()
     }
 
     /// One line per skipped file (`name: reason`), for logging.
     pub fn skipped_report(&self) -> String {
-        self.skipped
-            .iter()
-            .map(|s| format!("skipped {}: {}\n", s.name, s.reason))
-            .collect()
+        self.skipped.iter().map(|s| format!("skipped {}: {}\n", s.name, s.reason)).collect()
     }
 }

@@ -14,8 +14,7 @@ use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// The header line of `pairs.tsv`.
-pub const HEADER: &str =
-    "name\tsource\ttarget\toverlap_threshold\tnote\tT_target_source_4x4_rowmajor";
+pub const HEADER: &str = "name\tsource\ttarget\toverlap_threshold\tnote\tT_target_source_4x4_rowmajor";
 
 /// One line of a manifest.
 #[allow(non_snake_case)]
@@ -60,19 +59,12 @@ pub fn parse(text: &str) -> Result<Vec<Entry>, String> {
     let mut out = Vec::new();
     for (ln, line) in text.lines().enumerate() {
         let line = line.trim_end_matches('\r');
-        if line.trim().is_empty()
-            || line.starts_with('#')
-            || (ln == 0 && line.starts_with("name\t"))
-        {
+        if line.trim().is_empty() || line.starts_with('#') || (ln == 0 && line.starts_with("name\t")) {
             continue;
         }
         let cols: Vec<&str> = line.split('\t').collect();
         if cols.len() != 6 {
-            return Err(format!(
-                "line {}: {} tab-separated columns, expected 6",
-                ln + 1,
-                cols.len()
-            ));
+            return Err(format!("line {}: {} tab-separated columns, expected 6", ln + 1, cols.len()));
         }
         let overlap_threshold = cols[3]
             .trim()
@@ -84,11 +76,7 @@ pub fn parse(text: &str) -> Result<Vec<Entry>, String> {
             .collect::<Result<_, _>>()
             .map_err(|e| format!("line {}: transform: {e}", ln + 1))?;
         if nums.len() != 16 {
-            return Err(format!(
-                "line {}: transform has {} numbers, expected 16",
-                ln + 1,
-                nums.len()
-            ));
+            return Err(format!("line {}: transform has {} numbers, expected 16", ln + 1, nums.len()));
         }
         let t = Matrix4::from_fn(|r, c| nums[r * 4 + c]);
         transform::check_rigid(&t, 1e-3).map_err(|e| format!("line {}: transform: {e}", ln + 1))?;
@@ -115,9 +103,7 @@ pub fn format(entries: &[Entry]) -> String {
     let mut s = String::from(HEADER);
     s.push('\n');
     for e in entries {
-        let t: Vec<String> = (0..16)
-            .map(|i| format!("{}", e.T_target_source[(i / 4, i % 4)]))
-            .collect();
+        let t: Vec<String> = (0..16).map(|i| format!("{}", e.T_target_source[(i / 4, i % 4)])).collect();
         let clean = |x: &str| x.replace(['\t', '\n'], " ");
         s.push_str(&format!(
             "{}\t{}\t{}\t{}\t{}\t{}\n",

@@ -19,15 +19,9 @@ pub struct PairError {
 pub fn pair_error(pred: &Matrix4<f64>, gt: &Matrix4<f64>, scale: f64) -> PairError {
     let ok = pred.iter().all(|v| v.is_finite());
     if !ok {
-        return PairError {
-            rot_deg: 180.0,
-            trans: f64::INFINITY,
-        };
+        return PairError { rot_deg: 180.0, trans: f64::INFINITY };
     }
-    PairError {
-        rot_deg: rotation_error_deg(pred, gt),
-        trans: translation_error(pred, gt) / scale,
-    }
+    PairError { rot_deg: rotation_error_deg(pred, gt), trans: translation_error(pred, gt) / scale }
 }
 
 /// The paper's table figures for one method.
@@ -68,10 +62,7 @@ pub fn summarize(errors: &[PairError], times_ms: &[f64], rot_thr: f64, trans_thr
             s / c as f64
         }
     };
-    let rec: Vec<&PairError> = errors
-        .iter()
-        .filter(|e| recalled(e, rot_thr, trans_thr))
-        .collect();
+    let rec: Vec<&PairError> = errors.iter().filter(|e| recalled(e, rot_thr, trans_thr)).collect();
     Summary {
         pairs: n,
         mre: mean(&mut errors.iter().map(|e| e.rot_deg)),
@@ -86,19 +77,13 @@ pub fn summarize(errors: &[PairError], times_ms: &[f64], rot_thr: f64, trans_thr
 /// Recall as the rotation threshold sweeps `thresholds` (translation held at `trans_thr`).
 pub fn recall_vs_rotation(errors: &[PairError], thresholds: &[f64], trans_thr: f64) -> Vec<f64> {
     let n = errors.len().max(1) as f64;
-    thresholds
-        .iter()
-        .map(|&t| errors.iter().filter(|e| recalled(e, t, trans_thr)).count() as f64 / n)
-        .collect()
+    thresholds.iter().map(|&t| errors.iter().filter(|e| recalled(e, t, trans_thr)).count() as f64 / n).collect()
 }
 
 /// Recall as the translation threshold sweeps `thresholds` (rotation held at `rot_thr`).
 pub fn recall_vs_translation(errors: &[PairError], thresholds: &[f64], rot_thr: f64) -> Vec<f64> {
     let n = errors.len().max(1) as f64;
-    thresholds
-        .iter()
-        .map(|&t| errors.iter().filter(|e| recalled(e, rot_thr, t)).count() as f64 / n)
-        .collect()
+    thresholds.iter().map(|&t| errors.iter().filter(|e| recalled(e, rot_thr, t)).count() as f64 / n).collect()
 }
 
 /// `n + 1` evenly spaced values from 0 to `max`.
@@ -106,15 +91,10 @@ pub fn linspace(max: f64, n: usize) -> Vec<f64> {
     (0..=n).map(|i| max * i as f64 / n as f64).collect()
 }
 
-const COLORS: [&str; 8] = [
-    "#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f",
-];
+const COLORS: [&str; 8] = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b", "#e377c2", "#7f7f7f"];
 
 fn escape(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;")
+    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
 }
 
 /// Two panels side by side: recall vs rotation threshold (0..`rot_max` degrees, translation held
@@ -140,18 +120,8 @@ pub fn recall_svg(
     );
     let steps = 120;
     let panels = [
-        (
-            ml,
-            rot_max,
-            format!("rotation threshold (deg), TE < {trans_thr}"),
-            true,
-        ),
-        (
-            ml + pw + gap,
-            trans_max,
-            format!("translation threshold, RE < {rot_thr} deg"),
-            false,
-        ),
+        (ml, rot_max, format!("rotation threshold (deg), TE < {trans_thr}"), true),
+        (ml + pw + gap, trans_max, format!("translation threshold, RE < {rot_thr} deg"), false),
     ];
     for (x0, max, label, is_rot) in panels {
         let y0 = mt;
@@ -193,11 +163,8 @@ pub fn recall_svg(
             } else {
                 recall_vs_translation(errs, &th, rot_thr)
             };
-            let pts: Vec<String> = th
-                .iter()
-                .zip(&r)
-                .map(|(t, v)| format!("{:.1},{:.1}", x0 + t / max * pw, y0 + ph - v * ph))
-                .collect();
+            let pts: Vec<String> =
+                th.iter().zip(&r).map(|(t, v)| format!("{:.1},{:.1}", x0 + t / max * pw, y0 + ph - v * ph)).collect();
             s.push_str(&format!(
                 "<polyline fill=\"none\" stroke=\"{}\" stroke-width=\"2\" points=\"{}\"/>\n",
                 COLORS[k % COLORS.len()],

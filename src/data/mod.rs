@@ -28,9 +28,7 @@ pub use source::{ShapeSource, Split};
 /// Mixes a value and a stream tag into a well-spread 64-bit seed (SplitMix64 finaliser). Used to
 /// derive independent, platform-stable seeds (per shape, per pair, per stage).
 pub fn mix(value: u64, tag: u64) -> u64 {
-    let mut z = value
-        .wrapping_add(tag.wrapping_mul(0x9E37_79B9_7F4A_7C15))
-        .wrapping_add(0x9E37_79B9_7F4A_7C15);
+    let mut z = value.wrapping_add(tag.wrapping_mul(0x9E37_79B9_7F4A_7C15)).wrapping_add(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)

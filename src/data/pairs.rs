@@ -100,15 +100,9 @@ pub struct Pair {
 pub fn normalize_shape(cloud: &PointCloud) -> (PointCloud, [f64; 3], f64) {
     let (lo, hi) = cloud.bounds();
     let c = [0, 1, 2].map(|a| (lo[a] as f64 + hi[a] as f64) * 0.5);
-    let s = (0..3)
-        .map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5)
-        .fold(0.0, f64::max);
+    let s = (0..3).map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5).fold(0.0, f64::max);
     let s = if s > 0.0 && s.is_finite() { s } else { 1.0 };
-    let points = cloud
-        .points
-        .iter()
-        .map(|p| [0, 1, 2].map(|a| ((p[a] as f64 - c[a]) / s) as f32))
-        .collect();
+    let points = cloud.points.iter().map(|p| [0, 1, 2].map(|a| ((p[a] as f64 - c[a]) / s) as f32)).collect();
     (PointCloud::new(points), c, s)
 }
 
@@ -237,11 +231,7 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
     let jitter = |rng: &mut ChaCha8Rng, q: Vector3<f64>| -> [f32; 3] {
         let mut out = [0.0f32; 3];
         for a in 0..3 {
-            let n = if sigma > 0.0 {
-                (normal(rng) * sigma).clamp(-clip, clip)
-            } else {
-                0.0
-            };
+            let n = if sigma > 0.0 { (normal(rng) * sigma).clamp(-clip, clip) } else { 0.0 };
             out[a] = (q[a] + n) as f32;
         }
         out
@@ -251,10 +241,7 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
         Vector3::new(v[0] as f64, v[1] as f64, v[2] as f64)
     };
     let source: Vec<[f32; 3]> = src_i.iter().map(|&i| jitter(&mut rng, pt(i))).collect();
-    let target: Vec<[f32; 3]> = tgt_i
-        .iter()
-        .map(|&i| jitter(&mut rng, r * pt(i) + t))
-        .collect();
+    let target: Vec<[f32; 3]> = tgt_i.iter().map(|&i| jitter(&mut rng, r * pt(i) + t)).collect();
     let ct = r * cv + t;
     Pair {
         shape: shape.to_string(),

@@ -119,14 +119,11 @@ impl ShapeSource {
     pub fn shape(&self, split: Split, index: u64) -> Result<ShapeRef<'_>> {
         let bank = self.bank(split);
         let h = mix(index, split.tag());
-        let use_bank = !bank.is_empty()
-            && (!self.procedural || ((h >> 11) as f64 / (1u64 << 53) as f64) < self.bank_fraction);
+        let use_bank =
+            !bank.is_empty() && (!self.procedural || ((h >> 11) as f64 / (1u64 << 53) as f64) < self.bank_fraction);
         if use_bank {
             let m = &bank[(mix(h, 0xBA4C) % bank.len() as u64) as usize];
-            return Ok(ShapeRef {
-                name: format!("bank/{}", m.name),
-                mesh: Cow::Borrowed(&m.mesh),
-            });
+            return Ok(ShapeRef { name: format!("bank/{}", m.name), mesh: Cow::Borrowed(&m.mesh) });
         }
         if !self.procedural {
             return Err(crate::Error::InvalidOption(format!(
@@ -134,21 +131,13 @@ impl ShapeSource {
             )));
         }
         let (cat, seed) = self.procedural_id(split, index);
-        Ok(ShapeRef {
-            name: format!("procedural/{}/{seed}", cat.name()),
-            mesh: Cow::Owned(generate(cat, seed)),
-        })
+        Ok(ShapeRef { name: format!("procedural/{}/{seed}", cat.name()), mesh: Cow::Owned(generate(cat, seed)) })
     }
 
     /// Pair `index` of a split: its shape ([`Self::shape`]) and the protocol with the pair seed
     /// `mix(index, split)`.
     pub fn pair(&self, split: Split, index: u64, params: &PairParams) -> Result<Pair> {
         let shape = self.shape(split, index)?;
-        make_pair(
-            &shape.mesh,
-            &shape.name,
-            params,
-            mix(index, split.tag() ^ 0x9A12),
-        )
+        make_pair(&shape.mesh, &shape.name, params, mix(index, split.tag() ^ 0x9A12))
     }
 }

@@ -18,28 +18,26 @@ pub(crate) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, String
         i += 1;
         if ctrl < 32 {
             let len = ctrl + 1;
-            let lit = input
-                .get(i..i + len)
-                .ok_or_else(|| format!("a literal run of {len} bytes at compressed byte {at} runs past the end of the data"))?;
+            let lit = input.get(i..i + len).ok_or_else(|| {
+                format!("a literal run of {len} bytes at compressed byte {at} runs past the end of the data")
+            })?;
             if out.len() + len > out_len {
-                return Err(format!("the data at compressed byte {at} decompresses past the declared size of {out_len} bytes"));
+                return Err(format!(
+                    "the data at compressed byte {at} decompresses past the declared size of {out_len} bytes"
+                ));
             }
             out.extend_from_slice(lit);
             i += len;
         } else {
             let mut len = ctrl >> 5;
             if len == 7 {
-                len += *input
-                    .get(i)
-                    .ok_or_else(|| format!("a back-reference at compressed byte {at} is cut off"))?
+                len += *input.get(i).ok_or_else(|| format!("a back-reference at compressed byte {at} is cut off"))?
                     as usize;
                 i += 1;
             }
             len += 2;
-            let low = *input
-                .get(i)
-                .ok_or_else(|| format!("a back-reference at compressed byte {at} is cut off"))?
-                as usize;
+            let low =
+                *input.get(i).ok_or_else(|| format!("a back-reference at compressed byte {at} is cut off"))? as usize;
             i += 1;
             let back = ((ctrl & 0x1f) << 8) + low + 1;
             if back > out.len() {
@@ -49,7 +47,9 @@ pub(crate) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, String
                 ));
             }
             if out.len() + len > out_len {
-                return Err(format!("the data at compressed byte {at} decompresses past the declared size of {out_len} bytes"));
+                return Err(format!(
+                    "the data at compressed byte {at} decompresses past the declared size of {out_len} bytes"
+                ));
             }
             let start = out.len() - back;
             if back >= len {
@@ -64,10 +64,7 @@ pub(crate) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, String
         }
     }
     if out.len() != out_len {
-        return Err(format!(
-            "the data decompresses to {} bytes, but the header declares {out_len}",
-            out.len()
-        ));
+        return Err(format!("the data decompresses to {} bytes, but the header declares {out_len}", out.len()));
     }
     Ok(out)
 }
@@ -83,9 +80,7 @@ mod tests {
         assert_eq!(decompress(&data, 9).unwrap(), b"abcabcabc");
         assert!(decompress(&data, 8).is_err());
         assert!(decompress(&data, 10).is_err());
-        assert!(decompress(&[0x20, 5], 3)
-            .unwrap_err()
-            .contains("before the start"));
+        assert!(decompress(&[0x20, 5], 3).unwrap_err().contains("before the start"));
         assert!(decompress(&[5, 1], 6).unwrap_err().contains("past the end"));
         assert!(decompress(&[0xe0], 9).unwrap_err().contains("cut off"));
     }

@@ -19,11 +19,7 @@ impl Mesh {
     fn area_of(c: &[[f64; 3]; 3]) -> f64 {
         let e1 = [0, 1, 2].map(|a| c[1][a] - c[0][a]);
         let e2 = [0, 1, 2].map(|a| c[2][a] - c[0][a]);
-        let x = [
-            e1[1] * e2[2] - e1[2] * e2[1],
-            e1[2] * e2[0] - e1[0] * e2[2],
-            e1[0] * e2[1] - e1[1] * e2[0],
-        ];
+        let x = [e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]];
         0.5 * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt()
     }
 
@@ -73,9 +69,7 @@ impl Mesh {
         let mut points = Vec::with_capacity(n.min(1 << 20));
         for _ in 0..n {
             let u = rng.random::<f64>() * total;
-            let k = cumulative
-                .partition_point(|&c| c <= u)
-                .min(chosen.len() - 1);
+            let k = cumulative.partition_point(|&c| c <= u).min(chosen.len() - 1);
             let [a, b, c] = chosen[k];
             let s = rng.random::<f64>().sqrt();
             let r2 = rng.random::<f64>();

@@ -107,19 +107,12 @@ pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
 }
 
 fn sniff(bytes: &[u8]) -> Option<Format> {
-    let first = bytes
-        .split(|&b| b == b'\n')
-        .next()
-        .unwrap_or_default()
-        .trim_ascii();
+    let first = bytes.split(|&b| b == b'\n').next().unwrap_or_default().trim_ascii();
     if first == b"ply" {
         return Some(Format::Ply);
     }
     // PCD: a "# .PCD" comment or a VERSION / FIELDS line before anything else.
-    for line in bytes[..bytes.len().min(4096)]
-        .split(|&b| b == b'\n')
-        .take(20)
-    {
+    for line in bytes[..bytes.len().min(4096)].split(|&b| b == b'\n').take(20) {
         let l = line.trim_ascii();
         if l.starts_with(b"# .PCD") {
             return Some(Format::Pcd);
@@ -151,10 +144,7 @@ fn read_format(bytes: &[u8], format: Format, mesh: bool) -> Result<Mesh> {
     match format {
         Format::Ply => ply::read(bytes, mesh),
         Format::Pcd => pcd::read(bytes),
-        Format::Xyz => text::read(bytes).map(|vertices| Mesh {
-            vertices,
-            triangles: Vec::new(),
-        }),
+        Format::Xyz => text::read(bytes).map(|vertices| Mesh { vertices, triangles: Vec::new() }),
         Format::Obj => obj::read(bytes),
         Format::Off => off::read(bytes),
         Format::Stl => stl::read(bytes),
@@ -177,10 +167,7 @@ pub fn read_point_cloud(bytes: &[u8], file_name: &str) -> Result<PointCloud> {
 pub fn read_mesh(bytes: &[u8], file_name: &str) -> Result<Mesh> {
     let format = detect_format(bytes, file_name)?;
     if !format.has_faces() {
-        return Err(Error::parse(
-            format.name(),
-            "this format holds points only, not a mesh (use read_point_cloud)",
-        ));
+        return Err(Error::parse(format.name(), "this format holds points only, not a mesh (use read_point_cloud)"));
     }
     read_format(bytes, format, true)
 }
@@ -193,15 +180,8 @@ pub fn write_ply_binary(cloud: &PointCloud) -> Vec<u8> {
 /// Reads a point cloud from a file (native only); the format comes from the file name.
 #[cfg(not(target_arch = "wasm32"))]
 pub fn read_path(path: &std::path::Path) -> Result<PointCloud> {
-    let bytes = std::fs::read(path).map_err(|e| {
-        Error::Io(std::io::Error::new(
-            e.kind(),
-            format!("{}: {e}", path.display()),
-        ))
-    })?;
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
+    let bytes = std::fs::read(path)
+        .map_err(|e| Error::Io(std::io::Error::new(e.kind(), format!("{}: {e}", path.display()))))?;
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     read_point_cloud(&bytes, &name)
 }

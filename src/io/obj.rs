@@ -17,24 +17,16 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
     let mut corners: Vec<i64> = Vec::new();
     for (n, raw) in Lines::new(bytes) {
         let trimmed = raw.trim_ascii_start();
-        let is = |kw: &[u8]| {
-            trimmed.starts_with(kw)
-                && trimmed
-                    .get(kw.len())
-                    .is_none_or(|b| b.is_ascii_whitespace())
-        };
+        let is = |kw: &[u8]| trimmed.starts_with(kw) && trimmed.get(kw.len()).is_none_or(|b| b.is_ascii_whitespace());
         if is(b"v") {
             let line = utf8_line(F, n, raw)?;
             let mut t = line.split_ascii_whitespace().skip(1);
             let mut p = [0.0f32; 3];
             for (a, v) in p.iter_mut().enumerate() {
                 let axis = ["x", "y", "z"][a];
-                let tok = t.next().ok_or_else(|| {
-                    Error::parse(
-                        F,
-                        format!("line {n}: vertex has {a} coordinates, expected 3"),
-                    )
-                })?;
+                let tok = t
+                    .next()
+                    .ok_or_else(|| Error::parse(F, format!("line {n}: vertex has {a} coordinates, expected 3")))?;
                 *v = parse_f32(F, n, axis, tok)?;
             }
             vertices.push(p);
@@ -51,16 +43,17 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                 } else {
                     return Err(Error::parse(
                         F,
-                        format!(
-                            "line {n}: face vertex index 0 is invalid (OBJ indices start at 1)"
-                        ),
+                        format!("line {n}: face vertex index 0 is invalid (OBJ indices start at 1)"),
                     ));
                 };
                 // Negative relative indices that go before the first vertex are out of range now.
                 if resolved < 0 {
                     return Err(Error::parse(
                         F,
-                        format!("line {n}: relative face index {i} points before the first vertex ({} vertices so far)", vertices.len()),
+                        format!(
+                            "line {n}: relative face index {i} points before the first vertex ({} vertices so far)",
+                            vertices.len()
+                        ),
                     ));
                 }
                 corners.push(resolved);
@@ -77,10 +70,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         }
         fan(&poly, &mut triangles);
     }
-    Ok(Mesh {
-        vertices,
-        triangles,
-    })
+    Ok(Mesh { vertices, triangles })
 }
 
 /// True when the first non-comment lines look like OBJ statements.
@@ -91,10 +81,7 @@ pub(crate) fn sniff(bytes: &[u8]) -> bool {
         if l.is_empty() || l.starts_with(b"#") {
             continue;
         }
-        let kw = l
-            .split(|b| b.is_ascii_whitespace())
-            .next()
-            .unwrap_or_default();
+        let kw = l.split(|b| b.is_ascii_whitespace()).next().unwrap_or_default();
         match kw {
             b"v" => return true,
             b"vn" | b"vt" | b"o" | b"g" | b"s" | b"mtllib" | b"usemtl" => continue,

@@ -5,9 +5,7 @@
 //! comments and blank lines are skipped. The counts may share the header line, as in
 //! `OFF 8 6 0` or ModelNet's `OFF490 518 0`. `4OFF`, `nOFF` and `OFF BINARY` are rejected.
 
-use super::util::{
-    bounded_capacity, check_index, fan, parse_count, parse_f32, parse_int, show, utf8_line, Lines,
-};
+use super::util::{bounded_capacity, check_index, fan, parse_count, parse_f32, parse_int, show, utf8_line, Lines};
 use super::Mesh;
 use crate::{Error, Result};
 
@@ -41,11 +39,7 @@ fn continue_record<'a>(
             None => {
                 return Err(Error::parse(
                     F,
-                    format!(
-                        "the file ends inside {}: {} of {need} values present",
-                        what(),
-                        toks.len()
-                    ),
+                    format!("the file ends inside {}: {} of {need} values present", what(), toks.len()),
                 ))
             }
         }
@@ -57,9 +51,7 @@ fn continue_record<'a>(
 fn header_keyword(tok: &str) -> Option<(&str, &str)> {
     let i = tok.find("OFF")?;
     let (prefix, rest) = (&tok[..i], &tok[i + 3..]);
-    if prefix
-        .chars()
-        .all(|c| matches!(c, 'S' | 'T' | 'C' | 'N' | '4' | 'n'))
+    if prefix.chars().all(|c| matches!(c, 'S' | 'T' | 'C' | 'N' | '4' | 'n'))
         && rest.chars().all(|c| c.is_ascii_digit())
     {
         Some((prefix, rest))
@@ -70,8 +62,7 @@ fn header_keyword(tok: &str) -> Option<(&str, &str)> {
 
 pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
     let mut lines = Lines::new(bytes);
-    let (hn, htoks) =
-        next_tokens(&mut lines)?.ok_or_else(|| Error::parse(F, "the file is empty"))?;
+    let (hn, htoks) = next_tokens(&mut lines)?.ok_or_else(|| Error::parse(F, "the file is empty"))?;
     let mut count_toks: Vec<String> = Vec::new();
     let count_line;
     if htoks[0].chars().all(|c| c.is_ascii_digit()) {
@@ -79,32 +70,13 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         count_line = hn;
         count_toks.extend(htoks.iter().map(|s| s.to_string()));
     } else {
-        let (prefix, glued) = header_keyword(htoks[0]).ok_or_else(|| {
-            Error::parse(
-                F,
-                format!(
-                    "line {hn}: expected an OFF header, found {}",
-                    show(htoks[0])
-                ),
-            )
-        })?;
+        let (prefix, glued) = header_keyword(htoks[0])
+            .ok_or_else(|| Error::parse(F, format!("line {hn}: expected an OFF header, found {}", show(htoks[0]))))?;
         if prefix.contains('4') || prefix.contains('n') {
-            return Err(Error::parse(
-                F,
-                format!(
-                    "line {hn}: {} (4D or n-dimensional OFF) is not supported",
-                    htoks[0]
-                ),
-            ));
+            return Err(Error::parse(F, format!("line {hn}: {} (4D or n-dimensional OFF) is not supported", htoks[0])));
         }
-        if htoks
-            .get(1)
-            .is_some_and(|t| t.eq_ignore_ascii_case("BINARY"))
-        {
-            return Err(Error::parse(
-                F,
-                format!("line {hn}: binary OFF is not supported"),
-            ));
+        if htoks.get(1).is_some_and(|t| t.eq_ignore_ascii_case("BINARY")) {
+            return Err(Error::parse(F, format!("line {hn}: binary OFF is not supported")));
         }
         if !glued.is_empty() {
             count_toks.push(glued.to_string());
@@ -112,10 +84,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         count_toks.extend(htoks[1..].iter().map(|s| s.to_string()));
         if count_toks.is_empty() {
             let (n, toks) = next_tokens(&mut lines)?.ok_or_else(|| {
-                Error::parse(
-                    F,
-                    format!("the file ends after the header (line {hn}): no counts line"),
-                )
+                Error::parse(F, format!("the file ends after the header (line {hn}): no counts line"))
             })?;
             count_line = n;
             count_toks.extend(toks.iter().map(|s| s.to_string()));
@@ -124,10 +93,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         }
     }
     if count_toks.len() < 2 {
-        return Err(Error::parse(
-            F,
-            format!("line {count_line}: expected the vertex and face counts"),
-        ));
+        return Err(Error::parse(F, format!("line {count_line}: expected the vertex and face counts")));
     }
     let nv = parse_count(F, count_line, "vertex count", &count_toks[0])?;
     let nf = parse_count(F, count_line, "face count", &count_toks[1])?;
@@ -138,18 +104,11 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         let (n, toks) = next_tokens(&mut lines)?.ok_or_else(|| {
             Error::parse(
                 F,
-                format!(
-                    "the file ends after {i} of the {nv} vertices the header declares (line {})",
-                    lines.line_no()
-                ),
+                format!("the file ends after {i} of the {nv} vertices the header declares (line {})", lines.line_no()),
             )
         })?;
         let toks = continue_record(&mut lines, toks, 3, || format!("vertex {i} (line {n})"))?;
-        vertices.push([
-            parse_f32(F, n, "x", toks[0])?,
-            parse_f32(F, n, "y", toks[1])?,
-            parse_f32(F, n, "z", toks[2])?,
-        ]);
+        vertices.push([parse_f32(F, n, "x", toks[0])?, parse_f32(F, n, "y", toks[1])?, parse_f32(F, n, "z", toks[2])?]);
     }
     let mut triangles = Vec::with_capacity(bounded_capacity(nf, lines.remaining(), 8));
     let mut poly = Vec::new();
@@ -157,30 +116,20 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         let (n, toks) = next_tokens(&mut lines)?.ok_or_else(|| {
             Error::parse(
                 F,
-                format!(
-                    "the file ends after {f} of the {nf} faces the header declares (line {})",
-                    lines.line_no()
-                ),
+                format!("the file ends after {f} of the {nf} faces the header declares (line {})", lines.line_no()),
             )
         })?;
         let k = parse_count(F, n, "face corner count", toks[0])?;
         let need = usize::try_from(k).unwrap_or(usize::MAX).saturating_add(1);
-        let toks = continue_record(&mut lines, toks, need, || {
-            format!("face {f} (line {n}, {k} corners)")
-        })?;
+        let toks = continue_record(&mut lines, toks, need, || format!("face {f} (line {n}, {k} corners)"))?;
         poly.clear();
         for tok in &toks[1..=k as usize] {
             let i = parse_int(F, n, "vertex index", tok)?;
-            poly.push(check_index(F, i, vertices.len(), || {
-                format!("line {n} (face {f})")
-            })?);
+            poly.push(check_index(F, i, vertices.len(), || format!("line {n} (face {f})"))?);
         }
         fan(&poly, &mut triangles);
     }
-    Ok(Mesh {
-        vertices,
-        triangles,
-    })
+    Ok(Mesh { vertices, triangles })
 }
 
 /// True when the first non-comment token is an OFF header keyword.
@@ -191,14 +140,8 @@ pub(crate) fn sniff(bytes: &[u8]) -> bool {
         if l.is_empty() || l.starts_with(b"#") {
             continue;
         }
-        let tok = l
-            .split(|b| b.is_ascii_whitespace())
-            .next()
-            .unwrap_or_default();
-        return std::str::from_utf8(tok)
-            .ok()
-            .and_then(header_keyword)
-            .is_some();
+        let tok = l.split(|b| b.is_ascii_whitespace()).next().unwrap_or_default();
+        return std::str::from_utf8(tok).ok().and_then(header_keyword).is_some();
     }
     false
 }

@@ -61,8 +61,8 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
     let mut data = None;
     let mut fields_line = 0;
     for (n, raw) in lines.by_ref() {
-        let line = utf8_line(F, n, raw)
-            .map_err(|_| Error::parse(F, format!("header line {n} is not valid UTF-8 text")))?;
+        let line =
+            utf8_line(F, n, raw).map_err(|_| Error::parse(F, format!("header line {n} is not valid UTF-8 text")))?;
         let line = line.trim();
         if line.is_empty() || line.starts_with('#') {
             continue;
@@ -73,10 +73,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         let one = |what: &str| -> Result<u64> {
             match values.as_slice() {
                 [v] => parse_count(F, n, what, v),
-                _ => Err(Error::parse(
-                    F,
-                    format!("line {n}: {key} needs exactly one value"),
-                )),
+                _ => Err(Error::parse(F, format!("line {n}: {key} needs exactly one value"))),
             }
         };
         match key.to_ascii_uppercase().as_str() {
@@ -97,10 +94,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                     .iter()
                     .map(|s| match *s {
                         "F" | "I" | "U" => Ok(s.chars().next().unwrap_or('F')),
-                        _ => Err(Error::parse(
-                            F,
-                            format!("line {n}: unknown TYPE {} (expected F, I or U)", show(s)),
-                        )),
+                        _ => Err(Error::parse(F, format!("line {n}: unknown TYPE {} (expected F, I or U)", show(s)))),
                     })
                     .collect::<Result<Vec<_>>>()?;
                 types = Some((n, v));
@@ -108,10 +102,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
             "COUNT" => {
                 let v = values
                     .iter()
-                    .map(|s| {
-                        parse_count(F, n, "COUNT", s)
-                            .map(|v| usize::try_from(v).unwrap_or(usize::MAX))
-                    })
+                    .map(|s| parse_count(F, n, "COUNT", s).map(|v| usize::try_from(v).unwrap_or(usize::MAX)))
                     .collect::<Result<Vec<_>>>()?;
                 counts = Some((n, v));
             }
@@ -126,18 +117,16 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                     _ => {
                         return Err(Error::parse(
                             F,
-                            format!("line {n}: unknown DATA {} (expected ascii, binary or binary_compressed)", show(values.first().copied().unwrap_or(""))),
+                            format!(
+                                "line {n}: unknown DATA {} (expected ascii, binary or binary_compressed)",
+                                show(values.first().copied().unwrap_or(""))
+                            ),
                         ))
                     }
                 });
                 break;
             }
-            _ => {
-                return Err(Error::parse(
-                    F,
-                    format!("line {n}: unknown header keyword {}", show(key)),
-                ))
-            }
+            _ => return Err(Error::parse(F, format!("line {n}: unknown header keyword {}", show(key)))),
         }
     }
     let data = data.ok_or_else(|| Error::parse(F, "the header has no DATA line"))?;
@@ -152,22 +141,15 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
             _ => Ok(()),
         }
     };
-    let (sizes_line, sizes) =
-        sizes.ok_or_else(|| Error::parse(F, "the header has no SIZE line"))?;
-    let (types_line, types) =
-        types.ok_or_else(|| Error::parse(F, "the header has no TYPE line"))?;
+    let (sizes_line, sizes) = sizes.ok_or_else(|| Error::parse(F, "the header has no SIZE line"))?;
+    let (types_line, types) = types.ok_or_else(|| Error::parse(F, "the header has no TYPE line"))?;
     check_len("SIZE", Some((sizes_line, sizes.len())))?;
     check_len("TYPE", Some((types_line, types.len())))?;
     check_len("COUNT", counts.as_ref().map(|(l, c)| (*l, c.len())))?;
     let counts = counts.map(|(_, c)| c).unwrap_or_else(|| vec![1; nf]);
     let mut fields = Vec::with_capacity(nf);
     for i in 0..nf {
-        let f = Field {
-            name: names[i].clone(),
-            size: sizes[i],
-            ty: types[i],
-            count: counts[i],
-        };
+        let f = Field { name: names[i].clone(), size: sizes[i], ty: types[i], count: counts[i] };
         let ok = match f.ty {
             'F' => f.size == 4 || f.size == 8,
             _ => matches!(f.size, 1 | 2 | 4 | 8),
@@ -175,10 +157,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         if !ok {
             return Err(Error::parse(
                 F,
-                format!(
-                    "field '{}' has TYPE {} with SIZE {}, which is not a valid combination",
-                    f.name, f.ty, f.size
-                ),
+                format!("field '{}' has TYPE {} with SIZE {}, which is not a valid combination", f.name, f.ty, f.size),
             ));
         }
         fields.push(f);
@@ -190,10 +169,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         .ok_or_else(|| Error::parse(F, format!("WIDTH {width} x HEIGHT {height} overflows")))?;
     let n_points = points.unwrap_or(wh);
     if n_points != wh {
-        return Err(Error::parse(
-            F,
-            format!("WIDTH {width} x HEIGHT {height} = {wh}, but POINTS is {n_points}"),
-        ));
+        return Err(Error::parse(F, format!("WIDTH {width} x HEIGHT {height} = {wh}, but POINTS is {n_points}")));
     }
     // Where x, y, z are: field index, value index (in ascii tokens), byte offset in a record.
     let mut axes = [(0usize, 0usize, 0usize); 3];
@@ -203,47 +179,32 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
             .position(|f| f.name == *axis)
             .ok_or_else(|| Error::parse(F, format!("FIELDS has no '{axis}' field")))?;
         if fields[i].count != 1 {
-            return Err(Error::parse(
-                F,
-                format!("field '{axis}' has COUNT {}, expected 1", fields[i].count),
-            ));
+            return Err(Error::parse(F, format!("field '{axis}' has COUNT {}, expected 1", fields[i].count)));
         }
-        let token: usize = fields[..i]
-            .iter()
-            .map(|f| f.count)
-            .fold(0, usize::saturating_add);
-        let offset: usize = fields[..i]
-            .iter()
-            .map(|f| f.size.saturating_mul(f.count))
-            .fold(0, usize::saturating_add);
+        let token: usize = fields[..i].iter().map(|f| f.count).fold(0, usize::saturating_add);
+        let offset: usize = fields[..i].iter().map(|f| f.size.saturating_mul(f.count)).fold(0, usize::saturating_add);
         axes[a] = (i, token, offset);
     }
     let stride = fields
         .iter()
-        .try_fold(0usize, |acc, f| {
-            f.size.checked_mul(f.count).and_then(|b| acc.checked_add(b))
-        })
+        .try_fold(0usize, |acc, f| f.size.checked_mul(f.count).and_then(|b| acc.checked_add(b)))
         .ok_or_else(|| Error::parse(F, "the point record size (SIZE x COUNT summed) overflows"))?;
     let body_at = lines.offset();
     let body = &bytes[body_at..];
     let mut out = Vec::new();
     match data {
         Data::Ascii => {
-            let n_tokens: usize = fields
-                .iter()
-                .map(|f| f.count)
-                .fold(0, usize::saturating_add);
-            out.reserve(bounded_capacity(
-                n_points,
-                body.len(),
-                n_tokens.saturating_mul(2),
-            ));
+            let n_tokens: usize = fields.iter().map(|f| f.count).fold(0, usize::saturating_add);
+            out.reserve(bounded_capacity(n_points, body.len(), n_tokens.saturating_mul(2)));
             let mut read = 0u64;
             while read < n_points {
                 let Some((n, raw)) = lines.next() else {
                     return Err(Error::parse(
                         F,
-                        format!("the file ends after {read} of the {n_points} points the header declares (line {})", lines.line_no()),
+                        format!(
+                            "the file ends after {read} of the {n_points} points the header declares (line {})",
+                            lines.line_no()
+                        ),
                     ));
                 };
                 let line = utf8_line(F, n, raw)?;
@@ -254,20 +215,12 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                 if toks.len() < n_tokens {
                     return Err(Error::parse(
                         F,
-                        format!(
-                            "line {n}: expected {n_tokens} values per point, found {}",
-                            toks.len()
-                        ),
+                        format!("line {n}: expected {n_tokens} values per point, found {}", toks.len()),
                     ));
                 }
                 let mut p = [0.0f32; 3];
                 for a in 0..3 {
-                    p[a] = parse_f32(
-                        F,
-                        n,
-                        &format!("field '{}'", fields[axes[a].0].name),
-                        toks[axes[a].1],
-                    )?;
+                    p[a] = parse_f32(F, n, &format!("field '{}'", fields[axes[a].0].name), toks[axes[a].1])?;
                 }
                 out.push(p);
                 read += 1;
@@ -300,9 +253,14 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
             }
         }
         Data::Compressed => {
-            let head = body
-                .get(..8)
-                .ok_or_else(|| Error::parse(F, format!("binary_compressed data is cut off at byte offset {body_at}: the 8-byte size header is missing")))?;
+            let head = body.get(..8).ok_or_else(|| {
+                Error::parse(
+                    F,
+                    format!(
+                        "binary_compressed data is cut off at byte offset {body_at}: the 8-byte size header is missing"
+                    ),
+                )
+            })?;
             let comp = u32::from_le_bytes([head[0], head[1], head[2], head[3]]) as usize;
             let uncomp = u32::from_le_bytes([head[4], head[5], head[6], head[7]]) as u64;
             let payload = 8usize.checked_add(comp).and_then(|end| body.get(8..end)).ok_or_else(|| {
@@ -332,19 +290,11 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                 ));
             }
             let raw = lzf::decompress(payload, uncomp as usize).map_err(|e| {
-                Error::parse(
-                    F,
-                    format!(
-                        "binary_compressed data (from byte offset {}): {e}",
-                        body_at + 8
-                    ),
-                )
+                Error::parse(F, format!("binary_compressed data (from byte offset {}): {e}", body_at + 8))
             })?;
             // Field-major layout: all points' values of field 0, then of field 1, ...
             let n = n_points as usize;
-            let starts: Vec<usize> = (0..3)
-                .map(|a| fields[..axes[a].0].iter().map(|f| f.bytes() * n).sum())
-                .collect();
+            let starts: Vec<usize> = (0..3).map(|a| fields[..axes[a].0].iter().map(|f| f.bytes() * n).sum()).collect();
             out.reserve(n);
             for i in 0..n {
                 out.push([0, 1, 2].map(|a| {
@@ -355,8 +305,5 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
             }
         }
     }
-    Ok(Mesh {
-        vertices: out,
-        triangles: Vec::new(),
-    })
+    Ok(Mesh { vertices: out, triangles: Vec::new() })
 }

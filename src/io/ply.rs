@@ -6,9 +6,7 @@
 //! needs (x/y/z of `vertex`, one index list of `face`, everything else skipped) is small enough
 //! to do directly, with every count checked against the bytes that remain.
 
-use super::util::{
-    bounded_capacity, check_index, fan, parse_count, parse_f32, parse_int, show, utf8_line, Lines,
-};
+use super::util::{bounded_capacity, check_index, fan, parse_count, parse_f32, parse_int, show, utf8_line, Lines};
 use super::Mesh;
 use crate::{Error, Result};
 
@@ -169,12 +167,7 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
     let mut lines = Lines::new(bytes);
     match lines.next() {
         Some((_, l)) if l.trim_ascii_end() == b"ply" => {}
-        _ => {
-            return Err(Error::parse(
-                F,
-                "missing the 'ply' magic line at the start of the file",
-            ))
-        }
+        _ => return Err(Error::parse(F, "missing the 'ply' magic line at the start of the file")),
     }
     let mut encoding = None;
     let mut elements: Vec<Element> = Vec::new();
@@ -184,20 +177,14 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
         if trimmed.starts_with(b"comment") || trimmed.starts_with(b"obj_info") {
             continue;
         }
-        let line = utf8_line(F, n, raw)
-            .map_err(|_| Error::parse(F, format!("header line {n} is not valid UTF-8 text")))?;
+        let line =
+            utf8_line(F, n, raw).map_err(|_| Error::parse(F, format!("header line {n} is not valid UTF-8 text")))?;
         let mut t = line.split_ascii_whitespace();
         let Some(keyword) = t.next() else { continue };
         match keyword {
             "end_header" => {
-                let encoding =
-                    encoding.ok_or_else(|| Error::parse(F, "the header has no 'format' line"))?;
-                return Ok(Header {
-                    encoding,
-                    elements,
-                    body: lines.offset(),
-                    last_line: n,
-                });
+                let encoding = encoding.ok_or_else(|| Error::parse(F, "the header has no 'format' line"))?;
+                return Ok(Header { encoding, elements, body: lines.offset(), last_line: n });
             }
             "format" => {
                 let e = match t.next() {
@@ -207,7 +194,10 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
                     other => {
                         return Err(Error::parse(
                             F,
-                            format!("line {n}: unknown format {} (expected ascii, binary_little_endian or binary_big_endian)", show(other.unwrap_or(""))),
+                            format!(
+                            "line {n}: unknown format {} (expected ascii, binary_little_endian or binary_big_endian)",
+                            show(other.unwrap_or(""))
+                        ),
                         ))
                     }
                 };
@@ -215,60 +205,35 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
             }
             "element" => {
                 let (Some(name), Some(count)) = (t.next(), t.next()) else {
-                    return Err(Error::parse(
-                        F,
-                        format!("line {n}: 'element' needs a name and a count"),
-                    ));
+                    return Err(Error::parse(F, format!("line {n}: 'element' needs a name and a count")));
                 };
                 let count = parse_count(F, n, &format!("element '{name}' count"), count)?;
-                elements.push(Element {
-                    name: name.to_string(),
-                    count,
-                    props: Vec::new(),
-                });
+                elements.push(Element { name: name.to_string(), count, props: Vec::new() });
             }
             "property" => {
                 let Some(el) = elements.last_mut() else {
-                    return Err(Error::parse(
-                        F,
-                        format!("line {n}: 'property' before any 'element'"),
-                    ));
+                    return Err(Error::parse(F, format!("line {n}: 'property' before any 'element'")));
                 };
                 let ty = |name: Option<&str>| -> Result<Scalar> {
-                    let name = name.ok_or_else(|| {
-                        Error::parse(F, format!("line {n}: incomplete property line"))
-                    })?;
-                    Scalar::from_name(name).ok_or_else(|| {
-                        Error::parse(F, format!("line {n}: unknown property type {}", show(name)))
-                    })
+                    let name = name.ok_or_else(|| Error::parse(F, format!("line {n}: incomplete property line")))?;
+                    Scalar::from_name(name)
+                        .ok_or_else(|| Error::parse(F, format!("line {n}: unknown property type {}", show(name))))
                 };
                 let first = t.next();
                 let (kind, name) = if first == Some("list") {
                     let count = ty(t.next())?;
                     let item = ty(t.next())?;
                     if !count.is_int() {
-                        return Err(Error::parse(
-                            F,
-                            format!("line {n}: list count type must be an integer type"),
-                        ));
+                        return Err(Error::parse(F, format!("line {n}: list count type must be an integer type")));
                     }
                     (Kind::List { count, item }, t.next())
                 } else {
                     (Kind::Scalar(ty(first)?), t.next())
                 };
-                let name =
-                    name.ok_or_else(|| Error::parse(F, format!("line {n}: property has no name")))?;
-                el.props.push(Property {
-                    name: name.to_string(),
-                    kind,
-                });
+                let name = name.ok_or_else(|| Error::parse(F, format!("line {n}: property has no name")))?;
+                el.props.push(Property { name: name.to_string(), kind });
             }
-            other => {
-                return Err(Error::parse(
-                    F,
-                    format!("line {n}: unknown header keyword {}", show(other)),
-                ))
-            }
+            other => return Err(Error::parse(F, format!("line {n}: unknown header keyword {}", show(other)))),
         }
     }
     Err(Error::parse(F, "the header has no 'end_header' line"))
@@ -299,10 +264,7 @@ fn vertex_want(el: &Element) -> Result<Want> {
             .position(|p| p.name == *axis)
             .ok_or_else(|| Error::parse(F, format!("element 'vertex' has no '{axis}' property")))?;
         if matches!(el.props[i].kind, Kind::List { .. }) {
-            return Err(Error::parse(
-                F,
-                format!("vertex property '{axis}' is a list, expected a scalar"),
-            ));
+            return Err(Error::parse(F, format!("vertex property '{axis}' is a list, expected a scalar")));
         }
         idx[a] = i;
     }
@@ -310,32 +272,19 @@ fn vertex_want(el: &Element) -> Result<Want> {
 }
 
 fn face_want(el: &Element, n_vertices: usize) -> Result<Want> {
-    let lists: Vec<usize> = (0..el.props.len())
-        .filter(|&i| matches!(el.props[i].kind, Kind::List { .. }))
-        .collect();
+    let lists: Vec<usize> = (0..el.props.len()).filter(|&i| matches!(el.props[i].kind, Kind::List { .. })).collect();
     let i = el
         .props
         .iter()
         .position(|p| p.name == "vertex_indices" || p.name == "vertex_index")
-        .or(if lists.len() == 1 {
-            Some(lists[0])
-        } else {
-            None
-        })
+        .or(if lists.len() == 1 { Some(lists[0]) } else { None })
         .ok_or_else(|| Error::parse(F, "element 'face' has no 'vertex_indices' list property"))?;
     match el.props[i].kind {
         Kind::List { item, .. } if item.is_int() => Ok(Want::Faces(i, n_vertices)),
-        Kind::List { .. } => Err(Error::parse(
-            F,
-            format!(
-                "face list '{}' has a floating-point item type",
-                el.props[i].name
-            ),
-        )),
-        Kind::Scalar(_) => Err(Error::parse(
-            F,
-            format!("face property '{}' is not a list", el.props[i].name),
-        )),
+        Kind::List { .. } => {
+            Err(Error::parse(F, format!("face list '{}' has a floating-point item type", el.props[i].name)))
+        }
+        Kind::Scalar(_) => Err(Error::parse(F, format!("face property '{}' is not a list", el.props[i].name))),
     }
 }
 
@@ -353,12 +302,7 @@ pub(crate) fn read(bytes: &[u8], mesh: bool) -> Result<Mesh> {
             h.elements
                 .iter()
                 .position(|e| e.name == "face")
-                .ok_or_else(|| {
-                    Error::parse(
-                        F,
-                        "the file has no 'face' element (a point cloud, not a mesh)",
-                    )
-                })?,
+                .ok_or_else(|| Error::parse(F, "the file has no 'face' element (a point cloud, not a mesh)"))?,
         )
     } else {
         None
@@ -386,10 +330,7 @@ pub(crate) fn read(bytes: &[u8], mesh: bool) -> Result<Mesh> {
             }
         }
     }
-    Ok(Mesh {
-        vertices: out.points,
-        triangles: out.triangles,
-    })
+    Ok(Mesh { vertices: out.points, triangles: out.triangles })
 }
 
 fn read_binary_element(
@@ -405,11 +346,7 @@ fn read_binary_element(
     }
     let remaining = bytes.len() - *pos;
     let min = el.min_size() as u64;
-    if el
-        .count
-        .checked_mul(min)
-        .is_none_or(|need| need > remaining as u64)
-    {
+    if el.count.checked_mul(min).is_none_or(|need| need > remaining as u64) {
         return Err(Error::parse(
             F,
             format!(
@@ -426,19 +363,9 @@ fn read_binary_element(
             let layout: Vec<(usize, Scalar)> = idx
                 .iter()
                 .map(|&i| {
-                    let off: usize = el.props[..i]
-                        .iter()
-                        .map(|p| {
-                            if let Kind::Scalar(s) = p.kind {
-                                s.size()
-                            } else {
-                                0
-                            }
-                        })
-                        .sum();
-                    let Kind::Scalar(s) = el.props[i].kind else {
-                        unreachable!("checked by vertex_want")
-                    };
+                    let off: usize =
+                        el.props[..i].iter().map(|p| if let Kind::Scalar(s) = p.kind { s.size() } else { 0 }).sum();
+                    let Kind::Scalar(s) = el.props[i].kind else { unreachable!("checked by vertex_want") };
                     (off, s)
                 })
                 .collect();
@@ -456,8 +383,7 @@ fn read_binary_element(
     }
     // Elements with list properties: one instance at a time, every read bounds-checked.
     if let Want::Points(_) = want {
-        out.points
-            .reserve(bounded_capacity(el.count, remaining, min as usize));
+        out.points.reserve(bounded_capacity(el.count, remaining, min as usize));
     }
     let mut poly: Vec<u32> = Vec::new();
     for inst in 0..count {
@@ -476,9 +402,7 @@ fn read_binary_element(
             };
             match p.kind {
                 Kind::Scalar(s) => {
-                    let b = bytes
-                        .get(*pos..*pos + s.size())
-                        .ok_or_else(|| truncated(s.size(), *pos))?;
+                    let b = bytes.get(*pos..*pos + s.size()).ok_or_else(|| truncated(s.size(), *pos))?;
                     if let Want::Points(idx) = want {
                         for a in 0..3 {
                             if idx[a] == pi {
@@ -489,20 +413,19 @@ fn read_binary_element(
                     *pos += s.size();
                 }
                 Kind::List { count: cs, item } => {
-                    let b = bytes
-                        .get(*pos..*pos + cs.size())
-                        .ok_or_else(|| truncated(cs.size(), *pos))?;
+                    let b = bytes.get(*pos..*pos + cs.size()).ok_or_else(|| truncated(cs.size(), *pos))?;
                     let n = cs.read_i64(b, big);
                     if n < 0 {
                         return Err(Error::parse(
                             F,
-                            format!("element '{}' instance {inst}: list '{}' has a negative length {n} (byte offset {})", el.name, p.name, *pos),
+                            format!(
+                                "element '{}' instance {inst}: list '{}' has a negative length {n} (byte offset {})",
+                                el.name, p.name, *pos
+                            ),
                         ));
                     }
                     *pos += cs.size();
-                    let len = (n as usize)
-                        .checked_mul(item.size())
-                        .ok_or_else(|| truncated(usize::MAX, *pos))?;
+                    let len = (n as usize).checked_mul(item.size()).ok_or_else(|| truncated(usize::MAX, *pos))?;
                     let items = pos
                         .checked_add(len)
                         .and_then(|end| bytes.get(*pos..end))
@@ -536,11 +459,7 @@ fn read_ascii_element(lines: &mut Lines, el: &Element, want: Want, out: &mut Out
     }
     if let Want::Points(_) = want {
         // An ascii instance takes at least two bytes per scalar ("0 ").
-        out.points.reserve(bounded_capacity(
-            el.count,
-            lines.remaining(),
-            2 * el.props.len(),
-        ));
+        out.points.reserve(bounded_capacity(el.count, lines.remaining(), 2 * el.props.len()));
     }
     let mut poly: Vec<u32> = Vec::new();
     let mut inst: u64 = 0;
@@ -567,10 +486,7 @@ fn read_ascii_element(lines: &mut Lines, el: &Element, want: Want, out: &mut Out
                 t.next().ok_or_else(|| {
                     Error::parse(
                         F,
-                        format!(
-                            "line {n}: element '{}' is missing a value for {what} '{}'",
-                            el.name, p.name
-                        ),
+                        format!("line {n}: element '{}' is missing a value for {what} '{}'", el.name, p.name),
                     )
                 })
             };
@@ -597,16 +513,11 @@ fn read_ascii_element(lines: &mut Lines, el: &Element, want: Want, out: &mut Out
                         let tok = t.next().ok_or_else(|| {
                             Error::parse(
                                 F,
-                                format!(
-                                    "line {n}: list '{}' declares {len} items but only {k} follow",
-                                    p.name
-                                ),
+                                format!("line {n}: list '{}' declares {len} items but only {k} follow", p.name),
                             )
                         })?;
                         if is_faces {
-                            let Want::Faces(_, nv) = want else {
-                                unreachable!()
-                            };
+                            let Want::Faces(_, nv) = want else { unreachable!() };
                             let v = parse_int(F, n, "vertex index", tok)?;
                             poly.push(check_index(F, v, nv, || format!("line {n} (face {inst})"))?);
                         } else {

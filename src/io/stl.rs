@@ -69,7 +69,10 @@ fn read_binary(bytes: &[u8]) -> Result<Mesh> {
     if bytes.len() < 84 {
         return Err(Error::parse(
             F,
-            format!("binary STL needs an 84-byte header (80 bytes, then the facet count), but the file has {} bytes", bytes.len()),
+            format!(
+                "binary STL needs an 84-byte header (80 bytes, then the facet count), but the file has {} bytes",
+                bytes.len()
+            ),
         ));
     }
     let n = u32::from_le_bytes([bytes[80], bytes[81], bytes[82], bytes[83]]) as u64;
@@ -77,7 +80,10 @@ fn read_binary(bytes: &[u8]) -> Result<Mesh> {
     if need > bytes.len() as u64 {
         return Err(Error::parse(
             F,
-            format!("truncated binary STL: the header declares {n} facets ({need} bytes), but the file has {} bytes", bytes.len()),
+            format!(
+                "truncated binary STL: the header declares {n} facets ({need} bytes), but the file has {} bytes",
+                bytes.len()
+            ),
         ));
     }
     let n = n as usize;
@@ -88,21 +94,13 @@ fn read_binary(bytes: &[u8]) -> Result<Mesh> {
         let v = |k: usize| {
             let o = 12 + 12 * k;
             [0, 1, 2].map(|a| {
-                f32::from_le_bytes([
-                    rec[o + 4 * a],
-                    rec[o + 4 * a + 1],
-                    rec[o + 4 * a + 2],
-                    rec[o + 4 * a + 3],
-                ])
+                f32::from_le_bytes([rec[o + 4 * a], rec[o + 4 * a + 1], rec[o + 4 * a + 2], rec[o + 4 * a + 3]])
             })
         };
         let t = [w.add(v(0)), w.add(v(1)), w.add(v(2))];
         triangles.push(t);
     }
-    Ok(Mesh {
-        vertices: w.vertices,
-        triangles,
-    })
+    Ok(Mesh { vertices: w.vertices, triangles })
 }
 
 fn read_ascii(bytes: &[u8]) -> Result<Mesh> {
@@ -127,61 +125,44 @@ fn read_ascii(bytes: &[u8]) -> Result<Mesh> {
             }
             "vertex" => {
                 let Some((_, corners)) = loop_.as_mut() else {
-                    return Err(Error::parse(
-                        F,
-                        format!("line {n}: 'vertex' outside an 'outer loop'"),
-                    ));
+                    return Err(Error::parse(F, format!("line {n}: 'vertex' outside an 'outer loop'")));
                 };
                 let mut p = [0.0f32; 3];
                 for (a, v) in p.iter_mut().enumerate() {
                     let axis = ["x", "y", "z"][a];
-                    let tok = t.next().ok_or_else(|| {
-                        Error::parse(
-                            F,
-                            format!("line {n}: vertex has {a} coordinates, expected 3"),
-                        )
-                    })?;
+                    let tok = t
+                        .next()
+                        .ok_or_else(|| Error::parse(F, format!("line {n}: vertex has {a} coordinates, expected 3")))?;
                     *v = parse_f32(F, n, axis, tok)?;
                 }
                 corners.push(w.add(p));
             }
             "endloop" => {
                 let Some((start, corners)) = loop_.take() else {
-                    return Err(Error::parse(
-                        F,
-                        format!("line {n}: 'endloop' without 'outer loop'"),
-                    ));
+                    return Err(Error::parse(F, format!("line {n}: 'endloop' without 'outer loop'")));
                 };
                 if corners.len() < 3 {
                     return Err(Error::parse(
                         F,
-                        format!("line {n}: the facet loop opened at line {start} has {} vertices, expected 3", corners.len()),
+                        format!(
+                            "line {n}: the facet loop opened at line {start} has {} vertices, expected 3",
+                            corners.len()
+                        ),
                     ));
                 }
                 fan(&corners, &mut triangles);
                 facets += 1;
             }
-            other => {
-                return Err(Error::parse(
-                    F,
-                    format!("line {n}: unexpected keyword {} in ascii STL", show(other)),
-                ))
-            }
+            other => return Err(Error::parse(F, format!("line {n}: unexpected keyword {} in ascii STL", show(other)))),
         }
     }
     if let Some((start, _)) = loop_ {
-        return Err(Error::parse(
-            F,
-            format!("the file ends inside the facet loop opened at line {start}"),
-        ));
+        return Err(Error::parse(F, format!("the file ends inside the facet loop opened at line {start}")));
     }
     if facets == 0 {
         return Err(Error::parse(F, "ascii STL has no facets"));
     }
-    Ok(Mesh {
-        vertices: w.vertices,
-        triangles,
-    })
+    Ok(Mesh { vertices: w.vertices, triangles })
 }
 
 /// True when the content is STL: the binary size rule, or `solid` followed by `facet`.

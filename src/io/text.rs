@@ -59,10 +59,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f32; 3]>> {
         }
     }
     if !started {
-        return Err(Error::parse(
-            F,
-            "no line with three numbers (x y z) found: not a text point list",
-        ));
+        return Err(Error::parse(F, "no line with three numbers (x y z) found: not a text point list"));
     }
     Ok(out)
 }

@@ -13,20 +13,12 @@ pub(crate) struct Lines<'a> {
 
 impl<'a> Lines<'a> {
     pub(crate) fn new(bytes: &'a [u8]) -> Self {
-        Self {
-            bytes,
-            pos: 0,
-            line: 0,
-        }
+        Self { bytes, pos: 0, line: 0 }
     }
 
     /// Continues from byte `pos`, the next line being numbered `line + 1`.
     pub(crate) fn at(bytes: &'a [u8], pos: usize, line: usize) -> Self {
-        Self {
-            bytes,
-            pos: pos.min(bytes.len()),
-            line,
-        }
+        Self { bytes, pos: pos.min(bytes.len()), line }
     }
 
     /// Byte offset of the start of the next line.
@@ -66,18 +58,11 @@ impl<'a> Iterator for Lines<'a> {
 }
 
 /// The line as UTF-8 text, or an error naming the line.
-pub(crate) fn utf8_line<'a>(
-    format: &'static str,
-    line_no: usize,
-    line: &'a [u8],
-) -> Result<&'a str> {
+pub(crate) fn utf8_line<'a>(format: &'static str, line_no: usize, line: &'a [u8]) -> Result<&'a str> {
     std::str::from_utf8(line).map_err(|e| {
         Error::parse(
             format,
-            format!(
-                "line {line_no} is not valid UTF-8 text (invalid byte at column {})",
-                e.valid_up_to() + 1
-            ),
+            format!("line {line_no} is not valid UTF-8 text (invalid byte at column {})", e.valid_up_to() + 1),
         )
     })
 }
@@ -94,60 +79,29 @@ pub(crate) fn show(token: &str) -> String {
 }
 
 /// Parses an `f32` coordinate token (`nan`, `inf` accepted: validation happens later).
-pub(crate) fn parse_f32(
-    format: &'static str,
-    line_no: usize,
-    what: &str,
-    token: &str,
-) -> Result<f32> {
-    token.parse::<f32>().map_err(|_| {
-        Error::parse(
-            format,
-            format!("line {line_no}: {what} {} is not a number", show(token)),
-        )
-    })
+pub(crate) fn parse_f32(format: &'static str, line_no: usize, what: &str, token: &str) -> Result<f32> {
+    token
+        .parse::<f32>()
+        .map_err(|_| Error::parse(format, format!("line {line_no}: {what} {} is not a number", show(token))))
 }
 
 /// Parses an integer token.
-pub(crate) fn parse_int(
-    format: &'static str,
-    line_no: usize,
-    what: &str,
-    token: &str,
-) -> Result<i64> {
-    token.parse::<i64>().map_err(|_| {
-        Error::parse(
-            format,
-            format!("line {line_no}: {what} {} is not an integer", show(token)),
-        )
-    })
+pub(crate) fn parse_int(format: &'static str, line_no: usize, what: &str, token: &str) -> Result<i64> {
+    token
+        .parse::<i64>()
+        .map_err(|_| Error::parse(format, format!("line {line_no}: {what} {} is not an integer", show(token))))
 }
 
 /// Parses a non-negative count token.
-pub(crate) fn parse_count(
-    format: &'static str,
-    line_no: usize,
-    what: &str,
-    token: &str,
-) -> Result<u64> {
+pub(crate) fn parse_count(format: &'static str, line_no: usize, what: &str, token: &str) -> Result<u64> {
     token.parse::<u64>().map_err(|_| {
-        Error::parse(
-            format,
-            format!(
-                "line {line_no}: {what} {} is not a non-negative integer",
-                show(token)
-            ),
-        )
+        Error::parse(format, format!("line {line_no}: {what} {} is not a non-negative integer", show(token)))
     })
 }
 
 /// How many items to reserve room for: what the header claims, but never more than the
 /// remaining bytes could hold at `min_item_bytes` each (a lying header cannot make us allocate).
-pub(crate) fn bounded_capacity(
-    claimed: u64,
-    remaining_bytes: usize,
-    min_item_bytes: usize,
-) -> usize {
+pub(crate) fn bounded_capacity(claimed: u64, remaining_bytes: usize, min_item_bytes: usize) -> usize {
     let fit = remaining_bytes / min_item_bytes.max(1);
     usize::try_from(claimed).unwrap_or(usize::MAX).min(fit)
 }
@@ -162,10 +116,7 @@ pub(crate) fn check_index(
     if index < 0 || index as u64 >= n_vertices as u64 || index > u32::MAX as i64 {
         return Err(Error::parse(
             format,
-            format!(
-                "{}: vertex index {index} is out of range ({n_vertices} vertices)",
-                where_()
-            ),
+            format!("{}: vertex index {index} is out of range ({n_vertices} vertices)", where_()),
         ));
     }
     Ok(index as u32)
@@ -184,8 +135,7 @@ pub(crate) fn fan(poly: &[u32], out: &mut Vec<[u32; 3]>) {
 /// Splits a text line into tokens separated by whitespace, commas or semicolons (empty tokens
 /// dropped).
 pub(crate) fn split_fields(line: &str) -> impl Iterator<Item = &str> {
-    line.split(|c: char| c.is_ascii_whitespace() || c == ',' || c == ';')
-        .filter(|t| !t.is_empty())
+    line.split(|c: char| c.is_ascii_whitespace() || c == ',' || c == ';').filter(|t| !t.is_empty())
 }
 
 #[cfg(test)]

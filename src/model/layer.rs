@@ -2,8 +2,8 @@
 
 use super::config::{ModelConfig, Reference};
 use crate::nn::{
-    sigmoid, softmax_rows_inplace, workspace::take, AttentionBlock, LayerNorm, Linear, Mlp,
-    MultiHeadAttention, Workspace,
+    sigmoid, softmax_rows_inplace, workspace::take, AttentionBlock, LayerNorm, Linear, Mlp, MultiHeadAttention,
+    Workspace,
 };
 use crate::weights::Weights;
 
@@ -84,29 +84,15 @@ pub(crate) fn linear(w: &Weights, name: &str) -> Linear {
     let weight = w.get(&format!("{name}.weight")).to_vec();
     let bias = w.get(&format!("{name}.bias")).to_vec();
     let out_dim = bias.len();
-    Linear {
-        in_dim: weight.len() / out_dim,
-        out_dim,
-        weight,
-        bias: Some(bias),
-    }
+    Linear { in_dim: weight.len() / out_dim, out_dim, weight, bias: Some(bias) }
 }
 
 pub(crate) fn mlp(w: &Weights, prefix: &str, layers: usize, relu_last: bool) -> Mlp {
-    Mlp {
-        layers: (0..layers)
-            .map(|i| linear(w, &format!("{prefix}.{i}")))
-            .collect(),
-        relu_last,
-    }
+    Mlp { layers: (0..layers).map(|i| linear(w, &format!("{prefix}.{i}"))).collect(), relu_last }
 }
 
 fn norm(w: &Weights, name: &str, eps: f32) -> LayerNorm {
-    LayerNorm {
-        gamma: w.get(&format!("{name}.weight")).to_vec(),
-        beta: w.get(&format!("{name}.bias")).to_vec(),
-        eps,
-    }
+    LayerNorm { gamma: w.get(&format!("{name}.weight")).to_vec(), beta: w.get(&format!("{name}.bias")).to_vec(), eps }
 }
 
 fn block(w: &Weights, name: &str, cfg: &ModelConfig) -> AttentionBlock {
@@ -149,14 +135,9 @@ impl ArpsLayer {
         for st in [&mut ws.source, &mut ws.target] {
             let n = st.n;
             let phi = take(&mut ws.phi, n * c);
-            self.pos
-                .forward(&st.x[..n * 3], n, phi, &mut ws.a, &mut ws.b);
+            self.pos.forward(&st.x[..n * 3], n, phi, &mut ws.a, &mut ws.b);
             let g = take(&mut st.g, n * d);
-            for ((gr, fr), pr) in g
-                .chunks_exact_mut(d)
-                .zip(st.f.chunks_exact(c))
-                .zip(phi.chunks_exact(c))
-            {
+            for ((gr, fr), pr) in g.chunks_exact_mut(d).zip(st.f.chunks_exact(c)).zip(phi.chunks_exact(c)) {
                 gr[..c].copy_from_slice(fr);
                 gr[c..].copy_from_slice(pr);
             }
@@ -165,38 +146,17 @@ impl ArpsLayer {
         for st in [&mut ws.source, &mut ws.target] {
             let n = st.n;
             let g1 = take(&mut st.g1, n * d);
-            self.self_attn
-                .forward(&st.g[..n * d], n, &st.g[..n * d], n, g1, &mut ws.attn);
+            self.self_attn.forward(&st.g[..n * d], n, &st.g[..n * d], n, g1, &mut ws.attn);
         }
         // cross attention: each cloud's self-attended tokens attend to the other's
         let (s, t) = (&mut ws.source, &mut ws.target);
         let gs2 = take(&mut s.g2, s.n * d);
-        self.cross_attn.forward(
-            &s.g1[..s.n * d],
-            s.n,
-            &t.g1[..t.n * d],
-            t.n,
-            gs2,
-            &mut ws.attn,
-        );
+        self.cross_attn.forward(&s.g1[..s.n * d], s.n, &t.g1[..t.n * d], t.n, gs2, &mut ws.attn);
         let gt2 = take(&mut t.g2, t.n * d);
-        self.cross_attn.forward(
-            &t.g1[..t.n * d],
-            t.n,
-            &s.g1[..s.n * d],
-            s.n,
-            gt2,
-            &mut ws.attn,
-        );
+        self.cross_attn.forward(&t.g1[..t.n * d], t.n, &s.g1[..s.n * d], s.n, gt2, &mut ws.attn);
         // features and reference points
-        let mut mu = [
-            ([0.0f32; 3], vec![0.0f32; c]),
-            ([0.0f32; 3], vec![0.0f32; c]),
-        ];
-        for (st, (mx, mf)) in [&mut ws.source, &mut ws.target]
-            .into_iter()
-            .zip(mu.iter_mut())
-        {
+        let mut mu = [([0.0f32; 3], vec![0.0f32; c]), ([0.0f32; 3], vec![0.0f32; c])];
+        for (st, (mx, mf)) in [&mut ws.source, &mut ws.target].into_iter().zip(mu.iter_mut()) {
             let n = st.n;
             let f = take(&mut st.f, n * c);
             self.out.forward(&st.g2[..n * d], n, f);
@@ -207,8 +167,8 @@ impl ArpsLayer {
                 if wi == 0.0 {
                     continue;
                 }
-                for a in 0..3 {
-                    mx[a] += wi * st.x[i * 3 + a];
+                for (m, x) in mx.iter_mut().zip(&st.x[i * 3..i * 3 + 3]) {
+                    *m += wi * x;
                 }
                 for (m, v) in mf.iter_mut().zip(&f[i * c..(i + 1) * c]) {
                     *m += wi * v;
@@ -216,22 +176,13 @@ impl ArpsLayer {
             }
         }
         // step size from the differences of the two reference points
-        let mut step_in = vec![0.0f32; 3 + c];
-        for a in 0..3 {
-            step_in[a] = mu[0].0[a] - mu[1].0[a];
-        }
-        for k in 0..c {
-            step_in[3 + k] = mu[0].1[k] - mu[1].1[k];
-        }
+        let step_in: Vec<f32> =
+            (0..3).map(|a| mu[0].0[a] - mu[1].0[a]).chain(mu[0].1.iter().zip(&mu[1].1).map(|(s, t)| s - t)).collect();
         let mut alpha = [0.0f32];
-        self.step
-            .forward(&step_in, 1, &mut alpha, &mut ws.a, &mut ws.b);
+        self.step.forward(&step_in, 1, &mut alpha, &mut ws.a, &mut ws.b);
         let s = sigmoid(alpha[0]);
         let mut shifts = [[0.0f32; 3]; 2];
-        for ((st, (mx, _)), shift) in [&mut ws.source, &mut ws.target]
-            .into_iter()
-            .zip(mu.iter())
-            .zip(shifts.iter_mut())
+        for ((st, (mx, _)), shift) in [&mut ws.source, &mut ws.target].into_iter().zip(mu.iter()).zip(shifts.iter_mut())
         {
             *shift = mx.map(|v| s * v);
             for xi in st.x[..st.n * 3].chunks_exact_mut(3) {
@@ -260,10 +211,7 @@ fn reference_weights(layer: &ArpsLayer, cfg: &ModelConfig, f: &[f32], n: usize, 
         }
         _ => {
             let h = cfg.top_h.min(n);
-            let norms: Vec<f32> = f
-                .chunks_exact(c)
-                .map(|r| r.iter().map(|v| v * v).sum())
-                .collect();
+            let norms: Vec<f32> = f.chunks_exact(c).map(|r| r.iter().map(|v| v * v).sum()).collect();
             let mut idx: Vec<usize> = (0..n).collect();
             idx.sort_by(|&a, &b| norms[b].total_cmp(&norms[a]).then(a.cmp(&b)));
             w.fill(0.0);

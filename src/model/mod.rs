@@ -1,8 +1,8 @@
 //! The DGMR-ARPS network: ARPS layers (position MLP, self and cross attention, reference point,
 //! step size, shifting) and the membership head (method.md B §1-§3).
 //!
-//! One forward pass takes a source and a target cloud (normalised units, any number of points
-//! >= 16, usually the config's N) and returns each point's soft membership in J Gaussians; the GMM
+//! One forward pass takes a source and a target cloud (normalised units, at least 16 points
+//! each, usually the config's N) and returns each point's soft membership in J Gaussians; the GMM
 //! parameters and the rigid solve are in [`crate::gmr`].
 
 pub mod config;
@@ -55,25 +55,14 @@ impl Model {
     /// Builds the network from validated weights.
     pub fn from_weights(w: &Weights) -> Result<Self> {
         w.config.validate()?;
-        let layers = (0..w.config.layers)
-            .map(|l| ArpsLayer::from_weights(w, l))
-            .collect();
+        let layers = (0..w.config.layers).map(|l| ArpsLayer::from_weights(w, l)).collect();
         let head = layer::mlp(w, "head", w.config.head_hidden.len() + 1, false);
-        Ok(Self {
-            config: w.config.clone(),
-            layers,
-            head,
-        })
+        Ok(Self { config: w.config.clone(), layers, head })
     }
 
     /// Runs the network on a pair. Points are in normalised units; each cloud is pre-centred
     /// here (its own mean subtracted), so the output does not depend on where the clouds sit.
-    pub fn forward(
-        &self,
-        source: &[[f32; 3]],
-        target: &[[f32; 3]],
-        ws: &mut ModelWorkspace,
-    ) -> Result<ForwardOutput> {
+    pub fn forward(&self, source: &[[f32; 3]], target: &[[f32; 3]], ws: &mut ModelWorkspace) -> Result<ForwardOutput> {
         let min = self.min_points();
         for (what, c) in [("source", source), ("target", target)] {
             if c.len() < min {
@@ -95,10 +84,7 @@ impl Model {
             out.shifts_target.push(dt);
         }
         let j = self.config.gaussians;
-        for (f, n, gamma) in [
-            (&lw.source.f, ns, &mut out.gamma_source),
-            (&lw.target.f, nt, &mut out.gamma_target),
-        ] {
+        for (f, n, gamma) in [(&lw.source.f, ns, &mut out.gamma_source), (&lw.target.f, nt, &mut out.gamma_target)] {
             let h = take(&mut ws.head_in, n * 2 * c);
             let mut max = vec![f32::NEG_INFINITY; c];
             for row in f[..n * c].chunks_exact(c) {

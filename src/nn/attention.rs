@@ -32,15 +32,7 @@ impl MultiHeadAttention {
 
     /// `out[nq, d] = MHA(x_q, x_kv, x_kv)`: queries from `x_q [nq, d]`, keys and values from
     /// `x_kv [nk, d]`.
-    pub fn forward(
-        &self,
-        x_q: &[f32],
-        nq: usize,
-        x_kv: &[f32],
-        nk: usize,
-        out: &mut [f32],
-        ws: &mut Workspace,
-    ) {
+    pub fn forward(&self, x_q: &[f32], nq: usize, x_kv: &[f32], nk: usize, out: &mut [f32], ws: &mut Workspace) {
         let d = self.dim();
         let dk = d / self.heads;
         let q = take(&mut ws.q, nq * d);
@@ -55,22 +47,7 @@ impl MultiHeadAttention {
         for h in 0..self.heads {
             let off = h * dk;
             // scores = scale * Q_h K_h^T
-            gemm(
-                nq,
-                dk,
-                nk,
-                scale,
-                &q[off..],
-                d as isize,
-                1,
-                &k[off..],
-                1,
-                d as isize,
-                0.0,
-                scores,
-                nk as isize,
-                1,
-            );
+            gemm(nq, dk, nk, scale, &q[off..], d as isize, 1, &k[off..], 1, d as isize, 0.0, scores, nk as isize, 1);
             softmax_rows_inplace(scores, nk);
             // heads[:, off..off+dk] = P V_h
             gemm(
@@ -112,15 +89,7 @@ pub struct AttentionBlock {
 
 impl AttentionBlock {
     /// Writes the block's output for queries `x [nq, d]` attending to `kv [nk, d]` into `y [nq, d]`.
-    pub fn forward(
-        &self,
-        x: &[f32],
-        nq: usize,
-        kv: &[f32],
-        nk: usize,
-        y: &mut [f32],
-        ws: &mut Workspace,
-    ) {
+    pub fn forward(&self, x: &[f32], nq: usize, kv: &[f32], nk: usize, y: &mut [f32], ws: &mut Workspace) {
         let d = self.attn.dim();
         let mut tmp = std::mem::take(&mut ws.tmp);
         let a = take(&mut tmp, nq * d);

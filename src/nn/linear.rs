@@ -47,14 +47,7 @@ impl Mlp {
     }
 
     /// Applies the MLP to `[rows, in]`; writes `[rows, out_dim]` to `y`. `a`, `b` are scratch.
-    pub fn forward(
-        &self,
-        x: &[f32],
-        rows: usize,
-        y: &mut [f32],
-        a: &mut Vec<f32>,
-        b: &mut Vec<f32>,
-    ) {
+    pub fn forward(&self, x: &[f32], rows: usize, y: &mut [f32], a: &mut Vec<f32>, b: &mut Vec<f32>) {
         let n = self.layers.len();
         let first = &self.layers[0];
         if n == 1 {
@@ -69,11 +62,7 @@ impl Mlp {
         relu_inplace(out);
         let mut current_in_a = true;
         for (i, layer) in self.layers.iter().enumerate().skip(1) {
-            let (src, dst) = if current_in_a {
-                (&*a, &mut *b)
-            } else {
-                (&*b, &mut *a)
-            };
+            let (src, dst) = if current_in_a { (&*a, &mut *b) } else { (&*b, &mut *a) };
             let src = &src[..rows * layer.in_dim];
             if i == n - 1 {
                 layer.forward(src, rows, y);

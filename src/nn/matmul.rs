@@ -2,17 +2,13 @@
 
 /// `C[m,n] = A[m,k] * B[k,n]` (all row-major, contiguous). Overwrites `c`.
 pub fn matmul(a: &[f32], b: &[f32], c: &mut [f32], m: usize, k: usize, n: usize) {
-    gemm(
-        m, k, n, 1.0, a, k as isize, 1, b, n as isize, 1, 0.0, c, n as isize, 1,
-    );
+    gemm(m, k, n, 1.0, a, k as isize, 1, b, n as isize, 1, 0.0, c, n as isize, 1);
 }
 
 /// `C[m,n] = A[m,k] * B[n,k]^T` (B given row-major as `[n, k]`, e.g. a Linear weight).
 /// Overwrites `c`.
 pub fn matmul_bt(a: &[f32], b: &[f32], c: &mut [f32], m: usize, k: usize, n: usize) {
-    gemm(
-        m, k, n, 1.0, a, k as isize, 1, b, 1, k as isize, 0.0, c, n as isize, 1,
-    );
+    gemm(m, k, n, 1.0, a, k as isize, 1, b, 1, k as isize, 0.0, c, n as isize, 1);
 }
 
 /// General strided product `C = alpha * A * B + beta * C`, with explicit row and column strides

@@ -15,11 +15,7 @@ pub fn bumpy_surface(n: usize, phase: f64) -> PointCloud {
         let u = a * std::f64::consts::TAU;
         let v = (2.0 * b - 1.0).acos();
         let r = 0.8 + 0.12 * (3.0 * u).sin() * (2.0 * v).cos() + 0.08 * (5.0 * v).sin();
-        let p = [
-            r * v.sin() * u.cos() * 1.2,
-            r * v.sin() * u.sin() * 0.8,
-            r * v.cos() + 0.2 * (u).cos(),
-        ];
+        let p = [r * v.sin() * u.cos() * 1.2, r * v.sin() * u.sin() * 0.8, r * v.cos() + 0.2 * (u).cos()];
         pts.push(p.map(|x| x as f32));
     }
     PointCloud::new(pts)

@@ -16,12 +16,8 @@ pub const PAIR_JSON: &str = include_str!("../../fixtures/wasm/pair.json");
 /// registration checks do not depend on them and the reader checks have a reference).
 pub fn ascii_ply_xyz(bytes: &[u8]) -> Vec<f32> {
     let text = std::str::from_utf8(bytes).expect("fixture is UTF-8");
-    let (_, body) = text
-        .split_once("end_header\n")
-        .expect("fixture has a PLY header");
-    body.split_ascii_whitespace()
-        .map(|v| v.parse::<f32>().expect("fixture number"))
-        .collect()
+    let (_, body) = text.split_once("end_header\n").expect("fixture has a PLY header");
+    body.split_ascii_whitespace().map(|v| v.parse::<f32>().expect("fixture number")).collect()
 }
 
 pub fn source() -> Vec<f32> {
@@ -42,10 +38,7 @@ pub fn ground_truth() -> Matrix4<f64> {
 /// The message of a thrown JS `Error`.
 pub fn message(e: JsError) -> String {
     let v: JsValue = e.into();
-    assert!(
-        v.is_instance_of::<js_sys::Error>(),
-        "a JS Error is thrown, got {v:?}"
-    );
+    assert!(v.is_instance_of::<js_sys::Error>(), "a JS Error is thrown, got {v:?}");
     v.unchecked_into::<js_sys::Error>().message().into()
 }
 
@@ -54,18 +47,13 @@ pub fn get(obj: &JsValue, key: &str) -> JsValue {
 }
 
 pub fn num(obj: &JsValue, key: &str) -> f64 {
-    get(obj, key)
-        .as_f64()
-        .unwrap_or_else(|| panic!("{key} is a number"))
+    get(obj, key).as_f64().unwrap_or_else(|| panic!("{key} is a number"))
 }
 
 /// A result matrix field (`Float32Array(16)`, column-major) as a `Matrix4`.
 pub fn matrix(obj: &JsValue, key: &str) -> Matrix4<f64> {
     let v = get(obj, key);
-    assert!(
-        v.is_instance_of::<Float32Array>(),
-        "{key} is a Float32Array"
-    );
+    assert!(v.is_instance_of::<Float32Array>(), "{key} is a Float32Array");
     let a: Float32Array = v.unchecked_into();
     assert_eq!(a.length(), 16, "{key} has 16 elements");
     let mut m = [0.0f64; 16];
@@ -92,8 +80,5 @@ pub fn column_major_js(m: &Matrix4<f64>) -> Float32Array {
 
 pub fn strings(v: &JsValue) -> Vec<String> {
     assert!(Array::is_array(v), "an array");
-    Array::from(v)
-        .iter()
-        .map(|s| s.as_string().expect("a string"))
-        .collect()
+    Array::from(v).iter().map(|s| s.as_string().expect("a string")).collect()
 }

@@ -48,11 +48,7 @@ fn synthetic_pair(n: usize) -> (PointCloud, PointCloud, nalgebra::Matrix4<f64>) 
         // a torus with bumps, in roughly [-1, 1]^3
         let r = 0.3 + 0.05 * (5.0 * u).sin() * (3.0 * v).cos();
         let big = 0.65;
-        [
-            (big + r * v.cos()) * u.cos(),
-            (big + r * v.cos()) * u.sin(),
-            r * v.sin() * 1.4,
-        ]
+        [(big + r * v.cos()) * u.cos(), (big + r * v.cos()) * u.sin(), r * v.sin() * 1.4]
     };
     let view = |n: usize, phase: f64| -> PointCloud {
         let mut pts = Vec::with_capacity(n);
@@ -84,12 +80,8 @@ fn synthetic_pair(n: usize) -> (PointCloud, PointCloud, nalgebra::Matrix4<f64>) 
 
 /// sgemm GFLOP/s for `[m,k] x [k,n]`, median of `reps`.
 fn matmul_gflops(m: usize, k: usize, n: usize, reps: usize) -> f64 {
-    let a: Vec<f32> = (0..m * k)
-        .map(|i| ((i * 7919) % 1000) as f32 * 1e-3)
-        .collect();
-    let b: Vec<f32> = (0..k * n)
-        .map(|i| ((i * 104_729) % 1000) as f32 * 1e-3)
-        .collect();
+    let a: Vec<f32> = (0..m * k).map(|i| ((i * 7919) % 1000) as f32 * 1e-3).collect();
+    let b: Vec<f32> = (0..k * n).map(|i| ((i * 104_729) % 1000) as f32 * 1e-3).collect();
     let mut c = vec![0.0f32; m * n];
     nn::matmul(&a, &b, &mut c, m, k, n); // warm-up
     let mut times: Vec<f64> = (0..reps)
@@ -129,34 +121,19 @@ pub fn run(args: BenchArgs) -> Result<(), String> {
         .map(|_| {
             let t = Instant::now();
             for b in &bytes {
-                std::hint::black_box(
-                    io::read_point_cloud(b, "cloud.ply").expect("own PLY output parses"),
-                );
+                std::hint::black_box(io::read_point_cloud(b, "cloud.ply").expect("own PLY output parses"));
             }
             t.elapsed().as_secs_f64() * 1e3
         })
         .collect();
-    let options = Options {
-        icp,
-        ..Options::default()
-    };
-    let _ = registrar
-        .register(&source, &target, &options)
-        .map_err(|e| e.to_string())?; // warm-up
+    let options = Options { icp, ..Options::default() };
+    let _ = registrar.register(&source, &target, &options).map_err(|e| e.to_string())?; // warm-up
     let mut stages: [Vec<f64>; 5] = Default::default();
     let mut last = None;
     for _ in 0..reps {
-        let r = registrar
-            .register(&source, &target, &options)
-            .map_err(|e| e.to_string())?;
+        let r = registrar.register(&source, &target, &options).map_err(|e| e.to_string())?;
         let t = r.timings;
-        for (v, x) in stages.iter_mut().zip([
-            t.preprocess_ms,
-            t.network_ms,
-            t.gmr_ms,
-            t.icp_ms,
-            t.total_ms,
-        ]) {
+        for (v, x) in stages.iter_mut().zip([t.preprocess_ms, t.network_ms, t.gmr_ms, t.icp_ms, t.total_ms]) {
             v.push(x);
         }
         last = Some(r);
@@ -172,23 +149,29 @@ pub fn run(args: BenchArgs) -> Result<(), String> {
     let peak_model = matmul_gflops(n_net, cfg.token_dim(), cfg.token_dim(), 15);
     let peak = peak_square.max(peak_model);
 
-    println!("arps bench: {} + {} points, model '{}' (N = {n_net}, C = {}, L = {}), ICP {:?}, {reps} reps, medians", source.len(), target.len(), cfg.preset, cfg.feature_dim, cfg.layers, icp);
+    println!(
+        "arps bench: {} + {} points, model '{}' (N = {n_net}, C = {}, L = {}), ICP {:?}, {reps} reps, medians",
+        source.len(),
+        target.len(),
+        cfg.preset,
+        cfg.feature_dim,
+        cfg.layers,
+        icp
+    );
     println!("  read (2 x binary PLY)   {:>9.3} ms", median(&mut read_ms));
     println!("  downsample/normalise    {:>9.3} ms", median(&mut pre));
-    println!(
-        "  network                 {:>9.3} ms   ({:.2} GFLOP per pair)",
-        net_ms,
-        flops / 1e9
-    );
+    println!("  network                 {:>9.3} ms   ({:.2} GFLOP per pair)", net_ms, flops / 1e9);
     println!("  GMR                     {:>9.3} ms", median(&mut gmr));
-    println!(
-        "  ICP                     {:>9.3} ms   ({} iterations)",
-        median(&mut icp_t),
-        r.icp_iterations
-    );
+    println!("  ICP                     {:>9.3} ms   ({} iterations)", median(&mut icp_t), r.icp_iterations);
     println!("  total register()        {:>9.3} ms", median(&mut total));
     println!("  network throughput      {:>9.1} GFLOP/s", net_gflops);
-    println!("  matmul peak             {:>9.1} GFLOP/s   (512^3: {:.1}; [{n_net} x {d}] x [{d} x {d}]: {:.1})", peak, peak_square, peak_model, d = cfg.token_dim());
+    println!(
+        "  matmul peak             {:>9.1} GFLOP/s   (512^3: {:.1}; [{n_net} x {d}] x [{d} x {d}]: {:.1})",
+        peak,
+        peak_square,
+        peak_model,
+        d = cfg.token_dim()
+    );
     println!("  network / peak          {:>9.2}", net_gflops / peak);
     if let Some(truth) = truth {
         println!(

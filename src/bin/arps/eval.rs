@@ -77,13 +77,8 @@ enum Method {
     UntrainedIcp,
 }
 
-const METHODS: [Method; 5] = [
-    Method::Network,
-    Method::NetworkIcp,
-    Method::IcpIdentity,
-    Method::IcpCentroids,
-    Method::UntrainedIcp,
-];
+const METHODS: [Method; 5] =
+    [Method::Network, Method::NetworkIcp, Method::IcpIdentity, Method::IcpCentroids, Method::UntrainedIcp];
 
 impl Method {
     fn name(self) -> &'static str {
@@ -99,23 +94,13 @@ impl Method {
     fn options(self, source: &PointCloud, target: &PointCloud) -> Options {
         let base = Options::default();
         match self {
-            Method::Network => Options {
-                icp: arps::IcpKind::Off,
-                ..base
-            },
+            Method::Network => Options { icp: arps::IcpKind::Off, ..base },
             Method::NetworkIcp | Method::UntrainedIcp => base,
-            Method::IcpIdentity => Options {
-                network: false,
-                ..base
-            },
+            Method::IcpIdentity => Options { network: false, ..base },
             Method::IcpCentroids => {
                 let (cs, ct) = (source.centroid(), target.centroid());
                 let t = Vector3::new(ct[0] - cs[0], ct[1] - cs[1], ct[2] - cs[2]);
-                Options {
-                    network: false,
-                    initial_transform: Some(to_rows(&Matrix4::new_translation(&t))),
-                    ..base
-                }
+                Options { network: false, initial_transform: Some(to_rows(&Matrix4::new_translation(&t))), ..base }
             }
         }
     }
@@ -145,10 +130,7 @@ struct PairResult {
 
 pub fn run(a: EvalArgs) -> Result<(), String> {
     let entries = manifest::read(&a.manifest)?;
-    let entries: Vec<_> = entries
-        .into_iter()
-        .take(a.limit.unwrap_or(usize::MAX))
-        .collect();
+    let entries: Vec<_> = entries.into_iter().take(a.limit.unwrap_or(usize::MAX)).collect();
     if entries.is_empty() {
         return Err(format!("{}: no pairs", a.manifest.display()));
     }
@@ -178,25 +160,11 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             source = source.transformed(&p);
             gt *= rigid_inverse(&p);
         }
-        let scale = if divide {
-            JointNormalization::of_pair(&source, &target).scale
-        } else {
-            1.0
-        };
-        let mut r = PairResult {
-            name: e.name.clone(),
-            scale,
-            errors: Vec::new(),
-            ms: Vec::new(),
-            failed: Vec::new(),
-        };
+        let scale = if divide { JointNormalization::of_pair(&source, &target).scale } else { 1.0 };
+        let mut r = PairResult { name: e.name.clone(), scale, errors: Vec::new(), ms: Vec::new(), failed: Vec::new() };
         for m in METHODS {
             let options = m.options(&source, &target);
-            let reg = if m == Method::UntrainedIcp {
-                &mut untrained
-            } else {
-                &mut trained
-            };
+            let reg = if m == Method::UntrainedIcp { &mut untrained } else { &mut trained };
             let t0 = Instant::now();
             let out = reg.register(&source, &target, &options);
             r.ms.push(t0.elapsed().as_secs_f64() * 1e3);
@@ -239,26 +207,15 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         None => "embedded default model".into(),
     };
     if let Some(path) = &a.svg {
-        let curves: Vec<(String, Vec<PairError>)> = per_method
-            .iter()
-            .map(|(n, e, _, _)| (n.clone(), e.clone()))
-            .collect();
+        let curves: Vec<(String, Vec<PairError>)> =
+            per_method.iter().map(|(n, e, _, _)| (n.clone(), e.clone())).collect();
         let title = format!(
             "{} ({} pairs{})",
             a.manifest.display(),
             results.len(),
-            a.perturb
-                .map(|s| format!(", perturbed, seed {s}"))
-                .unwrap_or_default()
+            a.perturb.map(|s| format!(", perturbed, seed {s}")).unwrap_or_default()
         );
-        let svg = recall_svg(
-            &curves,
-            a.rot_threshold,
-            a.trans_threshold,
-            30.0,
-            0.4,
-            &title,
-        );
+        let svg = recall_svg(&curves, a.rot_threshold, a.trans_threshold, 30.0, 0.4, &title);
         std::fs::write(path, svg).map_err(|e| format!("{}: {e}", path.display()))?;
     }
     if a.json {
@@ -293,9 +250,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         "arps eval: {} pairs from {}{}",
         results.len(),
         a.manifest.display(),
-        a.perturb
-            .map(|s| format!(", sources perturbed (seed {s})"))
-            .unwrap_or_default()
+        a.perturb.map(|s| format!(", sources perturbed (seed {s})")).unwrap_or_default()
     );
     println!("  weights: {weights_desc}; untrained: random web weights, seed 0");
     println!("  errors: {units}");

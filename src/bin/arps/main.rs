@@ -13,11 +13,7 @@ mod eval;
 mod make_pairs;
 
 #[derive(Parser)]
-#[command(
-    name = "arps",
-    version,
-    about = "Partial-to-partial point-cloud registration (DGMR-ARPS + ICP)"
-)]
+#[command(name = "arps", version, about = "Partial-to-partial point-cloud registration (DGMR-ARPS + ICP)")]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -145,16 +141,10 @@ fn run(command: Command) -> Result<(), String> {
                 max_correspondence_distance,
                 network_points,
                 seed,
-                non_finite: if drop_non_finite {
-                    NonFinite::Drop
-                } else {
-                    NonFinite::Error
-                },
+                non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
                 ..Options::default()
             };
-            let r = registrar
-                .register(&src, &tgt, &options)
-                .map_err(|e| e.to_string())?;
+            let r = registrar.register(&src, &tgt, &options).map_err(|e| e.to_string())?;
             let time_ms = t0.elapsed().as_secs_f64() * 1e3;
             if json {
                 let out = serde_json::json!({
@@ -173,10 +163,7 @@ fn run(command: Command) -> Result<(), String> {
             } else {
                 println!("T_target_source (maps source points into the target frame):");
                 for row in transform::to_rows(&r.T_target_source) {
-                    println!(
-                        "  {:>12.6} {:>12.6} {:>12.6} {:>12.6}",
-                        row[0], row[1], row[2], row[3]
-                    );
+                    println!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
                 }
                 println!(
                     "rotation {:.3} deg, translation {:.6}",
@@ -189,11 +176,7 @@ fn run(command: Command) -> Result<(), String> {
                     r.max_correspondence_distance,
                     r.inlier_rmse,
                     r.icp_iterations,
-                    if r.icp_converged {
-                        "converged"
-                    } else {
-                        "not converged"
-                    }
+                    if r.icp_converged { "converged" } else { "not converged" }
                 );
                 let t = r.timings;
                 println!(
@@ -207,16 +190,10 @@ fn run(command: Command) -> Result<(), String> {
             Ok(())
         }
         Command::Info { weights } => {
-            let bytes =
-                std::fs::read(&weights).map_err(|e| format!("{}: {e}", weights.display()))?;
-            let w =
-                Weights::from_bytes(&bytes).map_err(|e| format!("{}: {e}", weights.display()))?;
+            let bytes = std::fs::read(&weights).map_err(|e| format!("{}: {e}", weights.display()))?;
+            let w = Weights::from_bytes(&bytes).map_err(|e| format!("{}: {e}", weights.display()))?;
             let c = &w.config;
-            println!(
-                "{}: arps weights, format version {}",
-                weights.display(),
-                arps::weights::FORMAT_VERSION
-            );
+            println!("{}: arps weights, format version {}", weights.display(), arps::weights::FORMAT_VERSION);
             println!("  file size     {} bytes", bytes.len());
             println!("  parameters    {}", c.parameter_count());
             println!("  preset        {}", c.preset);
@@ -230,49 +207,24 @@ fn run(command: Command) -> Result<(), String> {
                 c.layers,
                 c.gaussians
             );
-            println!(
-                "  reference     {:?} (top_h {}, temperature {})",
-                c.reference, c.top_h, c.soft_temperature
-            );
-            println!(
-                "  pos MLP       3 -> {:?} -> {}",
-                c.pos_hidden, c.feature_dim
-            );
-            println!(
-                "  head          {} -> {:?} -> {}",
-                2 * c.feature_dim,
-                c.head_hidden,
-                c.gaussians
-            );
+            println!("  reference     {:?} (top_h {}, temperature {})", c.reference, c.top_h, c.soft_temperature);
+            println!("  pos MLP       3 -> {:?} -> {}", c.pos_hidden, c.feature_dim);
+            println!("  head          {} -> {:?} -> {}", 2 * c.feature_dim, c.head_hidden, c.gaussians);
             println!(
                 "  provenance    {}",
-                serde_json::to_string_pretty(&w.provenance)
-                    .unwrap_or_default()
-                    .replace('\n', "\n                ")
+                serde_json::to_string_pretty(&w.provenance).unwrap_or_default().replace('\n', "\n                ")
             );
             Ok(())
         }
         Command::Bench(args) => bench::run(args),
         Command::Eval(args) => eval::run(args),
         Command::MakePairs(args) => make_pairs::run(args),
-        Command::RandomWeights {
-            preset,
-            seed,
-            f16,
-            out,
-        } => {
+        Command::RandomWeights { preset, seed, f16, out } => {
             let config = ModelConfig::preset(&preset).map_err(|e| e.to_string())?;
             let w = Weights::random(&config, seed).map_err(|e| e.to_string())?;
-            let bytes = w
-                .to_bytes(if f16 { StoreAs::F16 } else { StoreAs::F32 })
-                .map_err(|e| e.to_string())?;
+            let bytes = w.to_bytes(if f16 { StoreAs::F16 } else { StoreAs::F32 }).map_err(|e| e.to_string())?;
             std::fs::write(&out, &bytes).map_err(|e| format!("{}: {e}", out.display()))?;
-            println!(
-                "wrote {} ({} bytes, {} parameters)",
-                out.display(),
-                bytes.len(),
-                config.parameter_count()
-            );
+            println!("wrote {} ({} bytes, {} parameters)", out.display(), bytes.len(), config.parameter_count());
             Ok(())
         }
     }

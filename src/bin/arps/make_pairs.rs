@@ -69,11 +69,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
             for s in &b.skipped {
                 eprintln!("arps: bank: skipped {}: {}", s.name, s.reason);
             }
-            eprintln!(
-                "arps: bank: {} meshes usable, {} skipped",
-                b.meshes.len(),
-                b.skipped.len()
-            );
+            eprintln!("arps: bank: {} meshes usable, {} skipped", b.meshes.len(), b.skipped.len());
             ShapeSource::with_bank(b, a.val_fraction)
         }
         _ => ShapeSource::procedural(),
@@ -95,9 +91,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let mut metas = Vec::new();
     for i in 0..a.count {
         let index = (a.seed << 32).wrapping_add(i);
-        let pair = source
-            .pair(split, index, &params)
-            .map_err(|e| format!("pair {i}: {e}"))?;
+        let pair = source.pair(split, index, &params).map_err(|e| format!("pair {i}: {e}"))?;
         let stem = format!("{i:05}");
         let (sf, tf) = (format!("{stem}_source.ply"), format!("{stem}_target.ply"));
         for (f, pts) in [(&sf, &pair.source), (&tf, &pair.target)] {
@@ -105,10 +99,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
             std::fs::write(&path, io::write_ply_binary(&PointCloud::new(pts.clone())))
                 .map_err(|e| format!("{}: {e}", path.display()))?;
         }
-        let short = pair
-            .shape
-            .strip_prefix("procedural/")
-            .unwrap_or(&pair.shape);
+        let short = pair.shape.strip_prefix("procedural/").unwrap_or(&pair.shape);
         let name = format!("{stem}-{}", short.replace('/', "-"));
         entries.push(Entry {
             name: name.clone(),
@@ -131,8 +122,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
         });
     }
     let tsv = a.out.join("pairs.tsv");
-    std::fs::write(&tsv, manifest::format(&entries))
-        .map_err(|e| format!("{}: {e}", tsv.display()))?;
+    std::fs::write(&tsv, manifest::format(&entries)).map_err(|e| format!("{}: {e}", tsv.display()))?;
     let sidecar = Sidecar {
         units: "normalized".into(),
         generator: serde_json::json!({
@@ -149,11 +139,8 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
         pairs: metas,
     };
     let json = a.out.join("pairs.json");
-    std::fs::write(
-        &json,
-        serde_json::to_string_pretty(&sidecar).map_err(|e| e.to_string())? + "\n",
-    )
-    .map_err(|e| format!("{}: {e}", json.display()))?;
+    std::fs::write(&json, serde_json::to_string_pretty(&sidecar).map_err(|e| e.to_string())? + "\n")
+        .map_err(|e| format!("{}: {e}", json.display()))?;
     println!("wrote {} pairs to {}", a.count, a.out.display());
     Ok(())
 }

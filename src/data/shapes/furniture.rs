@@ -14,11 +14,7 @@ fn legs(s: &mut Shape, r: &mut Dice, size: [f64; 3], inset: f64, thick: f64, spl
         for sy in [-1.0, 1.0] {
             let top = [sx * (w / 2.0 - inset), sy * (d / 2.0 - inset), h];
             let bot = [top[0] + sx * splay, top[1] + sy * splay, 0.0];
-            let leg = if round {
-                rod(bot, top, thick / 2.0, 8)
-            } else {
-                beam(bot, top, thick)
-            };
+            let leg = if round { rod(bot, top, thick / 2.0, 8) } else { beam(bot, top, thick) };
             s.add_at(leg, [0.0; 3]);
         }
     }
@@ -33,10 +29,7 @@ pub fn bathtub(r: &mut Dice) -> Mesh {
         let fh = r.u(0.06, 0.15);
         for sx in [-1.0, 1.0] {
             for sy in [-1.0, 1.0] {
-                s.add_at(
-                    ellipsoid([0.05, 0.05, fh * 0.5], 10),
-                    [sx * l * 0.38, sy * w * 0.35, fh * 0.5],
-                );
+                s.add_at(ellipsoid([0.05, 0.05, fh * 0.5], 10), [sx * l * 0.38, sy * w * 0.35, fh * 0.5]);
             }
         }
         fh
@@ -47,48 +40,27 @@ pub fn bathtub(r: &mut Dice) -> Mesh {
         s.add_at(open_box([l, w, h], t), [0.0, 0.0, z0]);
     } else {
         // rounded tub: a lathe wall squashed into an oval
-        let prof = [
-            (0.0, 0.0),
-            (0.42, 0.0),
-            (0.5, h),
-            (0.5 - t, h),
-            (0.42 - t, t),
-            (0.0, t),
-        ];
-        let tub = linear(
-            lathe(&prof, 28, false),
-            &nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(l, w, 1.0)),
-        );
+        let prof = [(0.0, 0.0), (0.42, 0.0), (0.5, h), (0.5 - t, h), (0.42 - t, t), (0.0, t)];
+        let tub =
+            linear(lathe(&prof, 28, false), &nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(l, w, 1.0)));
         s.add_at(tub, [0.0, 0.0, z0]);
     }
     // faucet at one end, off-centre
     let fx = -l / 2.0 + t * 0.5;
     let fy = r.u(-0.15, 0.15) * w;
     let top = z0 + h + r.u(0.12, 0.25);
-    s.add_at(
-        rod([fx, fy, z0 + h * 0.6], [fx, fy, top], 0.02, 8),
-        [0.0; 3],
-    );
-    s.add_at(
-        rod([fx, fy, top], [fx + r.u(0.12, 0.2), fy, top], 0.018, 8),
-        [0.0; 3],
-    );
+    s.add_at(rod([fx, fy, z0 + h * 0.6], [fx, fy, top], 0.02, 8), [0.0; 3]);
+    s.add_at(rod([fx, fy, top], [fx + r.u(0.12, 0.2), fy, top], 0.018, 8), [0.0; 3]);
     if r.chance(0.5) {
         // headrest at the other end
-        s.add_at(
-            cuboid([0.06, w * 0.4, 0.15]),
-            [l / 2.0 - t - 0.05, 0.0, z0 + h - 0.1],
-        );
+        s.add_at(cuboid([0.06, w * 0.4, 0.15]), [l / 2.0 - t - 0.05, 0.0, z0 + h - 0.1]);
     }
     s.mesh
 }
 
 pub fn bed(r: &mut Dice) -> Mesh {
     let mut s = Shape::default();
-    let (l, w) = (
-        r.u(1.9, 2.2),
-        r.pick(&[0.9, 1.2, 1.4, 1.6, 1.8]) * r.u(0.95, 1.05),
-    );
+    let (l, w) = (r.u(1.9, 2.2), r.pick(&[0.9, 1.2, 1.4, 1.6, 1.8]) * r.u(0.95, 1.05));
     let fh = r.u(0.15, 0.35);
     let frame_t = r.u(0.08, 0.2);
     legs(&mut s, r, [l, w, fh], 0.05, 0.06, 0.0);
@@ -100,23 +72,13 @@ pub fn bed(r: &mut Dice) -> Mesh {
     let ht = r.u(0.04, 0.1);
     s.add_at(slab([ht, w, fh + hb]), [-l / 2.0 - ht / 2.0, 0.0, 0.0]);
     if r.chance(0.5) {
-        s.add_at(
-            slab([ht, w, fh + hb * r.u(0.3, 0.6)]),
-            [l / 2.0 + ht / 2.0, 0.0, 0.0],
-        );
+        s.add_at(slab([ht, w, fh + hb * r.u(0.3, 0.6)]), [l / 2.0 + ht / 2.0, 0.0, 0.0]);
     }
     let top = fh + frame_t + mt;
     let pillows = if w > 1.1 { r.int(1, 2) } else { 1 };
     for k in 0..pillows {
-        let y = if pillows == 1 {
-            0.0
-        } else {
-            (k as f64 - 0.5) * w * 0.5
-        };
-        s.add_at(
-            ellipsoid([0.2, (w / pillows as f64) * 0.4, 0.07], 14),
-            [-l / 2.0 + 0.3, y, top + 0.05],
-        );
+        let y = if pillows == 1 { 0.0 } else { (k as f64 - 0.5) * w * 0.5 };
+        s.add_at(ellipsoid([0.2, (w / pillows as f64) * 0.4, 0.07], 14), [-l / 2.0 + 0.3, y, top + 0.05]);
     }
     if r.chance(0.4) {
         // a folded blanket across the foot end
@@ -152,28 +114,16 @@ pub fn bench(r: &mut Dice) -> Mesh {
         // backrest at +y, tilted
         let bh = r.u(0.3, 0.5);
         let tilt = r.u(0.0, 0.3);
-        s.add(
-            slab([l, 0.04, bh]),
-            &(translate([0.0, d / 2.0, h + st]) * rotate(0, -tilt)),
-        );
+        s.add(slab([l, 0.04, bh]), &(translate([0.0, d / 2.0, h + st]) * rotate(0, -tilt)));
         if r.chance(0.5) {
             for sx in [-1.0, 1.0] {
-                s.add_at(
-                    slab([0.05, d, 0.04]),
-                    [sx * (l / 2.0 - 0.025), 0.0, h + 0.25],
-                );
-                s.add_at(
-                    slab([0.04, 0.04, 0.25]),
-                    [sx * (l / 2.0 - 0.025), -d / 2.0 + 0.03, h],
-                );
+                s.add_at(slab([0.05, d, 0.04]), [sx * (l / 2.0 - 0.025), 0.0, h + 0.25]);
+                s.add_at(slab([0.04, 0.04, 0.25]), [sx * (l / 2.0 - 0.025), -d / 2.0 + 0.03, h]);
             }
         }
     } else {
         // a bag or cushion on one end
-        s.add_at(
-            ellipsoid([0.15, d * 0.35, 0.07], 12),
-            [-l / 2.0 + 0.25, 0.0, h + st + 0.05],
-        );
+        s.add_at(ellipsoid([0.15, d * 0.35, 0.07], 12), [-l / 2.0 + 0.25, 0.0, h + st + 0.05]);
     }
     s.mesh
 }
@@ -204,18 +154,12 @@ pub fn bookshelf(r: &mut Dice) -> Mesh {
             let bw = r.u(0.02, 0.06);
             let bh = (gap - t) * r.u(0.55, 0.9);
             let bd = d * r.u(0.6, 0.9);
-            s.add_at(
-                slab([bw, bd, bh]),
-                [x + bw / 2.0, -d / 2.0 + bd / 2.0 + 0.01, z + t],
-            );
+            s.add_at(slab([bw, bd, bh]), [x + bw / 2.0, -d / 2.0 + bd / 2.0 + 0.01, z + t]);
             x += bw + if r.chance(0.1) { 0.05 } else { 0.002 };
         }
         if r.chance(0.3) && x + 0.1 < end {
             let bh = (gap - t) * 0.7;
-            s.add(
-                slab([0.03, d * 0.7, bh]),
-                &(translate([x + 0.05, -d * 0.1, z + t]) * rotate(1, 0.35)),
-            );
+            s.add(slab([0.03, d * 0.7, bh]), &(translate([x + 0.05, -d * 0.1, z + t]) * rotate(1, 0.35)));
         }
     }
     s.mesh
@@ -241,11 +185,7 @@ pub fn chair(r: &mut Dice) -> Mesh {
         if r.chance(0.4) {
             // a stretcher between the front legs only
             s.add_at(
-                beam(
-                    [-w / 2.0 + 0.04, -d / 2.0 + 0.04, 0.15],
-                    [w / 2.0 - 0.04, -d / 2.0 + 0.04, 0.15],
-                    0.02,
-                ),
+                beam([-w / 2.0 + 0.04, -d / 2.0 + 0.04, 0.15], [w / 2.0 - 0.04, -d / 2.0 + 0.04, 0.15], 0.02),
                 [0.0; 3],
             );
         }
@@ -260,10 +200,7 @@ pub fn chair(r: &mut Dice) -> Mesh {
         1 => {
             // two posts and rails
             for sx in [-1.0, 1.0] {
-                s.add(
-                    slab([0.03, 0.03, bh]),
-                    &(back * translate([sx * (w / 2.0 - 0.015), 0.0, 0.0])),
-                );
+                s.add(slab([0.03, 0.03, bh]), &(back * translate([sx * (w / 2.0 - 0.015), 0.0, 0.0])));
             }
             let rails = r.int(1, 4);
             for k in 0..rails {
@@ -273,10 +210,7 @@ pub fn chair(r: &mut Dice) -> Mesh {
         }
         _ => {
             // rounded padded back
-            s.add(
-                ellipsoid([w * 0.5, 0.05, bh * 0.5], 16),
-                &(back * translate([0.0, 0.0, bh * 0.5])),
-            );
+            s.add(ellipsoid([w * 0.5, 0.05, bh * 0.5], 16), &(back * translate([0.0, 0.0, bh * 0.5])));
         }
     }
     if r.chance(0.4) {
@@ -303,36 +237,20 @@ pub fn desk(r: &mut Dice) -> Mesh {
     for k in 0..drawers {
         let dh = (h - tt) / drawers as f64;
         let z = k as f64 * dh;
-        s.add_at(
-            slab([pw * 0.9, 0.015, dh * 0.85]),
-            [px, -d * 0.475 - 0.007, z + dh * 0.075],
-        );
-        s.add_at(
-            cuboid([0.08, 0.02, 0.015]),
-            [px, -d * 0.475 - 0.022, z + dh * 0.7],
-        );
+        s.add_at(slab([pw * 0.9, 0.015, dh * 0.85]), [px, -d * 0.475 - 0.007, z + dh * 0.075]);
+        s.add_at(cuboid([0.08, 0.02, 0.015]), [px, -d * 0.475 - 0.022, z + dh * 0.7]);
     }
     let ox = -side * (w / 2.0 - 0.03);
     if r.chance(0.5) {
         s.add_at(slab([0.04, d * 0.95, h - tt]), [ox, 0.0, 0.0]);
     } else {
         for sy in [-1.0, 1.0] {
-            s.add_at(
-                beam(
-                    [ox, sy * (d / 2.0 - 0.04), 0.0],
-                    [ox, sy * (d / 2.0 - 0.04), h - tt],
-                    0.05,
-                ),
-                [0.0; 3],
-            );
+            s.add_at(beam([ox, sy * (d / 2.0 - 0.04), 0.0], [ox, sy * (d / 2.0 - 0.04), h - tt], 0.05), [0.0; 3]);
         }
     }
     if r.chance(0.6) {
         // modesty panel at the back
-        s.add_at(
-            slab([w - pw - 0.05, 0.02, (h - tt) * 0.5]),
-            [-side * pw / 2.0, d / 2.0 - 0.03, (h - tt) * 0.45],
-        );
+        s.add_at(slab([w - pw - 0.05, 0.02, (h - tt) * 0.5]), [-side * pw / 2.0, d / 2.0 - 0.03, (h - tt) * 0.45]);
     }
     s.add_at(slab([w, d, tt]), [0.0, 0.0, h - tt]);
     if r.chance(0.4) {
@@ -340,18 +258,12 @@ pub fn desk(r: &mut Dice) -> Mesh {
         let hh = r.u(0.25, 0.5);
         s.add_at(slab([w, 0.25, 0.02]), [0.0, d / 2.0 - 0.125, h + hh]);
         for sx in [-1.0, 1.0] {
-            s.add_at(
-                slab([0.02, 0.25, hh]),
-                [sx * (w / 2.0 - 0.01), d / 2.0 - 0.125, h],
-            );
+            s.add_at(slab([0.02, 0.25, hh]), [sx * (w / 2.0 - 0.01), d / 2.0 - 0.125, h]);
         }
     }
     if r.chance(0.4) {
         // a monitor or lamp on the desk
-        s.add_at(
-            slab([0.5, 0.04, 0.3]),
-            [r.u(-0.3, 0.3) * w, d * 0.2, h + 0.1],
-        );
+        s.add_at(slab([0.5, 0.04, 0.3]), [r.u(-0.3, 0.3) * w, d * 0.2, h + 0.1]);
         s.add_at(slab([0.05, 0.05, 0.1]), [0.0, d * 0.2, h]);
     }
     s.mesh
@@ -389,19 +301,8 @@ pub fn door(r: &mut Dice) -> Mesh {
     for sy in [-1.0, 1.0] {
         let y = sy * t / 2.0;
         if lever {
-            s.add_at(
-                rod([hx, y, hz], [hx, y + sy * 0.06, hz], 0.012, 8),
-                [0.0; 3],
-            );
-            s.add_at(
-                rod(
-                    [hx, y + sy * 0.06, hz],
-                    [hx - side * 0.13, y + sy * 0.06, hz],
-                    0.01,
-                    8,
-                ),
-                [0.0; 3],
-            );
+            s.add_at(rod([hx, y, hz], [hx, y + sy * 0.06, hz], 0.012, 8), [0.0; 3]);
+            s.add_at(rod([hx, y + sy * 0.06, hz], [hx - side * 0.13, y + sy * 0.06, hz], 0.01, 8), [0.0; 3]);
         } else {
             s.add_at(ellipsoid([0.03, 0.03, 0.03], 10), [hx, y + sy * 0.05, hz]);
             s.add_at(rod([hx, y, hz], [hx, y + sy * 0.04, hz], 0.01, 8), [0.0; 3]);
@@ -416,10 +317,7 @@ pub fn door(r: &mut Dice) -> Mesh {
         let f = r.u(0.05, 0.1);
         let ft = t * r.u(1.5, 3.0);
         for sx in [-1.0, 1.0] {
-            s.add_at(
-                slab([f, ft, h + f]),
-                [sx * (w / 2.0 + f / 2.0 + 0.01), 0.0, 0.0],
-            );
+            s.add_at(slab([f, ft, h + f]), [sx * (w / 2.0 + f / 2.0 + 0.01), 0.0, 0.0]);
         }
         s.add_at(slab([w + 2.0 * f + 0.02, ft, f]), [0.0, 0.0, h + 0.01]);
     }
@@ -440,29 +338,15 @@ pub fn dresser(r: &mut Dice) -> Mesh {
     let rh = (h - lh - 0.04) / rows as f64;
     for k in 0..rows {
         let z = lh + 0.02 + k as f64 * rh;
-        let split = if k + 1 == rows {
-            r.chance(0.7)
-        } else {
-            r.chance(0.3)
-        };
+        let split = if k + 1 == rows { r.chance(0.7) } else { r.chance(0.3) };
         let cols = if split { 2 } else { 1 };
         let cw = (w - 0.04) / cols as f64;
         for c in 0..cols {
             let x = -w / 2.0 + 0.02 + cw * (c as f64 + 0.5);
-            s.add_at(
-                slab([cw - 0.02, 0.02, rh - 0.02]),
-                [x, -d / 2.0 - 0.01, z + 0.01],
-            );
-            let kn = if cw > 0.5 {
-                [-cw * 0.25, cw * 0.25].to_vec()
-            } else {
-                vec![0.0]
-            };
+            s.add_at(slab([cw - 0.02, 0.02, rh - 0.02]), [x, -d / 2.0 - 0.01, z + 0.01]);
+            let kn = if cw > 0.5 { [-cw * 0.25, cw * 0.25].to_vec() } else { vec![0.0] };
             for dx in kn {
-                s.add_at(
-                    ellipsoid([0.018, 0.025, 0.018], 8),
-                    [x + dx, -d / 2.0 - 0.03, z + rh * 0.55],
-                );
+                s.add_at(ellipsoid([0.018, 0.025, 0.018], 8), [x + dx, -d / 2.0 - 0.03, z + rh * 0.55]);
             }
         }
     }
@@ -470,16 +354,10 @@ pub fn dresser(r: &mut Dice) -> Mesh {
         // a mirror at the back
         let mh = r.u(0.5, 0.9);
         let mw = w * r.u(0.5, 0.9);
-        s.add_at(
-            slab([mw, 0.03, mh]),
-            [r.u(-0.1, 0.1) * w, d / 2.0 - 0.05, h + 0.03],
-        );
+        s.add_at(slab([mw, 0.03, mh]), [r.u(-0.1, 0.1) * w, d / 2.0 - 0.05, h + 0.03]);
     } else if r.chance(0.5) {
         // something on top: a box or a vase at one end
-        s.add_at(
-            frustum(0.06, 0.04, r.u(0.15, 0.3), 12),
-            [r.sign() * w * 0.35, 0.0, h + 0.03],
-        );
+        s.add_at(frustum(0.06, 0.04, r.u(0.15, 0.3), 12), [r.sign() * w * 0.35, 0.0, h + 0.03]);
     }
     s.mesh
 }

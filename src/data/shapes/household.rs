@@ -28,20 +28,9 @@ pub fn curtain(r: &mut Dice) -> Mesh {
     let t = r.u(0.01, 0.02);
     // the rod with finials at the top
     let rod_r = r.u(0.01, 0.02);
-    s.add_at(
-        rod(
-            [-w / 2.0 - 0.1, 0.0, h + 0.05],
-            [w / 2.0 + 0.1, 0.0, h + 0.05],
-            rod_r,
-            10,
-        ),
-        [0.0; 3],
-    );
+    s.add_at(rod([-w / 2.0 - 0.1, 0.0, h + 0.05], [w / 2.0 + 0.1, 0.0, h + 0.05], rod_r, 10), [0.0; 3]);
     for sx in [-1.0, 1.0] {
-        s.add_at(
-            ellipsoid([0.03, 0.03, 0.03], 8),
-            [sx * (w / 2.0 + 0.12), 0.0, h + 0.05],
-        );
+        s.add_at(ellipsoid([0.03, 0.03, 0.03], 8), [sx * (w / 2.0 + 0.12), 0.0, h + 0.05]);
     }
     // one or two panels of different widths, drops and fold frequencies
     let panels = r.int(1, 2);
@@ -56,28 +45,18 @@ pub fn curtain(r: &mut Dice) -> Mesh {
             (pw, r.u(0.02, 0.07), r.u(0.1, 0.3))
         };
         let drop = h * r.u(0.75, 1.0);
-        let px = if gathered && k == 0 {
-            x0
-        } else {
-            x0 + pw - pw_eff
-        };
+        let px = if gathered && k == 0 { x0 } else { x0 + pw - pw_eff };
         let xf = translate([px, 0.0, h - drop]);
         s.add(folds(pw_eff, drop, amp, wl, t, r.u(0.0, TAU)), &xf);
         if gathered && r.chance(0.6) {
             // a tie-back band
-            s.add_at(
-                slab([pw_eff + 0.02, 2.0 * amp + 0.04, 0.04]),
-                [px + pw_eff / 2.0, 0.0, h - drop + drop * 0.4],
-            );
+            s.add_at(slab([pw_eff + 0.02, 2.0 * amp + 0.04, 0.04]), [px + pw_eff / 2.0, 0.0, h - drop + drop * 0.4]);
         }
         x0 += pw;
     }
     if r.chance(0.3) {
         // a valance across the top
-        s.add(
-            folds(w, h * 0.15, 0.03, 0.15, t, 0.0),
-            &translate([-w / 2.0, -0.08, h * 0.87]),
-        );
+        s.add(folds(w, h * 0.15, 0.03, 0.15, t, 0.0), &translate([-w / 2.0, -0.08, h * 0.87]));
     }
     s.mesh
 }
@@ -91,10 +70,7 @@ pub fn glass_box(r: &mut Dice) -> Mesh {
         // a cabinet stand
         let sh = r.u(0.2, 0.8);
         s.add_at(slab([w, d, sh]), [0.0; 3]);
-        s.add_at(
-            cuboid([0.1, 0.02, 0.015]),
-            [w * 0.25, -d / 2.0 - 0.01, sh * 0.8],
-        );
+        s.add_at(cuboid([0.1, 0.02, 0.015]), [w * 0.25, -d / 2.0 - 0.01, sh * 0.8]);
         sh
     } else {
         0.0
@@ -106,34 +82,14 @@ pub fn glass_box(r: &mut Dice) -> Mesh {
             s.add_at(beam([x, y, z0], [x, y, z0 + h], f), [0.0; 3]);
         }
         for z in [z0 + f / 2.0, z0 + h - f / 2.0] {
-            s.add_at(
-                beam(
-                    [sx * (w - f) / 2.0, -d / 2.0, z],
-                    [sx * (w - f) / 2.0, d / 2.0, z],
-                    f,
-                ),
-                [0.0; 3],
-            );
-            s.add_at(
-                beam(
-                    [-w / 2.0, sx * (d - f) / 2.0, z],
-                    [w / 2.0, sx * (d - f) / 2.0, z],
-                    f,
-                ),
-                [0.0; 3],
-            );
+            s.add_at(beam([sx * (w - f) / 2.0, -d / 2.0, z], [sx * (w - f) / 2.0, d / 2.0, z], f), [0.0; 3]);
+            s.add_at(beam([-w / 2.0, sx * (d - f) / 2.0, z], [w / 2.0, sx * (d - f) / 2.0, z], f), [0.0; 3]);
         }
     }
     // glass panes on the sides, top and bottom; the back may be opaque
     for sx in [-1.0, 1.0] {
-        s.add_at(
-            slab([g, d - f, h - f]),
-            [sx * (w - f) / 2.0, 0.0, z0 + f / 2.0],
-        );
-        s.add_at(
-            slab([w - f, g, h - f]),
-            [0.0, sx * (d - f) / 2.0, z0 + f / 2.0],
-        );
+        s.add_at(slab([g, d - f, h - f]), [sx * (w - f) / 2.0, 0.0, z0 + f / 2.0]);
+        s.add_at(slab([w - f, g, h - f]), [0.0, sx * (d - f) / 2.0, z0 + f / 2.0]);
     }
     s.add_at(slab([w, d, g]), [0.0, 0.0, z0]);
     if r.chance(0.7) {
@@ -158,28 +114,18 @@ pub fn glass_box(r: &mut Dice) -> Mesh {
         }
         _ => {
             let oh = h * r.u(0.3, 0.6);
-            s.add_at(
-                frustum(w * 0.12, w * 0.06, oh, 12),
-                [r.u(-0.2, 0.2) * w, 0.0, z0],
-            );
+            s.add_at(frustum(w * 0.12, w * 0.06, oh, 12), [r.u(-0.2, 0.2) * w, 0.0, z0]);
         }
     }
     // a handle on the front pane, to one side
-    s.add_at(
-        cuboid([0.015, 0.02, h * 0.2]),
-        [r.sign() * w * 0.35, -d / 2.0 - 0.01, z0 + h * 0.5],
-    );
+    s.add_at(cuboid([0.015, 0.02, h * 0.2]), [r.sign() * w * 0.35, -d / 2.0 - 0.01, z0 + h * 0.5]);
     s.mesh
 }
 
 pub fn guitar(r: &mut Dice) -> Mesh {
     let mut s = Shape::default();
     let acoustic = r.chance(0.5);
-    let l = if acoustic {
-        r.u(0.45, 0.52)
-    } else {
-        r.u(0.38, 0.45)
-    };
+    let l = if acoustic { r.u(0.45, 0.52) } else { r.u(0.38, 0.45) };
     let wl = l * r.u(0.3, 0.36); // lower-bout half width
     let wu = wl * r.u(0.7, 0.85);
     let (c1, a1) = (l * 0.3, l * 0.3);
@@ -203,42 +149,26 @@ pub fn guitar(r: &mut Dice) -> Mesh {
     outline.extend(ys.iter().map(|&y| [half(y, 1.0).max(0.002), y]));
     outline.push([0.0, l]);
     outline.extend(ys.iter().rev().map(|&y| [-half(y, cut).max(0.002), y]));
-    let depth = if acoustic {
-        r.u(0.08, 0.12)
-    } else {
-        r.u(0.035, 0.05)
-    };
+    let depth = if acoustic { r.u(0.08, 0.12) } else { r.u(0.035, 0.05) };
     s.add_at(extrude(&outline, depth), [0.0; 3]);
     // neck, fretboard side up (+z)
     let nl = r.u(0.42, 0.5);
     let nw = r.u(0.045, 0.055);
-    s.add_at(
-        slab([nw, nl, 0.025]),
-        [0.0, l - 0.02 + nl / 2.0, depth - 0.01],
-    );
+    s.add_at(slab([nw, nl, 0.025]), [0.0, l - 0.02 + nl / 2.0, depth - 0.01]);
     // headstock, tilted back, with pegs
     let hl = r.u(0.15, 0.2);
     let tilt = if acoustic { r.u(0.1, 0.25) } else { 0.0 };
     let hs = translate([0.0, l - 0.02 + nl, depth - 0.01]) * rotate(0, -tilt);
-    s.add(
-        slab([nw * 1.5, hl, 0.018]),
-        &(hs * translate([0.0, hl / 2.0, 0.0])),
-    );
+    s.add(slab([nw * 1.5, hl, 0.018]), &(hs * translate([0.0, hl / 2.0, 0.0])));
     let inline6 = !acoustic && r.chance(0.5);
     for k in 0..6 {
         let (x, y) = if inline6 {
             (nw * 0.75 + 0.01, hl * (0.15 + 0.13 * k as f64))
         } else {
             let side = if k < 3 { -1.0 } else { 1.0 };
-            (
-                side * (nw * 0.75 + 0.01),
-                hl * (0.25 + 0.25 * (k % 3) as f64),
-            )
+            (side * (nw * 0.75 + 0.01), hl * (0.25 + 0.25 * (k % 3) as f64))
         };
-        s.add(
-            rod([0.0, 0.0, 0.0], [x.signum() * 0.025, 0.0, 0.0], 0.004, 6),
-            &(hs * translate([x, y, 0.009])),
-        );
+        s.add(rod([0.0, 0.0, 0.0], [x.signum() * 0.025, 0.0, 0.0], 0.004, 6), &(hs * translate([x, y, 0.009])));
     }
     // bridge, and a sound hole ring or pickups
     s.add_at(slab([wl * 0.6, 0.02, 0.01]), [0.0, c1 * 0.8, depth]);
@@ -246,24 +176,15 @@ pub fn guitar(r: &mut Dice) -> Mesh {
         s.add_at(torus(wu * 0.45, 0.004, TAU, 24, 4), [0.0, c2 * 0.85, depth]);
     } else {
         for k in 0..r.int(1, 3) {
-            s.add_at(
-                slab([nw * 1.4, 0.03, 0.008]),
-                [0.0, c1 + 0.05 + 0.06 * k as f64, depth],
-            );
+            s.add_at(slab([nw * 1.4, 0.03, 0.008]), [0.0, c1 + 0.05 + 0.06 * k as f64, depth]);
         }
         // knobs on the lower bout, to one side
         for k in 0..r.int(2, 4) {
-            s.add_at(
-                cylinder(0.01, 0.015, 8),
-                [wl * 0.55, c1 * (0.5 + 0.25 * k as f64), depth],
-            );
+            s.add_at(cylinder(0.01, 0.015, 8), [wl * 0.55, c1 * (0.5 + 0.25 * k as f64), depth]);
         }
     }
     // strap button at the bottom end
-    s.add(
-        cylinder(0.006, 0.012, 8),
-        &(rotate(0, FRAC_PI_2) * translate([0.0, depth / 2.0, 0.0])),
-    );
+    s.add(cylinder(0.006, 0.012, 8), &(rotate(0, FRAC_PI_2) * translate([0.0, depth / 2.0, 0.0])));
     s.mesh
 }
 
@@ -290,12 +211,7 @@ pub fn keyboard(r: &mut Dice) -> Mesh {
     let bt = r.u(0.012, 0.025);
     // the base, wedge-shaped: thicker at the back (+y)
     let back = bt * r.u(1.2, 2.0);
-    let wedge = [
-        [-d / 2.0, 0.0],
-        [d / 2.0, 0.0],
-        [d / 2.0, back],
-        [-d / 2.0, bt],
-    ];
+    let wedge = [[-d / 2.0, 0.0], [d / 2.0, 0.0], [d / 2.0, back], [-d / 2.0, bt]];
     // extruded (y, z) profile along x: (a, b, c) -> (x, y, z) = (c - w/2, a, b)
     #[rustfmt::skip]
     let yz_to_x = nalgebra::Matrix4::new(
@@ -310,10 +226,7 @@ pub fn keyboard(r: &mut Dice) -> Mesh {
     let x0 = -w / 2.0 + margin;
     let y0 = -d / 2.0 + margin;
     let put = |s: &mut Shape, x: f64, y: f64, kw: f64| {
-        s.add_at(
-            slab([kw, key, kh]),
-            [x + kw / 2.0, y + key / 2.0, top(y + key / 2.0)],
-        );
+        s.add_at(slab([kw, key, kh]), [x + kw / 2.0, y + key / 2.0, top(y + key / 2.0)]);
     };
     for j in 0..rows {
         let y = y0 + j as f64 * pitch;
@@ -358,11 +271,7 @@ pub fn keyboard(r: &mut Dice) -> Mesh {
                 if j == 0 && i == 1 {
                     continue;
                 }
-                let kw = if j == 0 && i == 0 {
-                    2.0 * pitch - gap
-                } else {
-                    key
-                };
+                let kw = if j == 0 && i == 0 { 2.0 * pitch - gap } else { key };
                 put(&mut s, ex + i as f64 * pitch, y0 + j as f64 * pitch, kw);
             }
         }
@@ -371,12 +280,7 @@ pub fn keyboard(r: &mut Dice) -> Mesh {
         // a cable leaving the back edge
         let cx = r.u(-0.3, 0.3) * w;
         s.add_at(
-            rod(
-                [cx, d / 2.0, back * 0.5],
-                [cx + r.u(-0.05, 0.05), d / 2.0 + r.u(0.05, 0.15), back * 0.3],
-                0.003,
-                6,
-            ),
+            rod([cx, d / 2.0, back * 0.5], [cx + r.u(-0.05, 0.05), d / 2.0 + r.u(0.05, 0.15), back * 0.3], 0.003, 6),
             [0.0; 3],
         );
     }

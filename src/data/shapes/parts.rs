@@ -24,9 +24,7 @@ impl Shape {
             let p = xf * nalgebra::Vector4::new(v[0] as f64, v[1] as f64, v[2] as f64, 1.0);
             [p.x as f32, p.y as f32, p.z as f32]
         }));
-        self.mesh
-            .triangles
-            .extend(part.triangles.iter().map(|t| t.map(|i| i + base)));
+        self.mesh.triangles.extend(part.triangles.iter().map(|t| t.map(|i| i + base)));
     }
 
     /// Adds a part translated to `at`.
@@ -100,23 +98,13 @@ pub fn cuboid(s: [f64; 3]) -> Mesh {
             if i & 4 == 0 { -h[2] } else { h[2] },
         ]));
     }
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
+    let quads = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]];
     let mut triangles = Vec::with_capacity(12);
     for q in quads {
         triangles.push([q[0], q[1], q[2]]);
         triangles.push([q[0], q[2], q[3]]);
     }
-    Mesh {
-        vertices,
-        triangles,
-    }
+    Mesh { vertices, triangles }
 }
 
 /// A box of size `s` whose bottom face centre is at the origin (sits on z = 0).
@@ -249,8 +237,7 @@ pub fn triangulate(poly: &[[f64; 2]]) -> Vec<[usize; 3]> {
     let cross = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
         ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])) * orient
     };
-    let inside =
-        |p: [f64; 2], a, b, c| cross(a, b, p) > 0.0 && cross(b, c, p) > 0.0 && cross(c, a, p) > 0.0;
+    let inside = |p: [f64; 2], a, b, c| cross(a, b, p) > 0.0 && cross(b, c, p) > 0.0 && cross(c, a, p) > 0.0;
     let mut idx: Vec<usize> = (0..n).collect();
     let mut out = Vec::with_capacity(n - 2);
     let mut guard = 0;
@@ -264,10 +251,7 @@ pub fn triangulate(poly: &[[f64; 2]]) -> Vec<[usize; 3]> {
             if cross(a, b, c) <= 1e-12 {
                 continue;
             }
-            if idx
-                .iter()
-                .any(|&j| j != ia && j != ib && j != ic && inside(poly[j], a, b, c))
-            {
+            if idx.iter().any(|&j| j != ia && j != ib && j != ic && inside(poly[j], a, b, c)) {
                 continue;
             }
             out.push([ia, ib, ic]);
@@ -301,8 +285,7 @@ pub fn extrude(outline: &[[f64; 2]], depth: f64) -> Mesh {
     for t in triangulate(outline) {
         let t = t.map(|i| i as u32);
         m.triangles.push([t[0], t[2], t[1]]);
-        m.triangles
-            .push([t[0] + n as u32, t[1] + n as u32, t[2] + n as u32]);
+        m.triangles.push([t[0] + n as u32, t[1] + n as u32, t[2] + n as u32]);
     }
     for i in 0..n {
         let j = (i + 1) % n;
@@ -349,10 +332,7 @@ pub fn open_box(s: [f64; 3], t: f64) -> Mesh {
         sh.add_at(slab([t, s[1], h]), [sx * (s[0] - t) * 0.5, 0.0, t]);
     }
     for sy in [-1.0, 1.0] {
-        sh.add_at(
-            slab([s[0] - 2.0 * t, t, h]),
-            [0.0, sy * (s[1] - t) * 0.5, t],
-        );
+        sh.add_at(slab([s[0] - 2.0 * t, t, h]), [0.0, sy * (s[1] - t) * 0.5, t]);
     }
     sh.mesh
 }

@@ -55,10 +55,7 @@ pub fn airplane(r: &mut Dice) -> Mesh {
         .collect();
     let mut prof = prof;
     prof.insert(0, (0.0, 0.0));
-    s.add(
-        lathe(&prof, 16, false),
-        &(translate([-len / 2.0, 0.0, 0.0]) * z_to_x()),
-    );
+    s.add(lathe(&prof, 16, false), &(translate([-len / 2.0, 0.0, 0.0]) * z_to_x()));
     // main wings, low or high mounted, swept, with dihedral
     let span = len * r.u(0.4, 0.6);
     let cr = len * r.u(0.14, 0.22);
@@ -80,14 +77,8 @@ pub fn airplane(r: &mut Dice) -> Mesh {
     // engines: none (a propeller at the nose), two or four under the wings
     let engines = r.pick(&[0, 2, 2, 4]);
     if engines == 0 {
-        s.add_at(
-            slab([0.05 * len, 0.02 * len, len * 0.22]),
-            [len / 2.0 + 0.02 * len, 0.0, -len * 0.11],
-        );
-        s.add_at(
-            slab([0.05 * len, len * 0.22, 0.02 * len]),
-            [len / 2.0 + 0.02 * len, 0.0, -0.01 * len],
-        );
+        s.add_at(slab([0.05 * len, 0.02 * len, len * 0.22]), [len / 2.0 + 0.02 * len, 0.0, -len * 0.11]);
+        s.add_at(slab([0.05 * len, len * 0.22, 0.02 * len]), [len / 2.0 + 0.02 * len, 0.0, -0.01 * len]);
     } else {
         let er = rad * r.u(0.35, 0.5);
         let el = cr * r.u(0.6, 0.9);
@@ -110,23 +101,11 @@ pub fn airplane(r: &mut Dice) -> Mesh {
     let t_tail = r.chance(0.25);
     let tz = if t_tail { fin_h } else { rad * 0.3 };
     for side in [-1.0f64, 1.0] {
-        let flip =
-            nalgebra::Matrix4::new_nonuniform_scaling(&nalgebra::Vector3::new(1.0, side, 1.0));
-        s.add(
-            plate(tcr, tcr * 0.5, tspan, tspan * 0.4, wing_t * 0.8),
-            &(translate([tx, 0.0, tz]) * flip),
-        );
+        let flip = nalgebra::Matrix4::new_nonuniform_scaling(&nalgebra::Vector3::new(1.0, side, 1.0));
+        s.add(plate(tcr, tcr * 0.5, tspan, tspan * 0.4, wing_t * 0.8), &(translate([tx, 0.0, tz]) * flip));
     }
-    let fin = [
-        [0.0, 0.0],
-        [-tcr * 0.9, fin_h],
-        [-tcr * 1.3, fin_h],
-        [-tcr * 1.2, 0.0],
-    ];
-    s.add(
-        extrude(&fin, wing_t),
-        &(translate([tx + tcr * 0.1, 0.0, rad * 0.5]) * side_view(wing_t / 2.0)),
-    );
+    let fin = [[0.0, 0.0], [-tcr * 0.9, fin_h], [-tcr * 1.3, fin_h], [-tcr * 1.2, 0.0]];
+    s.add(extrude(&fin, wing_t), &(translate([tx + tcr * 0.1, 0.0, rad * 0.5]) * side_view(wing_t / 2.0)));
     s.mesh
 }
 
@@ -150,26 +129,16 @@ pub fn car(r: &mut Dice) -> Mesh {
     let z2 = z1 + ch;
     // side-view outline (x, z), counter-clockwise from the rear bottom
     let ws = r.u(0.25, 0.45); // windshield slope run
-    let rs = if kind == 1 || kind == 2 {
-        r.u(0.05, 0.2)
-    } else {
-        r.u(0.25, 0.45)
-    };
+    let rs = if kind == 1 || kind == 2 { r.u(0.05, 0.2) } else { r.u(0.25, 0.45) };
     let cabin_front = x1 - hood;
     let cabin_rear = x0 + trunk;
     let outline = if kind == 3 {
         // pickup: the body is cut down behind the cab; the bed is an open box
         let bed_l = cabin_rear - x0;
         for sy in [-1.0, 1.0] {
-            s.add_at(
-                slab([bed_l, 0.05, bh * 0.65]),
-                [x0 + bed_l / 2.0, sy * (w / 2.0 - 0.025), z0 + bh * 0.35],
-            );
+            s.add_at(slab([bed_l, 0.05, bh * 0.65]), [x0 + bed_l / 2.0, sy * (w / 2.0 - 0.025), z0 + bh * 0.35]);
         }
-        s.add_at(
-            slab([0.05, w, bh * 0.65]),
-            [x0 + 0.025, 0.0, z0 + bh * 0.35],
-        );
+        s.add_at(slab([0.05, w, bh * 0.65]), [x0 + 0.025, 0.0, z0 + bh * 0.35]);
         vec![
             [x0 + 0.1, z0],
             [x1 - 0.15, z0],
@@ -206,22 +175,13 @@ pub fn car(r: &mut Dice) -> Mesh {
     for x in [wheelbase_f, wheelbase_r] {
         for sy in [-1.0f64, 1.0] {
             let y = sy * (w / 2.0 - ww * 0.4);
-            s.add(
-                cylinder(wr, ww, 16),
-                &(translate([x, y - ww / 2.0, wr]) * rotate(0, -FRAC_PI_2)),
-            );
+            s.add(cylinder(wr, ww, 16), &(translate([x, y - ww / 2.0, wr]) * rotate(0, -FRAC_PI_2)));
         }
     }
     // mirrors, lights, spoiler, roof rack
     for sy in [-1.0, 1.0] {
-        s.add_at(
-            cuboid([0.1, 0.15, 0.08]),
-            [cabin_front - 0.1, sy * (w / 2.0 + 0.07), z1 + 0.1],
-        );
-        s.add_at(
-            cuboid([0.04, 0.3, 0.1]),
-            [x1 - 0.01, sy * w * 0.33, z0 + bh * 0.6],
-        );
+        s.add_at(cuboid([0.1, 0.15, 0.08]), [cabin_front - 0.1, sy * (w / 2.0 + 0.07), z1 + 0.1]);
+        s.add_at(cuboid([0.04, 0.3, 0.1]), [x1 - 0.01, sy * w * 0.33, z0 + bh * 0.6]);
     }
     if kind == 0 && r.chance(0.3) {
         s.add_at(slab([0.2, w * 0.9, 0.04]), [x0 + 0.12, 0.0, z1 + 0.08]);
@@ -230,20 +190,13 @@ pub fn car(r: &mut Dice) -> Mesh {
         for sy in [-1.0, 1.0] {
             s.add_at(
                 slab([(cabin_front - ws) - (cabin_rear + rs) - 0.2, 0.04, 0.05]),
-                [
-                    ((cabin_front - ws) + (cabin_rear + rs)) / 2.0,
-                    sy * w * 0.4,
-                    z2,
-                ],
+                [((cabin_front - ws) + (cabin_rear + rs)) / 2.0, sy * w * 0.4, z2],
             );
         }
     }
     if kind == 1 && r.chance(0.5) {
         // a spare wheel on the back door
-        s.add(
-            cylinder(wr * 0.9, ww, 16),
-            &(translate([x0, 0.0, z0 + bh * 0.7]) * rotate(1, -FRAC_PI_2)),
-        );
+        s.add(cylinder(wr * 0.9, ww, 16), &(translate([x0, 0.0, z0 + bh * 0.7]) * rotate(1, -FRAC_PI_2)));
     }
     s.mesh
 }

@@ -10,11 +10,8 @@ use std::f64::consts::{FRAC_PI_2, PI};
 /// loop: outer surface up, the rim, the inner surface back down.
 fn shell(outer: &[(f64, f64)], t: f64, segments: usize) -> Mesh {
     let mut prof: Vec<(f64, f64)> = outer.to_vec();
-    let mut inner: Vec<(f64, f64)> = outer
-        .iter()
-        .skip(1)
-        .map(|&(r, z)| ((r - t).max(0.0), z.max(outer[0].1 + t)))
-        .collect();
+    let mut inner: Vec<(f64, f64)> =
+        outer.iter().skip(1).map(|&(r, z)| ((r - t).max(0.0), z.max(outer[0].1 + t))).collect();
     inner.reverse();
     prof.extend(inner);
     prof.push((0.0, outer[0].1 + t));
@@ -29,13 +26,7 @@ pub fn bottle(r: &mut Dice) -> Mesh {
     let hs = r.u(0.02, 0.08);
     let hn = r.u(0.03, 0.09);
     let waist = r.u(0.85, 1.0);
-    let mut prof = vec![
-        (0.0, 0.0),
-        (rb * 0.92, 0.0),
-        (rb, 0.01),
-        (rb * waist, hb * 0.5),
-        (rb, hb),
-    ];
+    let mut prof = vec![(0.0, 0.0), (rb * 0.92, 0.0), (rb, 0.01), (rb * waist, hb * 0.5), (rb, hb)];
     let steps = 5;
     for k in 1..=steps {
         let a = k as f64 / steps as f64 * FRAC_PI_2;
@@ -47,10 +38,7 @@ pub fn bottle(r: &mut Dice) -> Mesh {
         // a cap
         prof.push((0.0, hb + hs + hn));
         s.add_at(lathe(&prof, seg, false), [0.0; 3]);
-        s.add_at(
-            cylinder(rn * 1.15, r.u(0.01, 0.03), seg),
-            [0.0, 0.0, hb + hs + hn],
-        );
+        s.add_at(cylinder(rn * 1.15, r.u(0.01, 0.03), seg), [0.0, 0.0, hb + hs + hn]);
     } else {
         prof.push((rn * 1.1, hb + hs + hn + 0.005));
         prof.push((0.0, hb + hs + hn + 0.005));
@@ -66,10 +54,7 @@ pub fn bottle(r: &mut Dice) -> Mesh {
     } else if r.chance(0.4) {
         // a label band, slightly proud, covering part of the circumference
         let a = r.u(1.5, 4.0);
-        s.add(
-            torus(rb, 0.003, a, 16, 4),
-            &translate([0.0, 0.0, hb * r.u(0.3, 0.7)]),
-        );
+        s.add(torus(rb, 0.003, a, 16, 4), &translate([0.0, 0.0, hb * r.u(0.3, 0.7)]));
     }
     s.mesh
 }
@@ -93,17 +78,11 @@ pub fn bowl(r: &mut Dice) -> Mesh {
     if r.chance(0.3) {
         // two small lug handles
         for sx in [-1.0, 1.0] {
-            s.add_at(
-                cuboid([0.03, 0.04, 0.008]),
-                [sx * (rr + 0.012), 0.0, h - 0.01],
-            );
+            s.add_at(cuboid([0.03, 0.04, 0.008]), [sx * (rr + 0.012), 0.0, h - 0.01]);
         }
     } else if r.chance(0.3) {
         // a spout
-        s.add(
-            frustum(0.015, 0.008, 0.05, 10),
-            &(translate([rr * 0.95, 0.0, h * 0.85]) * rotate(1, 1.2)),
-        );
+        s.add(frustum(0.015, 0.008, 0.05, 10), &(translate([rr * 0.95, 0.0, h * 0.85]) * rotate(1, 1.2)));
     }
     s.mesh
 }
@@ -155,21 +134,12 @@ pub fn cup(r: &mut Dice) -> Mesh {
     let tube = r.u(0.004, 0.008);
     s.add(
         torus(hr, tube, PI, 12, 8),
-        &(translate([rt * (1.0 + bulge * 0.5) - 0.002, 0.0, h * 0.55])
-            * rotate(0, FRAC_PI_2)
-            * rotate(2, -FRAC_PI_2)),
+        &(translate([rt * (1.0 + bulge * 0.5) - 0.002, 0.0, h * 0.55]) * rotate(0, FRAC_PI_2) * rotate(2, -FRAC_PI_2)),
     );
     if r.chance(0.3) {
         // a saucer
         let sr = rt * r.u(1.6, 2.0);
-        s.add_at(
-            shell(
-                &[(0.0, -0.012), (sr * 0.5, -0.012), (sr, -0.002)],
-                0.004,
-                seg,
-            ),
-            [0.0; 3],
-        );
+        s.add_at(shell(&[(0.0, -0.012), (sr * 0.5, -0.012), (sr, -0.002)], 0.004, seg), [0.0; 3]);
     }
     s.mesh
 }
@@ -179,11 +149,7 @@ pub fn flower_pot(r: &mut Dice) -> Mesh {
     let h = r.u(0.12, 0.35);
     let rt = h * r.u(0.4, 0.7);
     let rb = rt * r.u(0.6, 0.9);
-    let seg = if r.chance(0.2) {
-        4
-    } else {
-        r.pick(&[12, 16, 24])
-    };
+    let seg = if r.chance(0.2) { 4 } else { r.pick(&[12, 16, 24]) };
     let mut outer = vec![(0.0, 0.0), (rb, 0.0), (rt, h)];
     if r.chance(0.6) {
         // a rim
@@ -209,11 +175,7 @@ pub fn flower_pot(r: &mut Dice) -> Mesh {
                 let a = r.u(0.0, 2.0 * PI);
                 let lean = r.u(0.1, 0.7);
                 let len = h * r.u(0.6, 1.8);
-                let tip = [
-                    len * lean.sin() * a.cos(),
-                    len * lean.sin() * a.sin(),
-                    top + len * lean.cos(),
-                ];
+                let tip = [len * lean.sin() * a.cos(), len * lean.sin() * a.sin(), top + len * lean.cos()];
                 s.add_at(rod([0.0, 0.0, top], tip, 0.003, 6), [0.0; 3]);
                 let leaf = ellipsoid([len * 0.25, len * 0.08, 0.004], 10);
                 s.add(leaf, &(translate(tip) * rotate(2, a) * rotate(1, -lean)));
@@ -230,10 +192,7 @@ pub fn flower_pot(r: &mut Dice) -> Mesh {
                 let f = r.u(0.2, 0.8);
                 let at = [tip[0] * f, tip[1] * f, top + (tip[2] - top) * f];
                 let leaf = ellipsoid([len * 0.12, len * 0.04, 0.004], 10);
-                s.add(
-                    leaf,
-                    &(translate(at) * rotate(2, r.u(0.0, 2.0 * PI)) * rotate(1, -0.5)),
-                );
+                s.add(leaf, &(translate(at) * rotate(2, r.u(0.0, 2.0 * PI)) * rotate(1, -0.5)));
             }
         }
     }
@@ -249,33 +208,18 @@ pub fn lamp(r: &mut Dice) -> Mesh {
         let br = h * r.u(0.1, 0.2);
         s.add_at(cylinder(br, h * 0.03, seg), [0.0; 3]);
         let stem_top = h * 0.8;
-        s.add_at(
-            rod([0.0, 0.0, 0.0], [0.0, 0.0, stem_top], h * 0.012, 10),
-            [0.0; 3],
-        );
+        s.add_at(rod([0.0, 0.0, 0.0], [0.0, 0.0, stem_top], h * 0.012, 10), [0.0; 3]);
         let sh = h * r.u(0.18, 0.3);
         let sr0 = sh * r.u(0.7, 1.2);
         let sr1 = sr0 * r.u(0.45, 0.9);
         let t = 0.004;
-        let prof = [
-            (sr0, 0.0),
-            (sr1, sh),
-            (sr1 - t, sh),
-            (sr0 - t, 0.0),
-            (sr0, 0.0),
-        ];
+        let prof = [(sr0, 0.0), (sr1, sh), (sr1 - t, sh), (sr0 - t, 0.0), (sr0, 0.0)];
         // the shade may be tilted (reading lamp)
         let tilt = if r.chance(0.3) { r.u(0.2, 0.6) } else { 0.0 };
-        s.add(
-            lathe(&prof, seg, false),
-            &(translate([0.0, 0.0, stem_top - sh * 0.4]) * rotate(1, tilt)),
-        );
+        s.add(lathe(&prof, seg, false), &(translate([0.0, 0.0, stem_top - sh * 0.4]) * rotate(1, tilt)));
         if r.chance(0.5) {
             // a pull switch or a second arm to one side
-            s.add_at(
-                rod([0.0, 0.0, h * 0.5], [h * 0.15, 0.0, h * 0.6], h * 0.008, 6),
-                [0.0; 3],
-            );
+            s.add_at(rod([0.0, 0.0, h * 0.5], [h * 0.15, 0.0, h * 0.6], h * 0.008, 6), [0.0; 3]);
         }
     } else {
         // desk lamp: base, two-segment arm, conical head
@@ -299,15 +243,7 @@ pub fn lamp(r: &mut Dice) -> Mesh {
         s.add(head, &(translate(j2) * rotate(1, PI - r.u(0.0, 0.7))));
         if r.chance(0.5) {
             // a spring alongside the lower arm
-            s.add_at(
-                rod(
-                    [0.02, 0.02, 0.05],
-                    [j1[0] * 0.8 + 0.02, 0.02, j1[2] * 0.8],
-                    0.004,
-                    6,
-                ),
-                [0.0; 3],
-            );
+            s.add_at(rod([0.02, 0.02, 0.05], [j1[0] * 0.8 + 0.02, 0.02, j1[2] * 0.8], 0.004, 6), [0.0; 3]);
         }
     }
     s.mesh

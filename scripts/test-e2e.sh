@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# End-to-end test of the demo page (www/) in Debian's headless Chromium through playwright-core
+# (tests/e2e/): uploads two scans with a known transform, aligns, checks #result; a malformed file
+# and too few points show #error; the view is not blank. Builds pkg/ first when it is missing or
+# older than the sources (scripts/test.sh runs scripts/test-wasm.sh, which has just built it).
+# Screenshots: target/e2e/demo.png, target/e2e/example.png.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+
+scripts/setup.sh
+if [ ! -f pkg/arps_bg.wasm ] || [ ! -f pkg/worker-client.js ] ||
+  [ -n "$(find src js models Cargo.toml Cargo.lock -newer pkg/arps_bg.wasm -print -quit)" ]; then
+  scripts/build-pkg.sh
+fi
+node --test --test-reporter=spec tests/e2e/

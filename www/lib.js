@@ -1,0 +1,186 @@
+// Pure helpers of the demo page (no DOM, no three.js): matrices, the PLY writer, the example pair.
+// Matrices are 4x4 column-major arrays (element (row r, col c) at index c * 4 + r), like the
+// package's `result.matrix` and three.js `Matrix4.elements`.
+
+/** Four row-major rows of a column-major 4x4. */
+export function rowMajor(m) {
+  return [0, 1, 2, 3].map((r) => [0, 1, 2, 3].map((c) => m[c * 4 + r]));
+}
+
+/** Rotation angle of a rigid transform's rotation part, in degrees. */
+export function rotationAngleDeg(m) {
+  const cos = (m[0] + m[5] + m[10] - 1) / 2;
+  return (Math.acos(Math.min(1, Math.max(-1, cos))) * 180) / Math.PI;
+}
+
+/** a * b, both column-major 4x4. */
+export function multiply(a, b) {
+  const out = new Float64Array(16);
+  for (let r = 0; r < 4; r++)
+    for (let c = 0; c < 4; c++) {
+      let s = 0;
+      for (let k = 0; k < 4; k++) s += a[k * 4 + r] * b[c * 4 + k];
+      out[c * 4 + r] = s;
+    }
+  return out;
+}
+
+/** Inverse of a rigid transform (R^T, -R^T t). */
+export function invertRigid(m) {
+  const out = new Float64Array(16);
+  for (let r = 0; r < 3; r++) {
+    for (let c = 0; c < 3; c++) out[c * 4 + r] = m[r * 4 + c];
+    out[12 + r] = -(m[r * 4] * m[12] + m[r * 4 + 1] * m[13] + m[r * 4 + 2] * m[14]);
+  }
+  out[15] = 1;
+  return out;
+}
+
+/** Rigid transform: rotation of `deg` degrees about `axis`, then translation `t`. */
+export function rigid(axis, deg, t) {
+  const n = Math.hypot(...axis);
+  const [x, y, z] = axis.map((v) => v / n);
+  const a = (deg * Math.PI) / 180;
+  const c = Math.cos(a);
+  const s = Math.sin(a);
+  const C = 1 - c;
+  // Column-major.
+  return Float64Array.from([
+    c + x * x * C, y * x * C + z * s, z * x * C - y * s, 0,
+    x * y * C - z * s, c + y * y * C, z * y * C + x * s, 0,
+    x * z * C + y * s, y * z * C - x * s, c + z * z * C, 0,
+    t[0], t[1], t[2], 1,
+  ]);
+}
+
+/** Packed xyz points mapped through a column-major rigid transform (a new Float32Array). */
+export function transformPoints(points, m) {
+  const out = new Float32Array(points.length);
+  for (let i = 0; i < points.length; i += 3) {
+    const x = points[i];
+    const y = points[i + 1];
+    const z = points[i + 2];
+    out[i] = m[0] * x + m[4] * y + m[8] * z + m[12];
+    out[i + 1] = m[1] * x + m[5] * y + m[9] * z + m[13];
+    out[i + 2] = m[2] * x + m[6] * y + m[10] * z + m[14];
+  }
+  return out;
+}
+
+/** Drops points with a NaN or infinite coordinate; returns `{ points, dropped }`. */
+export function finitePoints(points) {
+  let bad = 0;
+  for (let i = 0; i < points.length; i += 3)
+    if (!(Number.isFinite(points[i]) && Number.isFinite(points[i + 1]) && Number.isFinite(points[i + 2]))) bad++;
+  if (bad === 0) return { points, dropped: 0 };
+  const out = new Float32Array(points.length - bad * 3);
+  let j = 0;
+  for (let i = 0; i < points.length; i += 3) {
+    if (!(Number.isFinite(points[i]) && Number.isFinite(points[i + 1]) && Number.isFinite(points[i + 2]))) continue;
+    out[j++] = points[i];
+    out[j++] = points[i + 1];
+    out[j++] = points[i + 2];
+  }
+  return { points: out, dropped: bad };
+}
+
+/** A binary little-endian PLY file (float x, y, z) of packed xyz points. */
+export function writePly(points, comment = "") {
+  const n = points.length / 3;
+  const header =
+    "ply\nformat binary_little_endian 1.0\n" +
+    (comment ? `comment ${comment.replace(/\s+/g, " ")}\n` : "") +
+    `element vertex ${n}\nproperty float x\nproperty float y\nproperty float z\nend_header\n`;
+  const head = new TextEncoder().encode(header);
+  const bytes = new Uint8Array(head.length + n * 12);
+  bytes.set(head, 0);
+  const view = new DataView(bytes.buffer, head.length);
+  for (let i = 0; i < points.length; i++) view.setFloat32(i * 4, points[i], true);
+  return bytes;
+}
+
+/** Deterministic pseudo-random numbers in [0, 1) (mulberry32). */
+export function random(seed) {
+  let a = seed >>> 0;
+  return () => {
+    a = (a + 0x6d2b79f5) >>> 0;
+    let t = a;
+    t = Math.imul(t ^ (t >>> 15), t | 1);
+    t ^= t + Math.imul(t ^ (t >>> 7), t | 61);
+    return ((t ^ (t >>> 14)) >>> 0) / 4294967296;
+  };
+}
+
+/** `count` points sampled uniformly (by area) on a triangle mesh. */
+export function sampleMesh(positions, cells, count, rand) {
+  const cum = new Float64Array(cells.length);
+  let total = 0;
+  cells.forEach(([i, j, k], f) => {
+    const [a, b, c] = [positions[i], positions[j], positions[k]];
+    const u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+    const v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+    total += 0.5 * Math.hypot(u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]);
+    cum[f] = total;
+  });
+  const out = new Float32Array(count * 3);
+  for (let n = 0; n < count; n++) {
+    const x = rand() * total;
+    let lo = 0;
+    let hi = cells.length - 1;
+    while (lo < hi) {
+      const mid = (lo + hi) >> 1;
+      if (cum[mid] < x) lo = mid + 1;
+      else hi = mid;
+    }
+    const [a, b, c] = cells[lo].map((i) => positions[i]);
+    let r1 = rand();
+    let r2 = rand();
+    if (r1 + r2 > 1) [r1, r2] = [1 - r1, 1 - r2];
+    for (let d = 0; d < 3; d++) out[n * 3 + d] = a[d] + r1 * (b[d] - a[d]) + r2 * (c[d] - a[d]);
+  }
+  return out;
+}
+
+/** The points whose projection on `dir` is at most the `keep` quantile (a half-space crop). */
+export function crop(points, dir, keep) {
+  const n = points.length / 3;
+  const proj = new Float64Array(n);
+  for (let i = 0; i < n; i++) proj[i] = points[i * 3] * dir[0] + points[i * 3 + 1] * dir[1] + points[i * 3 + 2] * dir[2];
+  const cut = Float64Array.from(proj).sort()[Math.min(n - 1, Math.floor(keep * n))];
+  const out = [];
+  for (let i = 0; i < n; i++) if (proj[i] <= cut) out.push(points[i * 3], points[i * 3 + 1], points[i * 3 + 2]);
+  return { points: Float32Array.from(out), dir, cut };
+}
+
+/** Parses the npm `bunny` package's index.js (lines `exports.positions=[...]`, `exports.cells=[...]`). */
+export function parseBunny(text) {
+  const grab = (name) => {
+    const start = text.indexOf(`exports.${name}=`);
+    if (start < 0) throw new Error(`bunny: no ${name} in the module`);
+    const body = text.slice(start + name.length + 9).split(/\n|;/, 1)[0];
+    return JSON.parse(body);
+  };
+  return { positions: grab("positions"), cells: grab("cells") };
+}
+
+/** The example's known motion `T_target_source`: 20 degrees about a tilted axis plus a shift. */
+export const EXAMPLE_TRUTH = rigid([0.3, 1, 0.2], 20, [0.9, -0.4, 0.5]);
+
+/**
+ * Two partial, offset views of a mesh: each is an independent surface sample cropped by a
+ * different half-space (about 85% of the surface each, about 75% shared); the source is then
+ * moved by the inverse of `EXAMPLE_TRUTH`, so the right answer is `EXAMPLE_TRUTH`.
+ */
+export function makeExample({ positions, cells }, count = 6000, seed = 1) {
+  const rand = random(seed);
+  const a = crop(sampleMesh(positions, cells, count, rand), [0.8, 0, 0.6], 0.85);
+  const b = crop(sampleMesh(positions, cells, count, rand), [-0.6, 0.2, 0.77], 0.85);
+  const source = transformPoints(a.points, invertRigid(EXAMPLE_TRUTH));
+  // Fraction of the source's surface that the target also saw.
+  let shared = 0;
+  for (let i = 0; i < a.points.length; i += 3) {
+    const p = a.points;
+    if (p[i] * b.dir[0] + p[i + 1] * b.dir[1] + p[i + 2] * b.dir[2] <= b.cut) shared++;
+  }
+  return { source, target: b.points, truth: EXAMPLE_TRUTH, overlap: shared / (a.points.length / 3) };
+}
