@@ -295,20 +295,13 @@ fn degenerate_inputs_never_trap() {
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
     let mut state = 12345u64;
     let mut rand = move || {
-        state = state
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
+        state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
         (state >> 40) as f32 / (1u64 << 24) as f32
     };
-    let mut cloud = |n: usize, f: &dyn Fn(usize, f32) -> f32| -> Vec<f32> {
-        (0..3 * n).map(|i| f(i, rand())).collect()
-    };
+    let mut cloud =
+        |n: usize, f: &dyn Fn(usize, f32) -> f32| -> Vec<f32> { (0..3 * n).map(|i| f(i, rand())).collect() };
     let cases: Vec<(&str, Vec<f32>, Vec<f32>)> = vec![
-        (
-            "exactly 16 points",
-            cloud(16, &|_, x| x),
-            cloud(16, &|_, x| x),
-        ),
+        ("exactly 16 points", cloud(16, &|_, x| x), cloud(16, &|_, x| x)),
         (
             "collinear",
             cloud(100, &|i, x| if i % 3 == 0 { x } else { 0.0 }),
@@ -319,40 +312,17 @@ fn degenerate_inputs_never_trap() {
             cloud(200, &|i, x| if i % 3 == 2 { 0.0 } else { x }),
             cloud(200, &|i, x| if i % 3 == 2 { 0.0 } else { x }),
         ),
-        (
-            "1e30 coordinates",
-            cloud(100, &|_, x| x * 1e30),
-            cloud(100, &|_, x| x * 1e30),
-        ),
-        (
-            "near f32::MAX",
-            cloud(100, &|_, x| (x - 0.5) * 3e38),
-            cloud(100, &|_, x| (x - 0.5) * 3e38),
-        ),
-        (
-            "1e-40 (subnormal)",
-            cloud(100, &|_, x| x * 1e-40),
-            cloud(100, &|_, x| x * 1e-40),
-        ),
-        (
-            "two distinct points",
-            cloud(100, &|i, _| ((i / 3) % 2) as f32),
-            cloud(100, &|i, _| ((i / 3) % 2) as f32),
-        ),
-        (
-            "1e6 apart",
-            cloud(100, &|_, x| x),
-            cloud(100, &|_, x| x + 1e6),
-        ),
+        ("1e30 coordinates", cloud(100, &|_, x| x * 1e30), cloud(100, &|_, x| x * 1e30)),
+        ("near f32::MAX", cloud(100, &|_, x| (x - 0.5) * 3e38), cloud(100, &|_, x| (x - 0.5) * 3e38)),
+        ("1e-40 (subnormal)", cloud(100, &|_, x| x * 1e-40), cloud(100, &|_, x| x * 1e-40)),
+        ("two distinct points", cloud(100, &|i, _| ((i / 3) % 2) as f32), cloud(100, &|i, _| ((i / 3) % 2) as f32)),
+        ("1e6 apart", cloud(100, &|_, x| x), cloud(100, &|_, x| x + 1e6)),
     ];
     for (name, s, t) in &cases {
         for opts in [None, Some(options(r#"{"icp": "point", "voxelSize": 0}"#))] {
             if let Ok(res) = r.register(s, t, opts) {
                 let m = matrix(&res, "matrix");
-                assert!(
-                    m.iter().all(|v| v.is_finite()),
-                    "{name}: non-finite matrix {m}"
-                );
+                assert!(m.iter().all(|v| v.is_finite()), "{name}: non-finite matrix {m}");
             }
         }
     }
