@@ -16,6 +16,10 @@ import init, { Registrar, parsePointCloud } from "./arps.js";
 
 let registrar = null;
 let loading = null;
+// After a trap (a WebAssembly.RuntimeError: an engine bug, or out of memory) the instance's state
+// cannot be trusted and cannot be re-instantiated in this worker: every later request fails with
+// a message starting "arps worker:", and the app should start a new worker.
+let trapped = null;
 
 const post = (message, transfer = []) => self.postMessage(message, transfer);
 const progress = (id, stage) => post({ id, type: "progress", stage });
@@ -45,6 +49,7 @@ function toBytes(data) {
 
 async function handle(msg) {
   const { id, type } = msg;
+  if (trapped) throw new Error(`arps worker: the engine trapped earlier (${trapped}); start a new worker`);
   switch (type) {
     case "init": {
       const r = await load(id, msg);
@@ -75,6 +80,7 @@ async function handle(msg) {
 self.addEventListener("message", (event) => {
   const msg = event.data ?? {};
   handle(msg).catch((e) => {
+    if (e instanceof WebAssembly.RuntimeError && !trapped) trapped = e.message;
     post({
       id: msg.id,
       type: "error",
