@@ -56,7 +56,9 @@ export interface WorkerRegistrar {
    * Registers `source` onto `target` (packed xyz `[x0, y0, z0, x1, ...]`, the same units) in the
    * worker. Resolves to the same plain object as `Registrar.register`; its `matrix` and
    * `networkMatrix` buffers were transferred, not copied. Rejects with an `Error` carrying the
-   * engine's message; the worker stays usable.
+   * engine's message; the worker stays usable. Exception: after a wasm trap (an engine bug or
+   * out of memory: the error's `name` is `"RuntimeError"`) every later request rejects with a
+   * message starting `arps worker:`; start a new worker then.
    */
   register(
     source: Float32Array,
