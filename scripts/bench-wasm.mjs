@@ -55,7 +55,8 @@ if (!existsSync(entry)) {
 const arps = await import(pathToFileURL(entry).href);
 await arps.default();
 const registrar = arps.Registrar.withDefaultModel();
-const wasm = { wall: [], engine: [], rows: new Map() };
+const STAGE_KEYS = ["preprocessMs", "networkMs", "gmrMs", "icpMs"];
+const wasm = { wall: [], engine: [], stages: [], rows: new Map() };
 const runWasm = (p) => {
   const sb = readFileSync(p.source);
   const tb = readFileSync(p.target);
@@ -63,7 +64,7 @@ const runWasm = (p) => {
   const s = arps.parsePointCloud(sb, path.basename(p.source));
   const t = arps.parsePointCloud(tb, path.basename(p.target));
   const r = registrar.register(s, t);
-  return { wall: performance.now() - t0, engine: r.timingsMs.totalMs, matrix: r.matrix };
+  return { wall: performance.now() - t0, engine: r.timingsMs.totalMs, stages: r.timingsMs, matrix: r.matrix };
 };
 for (const p of pairs) runWasm(p); // warm-up: compile tiers, grow memory
 for (const p of pairs) {
@@ -71,6 +72,7 @@ for (const p of pairs) {
     const r = runWasm(p);
     wasm.wall.push(r.wall);
     wasm.engine.push(r.engine);
+    wasm.stages.push(r.stages);
     wasm.rows.set(p.name, r.matrix);
   }
 }
@@ -83,12 +85,13 @@ if (withNative) {
   try {
     console.error("bench-wasm: building the native CLI (cargo build --release --features cli --bin arps)");
     execFileSync("cargo", ["build", "--release", "--quiet", "--features", "cli", "--bin", "arps"], { cwd: root, stdio: "inherit" });
-    native = { wall: [], engine: [], rotDiff: 0 };
+    native = { wall: [], engine: [], stages: [], rotDiff: 0 };
     for (const p of pairs) {
       for (let i = 0; i < reps; i++) {
         const out = JSON.parse(execFileSync(bin, ["register", p.source, p.target, "--json"], { encoding: "utf8" }));
         native.wall.push(out.time_ms);
         native.engine.push(out.timings_ms?.totalMs ?? out.timings_ms?.total_ms ?? NaN);
+        native.stages.push(out.timings_ms ?? {});
         native.rotDiff = Math.max(native.rotDiff, rotationDiffDeg(wasm.rows.get(p.name), out.T_target_source));
       }
     }
@@ -110,6 +113,13 @@ console.log(`bench-wasm: ${pairs.length} pairs from ${path.relative(root, pairsD
 console.log("median ms/pair      wasm (Node)   native   wasm/native");
 console.log(`  read+register   ${fmt(w.wall)}    ${fmt(n.wall)}    ${native ? (w.wall / n.wall).toFixed(2).padStart(6) : "     -"}`);
 console.log(`  engine only     ${fmt(w.engine)}    ${fmt(n.engine)}    ${native ? (w.engine / n.engine).toFixed(2).padStart(6) : "     -"}`);
+const stageMedian = (runs, k) => median(runs.map((t) => t[k] ?? t[k.replace(/Ms$/, "_ms")] ?? NaN));
+for (const k of STAGE_KEYS) {
+  const a = stageMedian(wasm.stages, k);
+  const b = native ? stageMedian(native.stages, k) : NaN;
+  const ratio = native && b > 0 ? (a / b).toFixed(2).padStart(6) : "     -";
+  console.log(`    ${k.replace(/Ms$/, "").padEnd(12)} ${fmt(a)}    ${fmt(b)}    ${ratio}`);
+}
 if (native) console.log(`largest rotation difference between the builds' answers: ${native.rotDiff.toFixed(4)} deg`);
 if (nativeNote) console.log(nativeNote);
 console.log(
