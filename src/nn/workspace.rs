@@ -14,7 +14,7 @@ pub fn take(v: &mut Vec<f32>, len: usize) -> &mut [f32] {
 pub struct Workspace {
     /// Queries `[nq, d]`.
     pub q: Vec<f32>,
-    /// Keys `[nk, d]`.
+    /// Keys, transposed: `[d, nk]`.
     pub k: Vec<f32>,
     /// Values `[nk, d]`.
     pub v: Vec<f32>,
