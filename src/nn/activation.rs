@@ -2,10 +2,13 @@
 
 use super::fastmath::{exp_fast, map_exp_inplace};
 
-/// `x = max(x, 0)` in place.
+/// `x = max(x, 0)` in place (NaN stays NaN).
+///
+/// Written as a compare-select rather than `f32::max`, whose NaN rule has no wasm simd128
+/// instruction: LLVM turns `f32::max` into a scalar `fmaxf` call per element there.
 pub fn relu_inplace(x: &mut [f32]) {
     for v in x {
-        *v = v.max(0.0);
+        *v = if *v < 0.0 { 0.0 } else { *v };
     }
 }
 

@@ -160,11 +160,22 @@ fn max_of_lanes(x: &[f32]) -> f32 {
             *a = if *v > *a { *v } else { *a };
         }
     }
-    let mut m = chunks.remainder().iter().copied().fold(f32::NEG_INFINITY, f32::max);
+    let mut m = chunks.remainder().iter().copied().fold(f32::NEG_INFINITY, max_skip_nan);
     for a in acc {
-        m = m.max(a);
+        m = max_skip_nan(m, a);
     }
     m
+}
+
+/// `max(m, v)` ignoring a NaN `v` (`m` is never NaN here); unlike `f32::max`, no libm call
+/// on wasm.
+#[inline(always)]
+fn max_skip_nan(m: f32, v: f32) -> f32 {
+    if v > m {
+        v
+    } else {
+        m
+    }
 }
 
 /// Sum with lane-wise partial sums (vectorisable).
@@ -200,7 +211,7 @@ fn sum_lanes<const L: usize>(acc: &[f32; L]) -> f32 {
 /// `exp` here is bit-identical to the scalar [`exp_fast`] (same operations, same order).
 #[cfg(all(target_arch = "wasm32", target_feature = "simd128"))]
 mod simd128 {
-    use super::{exp_fast, C2, C3, C4, C5, HI, LN2_HI, LN2_LO, LO, LOG2E, ROUND};
+    use super::{exp_fast, max_skip_nan, C2, C3, C4, C5, HI, LN2_HI, LN2_LO, LO, LOG2E, ROUND};
     use core::arch::wasm32::*;
 
     /// The constants of [`exp_v`], splatted once per call. V8 materialises every
@@ -290,9 +301,9 @@ mod simd128 {
             }
         }
         let acc = f32x4_pmax(f32x4_pmax(acc[0], acc[1]), f32x4_pmax(acc[2], acc[3]));
-        let mut m = chunks.remainder().iter().copied().fold(f32::NEG_INFINITY, f32::max);
+        let mut m = chunks.remainder().iter().copied().fold(f32::NEG_INFINITY, max_skip_nan);
         for l in [f32x4_extract_lane::<0>(acc), f32x4_extract_lane::<1>(acc), f32x4_extract_lane::<2>(acc), f32x4_extract_lane::<3>(acc)] {
-            m = m.max(l);
+            m = max_skip_nan(m, l);
         }
         m
     }

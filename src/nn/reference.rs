@@ -104,9 +104,9 @@ pub fn softmax_rows(x: &[f32], cols: usize) -> Vec<f32> {
     y
 }
 
-/// `max(x, 0)`.
+/// `max(x, 0)` (NaN stays NaN).
 pub fn relu(x: &[f32]) -> Vec<f32> {
-    x.iter().map(|v| v.max(0.0)).collect()
+    x.iter().map(|&v| if v < 0.0 { 0.0 } else { v }).collect()
 }
 
 /// GELU, tanh approximation `0.5 u (1 + tanh(z))`, in `f64`, evaluated as the equal
