@@ -1,7 +1,9 @@
 //! A packed, cache-blocked SGEMM (Goto/BLIS loop order) with an `MR x NR` register-tile
 //! micro-kernel: explicit `core::arch::wasm32` simd128 on wasm32 (where it beats
-//! `matrixmultiply`, which has no wasm kernel), and a portable scalar kernel with the same
-//! blocking everywhere else, so the blocking and packing logic is tested natively.
+//! `matrixmultiply`'s 8x8 simd128 kernel, ~38-41 vs ~29-33 GFLOP/s on 512x128x128-like
+//! shapes in Node 20), and a portable scalar kernel with the same blocking everywhere else, so
+//! the blocking and packing logic is tested natively (the simd128 kernel itself by running
+//! the test suite as wasm32-wasip1 under Node).
 //!
 //! Packing buffers are thread-local and only grow: no allocation per call after warm-up.
 

@@ -1,8 +1,8 @@
 //! Matrix products on row-major `f32` slices.
 //!
-//! Natively they run on `matrixmultiply` (runtime-dispatched AVX/FMA/AVX-512 kernels); on
-//! wasm32 with simd128 on the crate's own packed GEMM with a simd128 micro-kernel
-//! ([`gemm`](super::gemm)), which is faster there than `matrixmultiply`'s auto-vectorised one.
+//! Natively they run on `matrixmultiply` (runtime-dispatched AVX/FMA kernels); on wasm32 with
+//! simd128 on the crate's own packed GEMM with a 4x8 simd128 micro-kernel
+//! ([`gemm`](mod@super::gemm)), which is faster there than `matrixmultiply`'s 8x8 one.
 
 /// `C[m,n] = A[m,k] * B[k,n]` (all row-major, contiguous). Overwrites `c`.
 pub fn matmul(a: &[f32], b: &[f32], c: &mut [f32], m: usize, k: usize, n: usize) {

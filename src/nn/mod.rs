@@ -5,7 +5,7 @@
 //! Kernels write into caller-provided buffers; [`Workspace`] holds the scratch a forward
 //! pass reuses across calls, so the hot path makes no large allocations after the first call.
 //!
-//! [`reference`] has naive versions of every kernel (for tests and gradient checks).
+//! [`reference`](mod@reference) has naive versions of every kernel (for tests and gradient checks).
 
 pub mod activation;
 pub mod attention;

@@ -18,7 +18,8 @@ pub struct Workspace {
     pub k: Vec<f32>,
     /// Values `[nk, d]`.
     pub v: Vec<f32>,
-    /// Attention scores / probabilities for one head `[nq, nk]`.
+    /// Attention scores / unnormalised probabilities of one head for one block of queries,
+    /// `[min(nq, QUERY_BLOCK), nk]` (see [`super::attention::QUERY_BLOCK`]).
     pub scores: Vec<f32>,
     /// Concatenated head outputs `[nq, d]`.
     pub heads: Vec<f32>,
