@@ -30,18 +30,28 @@ pub fn flops_attention_block(nq: usize, nk: usize, d: usize, heads: usize, ffn: 
 }
 
 /// Median GFLOP/s of the crate's [`gemm`] on `[m, k] x [k, n]` (row-major, contiguous), over
-/// `reps` timed runs after one warm-up. `clock` returns milliseconds (e.g.
+/// `reps` timed runs after a warm-up of at least 30 ms. `clock` returns milliseconds (e.g.
 /// [`crate::timing::default_clock`] natively, `performance.now` in wasm). Each timed run repeats
 /// the product until it lasts at least ~2 ms, so coarse clocks still give usable figures.
+///
+/// In a browser or Node, call it once before the call you report: V8 first runs wasm in its
+/// baseline compiler and optimises in the background, and on a busy machine the first call can
+/// read ~4x low (measured 8-10 instead of ~40 GFLOP/s at n = 128 here).
 pub fn bench_gemm_gflops(m: usize, k: usize, n: usize, reps: usize, clock: fn() -> f64) -> f64 {
     let a: Vec<f32> = (0..m * k).map(|i| ((i * 7 % 13) as f32 - 6.0) * 0.1).collect();
     let b: Vec<f32> = (0..k * n).map(|i| ((i * 5 % 11) as f32 - 5.0) * 0.1).collect();
     let mut c = vec![0.0f32; m * n];
     let mut run = || gemm(m, k, n, 1.0, &a, k as isize, 1, &b, n as isize, 1, 0.0, &mut c, n as isize, 1);
-    // Warm up (packing buffers, caches) and size the inner loop.
+    // Warm up for at least 3 calls and 30 ms (packing buffers, caches, and a JIT's tier-up:
+    // V8 keeps a wasm function in its baseline compiler for its first calls), and size the
+    // inner loop from it. The call cap keeps a clock that does not advance from hanging here.
     let t0 = clock();
-    run();
-    let once = (clock() - t0).max(1e-4);
+    let mut calls = 0usize;
+    while calls < 3 || (clock() - t0 < 30.0 && calls < 10_000) {
+        run();
+        calls += 1;
+    }
+    let once = ((clock() - t0) / calls as f64).max(1e-4);
     let inner = ((2.0 / once).ceil() as usize).clamp(1, 10_000);
     let mut times: Vec<f64> = (0..reps.max(1))
         .map(|_| {

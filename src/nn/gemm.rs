@@ -137,6 +137,10 @@ struct Tile {
     beta: f32,
 }
 
+/// Kept out of line so that the hot loops sit in a function entered once per product: V8
+/// switches a wasm function to its optimised tier only between calls (no on-stack
+/// replacement), so they must not end up inlined into a long-running caller.
+#[inline(never)]
 #[allow(clippy::too_many_arguments)]
 unsafe fn blocked(
     kernel: Kernel,
