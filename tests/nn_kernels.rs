@@ -42,11 +42,7 @@ fn linear(rng: &mut Rng, i: usize, o: usize, bias: bool) -> Linear {
 }
 
 fn layernorm(rng: &mut Rng, d: usize) -> LayerNorm {
-    LayerNorm {
-        gamma: rng.vec(d, 0.2).into_iter().map(|v| 1.0 + v).collect(),
-        beta: rng.vec(d, 0.2),
-        eps: 1e-5,
-    }
+    LayerNorm { gamma: rng.vec(d, 0.2).into_iter().map(|v| 1.0 + v).collect(), beta: rng.vec(d, 0.2), eps: 1e-5 }
 }
 
 fn block(rng: &mut Rng, d: usize, heads: usize, ffn: usize) -> AttentionBlock {
@@ -84,13 +80,24 @@ fn matmul_and_matmul_bt_match_reference() {
     }
 }
 
-type GemmFn = dyn Fn(usize, usize, usize, f32, &[f32], isize, isize, &[f32], isize, isize, f32, &mut [f32], isize, isize);
+type GemmFn =
+    dyn Fn(usize, usize, usize, f32, &[f32], isize, isize, &[f32], isize, isize, f32, &mut [f32], isize, isize);
 
 /// Strided cases: transposed operands, padded row strides, a column-strided C, alpha/beta,
 /// beta = 0 over a NaN-filled C, k = 0, and shapes crossing the blocked GEMM's KC/MC/NC.
 fn check_strided(f: &GemmFn, name: &str) {
     let mut rng = Rng(2);
-    let shapes = [(1, 1, 1), (3, 7, 17), (17, 3, 7), (64, 129, 7), (129, 17, 64), (7, 300, 33), (70, 260, 520), (9, 20, 1030), (5, 0, 9)];
+    let shapes = [
+        (1, 1, 1),
+        (3, 7, 17),
+        (17, 3, 7),
+        (64, 129, 7),
+        (129, 17, 64),
+        (7, 300, 33),
+        (70, 260, 520),
+        (9, 20, 1030),
+        (5, 0, 9),
+    ];
     for &(m, k, n) in &shapes {
         for layout in 0..9 {
             // A: row-major with padding, transposed (column-major with padding), or with both
@@ -123,7 +130,12 @@ fn check_strided(f: &GemmFn, name: &str) {
                     }
                 }
                 f(m, k, n, alpha, &a, rsa, csa, &b, rsb, csb, beta, &mut got, rsc, csc);
-                assert_close(&got, &want, RTOL, &format!("{name} {m}x{k}x{n} layout {layout} alpha {alpha} beta {beta}"));
+                assert_close(
+                    &got,
+                    &want,
+                    RTOL,
+                    &format!("{name} {m}x{k}x{n} layout {layout} alpha {alpha} beta {beta}"),
+                );
             }
         }
     }
@@ -185,10 +197,7 @@ fn linear_and_mlp_match_reference() {
             }
         }
         for (dims, relu_last) in [(&[3usize, 17][..], true), (&[3, 64, 128][..], true), (&[7, 33, 5, 2][..], false)] {
-            let mlp = Mlp {
-                layers: dims.windows(2).map(|w| linear(&mut rng, w[0], w[1], true)).collect(),
-                relu_last,
-            };
+            let mlp = Mlp { layers: dims.windows(2).map(|w| linear(&mut rng, w[0], w[1], true)).collect(), relu_last };
             let x = rng.vec(rows * dims[0], 1.0);
             let mut y = vec![f32::NAN; rows * mlp.out_dim()];
             mlp.forward(&x, rows, &mut y, &mut Vec::new(), &mut Vec::new());
@@ -204,7 +213,12 @@ fn layernorm_matches_reference() {
         for &d in &SIZES {
             let ln = layernorm(&mut rng, d);
             // Offset rows (mean far from 0) as well as centred ones.
-            let x: Vec<f32> = rng.vec(rows * d, 2.0).iter().enumerate().map(|(i, v)| v + if i % 3 == 0 { 100.0 } else { 0.0 }).collect();
+            let x: Vec<f32> = rng
+                .vec(rows * d, 2.0)
+                .iter()
+                .enumerate()
+                .map(|(i, v)| v + if i % 3 == 0 { 100.0 } else { 0.0 })
+                .collect();
             let mut y = x.clone();
             ln.forward_inplace(&mut y);
             assert_close(&y, &r::layernorm(&ln, &x), 2e-5, &format!("layernorm {rows}x{d}"));
@@ -319,7 +333,12 @@ fn attention_matches_reference() {
                 let xkv = rng.vec(nk * d, 1.0);
                 let mut out = vec![f32::NAN; nq * d];
                 mha.forward(&xq, nq, &xkv, nk, &mut out, &mut ws);
-                assert_close(&out, &r::attention(&mha, &xq, nq, &xkv, nk), RTOL, &format!("mha d {d} h {heads} nq {nq} nk {nk}"));
+                assert_close(
+                    &out,
+                    &r::attention(&mha, &xq, nq, &xkv, nk),
+                    RTOL,
+                    &format!("mha d {d} h {heads} nq {nq} nk {nk}"),
+                );
             }
         }
     }
@@ -372,10 +391,8 @@ fn flop_counts() {
     let attn = 4 * 2 * n * d * d + 4 * n * n * d;
     assert_eq!(nn::flops_attention(512, 512, 128, 4), attn);
     assert_eq!(nn::flops_attention_block(512, 512, 128, 4, 256), attn + 4 * n * d * f);
-    let mlp = Mlp {
-        layers: vec![linear(&mut Rng(1), 3, 16, true), linear(&mut Rng(2), 16, 64, true)],
-        relu_last: true,
-    };
+    let mlp =
+        Mlp { layers: vec![linear(&mut Rng(1), 3, 16, true), linear(&mut Rng(2), 16, 64, true)], relu_last: true };
     assert_eq!(nn::flops_mlp(&mlp, 10), 2 * 10 * (3 * 16 + 16 * 64));
 }
 

@@ -67,18 +67,48 @@ enum Keys<'a> {
 /// `out_h = softmax(Q_h K_h^T / sqrt(dk)) V_h`. `q`, `out` are `[nq, d]`, `k`, `v` are `[nk, d]`;
 /// `scores` holds at least `min(nq, QUERY_BLOCK) * nk` floats.
 #[allow(clippy::too_many_arguments)]
-pub fn attend(q: &[f32], nq: usize, k: &[f32], v: &[f32], nk: usize, d: usize, heads: usize, out: &mut [f32], scores: &mut [f32]) {
+pub fn attend(
+    q: &[f32],
+    nq: usize,
+    k: &[f32],
+    v: &[f32],
+    nk: usize,
+    d: usize,
+    heads: usize,
+    out: &mut [f32],
+    scores: &mut [f32],
+) {
     attend_impl(q, nq, Keys::Rows(k), v, nk, d, heads, out, scores);
 }
 
 /// [`attend`] with the keys `[nk, d]` given transposed, `kt = K^T [d, nk]`.
 #[allow(clippy::too_many_arguments)]
-pub fn attend_kt(q: &[f32], nq: usize, kt: &[f32], v: &[f32], nk: usize, d: usize, heads: usize, out: &mut [f32], scores: &mut [f32]) {
+pub fn attend_kt(
+    q: &[f32],
+    nq: usize,
+    kt: &[f32],
+    v: &[f32],
+    nk: usize,
+    d: usize,
+    heads: usize,
+    out: &mut [f32],
+    scores: &mut [f32],
+) {
     attend_impl(q, nq, Keys::Transposed(kt), v, nk, d, heads, out, scores);
 }
 
 #[allow(clippy::too_many_arguments)]
-fn attend_impl(q: &[f32], nq: usize, keys: Keys, v: &[f32], nk: usize, d: usize, heads: usize, out: &mut [f32], scores: &mut [f32]) {
+fn attend_impl(
+    q: &[f32],
+    nq: usize,
+    keys: Keys,
+    v: &[f32],
+    nk: usize,
+    d: usize,
+    heads: usize,
+    out: &mut [f32],
+    scores: &mut [f32],
+) {
     assert!(heads > 0 && d.is_multiple_of(heads), "attention: d = {d} not divisible by heads = {heads}");
     let dk = d / heads;
     let scale = 1.0 / (dk as f32).sqrt();

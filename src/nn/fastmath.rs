@@ -302,7 +302,12 @@ mod simd128 {
         }
         let acc = f32x4_pmax(f32x4_pmax(acc[0], acc[1]), f32x4_pmax(acc[2], acc[3]));
         let mut m = chunks.remainder().iter().copied().fold(f32::NEG_INFINITY, max_skip_nan);
-        for l in [f32x4_extract_lane::<0>(acc), f32x4_extract_lane::<1>(acc), f32x4_extract_lane::<2>(acc), f32x4_extract_lane::<3>(acc)] {
+        for l in [
+            f32x4_extract_lane::<0>(acc),
+            f32x4_extract_lane::<1>(acc),
+            f32x4_extract_lane::<2>(acc),
+            f32x4_extract_lane::<3>(acc),
+        ] {
             m = max_skip_nan(m, l);
         }
         m

@@ -98,7 +98,25 @@ pub fn gemm_blocked_with(
         PACK.with(|p| {
             let mut p = p.borrow_mut();
             let (ap, bp) = &mut *p;
-            blocked(kernel, m, k, n, alpha, a.as_ptr(), rsa, csa, b.as_ptr(), rsb, csb, beta, c.as_mut_ptr(), rsc, csc, ap, bp);
+            blocked(
+                kernel,
+                m,
+                k,
+                n,
+                alpha,
+                a.as_ptr(),
+                rsa,
+                csa,
+                b.as_ptr(),
+                rsb,
+                csb,
+                beta,
+                c.as_mut_ptr(),
+                rsc,
+                csc,
+                ap,
+                bp,
+            );
         });
     }
 }
@@ -329,7 +347,8 @@ mod simd128 {
         let last = t.mr as isize - 1;
         // Packed A: one pointer, element (i, s) at a + s * MR + i. In place: row pointers
         // (rows past mr repeat the last valid one; their results are discarded).
-        let mut a: [*const f32; MR] = core::array::from_fn(|i| if AP { p.a } else { p.a.offset((i as isize).min(last) * p.ars) });
+        let mut a: [*const f32; MR] =
+            core::array::from_fn(|i| if AP { p.a } else { p.a.offset((i as isize).min(last) * p.ars) });
         let mut b = p.b;
         for _ in 0..kc {
             let b0 = v128_load(b as *const v128);

@@ -70,7 +70,22 @@ pub fn gemm_matrixmultiply(
     // SAFETY: check_operands asserted that all three strided views lie inside their slices,
     // with non-negative strides; `c` is exclusively borrowed so cannot alias `a` or `b`.
     unsafe {
-        matrixmultiply::sgemm(m, k, n, alpha, a.as_ptr(), rsa, csa, b.as_ptr(), rsb, csb, beta, c.as_mut_ptr(), rsc, csc);
+        matrixmultiply::sgemm(
+            m,
+            k,
+            n,
+            alpha,
+            a.as_ptr(),
+            rsa,
+            csa,
+            b.as_ptr(),
+            rsb,
+            csb,
+            beta,
+            c.as_mut_ptr(),
+            rsc,
+            csc,
+        );
     }
 }
 

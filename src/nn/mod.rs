@@ -22,7 +22,9 @@ pub mod workspace;
 
 pub use activation::{gelu_inplace, relu_inplace, sigmoid, sigmoid_inplace};
 pub use attention::{AttentionBlock, MultiHeadAttention};
-pub use bench::{bench_gemm_gflops, bench_matmul_gflops, flops_attention, flops_attention_block, flops_linear, flops_mlp};
+pub use bench::{
+    bench_gemm_gflops, bench_matmul_gflops, flops_attention, flops_attention_block, flops_linear, flops_mlp,
+};
 pub use fastmath::exp_fast;
 pub use linear::{Linear, Mlp};
 pub use matmul::{gemm, matmul, matmul_bt};
