@@ -198,12 +198,7 @@ fn small_run_all_losses() {
     cfg.top_h = cfg.n_points / 4;
     let steps = env("BENCH_STEPS", 200);
     let params = train::init_params(&cfg, 1).unwrap();
-    let loss = LossConfig {
-        aff: 1.0,
-        reg: 1.0,
-        consistency: 1.0,
-        ..LossConfig::default()
-    };
+    let loss = LossConfig { aff: 1.0, reg: 1.0, consistency: 1.0, ..LossConfig::default() };
     let mut state = TrainState::new(cfg.clone(), params, 1e-3, Some(1.0));
     for s in 0..steps {
         let pairs = synthetic::pairs(8, cfg.n_points, 10_000 + 8 * s as u64);

@@ -77,11 +77,7 @@ fn short_run_lowers_the_loss() {
 fn data_pipeline_pairs_convert() {
     use arps::data::pairs::{pair_from_dense, PairParams};
     let dense = arps::PointCloud::new(synthetic::pair(synthetic::Shape::Cylinder, 1024, 3).source);
-    let params = PairParams {
-        points: 32,
-        dense_points: 1024,
-        ..PairParams::default()
-    };
+    let params = PairParams { points: 32, dense_points: 1024, ..PairParams::default() };
     let dp = pair_from_dense(&dense, "test", &params, 9);
     let p = train::Pair::from(&dp);
     assert_eq!(p.t_gt, dp.T_target_source);

@@ -1,6 +1,6 @@
 //! Fully connected layers.
 
-use super::{activation::relu_inplace, matmul::matmul_bt, workspace::take};
+use super::{activation::relu_inplace, matmul::gemm, matmul::matmul_bt, workspace::take};
 
 /// `y = x W^T + b` with `W` stored `[out, in]` row-major.
 #[derive(Clone, Debug, PartialEq)]
@@ -24,6 +24,22 @@ impl Linear {
         if let Some(b) = &self.bias {
             for row in y.chunks_exact_mut(self.out_dim) {
                 for (v, bi) in row.iter_mut().zip(b) {
+                    *v += bi;
+                }
+            }
+        }
+    }
+
+    /// The transposed output: writes `y^T = W x^T + b` as `[out_dim, rows]` row-major (e.g. the
+    /// keys of attention, so that each head's `K_h^T` is a contiguous block of rows).
+    pub fn forward_transposed(&self, x: &[f32], rows: usize, yt: &mut [f32]) {
+        debug_assert_eq!(x.len(), rows * self.in_dim);
+        debug_assert_eq!(yt.len(), rows * self.out_dim);
+        let (i, r) = (self.in_dim as isize, rows as isize);
+        gemm(self.out_dim, self.in_dim, rows, 1.0, &self.weight, i, 1, x, 1, i, 0.0, yt, r, 1);
+        if let Some(b) = &self.bias {
+            for (row, bi) in yt.chunks_exact_mut(rows.max(1)).zip(b) {
+                for v in row.iter_mut() {
                     *v += bi;
                 }
             }

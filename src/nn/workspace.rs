@@ -14,11 +14,12 @@ pub fn take(v: &mut Vec<f32>, len: usize) -> &mut [f32] {
 pub struct Workspace {
     /// Queries `[nq, d]`.
     pub q: Vec<f32>,
-    /// Keys `[nk, d]`.
+    /// Keys, transposed: `[d, nk]`.
     pub k: Vec<f32>,
     /// Values `[nk, d]`.
     pub v: Vec<f32>,
-    /// Attention scores / probabilities for one head `[nq, nk]`.
+    /// Attention scores / unnormalised probabilities of one head for one block of queries,
+    /// `[min(nq, QUERY_BLOCK), nk]` (see [`super::attention::QUERY_BLOCK`]).
     pub scores: Vec<f32>,
     /// Concatenated head outputs `[nq, d]`.
     pub heads: Vec<f32>,
