@@ -3,7 +3,7 @@ import type { ModelConfig, ModelProvenance, RegisterOptions, RegistrationResult 
 /**
  * Progress of a request, in order: `"loading"` (fetching and compiling the engine and the
  * model, first request only), `"preparing"` (inputs received, registration starting),
- * `"network"` and `"refining"` (the network, then ICP: sent once the engine reports stages),
+ * `"network"` and `"refining"` (the network, then ICP, as the engine starts them),
  * `"done"` (the result is on its way).
  */
 export type Stage = "loading" | "preparing" | "network" | "refining" | "done";

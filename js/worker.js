@@ -59,9 +59,10 @@ async function handle(msg) {
     case "register": {
       const r = await load(id);
       progress(id, "preparing");
-      // The engine runs network, GMR and ICP in one call; per-stage events ("network",
-      // "refining") need a progress hook in the core and are not sent yet.
-      const result = r.register(msg.source, msg.target, msg.options ?? undefined);
+      // "preparing" was just sent; the engine reports "network" and "refining" as they start.
+      const result = r.register(msg.source, msg.target, msg.options ?? undefined, (stage) => {
+        if (stage !== "preparing") progress(id, stage);
+      });
       progress(id, "done");
       post({ id, type: "result", result }, [result.matrix.buffer, result.networkMatrix.buffer]);
       return;

@@ -15,7 +15,8 @@ use serde::{Deserialize, Serialize};
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase", default, deny_unknown_fields)]
 pub struct Options {
-    /// Points per cloud fed to the network. Default `None`: the model's N (512 for `web`).
+    /// Points per cloud fed to the network, at most [`MAX_NETWORK_POINTS`]. Default `None`: the
+    /// model's N (256 for `web`).
     pub network_points: Option<usize>,
     /// Seed of every random choice (network sampling). Default 0. Same inputs + same seed = same
     /// output, bit for bit, on a given build.
@@ -119,6 +120,9 @@ pub struct Registrar {
     clock: Option<Clock>,
 }
 
+/// Most points per cloud the network may be given: attention costs grow with its square
+/// (4096 points take seconds in WebAssembly; the shipped model was trained on 256).
+pub const MAX_NETWORK_POINTS: usize = 4096;
 /// Default final ICP distance in normalised units.
 const DEFAULT_MAX_CORRESPONDENCE: f64 = 0.025;
 /// Fitness below which a warning says the alignment may have failed.
@@ -182,9 +186,9 @@ impl Registrar {
         let mut total = Stopwatch::start(self.clock);
         let mut warnings = Vec::new();
         let n_net = options.network_points.unwrap_or(self.model.config.n_points);
-        if n_net < self.model.min_points() || n_net > 1 << 16 {
+        if n_net < self.model.min_points() || n_net > MAX_NETWORK_POINTS {
             return Err(Error::InvalidOption(format!(
-                "networkPoints = {n_net} is outside {}..=65536 for this model",
+                "networkPoints = {n_net} is outside {}..={MAX_NETWORK_POINTS} for this model",
                 self.model.min_points()
             )));
         }
@@ -220,7 +224,15 @@ impl Registrar {
             None => DEFAULT_MAX_CORRESPONDENCE,
         };
         let voxel = match options.voxel_size {
-            Some(v) if v.is_finite() && v >= 0.0 => v / s,
+            // Voxels below a millionth of the clouds' half-extent cannot merge distinct f32 points
+            // meaningfully (and would saturate the grid keys): treat them as "no voxelisation".
+            Some(v) if v.is_finite() && v >= 0.0 => {
+                if v / s < 1e-6 {
+                    0.0
+                } else {
+                    v / s
+                }
+            }
             Some(v) => return Err(Error::InvalidOption(format!("voxelSize = {v} must be >= 0"))),
             None => d_final * 0.5,
         };

@@ -108,18 +108,44 @@ impl Registrar {
     /// Registers `source` onto `target` (packed xyz, same units) and returns the transform
     /// mapping source points into the target frame, with quality figures. `options` is a plain
     /// object (or `undefined`/`null`) mirroring the core `Options`; unknown fields throw.
+    /// `onProgress`, if given, is called with `"preparing"`, `"network"` and `"refining"` as each
+    /// stage starts (stages that do not run are skipped); if it throws, the registration still
+    /// completes and then the call throws that error.
     #[wasm_bindgen(unchecked_return_type = "RegistrationResult")]
     pub fn register(
         &mut self,
         source: &[f32],
         target: &[f32],
         #[wasm_bindgen(unchecked_optional_param_type = "RegisterOptions | null")] options: Option<JsValue>,
+        #[wasm_bindgen(
+            js_name = "onProgress",
+            unchecked_optional_param_type = "((stage: \"preparing\" | \"network\" | \"refining\") => void) | null"
+        )]
+        on_progress: Option<js_sys::Function>,
     ) -> Result<JsValue, JsError> {
         let options = options.unwrap_or(JsValue::UNDEFINED);
         let options = parse_options(options)?;
         let source = PointCloud::from_xyz(source).map_err(|e| prefixed("source", e))?;
         let target = PointCloud::from_xyz(target).map_err(|e| prefixed("target", e))?;
-        let r = self.inner.register(&source, &target, &options).map_err(js_err)?;
+        let mut callback_error: Option<JsValue> = None;
+        let mut progress = |stage: crate::Stage| {
+            if let (Some(f), None) = (&on_progress, &callback_error) {
+                let name = match stage {
+                    crate::Stage::Preparing => "preparing",
+                    crate::Stage::Network => "network",
+                    crate::Stage::Refining => "refining",
+                };
+                if let Err(e) = f.call1(&JsValue::NULL, &JsValue::from_str(name)) {
+                    callback_error = Some(e);
+                }
+            }
+        };
+        let r = self.inner.register_with_progress(&source, &target, &options, &mut progress).map_err(js_err)?;
+        if let Some(e) = callback_error {
+            let message =
+                e.dyn_ref::<js_sys::Error>().map(|e| String::from(e.message())).unwrap_or_else(|| format!("{e:?}"));
+            return Err(JsError::new(&format!("onProgress threw: {message}")));
+        }
         let out = Object::new();
         set(&out, "matrix", &matrix_js(&r.T_target_source))?;
         set(&out, "networkMatrix", &matrix_js(&r.T_target_source_network))?;

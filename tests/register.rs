@@ -170,3 +170,21 @@ fn progress_reports_each_stage_in_order() {
     registrar().register_with_progress(&s, &t, &icp_only, &mut |st| seen.push(st)).unwrap();
     assert_eq!(seen, vec![Stage::Preparing, Stage::Refining]);
 }
+
+#[test]
+fn network_points_are_capped_and_tiny_voxels_mean_none() {
+    let (s, t) = (bumpy_surface(2000, 0.0), bumpy_surface(2000, 0.3));
+    let e = registrar()
+        .register(
+            &s,
+            &t,
+            &Options { network_points: Some(arps::register::MAX_NETWORK_POINTS + 1), ..Options::default() },
+        )
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("networkPoints"), "{e}");
+    let exact = registrar().register(&s, &s, &Options { voxel_size: Some(0.0), ..Options::default() }).unwrap();
+    let tiny = registrar().register(&s, &s, &Options { voxel_size: Some(1e-30), ..Options::default() }).unwrap();
+    assert_eq!(exact.fitness, tiny.fitness);
+    assert!(tiny.fitness > 0.99, "{}", tiny.fitness);
+}

@@ -20,7 +20,7 @@ fn errors(result: &JsValue) -> (f64, f64) {
 }
 
 fn register_ok(r: &mut Registrar, options: JsValue) -> JsValue {
-    match r.register(&source(), &target(), Some(options)) {
+    match r.register(&source(), &target(), Some(options), None) {
         Ok(v) => v,
         Err(e) => panic!("register failed: {}", message(e)),
     }
@@ -145,7 +145,7 @@ fn nan_points_can_be_dropped() {
     let mut src = source();
     src[3 * 10 + 1] = f32::NAN;
     src[3 * 20] = f32::INFINITY;
-    let res = r.register(&src, &target(), Some(options(r#"{"nonFinite": "drop"}"#))).map_err(message).unwrap();
+    let res = r.register(&src, &target(), Some(options(r#"{"nonFinite": "drop"}"#)), None).map_err(message).unwrap();
     let (rot, tr) = errors(&res);
     assert!(rot < 1.0 && tr < 0.02, "{rot:.3} deg, {tr:.4}");
 }
@@ -158,7 +158,7 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     let tgt = target();
     let expect_err = |r: &mut Registrar, s: &[f32], t: &[f32], o: JsValue, needle: &str| {
         let e = r
-            .register(s, t, Some(o))
+            .register(s, t, Some(o), None)
             .err()
             .map(message)
             .unwrap_or_else(|| panic!("expected an error containing {needle:?}"));
@@ -252,7 +252,7 @@ fn custom_weights_from_bytes_match_the_default_model() {
     let mut t = Registrar::from_bytes(&tiny).map_err(message).unwrap();
     assert_eq!(get(&t.model_config().map_err(message).unwrap(), "preset").as_string().as_deref(), Some("tiny"));
     assert_eq!(get(&t.provenance().map_err(message).unwrap(), "kind").as_string().as_deref(), Some("random"));
-    let res = t.register(&source(), &target(), None).map_err(message).unwrap();
+    let res = t.register(&source(), &target(), None, None).map_err(message).unwrap();
     assert!(arps::transform::check_rigid(&matrix(&res, "matrix"), 1e-3).is_ok());
 }
 
@@ -268,7 +268,7 @@ fn parse_point_cloud_reads_real_bytes() {
     // The readers' output registers as is.
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
     let tgt = parse_point_cloud(TARGET_PLY, "target.ply").map_err(message).unwrap();
-    let res = r.register(&got, &tgt, None).map_err(message).unwrap();
+    let res = r.register(&got, &tgt, None, None).map_err(message).unwrap();
     let (rot, tr) = errors(&res);
     assert!(rot < 1.0 && tr < 0.02, "{rot:.3} deg, {tr:.4}");
 }
@@ -320,11 +320,31 @@ fn degenerate_inputs_never_trap() {
     ];
     for (name, s, t) in &cases {
         for opts in [None, Some(options(r#"{"icp": "point", "voxelSize": 0}"#))] {
-            if let Ok(res) = r.register(s, t, opts) {
+            if let Ok(res) = r.register(s, t, opts, None) {
                 let m = matrix(&res, "matrix");
                 assert!(m.iter().all(|v| v.is_finite()), "{name}: non-finite matrix {m}");
             }
         }
     }
+    still_works(&mut r);
+}
+
+#[wasm_bindgen_test]
+fn progress_callback_sees_each_stage_and_a_throwing_callback_is_reported() {
+    let mut r = Registrar::with_default_model().unwrap();
+    let seen = Array::new();
+    let push = {
+        let seen = seen.clone();
+        Closure::<dyn FnMut(JsValue)>::new(move |stage: JsValue| {
+            seen.push(&stage);
+        })
+    };
+    let f: js_sys::Function = push.as_ref().unchecked_ref::<js_sys::Function>().clone();
+    r.register(&source(), &target(), None, Some(f)).map_err(message).unwrap();
+    let stages: Vec<String> = seen.iter().map(|s| s.as_string().unwrap()).collect();
+    assert_eq!(stages, ["preparing", "network", "refining"]);
+    let throwing = js_sys::Function::new_with_args("stage", "throw new Error('boom at ' + stage)");
+    let e = message(r.register(&source(), &target(), None, Some(throwing)).unwrap_err());
+    assert!(e.contains("onProgress threw: boom at preparing"), "{e}");
     still_works(&mut r);
 }

@@ -85,7 +85,7 @@ fn organised_pcd_keeps_nan_and_drop_option_registers_it() {
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
     let e = r.register(&xyz, &xyz, None).err().map(message).expect("NaN rejected by default");
     assert!(e.contains("non-finite"), "{e}");
-    let res = r.register(&xyz, &xyz, Some(options(r#"{"nonFinite": "drop"}"#))).map_err(message).unwrap();
+    let res = r.register(&xyz, &xyz, Some(options(r#"{"nonFinite": "drop"}"#)), None).map_err(message).unwrap();
     let m = matrix(&res, "matrix");
     assert!(rotation_error_deg(&m, &nalgebra::Matrix4::identity()) < 0.5, "a cloud onto itself: {m}");
 }
