@@ -1,0 +1,74 @@
+//! The `arps` command line: `register --json` prints exactly one JSON object, bad input prints one
+//! line on stderr and exits non-zero, `info` describes a weights file.
+#![cfg(feature = "cli")]
+
+use std::process::Command;
+
+fn arps(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_arps")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap()
+}
+
+#[test]
+fn register_json_is_one_object_with_row_major_rows() {
+    let out = arps(&["register", "fixtures/wasm/source.ply", "fixtures/wasm/target.ply", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(stdout.trim().lines().count(), 1, "{stdout}");
+    let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+    let rows = v["T_target_source"].as_array().unwrap();
+    assert_eq!(rows.len(), 4);
+    assert!(rows.iter().all(|r| r.as_array().unwrap().len() == 4));
+    let last: Vec<f64> = rows[3].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    assert_eq!(last, [0.0, 0.0, 0.0, 1.0]);
+    for key in ["fitness", "inlier_rmse", "time_ms"] {
+        assert!(v[key].as_f64().is_some(), "{key} missing in {v}");
+    }
+    assert!(v["fitness"].as_f64().unwrap() > 0.5);
+}
+
+#[test]
+fn icp_kinds_and_human_output() {
+    for icp in ["point", "plane", "off"] {
+        let out = arps(&["register", "fixtures/wasm/source.ply", "fixtures/wasm/target.ply", "--icp", icp]);
+        assert!(out.status.success(), "{icp}: {}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(text.contains("T_target_source") && text.contains("fitness"), "{text}");
+    }
+}
+
+#[test]
+fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
+    let dir = std::env::temp_dir().join(format!("arps-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let broken = dir.join("broken.ply");
+    std::fs::write(&broken, b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n2\n").unwrap();
+    let tiny = dir.join("tiny.xyz");
+    std::fs::write(&tiny, b"0 0 0\n1 0 0\n0 1 0\n").unwrap();
+    let broken = broken.to_str().unwrap();
+    let tiny = tiny.to_str().unwrap();
+    let cases: [(&[&str], &str); 5] = [
+        (&["register", "does-not-exist.ply", "fixtures/wasm/target.ply"], "does-not-exist.ply"),
+        (&["register", broken, "fixtures/wasm/target.ply", "--json"], "PLY parse error"),
+        (&["register", tiny, "fixtures/wasm/target.ply"], "at least 16"),
+        (&["register", "fixtures/wasm/source.ply", "fixtures/wasm/target.ply", "--weights", broken], "weights"),
+        (&["info", "fixtures/wasm/source.ply"], "weights"),
+    ];
+    for (args, hint) in cases {
+        let out = arps(args);
+        assert!(!out.status.success(), "{args:?} succeeded");
+        assert!(out.stdout.is_empty(), "{args:?} printed on stdout");
+        let err = String::from_utf8(out.stderr).unwrap();
+        assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
+        assert!(err.starts_with("arps: ") && err.contains(hint), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn info_describes_the_default_model() {
+    let out = arps(&["info", "models/web.safetensors"]);
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    for needle in ["parameters", "preset        web", "provenance"] {
+        assert!(text.contains(needle), "{needle} not in {text}");
+    }
+}
