@@ -31,13 +31,28 @@ fn panel_svg(p: &Panel, x0: f64, y0: f64, w: f64, h: f64, xmax: f64) -> String {
     );
     for i in 0..=4 {
         let v = lo + (hi - lo) * i as f64 / 4.0;
-        s += &format!("<text x=\"{}\" y=\"{}\" text-anchor=\"end\" font-size=\"10\">{:.3}</text>\n", x0 - 4.0, sy(v) + 3.0, v);
+        s += &format!(
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"end\" font-size=\"10\">{:.3}</text>\n",
+            x0 - 4.0,
+            sy(v) + 3.0,
+            v
+        );
         let xv = xmax * i as f64 / 4.0;
-        s += &format!("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"10\">{:.0}</text>\n", sx(xv), y0 + h + 14.0, xv);
+        s += &format!(
+            "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"10\">{:.0}</text>\n",
+            sx(xv),
+            y0 + h + 14.0,
+            xv
+        );
     }
-    s += &format!("<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"10\">minutes</text>\n", x0 + w / 2.0, y0 + h + 28.0);
+    s += &format!(
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"10\">minutes</text>\n",
+        x0 + w / 2.0,
+        y0 + h + 28.0
+    );
     for (_, color, pts, dashed) in &p.series {
-        let path: Vec<String> = pts.iter().filter(|q| q.1.is_finite()).map(|q| format!("{:.1},{:.1}", sx(q.0), sy(q.1))).collect();
+        let path: Vec<String> =
+            pts.iter().filter(|q| q.1.is_finite()).map(|q| format!("{:.1},{:.1}", sx(q.0), sy(q.1))).collect();
         if !path.is_empty() {
             s += &format!(
                 "<polyline fill=\"none\" stroke=\"{color}\" stroke-width=\"1.5\"{} points=\"{}\"/>\n",

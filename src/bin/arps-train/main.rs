@@ -7,8 +7,11 @@
 //! * `arps-train curves --run runs/NAME --out curve.svg`: validation recall / MRE and the training
 //!   loss over wall-clock time.
 
-use arps::train::run::{checkpoint, data::TrainData, log, validate, Curriculum, RunConfig, RunState, ValMetrics, TRAINER_VERSION};
-use arps::train::{self, ConsistencyKind, CentroidMode, LossConfig, LossParts, TrainState};
+use arps::train::run::{
+    checkpoint, data::TrainData, log, process_cpu_seconds, validate, Curriculum, RunConfig, RunState, ValMetrics,
+    TRAINER_VERSION,
+};
+use arps::train::{self, CentroidMode, ConsistencyKind, LossConfig, LossParts, TrainState};
 use arps::{ModelConfig, StoreAs, Weights};
 use clap::{Args, Parser, Subcommand};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -52,6 +55,10 @@ struct TrainArgs {
     /// Train for this many minutes of wall-clock in this session.
     #[arg(long)]
     minutes: Option<f64>,
+    /// Train for this many minutes of process CPU time in this session (equal-CPU comparisons on a
+    /// shared machine).
+    #[arg(long)]
+    cpu_minutes: Option<f64>,
     /// Train until the run's step count reaches this (total over all sessions).
     #[arg(long)]
     steps: Option<u64>,
@@ -183,7 +190,9 @@ fn parse_loss(a: &TrainArgs) -> Result<LossConfig, String> {
     let mut l = LossConfig { sup: 0.0, ctr: 0.0, aff: 0.0, reg: 0.0, consistency: 0.0, ..LossConfig::default() };
     for item in a.loss.split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let (name, w) = match item.split_once('=') {
-            Some((n, w)) => (n.trim(), w.trim().parse::<f32>().map_err(|_| format!("loss weight '{w}' is not a number"))?),
+            Some((n, w)) => {
+                (n.trim(), w.trim().parse::<f32>().map_err(|_| format!("loss weight '{w}' is not a number"))?)
+            }
             None => (item, if item == "stp" { 1e-8 } else { 1.0 }),
         };
         match name {
@@ -328,8 +337,13 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
     let t0 = Instant::now();
     let val: Vec<validate::ValPair> = {
         use rayon::prelude::*;
-        pool.install(|| (0..cfg.val_pairs as u64).into_par_iter().map(|i| data.val_pair(i).map(|p| validate::ValPair::from(&p))).collect::<arps::Result<Vec<_>>>())
-            .map_err(|e| format!("validation pairs: {e}"))?
+        pool.install(|| {
+            (0..cfg.val_pairs as u64)
+                .into_par_iter()
+                .map(|i| data.val_pair(i).map(|p| validate::ValPair::from(&p)))
+                .collect::<arps::Result<Vec<_>>>()
+        })
+        .map_err(|e| format!("validation pairs: {e}"))?
     };
     say(&format!("{} validation pairs in {:.1} s", val.len(), t0.elapsed().as_secs_f64()));
     logf.write(json!({
@@ -348,6 +362,8 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
 
     let session = Instant::now();
     let elapsed0 = st.elapsed;
+    let cpu0 = st.cpu - process_cpu_seconds();
+    let session_cpu0 = st.cpu;
     let deadline = a.minutes.map(|m| m * 60.0);
     let target = a.steps;
     let pb = if tty {
@@ -358,8 +374,10 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         };
         let pb = ProgressBar::new(len);
         pb.set_style(
-            ProgressStyle::with_template(&format!("{{elapsed_precise}} [{{bar:30}}] {{pos}}/{{len}} {unit} ETA {{eta}} {{msg}}"))
-                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+            ProgressStyle::with_template(&format!(
+                "{{elapsed_precise}} [{{bar:30}}] {{pos}}/{{len}} {unit} ETA {{eta}} {{msg}}"
+            ))
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
         if unit == "steps" {
             pb.set_position(st.step);
@@ -379,15 +397,17 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
 
     let do_validate = |st: &mut RunState, ts: &TrainState, logf: &mut log::JsonlLog| -> Result<ValMetrics, String> {
         let with_icp = cfg.icp_every_validations > 0 && st.validations % cfg.icp_every_validations as u64 == 0;
+        st.cpu = cpu0 + process_cpu_seconds();
         let v = validate::validate(&pool, &cfg.model, &ts.params, &val, with_icp).map_err(|e| e.to_string())?;
         let improved = st.record_validation(&v);
         if improved {
-            let w = train::to_weights(&ts.params, &cfg.model, provenance(&a.run, st, bank_counts)).map_err(|e| e.to_string())?;
+            let w = train::to_weights(&ts.params, &cfg.model, provenance(&a.run, st, bank_counts))
+                .map_err(|e| e.to_string())?;
             let bytes = w.to_bytes(StoreAs::F32).map_err(|e| e.to_string())?;
             checkpoint::write_atomic(&best_path, &bytes).map_err(|e| format!("{}: {e}", best_path.display()))?;
         }
         logf.write(json!({
-            "kind": "val", "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed, "lr": st.lr,
+            "kind": "val", "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed, "cpu": st.cpu, "lr": st.lr,
             "val": v, "score": v.score(), "improved": improved, "best_score": st.best_score,
         }));
         Ok(v)
@@ -396,13 +416,19 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
     // baseline validation of a fresh run
     if st.validations == 0 && st.step == 0 {
         let v = do_validate(&mut st, &ts, &mut logf)?;
-        say(&format!("val @0: net recall {:.3} MRE {:.1} | +ICP {:?}  ({:.1} s)", v.net_recall, v.net_mre, v.icp_recall, v.seconds));
+        say(&format!(
+            "val @0: net recall {:.3} MRE {:.1} | +ICP {:?}  ({:.1} s)",
+            v.net_recall, v.net_mre, v.icp_recall, v.seconds
+        ));
         last_val = Some(v);
     }
 
     let mut stopped_by_file = false;
     loop {
-        if target.is_some_and(|s| st.step >= s) || deadline.is_some_and(|d| session.elapsed().as_secs_f64() >= d) {
+        if target.is_some_and(|s| st.step >= s)
+            || deadline.is_some_and(|d| session.elapsed().as_secs_f64() >= d)
+            || a.cpu_minutes.is_some_and(|m| st.cpu - session_cpu0 >= m * 60.0)
+        {
             break;
         }
         if stop_file.exists() {
@@ -414,8 +440,13 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         let first = st.pairs_seen;
         let pairs: Vec<train::Pair> = {
             use rayon::prelude::*;
-            pool.install(|| (first..first + cfg.batch as u64).into_par_iter().map(|i| data.train_pair(i)).collect::<arps::Result<Vec<_>>>())
-                .map_err(|e| format!("training pair: {e}"))?
+            pool.install(|| {
+                (first..first + cfg.batch as u64)
+                    .into_par_iter()
+                    .map(|i| data.train_pair(i))
+                    .collect::<arps::Result<Vec<_>>>()
+            })
+            .map_err(|e| format!("training pair: {e}"))?
         };
         let data_s = step_start.elapsed().as_secs_f64();
         ts.adam.lr = st.effective_lr();
@@ -425,6 +456,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         st.adam_t = ts.adam.t;
         st.pairs_seen += cfg.batch as u64;
         st.elapsed = elapsed0 + session.elapsed().as_secs_f64();
+        st.cpu = cpu0 + process_cpu_seconds();
         let dt = step_start.elapsed().as_secs_f64();
         if !r.skipped {
             window.push(r.loss.clone());
@@ -440,7 +472,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
             pps = (cfg.log_every_steps * cfg.batch as u64) as f64 / w_time.max(1e-9);
             last_loss = m.total;
             logf.write(json!({
-                "kind": "step", "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": (st.elapsed * 10.0).round() / 10.0,
+                "kind": "step", "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": (st.elapsed * 10.0).round() / 10.0, "cpu": (st.cpu * 10.0).round() / 10.0,
                 "lr": ts.adam.lr, "loss": loss_json(&m), "grad_norm": w_gn / n, "clipped": w_clipped, "skipped": w_skipped,
                 "skipped_total": st.skipped_steps, "pairs_per_s": (pps * 100.0).round() / 100.0,
                 "data_fraction": (w_data / w_time.max(1e-9) * 1000.0).round() / 1000.0,
@@ -494,7 +526,9 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         };
         if ckpt_due {
             checkpoint::save(&ckpt_path, &st, &ts.params, &ts.adam)?;
-            logf.write(json!({"kind": "checkpoint", "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed}));
+            logf.write(
+                json!({"kind": "checkpoint", "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed}),
+            );
             last_ckpt = Instant::now();
         }
         if let Some((pb, by_time)) = &pb {
@@ -509,10 +543,14 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
     }
     if a.final_val && st.last_val_step != st.step {
         let v = do_validate(&mut st, &ts, &mut logf)?;
-        say(&format!("final val @{}: net recall {:.3} MRE {:.2} | +ICP {:?}", st.step, v.net_recall, v.net_mre, v.icp_recall));
+        say(&format!(
+            "final val @{}: net recall {:.3} MRE {:.2} | +ICP {:?}",
+            st.step, v.net_recall, v.net_mre, v.icp_recall
+        ));
     }
+    st.cpu = cpu0 + process_cpu_seconds();
     checkpoint::save(&ckpt_path, &st, &ts.params, &ts.adam)?;
-    logf.write(json!({"kind": "end", "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed, "stopped_by_file": stopped_by_file, "best_score": st.best_score, "best_step": st.best_step}));
+    logf.write(json!({"kind": "end", "cpu": st.cpu, "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed, "stopped_by_file": stopped_by_file, "best_score": st.best_score, "best_step": st.best_step}));
     if let Some((pb, _)) = pb {
         pb.finish();
     }
@@ -554,12 +592,16 @@ fn export_cmd(a: ExportArgs) -> Result<(), String> {
         p["validation"] = serde_json::Value::Null;
         train::to_weights(&params, &st.config.model, p).map_err(|e| e.to_string())?
     } else {
-        Weights::from_bytes(&std::fs::read(&best).map_err(|e| format!("{}: {e}", best.display()))?).map_err(|e| e.to_string())?
+        Weights::from_bytes(&std::fs::read(&best).map_err(|e| format!("{}: {e}", best.display()))?)
+            .map_err(|e| e.to_string())?
     };
     if let Some(o) = w.provenance.as_object_mut() {
         o.insert("exported_by".into(), json!(TRAINER_VERSION));
         o.insert("git_commit".into(), json!(git_commit()));
-        o.insert("run_total".into(), json!({"steps": st.step, "pairs_seen": st.pairs_seen, "wall_clock_s": st.elapsed, "sessions": st.sessions}));
+        o.insert(
+            "run_total".into(),
+            json!({"steps": st.step, "pairs_seen": st.pairs_seen, "wall_clock_s": st.elapsed, "sessions": st.sessions}),
+        );
         o.insert("stored_as".into(), json!(if a.f16 { "f16" } else { "f32" }));
     }
     let bytes = w.to_bytes(if a.f16 { StoreAs::F16 } else { StoreAs::F32 }).map_err(|e| e.to_string())?;

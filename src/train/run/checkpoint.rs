@@ -35,11 +35,17 @@ pub fn to_bytes(state: &RunState, params: &Params, adam: &Adam) -> Result<Vec<u8
     }
     let views = raw
         .iter()
-        .map(|(n, b)| TensorView::new(Dtype::F32, vec![b.len() / 4], b).map(|v| (n.clone(), v)).map_err(|e| e.to_string()))
+        .map(|(n, b)| {
+            TensorView::new(Dtype::F32, vec![b.len() / 4], b).map(|v| (n.clone(), v)).map_err(|e| e.to_string())
+        })
         .collect::<Result<Vec<_>, String>>()?;
     let mut meta = HashMap::new();
     meta.insert(STATE_KEY.to_string(), serde_json::to_string(state).map_err(|e| e.to_string())?);
-    meta.insert("adam".to_string(), serde_json::json!({"lr": adam.lr, "beta1": adam.beta1, "beta2": adam.beta2, "eps": adam.eps, "t": adam.t}).to_string());
+    meta.insert(
+        "adam".to_string(),
+        serde_json::json!({"lr": adam.lr, "beta1": adam.beta1, "beta2": adam.beta2, "eps": adam.eps, "t": adam.t})
+            .to_string(),
+    );
     safetensors::serialize(views, Some(meta)).map_err(|e| e.to_string())
 }
 

@@ -25,7 +25,14 @@ pub struct Curriculum {
 
 impl Default for Curriculum {
     fn default() -> Self {
-        Self { ramp_pairs: 16_000, angle_deg: 10.0, translation: 0.1, keep_ratio: 0.85, min_overlap: 0.9, noise_sigma: 0.005 }
+        Self {
+            ramp_pairs: 16_000,
+            angle_deg: 10.0,
+            translation: 0.1,
+            keep_ratio: 0.85,
+            min_overlap: 0.9,
+            noise_sigma: 0.005,
+        }
     }
 }
 
@@ -53,7 +60,9 @@ impl Curriculum {
                 "keep" => c.keep_ratio = f,
                 "overlap" => c.min_overlap = f,
                 "noise" => c.noise_sigma = f,
-                other => return Err(format!("unknown curriculum key '{other}' (pairs, angle, trans, keep, overlap, noise)")),
+                other => {
+                    return Err(format!("unknown curriculum key '{other}' (pairs, angle, trans, keep, overlap, noise)"))
+                }
             }
         }
         Ok(c)

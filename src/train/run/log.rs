@@ -19,7 +19,10 @@ impl JsonlLog {
     /// Writes one line (adds `time`).
     pub fn write(&mut self, mut value: serde_json::Value) {
         if let Some(o) = value.as_object_mut() {
-            let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs_f64()).unwrap_or(0.0);
+            let now = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map(|d| d.as_secs_f64())
+                .unwrap_or(0.0);
             o.insert("time".into(), serde_json::json!((now * 1000.0).round() / 1000.0));
         }
         let _ = writeln!(self.file, "{value}");

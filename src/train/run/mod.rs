@@ -145,6 +145,20 @@ pub struct RunState {
     pub last_val_step: u64,
     /// Number of sessions (starts + resumes).
     pub sessions: u32,
+    /// Process CPU seconds (user + system) over all sessions: the fair clock on a shared machine.
+    #[serde(default)]
+    pub cpu: f64,
+}
+
+/// CPU seconds (user + system) this process has used so far (Linux `/proc/self/stat`; 0 elsewhere).
+pub fn process_cpu_seconds() -> f64 {
+    let Ok(s) = std::fs::read_to_string("/proc/self/stat") else { return 0.0 };
+    // fields after the command name (which is in parentheses and may contain spaces)
+    let Some(rest) = s.rfind(')').map(|i| &s[i + 1..]) else { return 0.0 };
+    let f: Vec<&str> = rest.split_whitespace().collect();
+    // rest starts at field 3 (state); utime is field 14, stime field 15 (1-based)
+    let ticks = |i: usize| f.get(i - 3).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
+    (ticks(14) + ticks(15)) / 100.0
 }
 
 impl RunState {
@@ -169,6 +183,7 @@ impl RunState {
             last_val_elapsed: 0.0,
             last_val_step: 0,
             sessions: 0,
+            cpu: 0.0,
         }
     }
 

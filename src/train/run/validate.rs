@@ -63,7 +63,13 @@ pub fn validate(
     let start = std::time::Instant::now();
     let weights = crate::train::to_weights(params, config, serde_json::Value::Null)?;
     let net = summarize(&errors(pool, &weights, pairs, IcpKind::Off), &[], ROT_THRESHOLD, TRANS_THRESHOLD);
-    let mut m = ValMetrics { pairs: pairs.len(), net_recall: net.recall, net_mre: net.mre, net_mte: net.mte, ..Default::default() };
+    let mut m = ValMetrics {
+        pairs: pairs.len(),
+        net_recall: net.recall,
+        net_mre: net.mre,
+        net_mte: net.mte,
+        ..Default::default()
+    };
     if with_icp {
         let icp = summarize(&errors(pool, &weights, pairs, IcpKind::Plane), &[], ROT_THRESHOLD, TRANS_THRESHOLD);
         m.icp_recall = Some(icp.recall);
