@@ -11,7 +11,7 @@ struct Panel {
     series: Vec<(String, String, Vec<(f64, f64)>, bool)>, // (label, colour, points, dashed)
 }
 
-fn panel_svg(p: &Panel, x0: f64, y0: f64, w: f64, h: f64, xmax: f64) -> String {
+fn panel_svg(p: &Panel, x0: f64, y0: f64, w: f64, h: f64, xmax: f64, xlabel: &str) -> String {
     let ys: Vec<f64> = p.series.iter().flat_map(|s| s.2.iter().map(|q| q.1)).filter(|v| v.is_finite()).collect();
     let (mut lo, mut hi) = ys.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
     if !lo.is_finite() {
@@ -46,9 +46,10 @@ fn panel_svg(p: &Panel, x0: f64, y0: f64, w: f64, h: f64, xmax: f64) -> String {
         );
     }
     s += &format!(
-        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"10\">minutes</text>\n",
+        "<text x=\"{}\" y=\"{}\" text-anchor=\"middle\" font-size=\"10\">{}</text>\n",
         x0 + w / 2.0,
-        y0 + h + 28.0
+        y0 + h + 28.0,
+        xlabel
     );
     for (_, color, pts, dashed) in &p.series {
         let path: Vec<String> =
@@ -64,7 +65,7 @@ fn panel_svg(p: &Panel, x0: f64, y0: f64, w: f64, h: f64, xmax: f64) -> String {
     s
 }
 
-pub fn run(runs: &[PathBuf], out: &Path) -> Result<(), String> {
+pub fn run(runs: &[PathBuf], out: &Path, cpu: bool) -> Result<(), String> {
     let mut panels = vec![
         Panel { title: "validation recall (solid: network, dashed: +ICP)", series: vec![] },
         Panel { title: "validation MRE, degrees (network)", series: vec![] },
@@ -78,7 +79,7 @@ pub fn run(runs: &[PathBuf], out: &Path) -> Result<(), String> {
         let name = run.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
         let (mut rec, mut icp, mut mre, mut loss) = (vec![], vec![], vec![], vec![]);
         for l in &lines {
-            let t = l["elapsed"].as_f64().unwrap_or(0.0) / 60.0;
+            let t = l[if cpu { "cpu" } else { "elapsed" }].as_f64().unwrap_or(0.0) / 60.0;
             xmax = xmax.max(t);
             match l["kind"].as_str() {
                 Some("val") => {
@@ -105,7 +106,8 @@ pub fn run(runs: &[PathBuf], out: &Path) -> Result<(), String> {
         "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"{width}\" height=\"{height}\" font-family=\"sans-serif\" font-size=\"12\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
     );
     for (i, p) in panels.iter().enumerate() {
-        s += &panel_svg(p, ml + i as f64 * (pw + gap), mt, pw, ph, xmax);
+        let xl = if cpu { "process CPU minutes" } else { "wall-clock minutes" };
+        s += &panel_svg(p, ml + i as f64 * (pw + gap), mt, pw, ph, xmax, xl);
     }
     for (i, (name, color)) in legend.iter().enumerate() {
         let y = mt + ph + 50.0 + 18.0 * i as f64;

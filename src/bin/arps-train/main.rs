@@ -110,8 +110,10 @@ struct TrainArgs {
     consistency_radius: f32,
     /// Curriculum: `off`, or `pairs=N,angle=A,trans=T,keep=K,overlap=O,noise=S` (start values,
     /// ramped linearly to the full protocol over N training pairs).
-    #[arg(long, default_value = "pairs=16000,angle=10,trans=0.1,keep=0.85,overlap=0.9,noise=0.005")]
-    curriculum: String,
+    /// Default `pairs=16000,angle=10,trans=0.1,keep=0.85,overlap=0.9,noise=0.005`. On --resume,
+    /// replaces the stored curriculum from the current pair on (logged in the session's start line).
+    #[arg(long)]
+    curriculum: Option<String>,
     /// Points per cloud of a generated pair (the network samples the model's N of them).
     #[arg(long, default_value_t = 1024)]
     pair_points: usize,
@@ -168,6 +170,9 @@ struct CurvesArgs {
     /// Output SVG.
     #[arg(long)]
     out: PathBuf,
+    /// X axis: wall-clock minutes (wall) or process CPU minutes (cpu; fair on a shared machine).
+    #[arg(long, default_value = "wall")]
+    x: String,
 }
 
 fn main() -> ExitCode {
@@ -175,7 +180,7 @@ fn main() -> ExitCode {
     let r = match cli.command {
         Command::Train(a) => train_cmd(a),
         Command::Export(a) => export_cmd(a),
-        Command::Curves(a) => curves::run(&a.run, &a.out),
+        Command::Curves(a) => curves::run(&a.run, &a.out, a.x == "cpu"),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,
@@ -236,7 +241,10 @@ fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
         val_fraction: a.val_fraction,
         bank_fraction: a.bank_fraction,
         pair_points: a.pair_points,
-        curriculum: Curriculum::parse(&a.curriculum)?,
+        curriculum: match &a.curriculum {
+            Some(c) => Curriculum::parse(c)?,
+            None => Curriculum::default(),
+        },
         val_pairs: a.val_pairs,
         val_every_minutes: a.val_every_minutes.unwrap_or(5.0),
         val_every_steps: a.val_every_steps.filter(|&s| s > 0),
@@ -290,6 +298,9 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         st.config.threads = a.threads.max(1);
         if let Some(v) = a.val_every_minutes {
             st.config.val_every_minutes = v;
+        }
+        if let Some(c) = &a.curriculum {
+            st.config.curriculum = Curriculum::parse(c)?;
         }
         if let Some(v) = a.icp_every {
             st.config.icp_every_validations = v;
@@ -390,7 +401,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
 
     let mut last_ckpt = Instant::now();
     let mut window: Vec<LossParts> = Vec::new();
-    let (mut w_gn, mut w_clipped, mut w_skipped, mut w_time, mut w_data) = (0.0f64, 0u64, 0u64, 0.0f64, 0.0f64);
+    let (mut w_gn, mut w_clipped, mut w_skipped, mut w_time, mut w_data, mut w_steps) = (0.0f64, 0u64, 0u64, 0.0f64, 0.0f64, 0u64);
     let mut last_val: Option<ValMetrics> = st.best_val.clone();
     let mut last_loss = f64::NAN;
     let mut pps = 0.0f64;
@@ -466,10 +477,11 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         w_skipped += r.skipped as u64;
         w_time += dt;
         w_data += data_s;
+        w_steps += 1;
         if st.step % cfg.log_every_steps == 0 {
             let n = window.len().max(1) as f64;
             let m = LossParts::mean(&window);
-            pps = (cfg.log_every_steps * cfg.batch as u64) as f64 / w_time.max(1e-9);
+            pps = (w_steps * cfg.batch as u64) as f64 / w_time.max(1e-9);
             last_loss = m.total;
             logf.write(json!({
                 "kind": "step", "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": (st.elapsed * 10.0).round() / 10.0, "cpu": (st.cpu * 10.0).round() / 10.0,
@@ -496,7 +508,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
                 );
             }
             window.clear();
-            (w_gn, w_clipped, w_skipped, w_time, w_data) = (0.0, 0, 0, 0.0, 0.0);
+            (w_gn, w_clipped, w_skipped, w_time, w_data, w_steps) = (0.0, 0, 0, 0.0, 0.0, 0);
         }
         let val_due = match cfg.val_every_steps {
             Some(s) => st.step % s == 0,
