@@ -1,0 +1,82 @@
+//! Training pairs: stream index -> protocol pair ([`crate::data::source::ShapeSource`], train split
+//! only) -> the engine's frames ([`crate::data::Pair::engine_frames`]) -> the engine's network
+//! sample ([`crate::data::EnginePair::network_sample`]) -> a [`crate::train::Pair`] with `v_gt_*`
+//! pre-centred on the sampled points' means (the network pre-centres its input the same way).
+
+use super::{Curriculum, RunConfig};
+use crate::data::source::{ShapeSource, Split};
+use crate::data::{bank, mix, PairParams};
+use crate::train::Pair as TrainPair;
+use crate::Result;
+
+/// The data side of a run.
+pub struct TrainData {
+    /// Shapes (procedural + bank), split by shape.
+    pub source: ShapeSource,
+    /// The full protocol (validation; the curriculum's end point).
+    pub full: PairParams,
+    /// The curriculum.
+    pub curriculum: Curriculum,
+    /// Network points per cloud.
+    pub n: usize,
+    /// Stream offset derived from the seed.
+    pub stream: u64,
+    /// Bank summary for the log: (usable meshes, skipped, train meshes, val meshes).
+    pub bank_counts: (usize, usize, usize, usize),
+}
+
+impl TrainData {
+    /// Builds the shape source (loading the bank, if any) for a run.
+    pub fn new(cfg: &RunConfig) -> std::result::Result<Self, String> {
+        let (mut source, counts) = match &cfg.bank {
+            Some(dir) => {
+                let b = bank::load_dir(std::path::Path::new(dir)).map_err(|e| format!("bank {dir}: {e}"))?;
+                let (usable, skipped) = (b.meshes.len(), b.skipped.len());
+                let s = ShapeSource::with_bank(b, cfg.val_fraction);
+                let c = (usable, skipped, s.bank_train.len(), s.bank_val.len());
+                (s, c)
+            }
+            None => (ShapeSource::procedural(), (0, 0, 0, 0)),
+        };
+        source.bank_fraction = cfg.bank_fraction;
+        let full = PairParams { points: cfg.pair_points, ..PairParams::default() };
+        Ok(Self {
+            source,
+            full,
+            curriculum: cfg.curriculum.clone(),
+            n: cfg.model.n_points,
+            stream: cfg.seed.wrapping_mul(1 << 40),
+            bank_counts: counts,
+        })
+    }
+
+    /// Training pair number `i` of the stream (deterministic in `(seed, i)`).
+    pub fn train_pair(&self, i: u64) -> Result<TrainPair> {
+        let params = self.curriculum.params(i, &self.full);
+        let index = self.stream.wrapping_add(i);
+        let p = self.source.pair(Split::Train, index, &params)?;
+        Ok(to_train_pair(&p, self.n, mix(index, 0x11E7)))
+    }
+
+    /// Validation pair `i` (full protocol; the same pair as `arps make-pairs --split val --seed 0`
+    /// writes as number `i`, given the same bank and fractions).
+    pub fn val_pair(&self, i: u64) -> Result<crate::data::Pair> {
+        self.source.pair(Split::Val, i, &self.full)
+    }
+}
+
+/// A protocol pair as the network sees it: engine frames, `n` network points per cloud drawn with
+/// the engine's rule for `Options::seed = sample_seed`, centroids pre-centred on the samples' means.
+pub fn to_train_pair(p: &crate::data::Pair, n: usize, sample_seed: u64) -> TrainPair {
+    let ep = p.engine_frames();
+    let (s, t) = ep.network_sample(n, sample_seed);
+    let (ms, mt) = (s.centroid(), t.centroid());
+    let pre = |c: [f64; 3], m: [f64; 3]| [0, 1, 2].map(|a| (c[a] - m[a]) as f32);
+    TrainPair {
+        v_gt_source: pre(ep.centroid_source, ms),
+        v_gt_target: pre(ep.centroid_target, mt),
+        source: s.points,
+        target: t.points,
+        t_gt: ep.T_target_source,
+    }
+}

@@ -1,0 +1,120 @@
+#![cfg(feature = "train")]
+//! `arps-train` end to end on the tiny preset (seconds): a short run lowers the loss and writes a
+//! checkpoint and a log; `--resume` continues exactly (same parameters and Adam moments as an
+//! uninterrupted run of the same total steps); `export` writes weights the engine loads and
+//! `arps info` describes.
+
+use arps::train::run::{checkpoint, log};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("arps-train-test-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn train(run: &Path, extra: &[&str]) {
+    let mut args: Vec<String> = ["train", "--run"].iter().map(|s| s.to_string()).collect();
+    args.push(run.to_string_lossy().into_owned());
+    args.extend(extra.iter().map(|s| s.to_string()));
+    let out = Command::new(env!("CARGO_BIN_EXE_arps-train")).args(&args).output().unwrap();
+    assert!(out.status.success(), "arps-train {args:?} failed:\n{}", String::from_utf8_lossy(&out.stderr));
+}
+
+const COMMON: [&str; 20] = [
+    "--preset",
+    "tiny",
+    "--batch",
+    "4",
+    "--lr",
+    "3e-3",
+    "--warmup-steps",
+    "5",
+    "--threads",
+    "2",
+    "--val-pairs",
+    "12",
+    "--val-every-steps",
+    "10",
+    "--checkpoint-every-steps",
+    "10",
+    "--curriculum",
+    "off",
+    "--quiet",
+    "--log-every=10",
+];
+
+#[test]
+fn short_run_lowers_the_loss_and_exports() {
+    let run = dir("short");
+    let mut args = COMMON.to_vec();
+    args.extend(["--steps", "80"]);
+    train(&run, &args);
+    let lines = log::read(&run.join("log.jsonl")).unwrap();
+    let losses: Vec<f64> =
+        lines.iter().filter(|l| l["kind"] == "step").map(|l| l["loss"]["total"].as_f64().unwrap()).collect();
+    assert_eq!(losses.len(), 8, "{lines:?}");
+    let first = losses[0];
+    let last = (losses[6] + losses[7]) / 2.0;
+    assert!(last < 0.8 * first, "loss did not drop: {losses:?}");
+    assert!(lines.iter().any(|l| l["kind"] == "val" && l["val"]["net_recall"].is_number()));
+    let (st, params, adam) = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
+    assert_eq!((st.step, st.pairs_seen, adam.t), (80, 320, 80));
+    assert_eq!(params.len(), arps::ModelConfig::tiny().tensor_specs().len());
+    assert!(run.join("best.safetensors").exists());
+
+    // export (f16) loads in the engine and `arps info` describes it
+    let out = run.join("exported.safetensors");
+    let e = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["export", "--run", run.to_str().unwrap(), "--out", out.to_str().unwrap(), "--f16"])
+        .output()
+        .unwrap();
+    assert!(e.status.success(), "{}", String::from_utf8_lossy(&e.stderr));
+    let w = arps::Weights::from_bytes(&std::fs::read(&out).unwrap()).unwrap();
+    assert_eq!(w.config.preset, "tiny");
+    assert!(w.provenance["trainer"].as_str().unwrap().starts_with("arps-train"));
+    assert!(w.provenance["pairs_seen"].as_u64().unwrap() > 0);
+    let info = Command::new(env!("CARGO_BIN_EXE_arps")).args(["info", out.to_str().unwrap()]).output().unwrap();
+    assert!(info.status.success(), "{}", String::from_utf8_lossy(&info.stderr));
+    let text = String::from_utf8_lossy(&info.stdout);
+    assert!(text.contains("tiny") && text.contains("arps-train"), "{text}");
+
+    // curves
+    let svg = run.join("curves.svg");
+    let c = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["curves", "--run", run.to_str().unwrap(), "--out", svg.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(c.status.success(), "{}", String::from_utf8_lossy(&c.stderr));
+    assert!(std::fs::read_to_string(&svg).unwrap().contains("<polyline"));
+    let _ = std::fs::remove_dir_all(&run);
+}
+
+#[test]
+fn resume_continues_exactly() {
+    let (a, b) = (dir("straight"), dir("resumed"));
+    let mut args = COMMON.to_vec();
+    args.extend(["--steps", "30"]);
+    train(&a, &args);
+    let mut first = COMMON.to_vec();
+    first.extend(["--steps", "15"]);
+    train(&b, &first);
+    let (st, _, _) = checkpoint::load(&b.join("checkpoint.safetensors")).unwrap();
+    assert_eq!(st.step, 15);
+    // a new run refuses to overwrite an existing one
+    let again = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["train", "--run", b.to_str().unwrap(), "--preset", "tiny", "--steps", "1"])
+        .output()
+        .unwrap();
+    assert!(!again.status.success());
+    train(&b, &["--resume", "--steps", "30", "--quiet"]);
+    let (sa, pa, aa) = checkpoint::load(&a.join("checkpoint.safetensors")).unwrap();
+    let (sb, pb, ab) = checkpoint::load(&b.join("checkpoint.safetensors")).unwrap();
+    assert_eq!((sb.step, sb.pairs_seen, sb.sessions), (30, 120, 2));
+    assert_eq!((sa.step, sa.pairs_seen, sa.lr, sa.best_step), (sb.step, sb.pairs_seen, sb.lr, sb.best_step));
+    assert_eq!(pa, pb, "parameters differ after resume");
+    assert_eq!(aa, ab, "Adam state differs after resume");
+    let _ = std::fs::remove_dir_all(&a);
+    let _ = std::fs::remove_dir_all(&b);
+}
