@@ -401,7 +401,8 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
 
     let mut last_ckpt = Instant::now();
     let mut window: Vec<LossParts> = Vec::new();
-    let (mut w_gn, mut w_clipped, mut w_skipped, mut w_time, mut w_data, mut w_steps) = (0.0f64, 0u64, 0u64, 0.0f64, 0.0f64, 0u64);
+    let (mut w_gn, mut w_clipped, mut w_skipped, mut w_time, mut w_data, mut w_steps) =
+        (0.0f64, 0u64, 0u64, 0.0f64, 0.0f64, 0u64);
     let mut last_val: Option<ValMetrics> = st.best_val.clone();
     let mut last_loss = f64::NAN;
     let mut pps = 0.0f64;
