@@ -69,7 +69,7 @@ fn panel_svg(p: &Panel, x0: f64, y0: f64, w: f64, h: f64, xmax: f64, xlabel: &st
 }
 
 pub fn run(runs: &[PathBuf], out: &Path, cpu: bool) -> Result<(), String> {
-    let mut panels = vec![
+    let mut panels = [
         Panel { title: "validation recall (solid: network, dashed: +ICP)", series: vec![] },
         Panel { title: "validation MRE, degrees (network)", series: vec![] },
         Panel { title: "training loss (total)", series: vec![] },

@@ -31,6 +31,7 @@ struct Cli {
 }
 
 #[derive(Subcommand)]
+#[allow(clippy::large_enum_variant)] // parsed once; boxing buys nothing
 enum Command {
     /// Train (a new run, or --resume an existing one).
     Train(TrainArgs),
@@ -408,7 +409,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
     let mut pps = 0.0f64;
 
     let do_validate = |st: &mut RunState, ts: &TrainState, logf: &mut log::JsonlLog| -> Result<ValMetrics, String> {
-        let with_icp = cfg.icp_every_validations > 0 && st.validations % cfg.icp_every_validations as u64 == 0;
+        let with_icp = cfg.icp_every_validations > 0 && st.validations.is_multiple_of(cfg.icp_every_validations as u64);
         st.cpu = cpu0 + process_cpu_seconds();
         let v = validate::validate(&pool, &cfg.model, &ts.params, &val, with_icp).map_err(|e| e.to_string())?;
         let improved = st.record_validation(&v);
