@@ -6,9 +6,12 @@ use std::path::{Path, PathBuf};
 
 const COLORS: [&str; 6] = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b"];
 
+/// (label, colour, points, dashed)
+type Series = (String, String, Vec<(f64, f64)>, bool);
+
 struct Panel {
     title: &'static str,
-    series: Vec<(String, String, Vec<(f64, f64)>, bool)>, // (label, colour, points, dashed)
+    series: Vec<Series>,
 }
 
 fn panel_svg(p: &Panel, x0: f64, y0: f64, w: f64, h: f64, xmax: f64, xlabel: &str) -> String {
@@ -66,7 +69,7 @@ fn panel_svg(p: &Panel, x0: f64, y0: f64, w: f64, h: f64, xmax: f64, xlabel: &st
 }
 
 pub fn run(runs: &[PathBuf], out: &Path, cpu: bool) -> Result<(), String> {
-    let mut panels = vec![
+    let mut panels = [
         Panel { title: "validation recall (solid: network, dashed: +ICP)", series: vec![] },
         Panel { title: "validation MRE, degrees (network)", series: vec![] },
         Panel { title: "training loss (total)", series: vec![] },

@@ -33,7 +33,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Train (a new run, or --resume an existing one).
-    Train(TrainArgs),
+    Train(Box<TrainArgs>),
     /// Export a run's best weights in the engine's format, with provenance.
     Export(ExportArgs),
     /// Plot a run's training curves (SVG).
@@ -178,7 +178,7 @@ struct CurvesArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let r = match cli.command {
-        Command::Train(a) => train_cmd(a),
+        Command::Train(a) => train_cmd(*a),
         Command::Export(a) => export_cmd(a),
         Command::Curves(a) => curves::run(&a.run, &a.out, a.x == "cpu"),
     };
@@ -401,13 +401,14 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
 
     let mut last_ckpt = Instant::now();
     let mut window: Vec<LossParts> = Vec::new();
-    let (mut w_gn, mut w_clipped, mut w_skipped, mut w_time, mut w_data, mut w_steps) = (0.0f64, 0u64, 0u64, 0.0f64, 0.0f64, 0u64);
+    let (mut w_gn, mut w_clipped, mut w_skipped, mut w_time, mut w_data, mut w_steps) =
+        (0.0f64, 0u64, 0u64, 0.0f64, 0.0f64, 0u64);
     let mut last_val: Option<ValMetrics> = st.best_val.clone();
     let mut last_loss = f64::NAN;
     let mut pps = 0.0f64;
 
     let do_validate = |st: &mut RunState, ts: &TrainState, logf: &mut log::JsonlLog| -> Result<ValMetrics, String> {
-        let with_icp = cfg.icp_every_validations > 0 && st.validations % cfg.icp_every_validations as u64 == 0;
+        let with_icp = cfg.icp_every_validations > 0 && st.validations.is_multiple_of(cfg.icp_every_validations as u64);
         st.cpu = cpu0 + process_cpu_seconds();
         let v = validate::validate(&pool, &cfg.model, &ts.params, &val, with_icp).map_err(|e| e.to_string())?;
         let improved = st.record_validation(&v);
@@ -478,7 +479,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         w_time += dt;
         w_data += data_s;
         w_steps += 1;
-        if st.step % cfg.log_every_steps == 0 {
+        if st.step.is_multiple_of(cfg.log_every_steps) {
             let n = window.len().max(1) as f64;
             let m = LossParts::mean(&window);
             pps = (w_steps * cfg.batch as u64) as f64 / w_time.max(1e-9);
@@ -511,7 +512,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
             (w_gn, w_clipped, w_skipped, w_time, w_data, w_steps) = (0.0, 0, 0, 0.0, 0.0, 0);
         }
         let val_due = match cfg.val_every_steps {
-            Some(s) => st.step % s == 0,
+            Some(s) => st.step.is_multiple_of(s),
             None => st.elapsed - st.last_val_elapsed >= cfg.val_every_minutes * 60.0,
         };
         if val_due {
@@ -533,7 +534,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
             last_val = Some(v);
         }
         let ckpt_due = match cfg.checkpoint_every_steps {
-            Some(s) => st.step % s == 0,
+            Some(s) => st.step.is_multiple_of(s),
             None => last_ckpt.elapsed().as_secs_f64() >= cfg.checkpoint_every_minutes * 60.0,
         };
         if ckpt_due {
