@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 
 const COLORS: [&str; 6] = ["#1f77b4", "#d62728", "#2ca02c", "#ff7f0e", "#9467bd", "#8c564b"];
 
-/// One curve: (label, colour, points, dashed).
+/// (label, colour, points, dashed)
 type Series = (String, String, Vec<(f64, f64)>, bool);
 
 struct Panel {

@@ -34,7 +34,7 @@ struct Cli {
 #[allow(clippy::large_enum_variant)] // parsed once; boxing buys nothing
 enum Command {
     /// Train (a new run, or --resume an existing one).
-    Train(TrainArgs),
+    Train(Box<TrainArgs>),
     /// Export a run's best weights in the engine's format, with provenance.
     Export(ExportArgs),
     /// Plot a run's training curves (SVG).
@@ -179,7 +179,7 @@ struct CurvesArgs {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let r = match cli.command {
-        Command::Train(a) => train_cmd(a),
+        Command::Train(a) => train_cmd(*a),
         Command::Export(a) => export_cmd(a),
         Command::Curves(a) => curves::run(&a.run, &a.out, a.x == "cpu"),
     };
@@ -480,7 +480,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         w_time += dt;
         w_data += data_s;
         w_steps += 1;
-        if st.step % cfg.log_every_steps == 0 {
+        if st.step.is_multiple_of(cfg.log_every_steps) {
             let n = window.len().max(1) as f64;
             let m = LossParts::mean(&window);
             pps = (w_steps * cfg.batch as u64) as f64 / w_time.max(1e-9);
@@ -513,7 +513,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
             (w_gn, w_clipped, w_skipped, w_time, w_data, w_steps) = (0.0, 0, 0, 0.0, 0.0, 0);
         }
         let val_due = match cfg.val_every_steps {
-            Some(s) => st.step % s == 0,
+            Some(s) => st.step.is_multiple_of(s),
             None => st.elapsed - st.last_val_elapsed >= cfg.val_every_minutes * 60.0,
         };
         if val_due {
@@ -535,7 +535,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
             last_val = Some(v);
         }
         let ckpt_due = match cfg.checkpoint_every_steps {
-            Some(s) => st.step % s == 0,
+            Some(s) => st.step.is_multiple_of(s),
             None => last_ckpt.elapsed().as_secs_f64() >= cfg.checkpoint_every_minutes * 60.0,
         };
         if ckpt_due {
