@@ -1,10 +1,8 @@
 //! Hot element-wise kernels of the trainer, written in 8-lane form so LLVM vectorises them, and
 //! compiled twice: for the baseline target and with AVX2 + FMA, picked at run time.
 //!
-//! The softmax uses a polynomial `exp` (Cephes `expf`: Cody-Waite range reduction, degree-6
-//! polynomial, relative error about 2e-7) instead of libm's, which costs ~4 ns per call and was
-//! two thirds of the attention forward pass at N = 512. Results differ from the engine's
-//! [`crate::nn::softmax_rows_inplace`] by a few units in the last place.
+//! The forward softmax is the engine's own ([`crate::nn::softmax_rows_inplace`]: polynomial `exp`,
+//! AVX2 picked at run time), so training and inference share one implementation.
 
 const LANES: usize = 8;
 
@@ -14,64 +12,6 @@ fn madd<const FMA: bool>(a: f32, b: f32, c: f32) -> f32 {
         a.mul_add(b, c)
     } else {
         a * b + c
-    }
-}
-
-/// `exp(x)` for `x` in about `[-87.3, 88.3]` (clamped outside).
-#[inline(always)]
-fn exp1<const FMA: bool>(x: f32) -> f32 {
-    const LOG2E: f32 = std::f32::consts::LOG2_E;
-    const C1: f32 = 0.693_359_4;
-    const C2: f32 = -2.121_944_4e-4;
-    const MAGIC: f32 = 12_582_912.0; // 1.5 * 2^23: adding it rounds to an integer
-    let x = x.clamp(-87.3, 88.3);
-    let t = madd::<FMA>(x, LOG2E, MAGIC);
-    let n = t - MAGIC;
-    let ni = t.to_bits().wrapping_sub(MAGIC.to_bits()) as i32;
-    let r = madd::<FMA>(n, -C2, madd::<FMA>(n, -C1, x));
-    let mut p = 1.987_569_1e-4f32;
-    p = madd::<FMA>(p, r, 1.398_199_9e-3);
-    p = madd::<FMA>(p, r, 8.333_452e-3);
-    p = madd::<FMA>(p, r, 4.166_579_6e-2);
-    p = madd::<FMA>(p, r, 1.666_666_5e-1);
-    p = madd::<FMA>(p, r, 0.5);
-    let y = madd::<FMA>(p * r, r, r) + 1.0;
-    y * f32::from_bits(((ni + 127) as u32) << 23)
-}
-
-#[inline(always)]
-fn softmax_rows_body<const FMA: bool>(x: &mut [f32], cols: usize) {
-    for row in x.chunks_exact_mut(cols) {
-        let mut m = [f32::NEG_INFINITY; LANES];
-        let mut chunks = row.chunks_exact(LANES);
-        for c in &mut chunks {
-            for k in 0..LANES {
-                m[k] = m[k].max(c[k]);
-            }
-        }
-        let mut max = m.iter().copied().fold(f32::NEG_INFINITY, f32::max);
-        for &v in chunks.remainder() {
-            max = max.max(v);
-        }
-        let mut s = [0.0f32; LANES];
-        let mut chunks = row.chunks_exact_mut(LANES);
-        for c in &mut chunks {
-            for k in 0..LANES {
-                let e = exp1::<FMA>(c[k] - max);
-                c[k] = e;
-                s[k] += e;
-            }
-        }
-        let mut sum: f32 = s.iter().sum();
-        for v in chunks.into_remainder() {
-            let e = exp1::<FMA>(*v - max);
-            *v = e;
-            sum += e;
-        }
-        let inv = 1.0 / sum;
-        for v in row.iter_mut() {
-            *v *= inv;
-        }
     }
 }
 
@@ -199,92 +139,7 @@ fn has_avx2_fma() -> bool {
 
 #[cfg(target_arch = "x86_64")]
 mod avx2 {
-    use std::arch::x86_64::*;
 
-    /// Eight `exp`s, the same polynomial as [`super::exp1`].
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn exp8(x: __m256) -> __m256 {
-        const MAGIC: f32 = 12_582_912.0;
-        let x = _mm256_min_ps(_mm256_max_ps(x, _mm256_set1_ps(-87.3)), _mm256_set1_ps(88.3));
-        let t = _mm256_fmadd_ps(x, _mm256_set1_ps(std::f32::consts::LOG2_E), _mm256_set1_ps(MAGIC));
-        let n = _mm256_sub_ps(t, _mm256_set1_ps(MAGIC));
-        let ni = _mm256_sub_epi32(_mm256_castps_si256(t), _mm256_set1_epi32(MAGIC.to_bits() as i32));
-        let r = _mm256_fnmadd_ps(n, _mm256_set1_ps(0.693_359_4), x);
-        let r = _mm256_fnmadd_ps(n, _mm256_set1_ps(-2.121_944_4e-4), r);
-        let mut p = _mm256_set1_ps(1.987_569_1e-4);
-        p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.398_199_9e-3));
-        p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(8.333_452e-3));
-        p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(4.166_579_6e-2));
-        p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(1.666_666_5e-1));
-        p = _mm256_fmadd_ps(p, r, _mm256_set1_ps(0.5));
-        let y = _mm256_add_ps(_mm256_fmadd_ps(_mm256_mul_ps(p, r), r, r), _mm256_set1_ps(1.0));
-        let scale = _mm256_castsi256_ps(_mm256_slli_epi32::<23>(_mm256_add_epi32(ni, _mm256_set1_epi32(127))));
-        _mm256_mul_ps(y, scale)
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn hsum(v: __m256) -> f32 {
-        let s = _mm_add_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
-        let s = _mm_add_ps(s, _mm_movehl_ps(s, s));
-        let s = _mm_add_ss(s, _mm_shuffle_ps::<1>(s, s));
-        _mm_cvtss_f32(s)
-    }
-
-    #[inline]
-    #[target_feature(enable = "avx2,fma")]
-    unsafe fn hmax(v: __m256) -> f32 {
-        let s = _mm_max_ps(_mm256_castps256_ps128(v), _mm256_extractf128_ps::<1>(v));
-        let s = _mm_max_ps(s, _mm_movehl_ps(s, s));
-        let s = _mm_max_ss(s, _mm_shuffle_ps::<1>(s, s));
-        _mm_cvtss_f32(s)
-    }
-
-    #[target_feature(enable = "avx2,fma")]
-    pub(super) unsafe fn softmax_rows(x: &mut [f32], cols: usize) {
-        let main = cols / 8 * 8;
-        for row in x.chunks_exact_mut(cols) {
-            let ptr = row.as_mut_ptr();
-            let mut max = f32::NEG_INFINITY;
-            if main > 0 {
-                let mut m = _mm256_set1_ps(f32::NEG_INFINITY);
-                for k in (0..main).step_by(8) {
-                    m = _mm256_max_ps(m, _mm256_loadu_ps(ptr.add(k)));
-                }
-                max = hmax(m);
-            }
-            for &v in &row[main..] {
-                max = max.max(v);
-            }
-            let mut sum = 0.0f32;
-            if main > 0 {
-                let vmax = _mm256_set1_ps(max);
-                let mut s = _mm256_setzero_ps();
-                for k in (0..main).step_by(8) {
-                    let e = exp8(_mm256_sub_ps(_mm256_loadu_ps(ptr.add(k)), vmax));
-                    _mm256_storeu_ps(ptr.add(k), e);
-                    s = _mm256_add_ps(s, e);
-                }
-                sum = hsum(s);
-            }
-            for v in &mut row[main..] {
-                let e = super::exp1::<true>(*v - max);
-                *v = e;
-                sum += e;
-            }
-            let inv = 1.0 / sum;
-            if main > 0 {
-                let vinv = _mm256_set1_ps(inv);
-                for k in (0..main).step_by(8) {
-                    _mm256_storeu_ps(ptr.add(k), _mm256_mul_ps(_mm256_loadu_ps(ptr.add(k)), vinv));
-                }
-            }
-            for v in &mut row[main..] {
-                *v *= inv;
-            }
-        }
-    }
     #[target_feature(enable = "avx2,fma")]
     pub(super) unsafe fn relu_backward(d: &mut [f32], g: &[f32], y: &[f32]) {
         super::relu_backward_body(d, g, y)
@@ -322,19 +177,6 @@ mod avx2 {
     pub(super) unsafe fn softmax_backward(d: &mut [f32], y: &[f32], cols: usize, scale: f32) {
         super::softmax_backward_body::<true>(d, y, cols, scale)
     }
-}
-
-/// Row-wise softmax in place (max-subtracted, polynomial `exp`).
-pub fn softmax_rows(x: &mut [f32], cols: usize) {
-    if cols == 0 {
-        return;
-    }
-    #[cfg(target_arch = "x86_64")]
-    if has_avx2_fma() {
-        // SAFETY: the CPU supports AVX2 and FMA (checked at run time).
-        return unsafe { avx2::softmax_rows(x, cols) };
-    }
-    softmax_rows_body::<false>(x, cols)
 }
 
 /// ReLU backward: `d += g` where the output `y > 0`.
@@ -400,36 +242,4 @@ pub fn layer_norm_backward(
         return unsafe { avx2::layer_norm_backward(g, x, gamma, stats, dx, dgamma, dbeta, scratch) };
     }
     layer_norm_backward_body::<false>(g, x, gamma, stats, dx, dgamma, dbeta, scratch)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn exp_is_accurate() {
-        let mut worst = 0.0f64;
-        let mut x = -87.0f32;
-        while x < 88.0 {
-            for v in [exp1::<false>(x), exp1::<true>(x)] {
-                let e = (x as f64).exp();
-                worst = worst.max(((v as f64) - e).abs() / e);
-            }
-            x += 0.0137;
-        }
-        assert!(worst < 5e-7, "{worst}");
-    }
-
-    #[test]
-    fn softmax_matches_engine() {
-        for cols in [1, 5, 8, 16, 37, 512] {
-            let mut a: Vec<f32> = (0..3 * cols).map(|i| ((i * 7919) % 1000) as f32 / 50.0 - 10.0).collect();
-            let mut b = a.clone();
-            softmax_rows(&mut a, cols);
-            crate::nn::softmax_rows_inplace(&mut b, cols);
-            for (x, y) in a.iter().zip(&b) {
-                assert!((x - y).abs() <= 1e-6 * y.max(1e-3), "{cols} columns: {x} vs {y}");
-            }
-        }
-    }
 }

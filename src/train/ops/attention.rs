@@ -35,7 +35,7 @@ pub fn attention(t: &mut Tape, q: Id, k: Id, v: Id, heads: usize) -> Id {
         let off = h * dk;
         let p = &mut probs[h * nq * nk..(h + 1) * nq * nk];
         gemm(nq, dk, nk, scale, &qv[off..], d as isize, 1, &kv[off..], 1, d as isize, 0.0, p, nk as isize, 1);
-        simd::softmax_rows(p, nk);
+        crate::nn::softmax_rows_inplace(p, nk);
         gemm(nq, nk, dk, 1.0, p, nk as isize, 1, &vv[off..], d as isize, 1, 0.0, &mut out[off..], d as isize, 1);
     }
     let needs = t.any_needs(&[q, k, v]);

@@ -28,7 +28,7 @@ pub fn softmax_rows(t: &mut Tape, a: Id) -> Id {
     let (r, c) = t.shape(a);
     let mut y = t.uninit(r * c);
     y.copy_from_slice(t.value(a));
-    crate::train::simd::softmax_rows(&mut y, c);
+    crate::nn::softmax_rows_inplace(&mut y, c);
     let needs = t.needs_grad(a);
     t.push(y, r, c, Box::new(Softmax { a, cols: c }), needs)
 }
