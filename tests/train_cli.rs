@@ -118,3 +118,33 @@ fn resume_continues_exactly() {
     let _ = std::fs::remove_dir_all(&a);
     let _ = std::fs::remove_dir_all(&b);
 }
+
+#[test]
+fn resume_can_fork_with_other_losses_and_lr() {
+    let run = dir("fork");
+    let mut args = COMMON.to_vec();
+    args.extend(["--steps", "10"]);
+    train(&run, &args);
+    let (st, _, _) = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
+    assert_eq!((st.config.loss.seg, st.config.loss.means), (0.0, 0.0));
+    train(&run, &["--resume", "--steps", "20", "--quiet", "--loss", "sup,ctr,seg=0.5,means=0.1", "--lr", "2e-4"]);
+    let (st, _, _) = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
+    assert_eq!((st.step, st.config.loss.seg, st.config.loss.means, st.config.loss.sup), (20, 0.5, 0.1, 1.0));
+    assert!((st.lr - 2e-4).abs() < 1e-9, "lr {}", st.lr);
+    let lines = log::read(&run.join("log.jsonl")).unwrap();
+    let steps: Vec<_> = lines.iter().filter(|l| l["kind"] == "step").collect();
+    let last = steps.last().unwrap();
+    assert!(last["loss"]["seg"].as_f64().unwrap() > 0.0, "{last}");
+    let e = last["loss"]["gamma_entropy"].as_f64().unwrap();
+    assert!(e > 0.0 && e <= 1.0, "{last}");
+    // bad overrides are clear errors
+    for bad in [["--loss", "sup,nope"], ["--lr", "0"]] {
+        let mut a: Vec<&str> = vec!["train", "--run", run.to_str().unwrap(), "--resume", "--steps", "21"];
+        a.extend(bad);
+        let out = Command::new(env!("CARGO_BIN_EXE_arps-train")).args(&a).output().unwrap();
+        assert!(!out.status.success(), "{bad:?} accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains("nope") || err.contains("--lr"), "{err}");
+    }
+    let _ = std::fs::remove_dir_all(&run);
+}

@@ -172,6 +172,19 @@ fn gmm_procrustes_rigid_losses() {
     check("chamfer_sq", &[(p, 6, 3), (randv(&mut r, 24, 1.0), 8, 3)], 1e-3, 1e-3, |t, x| {
         ops::chamfer_sq(t, x[0], x[1])
     });
+    // GMM-means alignment under a known transform (gradients through the means and the weights)
+    let p4 = pts.clone();
+    let gt_m = arps::transform::from_rotation_translation(
+        &arps::transform::euler_xyz(0.2, 0.4, -0.3),
+        &Vector3::new(0.2, -0.1, 0.3),
+    );
+    let pts_m: Vec<[f32; 3]> = pts.iter().map(|p| [p[2] * 0.8, p[0] + 0.2, -p[1]]).collect();
+    let (ga4, gb4) = (memberships(&mut r, n, j), memberships(&mut r, n, j));
+    check("means_alignment", &[(ga4, n, j), (gb4, n, j)], 1e-3, 2e-3, move |t, x| {
+        ops::means_alignment(t, x[0], x[1], &p4, &pts_m, &gt_m).0
+    });
+    let (gk, pk) = (memberships(&mut r, 7, j), memberships(&mut r, 7, j));
+    check("membership_kl", &[(gk, 7, j)], 1e-3, 1e-3, move |t, x| ops::membership_kl(t, x[0], &pk));
     let (ga, gb) = (memberships(&mut r, 5, j), memberships(&mut r, 6, j));
     let pairs = [(0, 1), (2, 2), (4, 5), (3, 0)];
     for kind in [ConsistencyKind::Squared, ConsistencyKind::SymmetricKl] {
@@ -377,6 +390,9 @@ fn all_losses() -> LossConfig {
         consistency: 1.0,
         consistency_radius: 0.1,
         consistency_kind: ConsistencyKind::SymmetricKl,
+        means: 1.0,
+        seg: 1.0,
+        seg_kappa: 6.0,
     }
 }
 
@@ -395,7 +411,7 @@ fn whole_model_top_h() {
 }
 
 /// Diagnostic: central differences of one tensor's first elements at several step sizes
-/// (`GC_NAME=tensor GC_TERM=sup|ctr|stp|aff|reg|consistency|all GC_TOPH=1`), to tell kinks and
+/// (`GC_NAME=tensor GC_TERM=sup|ctr|stp|aff|reg|consistency|means|seg|all GC_TOPH=1`), to tell kinks and
 /// rounding from a wrong gradient.
 #[test]
 #[ignore]
@@ -418,12 +434,16 @@ fn fd_sweep_one_tensor() {
         loss.aff = 0.0;
         loss.reg = 0.0;
         loss.consistency = 0.0;
+        loss.means = 0.0;
+        loss.seg = 0.0;
         match term.as_str() {
             "sup" => loss.sup = 1.0,
             "ctr" => loss.ctr = 1.0,
             "stp" => loss.stp = 1.0,
             "aff" => loss.aff = 1.0,
             "reg" => loss.reg = 1.0,
+            "means" => loss.means = 1.0,
+            "seg" => loss.seg = 1.0,
             _ => loss.consistency = 1.0,
         }
     }

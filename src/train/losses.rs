@@ -20,6 +20,14 @@
 //!   [`ConsistencyKind::Squared`] is the alternative. Like any agreement loss it is also
 //!   minimised by constant memberships; the transform losses prevent that collapse, so use it
 //!   together with `sup` (or `aff` + `reg`).
+//! * `means`: GMM-means alignment under the ground truth ([`ops::alignment`]): how far each
+//!   source component mean, moved by `T_gt`, lands from the target's component mean of the same
+//!   index, relative to the components' spread. A dense signal on every membership about what
+//!   GMR needs, without going through the 6-DoF Procrustes solve.
+//! * `seg`: KL divergence of each cloud's memberships from the canonical partition of
+//!   [`super::partition`] (soft cones around the ground-truth centroid, in the half-way frame
+//!   of the two clouds): dense, non-degenerate supervision of the memberships themselves, which
+//!   the transform losses leave nearly uniform.
 //!
 //! The total is `sum weight_k * L_k`. Terms with weight 0 are not computed, except the cheap
 //! `sup`, `ctr` and `aff`, which are always reported for monitoring.
@@ -37,6 +45,7 @@
 use super::model::{from_matrix, Forward};
 use super::ops::{self, ConsistencyKind};
 use super::pair::Pair;
+use super::partition::{self, Role};
 use super::tape::{Id, Tape};
 use crate::transform::{apply, rigid_inverse};
 use serde::{Deserialize, Serialize};
@@ -73,6 +82,19 @@ pub struct LossConfig {
     pub consistency_radius: f32,
     /// Divergence of the consistency loss.
     pub consistency_kind: ConsistencyKind,
+    /// GMM-means alignment loss (absent in checkpoints written before it existed: 0).
+    #[serde(default)]
+    pub means: f32,
+    /// Canonical-partition loss (absent in older checkpoints: 0).
+    #[serde(default)]
+    pub seg: f32,
+    /// Concentration `kappa` of the partition's soft cones (larger = sharper targets).
+    #[serde(default = "default_seg_kappa")]
+    pub seg_kappa: f32,
+}
+
+fn default_seg_kappa() -> f32 {
+    8.0
 }
 
 impl Default for LossConfig {
@@ -89,6 +111,9 @@ impl Default for LossConfig {
             consistency: 0.0,
             consistency_radius: 0.05,
             consistency_kind: ConsistencyKind::SymmetricKl,
+            means: 0.0,
+            seg: 0.0,
+            seg_kappa: default_seg_kappa(),
         }
     }
 }
@@ -122,6 +147,15 @@ pub struct LossParts {
     pub consistency: f64,
     /// Number of corresponding point pairs the consistency loss used.
     pub consistency_pairs: f64,
+    /// GMM-means alignment loss (always computed, for monitoring).
+    pub means: f64,
+    /// The component spread `S` of the alignment loss (squared normalised units): near 0 when
+    /// the memberships are nearly uniform.
+    pub means_spread: f64,
+    /// Mean membership-row entropy over both clouds, divided by `ln J` (1 = uniform rows).
+    pub gamma_entropy: f64,
+    /// Canonical-partition KL (0 when off), mean of the two clouds.
+    pub seg: f64,
     /// Step sizes per layer.
     pub steps: Vec<f64>,
 }
@@ -143,6 +177,10 @@ impl LossParts {
             m.reg += p.reg / n;
             m.consistency += p.consistency / n;
             m.consistency_pairs += p.consistency_pairs / n;
+            m.means += p.means / n;
+            m.means_spread += p.means_spread / n;
+            m.gamma_entropy += p.gamma_entropy / n;
+            m.seg += p.seg / n;
             for (a, b) in m.steps.iter_mut().zip(&p.steps) {
                 *a += b / n;
             }
@@ -152,7 +190,9 @@ impl LossParts {
 
     /// Whether every value is finite.
     pub fn is_finite(&self) -> bool {
-        [self.total, self.sup, self.ctr, self.stp, self.aff, self.reg, self.consistency].iter().all(|v| v.is_finite())
+        [self.total, self.sup, self.ctr, self.stp, self.aff, self.reg, self.consistency, self.means, self.seg]
+            .iter()
+            .all(|v| v.is_finite())
     }
 }
 
@@ -259,7 +299,55 @@ pub fn record(t: &mut Tape, fwd: &Forward, pair: &Pair, cfg: &LossConfig) -> (Id
         parts.consistency = t.scalar64(c);
         terms.push((c, cfg.consistency));
     }
+    // GMM-means alignment (cheap: always computed for monitoring)
+    let (means, mp) =
+        ops::means_alignment(t, fwd.gamma_source, fwd.gamma_target, &pair.source, &pair.target, &pair.t_gt);
+    parts.means = mp.loss;
+    parts.means_spread = mp.spread;
+    if cfg.means != 0.0 {
+        terms.push((means, cfg.means));
+    }
+    // canonical partition
+    if cfg.seg != 0.0 {
+        let j = t.shape(fwd.gamma_source).1;
+        let mut kls = Vec::new();
+        for (gamma, points, v, role) in [
+            (fwd.gamma_source, &pair.source, pair.v_gt_source, Role::Source),
+            (fwd.gamma_target, &pair.target, pair.v_gt_target, Role::Target),
+        ] {
+            let m = mean(points);
+            let centroid = [0, 1, 2].map(|a| m[a] + v[a] as f64);
+            let p = partition::targets(points, centroid, &pair.t_gt, role, j, cfg.seg_kappa as f64);
+            kls.push((ops::membership_kl(t, gamma, &p), 0.5));
+        }
+        let seg = ops::weighted_total(t, &kls);
+        parts.seg = t.scalar64(seg);
+        terms.push((seg, cfg.seg));
+    }
+    parts.gamma_entropy = 0.5
+        * (row_entropy(t.value(fwd.gamma_source), t.shape(fwd.gamma_source).1)
+            + row_entropy(t.value(fwd.gamma_target), t.shape(fwd.gamma_target).1));
     let total = ops::weighted_total(t, &terms);
     parts.total = t.scalar64(total);
     (total, parts)
+}
+
+/// Mean of points, in `f64`.
+fn mean(points: &[[f32; 3]]) -> [f64; 3] {
+    let mut m = [0.0f64; 3];
+    for p in points {
+        for a in 0..3 {
+            m[a] += p[a] as f64;
+        }
+    }
+    m.map(|v| v / points.len().max(1) as f64)
+}
+
+/// Mean entropy of the rows of `gamma` (`[n, j]`, rows summing to 1), divided by `ln j`.
+fn row_entropy(gamma: &[f32], j: usize) -> f64 {
+    if j < 2 || gamma.is_empty() {
+        return 0.0;
+    }
+    let h: f64 = gamma.iter().filter(|&&p| p > 0.0).map(|&p| -(p as f64) * (p as f64).ln()).sum();
+    h / (gamma.len() / j) as f64 / (j as f64).ln()
 }

@@ -41,6 +41,7 @@ pub mod model;
 pub mod ops;
 pub mod optim;
 pub mod pair;
+pub mod partition;
 pub mod run;
 pub mod simd;
 pub mod step;

@@ -66,9 +66,10 @@ struct TrainArgs {
     /// Pairs per step.
     #[arg(long, default_value_t = 8)]
     batch: usize,
-    /// Peak learning rate (Adam).
-    #[arg(long, default_value_t = 1e-3)]
-    lr: f32,
+    /// Peak learning rate (Adam; default 1e-3). On --resume, replaces the run's current lr
+    /// (logged in the session's start line).
+    #[arg(long)]
+    lr: Option<f32>,
     /// Linear warm-up steps.
     #[arg(long, default_value_t = 100)]
     warmup_steps: u64,
@@ -96,16 +97,21 @@ struct TrainArgs {
     /// Probability that a pair uses a bank shape.
     #[arg(long, default_value_t = 0.3)]
     bank_fraction: f64,
-    /// Losses: comma list of name[=weight] from sup, ctr, stp, aff, reg, consistency (unlisted
-    /// terms are off, except stp which keeps the paper's 1e-8 unless listed).
-    #[arg(long, default_value = "sup,ctr")]
-    loss: String,
+    /// Losses: comma list of name[=weight] from sup, ctr, stp, aff, reg, consistency, means,
+    /// seg (unlisted terms are off, except stp which keeps the paper's 1e-8 unless listed). Default
+    /// `sup,ctr`. On --resume, replaces the stored losses (a fork of a run with other losses:
+    /// copy its directory, then resume the copy with --loss).
+    #[arg(long)]
+    loss: Option<String>,
     /// Centroid loss on every layer's reference point (every) or the final one only (final).
     #[arg(long, default_value = "every")]
     ctr_mode: String,
     /// Consistency divergence: kl (symmetric KL) or squared.
     #[arg(long, default_value = "kl")]
     consistency_kind: String,
+    /// Concentration of the `seg` loss's soft cones.
+    #[arg(long, default_value_t = 8.0)]
+    seg_kappa: f32,
     /// Consistency correspondence radius (engine-normalised units).
     #[arg(long, default_value_t = 0.05)]
     consistency_radius: f32,
@@ -192,9 +198,14 @@ fn main() -> ExitCode {
     }
 }
 
+/// `--loss` when it is not given.
+const DEFAULT_LOSS: &str = "sup,ctr";
+/// `--lr` when it is not given.
+const DEFAULT_LR: f32 = 1e-3;
+
 fn parse_loss(a: &TrainArgs) -> Result<LossConfig, String> {
     let mut l = LossConfig { sup: 0.0, ctr: 0.0, aff: 0.0, reg: 0.0, consistency: 0.0, ..LossConfig::default() };
-    for item in a.loss.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+    for item in a.loss.as_deref().unwrap_or(DEFAULT_LOSS).split(',').map(str::trim).filter(|s| !s.is_empty()) {
         let (name, w) = match item.split_once('=') {
             Some((n, w)) => {
                 (n.trim(), w.trim().parse::<f32>().map_err(|_| format!("loss weight '{w}' is not a number"))?)
@@ -208,7 +219,9 @@ fn parse_loss(a: &TrainArgs) -> Result<LossConfig, String> {
             "aff" => l.aff = w,
             "reg" => l.reg = w,
             "consistency" | "cons" => l.consistency = w,
-            other => return Err(format!("unknown loss '{other}' (sup, ctr, stp, aff, reg, consistency)")),
+            "means" => l.means = w,
+            "seg" => l.seg = w,
+            other => return Err(format!("unknown loss '{other}' (sup, ctr, stp, aff, reg, consistency, means, seg)")),
         }
     }
     l.ctr_mode = match a.ctr_mode.as_str() {
@@ -222,6 +235,7 @@ fn parse_loss(a: &TrainArgs) -> Result<LossConfig, String> {
         o => return Err(format!("--consistency-kind {o}: expected kl or squared")),
     };
     l.consistency_radius = a.consistency_radius;
+    l.seg_kappa = a.seg_kappa;
     Ok(l)
 }
 
@@ -231,7 +245,7 @@ fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
         model,
         loss: parse_loss(a)?,
         batch: a.batch.max(1),
-        lr: a.lr,
+        lr: a.lr.unwrap_or(DEFAULT_LR),
         warmup_steps: a.warmup_steps,
         clip_norm: (a.clip > 0.0).then_some(a.clip),
         plateau_patience: a.patience,
@@ -286,6 +300,7 @@ fn loss_json(l: &LossParts) -> serde_json::Value {
     json!({
         "total": r(l.total), "sup": r(l.sup), "ctr": r(l.ctr), "ctr_no_shift": r(l.ctr_no_shift), "aff": r(l.aff),
         "reg": r(l.reg), "consistency": r(l.consistency), "consistency_pairs": r(l.consistency_pairs),
+        "means": r(l.means), "means_spread": r(l.means_spread), "gamma_entropy": r(l.gamma_entropy), "seg": r(l.seg),
         "steps": l.steps.iter().map(|&s| r(s)).collect::<Vec<_>>(),
     })
 }
@@ -308,6 +323,19 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         }
         if let Some(v) = a.checkpoint_every_minutes {
             st.config.checkpoint_every_minutes = v;
+        }
+        if let Some(v) = a.val_every_steps {
+            st.config.val_every_steps = Some(v).filter(|&s| s > 0);
+        }
+        if a.loss.is_some() {
+            st.config.loss = parse_loss(&a)?;
+        }
+        if let Some(lr) = a.lr {
+            if !(lr.is_finite() && lr > 0.0) {
+                return Err(format!("--lr {lr} must be a positive number"));
+            }
+            st.lr = lr;
+            st.bad_validations = 0;
         }
         (st, p, adam)
     } else {
@@ -359,7 +387,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
     };
     say(&format!("{} validation pairs in {:.1} s", val.len(), t0.elapsed().as_secs_f64()));
     logf.write(json!({
-        "kind": "start", "session": st.sessions, "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed,
+        "kind": "start", "session": st.sessions, "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed, "lr": st.lr,
         "threads": threads, "config": cfg, "bank_meshes": {"usable": bank_counts.0, "skipped": bank_counts.1, "train": bank_counts.2, "val": bank_counts.3},
     }));
 

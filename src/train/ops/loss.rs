@@ -1,5 +1,5 @@
 //! Loss ops: squared error against a constant, squared Chamfer distance, and the dense
-//! membership-consistency divergence.
+//! membership-consistency divergence, and the KL divergence of memberships from target rows.
 
 use crate::train::tape::{Backward, Id, Op, Tape};
 
@@ -198,5 +198,48 @@ impl Op for Consistency {
         ctx.accumulate(self.b, &db);
         ctx.give(da);
         ctx.give(db);
+    }
+}
+
+struct MembershipKl {
+    gamma: Id,
+    targets: Vec<f32>,
+}
+
+/// `mean_i KL(p_i || gamma_i) = mean_i sum_j p_ij (ln p_ij - ln gamma_ij)` of membership rows
+/// `gamma [n, J]` against target rows `targets` (`[n, J]`, rows summing to 1) -> `[1, 1]`
+/// (`gamma` clamped at `1e-8` inside the log).
+pub fn membership_kl(t: &mut Tape, gamma: Id, targets: &[f32]) -> Id {
+    let (n, j) = t.shape(gamma);
+    assert_eq!(targets.len(), n * j, "membership_kl: targets vs memberships");
+    let g = t.value(gamma);
+    let mut s = 0.0f64;
+    for (&p, &q) in targets.iter().zip(g) {
+        if p > 0.0 {
+            s += p as f64 * ((p as f64).ln() - (q.max(P_MIN) as f64).ln());
+        }
+    }
+    let v64 = if n == 0 { 0.0 } else { s / n as f64 };
+    let mut y = t.uninit(1);
+    y[0] = v64 as f32;
+    let needs = n > 0 && t.needs_grad(gamma);
+    let id = t.push(y, 1, 1, Box::new(MembershipKl { gamma, targets: targets.to_vec() }), needs);
+    t.set_scalar64(id, v64);
+    id
+}
+
+impl Op for MembershipKl {
+    fn name(&self) -> &'static str {
+        "membership_kl"
+    }
+    fn backward(&self, ctx: &mut Backward<'_>, _out: Id, g: &[f32]) {
+        let (n, _) = ctx.shape(self.gamma);
+        let k = g[0] / n as f32;
+        let v = ctx.value(self.gamma);
+        for ((d, &q), &p) in ctx.grad(self.gamma).iter_mut().zip(v).zip(&self.targets) {
+            if q > P_MIN {
+                *d -= k * p / q;
+            }
+        }
     }
 }

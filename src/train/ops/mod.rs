@@ -4,6 +4,7 @@
 //! ([`crate::nn`]), records the node, and registers a backward (a private struct implementing
 //! [`Op`](super::tape::Op)). Shapes are checked with `assert!` at record time.
 
+pub mod alignment;
 pub mod attention;
 pub mod concat;
 pub mod elementwise;
@@ -17,6 +18,7 @@ pub mod reduce;
 pub mod rigid;
 pub mod softmax;
 
+pub use alignment::means_alignment;
 pub use attention::attention;
 pub use concat::{concat_colmax, concat_cols};
 pub use elementwise::{add, mul_scalar, relu, scale, sigmoid, sub, sub_row};
@@ -24,7 +26,7 @@ pub use gmm::gmm_params;
 pub use gmr::gmr;
 pub use layernorm::layer_norm;
 pub use linear::linear;
-pub use loss::{chamfer_sq, membership_consistency, sq_err, ConsistencyKind};
+pub use loss::{chamfer_sq, membership_consistency, membership_kl, sq_err, ConsistencyKind};
 pub use procrustes::procrustes;
 pub use reduce::{mean_all, reshape, weighted_sum, weighted_total};
 pub use rigid::{matmul, rigid_inverse, transform_points};
