@@ -137,6 +137,16 @@ fn resume_can_fork_with_other_losses_and_lr() {
     assert!(last["loss"]["seg"].as_f64().unwrap() > 0.0, "{last}");
     let e = last["loss"]["gamma_entropy"].as_f64().unwrap();
     assert!(e > 0.0 && e <= 1.0, "{last}");
+    // the partition oracle runs on the run's validation pairs and prints a row per kappa
+    let o = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["partition-oracle", "--run", run.to_str().unwrap(), "--pairs", "4", "--kappa", "8,16"])
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let rows: Vec<&str> =
+        text.lines().filter(|l| l.trim_start().starts_with("8.0") || l.trim_start().starts_with("16.0")).collect();
+    assert_eq!(rows.len(), 2, "{text}");
     // bad overrides are clear errors
     for bad in [["--loss", "sup,nope"], ["--lr", "0"]] {
         let mut a: Vec<&str> = vec!["train", "--run", run.to_str().unwrap(), "--resume", "--steps", "21"];

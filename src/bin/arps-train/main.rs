@@ -22,6 +22,7 @@ use std::process::ExitCode;
 use std::time::Instant;
 
 mod curves;
+mod oracle;
 
 #[derive(Parser)]
 #[command(name = "arps-train", version, about = "Train, resume and export DGMR-ARPS models on the CPU")]
@@ -37,6 +38,9 @@ enum Command {
     Train(Box<TrainArgs>),
     /// Export a run's best weights in the engine's format, with provenance.
     Export(ExportArgs),
+    /// GMR accuracy with oracle memberships (the `seg` loss's targets) on a run's validation
+    /// pairs: the ceiling of a network that learned the partition.
+    PartitionOracle(OracleArgs),
     /// Plot a run's training curves (SVG).
     Curves(CurvesArgs),
 }
@@ -170,6 +174,19 @@ struct ExportArgs {
 }
 
 #[derive(Args)]
+struct OracleArgs {
+    /// Run directory (its data configuration and validation split are used).
+    #[arg(long)]
+    run: PathBuf,
+    /// Validation pairs.
+    #[arg(long, default_value_t = 200)]
+    pairs: u64,
+    /// Partition concentrations to try.
+    #[arg(long, value_delimiter = ',', default_value = "2,4,8,16,64")]
+    kappa: Vec<f64>,
+}
+
+#[derive(Args)]
 struct CurvesArgs {
     /// Run directory (or several, comma-separated, drawn on one plot).
     #[arg(long, value_delimiter = ',')]
@@ -188,6 +205,7 @@ fn main() -> ExitCode {
         Command::Train(a) => train_cmd(*a),
         Command::Export(a) => export_cmd(a),
         Command::Curves(a) => curves::run(&a.run, &a.out, a.x == "cpu"),
+        Command::PartitionOracle(a) => oracle::run(&a.run, a.pairs, &a.kappa),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

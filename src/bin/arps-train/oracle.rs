@@ -1,0 +1,50 @@
+//! `arps-train partition-oracle`: how well GMR registers the validation pairs when the
+//! memberships are exactly the `seg` loss's targets (the canonical partition, computed with the
+//! ground truth). It is the ceiling a network that learned the partition perfectly would reach,
+//! for choosing the partition's concentration `kappa`.
+
+use arps::data::metrics::{pair_error, summarize};
+use arps::train::partition::{targets, Role};
+use arps::train::run::data::{to_train_pair, TrainData};
+use std::path::Path;
+
+/// Prints one table row per `kappa`: recall (15 deg, 0.2), MRE, MTE of oracle memberships on the
+/// run's first `pairs` validation pairs, with the run's N network points per cloud.
+pub fn run(run: &Path, pairs: u64, kappas: &[f64]) -> Result<(), String> {
+    let (st, _, _) = arps::train::run::checkpoint::load(&run.join("checkpoint.safetensors"))?;
+    let data = TrainData::new(&st.config)?;
+    let (n, j) = (st.config.model.n_points, st.config.model.gaussians);
+    let mut val = Vec::new();
+    for i in 0..pairs {
+        let p = data.val_pair(i).map_err(|e| format!("validation pair {i}: {e}"))?;
+        val.push(to_train_pair(&p, n, i));
+    }
+    println!("oracle memberships (canonical partition, J = {j}, N = {n}) on {pairs} validation pairs");
+    println!("{:>8} {:>8} {:>9} {:>8}", "kappa", "recall", "MRE(deg)", "MTE");
+    for &kappa in kappas {
+        let errors: Vec<_> = val
+            .iter()
+            .map(|tp| {
+                let centroid = |pts: &[[f32; 3]], v: [f32; 3]| {
+                    let mut m = [0.0f64; 3];
+                    for q in pts {
+                        for a in 0..3 {
+                            m[a] += q[a] as f64 / pts.len() as f64;
+                        }
+                    }
+                    [0, 1, 2].map(|a| m[a] + v[a] as f64)
+                };
+                let gs = targets(&tp.source, centroid(&tp.source, tp.v_gt_source), &tp.t_gt, Role::Source, j, kappa);
+                let gt = targets(&tp.target, centroid(&tp.target, tp.v_gt_target), &tp.t_gt, Role::Target, j, kappa);
+                let t = arps::gmr::solve(
+                    &arps::gmr::gmm_params(&tp.source, &gs, j),
+                    &arps::gmr::gmm_params(&tp.target, &gt, j),
+                );
+                pair_error(&t, &tp.t_gt, 1.0)
+            })
+            .collect();
+        let s = summarize(&errors, &vec![0.0; errors.len()], 15.0, 0.2);
+        println!("{kappa:>8.1} {:>8.3} {:>9.2} {:>8.4}", s.recall, s.mre, s.mte);
+    }
+    Ok(())
+}
