@@ -67,8 +67,9 @@ enum Command {
     /// Time each stage (read, downsample, network, GMR, ICP) on a 1024 + 1024-point pair and compare the
     /// network's GFLOP/s with the matmul peak measured in the same run.
     Bench(bench::BenchArgs),
-    /// Evaluate a pair set (pairs.tsv) side by side: network, network + ICP, ICP from identity, ICP from
-    /// centroids, untrained network + ICP; prints MRE, MTE, Recall, RRE, RTE, ms/pair.
+    /// Evaluate a pair set (pairs.tsv) side by side: network, network + ICP, network + multi-start ICP (the
+    /// default), multi-start ICP without the network, ICP from identity, ICP from centroids, untrained
+    /// network + ICP; prints MRE, MTE, Recall, RRE, RTE, ms/pair.
     Eval(eval::EvalArgs),
     /// Write a pair set made with the paper's protocol (PLY files, pairs.tsv, pairs.json).
     MakePairs(make_pairs::MakePairsArgs),
