@@ -2,9 +2,9 @@
 //! that fits best.
 //!
 //! The network, the initial transform and a centroid alignment fail on partly different pairs, and
-//! ICP from each costs a few milliseconds once the target is prepared, so the pipeline refines
-//! every start in [`crate::Options::starts`] against one shared [`IcpTarget`] and keeps the best by
-//! [`choose`].
+//! once the target is prepared (kd-tree, normals) each extra start costs only its ICP iterations,
+//! so the pipeline refines every start in [`crate::Options::starts`] against one shared
+//! [`IcpTarget`] and keeps the best by [`choose`].
 
 use crate::icp::{IcpKind, IcpParams, IcpTarget};
 use nalgebra::Matrix4;
@@ -44,7 +44,7 @@ pub const SCHEDULE: [f64; 3] = [4.0, 2.0, 1.0];
 pub struct Candidate {
     /// Where it started.
     pub start: Start,
-    /// The refined transform (the frames of the clouds given to [`refine`]).
+    /// The refined transform (the frames of the clouds given to [`refine_all`]).
     pub T_target_source: Matrix4<f64>,
     /// [`IcpTarget::evaluate`]'s fitness at the final distance.
     pub fitness: f64,
