@@ -4,7 +4,9 @@
 //! The network, the initial transform and a centroid alignment fail on partly different pairs, and
 //! once the target is prepared (kd-tree, normals) each extra start costs only its ICP iterations,
 //! so the pipeline refines every start in [`crate::Options::starts`] against one shared
-//! [`IcpTarget`] and keeps the best by [`choose`].
+//! [`IcpTarget`] and keeps the best by [`choose`] ([`refine_best`]). Two things keep that cheap:
+//! starts that meet are merged ([`MERGE_FRACTION`]), and large sources are compared on a sample
+//! of [`SCREEN_POINTS`] points, only the winner being refined on all of them.
 
 use crate::icp::{IcpKind, IcpParams, IcpTarget};
 use nalgebra::Matrix4;
@@ -44,7 +46,7 @@ pub const SCHEDULE: [f64; 3] = [4.0, 2.0, 1.0];
 pub struct Candidate {
     /// Where it started.
     pub start: Start,
-    /// The refined transform (the frames of the clouds given to [`refine_all`]).
+    /// The refined transform (the frames of the clouds given to [`refine_starts`]).
     pub T_target_source: Matrix4<f64>,
     /// [`IcpTarget::evaluate`]'s fitness at the final distance.
     pub fitness: f64,
@@ -61,6 +63,45 @@ pub struct Candidate {
 /// converge to the same answer, and refining them again would only cost time.
 pub const MERGE_FRACTION: f64 = 0.1;
 
+/// With more source points than this, several starts are compared on an evenly spread sample
+/// of this many, and only the winner is refined on every point ([`refine_best`]).
+pub const SCREEN_POINTS: usize = 2048;
+
+/// The best start after refinement: [`refine_starts`] then [`choose`]. `None` for no starts.
+///
+/// With several starts and more than [`SCREEN_POINTS`] source points (large scans, where one ICP
+/// run costs hundreds of milliseconds), the starts are refined and compared on
+/// [`SCREEN_POINTS`] evenly spread source points, and only the winner is refined again on all of
+/// them, from where the sample left it; its figures are those of the full run (its `iterations`
+/// count both runs). So each extra start costs an ICP run on at most [`SCREEN_POINTS`] points.
+pub fn refine_best(
+    target: &IcpTarget,
+    source: &[[f32; 3]],
+    starts: &[(Start, Matrix4<f64>)],
+    kind: IcpKind,
+    d_final: f64,
+    max_iterations: u32,
+) -> Option<Candidate> {
+    if starts.len() > 1 && kind != IcpKind::Off && source.len() > SCREEN_POINTS {
+        let sample = even_sample(source, SCREEN_POINTS);
+        let screened = refine_starts(target, &sample, starts, kind, d_final, max_iterations);
+        let w = screened[choose(&screened)?];
+        let full = refine_starts(target, source, &[(w.start, w.T_target_source)], kind, d_final, max_iterations);
+        return full.first().map(|c| Candidate { iterations: w.iterations + c.iterations, ..*c });
+    }
+    let all = refine_starts(target, source, starts, kind, d_final, max_iterations);
+    choose(&all).map(|i| all[i])
+}
+
+/// `n` points of `points` (all of them if there are not more), evenly spaced in its order; the
+/// voxel grid's order (`sampling::voxel_downsample`) makes that an even spread in space.
+fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
+    if points.len() <= n {
+        return points.to_vec();
+    }
+    (0..n).map(|i| points[i * points.len() / n]).collect()
+}
+
 /// Refines every start with coarse-to-fine ICP against one prepared target ([`SCHEDULE`] times
 /// `d_final`, each stage capped at `max_iterations`) and scores each result at `d_final`.
 ///
@@ -68,7 +109,7 @@ pub const MERGE_FRACTION: f64 = 0.1;
 /// [`MERGE_FRACTION`] of `d_final` of an earlier one (largest displacement of a source point) is
 /// dropped, so the result has one candidate per distinct basin, in the order of `starts`. With
 /// [`IcpKind::Off`] nothing moves: every start is scored as it is.
-pub fn refine_all(
+pub fn refine_starts(
     target: &IcpTarget,
     source: &[[f32; 3]],
     starts: &[(Start, Matrix4<f64>)],

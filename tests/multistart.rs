@@ -157,14 +157,39 @@ fn starts_that_meet_are_merged_into_the_earlier_one() {
     let nudge = Matrix4::new_translation(&nalgebra::Vector3::new(0.01 * d, 0.0, 0.0));
     // the same start twice (a hair apart), and a distinct one
     let list = [(Start::Network, Matrix4::identity()), (Start::Centroids, nudge), (Start::Initial, truth)];
-    let c = refine::refine_all(&target, &source, &list, IcpKind::Plane, d, 30);
+    let c = refine::refine_starts(&target, &source, &list, IcpKind::Plane, d, 30);
     assert_eq!(c.len(), 1, "all three meet (the third at the first stage's end): {c:?}");
     assert_eq!(c[0].start, Start::Network);
     assert!(rotation_error_deg(&c[0].T_target_source, &truth) < 0.01 && c[0].fitness > 0.99);
 
     // with ICP off nothing moves and nothing merges: each start is scored as it is
-    let c = refine::refine_all(&target, &source, &list, IcpKind::Off, d, 30);
+    let c = refine::refine_starts(&target, &source, &list, IcpKind::Off, d, 30);
     assert_eq!(c.len(), 3);
     assert_eq!(c[2].fitness, 1.0);
     assert_eq!(refine::choose(&c), Some(2));
+}
+
+/// More source points than `SCREEN_POINTS`: the starts are compared on a sample, and the winner's
+/// figures are those of a full run.
+#[test]
+fn large_sources_are_screened_on_a_sample_and_the_winner_refined_on_all_points() {
+    let cloud = bumpy_surface(6000, 0.0).points;
+    assert!(cloud.len() > refine::SCREEN_POINTS);
+    let target = IcpTarget::new(&cloud, true);
+    let truth = motion([4.0, -3.0, 2.0], [0.04, 0.02, -0.03]);
+    let source = PointCloud::new(cloud.clone()).transformed(&arps::transform::rigid_inverse(&truth)).points;
+    let d = 0.03;
+    let flipped = motion([150.0, 0.0, 0.0], [0.0, 0.0, 0.0]);
+    let list = [(Start::Network, flipped), (Start::Initial, Matrix4::identity())];
+    let best = refine::refine_best(&target, &source, &list, IcpKind::Plane, d, 30).unwrap();
+    assert_eq!(best.start, Start::Initial);
+    assert!(rotation_error_deg(&best.T_target_source, &truth) < 0.01, "{}", best.T_target_source);
+    assert_eq!((best.fitness, best.inlier_rmse), target.evaluate(&source, &best.T_target_source, d));
+    assert!(best.fitness > 0.99);
+    // the same answer as refining every start on all points
+    let all = refine::refine_starts(&target, &source, &list, IcpKind::Plane, d, 30);
+    let full = all[refine::choose(&all).unwrap()];
+    assert_eq!(full.start, best.start);
+    assert!(rotation_error_deg(&full.T_target_source, &best.T_target_source) < 0.01);
+    assert_eq!(refine::refine_best(&target, &source, &[], IcpKind::Plane, d, 30), None);
 }
