@@ -27,7 +27,7 @@ fn fixture_pair(index: usize) -> (PointCloud, PointCloud, Matrix4<f64>) {
     // name, source, target, overlap_threshold, note, 16 numbers (row-major)
     let line = text.lines().nth(1 + index).unwrap();
     let fields: Vec<&str> = line.split('\t').collect();
-    let read = |name: &str| arps::io::read_path(&dir.join(name)).unwrap();
+    let read = |name: &str| arps::io::read_point_cloud(&std::fs::read(dir.join(name)).unwrap(), name).unwrap();
     let v: Vec<f64> = fields[5].split_whitespace().map(|x| x.parse().unwrap()).collect();
     (read(fields[1]), read(fields[2]), Matrix4::from_row_slice(&v))
 }
