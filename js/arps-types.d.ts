@@ -53,7 +53,27 @@ export interface RegisterOptions {
    * the first bad point; the default) or `"drop"` (ignore them, e.g. PCD "no return" points).
    */
   nonFinite?: "error" | "drop";
+  /**
+   * The transforms ICP starts from, in order of preference; each is refined (coarse to fine,
+   * against the same prepared target) and the best is returned, with `start` saying which: the
+   * highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier start. Starts
+   * that meet during refinement are refined once, as the earlier; on large clouds the starts are
+   * compared on 2048 of the source points and only the winner is refined on all of them. Default
+   * `["network", "centroids", "initial"]`; each extra start costs one ICP run (on at most 2048
+   * points), so `["network"]` is the fastest. Must be non-empty, without repeats.
+   * - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
+   *   reported as `"initial"`);
+   * - `"centroids"`: `initialTransform`'s rotation (none if unset) with the translation that moves
+   *   the source's centroid onto the target's;
+   * - `"initial"`: `initialTransform` itself (the identity if unset).
+   *
+   * With `icp: "off"` nothing is refined or compared: the first start is the answer.
+   */
+  starts?: RegistrationStart[];
 }
+
+/** A transform ICP starts from (see `RegisterOptions.starts`). */
+export type RegistrationStart = "network" | "centroids" | "initial";
 
 /** Milliseconds spent in each stage of one registration (measured with `performance.now()`). */
 export interface RegistrationTimings {
@@ -63,7 +83,7 @@ export interface RegistrationTimings {
   networkMs: number;
   /** GMM parameters and the weighted Procrustes solve. */
   gmrMs: number;
-  /** ICP (normals, kd-tree, iterations) and the final quality figures. */
+  /** ICP from every start (normals, kd-tree, iterations) and the quality figures. */
   icpMs: number;
   /** The whole `register` call inside the engine. */
   totalMs: number;
@@ -83,6 +103,8 @@ export interface RegistrationResult {
    * same frames and layout as `matrix`.
    */
   networkMatrix: Float32Array;
+  /** The start (of `RegisterOptions.starts`) whose refinement is `matrix`. */
+  start: RegistrationStart;
   /**
    * Fraction of (voxelised) source points that have a target point within
    * `maxCorrespondenceDistance` under `matrix`, in [0, 1]. Below 0.3 a warning is added: the
@@ -91,9 +113,9 @@ export interface RegistrationResult {
   fitness: number;
   /** RMS distance of those inlier pairs, in your units (0 when there are none). */
   inlierRmse: number;
-  /** ICP iterations run over all stages (0 with `icp: "off"`). */
+  /** ICP iterations over all stages of the chosen start's refinement (0 with `icp: "off"`). */
   iterations: number;
-  /** True when the last ICP stage met its convergence criteria (false with `icp: "off"`). */
+  /** True when the chosen start's last ICP stage met its convergence criteria (false with `icp: "off"`). */
   converged: boolean;
   /** The final max correspondence distance used, in your units (the default resolved). */
   maxCorrespondenceDistance: number;

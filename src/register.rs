@@ -1,8 +1,9 @@
 //! The registration pipeline: normalise, sample, network, GMR, ICP, de-normalise.
 
 use crate::cloud::{JointNormalization, NonFinite, PointCloud, MIN_POINTS};
-use crate::icp::{IcpKind, IcpParams, IcpTarget};
+use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
+use crate::refine::{self, Candidate, Start};
 use crate::timing::{default_clock, Clock, Stopwatch};
 use crate::weights::Weights;
 use crate::{gmr, sampling, transform, Error, Result};
@@ -41,6 +42,18 @@ pub struct Options {
     pub initial_transform: Option<[[f64; 4]; 4]>,
     /// What to do with NaN/Inf points. Default [`NonFinite::Error`].
     pub non_finite: NonFinite,
+    /// The transforms ICP starts from ([`Start`]), in order of preference. Each is refined coarse
+    /// to fine against the same prepared target ([`refine::refine_best`]; starts that meet on the
+    /// way are merged into the earlier one) and the best is returned ([`Registration::start`] says
+    /// which): the highest fitness at the final distance, ties going to the lower inlier RMSE, then
+    /// to the earlier start ([`refine::choose`]). Each extra start costs one ICP run on at most
+    /// [`refine::SCREEN_POINTS`] source points. Default
+    /// `[Network, Centroids, Initial]` (on 1000 validation pairs, recall 0.860 against 0.777 for
+    /// `[Network]` alone). Must be non-empty and without repeats. With `network: false`, a
+    /// `Network` start is the initial transform (reported as `Initial`). With `icp: Off` nothing is
+    /// refined or compared: the first start is the answer (choosing among unrefined starts by
+    /// fitness measured worse than taking the network's).
+    pub starts: Vec<Start>,
 }
 
 impl Default for Options {
@@ -55,6 +68,7 @@ impl Default for Options {
             voxel_size: None,
             initial_transform: None,
             non_finite: NonFinite::Error,
+            starts: vec![Start::Network, Start::Centroids, Start::Initial],
         }
     }
 }
@@ -81,7 +95,7 @@ pub struct Timings {
     pub network_ms: f64,
     /// GMM parameters and the weighted Procrustes solve.
     pub gmr_ms: f64,
-    /// ICP refinement (normals, kd-tree, iterations) and the final quality figures.
+    /// ICP refinement of every start (normals, kd-tree, iterations) and the quality figures.
     pub icp_ms: f64,
     /// Everything.
     pub total_ms: f64,
@@ -93,16 +107,18 @@ pub struct Timings {
 pub struct Registration {
     /// The answer: maps source points into the target frame (user units), after ICP.
     pub T_target_source: Matrix4<f64>,
-    /// The network + GMR estimate, before ICP (user units).
+    /// The network + GMR estimate, before ICP (user units); the initial transform with `network: false`.
     pub T_target_source_network: Matrix4<f64>,
+    /// The start whose refinement is `T_target_source` (one of [`Options::starts`]).
+    pub start: Start,
     /// Fraction of (voxelised) source points with a target point within the final max
     /// correspondence distance, under `T_target_source`; in [0, 1].
     pub fitness: f64,
     /// RMS distance of those inlier pairs, user units (0 if there are none).
     pub inlier_rmse: f64,
-    /// ICP iterations run over all stages (0 with ICP off).
+    /// ICP iterations over all stages of the chosen start's refinement (0 with ICP off).
     pub icp_iterations: u32,
-    /// True when the last ICP stage met its convergence criteria (false with ICP off).
+    /// True when the chosen start's last ICP stage met its convergence criteria (false with ICP off).
     pub icp_converged: bool,
     /// The final max correspondence distance used, user units.
     pub max_correspondence_distance: f64,
@@ -198,6 +214,7 @@ impl Registrar {
                 options.icp_max_iterations
             )));
         }
+        check_starts(&options.starts)?;
         let source = source.validated("source", MIN_POINTS, options.non_finite)?;
         let target = target.validated("target", MIN_POINTS, options.non_finite)?;
         let init = match &options.initial_transform {
@@ -267,25 +284,32 @@ impl Registrar {
         progress(Stage::Refining);
         let with_normals = options.icp == IcpKind::Plane;
         let target_index = IcpTarget::new(&icp_tgt.points, with_normals);
-        let mut t_n = t_net_n;
-        let mut iterations = 0;
-        let mut converged = false;
-        if options.icp != IcpKind::Off {
-            for factor in [4.0, 2.0, 1.0] {
-                let params = IcpParams {
-                    kind: options.icp,
-                    max_correspondence_distance: d_final * factor,
-                    max_iterations: options.icp_max_iterations,
-                    relative_fitness: 1e-6,
-                    relative_rmse: 1e-6,
-                };
-                let r = target_index.align(&icp_src.points, &t_n, &params);
-                t_n = r.T_target_source;
-                iterations += r.iterations;
-                converged = r.converged;
+        let mut starts: Vec<(Start, Matrix4<f64>)> = Vec::with_capacity(options.starts.len());
+        for &start in &options.starts {
+            let start = if start == Start::Network && !options.network { Start::Initial } else { start };
+            if starts.iter().any(|(s, _)| *s == start) {
+                continue;
             }
+            let t = match start {
+                Start::Network => t_net_n,
+                Start::Initial => norm.normalize_transform(&Matrix4::identity()),
+                Start::Centroids => centroid_alignment(&src_n, &tgt_n),
+            };
+            starts.push((start, t));
         }
-        let (fitness, rmse_n) = target_index.evaluate(&icp_src.points, &t_n, d_final);
+        if options.icp == IcpKind::Off {
+            starts.truncate(1);
+        }
+        let chosen = refine::refine_best(
+            &target_index,
+            &icp_src.points,
+            &starts,
+            options.icp,
+            d_final,
+            options.icp_max_iterations,
+        )
+        .ok_or_else(|| Error::InvalidOption("starts is empty".into()))?;
+        let Candidate { start, T_target_source: t_n, fitness, inlier_rmse: rmse_n, iterations, converged } = chosen;
         let icp_ms = watch.lap();
 
         let T_target_source = norm.denormalize(&t_n) * init;
@@ -300,6 +324,7 @@ impl Registrar {
         Ok(Registration {
             T_target_source,
             T_target_source_network,
+            start,
             fitness,
             inlier_rmse: rmse_n * s,
             icp_iterations: iterations,
@@ -309,4 +334,26 @@ impl Registrar {
             warnings,
         })
     }
+}
+
+/// Rejects an empty or repeating [`Options::starts`].
+fn check_starts(starts: &[Start]) -> Result<()> {
+    if starts.is_empty() {
+        return Err(Error::InvalidOption(
+            "starts is empty: list at least one of \"network\", \"centroids\", \"initial\"".into(),
+        ));
+    }
+    for (i, s) in starts.iter().enumerate() {
+        if starts[..i].contains(s) {
+            return Err(Error::InvalidOption(format!("starts lists \"{}\" twice", s.name())));
+        }
+    }
+    Ok(())
+}
+
+/// The [`Start::Centroids`] transform between two clouds in one frame: no rotation, the
+/// translation taking the source's centroid onto the target's.
+fn centroid_alignment(source: &PointCloud, target: &PointCloud) -> Matrix4<f64> {
+    let (cs, ct) = (source.centroid(), target.centroid());
+    Matrix4::new_translation(&nalgebra::Vector3::new(ct[0] - cs[0], ct[1] - cs[1], ct[2] - cs[2]))
 }

@@ -6,7 +6,7 @@
 //! JS API (see `js/arps-extra.d.ts` and the generated `arps.d.ts` for the documented types):
 //! * `Registrar.withDefaultModel()`, `Registrar.fromBytes(Uint8Array)`;
 //! * `registrar.register(source: Float32Array, target: Float32Array, options?)` -> a plain object
-//!   `{ matrix, networkMatrix, fitness, inlierRmse, iterations, converged,
+//!   `{ matrix, networkMatrix, start, fitness, inlierRmse, iterations, converged,
 //!   maxCorrespondenceDistance, timingsMs, warnings }`;
 //! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`.
 //!
@@ -149,6 +149,7 @@ impl Registrar {
         let out = Object::new();
         set(&out, "matrix", &matrix_js(&r.T_target_source))?;
         set(&out, "networkMatrix", &matrix_js(&r.T_target_source_network))?;
+        set(&out, "start", &JsValue::from_str(r.start.name()))?;
         set(&out, "fitness", &JsValue::from_f64(r.fitness))?;
         set(&out, "inlierRmse", &JsValue::from_f64(r.inlier_rmse))?;
         set(&out, "iterations", &JsValue::from_f64(r.icp_iterations as f64))?;

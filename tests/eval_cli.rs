@@ -5,8 +5,15 @@
 use std::path::Path;
 use std::process::Command;
 
-const METHODS: [&str; 5] =
-    ["network", "network + ICP", "ICP from identity", "ICP from centroids", "untrained network + ICP"];
+const METHODS: [&str; 7] = [
+    "network",
+    "network + ICP",
+    "network + multi-start ICP",
+    "multi-start ICP, no network",
+    "ICP from identity",
+    "ICP from centroids",
+    "untrained network + ICP",
+];
 
 fn arps(args: &[&str]) -> (bool, String, String) {
     let out = Command::new(env!("CARGO_BIN_EXE_arps")).args(args).output().unwrap();
@@ -31,8 +38,9 @@ fn eval_prints_the_table_for_every_method_on_the_fixture_pairs() {
         assert!(out.lines().any(|l| l.starts_with(&format!("{m} "))), "missing method {m}:\n{out}");
     }
     assert!(out.contains("normalised shape units"), "{out}");
+    assert!(out.contains("network + multi-start ICP: chosen start "), "{out}");
     let s = std::fs::read_to_string(&svg).unwrap();
-    assert_eq!(s.matches("<polyline").count(), 10);
+    assert_eq!(s.matches("<polyline").count(), 2 * METHODS.len());
     let _ = std::fs::remove_file(&svg);
 }
 
@@ -45,7 +53,7 @@ fn eval_json_and_perturbation() {
     assert_eq!(v["pairs"], 2);
     assert_eq!(v["perturb"], 3);
     let methods = v["methods"].as_array().unwrap();
-    assert_eq!(methods.len(), 5);
+    assert_eq!(methods.len(), METHODS.len());
     for (m, name) in methods.iter().zip(METHODS) {
         assert_eq!(m["name"], name);
         let r = m["summary"]["recall"].as_f64().unwrap();
@@ -53,6 +61,11 @@ fn eval_json_and_perturbation() {
         assert!(m["summary"]["mre"].as_f64().unwrap() >= 0.0);
     }
     assert_eq!(v["per_pair"].as_array().unwrap().len(), 2);
+    // which start each answer came from
+    let first = &v["per_pair"][0]["results"];
+    assert_eq!(first[1]["start"], "network");
+    assert!(["network", "centroids", "initial"].contains(&first[2]["start"].as_str().unwrap()), "{first}");
+    assert_eq!(first[4]["start"], "initial");
 }
 
 #[test]

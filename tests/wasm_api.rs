@@ -54,6 +54,8 @@ fn known_transform_is_recovered_with_default_options() {
     assert!(rmse > 0.0 && rmse < num(&res, "maxCorrespondenceDistance"), "inlierRmse {rmse}");
     assert!(num(&res, "iterations") >= 1.0);
     assert!(get(&res, "converged").as_bool().is_some());
+    let start = get(&res, "start").as_string().unwrap_or_default();
+    assert!(["network", "centroids", "initial"].contains(&start.as_str()), "start {start:?}");
     let timings = get(&res, "timingsMs");
     for k in ["preprocessMs", "networkMs", "gmrMs", "icpMs", "totalMs"] {
         assert!(num(&timings, k) >= 0.0, "timingsMs.{k}");
@@ -101,6 +103,14 @@ fn options_are_honoured() {
     );
     let (rot, tr) = errors(&icp_only);
     assert!(rot < 1.0 && tr < 0.02, "network off: {rot:.3} deg, {tr:.4}");
+
+    // One start: the answer says it came from there.
+    let single = register_ok(&mut r, options(r#"{"starts": ["network"]}"#));
+    assert_eq!(get(&single, "start").as_string().as_deref(), Some("network"));
+    let (rot, tr) = errors(&single);
+    assert!(rot < 1.0 && tr < 0.02, "starts [network]: {rot:.3} deg, {tr:.4}");
+    let no_net = register_ok(&mut r, options(r#"{"starts": ["network"], "network": false}"#));
+    assert_eq!(get(&no_net, "start").as_string().as_deref(), Some("initial"), "no network: the initial transform");
 
     let d = register_ok(&mut r, options(r#"{"maxCorrespondenceDistance": 0.08, "voxelSize": 0}"#));
     assert!((num(&d, "maxCorrespondenceDistance") - 0.08).abs() < 1e-9);
@@ -198,6 +208,10 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     expect_err(&mut r, &src, &tgt, options(r#"{"voxelSize": -0.5}"#), "voxelSize");
     expect_err(&mut r, &src, &tgt, options(r#"{"nonFinite": "keep"}"#), "invalid options");
     expect_err(&mut r, &src, &tgt, options(r#"{"network": "yes"}"#), "invalid options");
+    expect_err(&mut r, &src, &tgt, options(r#"{"starts": []}"#), "starts is empty");
+    expect_err(&mut r, &src, &tgt, options(r#"{"starts": ["initial", "initial"]}"#), "starts lists \"initial\" twice");
+    expect_err(&mut r, &src, &tgt, options(r#"{"starts": ["identity"]}"#), "invalid options");
+    expect_err(&mut r, &src, &tgt, options(r#"{"starts": "network"}"#), "invalid options");
     expect_err(&mut r, &src, &tgt, options("[1, 2]"), "expected a plain object");
     expect_err(&mut r, &src, &tgt, JsValue::from_f64(3.0), "expected a plain object");
     let scaled = r#"{"initialTransform": [[2,0,0,0],[0,2,0,0],[0,0,2,0],[0,0,0,1]]}"#;

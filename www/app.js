@@ -262,6 +262,7 @@ function resultJson(r, truth) {
     timingsMs: r.timingsMs,
     warnings: r.warnings,
     networkT_target_source: rowMajor(r.networkMatrix),
+    start: r.start,
   };
   if (truth) {
     const err = multiply(invertRigid(truth), m);
@@ -294,7 +295,10 @@ function showResult(r, truth = null) {
     ["Translation", `(${json.translation.map((v) => fmt(v)).join(", ")}) · |t| = ${fmt(Math.hypot(...json.translation))}`],
     ["Fitness", `${(r.fitness * 100).toFixed(1)}% of source points within ${fmt(r.maxCorrespondenceDistance, 3)}`],
     ["Inlier RMSE", fmt(r.inlierRmse)],
-    ["ICP", `${r.iterations} iterations${r.iterations ? (r.converged ? ", converged" : ", not converged") : ""}`],
+    [
+      "ICP",
+      `from the ${r.start} start, ${r.iterations} iterations${r.iterations ? (r.converged ? ", converged" : ", not converged") : ""}`,
+    ],
     [
       "Time",
       `${t.totalMs.toFixed(0)} ms: prepare ${t.preprocessMs.toFixed(0)}, network ${t.networkMs.toFixed(0)}, GMR ${t.gmrMs.toFixed(0)}, ICP ${t.icpMs.toFixed(0)}`,

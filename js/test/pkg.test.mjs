@@ -41,6 +41,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     throws(() => r.register(s, t, { icpMaxIteration: 3 }), /unknown field `icpMaxIteration`/);
     throws(() => r.register(s, t, { icp: "planar" }), /invalid options/);
     throws(() => r.register(s, t, { networkPoints: 1 }), /networkPoints = 1/);
+    throws(() => r.register(s, t, { starts: [] }), /starts is empty/);
     throws(() => arps.Registrar.fromBytes(new Uint8Array([1, 2, 3])), /^weights: /);
     throws(() => arps.parsePointCloud(new Uint8Array([0, 1, 2, 3]), "x.unknownext"), /./);
     r.free();
@@ -53,6 +54,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       assert.ok(res.networkMatrix instanceof Float32Array && res.networkMatrix.length === 16);
       for (const k of ["fitness", "inlierRmse", "iterations", "maxCorrespondenceDistance"]) assert.equal(typeof res[k], "number", k);
       assert.equal(typeof res.converged, "boolean");
+      assert.ok(["network", "centroids", "initial"].includes(res.start), `start ${res.start}`);
       for (const k of ["preprocessMs", "networkMs", "gmrMs", "icpMs", "totalMs"]) assert.equal(typeof res.timingsMs[k], "number", k);
       assert.ok(res.timingsMs.totalMs > 0);
       assert.ok(Array.isArray(res.warnings));

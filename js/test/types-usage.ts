@@ -15,13 +15,17 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   r.register(source, target, null);
   const ms: number = again.timingsMs.totalMs + result.fitness + result.inlierRmse + result.iterations;
   const w: string[] = result.warnings;
+  const start: "network" | "centroids" | "initial" = result.start;
+  r.register(source, target, { starts: ["network", "initial"] });
+  // @ts-expect-error unknown start
+  r.register(source, target, { starts: ["identity"] });
   const kind: string | undefined = r.provenance.kind;
   // @ts-expect-error misspelled option
   r.register(source, target, { icpMaxIteration: 3 });
   // @ts-expect-error wrong enum value
   r.register(source, target, { icp: "planar" });
   r.free();
-  return ms + w.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length;
+  return ms + w.length + start.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length;
 }
 
 export async function inAWorker(source: Float32Array, target: Float32Array): Promise<Float32Array> {

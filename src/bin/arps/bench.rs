@@ -162,7 +162,13 @@ pub fn run(args: BenchArgs) -> Result<(), String> {
     println!("  downsample/normalise    {:>9.3} ms", median(&mut pre));
     println!("  network                 {:>9.3} ms   ({:.2} GFLOP per pair)", net_ms, flops / 1e9);
     println!("  GMR                     {:>9.3} ms", median(&mut gmr));
-    println!("  ICP                     {:>9.3} ms   ({} iterations)", median(&mut icp_t), r.icp_iterations);
+    println!(
+        "  ICP                     {:>9.3} ms   ({} starts; chosen: {}, {} iterations)",
+        median(&mut icp_t),
+        options.starts.len(),
+        r.start.name(),
+        r.icp_iterations
+    );
     println!("  total register()        {:>9.3} ms", median(&mut total));
     println!("  network throughput      {:>9.1} GFLOP/s", net_gflops);
     println!(

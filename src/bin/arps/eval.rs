@@ -1,15 +1,19 @@
 //! `arps eval`: runs every pair of a manifest (`pairs.tsv`, the format of
-//! `../shared/data/scans/pairs.tsv`) through five methods side by side and prints the paper's
+//! `../shared/data/scans/pairs.tsv`) through seven methods side by side and prints the paper's
 //! table (method.md B §7): MRE, MTE, Recall, RRE, RTE and ms/pair.
 //!
 //! Methods (all use the pipeline's refinement: point-to-plane ICP, coarse to fine, defaults of
-//! [`Options`]):
+//! [`Options`] unless said):
 //! * `network`: the network + GMR estimate, ICP off;
-//! * `network + ICP`: the pipeline default;
-//! * `ICP from identity`: the network skipped (`Options::network = false`);
+//! * `network + ICP`: ICP from the network estimate only (`starts: [network]`);
+//! * `network + multi-start ICP`: the pipeline default (ICP from each of [`Options::starts`],
+//!   the best by fitness); the table's footer counts which start won;
+//! * `multi-start ICP, no network`: the same without the network (`starts: [centroids, initial]`);
+//! * `ICP from identity`: the network skipped (`Options::network = false`, `starts: [initial]`);
 //! * `ICP from centroids`: the network skipped, ICP started at the translation that aligns the
-//!   two clouds' centroids;
-//! * `untrained network + ICP`: random weights (`Weights::random(&ModelConfig::web(), 0)`).
+//!   two clouds' centroids (`starts: [initial]`);
+//! * `untrained network + ICP`: random weights (`Weights::random(&ModelConfig::web(), 0)`),
+//!   `starts: [network]`.
 //!
 //! Units: errors are in normalised units. Generated sets (`arps make-pairs`, whose `pairs.json`
 //! says `"units": "normalized"`) already are; for anything else (real scans) TE is divided by the
@@ -20,7 +24,7 @@ use arps::cloud::JointNormalization;
 use arps::data::manifest;
 use arps::data::metrics::{pair_error, recall_svg, summarize, PairError, Summary};
 use arps::transform::{euler_xyz, from_rotation_translation, rigid_inverse, to_rows};
-use arps::{io, ModelConfig, Options, PointCloud, Registrar, Weights};
+use arps::{io, ModelConfig, Options, PointCloud, Registrar, Start, Weights};
 use clap::{Args, ValueEnum};
 use nalgebra::{Matrix4, Vector3};
 use rand::Rng;
@@ -72,35 +76,59 @@ pub struct EvalArgs {
 enum Method {
     Network,
     NetworkIcp,
+    NetworkMultiStart,
+    MultiStartNoNetwork,
     IcpIdentity,
     IcpCentroids,
     UntrainedIcp,
 }
 
-const METHODS: [Method; 5] =
-    [Method::Network, Method::NetworkIcp, Method::IcpIdentity, Method::IcpCentroids, Method::UntrainedIcp];
+const METHODS: [Method; 7] = [
+    Method::Network,
+    Method::NetworkIcp,
+    Method::NetworkMultiStart,
+    Method::MultiStartNoNetwork,
+    Method::IcpIdentity,
+    Method::IcpCentroids,
+    Method::UntrainedIcp,
+];
 
 impl Method {
     fn name(self) -> &'static str {
         match self {
             Method::Network => "network",
             Method::NetworkIcp => "network + ICP",
+            Method::NetworkMultiStart => "network + multi-start ICP",
+            Method::MultiStartNoNetwork => "multi-start ICP, no network",
             Method::IcpIdentity => "ICP from identity",
             Method::IcpCentroids => "ICP from centroids",
             Method::UntrainedIcp => "untrained network + ICP",
         }
     }
+    /// True for the methods that refine several starts.
+    fn multi_start(self) -> bool {
+        matches!(self, Method::NetworkMultiStart | Method::MultiStartNoNetwork)
+    }
     /// The one place that says how each method calls the pipeline.
     fn options(self, source: &PointCloud, target: &PointCloud) -> Options {
         let base = Options::default();
+        let single = |start| Options { starts: vec![start], ..Options::default() };
         match self {
-            Method::Network => Options { icp: arps::IcpKind::Off, ..base },
-            Method::NetworkIcp | Method::UntrainedIcp => base,
-            Method::IcpIdentity => Options { network: false, ..base },
+            Method::Network => Options { icp: arps::IcpKind::Off, ..single(Start::Network) },
+            Method::NetworkIcp | Method::UntrainedIcp => single(Start::Network),
+            Method::NetworkMultiStart => base,
+            Method::MultiStartNoNetwork => {
+                Options { network: false, starts: vec![Start::Centroids, Start::Initial], ..base }
+            }
+            Method::IcpIdentity => Options { network: false, ..single(Start::Initial) },
             Method::IcpCentroids => {
                 let (cs, ct) = (source.centroid(), target.centroid());
                 let t = Vector3::new(ct[0] - cs[0], ct[1] - cs[1], ct[2] - cs[2]);
-                Options { network: false, initial_transform: Some(to_rows(&Matrix4::new_translation(&t))), ..base }
+                Options {
+                    network: false,
+                    initial_transform: Some(to_rows(&Matrix4::new_translation(&t))),
+                    ..single(Start::Initial)
+                }
             }
         }
     }
@@ -126,6 +154,8 @@ struct PairResult {
     errors: Vec<PairError>,
     ms: Vec<f64>,
     failed: Vec<Option<String>>,
+    /// The start each method's answer came from (`None` when it failed).
+    start: Vec<Option<Start>>,
 }
 
 pub fn run(a: EvalArgs) -> Result<(), String> {
@@ -161,7 +191,14 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             gt *= rigid_inverse(&p);
         }
         let scale = if divide { JointNormalization::of_pair(&source, &target).scale } else { 1.0 };
-        let mut r = PairResult { name: e.name.clone(), scale, errors: Vec::new(), ms: Vec::new(), failed: Vec::new() };
+        let mut r = PairResult {
+            name: e.name.clone(),
+            scale,
+            errors: Vec::new(),
+            ms: Vec::new(),
+            failed: Vec::new(),
+            start: Vec::new(),
+        };
         for m in METHODS {
             let options = m.options(&source, &target);
             let reg = if m == Method::UntrainedIcp { &mut untrained } else { &mut trained };
@@ -169,12 +206,13 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             let out = reg.register(&source, &target, &options);
             r.ms.push(t0.elapsed().as_secs_f64() * 1e3);
             // a failed registration counts as the identity (no estimate), and is reported
-            let (pred, fail) = match out {
-                Ok(x) => (x.T_target_source, None),
-                Err(err) => (Matrix4::identity(), Some(err.to_string())),
+            let (pred, fail, start) = match out {
+                Ok(x) => (x.T_target_source, None, Some(x.start)),
+                Err(err) => (Matrix4::identity(), Some(err.to_string()), None),
             };
             r.errors.push(pair_error(&pred, &gt, scale));
             r.failed.push(fail);
+            r.start.push(start);
         }
         if !a.json {
             eprint!("\r{} / {} pairs", k + 1, entries.len());
@@ -239,6 +277,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
                     "rot_deg": r.errors[i].rot_deg,
                     "trans": r.errors[i].trans,
                     "ms": r.ms[i],
+                    "start": r.start[i],
                     "error": r.failed[i],
                 })).collect::<Vec<_>>(),
             })).collect::<Vec<_>>(),
@@ -259,7 +298,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         a.rot_threshold, a.trans_threshold
     );
     println!(
-        "{:<26} {:>9} {:>8} {:>7} {:>9} {:>8} {:>9} {:>6}",
+        "{:<28} {:>9} {:>8} {:>7} {:>9} {:>8} {:>9} {:>6}",
         "method", "MRE(deg)", "MTE", "Recall", "RRE(deg)", "RTE", "ms/pair", "failed"
     );
     // RRE/RTE are undefined (NaN) when nothing is recalled: print "-"
@@ -272,7 +311,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
     };
     for (n, _, s, f) in &per_method {
         println!(
-            "{:<26} {:>9} {:>8} {:>7.4} {:>9} {:>8} {:>9.1} {:>6}",
+            "{:<28} {:>9} {:>8} {:>7.4} {:>9} {:>8} {:>9.1} {:>6}",
             n,
             num(s.mre, 3),
             num(s.mte, 4),
@@ -282,6 +321,16 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             s.ms_per_pair,
             f
         );
+    }
+    let wins = |i: usize, start: Start| results.iter().filter(|r| r.start[i] == Some(start)).count();
+    for (i, m) in METHODS.iter().enumerate().filter(|(_, m)| m.multi_start()) {
+        let counts: Vec<String> = [Start::Network, Start::Centroids, Start::Initial]
+            .into_iter()
+            .map(|s| (s, wins(i, s)))
+            .filter(|&(_, n)| n > 0)
+            .map(|(s, n)| format!("{} {n}", s.name()))
+            .collect();
+        println!("  {}: chosen start {}", m.name(), counts.join(", "));
     }
     for r in &results {
         for (i, f) in r.failed.iter().enumerate() {

@@ -3,7 +3,7 @@
 //!
 //! Errors print one line on stderr (`arps: ...`) and exit with status 1 (2 for usage errors).
 
-use arps::{io, transform, IcpKind, ModelConfig, NonFinite, Options, Registrar, StoreAs, Weights};
+use arps::{io, transform, IcpKind, ModelConfig, NonFinite, Options, Registrar, Start, StoreAs, Weights};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -29,6 +29,16 @@ enum IcpArg {
     Off,
 }
 
+#[derive(Clone, Copy, ValueEnum)]
+enum StartArg {
+    /// The network + GMR estimate.
+    Network,
+    /// Translation aligning the clouds' centroids.
+    Centroids,
+    /// The identity (no initial transform on the command line).
+    Initial,
+}
+
 #[derive(Subcommand)]
 enum Command {
     /// Register SOURCE onto TARGET and print T_target_source (maps source points into the target frame).
@@ -52,6 +62,9 @@ enum Command {
         /// Seed of the network's point sampling.
         #[arg(long, default_value_t = 0)]
         seed: u64,
+        /// Where ICP starts from, comma-separated; the best refinement by fitness wins.
+        #[arg(long, value_enum, value_delimiter = ',', default_values_t = [StartArg::Network, StartArg::Centroids, StartArg::Initial])]
+        starts: Vec<StartArg>,
         /// Drop NaN/Inf points instead of failing.
         #[arg(long)]
         drop_non_finite: bool,
@@ -67,8 +80,9 @@ enum Command {
     /// Time each stage (read, downsample, network, GMR, ICP) on a 1024 + 1024-point pair and compare the
     /// network's GFLOP/s with the matmul peak measured in the same run.
     Bench(bench::BenchArgs),
-    /// Evaluate a pair set (pairs.tsv) side by side: network, network + ICP, ICP from identity, ICP from
-    /// centroids, untrained network + ICP; prints MRE, MTE, Recall, RRE, RTE, ms/pair.
+    /// Evaluate a pair set (pairs.tsv) side by side: network, network + ICP, network + multi-start ICP (the
+    /// default), multi-start ICP without the network, ICP from identity, ICP from centroids, untrained
+    /// network + ICP; prints MRE, MTE, Recall, RRE, RTE, ms/pair.
     Eval(eval::EvalArgs),
     /// Write a pair set made with the paper's protocol (PLY files, pairs.tsv, pairs.json).
     MakePairs(make_pairs::MakePairsArgs),
@@ -125,6 +139,7 @@ fn run(command: Command) -> Result<(), String> {
             max_correspondence_distance,
             network_points,
             seed,
+            starts,
             drop_non_finite,
             json,
         } => {
@@ -142,6 +157,14 @@ fn run(command: Command) -> Result<(), String> {
                 network_points,
                 seed,
                 non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
+                starts: starts
+                    .iter()
+                    .map(|s| match s {
+                        StartArg::Network => Start::Network,
+                        StartArg::Centroids => Start::Centroids,
+                        StartArg::Initial => Start::Initial,
+                    })
+                    .collect(),
                 ..Options::default()
             };
             let r = registrar.register(&src, &tgt, &options).map_err(|e| e.to_string())?;
@@ -150,6 +173,7 @@ fn run(command: Command) -> Result<(), String> {
                 let out = serde_json::json!({
                     "T_target_source": transform::to_rows(&r.T_target_source),
                     "T_target_source_network": transform::to_rows(&r.T_target_source_network),
+                    "start": r.start,
                     "fitness": r.fitness,
                     "inlier_rmse": r.inlier_rmse,
                     "icp_iterations": r.icp_iterations,
@@ -171,10 +195,11 @@ fn run(command: Command) -> Result<(), String> {
                     transform::translation(&r.T_target_source).norm()
                 );
                 println!(
-                    "fitness {:.4} (within {:.4}), inlier RMSE {:.6}, ICP iterations {} ({})",
+                    "fitness {:.4} (within {:.4}), inlier RMSE {:.6}, ICP from the {} start, {} iterations ({})",
                     r.fitness,
                     r.max_correspondence_distance,
                     r.inlier_rmse,
+                    r.start.name(),
                     r.icp_iterations,
                     if r.icp_converged { "converged" } else { "not converged" }
                 );

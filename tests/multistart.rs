@@ -1,0 +1,195 @@
+//! Multi-start refinement (`Options::starts`): a bad start is outvoted by a good one and the
+//! chosen start is reported, starts that meet are merged, options are validated, ICP off takes the
+//! first start, and the result is deterministic.
+
+mod common;
+
+use arps::icp::{IcpKind, IcpTarget};
+use arps::refine::{self, Candidate, Start};
+use arps::transform::{rotation_error_deg, translation_error};
+use arps::{ModelConfig, Options, PointCloud, Registrar, Weights};
+use common::{bumpy_surface, crop, motion};
+use nalgebra::Matrix4;
+use std::path::Path;
+
+fn untrained() -> Registrar {
+    Registrar::new(&Weights::random(&ModelConfig::web(), 0).unwrap()).unwrap()
+}
+
+fn starts(list: &[Start]) -> Options {
+    Options { starts: list.to_vec(), ..Options::default() }
+}
+
+/// A committed fixture pair (`fixtures/pairs`, paper protocol, normalised units) and its ground truth.
+fn fixture_pair(index: usize) -> (PointCloud, PointCloud, Matrix4<f64>) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs");
+    let text = std::fs::read_to_string(dir.join("pairs.tsv")).unwrap();
+    // name, source, target, overlap_threshold, note, 16 numbers (row-major)
+    let line = text.lines().nth(1 + index).unwrap();
+    let fields: Vec<&str> = line.split('\t').collect();
+    let read = |name: &str| arps::io::read_point_cloud(&std::fs::read(dir.join(name)).unwrap(), name).unwrap();
+    let v: Vec<f64> = fields[5].split_whitespace().map(|x| x.parse().unwrap()).collect();
+    (read(fields[1]), read(fields[2]), Matrix4::from_row_slice(&v))
+}
+
+/// Fixture 19 (a lamp, 1024 + 1024 points, rotated about 50 degrees): with random weights the
+/// network's estimate leads ICP to a flipped answer; the centroid start recovers the truth.
+#[test]
+fn a_bad_network_start_is_outvoted_by_the_centroid_start() {
+    let (source, target, truth) = fixture_pair(19);
+    let mut reg = untrained();
+    let alone = reg.register(&source, &target, &starts(&[Start::Network])).unwrap();
+    assert_eq!(alone.start, Start::Network);
+    let re_alone = rotation_error_deg(&alone.T_target_source, &truth);
+    assert!(re_alone > 90.0, "precondition: the network start alone fails here, {re_alone:.1} deg");
+
+    let r = reg.register(&source, &target, &Options::default()).unwrap();
+    let (re, te) = (rotation_error_deg(&r.T_target_source, &truth), translation_error(&r.T_target_source, &truth));
+    assert_eq!(r.start, Start::Centroids, "{re:.1} deg, fitness {}", r.fitness);
+    assert!(re < 2.0 && te < 0.02, "{re:.2} deg, {te:.4}");
+    assert!(r.fitness > alone.fitness + 0.2, "fitness {} vs {}", r.fitness, alone.fitness);
+    // the network estimate is still reported as such
+    assert_eq!(r.T_target_source_network, alone.T_target_source_network);
+}
+
+/// Without the network: the target is three extents away, so from the identity nothing overlaps,
+/// while the centroid start needs only a 20-degree correction.
+#[test]
+fn the_centroid_start_recovers_a_far_translation() {
+    let full = bumpy_surface(4000, 0.0);
+    let truth = motion([20.0, -10.0, 5.0], [3.0, 1.0, -2.0]);
+    let source = crop(&full, [1.0, 0.3, 0.0], 0.8);
+    let target = crop(&bumpy_surface(4000, 0.4), [-0.2, 1.0, 0.1], 0.8).transformed(&truth);
+    let mut reg = untrained();
+    let options = |list: &[Start]| Options { network: false, ..starts(list) };
+
+    let identity = reg.register(&source, &target, &options(&[Start::Initial])).unwrap();
+    assert_eq!(identity.fitness, 0.0, "precondition: no overlap from the identity");
+    let r = reg.register(&source, &target, &options(&[Start::Initial, Start::Centroids])).unwrap();
+    assert_eq!(r.start, Start::Centroids);
+    let (re, te) = (rotation_error_deg(&r.T_target_source, &truth), translation_error(&r.T_target_source, &truth));
+    assert!(re < 0.5 && te < 0.01, "{re:.3} deg, {te:.4}");
+    assert!((r.T_target_source_network - Matrix4::identity()).abs().max() < 1e-9, "no network: the initial transform");
+
+    // with `network: false` a network start is the initial transform, reported as such
+    let as_network = reg.register(&source, &target, &options(&[Start::Network])).unwrap();
+    assert_eq!(as_network.start, Start::Initial);
+    assert_eq!(as_network.T_target_source, identity.T_target_source);
+}
+
+#[test]
+fn icp_off_returns_the_first_start_unrefined() {
+    let (source, target, _) = fixture_pair(3);
+    let mut reg = untrained();
+    let off = Options { icp: IcpKind::Off, ..Options::default() };
+    let r = reg.register(&source, &target, &off).unwrap();
+    assert_eq!(r.start, Start::Network);
+    assert_eq!(r.T_target_source, r.T_target_source_network);
+    assert_eq!(r.icp_iterations, 0);
+
+    let r = reg.register(&source, &target, &Options { starts: vec![Start::Centroids, Start::Network], ..off }).unwrap();
+    assert_eq!(r.start, Start::Centroids);
+    // the centroid start: no rotation, centroids aligned
+    assert!(arps::transform::rotation_angle_deg(&r.T_target_source) < 1e-9);
+    let moved = source.transformed(&r.T_target_source).centroid();
+    let c = target.centroid();
+    assert!((0..3).all(|a| (moved[a] - c[a]).abs() < 1e-5), "{moved:?} vs {c:?}");
+}
+
+#[test]
+fn empty_or_repeated_starts_are_errors_and_names_parse() {
+    let (source, target, _) = fixture_pair(0);
+    let mut reg = untrained();
+    for (list, needle) in [(vec![], "starts is empty"), (vec![Start::Initial, Start::Network, Start::Initial], "twice")]
+    {
+        let e = reg.register(&source, &target, &starts(&list)).unwrap_err().to_string();
+        assert!(e.contains(needle) && e.contains("invalid option"), "{e}");
+    }
+    // the registrar still works
+    assert!(reg.register(&source, &target, &Options::default()).is_ok());
+
+    let o: Options = serde_json::from_str(r#"{"starts": ["initial", "network"]}"#).unwrap();
+    assert_eq!(o.starts, vec![Start::Initial, Start::Network]);
+    let e = serde_json::from_str::<Options>(r#"{"starts": ["identity"]}"#).unwrap_err().to_string();
+    assert!(e.contains("identity") && e.contains("centroids"), "{e}");
+    assert_eq!(Options::default().starts, vec![Start::Network, Start::Centroids, Start::Initial]);
+    assert_eq!(serde_json::to_string(&Start::Centroids).unwrap(), r#""centroids""#);
+}
+
+#[test]
+fn same_inputs_and_seed_give_the_same_choice_bit_for_bit() {
+    let (source, target, _) = fixture_pair(19);
+    let a = untrained().register(&source, &target, &Options::default()).unwrap();
+    let mut reg = untrained();
+    let _ = reg.register(&target, &source, &Options::default()).unwrap(); // reused buffers do not matter
+    let b = reg.register(&source, &target, &Options::default()).unwrap();
+    assert_eq!(a.T_target_source, b.T_target_source);
+    assert_eq!(a.T_target_source_network, b.T_target_source_network);
+    assert_eq!(
+        (a.start, a.fitness, a.inlier_rmse, a.icp_iterations),
+        (b.start, b.fitness, b.inlier_rmse, b.icp_iterations)
+    );
+}
+
+fn candidate(start: Start, fitness: f64, inlier_rmse: f64) -> Candidate {
+    Candidate { start, T_target_source: Matrix4::identity(), fitness, inlier_rmse, iterations: 0, converged: false }
+}
+
+#[test]
+fn choose_prefers_fitness_then_rmse_then_order() {
+    use Start::*;
+    assert_eq!(refine::choose(&[]), None);
+    let c = [candidate(Network, 0.5, 0.02), candidate(Centroids, 0.6, 0.03), candidate(Initial, 0.59, 0.001)];
+    assert_eq!(refine::choose(&c), Some(1), "highest fitness, even with a higher RMSE");
+    let c = [candidate(Network, 0.6, 0.02), candidate(Centroids, 0.6, 0.01)];
+    assert_eq!(refine::choose(&c), Some(1), "equal fitness: lower RMSE");
+    let c = [candidate(Network, 0.6, 0.01), candidate(Centroids, 0.6, 0.01)];
+    assert_eq!(refine::choose(&c), Some(0), "a full tie: the earlier start");
+}
+
+#[test]
+fn starts_that_meet_are_merged_into_the_earlier_one() {
+    let cloud = bumpy_surface(1500, 0.0).points;
+    let target = IcpTarget::new(&cloud, true);
+    let truth = motion([3.0, -2.0, 1.0], [0.05, 0.0, -0.03]);
+    let source = PointCloud::new(cloud.clone()).transformed(&arps::transform::rigid_inverse(&truth)).points;
+    let d = 0.05;
+    let nudge = Matrix4::new_translation(&nalgebra::Vector3::new(0.01 * d, 0.0, 0.0));
+    // the same start twice (a hair apart), and a distinct one
+    let list = [(Start::Network, Matrix4::identity()), (Start::Centroids, nudge), (Start::Initial, truth)];
+    let c = refine::refine_starts(&target, &source, &list, IcpKind::Plane, d, 30);
+    assert_eq!(c.len(), 1, "all three meet (the third at the first stage's end): {c:?}");
+    assert_eq!(c[0].start, Start::Network);
+    assert!(rotation_error_deg(&c[0].T_target_source, &truth) < 0.01 && c[0].fitness > 0.99);
+
+    // with ICP off nothing moves and nothing merges: each start is scored as it is
+    let c = refine::refine_starts(&target, &source, &list, IcpKind::Off, d, 30);
+    assert_eq!(c.len(), 3);
+    assert_eq!(c[2].fitness, 1.0);
+    assert_eq!(refine::choose(&c), Some(2));
+}
+
+/// More source points than `SCREEN_POINTS`: the starts are compared on a sample, and the winner's
+/// figures are those of a full run.
+#[test]
+fn large_sources_are_screened_on_a_sample_and_the_winner_refined_on_all_points() {
+    let cloud = bumpy_surface(6000, 0.0).points;
+    assert!(cloud.len() > refine::SCREEN_POINTS);
+    let target = IcpTarget::new(&cloud, true);
+    let truth = motion([4.0, -3.0, 2.0], [0.04, 0.02, -0.03]);
+    let source = PointCloud::new(cloud.clone()).transformed(&arps::transform::rigid_inverse(&truth)).points;
+    let d = 0.03;
+    let flipped = motion([150.0, 0.0, 0.0], [0.0, 0.0, 0.0]);
+    let list = [(Start::Network, flipped), (Start::Initial, Matrix4::identity())];
+    let best = refine::refine_best(&target, &source, &list, IcpKind::Plane, d, 30).unwrap();
+    assert_eq!(best.start, Start::Initial);
+    assert!(rotation_error_deg(&best.T_target_source, &truth) < 0.01, "{}", best.T_target_source);
+    assert_eq!((best.fitness, best.inlier_rmse), target.evaluate(&source, &best.T_target_source, d));
+    assert!(best.fitness > 0.99);
+    // the same answer as refining every start on all points
+    let all = refine::refine_starts(&target, &source, &list, IcpKind::Plane, d, 30);
+    let full = all[refine::choose(&all).unwrap()];
+    assert_eq!(full.start, best.start);
+    assert!(rotation_error_deg(&full.T_target_source, &best.T_target_source) < 0.01);
+    assert_eq!(refine::refine_best(&target, &source, &[], IcpKind::Plane, d, 30), None);
+}
