@@ -311,12 +311,10 @@ pub fn record(t: &mut Tape, fwd: &Forward, pair: &Pair, cfg: &LossConfig) -> (Id
     if cfg.seg != 0.0 {
         let j = t.shape(fwd.gamma_source).1;
         let mut kls = Vec::new();
-        for (gamma, points, v, role) in [
-            (fwd.gamma_source, &pair.source, pair.v_gt_source, Role::Source),
-            (fwd.gamma_target, &pair.target, pair.v_gt_target, Role::Target),
+        for (gamma, points, centroid, role) in [
+            (fwd.gamma_source, &pair.source, pair.source_centroid(), Role::Source),
+            (fwd.gamma_target, &pair.target, pair.target_centroid(), Role::Target),
         ] {
-            let m = mean(points);
-            let centroid = [0, 1, 2].map(|a| m[a] + v[a] as f64);
             let p = partition::targets(points, centroid, &pair.t_gt, role, j, cfg.seg_kappa as f64);
             kls.push((ops::membership_kl(t, gamma, &p), 0.5));
         }
@@ -330,17 +328,6 @@ pub fn record(t: &mut Tape, fwd: &Forward, pair: &Pair, cfg: &LossConfig) -> (Id
     let total = ops::weighted_total(t, &terms);
     parts.total = t.scalar64(total);
     (total, parts)
-}
-
-/// Mean of points, in `f64`.
-fn mean(points: &[[f32; 3]]) -> [f64; 3] {
-    let mut m = [0.0f64; 3];
-    for p in points {
-        for a in 0..3 {
-            m[a] += p[a] as f64;
-        }
-    }
-    m.map(|v| v / points.len().max(1) as f64)
 }
 
 /// Mean entropy of the rows of `gamma` (`[n, j]`, rows summing to 1), divided by `ln j`.

@@ -28,6 +28,21 @@ fn mean(points: &[[f32; 3]]) -> [f64; 3] {
     m.map(|v| v / points.len().max(1) as f64)
 }
 
+impl Pair {
+    /// The ground-truth shape centroid in the source's own frame (`v_gt_source` plus the
+    /// source's mean, i.e. not pre-centred).
+    pub fn source_centroid(&self) -> [f64; 3] {
+        let m = mean(&self.source);
+        [0, 1, 2].map(|a| m[a] + self.v_gt_source[a] as f64)
+    }
+
+    /// The same for the target, in the target's frame.
+    pub fn target_centroid(&self) -> [f64; 3] {
+        let m = mean(&self.target);
+        [0, 1, 2].map(|a| m[a] + self.v_gt_target[a] as f64)
+    }
+}
+
 impl From<&crate::data::Pair> for Pair {
     /// From the data pipeline's pair: the centroids are moved into each cloud's pre-centred
     /// frame (minus that cloud's own mean, as the network sees it).

@@ -25,17 +25,8 @@ pub fn run(run: &Path, pairs: u64, kappas: &[f64]) -> Result<(), String> {
         let errors: Vec<_> = val
             .iter()
             .map(|tp| {
-                let centroid = |pts: &[[f32; 3]], v: [f32; 3]| {
-                    let mut m = [0.0f64; 3];
-                    for q in pts {
-                        for a in 0..3 {
-                            m[a] += q[a] as f64 / pts.len() as f64;
-                        }
-                    }
-                    [0, 1, 2].map(|a| m[a] + v[a] as f64)
-                };
-                let gs = targets(&tp.source, centroid(&tp.source, tp.v_gt_source), &tp.t_gt, Role::Source, j, kappa);
-                let gt = targets(&tp.target, centroid(&tp.target, tp.v_gt_target), &tp.t_gt, Role::Target, j, kappa);
+                let gs = targets(&tp.source, tp.source_centroid(), &tp.t_gt, Role::Source, j, kappa);
+                let gt = targets(&tp.target, tp.target_centroid(), &tp.t_gt, Role::Target, j, kappa);
                 let t = arps::gmr::solve(
                     &arps::gmr::gmm_params(&tp.source, &gs, j),
                     &arps::gmr::gmm_params(&tp.target, &gt, j),
