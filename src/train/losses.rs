@@ -30,7 +30,8 @@
 //!   the transform losses leave nearly uniform.
 //!
 //! The total is `sum weight_k * L_k`. Terms with weight 0 are not computed, except the cheap
-//! `sup`, `ctr` and `aff`, which are always reported for monitoring.
+//! `sup`, `ctr`, `aff` and `means`, which are always reported for monitoring (with the
+//! membership-row entropy).
 //!
 //! Gradient balance at initialisation (web config, N = 256, measured by the
 //! `gradient_norms_at_init` diagnostic in tests/train_bench.rs): `sup` gives a gradient norm of
