@@ -31,7 +31,7 @@ fn eval_prints_the_table_for_every_method_on_the_fixture_pairs() {
     let (ok, out, err) = arps(&["eval", manifest.to_str().unwrap(), "--limit", "6", "--svg", svg.to_str().unwrap()]);
     assert!(ok, "stdout:\n{out}\nstderr:\n{err}");
     assert!(out.contains("6 pairs"), "{out}");
-    for h in ["MRE(deg)", "MTE", "Recall", "RRE(deg)", "RTE", "ms/pair"] {
+    for h in ["MRE(deg)", "MTE", "Recall", "RRE(deg)", "RTE", "ms/pair", "fit>=GT"] {
         assert!(out.contains(h), "missing column {h}:\n{out}");
     }
     for m in METHODS {
@@ -59,12 +59,22 @@ fn eval_json_and_perturbation() {
         let r = m["summary"]["recall"].as_f64().unwrap();
         assert!((0.0..=1.0).contains(&r));
         assert!(m["summary"]["mre"].as_f64().unwrap() >= 0.0);
+        // ambiguous misses are misses
+        let missed = ((1.0 - r) * 2.0).round() as u64;
+        assert!(m["fit_ge_gt"].as_u64().unwrap() <= missed, "{m}");
     }
     assert_eq!(v["per_pair"].as_array().unwrap().len(), 2);
+    for p in v["per_pair"].as_array().unwrap() {
+        let gt = p["gt_fitness"].as_f64().unwrap();
+        assert!(gt > 0.1 && gt <= 1.0, "the refined truth overlaps: {p}");
+        for r in p["results"].as_array().unwrap() {
+            assert!((0.0..=1.0).contains(&r["fitness"].as_f64().unwrap()), "{r}");
+        }
+    }
     // which start each answer came from
     let first = &v["per_pair"][0]["results"];
     assert_eq!(first[1]["start"], "network");
-    assert!(["network", "centroids", "initial"].contains(&first[2]["start"].as_str().unwrap()), "{first}");
+    assert!(["network", "centroids", "initial", "turned"].contains(&first[2]["start"].as_str().unwrap()), "{first}");
     assert_eq!(first[4]["start"], "initial");
 }
 
@@ -101,5 +111,31 @@ fn make_pairs_writes_a_set_that_eval_reads() {
     }
     let (ok, out, err) = arps(&["eval", dir.join("pairs.tsv").to_str().unwrap(), "--limit", "1"]);
     assert!(ok, "{out}{err}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Real manifests store the truth to a few digits (`../shared/data/scans/pairs.tsv`): a ground
+/// truth that is rigid only to 1e-3 is still evaluated, not rejected.
+#[test]
+fn eval_accepts_a_ground_truth_rounded_to_a_few_digits() {
+    let fixtures = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs");
+    let text = std::fs::read_to_string(fixtures.join("pairs.tsv")).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let mut fields: Vec<String> = lines.next().unwrap().split('\t').map(String::from).collect();
+    let rounded: Vec<String> =
+        fields[5].split_whitespace().map(|x| format!("{:.3}", x.parse::<f64>().unwrap())).collect();
+    fields[5] = rounded.join(" ");
+    for f in [1, 2] {
+        fields[f] = fixtures.join(&fields[f]).display().to_string();
+    }
+    let dir = std::env::temp_dir().join(format!("arps-eval-rounded-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let manifest = dir.join("pairs.tsv");
+    std::fs::write(&manifest, format!("{header}\n{}\n", fields.join("\t"))).unwrap();
+    let (ok, out, err) = arps(&["eval", manifest.to_str().unwrap(), "--json"]);
+    assert!(ok, "{out}{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    assert!(v["per_pair"][0]["gt_fitness"].as_f64().unwrap() > 0.1, "{out}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -77,6 +77,42 @@ fn the_centroid_start_recovers_a_far_translation() {
     assert_eq!(as_network.T_target_source, identity.T_target_source);
 }
 
+/// Fixture 4 (a bookshelf turned about 25 degrees past ICP's basin): without the network, ICP from
+/// the identity stops in a wrong basin; one of the six 45-degree turns of the identity lands in
+/// the right one and fits better.
+#[test]
+fn a_turned_start_recovers_a_rotation_beyond_icps_basin() {
+    let (source, target, truth) = fixture_pair(4);
+    let mut reg = untrained();
+    let options = |list: &[Start]| Options { network: false, ..starts(list) };
+    let alone = reg.register(&source, &target, &options(&[Start::Initial])).unwrap();
+    let re_alone = rotation_error_deg(&alone.T_target_source, &truth);
+    assert!(re_alone > 15.0, "precondition: ICP from the identity fails here, {re_alone:.1} deg");
+
+    let r = reg.register(&source, &target, &options(&[Start::Initial, Start::Turned])).unwrap();
+    let (re, te) = (rotation_error_deg(&r.T_target_source, &truth), translation_error(&r.T_target_source, &truth));
+    assert_eq!(r.start, Start::Turned, "{re:.1} deg");
+    assert!(re < 2.0 && te < 0.02, "{re:.2} deg, {te:.4}");
+    assert!(r.fitness > alone.fitness, "fitness {} vs {}", r.fitness, alone.fitness);
+}
+
+#[test]
+fn turned_starts_are_six_turns_about_the_pivot() {
+    let base = motion([10.0, -20.0, 5.0], [0.3, 0.1, -0.2]);
+    let pivot = [0.5, -0.25, 1.0];
+    let turns = refine::turned(&base, pivot, 45.0);
+    let p = nalgebra::Point3::from(nalgebra::Vector3::from(pivot));
+    for (i, t) in turns.iter().enumerate() {
+        let turn = t * arps::transform::rigid_inverse(&base);
+        assert!((arps::transform::rotation_angle_deg(&turn) - 45.0).abs() < 1e-9, "turn {i}");
+        assert!((turn.transform_point(&p) - p).norm() < 1e-12, "turn {i} moves the pivot");
+        // the axis: x, x, y, y, z, z, alternating sign
+        let axis = nalgebra::Rotation3::from_matrix(&arps::transform::rotation(&turn)).axis().unwrap();
+        let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
+        assert!((axis[i / 2] - sign).abs() < 1e-9, "turn {i}: axis {axis:?}");
+    }
+}
+
 #[test]
 fn icp_off_returns_the_first_start_unrefined() {
     let (source, target, _) = fixture_pair(3);
@@ -112,7 +148,9 @@ fn empty_or_repeated_starts_are_errors_and_names_parse() {
     assert_eq!(o.starts, vec![Start::Initial, Start::Network]);
     let e = serde_json::from_str::<Options>(r#"{"starts": ["identity"]}"#).unwrap_err().to_string();
     assert!(e.contains("identity") && e.contains("centroids"), "{e}");
-    assert_eq!(Options::default().starts, vec![Start::Network, Start::Centroids, Start::Initial]);
+    assert_eq!(Options::default().starts, vec![Start::Network, Start::Centroids, Start::Initial, Start::Turned]);
+    let o: Options = serde_json::from_str(r#"{"starts": ["turned"]}"#).unwrap();
+    assert_eq!(o.starts, vec![Start::Turned]);
     assert_eq!(serde_json::to_string(&Start::Centroids).unwrap(), r#""centroids""#);
 }
 

@@ -8,12 +8,19 @@
 //! * `network + ICP`: ICP from the network estimate only (`starts: [network]`);
 //! * `network + multi-start ICP`: the pipeline default (ICP from each of [`Options::starts`],
 //!   the best by fitness); the table's footer counts which start won;
-//! * `multi-start ICP, no network`: the same without the network (`starts: [centroids, initial]`);
+//! * `multi-start ICP, no network`: the same without the network (`starts: [centroids, initial,
+//!   turned]`, the turns taken about the identity);
 //! * `ICP from identity`: the network skipped (`Options::network = false`, `starts: [initial]`);
 //! * `ICP from centroids`: the network skipped, ICP started at the translation that aligns the
 //!   two clouds' centroids (`starts: [initial]`);
 //! * `untrained network + ICP`: random weights (`Weights::random(&ModelConfig::web(), 0)`),
 //!   `starts: [network]`.
+//!
+//! Failures that fit as well as the truth: for every pair the truth is refined too (ICP started
+//! at the ground truth, same settings), and a failed estimate whose fitness is at least that
+//! fitness − [`AMBIGUITY_MARGIN`] is counted in the `fit>=GT` column. Such failures are
+//! geometric ambiguities (a cone turned about its axis, a box flipped): no method that
+//! scores poses by how well the clouds overlap can tell them from the truth.
 //!
 //! Units: errors are in normalised units. Generated sets (`arps make-pairs`, whose `pairs.json`
 //! says `"units": "normalized"`) already are; for anything else (real scans) TE is divided by the
@@ -22,7 +29,7 @@
 
 use arps::cloud::JointNormalization;
 use arps::data::manifest;
-use arps::data::metrics::{pair_error, recall_svg, summarize, PairError, Summary};
+use arps::data::metrics::{pair_error, recall_svg, recalled, summarize, PairError, Summary};
 use arps::transform::{euler_xyz, from_rotation_translation, rigid_inverse, to_rows};
 use arps::{io, ModelConfig, Options, PointCloud, Registrar, Start, Weights};
 use clap::{Args, ValueEnum};
@@ -72,6 +79,9 @@ pub struct EvalArgs {
     te_scale: TeScale,
 }
 
+/// A failed estimate whose fitness is within this of the refined truth's counts as ambiguous.
+const AMBIGUITY_MARGIN: f64 = 0.01;
+
 #[derive(Clone, Copy, PartialEq, Eq)]
 enum Method {
     Network,
@@ -118,7 +128,7 @@ impl Method {
             Method::NetworkIcp | Method::UntrainedIcp => single(Start::Network),
             Method::NetworkMultiStart => base,
             Method::MultiStartNoNetwork => {
-                Options { network: false, starts: vec![Start::Centroids, Start::Initial], ..base }
+                Options { network: false, starts: vec![Start::Centroids, Start::Initial, Start::Turned], ..base }
             }
             Method::IcpIdentity => Options { network: false, ..single(Start::Initial) },
             Method::IcpCentroids => {
@@ -156,6 +166,29 @@ struct PairResult {
     failed: Vec<Option<String>>,
     /// The start each method's answer came from (`None` when it failed).
     start: Vec<Option<Start>>,
+    /// Each method's fitness at the final ICP distance (`None` when it failed).
+    fitness: Vec<Option<f64>>,
+    /// The fitness of the truth, refined by ICP from the ground-truth pose.
+    gt_fitness: f64,
+}
+
+impl PairResult {
+    /// Method `i` failed the recall thresholds with a fit at least as good as the truth's.
+    fn ambiguous(&self, i: usize, rot_thr: f64, trans_thr: f64) -> bool {
+        !recalled(&self.errors[i], rot_thr, trans_thr)
+            && self.fitness[i].is_some_and(|f| f >= self.gt_fitness - AMBIGUITY_MARGIN)
+    }
+}
+
+/// One row of the table.
+struct MethodSummary {
+    name: String,
+    errors: Vec<PairError>,
+    summary: Summary,
+    /// Pairs where the pipeline returned an error.
+    failed: usize,
+    /// Pairs missed with a fit at least as good as the truth's ([`PairResult::ambiguous`]).
+    ambiguous: usize,
 }
 
 pub fn run(a: EvalArgs) -> Result<(), String> {
@@ -191,6 +224,19 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             gt *= rigid_inverse(&p);
         }
         let scale = if divide { JointNormalization::of_pair(&source, &target).scale } else { 1.0 };
+        // manifests store the truth to a few digits: project its rotation back onto SO(3)
+        let r_gt = nalgebra::Rotation3::from_matrix(&arps::transform::rotation(&gt));
+        let gt_rigid = from_rotation_translation(r_gt.matrix(), &arps::transform::translation(&gt));
+        let truth = Options {
+            network: false,
+            initial_transform: Some(to_rows(&gt_rigid)),
+            starts: vec![Start::Initial],
+            ..Options::default()
+        };
+        let gt_fitness = trained
+            .register(&source, &target, &truth)
+            .map_err(|err| format!("{}: refining the ground truth: {err}", e.name))?
+            .fitness;
         let mut r = PairResult {
             name: e.name.clone(),
             scale,
@@ -198,6 +244,8 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             ms: Vec::new(),
             failed: Vec::new(),
             start: Vec::new(),
+            fitness: Vec::new(),
+            gt_fitness,
         };
         for m in METHODS {
             let options = m.options(&source, &target);
@@ -206,13 +254,14 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             let out = reg.register(&source, &target, &options);
             r.ms.push(t0.elapsed().as_secs_f64() * 1e3);
             // a failed registration counts as the identity (no estimate), and is reported
-            let (pred, fail, start) = match out {
-                Ok(x) => (x.T_target_source, None, Some(x.start)),
-                Err(err) => (Matrix4::identity(), Some(err.to_string()), None),
+            let (pred, fail, start, fitness) = match out {
+                Ok(x) => (x.T_target_source, None, Some(x.start), Some(x.fitness)),
+                Err(err) => (Matrix4::identity(), Some(err.to_string()), None, None),
             };
             r.errors.push(pair_error(&pred, &gt, scale));
             r.failed.push(fail);
             r.start.push(start);
+            r.fitness.push(fitness);
         }
         if !a.json {
             eprint!("\r{} / {} pairs", k + 1, entries.len());
@@ -223,15 +272,19 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         eprintln!();
     }
 
-    let per_method: Vec<(String, Vec<PairError>, Summary, usize)> = METHODS
+    let per_method: Vec<MethodSummary> = METHODS
         .iter()
         .enumerate()
         .map(|(i, m)| {
-            let errs: Vec<PairError> = results.iter().map(|r| r.errors[i]).collect();
+            let errors: Vec<PairError> = results.iter().map(|r| r.errors[i]).collect();
             let ms: Vec<f64> = results.iter().map(|r| r.ms[i]).collect();
-            let fails = results.iter().filter(|r| r.failed[i].is_some()).count();
-            let s = summarize(&errs, &ms, a.rot_threshold, a.trans_threshold);
-            (m.name().to_string(), errs, s, fails)
+            MethodSummary {
+                name: m.name().to_string(),
+                summary: summarize(&errors, &ms, a.rot_threshold, a.trans_threshold),
+                errors,
+                failed: results.iter().filter(|r| r.failed[i].is_some()).count(),
+                ambiguous: results.iter().filter(|r| r.ambiguous(i, a.rot_threshold, a.trans_threshold)).count(),
+            }
         })
         .collect();
 
@@ -246,7 +299,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
     };
     if let Some(path) = &a.svg {
         let curves: Vec<(String, Vec<PairError>)> =
-            per_method.iter().map(|(n, e, _, _)| (n.clone(), e.clone())).collect();
+            per_method.iter().map(|m| (m.name.clone(), m.errors.clone())).collect();
         let title = format!(
             "{} ({} pairs{})",
             a.manifest.display(),
@@ -266,18 +319,21 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "units": units,
             "rot_threshold_deg": a.rot_threshold,
             "trans_threshold": a.trans_threshold,
-            "methods": per_method.iter().map(|(n, _, s, f)| serde_json::json!({
-                "name": n, "summary": s, "failed": f,
+            "ambiguity_margin": AMBIGUITY_MARGIN,
+            "methods": per_method.iter().map(|m| serde_json::json!({
+                "name": m.name, "summary": m.summary, "failed": m.failed, "fit_ge_gt": m.ambiguous,
             })).collect::<Vec<_>>(),
             "per_pair": results.iter().map(|r| serde_json::json!({
                 "name": r.name,
                 "te_scale": r.scale,
+                "gt_fitness": r.gt_fitness,
                 "results": METHODS.iter().enumerate().map(|(i, m)| serde_json::json!({
                     "method": m.name(),
                     "rot_deg": r.errors[i].rot_deg,
                     "trans": r.errors[i].trans,
                     "ms": r.ms[i],
                     "start": r.start[i],
+                    "fitness": r.fitness[i],
                     "error": r.failed[i],
                 })).collect::<Vec<_>>(),
             })).collect::<Vec<_>>(),
@@ -298,8 +354,11 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         a.rot_threshold, a.trans_threshold
     );
     println!(
-        "{:<28} {:>9} {:>8} {:>7} {:>9} {:>8} {:>9} {:>6}",
-        "method", "MRE(deg)", "MTE", "Recall", "RRE(deg)", "RTE", "ms/pair", "failed"
+        "  fit>=GT: pairs missed with a fitness within {AMBIGUITY_MARGIN} of the truth's (refined by ICP from the ground truth): ambiguous geometry"
+    );
+    println!(
+        "{:<28} {:>9} {:>8} {:>7} {:>9} {:>8} {:>9} {:>6} {:>8}",
+        "method", "MRE(deg)", "MTE", "Recall", "RRE(deg)", "RTE", "ms/pair", "failed", "fit>=GT"
     );
     // RRE/RTE are undefined (NaN) when nothing is recalled: print "-"
     let num = |v: f64, prec: usize| {
@@ -309,22 +368,24 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             format!("{v:.prec$}")
         }
     };
-    for (n, _, s, f) in &per_method {
+    for m in &per_method {
+        let s = &m.summary;
         println!(
-            "{:<28} {:>9} {:>8} {:>7.4} {:>9} {:>8} {:>9.1} {:>6}",
-            n,
+            "{:<28} {:>9} {:>8} {:>7.4} {:>9} {:>8} {:>9.1} {:>6} {:>8}",
+            m.name,
             num(s.mre, 3),
             num(s.mte, 4),
             s.recall,
             num(s.rre, 3),
             num(s.rte, 4),
             s.ms_per_pair,
-            f
+            m.failed,
+            m.ambiguous
         );
     }
     let wins = |i: usize, start: Start| results.iter().filter(|r| r.start[i] == Some(start)).count();
     for (i, m) in METHODS.iter().enumerate().filter(|(_, m)| m.multi_start()) {
-        let counts: Vec<String> = [Start::Network, Start::Centroids, Start::Initial]
+        let counts: Vec<String> = [Start::Network, Start::Centroids, Start::Initial, Start::Turned]
             .into_iter()
             .map(|s| (s, wins(i, s)))
             .filter(|&(_, n)| n > 0)

@@ -37,6 +37,8 @@ enum StartArg {
     Centroids,
     /// The identity (no initial transform on the command line).
     Initial,
+    /// The network estimate turned 45 degrees both ways about each axis (six starts).
+    Turned,
 }
 
 #[derive(Subcommand)]
@@ -163,6 +165,7 @@ fn run(command: Command) -> Result<(), String> {
                         StartArg::Network => Start::Network,
                         StartArg::Centroids => Start::Centroids,
                         StartArg::Initial => Start::Initial,
+                        StartArg::Turned => Start::Turned,
                     })
                     .collect(),
                 ..Options::default()
