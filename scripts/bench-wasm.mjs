@@ -4,10 +4,11 @@
 //
 //   scripts/build-pkg.sh                                   # the wasm build (pkg/node)
 //   cargo build --release --features cli --bin arps        # the native CLI (built here if missing)
-//   node scripts/bench-wasm.mjs [--pairs DIR] [--reps N] [--no-native]
+//   node scripts/bench-wasm.mjs [--pairs DIR] [--reps N] [--no-native] [--starts a,b,...]
 //
 // DIR holds pairs.tsv (name, source, target, ...) and the PLY files; default fixtures/pairs.
 // Per pair and build, N timed runs (default 3) after one untimed warm-up pass for wasm.
+// --starts sets `starts` for both builds (default: the engine's default starts).
 // Columns:
 //   "read+register": wasm = parsePointCloud of both files' bytes + register (wall clock);
 //                    native = the CLI's `time_ms` (reads both files + registers, in-process; model
@@ -29,6 +30,8 @@ const flag = (name, fallback) => {
 const pairsDir = path.resolve(flag("--pairs", path.join(root, "fixtures", "pairs")));
 const reps = Number(flag("--reps", "3"));
 const withNative = !args.includes("--no-native");
+const starts = flag("--starts", null);
+const options = starts ? { starts: starts.split(",") } : {};
 
 const median = (xs) => {
   const s = [...xs].sort((a, b) => a - b);
@@ -63,7 +66,7 @@ const runWasm = (p) => {
   const t0 = performance.now();
   const s = arps.parsePointCloud(sb, path.basename(p.source));
   const t = arps.parsePointCloud(tb, path.basename(p.target));
-  const r = registrar.register(s, t);
+  const r = registrar.register(s, t, options);
   return { wall: performance.now() - t0, engine: r.timingsMs.totalMs, stages: r.timingsMs, matrix: r.matrix };
 };
 for (const p of pairs) runWasm(p); // warm-up: compile tiers, grow memory
@@ -88,7 +91,7 @@ if (withNative) {
     native = { wall: [], engine: [], stages: [], rotDiff: 0 };
     for (const p of pairs) {
       for (let i = 0; i < reps; i++) {
-        const out = JSON.parse(execFileSync(bin, ["register", p.source, p.target, "--json"], { encoding: "utf8" }));
+        const out = JSON.parse(execFileSync(bin, ["register", p.source, p.target, "--json", ...(starts ? ["--starts", starts] : [])], { encoding: "utf8" }));
         native.wall.push(out.time_ms);
         native.engine.push(out.timings_ms?.totalMs ?? out.timings_ms?.total_ms ?? NaN);
         native.stages.push(out.timings_ms ?? {});
@@ -109,7 +112,7 @@ function rotationDiffDeg(colMajor, rows) {
 
 const w = { wall: median(wasm.wall), engine: median(wasm.engine) };
 const n = native ? { wall: median(native.wall), engine: median(native.engine) } : { wall: NaN, engine: NaN };
-console.log(`bench-wasm: ${pairs.length} pairs from ${path.relative(root, pairsDir) || "."}, ${reps} runs each, default options`);
+console.log(`bench-wasm: ${pairs.length} pairs from ${path.relative(root, pairsDir) || "."}, ${reps} runs each, ${starts ? `starts ${starts}` : "default options"}`);
 console.log("median ms/pair      wasm (Node)   native   wasm/native");
 console.log(`  read+register   ${fmt(w.wall)}    ${fmt(n.wall)}    ${native ? (w.wall / n.wall).toFixed(2).padStart(6) : "     -"}`);
 console.log(`  engine only     ${fmt(w.engine)}    ${fmt(n.engine)}    ${native ? (w.engine / n.engine).toFixed(2).padStart(6) : "     -"}`);
@@ -126,6 +129,7 @@ console.log(
   JSON.stringify({
     pairs: pairs.length,
     reps,
+    starts: starts ?? "default",
     wasm_median_ms: w.wall,
     wasm_engine_median_ms: w.engine,
     native_median_ms: native ? n.wall : null,
