@@ -111,6 +111,9 @@ fn options_are_honoured() {
     assert!(rot < 1.0 && tr < 0.02, "starts [network]: {rot:.3} deg, {tr:.4}");
     let no_net = register_ok(&mut r, options(r#"{"starts": ["network"], "network": false}"#));
     assert_eq!(get(&no_net, "start").as_string().as_deref(), Some("initial"), "no network: the initial transform");
+    // The turned starts alone: six turns of the estimate, none of them the estimate itself.
+    let turned = register_ok(&mut r, options(r#"{"starts": ["turned"]}"#));
+    assert_eq!(get(&turned, "start").as_string().as_deref(), Some("turned"));
 
     let d = register_ok(&mut r, options(r#"{"maxCorrespondenceDistance": 0.08, "voxelSize": 0}"#));
     assert!((num(&d, "maxCorrespondenceDistance") - 0.08).abs() < 1e-9);
