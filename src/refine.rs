@@ -31,6 +31,9 @@ pub enum Start {
 }
 
 impl Start {
+    /// Every start, in declaration order.
+    pub const ALL: [Start; 4] = [Start::Network, Start::Centroids, Start::Initial, Start::Turned];
+
     /// The name used in options and results (`"network"`, `"centroids"`, `"initial"`, `"turned"`).
     pub fn name(self) -> &'static str {
         match self {
@@ -56,10 +59,9 @@ pub fn turned(base: &Matrix4<f64>, pivot: [f64; 3], degrees: f64) -> [Matrix4<f6
     let axes = [nalgebra::Vector3::x_axis(), nalgebra::Vector3::y_axis(), nalgebra::Vector3::z_axis()];
     std::array::from_fn(|i| {
         let sign = if i % 2 == 0 { 1.0 } else { -1.0 };
-        let r = nalgebra::Rotation3::from_axis_angle(&axes[i / 2], sign * a);
+        let r = nalgebra::Rotation3::from_axis_angle(&axes[i / 2], sign * a).into_inner();
         // x -> R (x - c) + c
-        let turn = nalgebra::Isometry3::from_parts((c - r * c).into(), r.into()).to_homogeneous();
-        turn * base
+        crate::transform::from_rotation_translation(&r, &(c - r * c)) * base
     })
 }
 

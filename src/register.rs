@@ -297,11 +297,11 @@ impl Registrar {
                 Start::Initial => norm.normalize_transform(&Matrix4::identity()),
                 Start::Centroids => centroid_alignment(&src_n, &tgt_n),
                 Start::Turned => {
-                    let base = if options.network { t_net_n } else { norm.normalize_transform(&Matrix4::identity()) };
+                    // t_net_n is the initial transform when the network is off
                     let c = src_n.centroid();
-                    let moved = base.transform_point(&nalgebra::Point3::new(c[0], c[1], c[2]));
+                    let moved = t_net_n.transform_point(&nalgebra::Point3::new(c[0], c[1], c[2]));
                     let pivot = [moved.x, moved.y, moved.z];
-                    starts.extend(refine::turned(&base, pivot, refine::TURN_DEGREES).map(|t| (start, t)));
+                    starts.extend(refine::turned(&t_net_n, pivot, refine::TURN_DEGREES).map(|t| (start, t)));
                     continue;
                 }
             };
@@ -349,9 +349,8 @@ impl Registrar {
 /// Rejects an empty or repeating [`Options::starts`].
 fn check_starts(starts: &[Start]) -> Result<()> {
     if starts.is_empty() {
-        return Err(Error::InvalidOption(
-            "starts is empty: list at least one of \"network\", \"centroids\", \"initial\", \"turned\"".into(),
-        ));
+        let names: Vec<String> = Start::ALL.iter().map(|s| format!("\"{}\"", s.name())).collect();
+        return Err(Error::InvalidOption(format!("starts is empty: list at least one of {}", names.join(", "))));
     }
     for (i, s) in starts.iter().enumerate() {
         if starts[..i].contains(s) {

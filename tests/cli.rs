@@ -72,3 +72,28 @@ fn info_describes_the_default_model() {
         assert!(text.contains(needle), "{needle} not in {text}");
     }
 }
+
+/// Without `--starts` the CLI refines the engine's default starts (`Options::default().starts`,
+/// which includes `turned`): the same answer as the library. Fixture pair 6 is one where a turned
+/// start wins with the embedded model, so a CLI default that drifted from the engine's shows.
+#[test]
+fn register_defaults_to_the_engines_starts() {
+    let (src, tgt) = ("fixtures/pairs/00006_source.ply", "fixtures/pairs/00006_target.ply");
+    let out = arps(&["register", src, tgt, "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let read = |p: &str| arps::io::read_path(&dir.join(p)).unwrap();
+    let lib = arps::Registrar::with_default_model()
+        .unwrap()
+        .register(&read(src), &read(tgt), &arps::Options::default())
+        .unwrap();
+    assert_eq!(v["start"], serde_json::to_value(lib.start).unwrap(), "{v}");
+    // (serde_json's default float parsing may be off by an ulp)
+    assert!((v["fitness"].as_f64().unwrap() - lib.fitness).abs() < 1e-12, "{v} vs {}", lib.fitness);
+
+    let three = arps(&["register", src, tgt, "--json", "--starts", "network,centroids,initial"]);
+    let t: serde_json::Value = serde_json::from_slice(&three.stdout).unwrap();
+    assert_ne!(t["start"], "turned", "{t}");
+}

@@ -225,8 +225,8 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         }
         let scale = if divide { JointNormalization::of_pair(&source, &target).scale } else { 1.0 };
         // manifests store the truth to a few digits: project its rotation back onto SO(3)
-        let r_gt = nalgebra::Rotation3::from_matrix(&arps::transform::rotation(&gt));
-        let gt_rigid = from_rotation_translation(r_gt.matrix(), &arps::transform::translation(&gt));
+        let r_gt = arps::gmr::nearest_rotation(&arps::transform::rotation(&gt));
+        let gt_rigid = from_rotation_translation(&r_gt, &arps::transform::translation(&gt));
         let truth = Options {
             network: false,
             initial_transform: Some(to_rows(&gt_rigid)),
@@ -385,7 +385,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
     }
     let wins = |i: usize, start: Start| results.iter().filter(|r| r.start[i] == Some(start)).count();
     for (i, m) in METHODS.iter().enumerate().filter(|(_, m)| m.multi_start()) {
-        let counts: Vec<String> = [Start::Network, Start::Centroids, Start::Initial, Start::Turned]
+        let counts: Vec<String> = Start::ALL
             .into_iter()
             .map(|s| (s, wins(i, s)))
             .filter(|&(_, n)| n > 0)

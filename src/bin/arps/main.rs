@@ -64,9 +64,10 @@ enum Command {
         /// Seed of the network's point sampling.
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// Where ICP starts from, comma-separated; the best refinement by fitness wins.
-        #[arg(long, value_enum, value_delimiter = ',', default_values_t = [StartArg::Network, StartArg::Centroids, StartArg::Initial])]
-        starts: Vec<StartArg>,
+        /// Where ICP starts from, comma-separated; the best refinement by fitness wins
+        /// [default: the engine's `Options::starts`: network,centroids,initial,turned].
+        #[arg(long, value_enum, value_delimiter = ',')]
+        starts: Option<Vec<StartArg>>,
         /// Drop NaN/Inf points instead of failing.
         #[arg(long)]
         drop_non_finite: bool,
@@ -159,15 +160,18 @@ fn run(command: Command) -> Result<(), String> {
                 network_points,
                 seed,
                 non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
-                starts: starts
-                    .iter()
-                    .map(|s| match s {
-                        StartArg::Network => Start::Network,
-                        StartArg::Centroids => Start::Centroids,
-                        StartArg::Initial => Start::Initial,
-                        StartArg::Turned => Start::Turned,
-                    })
-                    .collect(),
+                starts: match starts {
+                    Some(list) => list
+                        .iter()
+                        .map(|s| match s {
+                            StartArg::Network => Start::Network,
+                            StartArg::Centroids => Start::Centroids,
+                            StartArg::Initial => Start::Initial,
+                            StartArg::Turned => Start::Turned,
+                        })
+                        .collect(),
+                    None => Options::default().starts,
+                },
                 ..Options::default()
             };
             let r = registrar.register(&src, &tgt, &options).map_err(|e| e.to_string())?;
