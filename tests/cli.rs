@@ -97,3 +97,21 @@ fn register_defaults_to_the_engines_starts() {
     let t: serde_json::Value = serde_json::from_slice(&three.stdout).unwrap();
     assert_ne!(t["start"], "turned", "{t}");
 }
+
+#[test]
+fn a_closed_stdout_ends_quietly() {
+    // `arps register ... | head -c0`: the reader is gone before the first line is written (the
+    // read end is closed right after the spawn; registering takes milliseconds).
+    let mut child = Command::new(env!("CARGO_BIN_EXE_arps"))
+        .args(["register", "fixtures/wasm/source.ply", "fixtures/wasm/target.ply"])
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "status {:?}, stderr: {stderr}", out.status);
+    assert!(!stderr.contains("panicked"), "{stderr}");
+}

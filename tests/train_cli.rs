@@ -156,5 +156,26 @@ fn resume_can_fork_with_other_losses_and_lr() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains("nope") || err.contains("--lr"), "{err}");
     }
+    // a fork that fine-tunes at another N, with another plateau patience; the export carries the N
+    train(&run, &["--resume", "--steps", "25", "--quiet", "--network-points", "24", "--patience", "7"]);
+    let (st, _, _) = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
+    assert_eq!((st.step, st.config.model.n_points, st.config.plateau_patience), (25, 24, 7));
+    let exported = run.join("n24.safetensors");
+    let out = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["export", "--run", run.to_str().unwrap(), "--latest", "--out", exported.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let w = arps::Weights::from_bytes(&std::fs::read(&exported).unwrap()).unwrap();
+    assert_eq!(w.config.n_points, 24);
+    let o = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["partition-oracle", "--run", run.to_str().unwrap(), "--pairs", "2", "--points", "2"])
+        .output()
+        .unwrap();
+    assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--points 2"));
+    let a = ["train", "--run", run.to_str().unwrap(), "--resume", "--steps", "26", "--network-points", "8"];
+    let out = Command::new(env!("CARGO_BIN_EXE_arps-train")).args(a).output().unwrap();
+    assert!(!out.status.success(), "--network-points 8 accepted");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--network-points 8"));
     let _ = std::fs::remove_dir_all(&run);
 }

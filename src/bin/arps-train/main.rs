@@ -21,6 +21,9 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
+#[macro_use]
+#[path = "../common/out.rs"]
+mod out;
 mod curves;
 mod oracle;
 
@@ -80,9 +83,14 @@ struct TrainArgs {
     /// Global gradient-norm clip (0 = off).
     #[arg(long, default_value_t = 1.0)]
     clip: f64,
-    /// Halve the lr after this many validations without improvement.
-    #[arg(long, default_value_t = 3)]
-    patience: u32,
+    /// Halve the lr after this many validations without improvement (default 3; on --resume,
+    /// overrides the stored value).
+    #[arg(long)]
+    patience: Option<u32>,
+    /// Points per cloud the network samples (default: the preset's N). On --resume, replaces
+    /// the stored N (a fork that fine-tunes at another N; the weights do not depend on it).
+    #[arg(long)]
+    network_points: Option<usize>,
     /// Smallest lr the plateau schedule goes to.
     #[arg(long, default_value_t = 1e-5)]
     min_lr: f32,
@@ -184,6 +192,9 @@ struct OracleArgs {
     /// Partition concentrations to try.
     #[arg(long, value_delimiter = ',', default_value = "2,4,8,16,64")]
     kappa: Vec<f64>,
+    /// Points per cloud (default: the run's N).
+    #[arg(long)]
+    points: Option<usize>,
 }
 
 #[derive(Args)]
@@ -205,7 +216,7 @@ fn main() -> ExitCode {
         Command::Train(a) => train_cmd(*a),
         Command::Export(a) => export_cmd(a),
         Command::Curves(a) => curves::run(&a.run, &a.out, a.x == "cpu"),
-        Command::PartitionOracle(a) => oracle::run(&a.run, a.pairs, &a.kappa),
+        Command::PartitionOracle(a) => oracle::run(&a.run, a.pairs, &a.kappa, a.points),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,
@@ -218,6 +229,8 @@ fn main() -> ExitCode {
 
 /// `--loss` when it is not given.
 const DEFAULT_LOSS: &str = "sup,ctr";
+/// Plateau patience of a new run (validations without improvement before the lr halves).
+const DEFAULT_PATIENCE: u32 = 3;
 /// `--lr` when it is not given.
 const DEFAULT_LR: f32 = 1e-3;
 
@@ -258,7 +271,11 @@ fn parse_loss(a: &TrainArgs) -> Result<LossConfig, String> {
 }
 
 fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
-    let model = ModelConfig::preset(&a.preset).map_err(|e| e.to_string())?;
+    let mut model = ModelConfig::preset(&a.preset).map_err(|e| e.to_string())?;
+    if let Some(n) = a.network_points {
+        model.n_points = n;
+        model.validate().map_err(|e| format!("--network-points {n}: {e}"))?;
+    }
     Ok(RunConfig {
         model,
         loss: parse_loss(a)?,
@@ -266,7 +283,7 @@ fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
         lr: a.lr.unwrap_or(DEFAULT_LR),
         warmup_steps: a.warmup_steps,
         clip_norm: (a.clip > 0.0).then_some(a.clip),
-        plateau_patience: a.patience,
+        plateau_patience: a.patience.unwrap_or(DEFAULT_PATIENCE),
         min_lr: a.min_lr,
         seed: a.seed,
         threads: a.threads.max(1),
@@ -344,6 +361,14 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         }
         if let Some(v) = a.val_every_steps {
             st.config.val_every_steps = Some(v).filter(|&s| s > 0);
+        }
+        if let Some(v) = a.patience {
+            st.config.plateau_patience = v;
+            st.bad_validations = 0;
+        }
+        if let Some(n) = a.network_points {
+            st.config.model.n_points = n;
+            st.config.model.validate().map_err(|e| format!("--network-points {n}: {e}"))?;
         }
         if a.loss.is_some() {
             st.config.loss = parse_loss(&a)?;

@@ -9,18 +9,21 @@ use arps::train::run::data::{to_train_pair, TrainData};
 use std::path::Path;
 
 /// Prints one table row per `kappa`: recall (15 deg, 0.2), MRE, MTE of oracle memberships on the
-/// run's first `pairs` validation pairs, with the run's N network points per cloud.
-pub fn run(run: &Path, pairs: u64, kappas: &[f64]) -> Result<(), String> {
+/// run's first `pairs` validation pairs, with `points` (default: the run's N) points per cloud.
+pub fn run(run: &Path, pairs: u64, kappas: &[f64], points: Option<usize>) -> Result<(), String> {
     let (st, _, _) = arps::train::run::checkpoint::load(&run.join("checkpoint.safetensors"))?;
     let data = TrainData::new(&st.config)?;
-    let (n, j) = (st.config.model.n_points, st.config.model.gaussians);
+    let (n, j) = (points.unwrap_or(st.config.model.n_points), st.config.model.gaussians);
+    if n < j {
+        return Err(format!("--points {n}: need at least J = {j} points"));
+    }
     let mut val = Vec::new();
     for i in 0..pairs {
         let p = data.val_pair(i).map_err(|e| format!("validation pair {i}: {e}"))?;
         val.push(to_train_pair(&p, n, i));
     }
-    println!("oracle memberships (canonical partition, J = {j}, N = {n}) on {pairs} validation pairs");
-    println!("{:>8} {:>8} {:>9} {:>8}", "kappa", "recall", "MRE(deg)", "MTE");
+    out!("oracle memberships (canonical partition, J = {j}, N = {n}) on {pairs} validation pairs");
+    out!("{:>8} {:>8} {:>9} {:>8}", "kappa", "recall", "MRE(deg)", "MTE");
     for &kappa in kappas {
         let errors: Vec<_> = val
             .iter()
@@ -35,7 +38,7 @@ pub fn run(run: &Path, pairs: u64, kappas: &[f64]) -> Result<(), String> {
             })
             .collect();
         let s = summarize(&errors, &vec![0.0; errors.len()], 15.0, 0.2);
-        println!("{kappa:>8.1} {:>8.3} {:>9.2} {:>8.4}", s.recall, s.mre, s.mte);
+        out!("{kappa:>8.1} {:>8.3} {:>9.2} {:>8.4}", s.recall, s.mre, s.mte);
     }
     Ok(())
 }

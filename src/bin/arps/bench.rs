@@ -149,7 +149,7 @@ pub fn run(args: BenchArgs) -> Result<(), String> {
     let peak_model = matmul_gflops(n_net, cfg.token_dim(), cfg.token_dim(), 15);
     let peak = peak_square.max(peak_model);
 
-    println!(
+    out!(
         "arps bench: {} + {} points, model '{}' (N = {n_net}, C = {}, L = {}), ICP {:?}, {reps} reps, medians",
         source.len(),
         target.len(),
@@ -158,29 +158,29 @@ pub fn run(args: BenchArgs) -> Result<(), String> {
         cfg.layers,
         icp
     );
-    println!("  read (2 x binary PLY)   {:>9.3} ms", median(&mut read_ms));
-    println!("  downsample/normalise    {:>9.3} ms", median(&mut pre));
-    println!("  network                 {:>9.3} ms   ({:.2} GFLOP per pair)", net_ms, flops / 1e9);
-    println!("  GMR                     {:>9.3} ms", median(&mut gmr));
-    println!(
+    out!("  read (2 x binary PLY)   {:>9.3} ms", median(&mut read_ms));
+    out!("  downsample/normalise    {:>9.3} ms", median(&mut pre));
+    out!("  network                 {:>9.3} ms   ({:.2} GFLOP per pair)", net_ms, flops / 1e9);
+    out!("  GMR                     {:>9.3} ms", median(&mut gmr));
+    out!(
         "  ICP                     {:>9.3} ms   ({} starts; chosen: {}, {} iterations)",
         median(&mut icp_t),
         options.starts.len(),
         r.start.name(),
         r.icp_iterations
     );
-    println!("  total register()        {:>9.3} ms", median(&mut total));
-    println!("  network throughput      {:>9.1} GFLOP/s", net_gflops);
-    println!(
+    out!("  total register()        {:>9.3} ms", median(&mut total));
+    out!("  network throughput      {:>9.1} GFLOP/s", net_gflops);
+    out!(
         "  matmul peak             {:>9.1} GFLOP/s   (512^3: {:.1}; [{n_net} x {d}] x [{d} x {d}]: {:.1})",
         peak,
         peak_square,
         peak_model,
         d = cfg.token_dim()
     );
-    println!("  network / peak          {:>9.2}", net_gflops / peak);
+    out!("  network / peak          {:>9.2}", net_gflops / peak);
     if let Some(truth) = truth {
-        println!(
+        out!(
             "  accuracy (synthetic pair): rotation error {:.3} deg, translation error {:.4}; network only {:.2} deg, {:.4}",
             transform::rotation_error_deg(&r.T_target_source, &truth),
             transform::translation_error(&r.T_target_source, &truth),

@@ -338,27 +338,36 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
                 })).collect::<Vec<_>>(),
             })).collect::<Vec<_>>(),
         });
-        println!("{out}");
+        out!("{out}");
         return Ok(());
     }
-    println!(
+    out!(
         "arps eval: {} pairs from {}{}",
         results.len(),
         a.manifest.display(),
         a.perturb.map(|s| format!(", sources perturbed (seed {s})")).unwrap_or_default()
     );
-    println!("  weights: {weights_desc}; untrained: random web weights, seed 0");
-    println!("  errors: {units}");
-    println!(
+    out!("  weights: {weights_desc}; untrained: random web weights, seed 0");
+    out!("  errors: {units}");
+    out!(
         "  recall: RE < {} deg and TE < {} (strict); RRE/RTE over recalled pairs; ICP: point-to-plane, coarse to fine",
-        a.rot_threshold, a.trans_threshold
+        a.rot_threshold,
+        a.trans_threshold
     );
-    println!(
+    out!(
         "  fit>=GT: pairs missed with a fitness within {AMBIGUITY_MARGIN} of the truth's (refined by ICP from the ground truth): ambiguous geometry"
     );
-    println!(
+    out!(
         "{:<28} {:>9} {:>8} {:>7} {:>9} {:>8} {:>9} {:>6} {:>8}",
-        "method", "MRE(deg)", "MTE", "Recall", "RRE(deg)", "RTE", "ms/pair", "failed", "fit>=GT"
+        "method",
+        "MRE(deg)",
+        "MTE",
+        "Recall",
+        "RRE(deg)",
+        "RTE",
+        "ms/pair",
+        "failed",
+        "fit>=GT"
     );
     // RRE/RTE are undefined (NaN) when nothing is recalled: print "-"
     let num = |v: f64, prec: usize| {
@@ -370,7 +379,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
     };
     for m in &per_method {
         let s = &m.summary;
-        println!(
+        out!(
             "{:<28} {:>9} {:>8} {:>7.4} {:>9} {:>8} {:>9.1} {:>6} {:>8}",
             m.name,
             num(s.mre, 3),
@@ -391,17 +400,17 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             .filter(|&(_, n)| n > 0)
             .map(|(s, n)| format!("{} {n}", s.name()))
             .collect();
-        println!("  {}: chosen start {}", m.name(), counts.join(", "));
+        out!("  {}: chosen start {}", m.name(), counts.join(", "));
     }
     for r in &results {
         for (i, f) in r.failed.iter().enumerate() {
             if let Some(f) = f {
-                println!("  failed: {} with {}: {f}", r.name, METHODS[i].name());
+                out!("  failed: {} with {}: {f}", r.name, METHODS[i].name());
             }
         }
     }
     if let Some(p) = &a.svg {
-        println!("  curves: {}", p.display());
+        out!("  curves: {}", p.display());
     }
     Ok(())
 }

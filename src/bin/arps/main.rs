@@ -8,6 +8,9 @@ use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
+#[macro_use]
+#[path = "../common/out.rs"]
+mod out;
 mod bench;
 mod eval;
 mod make_pairs;
@@ -190,18 +193,18 @@ fn run(command: Command) -> Result<(), String> {
                     "timings_ms": r.timings,
                     "warnings": r.warnings,
                 });
-                println!("{out}");
+                out!("{out}");
             } else {
-                println!("T_target_source (maps source points into the target frame):");
+                out!("T_target_source (maps source points into the target frame):");
                 for row in transform::to_rows(&r.T_target_source) {
-                    println!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
+                    out!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
                 }
-                println!(
+                out!(
                     "rotation {:.3} deg, translation {:.6}",
                     transform::rotation_angle_deg(&r.T_target_source),
                     transform::translation(&r.T_target_source).norm()
                 );
-                println!(
+                out!(
                     "fitness {:.4} (within {:.4}), inlier RMSE {:.6}, ICP from the {} start, {} iterations ({})",
                     r.fitness,
                     r.max_correspondence_distance,
@@ -211,12 +214,15 @@ fn run(command: Command) -> Result<(), String> {
                     if r.icp_converged { "converged" } else { "not converged" }
                 );
                 let t = r.timings;
-                println!(
+                out!(
                     "time {time_ms:.1} ms (read+all); preprocess {:.1}, network {:.1}, GMR {:.2}, ICP {:.1} ms",
-                    t.preprocess_ms, t.network_ms, t.gmr_ms, t.icp_ms
+                    t.preprocess_ms,
+                    t.network_ms,
+                    t.gmr_ms,
+                    t.icp_ms
                 );
                 for w in &r.warnings {
-                    println!("warning: {w}");
+                    out!("warning: {w}");
                 }
             }
             Ok(())
@@ -225,11 +231,11 @@ fn run(command: Command) -> Result<(), String> {
             let bytes = std::fs::read(&weights).map_err(|e| format!("{}: {e}", weights.display()))?;
             let w = Weights::from_bytes(&bytes).map_err(|e| format!("{}: {e}", weights.display()))?;
             let c = &w.config;
-            println!("{}: arps weights, format version {}", weights.display(), arps::weights::FORMAT_VERSION);
-            println!("  file size     {} bytes", bytes.len());
-            println!("  parameters    {}", c.parameter_count());
-            println!("  preset        {}", c.preset);
-            println!(
+            out!("{}: arps weights, format version {}", weights.display(), arps::weights::FORMAT_VERSION);
+            out!("  file size     {} bytes", bytes.len());
+            out!("  parameters    {}", c.parameter_count());
+            out!("  preset        {}", c.preset);
+            out!(
                 "  network       N = {}, C = {} (tokens {}), heads {}, FFN {}, layers {}, J = {}",
                 c.n_points,
                 c.feature_dim,
@@ -239,10 +245,10 @@ fn run(command: Command) -> Result<(), String> {
                 c.layers,
                 c.gaussians
             );
-            println!("  reference     {:?} (top_h {}, temperature {})", c.reference, c.top_h, c.soft_temperature);
-            println!("  pos MLP       3 -> {:?} -> {}", c.pos_hidden, c.feature_dim);
-            println!("  head          {} -> {:?} -> {}", 2 * c.feature_dim, c.head_hidden, c.gaussians);
-            println!(
+            out!("  reference     {:?} (top_h {}, temperature {})", c.reference, c.top_h, c.soft_temperature);
+            out!("  pos MLP       3 -> {:?} -> {}", c.pos_hidden, c.feature_dim);
+            out!("  head          {} -> {:?} -> {}", 2 * c.feature_dim, c.head_hidden, c.gaussians);
+            out!(
                 "  provenance    {}",
                 serde_json::to_string_pretty(&w.provenance).unwrap_or_default().replace('\n', "\n                ")
             );
@@ -256,7 +262,7 @@ fn run(command: Command) -> Result<(), String> {
             let w = Weights::random(&config, seed).map_err(|e| e.to_string())?;
             let bytes = w.to_bytes(if f16 { StoreAs::F16 } else { StoreAs::F32 }).map_err(|e| e.to_string())?;
             std::fs::write(&out, &bytes).map_err(|e| format!("{}: {e}", out.display()))?;
-            println!("wrote {} ({} bytes, {} parameters)", out.display(), bytes.len(), config.parameter_count());
+            out!("wrote {} ({} bytes, {} parameters)", out.display(), bytes.len(), config.parameter_count());
             Ok(())
         }
     }

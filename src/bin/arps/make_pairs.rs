@@ -141,6 +141,6 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let json = a.out.join("pairs.json");
     std::fs::write(&json, serde_json::to_string_pretty(&sidecar).map_err(|e| e.to_string())? + "\n")
         .map_err(|e| format!("{}: {e}", json.display()))?;
-    println!("wrote {} pairs to {}", a.count, a.out.display());
+    out!("wrote {} pairs to {}", a.count, a.out.display());
     Ok(())
 }
