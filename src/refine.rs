@@ -68,6 +68,18 @@ pub fn turned(base: &Matrix4<f64>, pivot: [f64; 3], degrees: f64) -> [Matrix4<f6
 /// ICP runs coarse to fine at these multiples of the final max correspondence distance.
 pub const SCHEDULE: [f64; 3] = [4.0, 2.0, 1.0];
 
+/// How every start is refined: the ICP kind, the final max correspondence distance (the stages of
+/// [`SCHEDULE`] are multiples of it; candidates are scored at it) and each stage's iteration cap.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Refinement {
+    /// Point-to-plane, point-to-point, or off (the starts are only scored).
+    pub kind: IcpKind,
+    /// The final max correspondence distance, in the clouds' units.
+    pub d_final: f64,
+    /// Iteration cap of each ICP stage.
+    pub max_iterations: u32,
+}
+
 /// One start after refinement, scored at the final distance.
 #[allow(non_snake_case)]
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -106,18 +118,16 @@ pub fn refine_best(
     target: &IcpTarget,
     source: &[[f32; 3]],
     starts: &[(Start, Matrix4<f64>)],
-    kind: IcpKind,
-    d_final: f64,
-    max_iterations: u32,
+    how: &Refinement,
 ) -> Option<Candidate> {
-    if starts.len() > 1 && kind != IcpKind::Off && source.len() > SCREEN_POINTS {
+    if starts.len() > 1 && how.kind != IcpKind::Off && source.len() > SCREEN_POINTS {
         let sample = even_sample(source, SCREEN_POINTS);
-        let screened = refine_starts(target, &sample, starts, kind, d_final, max_iterations);
+        let screened = refine_starts(target, &sample, starts, how);
         let w = screened[choose(&screened)?];
-        let full = refine_starts(target, source, &[(w.start, w.T_target_source)], kind, d_final, max_iterations);
+        let full = refine_starts(target, source, &[(w.start, w.T_target_source)], how);
         return full.first().map(|c| Candidate { iterations: w.iterations + c.iterations, ..*c });
     }
-    let all = refine_starts(target, source, starts, kind, d_final, max_iterations);
+    let all = refine_starts(target, source, starts, how);
     choose(&all).map(|i| all[i])
 }
 
@@ -131,20 +141,20 @@ fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
 }
 
 /// Refines every start with coarse-to-fine ICP against one prepared target ([`SCHEDULE`] times
-/// `d_final`, each stage capped at `max_iterations`) and scores each result at `d_final`.
+/// `how.d_final`, each stage capped at `how.max_iterations`) and scores each result at
+/// `how.d_final`.
 ///
 /// The starts advance stage by stage together; before each stage a start that has come within
-/// [`MERGE_FRACTION`] of `d_final` of an earlier one (largest displacement of a source point) is
+/// [`MERGE_FRACTION`] of `how.d_final` of an earlier one (largest displacement of a source point) is
 /// dropped, so the result has one candidate per distinct basin, in the order of `starts`. With
 /// [`IcpKind::Off`] nothing moves: every start is scored as it is.
 pub fn refine_starts(
     target: &IcpTarget,
     source: &[[f32; 3]],
     starts: &[(Start, Matrix4<f64>)],
-    kind: IcpKind,
-    d_final: f64,
-    max_iterations: u32,
+    how: &Refinement,
 ) -> Vec<Candidate> {
+    let Refinement { kind, d_final, max_iterations } = *how;
     let mut live: Vec<Candidate> = starts
         .iter()
         .map(|&(start, t)| Candidate {

@@ -3,7 +3,7 @@
 use crate::cloud::{JointNormalization, NonFinite, PointCloud, MIN_POINTS};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
-use crate::refine::{self, Candidate, Start};
+use crate::refine::{self, Candidate, Refinement, Start};
 use crate::timing::{default_clock, Clock, Stopwatch};
 use crate::weights::Weights;
 use crate::{gmr, sampling, transform, Error, Result};
@@ -310,15 +310,9 @@ impl Registrar {
         if options.icp == IcpKind::Off {
             starts.truncate(1);
         }
-        let chosen = refine::refine_best(
-            &target_index,
-            &icp_src.points,
-            &starts,
-            options.icp,
-            d_final,
-            options.icp_max_iterations,
-        )
-        .ok_or_else(|| Error::InvalidOption("starts is empty".into()))?;
+        let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations };
+        let chosen = refine::refine_best(&target_index, &icp_src.points, &starts, &how)
+            .ok_or_else(|| Error::InvalidOption("starts is empty".into()))?;
         let Candidate { start, T_target_source: t_n, fitness, inlier_rmse: rmse_n, iterations, converged } = chosen;
         let icp_ms = watch.lap();
 

@@ -5,7 +5,7 @@
 mod common;
 
 use arps::icp::{IcpKind, IcpTarget};
-use arps::refine::{self, Candidate, Start};
+use arps::refine::{self, Candidate, Refinement, Start};
 use arps::transform::{rotation_error_deg, translation_error};
 use arps::{ModelConfig, Options, PointCloud, Registrar, Weights};
 use common::{bumpy_surface, crop, motion};
@@ -14,6 +14,11 @@ use std::path::Path;
 
 fn untrained() -> Registrar {
     Registrar::new(&Weights::random(&ModelConfig::web(), 0).unwrap()).unwrap()
+}
+
+/// Coarse-to-fine refinement of `kind` to `d`, 30 iterations per stage (the engine's default).
+fn how(kind: IcpKind, d: f64) -> Refinement {
+    Refinement { kind, d_final: d, max_iterations: 30 }
 }
 
 fn starts(list: &[Start]) -> Options {
@@ -195,13 +200,13 @@ fn starts_that_meet_are_merged_into_the_earlier_one() {
     let nudge = Matrix4::new_translation(&nalgebra::Vector3::new(0.01 * d, 0.0, 0.0));
     // the same start twice (a hair apart), and a distinct one
     let list = [(Start::Network, Matrix4::identity()), (Start::Centroids, nudge), (Start::Initial, truth)];
-    let c = refine::refine_starts(&target, &source, &list, IcpKind::Plane, d, 30);
+    let c = refine::refine_starts(&target, &source, &list, &how(IcpKind::Plane, d));
     assert_eq!(c.len(), 1, "all three meet (the third at the first stage's end): {c:?}");
     assert_eq!(c[0].start, Start::Network);
     assert!(rotation_error_deg(&c[0].T_target_source, &truth) < 0.01 && c[0].fitness > 0.99);
 
     // with ICP off nothing moves and nothing merges: each start is scored as it is
-    let c = refine::refine_starts(&target, &source, &list, IcpKind::Off, d, 30);
+    let c = refine::refine_starts(&target, &source, &list, &how(IcpKind::Off, d));
     assert_eq!(c.len(), 3);
     assert_eq!(c[2].fitness, 1.0);
     assert_eq!(refine::choose(&c), Some(2));
@@ -219,15 +224,15 @@ fn large_sources_are_screened_on_a_sample_and_the_winner_refined_on_all_points()
     let d = 0.03;
     let flipped = motion([150.0, 0.0, 0.0], [0.0, 0.0, 0.0]);
     let list = [(Start::Network, flipped), (Start::Initial, Matrix4::identity())];
-    let best = refine::refine_best(&target, &source, &list, IcpKind::Plane, d, 30).unwrap();
+    let best = refine::refine_best(&target, &source, &list, &how(IcpKind::Plane, d)).unwrap();
     assert_eq!(best.start, Start::Initial);
     assert!(rotation_error_deg(&best.T_target_source, &truth) < 0.01, "{}", best.T_target_source);
     assert_eq!((best.fitness, best.inlier_rmse), target.evaluate(&source, &best.T_target_source, d));
     assert!(best.fitness > 0.99);
     // the same answer as refining every start on all points
-    let all = refine::refine_starts(&target, &source, &list, IcpKind::Plane, d, 30);
+    let all = refine::refine_starts(&target, &source, &list, &how(IcpKind::Plane, d));
     let full = all[refine::choose(&all).unwrap()];
     assert_eq!(full.start, best.start);
     assert!(rotation_error_deg(&full.T_target_source, &best.T_target_source) < 0.01);
-    assert_eq!(refine::refine_best(&target, &source, &[], IcpKind::Plane, d, 30), None);
+    assert_eq!(refine::refine_best(&target, &source, &[], &how(IcpKind::Plane, d)), None);
 }
