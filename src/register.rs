@@ -48,9 +48,10 @@ pub struct Options {
     /// which): the highest fitness at the final distance, ties going to the lower inlier RMSE, then
     /// to the earlier start ([`refine::choose`]). Each extra start costs one ICP run on at most
     /// [`refine::SCREEN_POINTS`] source points ([`Start::Turned`] is six). Default
-    /// `[Network, Centroids, Initial, Turned]`: on 500 validation pairs (`arps eval`) recall 0.940
-    /// and MRE 4.1 degrees, against 0.880 / 5.6 without `Turned` and 0.820 / 7.6 for `[Network]`
-    /// alone, for about twice the refinement time of the three plain starts. Must be non-empty and
+    /// `[Network, Centroids, Initial, Turned]`: on 500 validation pairs (`arps eval`, the model
+    /// of step 11,818 in `models/MODEL.md`) recall 0.940 and MRE 4.1 degrees, against 0.880 / 5.6
+    /// without `Turned` and 0.820 / 7.6 for `[Network]` alone, for about twice the refinement time
+    /// of the three plain starts (the shipped model: 0.948 / 3.3 and 0.852 / 6.4 for `[Network]`). Must be non-empty and
     /// without repeats. With `network: false`, a `Network` start is the initial transform
     /// (reported as `Initial`) and `Turned` turns the initial transform. With `icp: Off` nothing
     /// is refined or compared: the first start is the answer (choosing among unrefined starts by
