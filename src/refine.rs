@@ -112,8 +112,9 @@ pub const SCREEN_POINTS: usize = 2048;
 /// With several starts and more than [`SCREEN_POINTS`] source points (large scans, where one ICP
 /// run costs hundreds of milliseconds), the starts are refined and compared on
 /// [`SCREEN_POINTS`] evenly spread source points, and only the winner is refined again on all of
-/// them, from where the sample left it; its figures are those of the full run (its `iterations`
-/// count both runs). So each extra start costs an ICP run on at most [`SCREEN_POINTS`] points.
+/// them, from where the sample left it, at the final distance only (the sample's run has been
+/// through the coarse stages); its figures are those of the full run (its `iterations` count both
+/// runs). So each extra start costs an ICP run on at most [`SCREEN_POINTS`] points.
 pub fn refine_best(
     target: &IcpTarget,
     source: &[[f32; 3]],
@@ -124,7 +125,9 @@ pub fn refine_best(
         let sample = even_sample(source, SCREEN_POINTS);
         let screened = refine_starts(target, &sample, starts, how);
         let w = screened[choose(&screened)?];
-        let full = refine_starts(target, source, &[(w.start, w.T_target_source)], how);
+        // the sample left it converged at the final distance: only the final stage runs again
+        let last = &SCHEDULE[SCHEDULE.len() - 1..];
+        let full = refine_stages(target, source, &[(w.start, w.T_target_source)], how, last);
         return full.first().map(|c| Candidate { iterations: w.iterations + c.iterations, ..*c });
     }
     let all = refine_starts(target, source, starts, how);
@@ -154,6 +157,17 @@ pub fn refine_starts(
     starts: &[(Start, Matrix4<f64>)],
     how: &Refinement,
 ) -> Vec<Candidate> {
+    refine_stages(target, source, starts, how, &SCHEDULE)
+}
+
+/// [`refine_starts`] with the given stages (multiples of `how.d_final`) instead of [`SCHEDULE`].
+fn refine_stages(
+    target: &IcpTarget,
+    source: &[[f32; 3]],
+    starts: &[(Start, Matrix4<f64>)],
+    how: &Refinement,
+    schedule: &[f64],
+) -> Vec<Candidate> {
     let Refinement { kind, d_final, max_iterations } = *how;
     let mut live: Vec<Candidate> = starts
         .iter()
@@ -167,7 +181,7 @@ pub fn refine_starts(
         })
         .collect();
     if kind != IcpKind::Off {
-        for factor in SCHEDULE {
+        for &factor in schedule {
             merge_coincident(&mut live, source, MERGE_FRACTION * d_final);
             let params = IcpParams {
                 kind,
