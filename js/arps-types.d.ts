@@ -137,11 +137,34 @@ export interface ModelProvenance {
   [key: string]: unknown;
 }
 
-/** The network sizes read from a weights file (snake_case, as stored in the file). */
+/** The network sizes read from a weights file (the file stores them in snake_case; here camelCase). */
 export interface ModelConfig {
   /** Preset the config started from (`"web"`, `"paper"`, `"tiny"` or a custom label). */
   preset: string;
   /** Network points per cloud, N (the default of `networkPoints`). */
-  n_points: number;
-  [key: string]: unknown;
+  nPoints: number;
+  /** Per-point feature width C; attention tokens are 2C wide. */
+  featureDim: number;
+  /** Attention heads. */
+  heads: number;
+  /** Hidden width of each attention block's feed-forward network. */
+  ffnDim: number;
+  /** ARPS layers, L. */
+  layers: number;
+  /** Top-H size of the `"top_h"` reference rule. */
+  topH: number;
+  /** Gaussians, J. */
+  gaussians: number;
+  /** Hidden widths of the position MLP. */
+  posHidden: number[];
+  /** Hidden width of the step-size MLP. */
+  stepHidden: number;
+  /** Hidden widths of the membership head. */
+  headHidden: number[];
+  /** Reference-point rule: the paper's top-H mean, or the differentiable softmax-weighted mean. */
+  reference: "top_h" | "soft";
+  /** Softmax temperature of the `"soft"` rule. */
+  softTemperature: number;
+  /** LayerNorm epsilon. */
+  layerNormEps: number;
 }

@@ -168,10 +168,14 @@ impl Registrar {
         to_js(self.inner.provenance())
     }
 
-    /// The network configuration of the loaded weights (sizes, preset name).
+    /// The network configuration of the loaded weights (sizes, preset name), with the core's
+    /// [`crate::ModelConfig`] fields in camelCase (`nPoints`, `featureDim`, ...), like the rest of
+    /// the JS API.
     #[wasm_bindgen(getter, js_name = modelConfig, unchecked_return_type = "ModelConfig")]
     pub fn model_config(&self) -> Result<JsValue, JsError> {
-        to_js(&self.inner.model().config)
+        let value =
+            serde_json::to_value(&self.inner.model().config).map_err(|e| JsError::new(&format!("internal: {e}")))?;
+        to_js(&camel_case_keys(value))
     }
 }
 
@@ -190,6 +194,35 @@ fn set(obj: &Object, key: &str, value: &JsValue) -> Result<(), JsError> {
 fn to_js<T: serde::Serialize + ?Sized>(value: &T) -> Result<JsValue, JsError> {
     let ser = serde_wasm_bindgen::Serializer::new().serialize_maps_as_objects(true);
     value.serialize(&ser).map_err(|e| JsError::new(&format!("internal: {e}")))
+}
+
+/// Object keys from `snake_case` to `camelCase`, recursively (values are left alone).
+fn camel_case_keys(value: serde_json::Value) -> serde_json::Value {
+    use serde_json::Value;
+    match value {
+        Value::Object(map) => {
+            Value::Object(map.into_iter().map(|(k, v)| (camel_case(&k), camel_case_keys(v))).collect())
+        }
+        Value::Array(items) => Value::Array(items.into_iter().map(camel_case_keys).collect()),
+        other => other,
+    }
+}
+
+/// `n_points` -> `nPoints`.
+fn camel_case(key: &str) -> String {
+    let mut out = String::with_capacity(key.len());
+    let mut upper = false;
+    for c in key.chars() {
+        if c == '_' {
+            upper = true;
+        } else if upper {
+            out.extend(c.to_uppercase());
+            upper = false;
+        } else {
+            out.push(c);
+        }
+    }
+    out
 }
 
 /// A 4x4 as `Float32Array(16)`, column-major (three.js `Matrix4.fromArray`).

@@ -267,7 +267,17 @@ fn custom_weights_from_bytes_match_the_default_model() {
     // A different (tiny) model loads from bytes, reports its config, and registers.
     let tiny = arps::Weights::random(&arps::ModelConfig::tiny(), 1).unwrap().to_bytes(arps::StoreAs::F32).unwrap();
     let mut t = Registrar::from_bytes(&tiny).map_err(message).unwrap();
-    assert_eq!(get(&t.model_config().map_err(message).unwrap(), "preset").as_string().as_deref(), Some("tiny"));
+    let config = t.model_config().map_err(message).unwrap();
+    assert_eq!(get(&config, "preset").as_string().as_deref(), Some("tiny"));
+    // camelCase like the rest of the JS API, every field of the core's config
+    let tiny_config = arps::ModelConfig::tiny();
+    assert_eq!(get(&config, "nPoints").as_f64(), Some(tiny_config.n_points as f64));
+    assert_eq!(get(&config, "featureDim").as_f64(), Some(tiny_config.feature_dim as f64));
+    assert_eq!(get(&config, "layerNormEps").as_f64().map(|v| v as f32), Some(tiny_config.layer_norm_eps));
+    assert!(get(&config, "n_points").is_undefined());
+    let keys = js_sys::Object::keys(config.unchecked_ref::<js_sys::Object>()).length();
+    let fields = serde_json::to_value(&tiny_config).unwrap().as_object().unwrap().len();
+    assert_eq!(keys as usize, fields);
     assert_eq!(get(&t.provenance().map_err(message).unwrap(), "kind").as_string().as_deref(), Some("random"));
     let res = t.register(&source(), &target(), None, None).map_err(message).unwrap();
     assert!(arps::transform::check_rigid(&matrix(&res, "matrix"), 1e-3).is_ok());

@@ -44,7 +44,7 @@ function getEngine() {
           untrained ? "warn" : "ok",
           untrained
             ? "The embedded network weights are an untrained placeholder: ICP does the work until trained weights ship."
-            : `Model preset ${arps.modelConfig?.preset}, N = ${arps.modelConfig?.n_points}; provenance ${JSON.stringify(arps.provenance)}`,
+            : `Model preset ${arps.modelConfig?.preset}, N = ${arps.modelConfig?.nPoints}; provenance ${JSON.stringify(arps.provenance)}`,
         );
         return arps;
       },

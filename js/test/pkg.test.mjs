@@ -23,6 +23,8 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     const r = arps.Registrar.withDefaultModel();
     assert.equal(typeof r.provenance, "object");
     assert.equal(r.modelConfig.preset, "web");
+    assert.ok(Number.isInteger(r.modelConfig.nPoints) && r.modelConfig.nPoints >= 16, "camelCase nPoints");
+    assert.equal(r.modelConfig.n_points, undefined);
     r.free();
   });
 

@@ -20,12 +20,16 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   // @ts-expect-error unknown start
   r.register(source, target, { starts: ["identity"] });
   const kind: string | undefined = r.provenance.kind;
+  const networkPoints: number = r.modelConfig.nPoints;
+  const reference: "top_h" | "soft" = r.modelConfig.reference;
+  // @ts-expect-error the config is camelCase
+  const snake = r.modelConfig.n_points;
   // @ts-expect-error misspelled option
   r.register(source, target, { icpMaxIteration: 3 });
   // @ts-expect-error wrong enum value
   r.register(source, target, { icp: "planar" });
   r.free();
-  return ms + w.length + start.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length;
+  return ms + networkPoints + reference.length + String(snake).length + w.length + start.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length;
 }
 
 export async function inAWorker(source: Float32Array, target: Float32Array): Promise<Float32Array> {
