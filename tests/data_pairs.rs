@@ -215,3 +215,39 @@ fn network_sample_draws_from_the_engine_clouds() {
     assert_eq!(e.network_sample(512, 7), (s.clone(), t));
     assert_ne!(e.network_sample(512, 8).0, s);
 }
+
+#[test]
+fn pose_angle_turns_the_whole_shape_and_keeps_the_ground_truth() {
+    let mesh = generate(Category::Chair, 2);
+    let dense = mesh.sample_surface(4096, 5).unwrap();
+    let (normed, _, _) = normalize_shape(&dense);
+    for seed in 0..4 {
+        let turned = pair_from_dense(&dense, "chair", &PairParams { pose_angle_deg: 180.0, ..quiet() }, seed);
+        // the source is the dense shape turned by one rotation R_pose about the origin
+        let a = normed.points[turned.source_dense_index[0] as usize];
+        let b = normed.points[turned.source_dense_index[1] as usize];
+        let (ta, tb) = (turned.source[0], turned.source[1]);
+        let len = |p: [f32; 3]| (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt();
+        let diff = |p: [f32; 3], q: [f32; 3]| [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+        assert!((len(ta) - len(a)).abs() < 1e-5, "distances to the origin kept");
+        assert!((len(diff(ta, tb)) - len(diff(a, b))).abs() < 1e-5, "distances kept");
+        assert!(!close(ta, a, 1e-3), "seed {seed}: the source was not turned");
+        // the ground truth still maps each source point onto its target counterpart
+        let pos: std::collections::HashMap<u32, usize> =
+            turned.target_dense_index.iter().enumerate().map(|(k, &i)| (i, k)).collect();
+        let mut matched = 0;
+        for (j, i) in turned.source_dense_index.iter().enumerate() {
+            if let Some(&k) = pos.get(i) {
+                matched += 1;
+                assert!(close(apply(&turned.T_target_source, turned.source[j]), turned.target[k], 1e-5));
+            }
+        }
+        assert!(matched > 200, "only {matched} shared samples");
+        let c = turned.centroid_source;
+        let ct = turned.T_target_source * Vector4::new(c[0], c[1], c[2], 1.0);
+        assert!((0..3).all(|k| (turned.centroid_target[k] - ct[k]).abs() < 1e-9));
+    }
+    // 0, the default, is the paper's protocol: the very same pair
+    let zero = PairParams { pose_angle_deg: 0.0, ..quiet() };
+    assert_eq!(pair_from_dense(&dense, "chair", &zero, 3), pair_from_dense(&dense, "chair", &quiet(), 3));
+}

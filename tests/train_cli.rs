@@ -157,9 +157,14 @@ fn resume_can_fork_with_other_losses_and_lr() {
         assert!(err.contains("nope") || err.contains("--lr"), "{err}");
     }
     // a fork that fine-tunes at another N, with another plateau patience; the export carries the N
-    train(&run, &["--resume", "--steps", "25", "--quiet", "--network-points", "24", "--patience", "7"]);
+    // (and training pairs in any pose)
+    assert_eq!(st.config.pose_angle_deg, 0.0);
+    let a =
+        ["--resume", "--steps", "25", "--quiet", "--network-points", "24", "--patience", "7", "--pose-angle", "180"];
+    train(&run, &a);
     let (st, _, _) = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
     assert_eq!((st.step, st.config.model.n_points, st.config.plateau_patience), (25, 24, 7));
+    assert_eq!(st.config.pose_angle_deg, 180.0);
     let exported = run.join("n24.safetensors");
     let out = Command::new(env!("CARGO_BIN_EXE_arps-train"))
         .args(["export", "--run", run.to_str().unwrap(), "--latest", "--out", exported.to_str().unwrap()])
@@ -173,9 +178,12 @@ fn resume_can_fork_with_other_losses_and_lr() {
         .output()
         .unwrap();
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--points 2"));
-    let a = ["train", "--run", run.to_str().unwrap(), "--resume", "--steps", "26", "--network-points", "8"];
-    let out = Command::new(env!("CARGO_BIN_EXE_arps-train")).args(a).output().unwrap();
-    assert!(!out.status.success(), "--network-points 8 accepted");
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--network-points 8"));
+    for bad in [["--network-points", "8"], ["--pose-angle", "400"]] {
+        let mut a = vec!["train", "--run", run.to_str().unwrap(), "--resume", "--steps", "26"];
+        a.extend(bad);
+        let out = Command::new(env!("CARGO_BIN_EXE_arps-train")).args(&a).output().unwrap();
+        assert!(!out.status.success(), "{bad:?} accepted");
+        assert!(String::from_utf8_lossy(&out.stderr).contains(&bad.join(" ")), "{bad:?}");
+    }
     let _ = std::fs::remove_dir_all(&run);
 }

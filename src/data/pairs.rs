@@ -4,7 +4,9 @@
 //! Steps of [`make_pair`], in order:
 //! 1. dense cloud: `dense_points` area-weighted surface samples of the mesh;
 //! 2. normalise the **full** shape once: bounding-box centre to the origin, largest half-extent
-//!    to 1 (so it fits `[-1, 1]^3` with its aspect ratio kept); `c_full` = its mean;
+//!    to 1 (so it fits `[-1, 1]^3` with its aspect ratio kept); then, only with
+//!    [`PairParams::pose_angle_deg`] > 0 (not in the paper's protocol), turn it about the origin
+//!    by random Euler angles; `c_full` = its mean;
 //! 3. two half-space crops keeping `keep_ratio` of the dense points each: for a direction `u`
 //!    uniform on S², keep the points with the largest `(p - c_full) · u`; both directions are
 //!    redrawn until the overlap `|S ∩ T| / min(|S|, |T|)` is at least `min_overlap` (at most
@@ -49,6 +51,12 @@ pub struct PairParams {
     pub noise_sigma: f64,
     /// Noise is clipped to `±noise_clip` (default 0.05).
     pub noise_clip: f64,
+    /// Pose of the whole shape before cropping: Euler angles `U[-a, a]` each, degrees (default 0:
+    /// the shape's own orientation, as in the paper's protocol, where ModelNet shapes come
+    /// upright; 180 turns it anywhere). Drawn from a random stream of its own, so `0` leaves every
+    /// pair exactly as it was. With it, the source is no longer in the shape's canonical pose: a
+    /// network cannot lean on the category's usual orientation.
+    pub pose_angle_deg: f64,
 }
 
 impl Default for PairParams {
@@ -63,6 +71,7 @@ impl Default for PairParams {
             max_translation: 0.5,
             noise_sigma: 0.01,
             noise_clip: 0.05,
+            pose_angle_deg: 0.0,
         }
     }
 }
@@ -187,6 +196,15 @@ pub fn make_pair(mesh: &Mesh, shape: &str, params: &PairParams, seed: u64) -> Re
 pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, seed: u64) -> Pair {
     let mut rng = sampling::rng(super::mix(seed, 0x9A1F));
     let (p, _, _) = normalize_shape(dense);
+    let p = if params.pose_angle_deg > 0.0 {
+        let mut pose_rng = sampling::rng(super::mix(seed, 0x905E));
+        let a = params.pose_angle_deg.to_radians();
+        let mut angle = || (pose_rng.random::<f64>() * 2.0 - 1.0) * a;
+        let (ax, ay, az) = (angle(), angle(), angle());
+        p.transformed(&from_rotation_translation(&euler_xyz(ax, ay, az), &Vector3::zeros()))
+    } else {
+        p
+    };
     let c = p.centroid();
     let cv = Vector3::from(c);
     let m = p.len();

@@ -133,6 +133,11 @@ struct TrainArgs {
     /// replaces the stored curriculum from the current pair on (logged in the session's start line).
     #[arg(long)]
     curriculum: Option<String>,
+    /// Training pairs only: turn each whole shape by Euler angles up to this many degrees before
+    /// cropping, so the source is not in the shape's own orientation (default 0, the paper's
+    /// protocol; validation always uses it). On --resume, replaces the stored value.
+    #[arg(long)]
+    pose_angle: Option<f64>,
     /// Points per cloud of a generated pair (the network samples the model's N of them).
     #[arg(long, default_value_t = 1024)]
     pair_points: usize,
@@ -270,6 +275,16 @@ fn parse_loss(a: &TrainArgs) -> Result<LossConfig, String> {
     Ok(l)
 }
 
+/// `--pose-angle`, checked: a finite angle in [0, 360].
+fn pose_angle(a: &TrainArgs) -> Result<Option<f64>, String> {
+    match a.pose_angle {
+        Some(v) if !(v.is_finite() && (0.0..=360.0).contains(&v)) => {
+            Err(format!("--pose-angle {v}: expected degrees in [0, 360]"))
+        }
+        v => Ok(v),
+    }
+}
+
 fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
     let mut model = ModelConfig::preset(&a.preset).map_err(|e| e.to_string())?;
     if let Some(n) = a.network_points {
@@ -291,6 +306,7 @@ fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
         val_fraction: a.val_fraction,
         bank_fraction: a.bank_fraction,
         pair_points: a.pair_points,
+        pose_angle_deg: pose_angle(a)?.unwrap_or(0.0),
         curriculum: match &a.curriculum {
             Some(c) => Curriculum::parse(c)?,
             None => Curriculum::default(),
@@ -321,6 +337,7 @@ fn provenance(run: &Path, st: &RunState, bank_counts: (usize, usize, usize, usiz
             "bank_fraction": c.bank_fraction,
             "val_fraction": c.val_fraction,
             "pair_points": c.pair_points,
+            "pose_angle_deg": c.pose_angle_deg,
             "curriculum": c.curriculum,
             "val_pairs": c.val_pairs,
         },
@@ -369,6 +386,9 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         if let Some(n) = a.network_points {
             st.config.model.n_points = n;
             st.config.model.validate().map_err(|e| format!("--network-points {n}: {e}"))?;
+        }
+        if let Some(v) = pose_angle(&a)? {
+            st.config.pose_angle_deg = v;
         }
         if a.loss.is_some() {
             st.config.loss = parse_loss(&a)?;

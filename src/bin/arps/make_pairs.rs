@@ -57,12 +57,19 @@ pub struct MakePairsArgs {
     /// Points per cloud.
     #[arg(long, default_value_t = 1024)]
     points: usize,
+    /// Turn each whole shape by Euler angles up to this many degrees before cropping (0, the
+    /// paper's protocol, keeps the shape's own, usually upright, orientation; 180: any pose).
+    #[arg(long, default_value_t = 0.0)]
+    pose_angle: f64,
 }
 
 /// The distance written as `overlap_threshold`: five noise sigmas at the default noise.
 const OVERLAP_THRESHOLD: f64 = 0.05;
 
 pub fn run(a: MakePairsArgs) -> Result<(), String> {
+    if !(a.pose_angle.is_finite() && (0.0..=360.0).contains(&a.pose_angle)) {
+        return Err(format!("--pose-angle {}: expected degrees in [0, 360]", a.pose_angle));
+    }
     let mut source = match (&a.bank, a.procedural_only) {
         (Some(dir), false) => {
             let b = bank::load_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -84,6 +91,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
         max_translation: a.max_translation,
         noise_sigma: a.noise,
         points: a.points,
+        pose_angle_deg: a.pose_angle,
         ..PairParams::default()
     };
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;

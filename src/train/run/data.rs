@@ -19,6 +19,8 @@ pub struct TrainData {
     pub curriculum: Curriculum,
     /// Network points per cloud.
     pub n: usize,
+    /// [`RunConfig::pose_angle_deg`] (training pairs only).
+    pub pose_angle_deg: f64,
     /// Stream offset derived from the seed.
     pub stream: u64,
     /// Bank summary for the log: (usable meshes, skipped, train meshes, val meshes).
@@ -45,6 +47,7 @@ impl TrainData {
             full,
             curriculum: cfg.curriculum.clone(),
             n: cfg.model.n_points,
+            pose_angle_deg: cfg.pose_angle_deg,
             stream: cfg.seed.wrapping_mul(1 << 40),
             bank_counts: counts,
         })
@@ -52,7 +55,7 @@ impl TrainData {
 
     /// Training pair number `i` of the stream (deterministic in `(seed, i)`).
     pub fn train_pair(&self, i: u64) -> Result<TrainPair> {
-        let params = self.curriculum.params(i, &self.full);
+        let params = PairParams { pose_angle_deg: self.pose_angle_deg, ..self.curriculum.params(i, &self.full) };
         let index = self.stream.wrapping_add(i);
         let p = self.source.pair(Split::Train, index, &params)?;
         Ok(to_train_pair(&p, self.n, mix(index, 0x11E7)))

@@ -59,6 +59,11 @@ pub struct RunConfig {
     pub pair_points: usize,
     /// The curriculum (training pairs only; validation always uses the full protocol).
     pub curriculum: Curriculum,
+    /// Training pairs only: the whole shape is first turned by Euler angles up to this many
+    /// degrees ([`crate::data::PairParams::pose_angle_deg`]; 0, the default, is the paper's
+    /// protocol, in which the source keeps the shape's own orientation).
+    #[serde(default)]
+    pub pose_angle_deg: f64,
     /// Validation pairs (indices 0.. of the validation split: the same pairs as
     /// `arps make-pairs --split val --seed 0`).
     pub val_pairs: usize,
