@@ -23,6 +23,21 @@ fn euler(r: &nalgebra::Matrix3<f64>) -> [f64; 3] {
     [ax, ay, az].map(f64::to_degrees)
 }
 
+/// Counterparts (equal dense indices) coincide under the ground truth (no noise), and there are
+/// more than 200 of them.
+fn assert_counterparts_match(pair: &arps::data::Pair) {
+    let pos: std::collections::HashMap<u32, usize> =
+        pair.target_dense_index.iter().enumerate().map(|(k, &i)| (i, k)).collect();
+    let mut matched = 0;
+    for (j, i) in pair.source_dense_index.iter().enumerate() {
+        if let Some(&k) = pos.get(i) {
+            matched += 1;
+            assert!(close(apply(&pair.T_target_source, pair.source[j]), pair.target[k], 1e-5));
+        }
+    }
+    assert!(matched > 200, "only {matched} shared samples");
+}
+
 #[test]
 fn protocol_sizes_overlap_and_ranges() {
     let p = PairParams::default();
@@ -76,17 +91,7 @@ fn ground_truth_maps_source_onto_target_counterparts_without_noise() {
         for (q, &i) in pair.target.iter().zip(&pair.target_dense_index) {
             assert!(close(*q, apply(&pair.T_target_source, normed.points[i as usize]), 1e-5));
         }
-        // counterparts: equal dense indices
-        let mut matched = 0;
-        let pos: std::collections::HashMap<u32, usize> =
-            pair.target_dense_index.iter().enumerate().map(|(k, &i)| (i, k)).collect();
-        for (j, i) in pair.source_dense_index.iter().enumerate() {
-            if let Some(&k) = pos.get(i) {
-                matched += 1;
-                assert!(close(apply(&pair.T_target_source, pair.source[j]), pair.target[k], 1e-5));
-            }
-        }
-        assert!(matched > 200, "only {matched} shared samples");
+        assert_counterparts_match(&pair);
         // the full-shape centroid
         let c = normed.centroid();
         assert!((0..3).all(|a| (pair.centroid_source[a] - c[a]).abs() < 1e-9));
@@ -233,16 +238,7 @@ fn pose_angle_turns_the_whole_shape_and_keeps_the_ground_truth() {
         assert!((len(diff(ta, tb)) - len(diff(a, b))).abs() < 1e-5, "distances kept");
         assert!(!close(ta, a, 1e-3), "seed {seed}: the source was not turned");
         // the ground truth still maps each source point onto its target counterpart
-        let pos: std::collections::HashMap<u32, usize> =
-            turned.target_dense_index.iter().enumerate().map(|(k, &i)| (i, k)).collect();
-        let mut matched = 0;
-        for (j, i) in turned.source_dense_index.iter().enumerate() {
-            if let Some(&k) = pos.get(i) {
-                matched += 1;
-                assert!(close(apply(&turned.T_target_source, turned.source[j]), turned.target[k], 1e-5));
-            }
-        }
-        assert!(matched > 200, "only {matched} shared samples");
+        assert_counterparts_match(&turned);
         let c = turned.centroid_source;
         let ct = turned.T_target_source * Vector4::new(c[0], c[1], c[2], 1.0);
         assert!((0..3).all(|k| (turned.centroid_target[k] - ct[k]).abs() < 1e-9));
