@@ -17,7 +17,8 @@ use serde::{Deserialize, Serialize};
 #[serde(rename_all = "camelCase", default, deny_unknown_fields)]
 pub struct Options {
     /// Points per cloud fed to the network, at most [`MAX_NETWORK_POINTS`]. Default `None`: the
-    /// model's N (256 for `web`).
+    /// model's N (128 for the embedded model, which was fine-tuned at 128; the `web` preset's
+    /// runs start at 256).
     pub network_points: Option<usize>,
     /// Seed of every random choice (network sampling). Default 0. Same inputs + same seed = same
     /// output, bit for bit, on a given build.
@@ -140,7 +141,7 @@ pub struct Registrar {
 }
 
 /// Most points per cloud the network may be given: attention costs grow with its square
-/// (4096 points take seconds in WebAssembly; the shipped model was trained on 256).
+/// (4096 points take seconds in WebAssembly; the shipped model was trained on 256, then 128).
 pub const MAX_NETWORK_POINTS: usize = 4096;
 /// Default final ICP distance in normalised units.
 const DEFAULT_MAX_CORRESPONDENCE: f64 = 0.025;

@@ -53,7 +53,9 @@ impl ModelConfig {
     /// L = 4, J = 16) at N = 256 network points and H = N/4. At N = 512 the forward pass costs
     /// 4.5 GFLOP per pair, at N = 256 1.6 GFLOP (attention grows with N^2): the difference between
     /// about 150 ms and 55 ms in WebAssembly, and about 3x in training throughput. ICP refines on
-    /// the full clouds, so the network only has to land in ICP's basin.
+    /// the full clouds, so the network only has to land in ICP's basin. The embedded model was
+    /// then fine-tuned at N = 128 (`arps-train --network-points 128`: level at equal CPU, half the
+    /// cost; `models/MODEL.md`), so its weights file says N = 128.
     pub fn web() -> Self {
         Self {
             preset: "web".into(),
