@@ -23,19 +23,25 @@ fn euler(r: &nalgebra::Matrix3<f64>) -> [f64; 3] {
     [ax, ay, az].map(f64::to_degrees)
 }
 
-/// Counterparts (equal dense indices) coincide under the ground truth (no noise), and there are
-/// more than 200 of them.
-fn assert_counterparts_match(pair: &arps::data::Pair) {
+/// Counterparts (equal dense indices) coincide under `t_target_source` (no noise); returns how
+/// many there are. `source`/`target` are the pair's clouds in any frames `t_target_source` maps
+/// between.
+fn counterparts_match(
+    pair: &arps::data::Pair,
+    t_target_source: &nalgebra::Matrix4<f64>,
+    source: &[[f32; 3]],
+    target: &[[f32; 3]],
+) -> usize {
     let pos: std::collections::HashMap<u32, usize> =
         pair.target_dense_index.iter().enumerate().map(|(k, &i)| (i, k)).collect();
     let mut matched = 0;
     for (j, i) in pair.source_dense_index.iter().enumerate() {
         if let Some(&k) = pos.get(i) {
             matched += 1;
-            assert!(close(apply(&pair.T_target_source, pair.source[j]), pair.target[k], 1e-5));
+            assert!(close(apply(t_target_source, source[j]), target[k], 1e-5));
         }
     }
-    assert!(matched > 200, "only {matched} shared samples");
+    matched
 }
 
 #[test]
@@ -91,7 +97,8 @@ fn ground_truth_maps_source_onto_target_counterparts_without_noise() {
         for (q, &i) in pair.target.iter().zip(&pair.target_dense_index) {
             assert!(close(*q, apply(&pair.T_target_source, normed.points[i as usize]), 1e-5));
         }
-        assert_counterparts_match(&pair);
+        let matched = counterparts_match(&pair, &pair.T_target_source, &pair.source, &pair.target);
+        assert!(matched > 200, "only {matched} shared samples");
         // the full-shape centroid
         let c = normed.centroid();
         assert!((0..3).all(|a| (pair.centroid_source[a] - c[a]).abs() < 1e-9));
@@ -160,16 +167,7 @@ fn engine_frames_are_consistent() {
             assert!(lo.iter().chain(&hi).all(|v| v.abs() <= 1.0 + 1e-5));
         }
         // the engine-frame GT maps the normalised source onto the normalised target
-        let pos: std::collections::HashMap<u32, usize> =
-            pair.target_dense_index.iter().enumerate().map(|(k, &i)| (i, k)).collect();
-        let mut matched = 0;
-        for (j, i) in pair.source_dense_index.iter().enumerate() {
-            if let Some(&k) = pos.get(i) {
-                matched += 1;
-                assert!(close(apply(&e.T_target_source, e.source.points[j]), e.target.points[k], 1e-5));
-            }
-        }
-        assert!(matched > 100);
+        assert!(counterparts_match(&pair, &e.T_target_source, &e.source.points, &e.target.points) > 100);
         let cs = e.centroid_source;
         let ct = e.T_target_source * Vector4::new(cs[0], cs[1], cs[2], 1.0);
         assert!((0..3).all(|a| (ct[a] - e.centroid_target[a]).abs() < 1e-9));
@@ -238,7 +236,8 @@ fn pose_angle_turns_the_whole_shape_and_keeps_the_ground_truth() {
         assert!((len(diff(ta, tb)) - len(diff(a, b))).abs() < 1e-5, "distances kept");
         assert!(!close(ta, a, 1e-3), "seed {seed}: the source was not turned");
         // the ground truth still maps each source point onto its target counterpart
-        assert_counterparts_match(&turned);
+        let matched = counterparts_match(&turned, &turned.T_target_source, &turned.source, &turned.target);
+        assert!(matched > 200, "only {matched} shared samples");
         let c = turned.centroid_source;
         let ct = turned.T_target_source * Vector4::new(c[0], c[1], c[2], 1.0);
         assert!((0..3).all(|k| (turned.centroid_target[k] - ct[k]).abs() < 1e-9));
