@@ -52,11 +52,11 @@ pub struct Options {
     /// `[Network, Centroids, Initial, Turned]`: on 500 validation pairs (`arps eval`, the model
     /// of step 11,818 in `models/MODEL.md`) recall 0.940 and MRE 4.1 degrees, against 0.880 / 5.6
     /// without `Turned` and 0.820 / 7.6 for `[Network]` alone, for about twice the refinement time
-    /// of the three plain starts (the shipped model: 0.948 / 3.3 and 0.852 / 6.4 for `[Network]`). Must be non-empty and
-    /// without repeats. With `network: false`, a `Network` start is the initial transform
-    /// (reported as `Initial`) and `Turned` turns the initial transform. With `icp: Off` nothing
-    /// is refined or compared: the first start is the answer (choosing among unrefined starts by
-    /// fitness measured worse than taking the network's).
+    /// of the three plain starts (the shipped model: 0.954 / 3.6 and 0.852 / 6.5 for `[Network]`).
+    /// Must be non-empty and without repeats. With `network: false`, a `Network` start is the
+    /// initial transform (reported as `Initial`) and `Turned` turns the initial transform. With
+    /// `icp: Off` nothing is refined or compared: the first start is the answer (choosing among
+    /// unrefined starts by fitness measured worse than taking the network's).
     pub starts: Vec<Start>,
 }
 

@@ -24,7 +24,7 @@ use crate::cloud::{JointNormalization, PointCloud};
 use crate::io::Mesh;
 use crate::transform::{euler_xyz, from_rotation_translation};
 use crate::{sampling, Result};
-use nalgebra::{Matrix4, Vector3};
+use nalgebra::{Matrix3, Matrix4, Vector3};
 use rand::Rng;
 use rand_chacha::ChaCha8Rng;
 
@@ -102,6 +102,24 @@ pub struct Pair {
     pub source_dense_index: Vec<u32>,
     /// For each target point, its index in the dense cloud.
     pub target_dense_index: Vec<u32>,
+}
+
+/// `Rx·Ry·Rz` ([`euler_xyz`]) with the three angles drawn in that order from `U[-max_deg, max_deg]`.
+fn random_euler(rng: &mut ChaCha8Rng, max_deg: f64) -> Matrix3<f64> {
+    let a = max_deg.to_radians();
+    let mut angle = || (rng.random::<f64>() * 2.0 - 1.0) * a;
+    let (ax, ay, az) = (angle(), angle(), angle());
+    euler_xyz(ax, ay, az)
+}
+
+/// Checks a [`PairParams::pose_angle_deg`] given by a user: a finite angle in [0, 360] degrees.
+/// The error message starts with the value (`"400: expected ..."`).
+pub fn check_pose_angle(deg: f64) -> std::result::Result<f64, String> {
+    if deg.is_finite() && (0.0..=360.0).contains(&deg) {
+        Ok(deg)
+    } else {
+        Err(format!("{deg}: expected degrees in [0, 360]"))
+    }
 }
 
 /// Normalises a cloud as the protocol does for a full shape: bounding-box centre to the origin,
@@ -198,10 +216,8 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
     let (p, _, _) = normalize_shape(dense);
     let p = if params.pose_angle_deg > 0.0 {
         let mut pose_rng = sampling::rng(super::mix(seed, 0x905E));
-        let a = params.pose_angle_deg.to_radians();
-        let mut angle = || (pose_rng.random::<f64>() * 2.0 - 1.0) * a;
-        let (ax, ay, az) = (angle(), angle(), angle());
-        p.transformed(&from_rotation_translation(&euler_xyz(ax, ay, az), &Vector3::zeros()))
+        let pose = random_euler(&mut pose_rng, params.pose_angle_deg);
+        p.transformed(&from_rotation_translation(&pose, &Vector3::zeros()))
     } else {
         p
     };
@@ -233,10 +249,7 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
     let mut tgt_i = resample(&t_idx, params.points, &mut rng);
 
     // 5. rigid motion
-    let a = params.max_angle_deg.to_radians();
-    let mut angle = || (rng.random::<f64>() * 2.0 - 1.0) * a;
-    let (ax, ay, az) = (angle(), angle(), angle());
-    let r = euler_xyz(ax, ay, az);
+    let r = random_euler(&mut rng, params.max_angle_deg);
     let t = unit_vector(&mut rng) * (rng.random::<f64>() * params.max_translation);
     let gt = from_rotation_translation(&r, &t);
 

@@ -54,8 +54,8 @@ impl ModelConfig {
     /// 4.5 GFLOP per pair, at N = 256 1.6 GFLOP (attention grows with N^2): the difference between
     /// about 150 ms and 55 ms in WebAssembly, and about 3x in training throughput. ICP refines on
     /// the full clouds, so the network only has to land in ICP's basin. The embedded model was
-    /// then fine-tuned at N = 128 (`arps-train --network-points 128`: level at equal CPU, half the
-    /// cost; `models/MODEL.md`), so its weights file says N = 128.
+    /// then fine-tuned at N = 128 (`arps-train --network-points 128`: at equal CPU level for the
+    /// full pipeline, a little behind for the network alone, at half the cost; `models/MODEL.md`), so its weights file says N = 128.
     pub fn web() -> Self {
         Self {
             preset: "web".into(),

@@ -7,6 +7,7 @@
 //! * `arps-train curves --run runs/NAME --out curve.svg`: validation recall / MRE and the training
 //!   loss over wall-clock time.
 
+use arps::data::pairs::check_pose_angle;
 use arps::train::run::{
     checkpoint, data::TrainData, log, process_cpu_seconds, validate, Curriculum, RunConfig, RunState, ValMetrics,
     TRAINER_VERSION,
@@ -275,22 +276,23 @@ fn parse_loss(a: &TrainArgs) -> Result<LossConfig, String> {
     Ok(l)
 }
 
-/// `--pose-angle`, checked: a finite angle in [0, 360].
+/// `--pose-angle`, checked ([`check_pose_angle`]).
 fn pose_angle(a: &TrainArgs) -> Result<Option<f64>, String> {
-    match a.pose_angle {
-        Some(v) if !(v.is_finite() && (0.0..=360.0).contains(&v)) => {
-            Err(format!("--pose-angle {v}: expected degrees in [0, 360]"))
-        }
-        v => Ok(v),
-    }
+    a.pose_angle.map(|v| check_pose_angle(v).map_err(|e| format!("--pose-angle {e}"))).transpose()
 }
 
-fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
-    let mut model = ModelConfig::preset(&a.preset).map_err(|e| e.to_string())?;
+/// `--network-points`, when given, replaces `model`'s N (checked with the rest of the config).
+fn set_network_points(model: &mut ModelConfig, a: &TrainArgs) -> Result<(), String> {
     if let Some(n) = a.network_points {
         model.n_points = n;
         model.validate().map_err(|e| format!("--network-points {n}: {e}"))?;
     }
+    Ok(())
+}
+
+fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
+    let mut model = ModelConfig::preset(&a.preset).map_err(|e| e.to_string())?;
+    set_network_points(&mut model, a)?;
     Ok(RunConfig {
         model,
         loss: parse_loss(a)?,
@@ -383,10 +385,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
             st.config.plateau_patience = v;
             st.bad_validations = 0;
         }
-        if let Some(n) = a.network_points {
-            st.config.model.n_points = n;
-            st.config.model.validate().map_err(|e| format!("--network-points {n}: {e}"))?;
-        }
+        set_network_points(&mut st.config.model, &a)?;
         if let Some(v) = pose_angle(&a)? {
             st.config.pose_angle_deg = v;
         }

@@ -5,6 +5,7 @@
 
 use arps::data::bank;
 use arps::data::manifest::{self, Entry, PairMeta, Sidecar};
+use arps::data::pairs::check_pose_angle;
 use arps::data::source::{ShapeSource, Split};
 use arps::data::PairParams;
 use arps::{io, PointCloud};
@@ -67,9 +68,7 @@ pub struct MakePairsArgs {
 const OVERLAP_THRESHOLD: f64 = 0.05;
 
 pub fn run(a: MakePairsArgs) -> Result<(), String> {
-    if !(a.pose_angle.is_finite() && (0.0..=360.0).contains(&a.pose_angle)) {
-        return Err(format!("--pose-angle {}: expected degrees in [0, 360]", a.pose_angle));
-    }
+    let pose_angle_deg = check_pose_angle(a.pose_angle).map_err(|e| format!("--pose-angle {e}"))?;
     let mut source = match (&a.bank, a.procedural_only) {
         (Some(dir), false) => {
             let b = bank::load_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -91,7 +90,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
         max_translation: a.max_translation,
         noise_sigma: a.noise,
         points: a.points,
-        pose_angle_deg: a.pose_angle,
+        pose_angle_deg,
         ..PairParams::default()
     };
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
