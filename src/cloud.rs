@@ -114,6 +114,12 @@ impl PointCloud {
         (lo, hi)
     }
 
+    /// The largest half-extent of the axis-aligned bounds (0 for an empty cloud).
+    pub fn half_extent(&self) -> f64 {
+        let (lo, hi) = self.bounds();
+        (0..3).map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5).fold(0.0, f64::max)
+    }
+
     /// The mean point, accumulated in `f64`.
     pub fn centroid(&self) -> [f64; 3] {
         let mut s = [0.0f64; 3];
@@ -155,8 +161,7 @@ impl JointNormalization {
         let box_of = |c: &PointCloud| {
             let (lo, hi) = c.bounds();
             let center = [0, 1, 2].map(|a| (lo[a] as f64 + hi[a] as f64) * 0.5);
-            let half = (0..3).map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5).fold(0.0, f64::max);
-            (center, half)
+            (center, c.half_extent())
         };
         let (source_center, hs) = box_of(source);
         let (target_center, ht) = box_of(target);

@@ -145,6 +145,11 @@ pub struct Registrar {
 pub const MAX_NETWORK_POINTS: usize = 4096;
 /// Default final ICP distance in normalised units.
 const DEFAULT_MAX_CORRESPONDENCE: f64 = 0.025;
+/// Ratio of the clouds' sizes (largest half-extents) above which a warning says they may be in
+/// different units. A partial scan of an object is smaller than a model of the whole, but not by
+/// this much; metres against millimetres is 1000.
+const SIZE_RATIO_WARNING: f64 = 10.0;
+
 /// Fitness below which a warning says the alignment may have failed.
 const LOW_FITNESS: f64 = 0.3;
 
@@ -230,6 +235,13 @@ impl Registrar {
             }
             None => Matrix4::identity(),
         };
+        let (size_source, size_target) = (source.half_extent(), target.half_extent());
+        let size_ratio = size_source.max(size_target) / size_source.min(size_target);
+        if size_ratio > SIZE_RATIO_WARNING {
+            warnings.push(format!(
+                "the clouds differ in size by {size_ratio:.0}x (largest half-extents: source {size_source:.4}, target {size_target:.4}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres)"
+            ));
+        }
         // The network sees the source already moved by the initial guess.
         let source_init = if options.initial_transform.is_some() { source.transformed(&init) } else { source.clone() };
         let norm = JointNormalization::of_pair(&source_init, &target);

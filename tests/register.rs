@@ -188,3 +188,19 @@ fn network_points_are_capped_and_tiny_voxels_mean_none() {
     assert_eq!(exact.fitness, tiny.fitness);
     assert!(tiny.fitness > 0.99, "{}", tiny.fitness);
 }
+
+#[test]
+fn clouds_in_different_units_get_a_warning() {
+    let source = bumpy_surface(1500, 0.0);
+    let same = bumpy_surface(1500, 0.2);
+    let r = registrar().register(&source, &same, &Options::default()).unwrap();
+    assert!(!r.warnings.iter().any(|w| w.contains("same unit")), "{:?}", r.warnings);
+    // the target in millimetres, the source in metres
+    let millimetres = PointCloud::new(same.points.iter().map(|p| p.map(|x| x * 1000.0)).collect());
+    let r = registrar().register(&source, &millimetres, &Options::default()).unwrap();
+    assert!(
+        r.warnings.iter().any(|w| w.contains("differ in size by 1000x") && w.contains("same unit")),
+        "{:?}",
+        r.warnings
+    );
+}
