@@ -187,3 +187,42 @@ fn resume_can_fork_with_other_losses_and_lr() {
     }
     let _ = std::fs::remove_dir_all(&run);
 }
+
+#[test]
+fn new_runs_take_model_sizes_and_resumed_runs_keep_theirs() {
+    let run = dir("sizes");
+    let mut args = COMMON.to_vec();
+    args.extend(["--steps", "3", "--feature-dim", "12", "--heads", "3", "--ffn-dim", "20", "--layers", "3"]);
+    train(&run, &args);
+    let exported = run.join("sized.safetensors");
+    let out = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["export", "--run", run.to_str().unwrap(), "--latest", "--out", exported.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    // the engine loads the sized model and runs it
+    let w = arps::Weights::from_bytes(&std::fs::read(&exported).unwrap()).unwrap();
+    let c = &w.config;
+    assert_eq!((c.feature_dim, c.heads, c.ffn_dim, c.layers), (12, 3, 20, 3));
+    assert_eq!(c.preset, "tiny+feature-dim=12+heads=3+ffn-dim=20+layers=3");
+    let mut reg = arps::Registrar::new(&w).unwrap();
+    let cloud = arps::PointCloud::new(
+        (0..200).map(|i| [(i % 10) as f32, (i / 10) as f32 * 0.7, ((i * 7) % 13) as f32 * 0.3]).collect(),
+    );
+    reg.register(&cloud, &cloud, &arps::Options::default()).unwrap();
+    // a resumed run cannot change its size; a new one gets a clear error for an inconsistent one
+    let out = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["train", "--run", run.to_str().unwrap(), "--resume", "--steps", "4", "--layers", "2"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("--layers"));
+    let other = dir("sizes-bad");
+    let out = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["train", "--run", other.to_str().unwrap(), "--preset", "tiny", "--steps", "1", "--heads", "5"])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("model size") && err.contains("heads = 5"), "{err}");
+    let _ = std::fs::remove_dir_all(&run);
+    let _ = std::fs::remove_dir_all(&other);
+}

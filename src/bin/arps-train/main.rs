@@ -92,6 +92,18 @@ struct TrainArgs {
     /// the stored N (a fork that fine-tunes at another N; the weights do not depend on it).
     #[arg(long)]
     network_points: Option<usize>,
+    /// Per-point feature width C of a new run (default: the preset's; tokens are 2C wide).
+    #[arg(long)]
+    feature_dim: Option<usize>,
+    /// Attention heads of a new run (default: the preset's; 2C must be divisible by it).
+    #[arg(long)]
+    heads: Option<usize>,
+    /// Feed-forward width of a new run's attention blocks (default: the preset's).
+    #[arg(long)]
+    ffn_dim: Option<usize>,
+    /// ARPS layers L of a new run (default: the preset's).
+    #[arg(long)]
+    layers: Option<usize>,
     /// Smallest lr the plateau schedule goes to.
     #[arg(long, default_value_t = 1e-5)]
     min_lr: f32,
@@ -290,8 +302,32 @@ fn set_network_points(model: &mut ModelConfig, a: &TrainArgs) -> Result<(), Stri
     Ok(())
 }
 
-fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
+/// The model-size flags that were given, as `(flag, value)`.
+fn size_flags(a: &TrainArgs) -> Vec<(&'static str, usize)> {
+    [("--feature-dim", a.feature_dim), ("--heads", a.heads), ("--ffn-dim", a.ffn_dim), ("--layers", a.layers)]
+        .into_iter()
+        .filter_map(|(flag, v)| v.map(|v| (flag, v)))
+        .collect()
+}
+
+/// The preset with the model-size flags applied; the label becomes e.g. `web+feature-dim=96`.
+fn model_config(a: &TrainArgs) -> Result<ModelConfig, String> {
     let mut model = ModelConfig::preset(&a.preset).map_err(|e| e.to_string())?;
+    for (flag, v) in size_flags(a) {
+        match flag {
+            "--feature-dim" => model.feature_dim = v,
+            "--heads" => model.heads = v,
+            "--ffn-dim" => model.ffn_dim = v,
+            _ => model.layers = v,
+        }
+        model.preset.push_str(&format!("+{}={v}", &flag[2..]));
+    }
+    model.validate().map_err(|e| format!("model size: {e}"))?;
+    Ok(model)
+}
+
+fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
+    let mut model = model_config(a)?;
     set_network_points(&mut model, a)?;
     Ok(RunConfig {
         model,
@@ -364,6 +400,9 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
     let ckpt_path = a.run.join("checkpoint.safetensors");
     let best_path = a.run.join("best.safetensors");
     let (mut st, params, adam) = if a.resume {
+        if let Some((flag, _)) = size_flags(&a).first() {
+            return Err(format!("{flag} sets the size of a new run; a resumed run keeps its model's size"));
+        }
         let (mut st, p, adam) = checkpoint::load(&ckpt_path)?;
         st.config.threads = a.threads.max(1);
         if let Some(v) = a.val_every_minutes {
