@@ -22,6 +22,17 @@ fn train(run: &Path, extra: &[&str]) {
     assert!(out.status.success(), "arps-train {args:?} failed:\n{}", String::from_utf8_lossy(&out.stderr));
 }
 
+/// `arps-train export --latest` of `run`, loaded by the engine.
+fn export_latest(run: &Path) -> arps::Weights {
+    let exported = run.join("latest.safetensors");
+    let out = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["export", "--run", run.to_str().unwrap(), "--latest", "--out", exported.to_str().unwrap()])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    arps::Weights::from_bytes(&std::fs::read(&exported).unwrap()).unwrap()
+}
+
 const COMMON: [&str; 20] = [
     "--preset",
     "tiny",
@@ -165,13 +176,7 @@ fn resume_can_fork_with_other_losses_and_lr() {
     let (st, _, _) = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
     assert_eq!((st.step, st.config.model.n_points, st.config.plateau_patience), (25, 24, 7));
     assert_eq!(st.config.pose_angle_deg, 180.0);
-    let exported = run.join("n24.safetensors");
-    let out = Command::new(env!("CARGO_BIN_EXE_arps-train"))
-        .args(["export", "--run", run.to_str().unwrap(), "--latest", "--out", exported.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
-    let w = arps::Weights::from_bytes(&std::fs::read(&exported).unwrap()).unwrap();
+    let w = export_latest(&run);
     assert_eq!(w.config.n_points, 24);
     let o = Command::new(env!("CARGO_BIN_EXE_arps-train"))
         .args(["partition-oracle", "--run", run.to_str().unwrap(), "--pairs", "2", "--points", "2"])
@@ -194,14 +199,8 @@ fn new_runs_take_model_sizes_and_resumed_runs_keep_theirs() {
     let mut args = COMMON.to_vec();
     args.extend(["--steps", "3", "--feature-dim", "12", "--heads", "3", "--ffn-dim", "20", "--layers", "3"]);
     train(&run, &args);
-    let exported = run.join("sized.safetensors");
-    let out = Command::new(env!("CARGO_BIN_EXE_arps-train"))
-        .args(["export", "--run", run.to_str().unwrap(), "--latest", "--out", exported.to_str().unwrap()])
-        .output()
-        .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     // the engine loads the sized model and runs it
-    let w = arps::Weights::from_bytes(&std::fs::read(&exported).unwrap()).unwrap();
+    let w = export_latest(&run);
     let c = &w.config;
     assert_eq!((c.feature_dim, c.heads, c.ffn_dim, c.layers), (12, 3, 20, 3));
     assert_eq!(c.preset, "tiny+feature-dim=12+heads=3+ffn-dim=20+layers=3");
