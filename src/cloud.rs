@@ -117,7 +117,7 @@ impl PointCloud {
     /// The largest half-extent of the axis-aligned bounds (0 for an empty cloud).
     pub fn half_extent(&self) -> f64 {
         let (lo, hi) = self.bounds();
-        (0..3).map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5).fold(0.0, f64::max)
+        half_extent_of(lo, hi)
     }
 
     /// The mean point, accumulated in `f64`.
@@ -136,6 +136,11 @@ impl PointCloud {
     pub fn transformed(&self, m: &Matrix4<f64>) -> PointCloud {
         PointCloud::new(self.points.iter().map(|&p| crate::transform::apply(m, p)).collect())
     }
+}
+
+/// The largest half-extent of the box `[lo, hi]`.
+fn half_extent_of(lo: [f32; 3], hi: [f32; 3]) -> f64 {
+    (0..3).map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5).fold(0.0, f64::max)
 }
 
 /// The normalisation the library applies before the network (method.md A.2).
@@ -161,7 +166,7 @@ impl JointNormalization {
         let box_of = |c: &PointCloud| {
             let (lo, hi) = c.bounds();
             let center = [0, 1, 2].map(|a| (lo[a] as f64 + hi[a] as f64) * 0.5);
-            (center, c.half_extent())
+            (center, half_extent_of(lo, hi))
         };
         let (source_center, hs) = box_of(source);
         let (target_center, ht) = box_of(target);

@@ -302,24 +302,25 @@ fn set_network_points(model: &mut ModelConfig, a: &TrainArgs) -> Result<(), Stri
     Ok(())
 }
 
-/// The model-size flags that were given, as `(flag, value)`.
-fn size_flags(a: &TrainArgs) -> Vec<(&'static str, usize)> {
-    [("--feature-dim", a.feature_dim), ("--heads", a.heads), ("--ffn-dim", a.ffn_dim), ("--layers", a.layers)]
-        .into_iter()
-        .filter_map(|(flag, v)| v.map(|v| (flag, v)))
-        .collect()
+/// Sets one size of a [`ModelConfig`].
+type SetSize = fn(&mut ModelConfig, usize);
+
+/// The model-size flags that were given, as `(flag, value, setter)`.
+fn size_flags(a: &TrainArgs) -> Vec<(&'static str, usize, SetSize)> {
+    let flags: [(&'static str, Option<usize>, SetSize); 4] = [
+        ("--feature-dim", a.feature_dim, |m, v| m.feature_dim = v),
+        ("--heads", a.heads, |m, v| m.heads = v),
+        ("--ffn-dim", a.ffn_dim, |m, v| m.ffn_dim = v),
+        ("--layers", a.layers, |m, v| m.layers = v),
+    ];
+    flags.into_iter().filter_map(|(flag, v, set)| v.map(|v| (flag, v, set))).collect()
 }
 
 /// The preset with the model-size flags applied; the label becomes e.g. `web+feature-dim=96`.
 fn model_config(a: &TrainArgs) -> Result<ModelConfig, String> {
     let mut model = ModelConfig::preset(&a.preset).map_err(|e| e.to_string())?;
-    for (flag, v) in size_flags(a) {
-        match flag {
-            "--feature-dim" => model.feature_dim = v,
-            "--heads" => model.heads = v,
-            "--ffn-dim" => model.ffn_dim = v,
-            _ => model.layers = v,
-        }
+    for (flag, v, set) in size_flags(a) {
+        set(&mut model, v);
         model.preset.push_str(&format!("+{}={v}", &flag[2..]));
     }
     model.validate().map_err(|e| format!("model size: {e}"))?;
@@ -400,7 +401,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
     let ckpt_path = a.run.join("checkpoint.safetensors");
     let best_path = a.run.join("best.safetensors");
     let (mut st, params, adam) = if a.resume {
-        if let Some((flag, _)) = size_flags(&a).first() {
+        if let Some((flag, _, _)) = size_flags(&a).first() {
             return Err(format!("{flag} sets the size of a new run; a resumed run keeps its model's size"));
         }
         let (mut st, p, adam) = checkpoint::load(&ckpt_path)?;
