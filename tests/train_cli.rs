@@ -70,7 +70,9 @@ fn short_run_lowers_the_loss_and_exports() {
     let last = (losses[6] + losses[7]) / 2.0;
     assert!(last < 0.8 * first, "loss did not drop: {losses:?}");
     assert!(lines.iter().any(|l| l["kind"] == "val" && l["val"]["net_recall"].is_number()));
-    let (st, params, adam) = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
+    let checkpoint::Checkpoint { state: st, params, adam, ema } =
+        checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
+    assert!(ema.is_none(), "a run without --ema keeps no average");
     assert_eq!((st.step, st.pairs_seen, adam.t), (80, 320, 80));
     assert_eq!(params.len(), arps::ModelConfig::tiny().tensor_specs().len());
     assert!(run.join("best.safetensors").exists());
@@ -106,12 +108,12 @@ fn short_run_lowers_the_loss_and_exports() {
 fn resume_continues_exactly() {
     let (a, b) = (dir("straight"), dir("resumed"));
     let mut args = COMMON.to_vec();
-    args.extend(["--steps", "30"]);
+    args.extend(["--steps", "30", "--ema", "0.9"]);
     train(&a, &args);
     let mut first = COMMON.to_vec();
-    first.extend(["--steps", "15"]);
+    first.extend(["--steps", "15", "--ema", "0.9"]);
     train(&b, &first);
-    let (st, _, _) = checkpoint::load(&b.join("checkpoint.safetensors")).unwrap();
+    let st = checkpoint::load(&b.join("checkpoint.safetensors")).unwrap().state;
     assert_eq!(st.step, 15);
     // a new run refuses to overwrite an existing one
     let again = Command::new(env!("CARGO_BIN_EXE_arps-train"))
@@ -120,12 +122,16 @@ fn resume_continues_exactly() {
         .unwrap();
     assert!(!again.status.success());
     train(&b, &["--resume", "--steps", "30", "--quiet"]);
-    let (sa, pa, aa) = checkpoint::load(&a.join("checkpoint.safetensors")).unwrap();
-    let (sb, pb, ab) = checkpoint::load(&b.join("checkpoint.safetensors")).unwrap();
+    let checkpoint::Checkpoint { state: sa, params: pa, adam: aa, ema: ea } =
+        checkpoint::load(&a.join("checkpoint.safetensors")).unwrap();
+    let checkpoint::Checkpoint { state: sb, params: pb, adam: ab, ema: eb } =
+        checkpoint::load(&b.join("checkpoint.safetensors")).unwrap();
     assert_eq!((sb.step, sb.pairs_seen, sb.sessions), (30, 120, 2));
     assert_eq!((sa.step, sa.pairs_seen, sa.lr, sa.best_step), (sb.step, sb.pairs_seen, sb.lr, sb.best_step));
     assert_eq!(pa, pb, "parameters differ after resume");
     assert_eq!(aa, ab, "Adam state differs after resume");
+    assert!(ea.is_some());
+    assert_eq!(ea, eb, "moving average differs after resume");
     let _ = std::fs::remove_dir_all(&a);
     let _ = std::fs::remove_dir_all(&b);
 }
@@ -136,10 +142,10 @@ fn resume_can_fork_with_other_losses_and_lr() {
     let mut args = COMMON.to_vec();
     args.extend(["--steps", "10"]);
     train(&run, &args);
-    let (st, _, _) = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
+    let st = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap().state;
     assert_eq!((st.config.loss.seg, st.config.loss.means), (0.0, 0.0));
     train(&run, &["--resume", "--steps", "20", "--quiet", "--loss", "sup,ctr,seg=0.5,means=0.1", "--lr", "2e-4"]);
-    let (st, _, _) = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
+    let st = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap().state;
     assert_eq!((st.step, st.config.loss.seg, st.config.loss.means, st.config.loss.sup), (20, 0.5, 0.1, 1.0));
     assert!((st.lr - 2e-4).abs() < 1e-9, "lr {}", st.lr);
     let lines = log::read(&run.join("log.jsonl")).unwrap();
@@ -173,7 +179,7 @@ fn resume_can_fork_with_other_losses_and_lr() {
     let a =
         ["--resume", "--steps", "25", "--quiet", "--network-points", "24", "--patience", "7", "--pose-angle", "180"];
     train(&run, &a);
-    let (st, _, _) = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
+    let st = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap().state;
     assert_eq!((st.step, st.config.model.n_points, st.config.plateau_patience), (25, 24, 7));
     assert_eq!(st.config.pose_angle_deg, 180.0);
     let w = export_latest(&run);
@@ -224,4 +230,41 @@ fn new_runs_take_model_sizes_and_resumed_runs_keep_theirs() {
     assert!(!out.status.success() && err.contains("model size") && err.contains("heads = 5"), "{err}");
     let _ = std::fs::remove_dir_all(&run);
     let _ = std::fs::remove_dir_all(&other);
+}
+
+#[test]
+fn a_moving_average_is_validated_exported_and_can_be_switched_off() {
+    let run = dir("ema");
+    let mut args = COMMON.to_vec();
+    args.extend(["--steps", "20", "--ema", "0.8"]);
+    train(&run, &args);
+    let ck = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
+    assert_eq!(ck.state.config.ema_decay, Some(0.8));
+    let ema = ck.ema.expect("the checkpoint holds the average");
+    assert_eq!(ema.keys().collect::<Vec<_>>(), ck.params.keys().collect::<Vec<_>>());
+    assert_ne!(ema, ck.params, "the average lags the parameters");
+    // validation scores the average and logs the current parameters beside it
+    let lines = log::read(&run.join("log.jsonl")).unwrap();
+    let vals: Vec<_> = lines.iter().filter(|l| l["kind"] == "val" && l["step"] == 20).collect();
+    assert_eq!(vals.len(), 1, "{lines:?}");
+    assert!(vals[0]["val"]["net_recall"].is_number() && vals[0]["val_raw"]["net_recall"].is_number(), "{}", vals[0]);
+    // export --latest writes the average
+    let w = export_latest(&run);
+    for (name, v) in &ema {
+        assert_eq!(w.get(name), v.as_slice(), "{name}");
+    }
+    // a bad decay is a clear error; 0 switches the average off and export writes the parameters
+    let bad = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["train", "--run", run.to_str().unwrap(), "--resume", "--steps", "21", "--ema", "1.5"])
+        .output()
+        .unwrap();
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("--ema 1.5"));
+    train(&run, &["--resume", "--steps", "22", "--quiet", "--ema", "0"]);
+    let ck = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap();
+    assert_eq!((ck.state.step, ck.state.config.ema_decay, ck.ema.is_none()), (22, None, true));
+    let w = export_latest(&run);
+    for (name, v) in &ck.params {
+        assert_eq!(w.get(name), v.as_slice(), "{name}");
+    }
+    let _ = std::fs::remove_dir_all(&run);
 }

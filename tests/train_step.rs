@@ -39,6 +39,45 @@ fn adam_matches_closed_form_first_step() {
 }
 
 #[test]
+fn moving_average_follows_the_closed_form() {
+    // avg_k = d^k avg_0 + (1 - d^k) p for parameters held at p
+    let mut p = train::Params::new();
+    p.insert("a".into(), vec![0.0, 4.0]);
+    let mut ema = train::Ema::new(0.5, &p);
+    p.insert("a".into(), vec![2.0, 0.0]);
+    p.insert("new".into(), vec![7.0]);
+    ema.update(&p);
+    ema.update(&p);
+    assert_eq!(ema.params["a"], vec![1.5, 1.0]);
+    // a parameter the average did not hold starts at its current value
+    assert_eq!(ema.params["new"], vec![7.0]);
+}
+
+#[test]
+fn steps_update_the_moving_average_and_skipped_steps_do_not() {
+    let cfg = ModelConfig::tiny();
+    let params = train::init_params(&cfg, 2).unwrap();
+    let mut state = TrainState::new(cfg.clone(), params.clone(), 1e-2, Some(1.0));
+    state.ema = Some(train::Ema::new(0.75, &params));
+    let pairs = synthetic::pairs(2, cfg.n_points, 7);
+    let r = train::train_step(&mut state, &pairs, &LossConfig::default(), 2);
+    assert!(!r.skipped);
+    let ema = &state.ema.as_ref().unwrap().params;
+    for (name, p0) in &params {
+        let p1 = &state.params[name];
+        for ((a, x0), x1) in ema[name].iter().zip(p0).zip(p1) {
+            assert!((a - (0.75 * x0 + 0.25 * x1)).abs() < 1e-6, "{name}: {a} vs {x0} -> {x1}");
+        }
+    }
+    assert!(std::ptr::eq(state.eval_params(), ema));
+    let before = state.ema.clone();
+    let mut bad = pairs.clone();
+    bad[0].source[0][1] = f32::INFINITY;
+    assert!(train::train_step(&mut state, &bad, &LossConfig::default(), 2).skipped);
+    assert_eq!(state.ema, before);
+}
+
+#[test]
 fn non_finite_step_is_skipped() {
     let cfg = ModelConfig::tiny();
     let params = train::init_params(&cfg, 2).unwrap();

@@ -52,7 +52,7 @@ pub use export::{init_params, to_weights};
 pub use losses::{CentroidMode, LossConfig, LossParts};
 pub use model::{forward, Forward, Params};
 pub use ops::ConsistencyKind;
-pub use optim::Adam;
+pub use optim::{Adam, Ema};
 pub use pair::Pair;
 pub use step::{batch_gradients, pair_gradients, train_step, StepReport, TrainState};
 pub use tape::{Id, Tape};

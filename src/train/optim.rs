@@ -1,4 +1,4 @@
-//! Adam, gradient-norm clipping, and the finiteness check.
+//! Adam, the parameters' moving average, gradient-norm clipping, and the finiteness check.
 
 use super::model::Params;
 use serde::{Deserialize, Serialize};
@@ -45,6 +45,43 @@ impl Adam {
                 *m = b1 * *m + (1.0 - b1) * g;
                 *v = b2 * *v + (1.0 - b2) * g * g;
                 *p -= step * *m / ((*v * inv_c2).sqrt() + self.eps);
+            }
+        }
+    }
+}
+
+/// An exponential moving average of the parameters (Polyak averaging): after every update,
+/// `avg = decay * avg + (1 - decay) * params`. At a noisy, roughly constant learning rate the
+/// average sits closer to the minimum than the iterate does, at no cost in steps; validation and
+/// export use it when a run keeps one.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct Ema {
+    /// Weight of the old average per update (e.g. 0.999: a horizon of about 1,000 steps).
+    pub decay: f32,
+    /// The averaged parameters.
+    pub params: Params,
+}
+
+impl Ema {
+    /// An average that starts at `params`.
+    pub fn new(decay: f32, params: &Params) -> Self {
+        Self { decay, params: params.clone() }
+    }
+
+    /// Folds the current parameters into the average. A parameter the average does not hold yet
+    /// starts at its current value.
+    pub fn update(&mut self, params: &Params) {
+        let d = self.decay;
+        for (name, p) in params {
+            match self.params.get_mut(name) {
+                Some(a) if a.len() == p.len() => {
+                    for (a, &p) in a.iter_mut().zip(p) {
+                        *a = d * *a + (1.0 - d) * p;
+                    }
+                }
+                _ => {
+                    self.params.insert(name.clone(), p.clone());
+                }
             }
         }
     }

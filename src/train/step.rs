@@ -4,7 +4,7 @@
 
 use super::losses::{self, LossConfig, LossParts};
 use super::model::{self, Params};
-use super::optim::{clip_grad_norm, grad_norm, Adam};
+use super::optim::{clip_grad_norm, grad_norm, Adam, Ema};
 use super::pair::Pair;
 use super::tape::Tape;
 use crate::model::ModelConfig;
@@ -98,12 +98,20 @@ pub struct TrainState {
     pub steps: u64,
     /// Steps skipped because the loss or a gradient was not finite.
     pub skipped_steps: u64,
+    /// Moving average of the parameters, updated after every applied step (None = not kept).
+    pub ema: Option<Ema>,
 }
 
 impl TrainState {
-    /// A fresh state.
+    /// A fresh state (no moving average).
     pub fn new(config: ModelConfig, params: Params, lr: f32, clip_norm: Option<f64>) -> Self {
-        Self { config, params, adam: Adam::new(lr), clip_norm, steps: 0, skipped_steps: 0 }
+        Self { config, params, adam: Adam::new(lr), clip_norm, steps: 0, skipped_steps: 0, ema: None }
+    }
+
+    /// The parameters to evaluate and export: the moving average when the run keeps one,
+    /// otherwise the current parameters.
+    pub fn eval_params(&self) -> &Params {
+        self.ema.as_ref().map_or(&self.params, |e| &e.params)
     }
 }
 
@@ -123,7 +131,7 @@ pub struct StepReport {
 }
 
 /// One optimisation step on a batch: mean gradients over `pairs` (data-parallel on `threads`),
-/// global-norm clipping, and an Adam update — or no update when the loss or gradient norm is
+/// global-norm clipping, an Adam update and the moving average's update — or no update when the loss or gradient norm is
 /// not finite (reported as `skipped`).
 pub fn train_step(state: &mut TrainState, pairs: &[Pair], loss: &LossConfig, threads: usize) -> StepReport {
     let start = std::time::Instant::now();
@@ -136,6 +144,9 @@ pub fn train_step(state: &mut TrainState, pairs: &[Pair], loss: &LossConfig, thr
             clipped = clip_grad_norm(&mut grads, c).1;
         }
         state.adam.update(&mut state.params, &grads);
+        if let Some(ema) = &mut state.ema {
+            ema.update(&state.params);
+        }
     } else {
         state.skipped_steps += 1;
     }

@@ -151,6 +151,11 @@ struct TrainArgs {
     /// protocol; validation always uses it). On --resume, replaces the stored value.
     #[arg(long)]
     pose_angle: Option<f64>,
+    /// Keep a moving average of the parameters with this decay per step (e.g. 0.999) and
+    /// validate and export it; 0 = off (the default). On --resume, replaces the stored value (an
+    /// average that does not exist yet starts at the current parameters).
+    #[arg(long)]
+    ema: Option<f32>,
     /// Points per cloud of a generated pair (the network samples the model's N of them).
     #[arg(long, default_value_t = 1024)]
     pair_points: usize,
@@ -194,7 +199,8 @@ struct ExportArgs {
     /// Store f16 (the shipped model); default f32.
     #[arg(long)]
     f16: bool,
-    /// Export the latest checkpoint's parameters instead of the best validation's.
+    /// Export the latest checkpoint's parameters (their moving average, if the run keeps one)
+    /// instead of the best validation's.
     #[arg(long)]
     latest: bool,
 }
@@ -288,6 +294,16 @@ fn parse_loss(a: &TrainArgs) -> Result<LossConfig, String> {
     Ok(l)
 }
 
+/// `--ema`, checked: Some(None) turns the average off, Some(Some(d)) sets its decay.
+fn ema_decay(a: &TrainArgs) -> Result<Option<Option<f32>>, String> {
+    match a.ema {
+        None => Ok(None),
+        Some(0.0) => Ok(Some(None)),
+        Some(d) if d > 0.0 && d < 1.0 => Ok(Some(Some(d))),
+        Some(d) => Err(format!("--ema {d} must be a decay in (0, 1), or 0 for off")),
+    }
+}
+
 /// `--pose-angle`, checked ([`check_pose_angle`]).
 fn pose_angle(a: &TrainArgs) -> Result<Option<f64>, String> {
     a.pose_angle.map(|v| check_pose_angle(v).map_err(|e| format!("--pose-angle {e}"))).transpose()
@@ -346,6 +362,7 @@ fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
         bank_fraction: a.bank_fraction,
         pair_points: a.pair_points,
         pose_angle_deg: pose_angle(a)?.unwrap_or(0.0),
+        ema_decay: ema_decay(a)?.flatten(),
         curriculum: match &a.curriculum {
             Some(c) => Curriculum::parse(c)?,
             None => Curriculum::default(),
@@ -381,7 +398,7 @@ fn provenance(run: &Path, st: &RunState, bank_counts: (usize, usize, usize, usiz
             "val_pairs": c.val_pairs,
         },
         "losses": c.loss,
-        "optimiser": {"adam_lr": c.lr, "warmup_steps": c.warmup_steps, "clip_norm": c.clip_norm, "batch": c.batch, "plateau_patience": c.plateau_patience},
+        "optimiser": {"adam_lr": c.lr, "warmup_steps": c.warmup_steps, "clip_norm": c.clip_norm, "batch": c.batch, "plateau_patience": c.plateau_patience, "ema_decay": c.ema_decay},
         "seed": c.seed,
     })
 }
@@ -400,11 +417,11 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
     std::fs::create_dir_all(&a.run).map_err(|e| format!("{}: {e}", a.run.display()))?;
     let ckpt_path = a.run.join("checkpoint.safetensors");
     let best_path = a.run.join("best.safetensors");
-    let (mut st, params, adam) = if a.resume {
+    let (mut st, params, adam, ema) = if a.resume {
         if let Some((flag, _, _)) = size_flags(&a).first() {
             return Err(format!("{flag} sets the size of a new run; a resumed run keeps its model's size"));
         }
-        let (mut st, p, adam) = checkpoint::load(&ckpt_path)?;
+        let checkpoint::Checkpoint { state: mut st, params: p, adam, ema } = checkpoint::load(&ckpt_path)?;
         st.config.threads = a.threads.max(1);
         if let Some(v) = a.val_every_minutes {
             st.config.val_every_minutes = v;
@@ -429,6 +446,9 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         if let Some(v) = pose_angle(&a)? {
             st.config.pose_angle_deg = v;
         }
+        if let Some(v) = ema_decay(&a)? {
+            st.config.ema_decay = v;
+        }
         if a.loss.is_some() {
             st.config.loss = parse_loss(&a)?;
         }
@@ -439,7 +459,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
             st.lr = lr;
             st.bad_validations = 0;
         }
-        (st, p, adam)
+        (st, p, adam, ema)
     } else {
         if ckpt_path.exists() {
             return Err(format!("{} exists: use --resume, or another --run", ckpt_path.display()));
@@ -447,7 +467,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         let cfg = run_config(&a)?;
         let params = train::init_params(&cfg.model, cfg.seed).map_err(|e| e.to_string())?;
         let lr = cfg.lr;
-        (RunState::new(cfg), params, train::Adam::new(lr))
+        (RunState::new(cfg), params, train::Adam::new(lr), None)
     };
     st.sessions += 1;
     let cfg = st.config.clone();
@@ -500,7 +520,9 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         clip_norm: cfg.clip_norm,
         steps: st.step,
         skipped_steps: st.skipped_steps,
+        ema: None,
     };
+    ts.ema = cfg.ema_decay.map(|d| train::Ema::new(d, ema.as_ref().unwrap_or(&ts.params)));
 
     let session = Instant::now();
     let elapsed0 = st.elapsed;
@@ -541,10 +563,15 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
     let do_validate = |st: &mut RunState, ts: &TrainState, logf: &mut log::JsonlLog| -> Result<ValMetrics, String> {
         let with_icp = cfg.icp_every_validations > 0 && st.validations.is_multiple_of(cfg.icp_every_validations as u64);
         st.cpu = cpu0 + process_cpu_seconds();
-        let v = validate::validate(&pool, &cfg.model, &ts.params, &val, with_icp).map_err(|e| e.to_string())?;
+        let v = validate::validate(&pool, &cfg.model, ts.eval_params(), &val, with_icp).map_err(|e| e.to_string())?;
+        // with a moving average, the current parameters too (network only), for comparison
+        let v_raw = match ts.ema {
+            Some(_) => Some(validate::validate(&pool, &cfg.model, &ts.params, &val, false).map_err(|e| e.to_string())?),
+            None => None,
+        };
         let improved = st.record_validation(&v);
         if improved {
-            let w = train::to_weights(&ts.params, &cfg.model, provenance(&a.run, st, bank_counts))
+            let w = train::to_weights(ts.eval_params(), &cfg.model, provenance(&a.run, st, bank_counts))
                 .map_err(|e| e.to_string())?;
             let bytes = w.to_bytes(StoreAs::F32).map_err(|e| e.to_string())?;
             checkpoint::write_atomic(&best_path, &bytes).map_err(|e| format!("{}: {e}", best_path.display()))?;
@@ -552,6 +579,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         logf.write(json!({
             "kind": "val", "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed, "cpu": st.cpu, "lr": st.lr,
             "val": v, "score": v.score(), "improved": improved, "best_score": st.best_score,
+            "val_raw": v_raw, "ema_decay": cfg.ema_decay,
         }));
         Ok(v)
     };
@@ -669,7 +697,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
             None => last_ckpt.elapsed().as_secs_f64() >= cfg.checkpoint_every_minutes * 60.0,
         };
         if ckpt_due {
-            checkpoint::save(&ckpt_path, &st, &ts.params, &ts.adam)?;
+            checkpoint::save(&ckpt_path, &st, &ts.params, &ts.adam, ts.ema.as_ref().map(|e| &e.params))?;
             logf.write(
                 json!({"kind": "checkpoint", "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed}),
             );
@@ -693,7 +721,7 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         ));
     }
     st.cpu = cpu0 + process_cpu_seconds();
-    checkpoint::save(&ckpt_path, &st, &ts.params, &ts.adam)?;
+    checkpoint::save(&ckpt_path, &st, &ts.params, &ts.adam, ts.ema.as_ref().map(|e| &e.params))?;
     logf.write(json!({"kind": "end", "cpu": st.cpu, "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed, "stopped_by_file": stopped_by_file, "best_score": st.best_score, "best_step": st.best_step}));
     if let Some((pb, _)) = pb {
         pb.finish();
@@ -723,18 +751,19 @@ fn git_commit() -> Option<String> {
 fn export_cmd(a: ExportArgs) -> Result<(), String> {
     let best = a.run.join("best.safetensors");
     let ckpt = a.run.join("checkpoint.safetensors");
-    let (st, _, _) = checkpoint::load(&ckpt)?;
+    let checkpoint::Checkpoint { state: st, params, ema, .. } = checkpoint::load(&ckpt)?;
     let mut w = if a.latest || !best.exists() {
         if !a.latest {
             eprintln!("arps-train: no best.safetensors yet; exporting the latest checkpoint");
         }
-        let (_, params, _) = checkpoint::load(&ckpt)?;
+        // a run that keeps a moving average validates and exports the average
+        let params = ema.as_ref().filter(|_| st.config.ema_decay.is_some()).unwrap_or(&params);
         let mut p = provenance(&a.run, &st, (0, 0, 0, 0));
         p["step"] = json!(st.step);
         p["pairs_seen"] = json!(st.pairs_seen);
         p["wall_clock_s"] = json!(st.elapsed);
         p["validation"] = serde_json::Value::Null;
-        train::to_weights(&params, &st.config.model, p).map_err(|e| e.to_string())?
+        train::to_weights(params, &st.config.model, p).map_err(|e| e.to_string())?
     } else {
         Weights::from_bytes(&std::fs::read(&best).map_err(|e| format!("{}: {e}", best.display()))?)
             .map_err(|e| e.to_string())?

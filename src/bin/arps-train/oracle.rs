@@ -11,7 +11,7 @@ use std::path::Path;
 /// Prints one table row per `kappa`: recall (15 deg, 0.2), MRE, MTE of oracle memberships on the
 /// run's first `pairs` validation pairs, with `points` (default: the run's N) points per cloud.
 pub fn run(run: &Path, pairs: u64, kappas: &[f64], points: Option<usize>) -> Result<(), String> {
-    let (st, _, _) = arps::train::run::checkpoint::load(&run.join("checkpoint.safetensors"))?;
+    let st = arps::train::run::checkpoint::load(&run.join("checkpoint.safetensors"))?.state;
     let data = TrainData::new(&st.config)?;
     let (n, j) = (points.unwrap_or(st.config.model.n_points), st.config.model.gaussians);
     if n < j {

@@ -1,5 +1,6 @@
 //! Checkpoints: one safetensors file holding the parameters (`param/<name>`), Adam's moments
-//! (`adam_m/<name>`, `adam_v/<name>`), all `f32`, and the [`RunState`] as JSON in the metadata key
+//! (`adam_m/<name>`, `adam_v/<name>`), the parameters' moving average when the run keeps one
+//! (`ema/<name>`), all `f32`, and the [`RunState`] as JSON in the metadata key
 //! `arps_train_state`. Written atomically (temporary file, fsync, rename), so a crash never leaves
 //! a half-written checkpoint.
 
@@ -25,10 +26,24 @@ pub fn write_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
     std::fs::rename(&tmp, path)
 }
 
+/// Everything a checkpoint holds.
+#[derive(Clone, Debug)]
+pub struct Checkpoint {
+    /// Where the run is, with its configuration.
+    pub state: RunState,
+    /// The current parameters.
+    pub params: Params,
+    /// The optimiser.
+    pub adam: Adam,
+    /// The parameters' moving average (runs with `ema_decay` set; its decay is the config's).
+    pub ema: Option<Params>,
+}
+
 /// Serialises a checkpoint.
-pub fn to_bytes(state: &RunState, params: &Params, adam: &Adam) -> Result<Vec<u8>, String> {
+pub fn to_bytes(state: &RunState, params: &Params, adam: &Adam, ema: Option<&Params>) -> Result<Vec<u8>, String> {
     let mut raw: Vec<(String, Vec<u8>)> = Vec::new();
-    for (prefix, map) in [("param", params), ("adam_m", &adam.m), ("adam_v", &adam.v)] {
+    let empty = Params::new();
+    for (prefix, map) in [("param", params), ("adam_m", &adam.m), ("adam_v", &adam.v), ("ema", ema.unwrap_or(&empty))] {
         for (name, v) in map {
             raw.push((format!("{prefix}/{name}"), v.iter().flat_map(|x| x.to_le_bytes()).collect()));
         }
@@ -49,8 +64,8 @@ pub fn to_bytes(state: &RunState, params: &Params, adam: &Adam) -> Result<Vec<u8
     safetensors::serialize(views, Some(meta)).map_err(|e| e.to_string())
 }
 
-/// Reads a checkpoint: state, parameters, Adam.
-pub fn from_bytes(bytes: &[u8]) -> Result<(RunState, Params, Adam), String> {
+/// Reads a checkpoint.
+pub fn from_bytes(bytes: &[u8]) -> Result<Checkpoint, String> {
     let st = SafeTensors::deserialize(bytes).map_err(|e| format!("bad checkpoint: {e}"))?;
     let (_, meta) = SafeTensors::read_metadata(bytes).map_err(|e| format!("bad checkpoint header: {e}"))?;
     let meta = meta.metadata().clone().unwrap_or_default();
@@ -64,6 +79,7 @@ pub fn from_bytes(bytes: &[u8]) -> Result<(RunState, Params, Adam), String> {
     adam.eps = a["eps"].as_f64().unwrap_or(1e-8) as f32;
     adam.t = a["t"].as_u64().unwrap_or(0);
     let mut params = Params::new();
+    let mut ema = Params::new();
     for (name, view) in st.tensors() {
         if view.dtype() != Dtype::F32 {
             return Err(format!("checkpoint tensor {name} is not f32"));
@@ -75,22 +91,25 @@ pub fn from_bytes(bytes: &[u8]) -> Result<(RunState, Params, Adam), String> {
             adam.m.insert(n.to_string(), v);
         } else if let Some(n) = name.strip_prefix("adam_v/") {
             adam.v.insert(n.to_string(), v);
+        } else if let Some(n) = name.strip_prefix("ema/") {
+            ema.insert(n.to_string(), v);
         }
     }
-    Ok((state, params, adam))
+    let ema = (!ema.is_empty()).then_some(ema);
+    Ok(Checkpoint { state, params, adam, ema })
 }
 
 /// Saves a checkpoint atomically, plus a human-readable copy of the state next to it
 /// (`<path>.json`, informational only; `--resume` reads the safetensors file).
-pub fn save(path: &Path, state: &RunState, params: &Params, adam: &Adam) -> Result<(), String> {
-    let bytes = to_bytes(state, params, adam)?;
+pub fn save(path: &Path, state: &RunState, params: &Params, adam: &Adam, ema: Option<&Params>) -> Result<(), String> {
+    let bytes = to_bytes(state, params, adam, ema)?;
     write_atomic(path, &bytes).map_err(|e| format!("{}: {e}", path.display()))?;
     let json = serde_json::to_string_pretty(state).map_err(|e| e.to_string())?;
     write_atomic(&path.with_extension("json"), json.as_bytes()).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// Loads a checkpoint.
-pub fn load(path: &Path) -> Result<(RunState, Params, Adam), String> {
+pub fn load(path: &Path) -> Result<Checkpoint, String> {
     let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
     from_bytes(&bytes)
 }

@@ -64,6 +64,11 @@ pub struct RunConfig {
     /// protocol, in which the source keeps the shape's own orientation).
     #[serde(default)]
     pub pose_angle_deg: f64,
+    /// Keep a moving average of the parameters with this decay per step (None = off). When set,
+    /// validation, `best.safetensors` and `export --latest` use the average; the current
+    /// parameters are also validated and logged (`val_raw`).
+    #[serde(default)]
+    pub ema_decay: Option<f32>,
     /// Validation pairs (indices 0.. of the validation split: the same pairs as
     /// `arps make-pairs --split val --seed 0`).
     pub val_pairs: usize,
