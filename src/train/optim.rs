@@ -51,9 +51,9 @@ impl Adam {
 }
 
 /// An exponential moving average of the parameters (Polyak averaging): after every update,
-/// `avg = decay * avg + (1 - decay) * params`. At a noisy, roughly constant learning rate the
-/// average sits closer to the minimum than the iterate does, at no cost in steps; validation and
-/// export use it when a run keeps one.
+/// `avg = decay * avg + (1 - decay) * params`. It smooths the iterate's step-to-step noise at no
+/// cost in steps (whether it also scores better depends on the learning rate: `models/MODEL.md`,
+/// session 6); validation and export use it when a run keeps one.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 pub struct Ema {
     /// Weight of the old average per update (e.g. 0.999: a horizon of about 1,000 steps).

@@ -513,6 +513,8 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         "threads": threads, "config": cfg, "bank_meshes": {"usable": bank_counts.0, "skipped": bank_counts.1, "train": bank_counts.2, "val": bank_counts.3},
     }));
 
+    // an average the checkpoint does not hold yet starts at the current parameters
+    let ema = cfg.ema_decay.map(|d| train::Ema::new(d, ema.as_ref().unwrap_or(&params)));
     let mut ts = TrainState {
         config: cfg.model.clone(),
         params,
@@ -520,9 +522,8 @@ fn train_cmd(a: TrainArgs) -> Result<(), String> {
         clip_norm: cfg.clip_norm,
         steps: st.step,
         skipped_steps: st.skipped_steps,
-        ema: None,
+        ema,
     };
-    ts.ema = cfg.ema_decay.map(|d| train::Ema::new(d, ema.as_ref().unwrap_or(&ts.params)));
 
     let session = Instant::now();
     let elapsed0 = st.elapsed;
