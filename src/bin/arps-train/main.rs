@@ -757,8 +757,9 @@ fn export_cmd(a: ExportArgs) -> Result<(), String> {
         if !a.latest {
             eprintln!("arps-train: no best.safetensors yet; exporting the latest checkpoint");
         }
-        // a run that keeps a moving average validates and exports the average
-        let params = ema.as_ref().filter(|_| st.config.ema_decay.is_some()).unwrap_or(&params);
+        // a run that keeps a moving average validates and exports the average (checkpoints
+        // hold one only while the run keeps it)
+        let params = ema.as_ref().unwrap_or(&params);
         let mut p = provenance(&a.run, &st, (0, 0, 0, 0));
         p["step"] = json!(st.step);
         p["pairs_seen"] = json!(st.pairs_seen);
