@@ -139,3 +139,105 @@ fn eval_accepts_a_ground_truth_rounded_to_a_few_digits() {
     assert!(v["per_pair"][0]["gt_fitness"].as_f64().unwrap() > 0.1, "{out}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// One pair of a hand-made eval result: name, the truth's fitness, and `(rot_deg, fitness)` of
+/// methods `a` and `b`.
+type PairRow<'a> = (&'a str, f64, [(f64, f64); 2]);
+
+/// An `arps eval --json` result with two methods (`a`, `b`) on the given pairs, TE 0.
+fn eval_json(pairs: &[PairRow]) -> String {
+    let per_pair: Vec<serde_json::Value> = pairs
+        .iter()
+        .map(|(name, gt, r)| {
+            let results: Vec<serde_json::Value> = ["a", "b"]
+                .iter()
+                .zip(r)
+                .map(|(m, (rot, fit))| {
+                    serde_json::json!({
+                        "method": m, "rot_deg": rot, "trans": 0.0, "ms": 1.0, "start": "network",
+                        "fitness": fit, "error": null,
+                    })
+                })
+                .collect();
+            serde_json::json!({ "name": name, "te_scale": 1.0, "gt_fitness": gt, "results": results })
+        })
+        .collect();
+    serde_json::json!({
+        "manifest": "x", "pairs": pairs.len(), "weights": "w", "rot_threshold_deg": 15.0,
+        "trans_threshold": 0.2, "ambiguity_margin": 0.01,
+        "methods": [{"name": "a"}, {"name": "b"}], "per_pair": per_pair,
+    })
+    .to_string()
+}
+
+fn write_temp(tag: &str, text: &str) -> std::path::PathBuf {
+    let p = std::env::temp_dir().join(format!("arps-compare-{}-{tag}.json", std::process::id()));
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+#[test]
+fn compare_counts_discordant_pairs_ambiguity_and_categories() {
+    // method a: A registers pairs 0 and 1, B registers 2; B's miss on 0 fits as well as the truth
+    let a = eval_json(&[
+        ("00000-cone-1", 0.9, [(2.0, 0.9), (1.0, 0.9)]),
+        ("00001-cone-2", 0.9, [(3.0, 0.9), (1.0, 0.9)]),
+        ("00002-bank-x", 0.9, [(40.0, 0.5), (1.0, 0.9)]),
+        ("00003-bank-y", 0.9, [(40.0, 0.5), (1.0, 0.9)]),
+    ]);
+    let b = eval_json(&[
+        ("00000-cone-1", 0.9, [(30.0, 0.895), (1.0, 0.9)]),
+        ("00001-cone-2", 0.9, [(30.0, 0.5), (1.0, 0.9)]),
+        ("00002-bank-x", 0.9, [(4.0, 0.9), (1.0, 0.9)]),
+        ("00003-bank-y", 0.9, [(40.0, 0.5), (1.0, 0.9)]),
+    ]);
+    let (pa, pb) = (write_temp("a", &a), write_temp("b", &b));
+    let (ok, out, err) =
+        arps(&["compare", pa.to_str().unwrap(), pb.to_str().unwrap(), "--by-category", "--methods", "a,b"]);
+    assert!(ok, "{err}");
+    let row = |m: &str| out.lines().find(|l| l.starts_with(&format!("{m} "))).unwrap_or_else(|| panic!("{out}"));
+    let cols: Vec<&str> = row("a").split_whitespace().collect();
+    // method, recall A, recall B, A only (unambiguous), B only (unambiguous), p
+    assert_eq!(&cols[..7], ["a", "0.5000", "0.2500", "2", "(1)", "1", "(1)"], "{out}");
+    assert!((cols[7].parse::<f64>().unwrap() - 1.0).abs() < 1e-12, "{out}");
+    let cols: Vec<&str> = row("b").split_whitespace().collect();
+    assert_eq!(&cols[..7], ["b", "1.0000", "1.0000", "0", "(0)", "0", "(0)"], "{out}");
+    assert!(row("cone").contains("1.000 / 0.000"), "{out}");
+    assert!(row("bank").contains("0.000 / 0.500"), "{out}");
+
+    // a file on other pairs, an unknown method and a file that is not an eval result are errors
+    let other = write_temp("c", &eval_json(&[("00000-cone-1", 0.9, [(2.0, 0.9), (1.0, 0.9)])]));
+    for (args, msg) in [
+        (vec![pa.to_str().unwrap(), other.to_str().unwrap()], "not on the same pairs"),
+        (vec![pa.to_str().unwrap(), pb.to_str().unwrap(), "--methods", "network"], "no method `network`"),
+        (vec![pa.to_str().unwrap(), write_temp("d", "{\"pairs\": 3}").to_str().unwrap()], "not an `arps eval --json`"),
+        (vec![pa.to_str().unwrap(), "/nonexistent/eval.json"], "/nonexistent/eval.json"),
+    ] {
+        let mut full = vec!["compare"];
+        full.extend(args);
+        let (ok, out, err) = arps(&full);
+        assert!(!ok, "{full:?} should fail:\n{out}");
+        assert!(err.starts_with("arps: ") && err.contains(msg) && err.trim().lines().count() == 1, "{full:?}: {err}");
+    }
+    for t in ["a", "b", "c", "d"] {
+        let _ =
+            std::fs::remove_file(std::env::temp_dir().join(format!("arps-compare-{}-{t}.json", std::process::id())));
+    }
+}
+
+#[test]
+fn compare_reads_what_eval_writes() {
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs/pairs.tsv");
+    let (ok, json, err) = arps(&["eval", manifest.to_str().unwrap(), "--limit", "2", "--json"]);
+    assert!(ok, "{err}");
+    let p = write_temp("eval", &json);
+    let (ok, out, err) = arps(&["compare", p.to_str().unwrap(), p.to_str().unwrap()]);
+    assert!(ok, "{err}");
+    assert!(out.contains("arps compare: 2 pairs"), "{out}");
+    for m in METHODS {
+        let line = out.lines().find(|l| l.starts_with(&format!("{m} "))).unwrap_or_else(|| panic!("{m}:\n{out}"));
+        // a result against itself: no discordant pairs
+        assert!(line.contains(" 0 (0) ") && line.trim_end().ends_with("1.00e0"), "{line}");
+    }
+    let _ = std::fs::remove_file(&p);
+}

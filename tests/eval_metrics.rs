@@ -2,7 +2,9 @@
 #![cfg(feature = "cli")]
 
 use arps::data::manifest::{self, Entry};
-use arps::data::metrics::{pair_error, recall_svg, recall_vs_rotation, recall_vs_translation, summarize, PairError};
+use arps::data::metrics::{
+    mcnemar_p, pair_error, recall_svg, recall_vs_rotation, recall_vs_translation, summarize, PairError,
+};
 use arps::transform::{euler_xyz, from_rotation_translation};
 use nalgebra::{Matrix4, Vector3};
 
@@ -92,4 +94,20 @@ fn reads_the_real_scan_manifest() {
     let entries = manifest::read(&p).unwrap();
     assert!(entries.len() >= 6);
     assert!(entries.iter().any(|e| e.name == "stanford-bunny"));
+}
+
+#[test]
+fn mcnemar_p_is_the_exact_two_sided_binomial_tail() {
+    // reference values from the binomial sums (Python's math.comb)
+    assert_eq!(mcnemar_p(0, 0), 1.0);
+    assert_eq!(mcnemar_p(1, 1), 1.0);
+    assert!((mcnemar_p(0, 5) - 0.0625).abs() < 1e-12);
+    assert!((mcnemar_p(8, 4) - 0.3876953125).abs() < 1e-12);
+    assert!((mcnemar_p(13, 48) - 7.665168380445453e-6).abs() < 1e-15);
+    // symmetric, and fine for large counts (no overflow in the binomials)
+    assert_eq!(mcnemar_p(48, 13), mcnemar_p(13, 48));
+    assert!((mcnemar_p(300, 250) - 0.036578745549102704).abs() < 1e-12);
+    let tiny = mcnemar_p(0, 2000);
+    assert!(tiny.is_finite() && (0.0..1e-300).contains(&tiny), "{tiny}");
+    assert!(mcnemar_p(1000, 1000) == 1.0);
 }

@@ -187,3 +187,28 @@ pub fn recall_svg(
     s.push_str("</svg>\n");
     s
 }
+
+/// Exact two-sided McNemar test for two methods scored on the same pairs: `only_a` pairs
+/// recalled by the first method alone, `only_b` by the second alone (the discordant pairs; pairs
+/// both or neither recall carry no information). Under "the methods are equally good" each
+/// discordant pair is a fair coin, so the p-value is the two-sided binomial tail
+/// `min(1, 2 P[X ≤ min(only_a, only_b)])`, `X ~ Binomial(only_a + only_b, 1/2)`. 1 when there are
+/// no discordant pairs.
+pub fn mcnemar_p(only_a: usize, only_b: usize) -> f64 {
+    let n = only_a + only_b;
+    let k = only_a.min(only_b);
+    if n == 0 {
+        return 1.0;
+    }
+    // ln C(n, i) by the running product, each term scaled by 2^-n in the log domain
+    let ln_half_n = -(n as f64) * std::f64::consts::LN_2;
+    let mut ln_c = 0.0;
+    let mut tail = 0.0;
+    for i in 0..=k {
+        if i > 0 {
+            ln_c += ((n - i + 1) as f64).ln() - (i as f64).ln();
+        }
+        tail += (ln_c + ln_half_n).exp();
+    }
+    (2.0 * tail).min(1.0)
+}

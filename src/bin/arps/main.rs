@@ -12,6 +12,7 @@ use std::process::ExitCode;
 #[path = "../common/out.rs"]
 mod out;
 mod bench;
+mod compare;
 mod eval;
 mod make_pairs;
 
@@ -90,6 +91,9 @@ enum Command {
     /// default), multi-start ICP without the network, ICP from identity, ICP from centroids, untrained
     /// network + ICP; prints MRE, MTE, Recall, RRE, RTE, ms/pair.
     Eval(eval::EvalArgs),
+    /// Compare two `arps eval --json` results on the same pairs: recall, the pairs only one side
+    /// registers, and an exact McNemar p-value, per method.
+    Compare(compare::CompareArgs),
     /// Write a pair set made with the paper's protocol (PLY files, pairs.tsv, pairs.json).
     MakePairs(make_pairs::MakePairsArgs),
     /// Write deterministic random (untrained) weights for a preset; for development and tests.
@@ -256,6 +260,7 @@ fn run(command: Command) -> Result<(), String> {
         }
         Command::Bench(args) => bench::run(args),
         Command::Eval(args) => eval::run(args),
+        Command::Compare(args) => compare::run(args),
         Command::MakePairs(args) => make_pairs::run(args),
         Command::RandomWeights { preset, seed, f16, out } => {
             let config = ModelConfig::preset(&preset).map_err(|e| e.to_string())?;
