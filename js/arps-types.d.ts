@@ -59,10 +59,10 @@ export interface RegisterOptions {
    * highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier start. Starts
    * that meet during refinement are refined once, as the earlier; on large clouds the starts are
    * compared on 2048 of the source points and only the winner is refined on all of them. Default
-   * `["network", "centroids", "initial", "turned"]`; each extra start costs one ICP run (on at
-   * most 2048 points; `"turned"` is six), so `["network"]` is the fastest and
-   * `["network", "centroids", "initial"]` about halves the refinement time for a few points of
-   * recall. Must be non-empty, without repeats.
+   * `["network", "centroids", "initial", "turned", "turnedInitial"]`; each extra start costs one ICP
+   * run (on at most 2048 points; `"turned"` and `"turnedInitial"` are six each), so `["network"]`
+   * is the fastest and `["network", "centroids", "initial", "turned"]` saves about a third of the
+   * refinement time for about a point of recall. Must be non-empty, without repeats.
    * - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
    *   reported as `"initial"`);
    * - `"centroids"`: `initialTransform`'s rotation (none if unset) with the translation that moves
@@ -70,7 +70,10 @@ export interface RegisterOptions {
    * - `"initial"`: `initialTransform` itself (the identity if unset);
    * - `"turned"`: six starts, the network estimate (the initial transform with `network: false`)
    *   turned 45 degrees both ways about each axis through the source's centroid, for estimates
-   *   that landed outside ICP's basin.
+   *   that landed outside ICP's basin;
+   * - `"turnedInitial"`: six starts, `initialTransform` (the identity if unset) turned the same
+   *   way, for pairs where the network's estimate is far off (with `network: false`, the same
+   *   starts as `"turned"`, reported as `"turned"`).
    *
    * With `icp: "off"` nothing is refined or compared: the first start is the answer.
    */
@@ -78,7 +81,7 @@ export interface RegisterOptions {
 }
 
 /** A transform ICP starts from (see `RegisterOptions.starts`). */
-export type RegistrationStart = "network" | "centroids" | "initial" | "turned";
+export type RegistrationStart = "network" | "centroids" | "initial" | "turned" | "turnedInitial";
 
 /** Milliseconds spent in each stage of one registration (measured with `performance.now()`). */
 export interface RegistrationTimings {

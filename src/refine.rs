@@ -28,20 +28,37 @@ pub enum Start {
     /// [`TURN_DEGREES`] both ways about each axis of the target frame, through the moved source's
     /// centroid ([`turned`]). For estimates that landed outside ICP's basin.
     Turned,
+    /// Six starts: the initial transform turned like [`Start::Turned`], through the source's
+    /// centroid (after the initial transform). Beside the network's turns, for pairs where the
+    /// network's estimate is far off; with `network: false` it is [`Start::Turned`].
+    TurnedInitial,
 }
 
 impl Start {
     /// Every start, in declaration order.
-    pub const ALL: [Start; 4] = [Start::Network, Start::Centroids, Start::Initial, Start::Turned];
+    pub const ALL: [Start; 5] = [Start::Network, Start::Centroids, Start::Initial, Start::Turned, Start::TurnedInitial];
 
-    /// The name used in options and results (`"network"`, `"centroids"`, `"initial"`, `"turned"`).
+    /// The name used in options and results (`"network"`, `"centroids"`, `"initial"`, `"turned"`,
+    /// `"turnedInitial"`).
     pub fn name(self) -> &'static str {
         match self {
             Start::Network => "network",
             Start::Centroids => "centroids",
             Start::Initial => "initial",
             Start::Turned => "turned",
+            Start::TurnedInitial => "turnedInitial",
         }
+    }
+}
+
+impl std::str::FromStr for Start {
+    type Err = String;
+    /// A start by its [`Start::name`].
+    fn from_str(s: &str) -> Result<Self, String> {
+        Start::ALL.into_iter().find(|x| x.name() == s).ok_or_else(|| {
+            let names: Vec<&str> = Start::ALL.iter().map(|x| x.name()).collect();
+            format!("unknown start `{s}` (expected one of {})", names.join(", "))
+        })
     }
 }
 

@@ -48,13 +48,16 @@ pub struct Options {
     /// way are merged into the earlier one) and the best is returned ([`Registration::start`] says
     /// which): the highest fitness at the final distance, ties going to the lower inlier RMSE, then
     /// to the earlier start ([`refine::choose`]). Each extra start costs one ICP run on at most
-    /// [`refine::SCREEN_POINTS`] source points ([`Start::Turned`] is six). Default
-    /// `[Network, Centroids, Initial, Turned]`: on 500 validation pairs (`arps eval`, the model
-    /// of step 11,818 in `models/MODEL.md`) recall 0.940 and MRE 4.1 degrees, against 0.880 / 5.6
-    /// without `Turned` and 0.820 / 7.6 for `[Network]` alone, for about twice the refinement time
-    /// of the three plain starts (the shipped model: 0.954 / 3.6 and 0.852 / 6.5 for `[Network]`).
+    /// [`refine::SCREEN_POINTS`] source points ([`Start::Turned`] and [`Start::TurnedInitial`] are
+    /// six each). Default `[Network, Centroids, Initial, Turned, TurnedInitial]`. On 1,000 fresh
+    /// validation pairs (`arps eval`, `make-pairs --seed 1`, the model shipped before session 7)
+    /// `TurnedInitial` raised recall from 0.936 to 0.947 (11 pairs gained, none lost) and cut MRE
+    /// from 4.3 to 3.9 degrees, for about 1.5 times the refinement time; on session 3's model,
+    /// `[Network, Centroids, Initial]` recalled 0.880 / 5.6 and `[Network]` alone 0.820 / 7.6
+    /// (`BENCHMARK.md`, `models/MODEL.md`).
     /// Must be non-empty and without repeats. With `network: false`, a `Network` start is the
-    /// initial transform (reported as `Initial`) and `Turned` turns the initial transform. With
+    /// initial transform (reported as `Initial`), and `Turned` and `TurnedInitial` both turn the
+    /// initial transform (reported as `Turned`). With
     /// `icp: Off` nothing is refined or compared: the first start is the answer (choosing among
     /// unrefined starts by fitness measured worse than taking the network's).
     pub starts: Vec<Start>,
@@ -72,7 +75,7 @@ impl Default for Options {
             voxel_size: None,
             initial_transform: None,
             non_finite: NonFinite::Error,
-            starts: vec![Start::Network, Start::Centroids, Start::Initial, Start::Turned],
+            starts: vec![Start::Network, Start::Centroids, Start::Initial, Start::Turned, Start::TurnedInitial],
         }
     }
 }
@@ -301,21 +304,31 @@ impl Registrar {
         let with_normals = options.icp == IcpKind::Plane;
         let target_index = IcpTarget::new(&icp_tgt.points, with_normals);
         let mut starts: Vec<(Start, Matrix4<f64>)> = Vec::with_capacity(options.starts.len());
+        // the six turns of `base` through the source's centroid as `base` moves it
+        let turns = |base: &Matrix4<f64>| {
+            let c = src_n.centroid();
+            let moved = base.transform_point(&nalgebra::Point3::new(c[0], c[1], c[2]));
+            refine::turned(base, [moved.x, moved.y, moved.z], refine::TURN_DEGREES)
+        };
+        let t_initial = norm.normalize_transform(&Matrix4::identity());
         for &start in &options.starts {
-            let start = if start == Start::Network && !options.network { Start::Initial } else { start };
+            // without the network its start is the initial transform, and its turns are the initial's
+            let start = match start {
+                Start::Network if !options.network => Start::Initial,
+                Start::TurnedInitial if !options.network => Start::Turned,
+                s => s,
+            };
             if starts.iter().any(|(s, _)| *s == start) {
                 continue;
             }
             let t = match start {
                 Start::Network => t_net_n,
-                Start::Initial => norm.normalize_transform(&Matrix4::identity()),
+                Start::Initial => t_initial,
                 Start::Centroids => centroid_alignment(&src_n, &tgt_n),
-                Start::Turned => {
+                Start::Turned | Start::TurnedInitial => {
                     // t_net_n is the initial transform when the network is off
-                    let c = src_n.centroid();
-                    let moved = t_net_n.transform_point(&nalgebra::Point3::new(c[0], c[1], c[2]));
-                    let pivot = [moved.x, moved.y, moved.z];
-                    starts.extend(refine::turned(&t_net_n, pivot, refine::TURN_DEGREES).map(|t| (start, t)));
+                    let base = if start == Start::Turned { t_net_n } else { t_initial };
+                    starts.extend(turns(&base).map(|t| (start, t)));
                     continue;
                 }
             };

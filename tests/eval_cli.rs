@@ -74,7 +74,10 @@ fn eval_json_and_perturbation() {
     // which start each answer came from
     let first = &v["per_pair"][0]["results"];
     assert_eq!(first[1]["start"], "network");
-    assert!(["network", "centroids", "initial", "turned"].contains(&first[2]["start"].as_str().unwrap()), "{first}");
+    assert!(
+        ["network", "centroids", "initial", "turned", "turnedInitial"].contains(&first[2]["start"].as_str().unwrap()),
+        "{first}"
+    );
     assert_eq!(first[4]["start"], "initial");
 }
 
@@ -240,4 +243,31 @@ fn compare_reads_what_eval_writes() {
         assert!(line.contains(" 0 (0) ") && line.trim_end().ends_with("1.00e0"), "{line}");
     }
     let _ = std::fs::remove_file(&p);
+}
+
+#[test]
+fn eval_runs_the_chosen_methods_with_the_given_starts() {
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs/pairs.tsv");
+    let m = manifest.to_str().unwrap();
+    let args = ["eval", m, "--limit", "2", "--methods", "multi-start,network", "--starts", "network,turnedInitial"];
+    let (ok, out, err) = arps(&[&args[..], &["--json"]].concat());
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    let names: Vec<&str> = v["methods"].as_array().unwrap().iter().map(|m| m["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["network", "network + multi-start ICP"], "table order, not argument order");
+    assert_eq!(v["starts"], serde_json::json!(["network", "turnedInitial"]));
+    for p in v["per_pair"].as_array().unwrap() {
+        let r = &p["results"][1];
+        assert!(["network", "turnedInitial"].contains(&r["start"].as_str().unwrap()), "{r}");
+    }
+    let (ok, out, _) = arps(&args);
+    assert!(ok);
+    assert!(out.contains("network + multi-start ICP starts: network, turnedInitial"), "{out}");
+    assert_eq!(out.lines().filter(|l| l.starts_with("network")).count(), 2, "two rows:\n{out}");
+
+    // unknown names are usage errors that list the known ones
+    let (ok, _, err) = arps(&["eval", m, "--starts", "network,sideways"]);
+    assert!(!ok && err.contains("sideways") && err.contains("turnedInitial"), "{err}");
+    let (ok, _, err) = arps(&["eval", m, "--methods", "fastest"]);
+    assert!(!ok && err.contains("fastest") && err.contains("multi-start"), "{err}");
 }

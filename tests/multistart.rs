@@ -101,6 +101,36 @@ fn a_turned_start_recovers_a_rotation_beyond_icps_basin() {
     assert!(r.fitness > alone.fitness, "fitness {} vs {}", r.fitness, alone.fitness);
 }
 
+/// `turnedInitial`: the initial transform turned 45 degrees about each axis through the source's
+/// centroid as the initial transform moves it, the network's estimate aside (with ICP off the first
+/// of the six, +x, is the answer). Without the network it is the same six starts as `turned`.
+#[test]
+fn turned_initial_starts_turn_the_initial_transform() {
+    let (source, target, _) = fixture_pair(4);
+    let mut reg = untrained();
+    let m = motion([5.0, -10.0, 20.0], [0.1, 0.2, -0.3]);
+    let options = |list: &[Start]| Options {
+        icp: IcpKind::Off,
+        initial_transform: Some(arps::transform::to_rows(&m)),
+        ..starts(list)
+    };
+    let r = reg.register(&source, &target, &options(&[Start::TurnedInitial, Start::Network])).unwrap();
+    assert_eq!(r.start, Start::TurnedInitial);
+    let c = source.transformed(&m).centroid();
+    let expected = refine::turned(&m, c, 45.0)[0];
+    assert!((r.T_target_source - expected).abs().max() < 1e-4, "{} vs {expected}", r.T_target_source);
+    assert!((r.T_target_source - r.T_target_source_network).abs().max() > 0.1, "not the network's turn");
+
+    // the same six starts when the network is off: the initial transform's turns, once
+    let off = |list: &[Start]| Options { network: false, ..starts(list) };
+    let a = reg.register(&source, &target, &off(&[Start::Initial, Start::Turned])).unwrap();
+    let b = reg.register(&source, &target, &off(&[Start::Initial, Start::TurnedInitial])).unwrap();
+    let c = reg.register(&source, &target, &off(&[Start::Initial, Start::Turned, Start::TurnedInitial])).unwrap();
+    assert_eq!(a.T_target_source, b.T_target_source);
+    assert_eq!(a.T_target_source, c.T_target_source);
+    assert_eq!((a.start, b.start, c.start), (Start::Turned, Start::Turned, Start::Turned));
+}
+
 #[test]
 fn turned_starts_are_six_turns_about_the_pivot() {
     let base = motion([10.0, -20.0, 5.0], [0.3, 0.1, -0.2]);
@@ -153,9 +183,19 @@ fn empty_or_repeated_starts_are_errors_and_names_parse() {
     assert_eq!(o.starts, vec![Start::Initial, Start::Network]);
     let e = serde_json::from_str::<Options>(r#"{"starts": ["identity"]}"#).unwrap_err().to_string();
     assert!(e.contains("identity") && e.contains("centroids"), "{e}");
-    assert_eq!(Options::default().starts, vec![Start::Network, Start::Centroids, Start::Initial, Start::Turned]);
-    let o: Options = serde_json::from_str(r#"{"starts": ["turned"]}"#).unwrap();
-    assert_eq!(o.starts, vec![Start::Turned]);
+    assert_eq!(
+        Options::default().starts,
+        vec![Start::Network, Start::Centroids, Start::Initial, Start::Turned, Start::TurnedInitial]
+    );
+    let o: Options = serde_json::from_str(r#"{"starts": ["turned", "turnedInitial"]}"#).unwrap();
+    assert_eq!(o.starts, vec![Start::Turned, Start::TurnedInitial]);
+    // names parse back (the CLI's --starts), unknown names list the known ones
+    for s in Start::ALL {
+        assert_eq!(s.name().parse::<Start>(), Ok(s));
+        assert_eq!(serde_json::to_string(&s).unwrap(), format!("\"{}\"", s.name()));
+    }
+    let e = "sideways".parse::<Start>().unwrap_err();
+    assert!(e.contains("sideways") && e.contains("turnedInitial"), "{e}");
     assert_eq!(serde_json::to_string(&Start::Centroids).unwrap(), r#""centroids""#);
 }
 

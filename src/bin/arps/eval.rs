@@ -77,26 +77,40 @@ pub struct EvalArgs {
     /// How TE is scaled.
     #[arg(long, value_enum, default_value_t = TeScale::Auto)]
     te_scale: TeScale,
+    /// The starts of `network + multi-start ICP`, comma-separated (network, centroids, initial,
+    /// turned, turnedInitial) [default: the engine's `Options::starts`].
+    #[arg(long, value_delimiter = ',')]
+    starts: Option<Vec<Start>>,
+    /// Run only these methods, comma-separated [default: all seven].
+    #[arg(long, value_enum, value_delimiter = ',')]
+    methods: Option<Vec<Method>>,
 }
 
 /// A failed estimate whose fitness is within this of the refined truth's counts as ambiguous.
 const AMBIGUITY_MARGIN: f64 = 0.01;
 
-#[derive(Clone, Copy, PartialEq, Eq)]
-enum Method {
+#[derive(Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Method {
+    /// `network`: the network + GMR estimate, ICP off.
     Network,
+    /// `network + ICP`: ICP from the network's estimate only.
     NetworkIcp,
-    NetworkMultiStart,
+    /// `network + multi-start ICP`: the pipeline default (or `--starts`).
+    MultiStart,
+    /// `multi-start ICP, no network`.
     MultiStartNoNetwork,
+    /// `ICP from identity`.
     IcpIdentity,
+    /// `ICP from centroids`.
     IcpCentroids,
+    /// `untrained network + ICP`.
     UntrainedIcp,
 }
 
 const METHODS: [Method; 7] = [
     Method::Network,
     Method::NetworkIcp,
-    Method::NetworkMultiStart,
+    Method::MultiStart,
     Method::MultiStartNoNetwork,
     Method::IcpIdentity,
     Method::IcpCentroids,
@@ -108,7 +122,7 @@ impl Method {
         match self {
             Method::Network => "network",
             Method::NetworkIcp => "network + ICP",
-            Method::NetworkMultiStart => "network + multi-start ICP",
+            Method::MultiStart => "network + multi-start ICP",
             Method::MultiStartNoNetwork => "multi-start ICP, no network",
             Method::IcpIdentity => "ICP from identity",
             Method::IcpCentroids => "ICP from centroids",
@@ -117,16 +131,17 @@ impl Method {
     }
     /// True for the methods that refine several starts.
     fn multi_start(self) -> bool {
-        matches!(self, Method::NetworkMultiStart | Method::MultiStartNoNetwork)
+        matches!(self, Method::MultiStart | Method::MultiStartNoNetwork)
     }
-    /// The one place that says how each method calls the pipeline.
-    fn options(self, source: &PointCloud, target: &PointCloud) -> Options {
+    /// The one place that says how each method calls the pipeline; `starts` are the multi-start
+    /// method's.
+    fn options(self, source: &PointCloud, target: &PointCloud, starts: &[Start]) -> Options {
         let base = Options::default();
         let single = |start| Options { starts: vec![start], ..Options::default() };
         match self {
             Method::Network => Options { icp: arps::IcpKind::Off, ..single(Start::Network) },
             Method::NetworkIcp | Method::UntrainedIcp => single(Start::Network),
-            Method::NetworkMultiStart => base,
+            Method::MultiStart => Options { starts: starts.to_vec(), ..base },
             Method::MultiStartNoNetwork => {
                 Options { network: false, starts: vec![Start::Centroids, Start::Initial, Start::Turned], ..base }
             }
@@ -207,6 +222,15 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         TeScale::One => false,
         TeScale::Pair => true,
     };
+    // the selected methods, in table order
+    let methods: Vec<Method> = match &a.methods {
+        Some(list) => METHODS.into_iter().filter(|m| list.contains(m)).collect(),
+        None => METHODS.to_vec(),
+    };
+    let starts = a.starts.clone().unwrap_or_else(|| Options::default().starts);
+    if starts.is_empty() {
+        return Err("--starts: give at least one start".into());
+    }
     let mut trained = super::load_registrar(a.weights.as_deref())?;
     let untrained_weights = Weights::random(&ModelConfig::web(), 0).map_err(|e| e.to_string())?;
     let mut untrained = Registrar::new(&untrained_weights).map_err(|e| e.to_string())?;
@@ -247,8 +271,8 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             fitness: Vec::new(),
             gt_fitness,
         };
-        for m in METHODS {
-            let options = m.options(&source, &target);
+        for &m in &methods {
+            let options = m.options(&source, &target, &starts);
             let reg = if m == Method::UntrainedIcp { &mut untrained } else { &mut trained };
             let t0 = Instant::now();
             let out = reg.register(&source, &target, &options);
@@ -272,7 +296,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         eprintln!();
     }
 
-    let per_method: Vec<MethodSummary> = METHODS
+    let per_method: Vec<MethodSummary> = methods
         .iter()
         .enumerate()
         .map(|(i, m)| {
@@ -315,6 +339,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "pairs": results.len(),
             "weights": weights_desc,
             "weights_provenance": trained.provenance(),
+            "starts": starts.iter().map(|s| s.name()).collect::<Vec<_>>(),
             "perturb": a.perturb,
             "units": units,
             "rot_threshold_deg": a.rot_threshold,
@@ -327,7 +352,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
                 "name": r.name,
                 "te_scale": r.scale,
                 "gt_fitness": r.gt_fitness,
-                "results": METHODS.iter().enumerate().map(|(i, m)| serde_json::json!({
+                "results": methods.iter().enumerate().map(|(i, m)| serde_json::json!({
                     "method": m.name(),
                     "rot_deg": r.errors[i].rot_deg,
                     "trans": r.errors[i].trans,
@@ -348,6 +373,8 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         a.perturb.map(|s| format!(", sources perturbed (seed {s})")).unwrap_or_default()
     );
     out!("  weights: {weights_desc}; untrained: random web weights, seed 0");
+    let names: Vec<&str> = starts.iter().map(|s| s.name()).collect();
+    out!("  network + multi-start ICP starts: {}", names.join(", "));
     out!("  errors: {units}");
     out!(
         "  recall: RE < {} deg and TE < {} (strict); RRE/RTE over recalled pairs; ICP: point-to-plane, coarse to fine",
@@ -393,7 +420,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         );
     }
     let wins = |i: usize, start: Start| results.iter().filter(|r| r.start[i] == Some(start)).count();
-    for (i, m) in METHODS.iter().enumerate().filter(|(_, m)| m.multi_start()) {
+    for (i, m) in methods.iter().enumerate().filter(|(_, m)| m.multi_start()) {
         let counts: Vec<String> = Start::ALL
             .into_iter()
             .map(|s| (s, wins(i, s)))
@@ -405,7 +432,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
     for r in &results {
         for (i, f) in r.failed.iter().enumerate() {
             if let Some(f) = f {
-                out!("  failed: {} with {}: {f}", r.name, METHODS[i].name());
+                out!("  failed: {} with {}: {f}", r.name, methods[i].name());
             }
         }
     }

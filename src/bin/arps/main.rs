@@ -33,18 +33,6 @@ enum IcpArg {
     Off,
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum StartArg {
-    /// The network + GMR estimate.
-    Network,
-    /// Translation aligning the clouds' centroids.
-    Centroids,
-    /// The identity (no initial transform on the command line).
-    Initial,
-    /// The network estimate turned 45 degrees both ways about each axis (six starts).
-    Turned,
-}
-
 #[derive(Subcommand)]
 enum Command {
     /// Register SOURCE onto TARGET and print T_target_source (maps source points into the target frame).
@@ -68,10 +56,11 @@ enum Command {
         /// Seed of the network's point sampling.
         #[arg(long, default_value_t = 0)]
         seed: u64,
-        /// Where ICP starts from, comma-separated; the best refinement by fitness wins
-        /// [default: the engine's `Options::starts`: network,centroids,initial,turned].
-        #[arg(long, value_enum, value_delimiter = ',')]
-        starts: Option<Vec<StartArg>>,
+        /// Where ICP starts from, comma-separated, from network, centroids, initial, turned,
+        /// turnedInitial; the best refinement by fitness wins
+        /// [default: the engine's `Options::starts`].
+        #[arg(long, value_delimiter = ',')]
+        starts: Option<Vec<Start>>,
         /// Drop NaN/Inf points instead of failing.
         #[arg(long)]
         drop_non_finite: bool,
@@ -167,18 +156,7 @@ fn run(command: Command) -> Result<(), String> {
                 network_points,
                 seed,
                 non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
-                starts: match starts {
-                    Some(list) => list
-                        .iter()
-                        .map(|s| match s {
-                            StartArg::Network => Start::Network,
-                            StartArg::Centroids => Start::Centroids,
-                            StartArg::Initial => Start::Initial,
-                            StartArg::Turned => Start::Turned,
-                        })
-                        .collect(),
-                    None => Options::default().starts,
-                },
+                starts: starts.unwrap_or_else(|| Options::default().starts),
                 ..Options::default()
             };
             let r = registrar.register(&src, &tgt, &options).map_err(|e| e.to_string())?;
