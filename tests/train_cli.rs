@@ -268,3 +268,22 @@ fn a_moving_average_is_validated_exported_and_can_be_switched_off() {
     }
     let _ = std::fs::remove_dir_all(&run);
 }
+
+/// `export --latest` does not load the shape bank; the bank counts in its provenance are the
+/// ones the run's last session logged, not zeros.
+#[test]
+fn a_latest_export_records_the_bank_the_run_trained_on() {
+    let run = dir("bank");
+    let bank = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/formats");
+    let mut args = COMMON.to_vec();
+    args.extend(["--steps", "2", "--bank", bank.to_str().unwrap()]);
+    train(&run, &args);
+    let log = std::fs::read_to_string(run.join("log.jsonl")).unwrap();
+    let start: serde_json::Value =
+        serde_json::from_str(log.lines().find(|l| l.contains("\"bank_meshes\"")).unwrap()).unwrap();
+    let logged = &start["bank_meshes"];
+    assert!(logged["usable"].as_u64().unwrap() > 0, "{logged}");
+    let w = export_latest(&run);
+    assert_eq!(&w.provenance["data"]["bank_meshes"], logged);
+    let _ = std::fs::remove_dir_all(&run);
+}

@@ -749,6 +749,16 @@ fn git_commit() -> Option<String> {
     out.status.success().then(|| String::from_utf8_lossy(&out.stdout).trim().to_string())
 }
 
+/// The `bank_meshes` counts of the last session start in a run log (null when there is none).
+fn last_bank_counts(log: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(log).unwrap_or_default();
+    text.lines()
+        .rev()
+        .filter(|l| l.contains("\"bank_meshes\""))
+        .find_map(|l| serde_json::from_str::<serde_json::Value>(l).ok()?.get("bank_meshes").cloned())
+        .unwrap_or(serde_json::Value::Null)
+}
+
 fn export_cmd(a: ExportArgs) -> Result<(), String> {
     let best = a.run.join("best.safetensors");
     let ckpt = a.run.join("checkpoint.safetensors");
@@ -761,6 +771,8 @@ fn export_cmd(a: ExportArgs) -> Result<(), String> {
         // hold one only while the run keeps it)
         let params = ema.as_ref().unwrap_or(&params);
         let mut p = provenance(&a.run, &st, (0, 0, 0, 0));
+        // the bank is not loaded here: take its counts from the run's last session start
+        p["data"]["bank_meshes"] = last_bank_counts(&a.run.join("log.jsonl"));
         p["step"] = json!(st.step);
         p["pairs_seen"] = json!(st.pairs_seen);
         p["wall_clock_s"] = json!(st.elapsed);
