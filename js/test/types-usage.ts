@@ -15,8 +15,9 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   r.register(source, target, null);
   const ms: number = again.timingsMs.totalMs + result.fitness + result.inlierRmse + result.iterations;
   const w: string[] = result.warnings;
-  const start: "network" | "centroids" | "initial" | "turned" = result.start;
+  const start: "network" | "centroids" | "initial" | "turned" | "turnedInitial" = result.start;
   r.register(source, target, { starts: ["network", "initial"] });
+  r.register(source, target, { starts: ["turned", "turnedInitial"] });
   // @ts-expect-error unknown start
   r.register(source, target, { starts: ["identity"] });
   const kind: string | undefined = r.provenance.kind;
