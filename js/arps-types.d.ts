@@ -61,7 +61,7 @@ export interface RegisterOptions {
    * compared on 2048 of the source points and only the winner is refined on all of them. Default
    * `["network", "centroids", "initial", "turned", "turnedInitial"]`; each extra start costs one ICP
    * run (on at most 2048 points; `"turned"` and `"turnedInitial"` are six each), so `["network"]`
-   * is the fastest and `["network", "centroids", "initial", "turned"]` saves about a third of the
+   * is the fastest and `["network", "centroids", "initial", "turned"]` saves about 40% of the
    * refinement time for about a point of recall. Must be non-empty, without repeats.
    * - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
    *   reported as `"initial"`);

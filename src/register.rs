@@ -52,7 +52,7 @@ pub struct Options {
     /// six each). Default `[Network, Centroids, Initial, Turned, TurnedInitial]`. On 1,000 fresh
     /// validation pairs (`arps eval`, `make-pairs --seed 1`, the model shipped before session 7)
     /// `TurnedInitial` raised recall from 0.936 to 0.947 (11 pairs gained, none lost) and cut MRE
-    /// from 4.3 to 3.9 degrees, for about 1.5 times the refinement time; on session 3's model,
+    /// from 4.3 to 3.9 degrees, for about 1.8 times the ICP time; on session 3's model,
     /// `[Network, Centroids, Initial]` recalled 0.880 / 5.6 and `[Network]` alone 0.820 / 7.6
     /// (`BENCHMARK.md`, `models/MODEL.md`).
     /// Must be non-empty and without repeats. With `network: false`, a `Network` start is the
