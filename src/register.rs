@@ -54,12 +54,12 @@ pub struct Options {
     /// `TurnedInitial` raised recall from 0.936 to 0.947 (11 pairs gained, none lost) and cut MRE
     /// from 4.3 to 3.9 degrees, for about 1.8 times the ICP time; on session 3's model,
     /// `[Network, Centroids, Initial]` recalled 0.880 / 5.6 and `[Network]` alone 0.820 / 7.6
-    /// (`BENCHMARK.md`, `models/MODEL.md`).
-    /// Must be non-empty and without repeats. With `network: false`, a `Network` start is the
-    /// initial transform (reported as `Initial`), and `Turned` and `TurnedInitial` both turn the
-    /// initial transform (reported as `Turned`). With
-    /// `icp: Off` nothing is refined or compared: the first start is the answer (choosing among
-    /// unrefined starts by fitness measured worse than taking the network's).
+    /// (`BENCHMARK.md`, `models/MODEL.md`). Must be non-empty and without repeats.
+    ///
+    /// With `network: false`, a `Network` start is the initial transform (reported as `Initial`),
+    /// and `Turned` and `TurnedInitial` both turn the initial transform (reported as `Turned`).
+    /// With `icp: Off` nothing is refined or compared: the first start is the answer (choosing
+    /// among unrefined starts by fitness measured worse than taking the network's).
     pub starts: Vec<Start>,
 }
 
