@@ -242,6 +242,13 @@ fn compare_reads_what_eval_writes() {
         // a result against itself: no discordant pairs
         assert!(line.contains(" 0 (0) ") && line.trim_end().ends_with("1.00e0"), "{line}");
     }
+    // eval's method keys select rows too
+    let (ok, out, err) =
+        arps(&["compare", p.to_str().unwrap(), p.to_str().unwrap(), "--methods", "multi-start,network-icp"]);
+    assert!(ok, "{err}");
+    let rows: Vec<&str> = out.lines().filter(|l| l.starts_with("network")).collect();
+    assert_eq!(rows.len(), 2, "{out}");
+    assert!(rows[0].starts_with("network + ICP ") && rows[1].starts_with("network + multi-start ICP "), "{out}");
     let _ = std::fs::remove_file(&p);
 }
 

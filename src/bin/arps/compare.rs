@@ -11,7 +11,7 @@
 //! `<index>-<category>-<shape id>`, `bank` for the shape bank's meshes).
 
 use arps::data::metrics::mcnemar_p;
-use clap::Args;
+use clap::{Args, ValueEnum};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -26,7 +26,8 @@ pub struct CompareArgs {
     /// `network + multi-start ICP`).
     #[arg(long)]
     by_category: bool,
-    /// Methods to compare, comma-separated (default: every method both files have).
+    /// Methods to compare, comma-separated, by `arps eval --methods` key (`network`, `network-icp`,
+    /// `multi-start`, ...) or by row name (default: every method both files have).
     #[arg(long, value_delimiter = ',')]
     methods: Option<Vec<String>>,
 }
@@ -124,7 +125,16 @@ pub fn run(args: CompareArgs) -> Result<(), String> {
         ));
     }
     let common: Vec<&String> = a.methods.iter().filter(|m| b.outcomes.contains_key(*m)).collect();
-    let methods: Vec<&String> = match &args.methods {
+    // eval's keys (`multi-start`) name the rows (`network + multi-start ICP`)
+    let requested: Option<Vec<String>> = args.methods.as_ref().map(|list| {
+        list.iter()
+            .map(|m| match super::eval::Method::from_str(m, false) {
+                Ok(method) => method.name().to_string(),
+                Err(_) => m.clone(),
+            })
+            .collect()
+    });
+    let methods: Vec<&String> = match &requested {
         Some(list) => {
             for m in list {
                 if !common.contains(&m) {
@@ -168,7 +178,7 @@ pub fn run(args: CompareArgs) -> Result<(), String> {
         );
     }
     if args.by_category {
-        let shown: Vec<&String> = match &args.methods {
+        let shown: Vec<&String> = match &requested {
             Some(_) => methods.clone(),
             None => methods.iter().copied().filter(|m| *m == "network" || *m == "network + multi-start ICP").collect(),
         };

@@ -118,7 +118,8 @@ const METHODS: [Method; 7] = [
 ];
 
 impl Method {
-    fn name(self) -> &'static str {
+    /// The method's row name in the table and the JSON.
+    pub fn name(self) -> &'static str {
         match self {
             Method::Network => "network",
             Method::NetworkIcp => "network + ICP",
