@@ -215,6 +215,13 @@ fn compare_counts_discordant_pairs_ambiguity_and_categories() {
         (vec![pa.to_str().unwrap(), pb.to_str().unwrap(), "--methods", "network"], "no method `network`"),
         (vec![pa.to_str().unwrap(), write_temp("d", "{\"pairs\": 3}").to_str().unwrap()], "not an `arps eval --json`"),
         (vec![pa.to_str().unwrap(), "/nonexistent/eval.json"], "/nonexistent/eval.json"),
+        (
+            vec![
+                pa.to_str().unwrap(),
+                write_temp("e", &a.replace("\"pairs\":4", "\"perturb\":1,\"pairs\":4")).to_str().unwrap(),
+            ],
+            "--perturb null and 1",
+        ),
     ] {
         let mut full = vec!["compare"];
         full.extend(args);
@@ -222,7 +229,7 @@ fn compare_counts_discordant_pairs_ambiguity_and_categories() {
         assert!(!ok, "{full:?} should fail:\n{out}");
         assert!(err.starts_with("arps: ") && err.contains(msg) && err.trim().lines().count() == 1, "{full:?}: {err}");
     }
-    for t in ["a", "b", "c", "d"] {
+    for t in ["a", "b", "c", "d", "e"] {
         let _ =
             std::fs::remove_file(std::env::temp_dir().join(format!("arps-compare-{}-{t}.json", std::process::id())));
     }
@@ -237,6 +244,7 @@ fn compare_reads_what_eval_writes() {
     let (ok, out, err) = arps(&["compare", p.to_str().unwrap(), p.to_str().unwrap()]);
     assert!(ok, "{err}");
     assert!(out.contains("arps compare: 2 pairs"), "{out}");
+    assert!(out.contains("multi-start: network, centroids, initial, turned, turnedInitial"), "{out}");
     for m in METHODS {
         let line = out.lines().find(|l| l.starts_with(&format!("{m} "))).unwrap_or_else(|| panic!("{m}:\n{out}"));
         // a result against itself: no discordant pairs

@@ -43,6 +43,10 @@ struct Outcome {
 /// One eval result: pair names, and per method the outcome of each pair, in pair order.
 struct EvalResult {
     weights: String,
+    /// The multi-start method's starts (eval writes them since session 7).
+    starts: Option<String>,
+    /// The seed of `eval --perturb` (null when the sources were not moved).
+    perturb: Value,
     rot_threshold: f64,
     trans_threshold: f64,
     names: Vec<String>,
@@ -88,6 +92,8 @@ fn read(path: &Path) -> Result<EvalResult, String> {
     }
     Ok(EvalResult {
         weights: v["weights"].as_str().unwrap_or("?").to_string(),
+        starts: v["starts"].as_array().map(|a| a.iter().filter_map(Value::as_str).collect::<Vec<_>>().join(", ")),
+        perturb: v["perturb"].clone(),
         rot_threshold,
         trans_threshold,
         names,
@@ -116,6 +122,15 @@ pub fn run(args: CompareArgs) -> Result<(), String> {
             a.names.len(),
             b.names.len(),
             if a.names.len() == b.names.len() { ", different names or order" } else { "" }
+        ));
+    }
+    if a.perturb != b.perturb {
+        return Err(format!(
+            "{} and {} moved the sources differently (--perturb {} and {})",
+            args.a.display(),
+            args.b.display(),
+            a.perturb,
+            b.perturb
         ));
     }
     if a.rot_threshold != b.rot_threshold || a.trans_threshold != b.trans_threshold {
@@ -147,8 +162,12 @@ pub fn run(args: CompareArgs) -> Result<(), String> {
     };
     let n = a.names.len();
     out!("arps compare: {n} pairs");
-    out!("  A: {} ({})", args.a.display(), a.weights);
-    out!("  B: {} ({})", args.b.display(), b.weights);
+    let describe = |r: &EvalResult| match &r.starts {
+        Some(s) => format!("{}; multi-start: {s}", r.weights),
+        None => r.weights.clone(),
+    };
+    out!("  A: {} ({})", args.a.display(), describe(&a));
+    out!("  B: {} ({})", args.b.display(), describe(&b));
     out!(
         "  recall: RE < {} deg and TE < {}; A only / B only: pairs one side registers and the other misses \
          (in brackets: of those misses, the unambiguous ones, fit < GT); p: exact two-sided McNemar",
