@@ -226,7 +226,7 @@ impl Registrar {
                 options.icp_max_iterations
             )));
         }
-        check_starts(&options.starts)?;
+        refine::check_starts(&options.starts)?;
         let source = source.validated("source", MIN_POINTS, options.non_finite)?;
         let target = target.validated("target", MIN_POINTS, options.non_finite)?;
         let init = match &options.initial_transform {
@@ -305,8 +305,8 @@ impl Registrar {
         let target_index = IcpTarget::new(&icp_tgt.points, with_normals);
         let mut starts: Vec<(Start, Matrix4<f64>)> = Vec::with_capacity(options.starts.len());
         // the six turns of `base` through the source's centroid as `base` moves it
+        let c = src_n.centroid();
         let turns = |base: &Matrix4<f64>| {
-            let c = src_n.centroid();
             let moved = base.transform_point(&nalgebra::Point3::new(c[0], c[1], c[2]));
             refine::turned(base, [moved.x, moved.y, moved.z], refine::TURN_DEGREES)
         };
@@ -365,20 +365,6 @@ impl Registrar {
             warnings,
         })
     }
-}
-
-/// Rejects an empty or repeating [`Options::starts`].
-fn check_starts(starts: &[Start]) -> Result<()> {
-    if starts.is_empty() {
-        let names: Vec<String> = Start::ALL.iter().map(|s| format!("\"{}\"", s.name())).collect();
-        return Err(Error::InvalidOption(format!("starts is empty: list at least one of {}", names.join(", "))));
-    }
-    for (i, s) in starts.iter().enumerate() {
-        if starts[..i].contains(s) {
-            return Err(Error::InvalidOption(format!("starts lists \"{}\" twice", s.name())));
-        }
-    }
-    Ok(())
 }
 
 /// The [`Start::Centroids`] transform between two clouds in one frame: no rotation, the

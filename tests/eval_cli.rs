@@ -283,6 +283,10 @@ fn eval_runs_the_chosen_methods_with_the_given_starts() {
     // unknown names are usage errors that list the known ones
     let (ok, _, err) = arps(&["eval", m, "--starts", "network,sideways"]);
     assert!(!ok && err.contains("sideways") && err.contains("turnedInitial"), "{err}");
+    // repeated starts are refused before any pair runs, with the engine's message
+    let (ok, out, err) = arps(&["eval", m, "--starts", "network,turned,network"]);
+    assert!(!ok && out.is_empty(), "{out}");
+    assert!(err.starts_with("arps: --starts:") && err.contains("\"network\" twice"), "{err}");
     let (ok, _, err) = arps(&["eval", m, "--methods", "fastest"]);
     assert!(!ok && err.contains("fastest") && err.contains("multi-start"), "{err}");
 }

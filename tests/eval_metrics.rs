@@ -3,7 +3,7 @@
 
 use arps::data::manifest::{self, Entry};
 use arps::data::metrics::{
-    mcnemar_p, pair_error, recall_svg, recall_vs_rotation, recall_vs_translation, summarize, PairError,
+    ambiguous_miss, mcnemar_p, pair_error, recall_svg, recall_vs_rotation, recall_vs_translation, summarize, PairError,
 };
 use arps::transform::{euler_xyz, from_rotation_translation};
 use nalgebra::{Matrix4, Vector3};
@@ -110,4 +110,13 @@ fn mcnemar_p_is_the_exact_two_sided_binomial_tail() {
     let tiny = mcnemar_p(0, 2000);
     assert!(tiny.is_finite() && (0.0..1e-300).contains(&tiny), "{tiny}");
     assert!(mcnemar_p(1000, 1000) == 1.0);
+}
+
+#[test]
+fn an_ambiguous_miss_is_a_miss_that_fits_within_the_margin_of_the_truth() {
+    assert!(ambiguous_miss(false, Some(0.895), 0.9, 0.01));
+    assert!(ambiguous_miss(false, Some(0.95), 0.9, 0.01), "fitting better than the truth counts");
+    assert!(!ambiguous_miss(false, Some(0.88), 0.9, 0.01), "fits worse than the truth");
+    assert!(!ambiguous_miss(true, Some(0.9), 0.9, 0.01), "recalled pairs are not misses");
+    assert!(!ambiguous_miss(false, None, 0.9, 0.01), "a failed call has no fitness");
 }

@@ -48,6 +48,14 @@ pub fn recalled(e: &PairError, rot_thr: f64, trans_thr: f64) -> bool {
     e.rot_deg < rot_thr && e.trans < trans_thr
 }
 
+/// A miss that fits the data as well as the truth does: the estimate failed the recall
+/// thresholds (`recalled` false), but its fitness is at least `gt_fitness` (the truth refined by
+/// the same ICP) minus `margin`. No choice by fitness can tell such a pose from the truth (a cone
+/// turned about its axis, a box flipped): `arps eval`'s `fit>=GT` column.
+pub fn ambiguous_miss(recalled: bool, fitness: Option<f64>, gt_fitness: f64, margin: f64) -> bool {
+    !recalled && fitness.is_some_and(|f| f >= gt_fitness - margin)
+}
+
 /// Summarises errors and times (ms) at the thresholds.
 pub fn summarize(errors: &[PairError], times_ms: &[f64], rot_thr: f64, trans_thr: f64) -> Summary {
     let n = errors.len();

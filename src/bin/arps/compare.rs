@@ -10,7 +10,7 @@
 //! `--by-category` adds recall per shape category (the pair names of `arps make-pairs`:
 //! `<index>-<category>-<shape id>`, `bank` for the shape bank's meshes).
 
-use arps::data::metrics::mcnemar_p;
+use arps::data::metrics::{ambiguous_miss, mcnemar_p, recalled, PairError};
 use clap::{Args, ValueEnum};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -80,11 +80,13 @@ fn read(path: &Path) -> Result<EvalResult, String> {
         for r in p["results"].as_array().ok_or_else(|| bad("a pair without `results`"))? {
             let method = r["method"].as_str().ok_or_else(|| bad("a result without `method`"))?;
             // a failed call counts as a miss (eval scores it as the identity)
-            let rot = r["rot_deg"].as_f64().unwrap_or(f64::INFINITY);
-            let trans = r["trans"].as_f64().unwrap_or(f64::INFINITY);
-            let recalled = r["error"].is_null() && rot < rot_threshold && trans < trans_threshold;
-            let ambiguous = !recalled && r["fitness"].as_f64().is_some_and(|f| f >= gt_fitness - margin);
-            outcomes.entry(method.to_string()).or_default().push(Outcome { recalled, ambiguous });
+            let e = PairError {
+                rot_deg: r["rot_deg"].as_f64().unwrap_or(f64::INFINITY),
+                trans: r["trans"].as_f64().unwrap_or(f64::INFINITY),
+            };
+            let hit = r["error"].is_null() && recalled(&e, rot_threshold, trans_threshold);
+            let ambiguous = ambiguous_miss(hit, r["fitness"].as_f64(), gt_fitness, margin);
+            outcomes.entry(method.to_string()).or_default().push(Outcome { recalled: hit, ambiguous });
         }
     }
     if outcomes.values().any(|o| o.len() != names.len()) {

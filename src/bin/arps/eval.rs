@@ -29,7 +29,7 @@
 
 use arps::cloud::JointNormalization;
 use arps::data::manifest;
-use arps::data::metrics::{pair_error, recall_svg, recalled, summarize, PairError, Summary};
+use arps::data::metrics::{ambiguous_miss, pair_error, recall_svg, recalled, summarize, PairError, Summary};
 use arps::transform::{euler_xyz, from_rotation_translation, rigid_inverse, to_rows};
 use arps::{io, ModelConfig, Options, PointCloud, Registrar, Start, Weights};
 use clap::{Args, ValueEnum};
@@ -191,8 +191,12 @@ struct PairResult {
 impl PairResult {
     /// Method `i` failed the recall thresholds with a fit at least as good as the truth's.
     fn ambiguous(&self, i: usize, rot_thr: f64, trans_thr: f64) -> bool {
-        !recalled(&self.errors[i], rot_thr, trans_thr)
-            && self.fitness[i].is_some_and(|f| f >= self.gt_fitness - AMBIGUITY_MARGIN)
+        ambiguous_miss(
+            recalled(&self.errors[i], rot_thr, trans_thr),
+            self.fitness[i],
+            self.gt_fitness,
+            AMBIGUITY_MARGIN,
+        )
     }
 }
 
@@ -229,9 +233,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         None => METHODS.to_vec(),
     };
     let starts = a.starts.clone().unwrap_or_else(|| Options::default().starts);
-    if starts.is_empty() {
-        return Err("--starts: give at least one start".into());
-    }
+    arps::refine::check_starts(&starts).map_err(|e| format!("--starts: {e}"))?;
     let mut trained = super::load_registrar(a.weights.as_deref())?;
     let untrained_weights = Weights::random(&ModelConfig::web(), 0).map_err(|e| e.to_string())?;
     let mut untrained = Registrar::new(&untrained_weights).map_err(|e| e.to_string())?;
