@@ -143,7 +143,7 @@ fn half_extent_of(lo: [f32; 3], hi: [f32; 3]) -> f64 {
     (0..3).map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5).fold(0.0, f64::max)
 }
 
-/// The normalisation the library applies before the network (method.md A.2).
+/// The normalisation the library applies before the network (docs/design.md §3).
 ///
 /// **Rule**: each cloud is centred on its own bounding-box centre, and both are divided by one
 /// shared scale `s` = the largest half-extent over both clouds' boxes, so each lies in

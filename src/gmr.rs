@@ -1,5 +1,5 @@
 //! Gaussian mixture registration: GMM parameters from memberships, and the weighted Procrustes
-//! solve (method.md B §4).
+//! solve (docs/design.md §5).
 //!
 //! Everything here accumulates in `f64`. Every solve returns a finite rigid transform with a
 //! proper rotation (`det R = +1`), whatever the input: degenerate configurations get a defined
@@ -31,15 +31,15 @@ impl Gmm {
     }
 }
 
-/// Added to `N * pi_j` before dividing by it (method.md §4.1), so empty components give finite
+/// Added to `N * pi_j` before dividing by it (docs/design.md §5.1), so empty components give finite
 /// means (zero) rather than NaN.
 pub const GMM_EPS: f64 = 1e-8;
-/// Lower clamp of the variances `sigma_j^2` (method.md §4.1).
+/// Lower clamp of the variances `sigma_j^2` (docs/design.md §5.1).
 pub const MIN_VAR: f64 = 1e-8;
 
 /// GMM parameters of `points` under memberships `gamma` (`[N, J]` row-major, rows sum to 1).
 ///
-/// Exactly method.md §4.1 (DeepGMR `gmm_params`), accumulated in `f64`:
+/// Exactly docs/design.md §5.1 (DeepGMR `gmm_params`), accumulated in `f64`:
 /// `pi_j = (1/N) sum_i gamma_ij`, `mu_j = sum_i gamma_ij x_i / (N pi_j + eps)`,
 /// `sigma_j^2 = max(sum_i gamma_ij |x_i - mu_j|^2 / (N pi_j + eps), 1e-8)` (two passes, no 1/3),
 /// with `eps = 1e-8`.
@@ -88,7 +88,7 @@ pub fn gmm_params(points: &[[f32; 3]], gamma: &[f32], j: usize) -> Gmm {
 /// `T_target_source` from the source and target GMMs (DeepGMR weighted Procrustes with the
 /// reflection fix). Always a proper rotation; degenerate input gives a defined result.
 ///
-/// method.md §4.2, with the source weights `pi^_j` (normalised to sum to 1, a no-op for
+/// docs/design.md §5.2, with the source weights `pi^_j` (normalised to sum to 1, a no-op for
 /// memberships whose rows sum to 1) and the target variances `sigma_j^2`:
 /// `c^ = sum pi^_j mu^_j`, `c = sum pi^_j mu_j`,
 /// `M = sum (pi^_j / sigma_j^2) (mu^_j - c^)(mu_j - c)^T`, `M = U S V^T`,

@@ -3,7 +3,7 @@
 //! A thin layer: it converts JS values to core types and back, and core errors to thrown JS
 //! `Error`s. All logic lives in the core ([`crate::Registrar`], [`crate::io`]).
 //!
-//! JS API (see `js/arps-extra.d.ts` and the generated `arps.d.ts` for the documented types):
+//! JS API (see `js/arps-types.d.ts` and the generated `arps.d.ts` for the documented types):
 //! * `Registrar.withDefaultModel()`, `Registrar.fromBytes(Uint8Array)`;
 //! * `registrar.register(source: Float32Array, target: Float32Array, options?)` -> a plain object
 //!   `{ matrix, networkMatrix, start, fitness, inlierRmse, iterations, converged,

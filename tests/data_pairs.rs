@@ -1,4 +1,4 @@
-//! The pair protocol (method.md B §6.2), the engine-frame mapping, and the shape source split.
+//! The pair protocol (docs/design.md §8), the engine-frame mapping, and the shape source split.
 #![cfg(feature = "cli")]
 
 use arps::data::pairs::{normalize_shape, pair_from_dense};

@@ -1,4 +1,4 @@
-//! Pair sets on disk: `pairs.tsv` (the format of `../shared/data/scans/pairs.tsv`) and the
+//! Pair sets on disk: `pairs.tsv` (as in `fixtures/pairs/pairs.tsv`) and the
 //! optional `pairs.json` sidecar that generated sets carry.
 //!
 //! `pairs.tsv` is tab-separated with a header line and the columns

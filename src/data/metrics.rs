@@ -1,4 +1,4 @@
-//! The paper's metrics (method.md B §7): geodesic rotation error in degrees, translation error,
+//! The paper's metrics (docs/design.md §9): geodesic rotation error in degrees, translation error,
 //! MRE/MTE over all pairs, recall (RE < θ_R **and** TE < θ_t, strict), RRE/RTE over the recalled
 //! pairs, and recall-vs-threshold curves drawn as a plain SVG.
 

@@ -1,6 +1,6 @@
 //! Training and evaluation data (CLI/trainer builds only): procedural ModelNet-like shapes, a
-//! shape-bank loader for real meshes, the paper's pair protocol (method.md B §6.2), pair sets on
-//! disk (PLY files + a `pairs.tsv` manifest), and the paper's metrics (method.md B §7).
+//! shape-bank loader for real meshes, the paper's pair protocol (docs/design.md §8), pair sets on
+//! disk (PLY files + a `pairs.tsv` manifest), and the paper's metrics (docs/design.md §9).
 //!
 //! * [`shapes`]: [`shapes::generate`]`(category, seed)` for the 20 ModelNet20 categories.
 //! * [`bank`]: [`bank::load_dir`] reads OBJ/OFF/PLY/STL meshes recursively, skipping degenerate
@@ -9,7 +9,7 @@
 //!   into the frames the engine's network sees.
 //! * [`source`]: [`source::ShapeSource`], procedural + bank shapes with a train/validation split
 //!   by shape, never by pair.
-//! * [`manifest`]: reading and writing `pairs.tsv` (the `../shared/data/scans/pairs.tsv` format)
+//! * [`manifest`]: reading and writing `pairs.tsv` (the `fixtures/pairs/pairs.tsv` format)
 //!   and the `pairs.json` sidecar.
 //! * [`metrics`]: rotation/translation errors, the paper's table figures, recall curves as SVG.
 

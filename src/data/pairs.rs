@@ -1,4 +1,4 @@
-//! The paper's pair protocol (method.md B §6.2), seeded per pair, and the mapping of a pair into
+//! The paper's pair protocol (docs/design.md §8), seeded per pair, and the mapping of a pair into
 //! the frames the engine's network sees.
 //!
 //! Steps of [`make_pair`], in order:
@@ -91,7 +91,7 @@ pub struct Pair {
     /// Ground truth: maps source points into the target frame, `p_t = R p_s + t`.
     pub T_target_source: Matrix4<f64>,
     /// The full (uncropped, dense) shape's mean in the source frame. **Not** pre-centred: subtract
-    /// the source's own mean yourself if your network input is mean-centred (method.md B §5.3).
+    /// the source's own mean yourself if your network input is mean-centred (docs/design.md §11.2).
     pub centroid_source: [f64; 3],
     /// The same point in the target frame: `R c + t`. Not pre-centred either.
     pub centroid_target: [f64; 3],

@@ -1,4 +1,4 @@
-//! Model configuration: read from the weights file, with the two named presets of method.md A.1.
+//! Model configuration: read from the weights file, with the two named presets of docs/design.md §7.
 
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -49,7 +49,7 @@ pub struct ModelConfig {
 }
 
 impl ModelConfig {
-    /// The default shipped size: method.md A.1's starting point (C = 64, tokens 128, 4 heads,
+    /// The default shipped size: docs/design.md §7's starting point (C = 64, tokens 128, 4 heads,
     /// L = 4, J = 16) at N = 256 network points and H = N/4. At N = 512 the forward pass costs
     /// 4.5 GFLOP per pair, at N = 256 1.6 GFLOP (attention grows with N^2): the difference between
     /// about 150 ms and 55 ms in WebAssembly, and about 3x in training throughput. ICP refines on
@@ -75,7 +75,7 @@ impl ModelConfig {
         }
     }
 
-    /// The paper-size reconstruction (method.md B §2.2): C = 256, tokens 512, 4 heads, N = 1024.
+    /// The paper-size reconstruction (docs/design.md §7): C = 256, tokens 512, 4 heads, N = 1024.
     pub fn paper() -> Self {
         Self {
             preset: "paper".into(),
@@ -231,7 +231,7 @@ mod tests {
         for p in ["web", "paper", "tiny"] {
             ModelConfig::preset(p).unwrap().validate().unwrap();
         }
-        // The paper reports 13.2M; method.md's reconstruction is ~13.8M (its MLPs use BN folded away).
+        // The paper reports 13.2M; docs/design.md §7's reconstruction is ~13.8M (its MLPs have no BatchNorm).
         let n = ModelConfig::paper().parameter_count();
         assert!((12_000_000..15_000_000).contains(&n), "{n}");
         assert!(ModelConfig::preset("huge").is_err());

@@ -1,4 +1,4 @@
-//! One ARPS layer (method.md B §2).
+//! One ARPS layer (docs/design.md §4.1-§4.3).
 
 use super::config::{ModelConfig, Reference};
 use crate::nn::{

@@ -1,5 +1,5 @@
 //! The DGMR-ARPS network: ARPS layers (position MLP, self and cross attention, reference point,
-//! step size, shifting) and the membership head (method.md B §1-§3).
+//! step size, shifting) and the membership head (docs/design.md §4).
 //!
 //! One forward pass takes a source and a target cloud (normalised units, at least 16 points
 //! each, usually the config's N) and returns each point's soft membership in J Gaussians; the GMM

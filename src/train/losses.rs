@@ -1,4 +1,4 @@
-//! The training losses (method.md B §5), each behind a switch (a weight; 0 turns a term off).
+//! The training losses (docs/design.md §11), each behind a switch (a weight; 0 turns a term off).
 //!
 //! * `sup`: supervised DeepGMR loss `MSE(T_12 T_gt^-1, I) + MSE(T_21 T_gt, I)` (MSE over the 16
 //!   entries).
@@ -99,7 +99,7 @@ fn default_seg_kappa() -> f32 {
 }
 
 impl Default for LossConfig {
-    /// method.md A.5's starting point: supervised transform loss + centroid loss on every layer
+    /// docs/design.md §11's starting point: supervised transform loss + centroid loss on every layer
     /// (+ the paper's negligible step penalty).
     fn default() -> Self {
         Self {

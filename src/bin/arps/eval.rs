@@ -1,6 +1,6 @@
 //! `arps eval`: runs every pair of a manifest (`pairs.tsv`, the format of
-//! `../shared/data/scans/pairs.tsv`) through seven methods side by side and prints the paper's
-//! table (method.md B §7): MRE, MTE, Recall, RRE, RTE and ms/pair.
+//! `fixtures/pairs/pairs.tsv`) through seven methods side by side and prints the paper's
+//! table (docs/design.md §9): MRE, MTE, Recall, RRE, RTE and ms/pair.
 //!
 //! Methods (all use the pipeline's refinement: point-to-plane ICP, coarse to fine, defaults of
 //! [`Options`] unless said):

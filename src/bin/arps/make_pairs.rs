@@ -1,6 +1,6 @@
-//! `arps make-pairs`: writes a pair set generated with the paper's protocol (method.md B §6.2):
+//! `arps make-pairs`: writes a pair set generated with the paper's protocol (docs/design.md §8):
 //! `NNNNN_source.ply`, `NNNNN_target.ply` (binary PLY), `pairs.tsv` (the format of
-//! `../shared/data/scans/pairs.tsv`, GT `T_target_source` row-major) and `pairs.json` (units,
+//! `fixtures/pairs/pairs.tsv`, GT `T_target_source` row-major) and `pairs.json` (units,
 //! protocol parameters, and per pair the shape, seed, overlap and full-shape centroids).
 
 use arps::data::bank;

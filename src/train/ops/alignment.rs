@@ -1,6 +1,6 @@
 //! GMM-means alignment under the ground truth: the dense loss on what GMR actually consumes.
 //!
-//! GMR (method.md B §4.2) recovers `T` exactly when every source component mean, moved by the
+//! GMR (docs/design.md §5.2) recovers `T` exactly when every source component mean, moved by the
 //! true transform, lands on the target component mean with the same index. This op measures
 //! how far that is from true, relative to how spread out the components are:
 //!

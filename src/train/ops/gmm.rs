@@ -1,4 +1,4 @@
-//! GMM parameters from memberships (method.md B §4.1, the engine's [`crate::gmr::gmm_params`]):
+//! GMM parameters from memberships (docs/design.md §5.1, the engine's [`crate::gmr::gmm_params`]):
 //! `pi_j = (1/N) sum_i g_ij`, `mu_j = sum_i g_ij x_i / (N pi_j + eps)`,
 //! `var_j = max(sum_i g_ij |x_i - mu_j|^2 / (N pi_j + eps), 1e-8)`, accumulated in `f64`.
 //! The points are constants (raw input coordinates); the gradient goes to the memberships.
@@ -8,7 +8,7 @@
 
 use crate::train::tape::{Backward, Id, Op, Tape};
 
-/// Added to `N pi_j` before dividing (method.md §4.1).
+/// Added to `N pi_j` before dividing (docs/design.md §5.1).
 pub const GMM_EPS: f64 = 1e-8;
 /// Lower clamp of the variances.
 pub const MIN_VAR: f64 = 1e-8;

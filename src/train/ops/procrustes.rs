@@ -1,4 +1,4 @@
-//! The DeepGMR weighted Procrustes solve (method.md B §4.2, the engine's [`crate::gmr::solve`])
+//! The DeepGMR weighted Procrustes solve (docs/design.md §5.2, the engine's [`crate::gmr::solve`])
 //! and its derivative, in `f64`.
 //!
 //! Forward: `p_j = pi^_j / sum pi^`, `c^ = sum p_j mu^_j`, `c = sum p_j mu_j`,

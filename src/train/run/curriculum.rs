@@ -1,4 +1,4 @@
-//! The curriculum (method.md A.8(c)): training pairs start with small rotations and translations,
+//! The curriculum (docs/design.md §12): training pairs start with small rotations and translations,
 //! high overlap and little noise, and ramp linearly to the paper's protocol (±45°, 0.5, ≥ 70%
 //! overlap with 70% crops, σ = 0.01) over `ramp_pairs` training pairs. Validation always uses the
 //! full protocol.

@@ -4,7 +4,7 @@
 //! off (network only) and, when asked, with the default point-to-plane ICP refining the network's
 //! estimate only (`starts: [Network]`, so "+ICP" measures the network, not the multi-start
 //! fallbacks, and stays comparable with logs written before multi-start existed). Errors are in
-//! the pairs' normalised shape units, recall at 15° and 0.2 (method.md B §7).
+//! the pairs' normalised shape units, recall at 15° and 0.2 (docs/design.md §9).
 
 use super::ValMetrics;
 use crate::data::metrics::{pair_error, summarize, PairError};
@@ -12,7 +12,7 @@ use crate::data::Pair;
 use crate::train::Params;
 use crate::{IcpKind, ModelConfig, Options, PointCloud, Registrar, Start, Weights};
 
-/// Recall thresholds (method.md B §7).
+/// Recall thresholds (docs/design.md §9).
 pub const ROT_THRESHOLD: f64 = 15.0;
 /// Translation threshold, normalised units.
 pub const TRANS_THRESHOLD: f64 = 0.2;
