@@ -151,8 +151,10 @@ fn rust_weights() -> Weights {
 #[test]
 fn rust_fixture_is_current() {
     if std::env::var("ARPS_WRITE_FIXTURES").is_ok_and(|v| v == "1") {
-        let w = rust_weights();
-        std::fs::write(fixture("rust_tiny.safetensors"), w.to_bytes(StoreAs::F32).unwrap()).unwrap();
+        // stored f16 (half the size); the outputs are the engine's on the stored weights
+        let bytes = rust_weights().to_bytes(StoreAs::F16).unwrap();
+        std::fs::write(fixture("rust_tiny.safetensors"), &bytes).unwrap();
+        let w = Weights::from_bytes(&bytes).unwrap();
         let pair = &arps::train::synthetic::pairs(1, 48, 3)[0];
         let target: Vec<[f32; 3]> = pair.target[..40].to_vec(); // clouds of different sizes
         write_io("rust_io.safetensors", &engine(&w, &pair.source, &target));
