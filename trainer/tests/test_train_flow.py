@@ -83,7 +83,15 @@ def test_first_step_losses_equal_the_cpu_trainers(tmp_path):
     shutil.copytree(a, c)
     pytrain(a, 1)
     run("train", "--run", str(c), "--resume", "--steps", "1", "--quiet")
-    la = [x for x in lines(a) if x["kind"] == "step"][0]["loss"]
-    lc = [x for x in lines(c) if x["kind"] == "step"][0]["loss"]
-    for k in ("total", "sup", "ctr", "ctr_no_shift", "consistency", "means", "seg", "gamma_entropy"):
+    sa = [x for x in lines(a) if x["kind"] == "step"][0]
+    sc = [x for x in lines(c) if x["kind"] == "step"][0]
+    la, lc = sa["loss"], sc["loss"]
+    assert la["seg"] > 0.1 and la["consistency_pairs"] > 0, "the terms under test are live"
+    for k in ("total", "sup", "ctr", "ctr_no_shift", "consistency", "consistency_pairs", "means", "seg", "gamma_entropy"):
         assert abs(la[k] - lc[k]) <= 1e-4 * max(1.0, abs(lc[k])), f"{k}: torch {la[k]} vs arps-train {lc[k]}"
+    assert abs(sa["grad_norm"] - sc["grad_norm"]) <= 1e-4 * sc["grad_norm"]
+    # the baseline validation (network only, pair units) agrees with the engine's registrar
+    va = [x for x in lines(a) if x["kind"] == "val"][0]["val"]
+    vc = [x for x in lines(c) if x["kind"] == "val"][0]["val"]
+    for k in ("net_recall", "net_mre", "net_mte"):
+        assert abs(va[k] - vc[k]) <= 1e-3 * max(1.0, abs(vc[k])), f"{k}: torch {va[k]} vs arps-train {vc[k]}"
