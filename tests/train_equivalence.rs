@@ -123,10 +123,8 @@ fn write_io(name: &str, io: &Io) {
         ("shifts_target", Dtype::F32, vec![l, 3], flat(&io.shifts_target)),
         ("t12", Dtype::F64, vec![4, 4], t),
     ];
-    let views: Vec<(String, TensorView<'_>)> = raw
-        .iter()
-        .map(|(k, d, s, b)| (k.to_string(), TensorView::new(*d, s.clone(), b).unwrap()))
-        .collect();
+    let views: Vec<(String, TensorView<'_>)> =
+        raw.iter().map(|(k, d, s, b)| (k.to_string(), TensorView::new(*d, s.clone(), b).unwrap())).collect();
     let meta = std::collections::HashMap::from([("written_by".to_string(), "tests/train_equivalence.rs".to_string())]);
     std::fs::write(fixture(name), safetensors::serialize(views, Some(meta)).unwrap()).unwrap();
 }

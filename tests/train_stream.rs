@@ -81,10 +81,8 @@ fn training_records_are_what_the_cpu_trainer_builds() {
     for r in &recs {
         let want = data.train_pair(r.index).unwrap();
         assert_eq!(r.pair, want, "pair {}", r.index);
-        let seg_s =
-            partition::targets(&want.source, want.source_centroid(), &want.t_gt, Role::Source, j, 4.0);
-        let seg_t =
-            partition::targets(&want.target, want.target_centroid(), &want.t_gt, Role::Target, j, 4.0);
+        let seg_s = partition::targets(&want.source, want.source_centroid(), &want.t_gt, Role::Source, j, 4.0);
+        let seg_t = partition::targets(&want.target, want.target_centroid(), &want.t_gt, Role::Target, j, 4.0);
         assert_eq!(r.seg_source, seg_s);
         assert_eq!(r.seg_target, seg_t);
         let mut corr = vec![-1; want.source.len()];
@@ -105,7 +103,8 @@ fn training_records_are_what_the_cpu_trainer_builds() {
 #[test]
 fn validation_records_are_the_validation_pairs() {
     let cfg = config();
-    let (h, recs) = read_all(&write(&cfg, &StreamSpec { val: true, first_pair: 0, worker: 0, workers: 1, count: Some(4) }));
+    let (h, recs) =
+        read_all(&write(&cfg, &StreamSpec { val: true, first_pair: 0, worker: 0, workers: 1, count: Some(4) }));
     assert_eq!((h.kind.as_str(), h.batch, recs.len()), ("val", 1, 4));
     let data = TrainData::new(&cfg).unwrap();
     for (i, r) in recs.iter().enumerate() {

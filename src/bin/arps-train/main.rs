@@ -6,6 +6,13 @@
 //!   provenance.
 //! * `arps-train curves --run runs/NAME --out curve.svg`: validation recall / MRE and the training
 //!   loss over wall-clock time.
+//! * `arps-train init --run runs/NAME [train flags]`: a new run's configuration and step-0
+//!   checkpoint, without training (for `stream` and the PyTorch trainer in `trainer/`).
+//! * `arps-train stream --config runs/NAME/config.json [--worker K --workers W] [--val]`: training
+//!   batches or validation pairs in the binary layout of `arps::train::run::stream`, on stdout.
+//! * `arps-train pack-bank --bank DIR --out bank.arpsbank.gz`: the shape bank in one file.
+//!
+//! The binary only parses arguments; the work is in `arps::train::run`.
 
 use arps::data::pairs::check_pose_angle;
 use arps::train::run::session::{self, Export, ResumeChanges, Session, Start};
@@ -282,7 +289,7 @@ fn main() -> ExitCode {
         Command::Export(a) => session::export(&Export { run: a.run, out: a.out, f16: a.f16, latest: a.latest }),
         Command::Curves(a) => curves::run(&a.run, &a.out, a.x == "cpu"),
         Command::PartitionOracle(a) => oracle::run(&a.run, a.pairs, &a.kappa, a.points),
-        Command::Init(a) => run_config(&a).and_then(|c| stream::init(&a.run, &c)),
+        Command::Init(a) => run_config(&a).and_then(|c| session::init(&a.run, &c)),
         Command::Stream(a) => stream::stream(&a),
         Command::PackBank(a) => stream::pack_bank(&a.bank, &a.out),
     };
@@ -454,4 +461,3 @@ fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
         log_every_steps: a.log_every.max(1),
     })
 }
-

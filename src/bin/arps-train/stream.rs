@@ -1,42 +1,12 @@
-//! `arps-train init`, `stream` and `pack-bank`: thin wrappers over [`arps::train::run::stream`]
-//! and [`arps::train::run::bank_pack`].
+//! `arps-train stream` and `pack-bank`: thin wrappers over [`arps::train::run::stream`] and
+//! [`arps::train::run::bank_pack`].
 
 use super::StreamArgs;
-use arps::train::run::{bank_pack, data::TrainData, stream as s, RunConfig};
+use arps::train::run::{bank_pack, data::TrainData, session, stream as s};
 use std::path::Path;
 
-/// Starts a run without training: `run/config.json` and the step-0 checkpoint (the engine's
-/// initialisation for the config's seed), which `train --resume` and the PyTorch trainer
-/// continue. Refuses a directory that already holds a checkpoint.
-pub fn init(run: &Path, cfg: &RunConfig) -> Result<(), String> {
-    std::fs::create_dir_all(run).map_err(|e| format!("{}: {e}", run.display()))?;
-    let ckpt = run.join("checkpoint.safetensors");
-    if ckpt.exists() {
-        return Err(format!("{} exists", ckpt.display()));
-    }
-    let json = serde_json::to_string_pretty(cfg).map_err(|e| e.to_string())?;
-    let path = run.join("config.json");
-    std::fs::write(&path, json + "\n").map_err(|e| format!("{}: {e}", path.display()))?;
-    let params = arps::train::init_params(&cfg.model, cfg.seed).map_err(|e| e.to_string())?;
-    let st = arps::train::run::RunState::new(cfg.clone());
-    arps::train::run::checkpoint::save(&ckpt, &st, &params, &arps::train::Adam::new(cfg.lr), None)?;
-    eprintln!("arps-train: wrote {} and {}", path.display(), ckpt.display());
-    Ok(())
-}
-
-/// Reads a run configuration: a [`RunConfig`] or any object with one under `config`.
-pub fn read_config(path: &Path) -> Result<RunConfig, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-    let v = match v.get("config") {
-        Some(c) => c.clone(),
-        None => v,
-    };
-    serde_json::from_value(v).map_err(|e| format!("{}: not a run configuration: {e}", path.display()))
-}
-
 pub fn stream(a: &StreamArgs) -> Result<(), String> {
-    let mut cfg = read_config(&a.config)?;
+    let mut cfg = session::read_config(&a.config)?;
     if let Some(b) = &a.bank {
         cfg.bank = Some(b.to_string_lossy().into_owned());
     }

@@ -12,7 +12,8 @@
 //! * [`log`]: JSONL lines.
 //! * [`bank_pack`]: the shape bank packed into one gzipped file.
 //! * [`stream`]: the binary training-data stream another trainer reads.
-//! * [`session`]: [`session::train`] runs one training session, [`session::export`] exports weights.
+//! * [`session`]: [`session::train`] runs one training session, [`session::export`] exports
+//!   weights, [`session::init`] starts a run without training.
 
 pub mod bank_pack;
 pub mod checkpoint;

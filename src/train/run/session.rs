@@ -2,7 +2,10 @@
 //! weights (`arps-train export`): the binary parses arguments into a [`Session`] or [`Export`]
 //! and calls [`train`] or [`export`].
 
-use super::{checkpoint, data::TrainData, log, process_cpu_seconds, validate, Curriculum, RunConfig, RunState, ValMetrics, TRAINER_VERSION};
+use super::{
+    checkpoint, data::TrainData, log, process_cpu_seconds, validate, Curriculum, RunConfig, RunState, ValMetrics,
+    TRAINER_VERSION,
+};
 use crate::train::{self, LossConfig, LossParts, TrainState};
 use crate::{StoreAs, Weights};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -522,4 +525,34 @@ pub fn export(a: &Export) -> Result<(), String> {
     checkpoint::write_atomic(&a.out, &bytes).map_err(|e| format!("{}: {e}", a.out.display()))?;
     eprintln!("arps-train: wrote {} ({} bytes)", a.out.display(), bytes.len());
     Ok(())
+}
+
+/// Starts a run without training: `run/config.json` and the step-0 checkpoint (the engine's
+/// initialisation for the config's seed), which `train --resume` and the PyTorch trainer
+/// continue. Refuses a directory that already holds a checkpoint.
+pub fn init(run: &Path, cfg: &RunConfig) -> Result<(), String> {
+    std::fs::create_dir_all(run).map_err(|e| format!("{}: {e}", run.display()))?;
+    let ckpt = run.join("checkpoint.safetensors");
+    if ckpt.exists() {
+        return Err(format!("{} exists", ckpt.display()));
+    }
+    let json = serde_json::to_string_pretty(cfg).map_err(|e| e.to_string())?;
+    let path = run.join("config.json");
+    std::fs::write(&path, json + "\n").map_err(|e| format!("{}: {e}", path.display()))?;
+    let params = train::init_params(&cfg.model, cfg.seed).map_err(|e| e.to_string())?;
+    let st = RunState::new(cfg.clone());
+    checkpoint::save(&ckpt, &st, &params, &train::Adam::new(cfg.lr), None)?;
+    eprintln!("arps-train: wrote {} and {}", path.display(), ckpt.display());
+    Ok(())
+}
+
+/// Reads a run configuration: a [`RunConfig`] or any object with one under `config`.
+pub fn read_config(path: &Path) -> Result<RunConfig, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let v: serde_json::Value = serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    let v = match v.get("config") {
+        Some(c) => c.clone(),
+        None => v,
+    };
+    serde_json::from_value(v).map_err(|e| format!("{}: not a run configuration: {e}", path.display()))
 }

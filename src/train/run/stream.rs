@@ -271,7 +271,8 @@ pub fn read_record(r: &mut impl Read, h: &Header) -> Result<Option<Record>, Stri
     };
     let (n, j) = (h.n, h.j);
     let u64v = |b: &[u8]| u64::from_le_bytes(b.try_into().unwrap_or([0; 8]));
-    let f32s = |b: &[u8]| -> Vec<f32> { b.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect() };
+    let f32s =
+        |b: &[u8]| -> Vec<f32> { b.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect() };
     let mat = |b: &[u8]| -> Matrix4<f64> {
         let v: Vec<f64> = b.chunks_exact(8).map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]))).collect();
         Matrix4::from_fn(|r, c| v[r * 4 + c])
