@@ -170,3 +170,27 @@ fn packed_bank_round_trips() {
     assert!(bank_pack::read(&bytes[..bytes.len() / 2]).is_err(), "a truncated pack is an error");
     assert!(bank_pack::read(&b"not gzip"[..]).is_err());
 }
+
+#[test]
+fn gzipped_logs_read_like_plain_ones() {
+    use arps::train::run::log;
+    use std::io::Write;
+    let dir = std::env::temp_dir().join(format!("arps-gz-log-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let text = "{\"kind\":\"start\",\"step\":0}\nnot json\n{\"kind\":\"end\",\"step\":5}\n";
+    let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());
+    gz.write_all(text.as_bytes()).unwrap();
+    std::fs::write(dir.join("log.jsonl.gz"), gz.finish().unwrap()).unwrap();
+    let lines = log::read(&dir.join("log.jsonl")).unwrap();
+    assert_eq!(lines.len(), 2);
+    assert_eq!(lines[1]["step"], 5);
+    // a plain log wins over a gzipped one
+    std::fs::write(dir.join("log.jsonl"), "{\"kind\":\"start\",\"step\":7}\n").unwrap();
+    assert_eq!(log::read(&dir.join("log.jsonl")).unwrap()[0]["step"], 7);
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert!(log::read(&dir.join("log.jsonl")).is_err(), "no log at all is an error");
+    // a finished run's committed log
+    let committed =
+        log::read(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/runs/web-1/log.jsonl")).unwrap();
+    assert!(committed.iter().filter(|l| l["kind"] == "val").count() > 5);
+}
