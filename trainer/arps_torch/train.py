@@ -277,10 +277,11 @@ def main(argv=None):
             net["t21"] = gmr(net["gamma_target"], net["gamma_source"], b["target"], b["source"])
             total, parts = losses(net, b, cfg["loss"])
             total.backward()
-            gn = math.sqrt(sum(float((p.grad.double() ** 2).sum()) for _, p in params if p.grad is not None))
             for _, p in params:
                 if p.grad is None:
                     p.grad = torch.zeros_like(p)
+            # one device sync for the global norm (float64, as the CPU trainer sums it)
+            gn = float(torch.stack([(p.grad.double() ** 2).sum() for _, p in params]).sum().sqrt())
             skipped = not (math.isfinite(gn) and all(math.isfinite(v) for k, v in parts.items() if k != "steps"))
             clipped = False
             if not skipped:
