@@ -1,6 +1,7 @@
-//! One training session of a run (what `arps-train train` does) and the export of a run's
-//! weights (`arps-train export`): the binary parses arguments into a [`Session`] or [`Export`]
-//! and calls [`train`] or [`export`].
+//! What the `arps-train` subcommands do, behind the binary's argument parsing: one training
+//! session of a run ([`train`] of a [`Session`]), the export of a run's weights ([`export`]),
+//! a new run's configuration and step-0 checkpoint without training ([`init`], for the data
+//! stream and the PyTorch trainer), and reading a run configuration back ([`read_config`]).
 
 use super::{
     checkpoint, data::TrainData, log, process_cpu_seconds, validate, Curriculum, RunConfig, RunState, ValMetrics,

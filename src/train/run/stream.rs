@@ -355,6 +355,9 @@ pub fn write_stream(
     if spec.workers == 0 || spec.worker >= spec.workers {
         return Err(format!("worker {} of {}: expected 0 <= worker < workers", spec.worker, spec.workers));
     }
+    if spec.val && spec.count.is_none() {
+        return Err("a validation stream needs a count".into());
+    }
     let h = header(cfg, spec);
     let closed = |e: &std::io::Error| e.kind() == std::io::ErrorKind::BrokenPipe;
     match write_header(w, &h) {
@@ -369,7 +372,7 @@ pub fn write_stream(
             break;
         }
         let indices: Vec<u64> = if spec.val {
-            let Some(count) = spec.count else { return Err("a validation stream needs a count".into()) };
+            let count = spec.count.unwrap_or(0);
             written = count;
             (0..count).collect()
         } else {
