@@ -20,6 +20,21 @@ cargo clippy --quiet --all-targets --features train -- -D warnings
 step "native tests (cargo test --features train)"
 cargo test --features train
 
+step "PyTorch trainer tests (trainer/tests; where torch is installed)"
+if python3 -c "import torch, numpy, safetensors, pytest" 2>/dev/null; then
+  # the flow tests run the arps-train that `cargo test` just built (they skip, and say so,
+  # when there is none)
+  rc=0
+  (cd trainer && ARPS_TRAIN_BIN="${ARPS_TRAIN_BIN:-$PWD/../target/debug/arps-train}" python3 -m pytest -q -rs tests) || rc=$?
+  if [ "$rc" -eq 5 ]; then
+    echo "SKIPPED: no trainer tests were collected"
+  elif [ "$rc" -ne 0 ]; then
+    exit "$rc"
+  fi
+else
+  echo "SKIPPED: trainer Python tests (torch, numpy, safetensors or pytest not importable; pip install -r trainer/requirements.txt)"
+fi
+
 step "core builds for wasm32 (no cli, no trainer)"
 cargo build --quiet --lib --target wasm32-unknown-unknown --release
 

@@ -5,7 +5,7 @@
 
 use super::{Curriculum, RunConfig};
 use crate::data::source::{ShapeSource, Split};
-use crate::data::{bank, mix, PairParams};
+use crate::data::{mix, PairParams};
 use crate::train::Pair as TrainPair;
 use crate::Result;
 
@@ -32,7 +32,7 @@ impl TrainData {
     pub fn new(cfg: &RunConfig) -> std::result::Result<Self, String> {
         let (mut source, counts) = match &cfg.bank {
             Some(dir) => {
-                let b = bank::load_dir(std::path::Path::new(dir)).map_err(|e| format!("bank {dir}: {e}"))?;
+                let b = super::bank_pack::load(std::path::Path::new(dir)).map_err(|e| format!("bank {dir}: {e}"))?;
                 let (usable, skipped) = (b.meshes.len(), b.skipped.len());
                 let s = ShapeSource::with_bank(b, cfg.val_fraction);
                 let c = (usable, skipped, s.bank_train.len(), s.bank_val.len());
@@ -55,10 +55,17 @@ impl TrainData {
 
     /// Training pair number `i` of the stream (deterministic in `(seed, i)`).
     pub fn train_pair(&self, i: u64) -> Result<TrainPair> {
+        let (p, sample_seed) = self.train_protocol_pair(i)?;
+        Ok(to_train_pair(&p, self.n, sample_seed))
+    }
+
+    /// Training pair number `i` in the pair's own units, with the seed of its network sample
+    /// ([`Self::train_pair`] is `to_train_pair` of these).
+    pub fn train_protocol_pair(&self, i: u64) -> Result<(crate::data::Pair, u64)> {
         let params = PairParams { pose_angle_deg: self.pose_angle_deg, ..self.curriculum.params(i, &self.full) };
         let index = self.stream.wrapping_add(i);
         let p = self.source.pair(Split::Train, index, &params)?;
-        Ok(to_train_pair(&p, self.n, mix(index, 0x11E7)))
+        Ok((p, mix(index, 0x11E7)))
     }
 
     /// Validation pair `i` (full protocol; the same pair as `arps make-pairs --split val --seed 0`

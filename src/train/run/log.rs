@@ -1,9 +1,10 @@
 //! The JSONL run log (`runs/NAME/log.jsonl`): one object per line, `"kind": "start" | "step" |
 //! "val" | "checkpoint" | "end"`, each with `time` (Unix seconds), `elapsed` (training seconds over
-//! all sessions), `step` and `pairs_seen`.
+//! all sessions), `step` and `pairs_seen`. A finished run's log may be stored gzipped next to
+//! where the plain one would be (`log.jsonl.gz`); the readers here take either.
 
-use std::io::Write;
-use std::path::Path;
+use std::io::{Read, Write};
+use std::path::{Path, PathBuf};
 
 /// Appends to a JSONL file.
 pub struct JsonlLog {
@@ -30,7 +31,30 @@ impl JsonlLog {
     }
 }
 
-/// Reads every line of a log that parses as JSON.
+/// `path` with `.gz` appended (`log.jsonl` -> `log.jsonl.gz`).
+pub fn gz_path(path: &Path) -> PathBuf {
+    let mut s = path.as_os_str().to_owned();
+    s.push(".gz");
+    PathBuf::from(s)
+}
+
+/// The text of a log: `path` itself, or when it does not exist, `path.gz` decompressed.
+pub fn read_text(path: &Path) -> std::io::Result<String> {
+    match std::fs::read_to_string(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            let gz = gz_path(path);
+            let file = std::fs::File::open(&gz).map_err(|_| e)?;
+            let mut text = String::new();
+            flate2::read::GzDecoder::new(file)
+                .read_to_string(&mut text)
+                .map_err(|e| std::io::Error::new(e.kind(), format!("{}: {e}", gz.display())))?;
+            Ok(text)
+        }
+        r => r,
+    }
+}
+
+/// Reads every line of a log that parses as JSON ([`read_text`]: plain or gzipped).
 pub fn read(path: &Path) -> std::io::Result<Vec<serde_json::Value>> {
-    Ok(std::fs::read_to_string(path)?.lines().filter_map(|l| serde_json::from_str(l).ok()).collect())
+    Ok(read_text(path)?.lines().filter_map(|l| serde_json::from_str(l).ok()).collect())
 }

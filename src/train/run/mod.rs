@@ -10,11 +10,18 @@
 //! * [`checkpoint`]: atomic checkpoints (parameters + Adam moments + state in one safetensors).
 //! * [`validate`]: the fixed validation set and its metrics, computed with the engine.
 //! * [`log`]: JSONL lines.
+//! * [`bank_pack`]: the shape bank packed into one gzipped file.
+//! * [`stream`]: the binary training-data stream another trainer reads.
+//! * [`session`]: [`session::train`] runs one training session, [`session::export`] exports
+//!   weights, [`session::init`] starts a run without training.
 
+pub mod bank_pack;
 pub mod checkpoint;
 pub mod curriculum;
 pub mod data;
 pub mod log;
+pub mod session;
+pub mod stream;
 pub mod validate;
 
 pub use curriculum::Curriculum;

@@ -1,0 +1,190 @@
+"""The engine's DGMR-ARPS network (``src/model``, ``src/train/model.rs``) in PyTorch, batched:
+pre-centring, ``f0 = 0``, tokens ``[f ; pos(x)]``, post-norm self then cross attention, the
+``out`` projection, the soft (or top-H) reference point, the step MLP and shifting, then the
+membership head; the GMM parameters and the weighted Procrustes solve (``gmr``) run in float64
+on the raw input coordinates, as in the engine. Parameters carry the engine's tensor names."""
+
+import torch
+import torch.nn.functional as F
+from torch import nn
+
+from .config import check, tensor_specs
+
+GMM_EPS = 1e-8
+MIN_VAR = 1e-8
+
+
+class ArpsNet(nn.Module):
+    """The network for one ``ModelConfig`` (dict). ``forward(source, target)`` takes
+    ``[B, Ns, 3]`` and ``[B, Nt, 3]`` float32 clouds in engine-normalised units."""
+
+    def __init__(self, cfg: dict):
+        super().__init__()
+        self.cfg = check(dict(cfg))
+        self.specs = tensor_specs(self.cfg)
+        self.index = {name: i for i, (name, _) in enumerate(self.specs)}
+        self.tensors = nn.ParameterList([nn.Parameter(torch.zeros(shape)) for _, shape in self.specs])
+
+    def p(self, name: str) -> torch.Tensor:
+        return self.tensors[self.index[name]]
+
+    def named(self):
+        """``[(engine name, parameter)]`` in the engine's order."""
+        return [(name, self.tensors[i]) for i, (name, _) in enumerate(self.specs)]
+
+    def load(self, tensors: dict):
+        """Copies ``{engine name: array}`` into the parameters (every tensor, exact shapes)."""
+        names = {n for n, _ in self.specs}
+        extra = set(tensors) - names
+        if extra:
+            raise ValueError(f"tensor {sorted(extra)[0]!r} is not part of the config")
+        with torch.no_grad():
+            for name, shape in self.specs:
+                if name not in tensors:
+                    raise ValueError(f"tensor {name!r} is missing")
+                v = torch.as_tensor(tensors[name], dtype=torch.float32)
+                if list(v.shape) != list(shape):
+                    v = v.reshape(shape) if v.numel() == torch.Size(shape).numel() else None
+                    if v is None:
+                        raise ValueError(f"tensor {name!r} has the wrong size")
+                self.p(name).copy_(v)
+
+    def state(self) -> dict:
+        """``{engine name: float32 CPU tensor}``."""
+        return {n: p.detach().float().cpu().contiguous() for n, p in self.named()}
+
+    def linear(self, x, name):
+        return F.linear(x, self.p(f"{name}.weight"), self.p(f"{name}.bias"))
+
+    def mlp(self, x, prefix, layers, relu_last):
+        for i in range(layers):
+            x = self.linear(x, f"{prefix}.{i}")
+            if i + 1 < layers or relu_last:
+                x = F.relu(x)
+        return x
+
+    def block(self, x, kv, name):
+        cfg = self.cfg
+        b, nq, d = x.shape
+        h = cfg["heads"]
+        q = self.linear(x, f"{name}.q").view(b, nq, h, d // h).transpose(1, 2)
+        k = self.linear(kv, f"{name}.k").view(b, kv.shape[1], h, d // h).transpose(1, 2)
+        v = self.linear(kv, f"{name}.v").view(b, kv.shape[1], h, d // h).transpose(1, 2)
+        a = F.scaled_dot_product_attention(q, k, v).transpose(1, 2).reshape(b, nq, d)
+        eps = cfg["layer_norm_eps"]
+        r = F.layer_norm(x + self.linear(a, f"{name}.o"), (d,), self.p(f"{name}.norm1.weight"),
+                         self.p(f"{name}.norm1.bias"), eps)
+        f = self.linear(F.relu(self.linear(r, f"{name}.ffn1")), f"{name}.ffn2")
+        return F.layer_norm(r + f, (d,), self.p(f"{name}.norm2.weight"), self.p(f"{name}.norm2.bias"), eps)
+
+    def reference(self, f, layer):
+        """Reference weights over the points, ``[B, N]``."""
+        cfg = self.cfg
+        if cfg["reference"] == "soft":
+            s = self.linear(f, f"{layer}.score").squeeze(-1) / cfg["soft_temperature"]
+            return torch.softmax(s, dim=-1)
+        n = f.shape[1]
+        h = min(cfg["top_h"], n)
+        norms = (f.detach() ** 2).sum(-1)
+        idx = torch.argsort(-norms, dim=-1, stable=True)[:, :h]
+        w = torch.zeros_like(norms)
+        return w.scatter(1, idx, 1.0 / h)
+
+    def network(self, source, target):
+        """Memberships and per-layer steps and shifts: ``dict(gamma_source [B, Ns, J],
+        gamma_target, steps [B, L], shifts_source [B, L, 3], shifts_target)``."""
+        cfg = self.cfg
+        c = cfg["feature_dim"]
+        x = [centred(source), centred(target)]
+        f = [x[0].new_zeros(x[0].shape[:2] + (c,)), x[1].new_zeros(x[1].shape[:2] + (c,))]
+        npos = len(cfg["pos_hidden"]) + 1
+        steps, shifts = [], [[], []]
+        for l in range(cfg["layers"]):
+            p = f"layers.{l}"
+            g = [torch.cat([f[s], self.mlp(x[s], f"{p}.pos", npos, True)], -1) for s in range(2)]
+            g1 = [self.block(g[s], g[s], f"{p}.self_attn") for s in range(2)]
+            g2 = [self.block(g1[0], g1[1], f"{p}.cross_attn"), self.block(g1[1], g1[0], f"{p}.cross_attn")]
+            mux, muf = [None, None], [None, None]
+            for s in range(2):
+                f[s] = self.linear(g2[s], f"{p}.out")
+                w = self.reference(f[s], p).unsqueeze(-1)
+                mux[s] = (w * x[s]).sum(1)
+                muf[s] = (w * f[s]).sum(1)
+            alpha = self.mlp(torch.cat([mux[0] - mux[1], muf[0] - muf[1]], -1), f"{p}.step", 2, False)
+            st = torch.sigmoid(alpha)
+            for s in range(2):
+                d = mux[s] * st
+                x[s] = x[s] - d.unsqueeze(1)
+                shifts[s].append(d)
+            steps.append(st.squeeze(-1))
+        nhead = len(cfg["head_hidden"]) + 1
+        gammas = []
+        for s in range(2):
+            colmax = f[s].max(dim=1, keepdim=True).values.expand_as(f[s])
+            logits = self.mlp(torch.cat([f[s], colmax], -1), "head", nhead, False)
+            gammas.append(torch.softmax(logits.float(), dim=-1))
+        return {
+            "gamma_source": gammas[0],
+            "gamma_target": gammas[1],
+            "steps": torch.stack(steps, 1).float(),
+            "shifts_source": torch.stack(shifts[0], 1).float(),
+            "shifts_target": torch.stack(shifts[1], 1).float(),
+        }
+
+    def forward(self, source, target):
+        """``network`` plus ``t12`` (``T_target_source``) and ``t21``, ``[B, 4, 4]`` float64."""
+        out = self.network(source, target)
+        out["t12"] = gmr(out["gamma_source"], out["gamma_target"], source, target)
+        out["t21"] = gmr(out["gamma_target"], out["gamma_source"], target, source)
+        return out
+
+
+def centred(points):
+    """The engine's pre-centring: the float64 mean, rounded to float32, subtracted."""
+    mean = points.double().mean(1, keepdim=True).float()
+    return points - mean
+
+
+def gmm(points, gamma):
+    """GMM parameters (``src/gmr.rs::gmm_params``) in float64: ``pi [B, J]``, ``mu [B, J, 3]``,
+    ``var [B, J]``."""
+    x = points.double()
+    g = gamma.double()
+    mass = g.sum(1)
+    mu = torch.einsum("bnj,bnk->bjk", g, x) / (mass + GMM_EPS).unsqueeze(-1)
+    d2 = ((x.unsqueeze(2) - mu.unsqueeze(1)) ** 2).sum(-1)
+    var = ((g * d2).sum(1) / (mass + GMM_EPS)).clamp_min(MIN_VAR)
+    pi = mass / x.shape[1]
+    return pi, mu, var
+
+
+def solve(pi_s, mu_s, mu_t, var_t):
+    """Weighted Procrustes (``src/gmr.rs::solve``): ``T_target_source`` ``[B, 4, 4]`` float64.
+    (The engine's fallbacks for degenerate inputs, rank-one and non-finite, are not mirrored.)"""
+    total = pi_s.sum(-1, keepdim=True)
+    cs = (pi_s.unsqueeze(-1) * mu_s).sum(1) / total
+    ct = (pi_s.unsqueeze(-1) * mu_t).sum(1) / total
+    w = (pi_s / total) / var_t.clamp_min(MIN_VAR)
+    a = mu_s - cs.unsqueeze(1)
+    b = mu_t - ct.unsqueeze(1)
+    m = torch.einsum("bj,bjk,bjl->bkl", w, a, b)
+    scale = m.abs().amax(dim=(1, 2), keepdim=True).clamp_min(1e-300)
+    u, _, vh = torch.linalg.svd(m / scale)
+    v = vh.transpose(1, 2)
+    det = torch.linalg.det(v @ u.transpose(1, 2))
+    dm = torch.ones_like(det).unsqueeze(-1).repeat(1, 3)
+    dm = torch.cat([dm[:, :2], torch.where(det < 0, -1.0, 1.0).unsqueeze(-1)], 1)
+    r = v @ torch.diag_embed(dm) @ u.transpose(1, 2)
+    t = ct - (r @ cs.unsqueeze(-1)).squeeze(-1)
+    out = torch.zeros(r.shape[0], 4, 4, dtype=torch.float64, device=r.device)
+    out[:, :3, :3] = r
+    out[:, :3, 3] = t
+    out[:, 3, 3] = 1.0
+    return out
+
+
+def gmr(gamma_s, gamma_t, source, target):
+    """``T_target_source`` from memberships of both clouds (raw coordinates), float64."""
+    pi_s, mu_s, _ = gmm(source, gamma_s)
+    _, mu_t, var_t = gmm(target, gamma_t)
+    return solve(pi_s, mu_s, mu_t, var_t)

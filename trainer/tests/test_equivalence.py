@@ -1,0 +1,92 @@
+"""PyTorch vs the engine, on the fixtures in fixtures/equivalence (see tests/train_equivalence.rs)."""
+
+import os
+
+import numpy as np
+import pytest
+
+torch = pytest.importorskip("torch", reason="torch is not installed (pip install -r trainer/requirements.txt)")
+
+from safetensors.numpy import load_file  # noqa: E402
+
+from arps_torch import fixture  # noqa: E402
+from arps_torch.model import ArpsNet  # noqa: E402
+from arps_torch.weights import read_weights  # noqa: E402
+from conftest import REPO  # noqa: E402
+
+FIX = os.path.join(REPO, "fixtures", "equivalence")
+KEYS = ["gamma_source", "gamma_target", "steps", "shifts_source", "shifts_target", "t12"]
+
+
+def model_of(path):
+    cfg, _, tensors = read_weights(path)
+    m = ArpsNet(cfg)
+    m.load(tensors)
+    return m
+
+
+def test_reproduces_the_engine_fixture():
+    m = model_of(os.path.join(FIX, "rust_tiny.safetensors"))
+    io = load_file(os.path.join(FIX, "rust_io.safetensors"))
+    assert io["source"].shape[0] != io["target"].shape[0], "the fixture has clouds of different sizes"
+    got = fixture.outputs(m, io["source"], io["target"])
+    assert io["gamma_source"].max() - 1 / m.cfg["gaussians"] > 0.1, "memberships nearly uniform"
+    for k in KEYS:
+        d = np.abs(got[k] - io[k]).max()
+        assert d <= 1e-4, f"{k} differs from the engine by {d:e}"
+
+
+def test_torch_fixture_is_current():
+    m = model_of(os.path.join(FIX, "torch_tiny.safetensors"))
+    io = load_file(os.path.join(FIX, "torch_io.safetensors"))
+    got = fixture.outputs(m, io["source"], io["target"])
+    for k in KEYS:
+        assert np.abs(got[k] - io[k]).max() <= 1e-5, f"{k}: rerun python -m arps_torch.fixture"
+
+
+def test_gmr_recovers_a_known_transform():
+    from arps_torch.model import gmr
+    g = torch.Generator().manual_seed(1)
+    src = torch.rand(2, 64, 3, generator=g) * 2 - 1
+    a = 0.7
+    r = torch.tensor([[1, 0, 0], [0, np.cos(a), -np.sin(a)], [0, np.sin(a), np.cos(a)]], dtype=torch.float32)
+    t = torch.tensor([0.3, -0.2, 0.1])
+    tgt = src @ r.T + t
+    gamma = torch.softmax(3 * torch.randn(2, 64, 6, generator=g), -1)
+    est = gmr(gamma, gamma, src, tgt)
+    want = torch.eye(4, dtype=torch.float64)
+    want[:3, :3] = r.double()
+    want[:3, 3] = t.double()
+    assert (est - want).abs().max() < 1e-5
+
+
+def test_weights_round_trip(tmp_path):
+    from arps_torch.weights import weights_bytes
+    cfg, prov, tensors = read_weights(os.path.join(REPO, "models", "web.safetensors"))
+    assert prov["trainer"].startswith("arps-train")
+    for f16 in (False, True):
+        p = tmp_path / f"w{int(f16)}.safetensors"
+        p.write_bytes(weights_bytes(cfg, tensors, {"x": 1}, f16=f16))
+        cfg2, prov2, back = read_weights(str(p))
+        assert cfg2 == cfg and prov2 == {"x": 1}
+        for k, v in tensors.items():
+            assert np.array_equal(back[k], v), k  # stored f16 already: exact both ways
+    bad = dict(tensors)
+    bad.pop(next(iter(bad)))
+    with pytest.raises(KeyError):
+        weights_bytes(cfg, bad)
+
+
+def test_checkpoint_round_trip(tmp_path):
+    from arps_torch.weights import read_checkpoint, save_checkpoint
+    params = {"a": np.arange(5, dtype=np.float32), "b": np.ones(3, np.float32)}
+    m = {k: v * 0.5 for k, v in params.items()}
+    v = {k: v * 0.25 for k, v in params.items()}
+    state = {"step": 3, "config": {"batch": 2}}
+    p = str(tmp_path / "checkpoint.safetensors")
+    save_checkpoint(p, state, {"lr": 1e-3, "t": 3}, params, m, v)
+    ck = read_checkpoint(p)
+    assert ck["state"] == state and ck["adam"]["t"] == 3 and ck["ema"] is None
+    for k in params:
+        assert np.array_equal(ck["params"][k], params[k]) and np.array_equal(ck["adam_v"][k], v[k])
+    assert os.path.exists(str(tmp_path / "checkpoint.json"))
