@@ -26,6 +26,15 @@ const TS_TYPES: &'static str = include_str!("../js/arps-types.d.ts");
 extern "C" {
     #[wasm_bindgen(js_namespace = performance, js_name = now)]
     fn performance_now() -> f64;
+
+    /// `Object.keys`, with a throw (a Proxy's `ownKeys` trap) returned instead of unwinding.
+    #[wasm_bindgen(catch, js_namespace = Object, js_name = keys)]
+    fn object_keys(object: &JsValue) -> Result<Array, JsValue>;
+}
+
+/// The message of a thrown JS value (an `Error`'s `message`, else its debug form).
+fn js_message(e: &JsValue) -> String {
+    e.dyn_ref::<js_sys::Error>().map(|e| String::from(e.message())).unwrap_or_else(|| format!("{e:?}"))
 }
 
 /// The clock handed to the core: `performance.now()` where it exists, else `Date.now()`.
@@ -142,9 +151,7 @@ impl Registrar {
         };
         let r = self.inner.register_with_progress(&source, &target, &options, &mut progress).map_err(js_err)?;
         if let Some(e) = callback_error {
-            let message =
-                e.dyn_ref::<js_sys::Error>().map(|e| String::from(e.message())).unwrap_or_else(|| format!("{e:?}"));
-            return Err(JsError::new(&format!("onProgress threw: {message}")));
+            return Err(JsError::new(&format!("onProgress threw: {}", js_message(&e))));
         }
         let out = Object::new();
         set(&out, "matrix", &matrix_js(&r.T_target_source))?;
@@ -249,9 +256,14 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
     // so it cannot drift).
     let fields = struct_fields::<Options>();
     let clean = Object::new();
-    for key in Object::keys(options.unchecked_ref::<Object>()).iter() {
+    // Every read of the caller's object may run a getter or a Proxy trap: each goes through a
+    // `catch` import, so a throw becomes this call's error instead of unwinding through wasm.
+    let keys = object_keys(&options)
+        .map_err(|e| JsError::new(&format!("invalid options: listing them threw: {}", js_message(&e))))?;
+    for key in keys.iter() {
         let name = key.as_string().unwrap_or_default();
-        let value = Reflect::get(&options, &key).unwrap_or(JsValue::UNDEFINED);
+        let value = Reflect::get(&options, &key)
+            .map_err(|e| JsError::new(&format!("invalid options: reading `{name}` threw: {}", js_message(&e))))?;
         if value.is_undefined() || value.is_null() {
             continue;
         }
@@ -320,7 +332,8 @@ fn column_major_16(name: &str, v: &JsValue) -> Result<Option<[f64; 16]>, JsError
         Some(Array::from(v).to_vec())
     } else if Array::is_array(v) {
         let a: &Array = v.unchecked_ref();
-        if a.length() == 16 {
+        // A flat list (its first element a number) must have 16; rows are left to serde.
+        if a.length() == 16 || a.get(0).as_f64().is_some() {
             Some(a.to_vec())
         } else {
             None
