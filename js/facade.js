@@ -39,6 +39,22 @@ const sabByteLength =
     ? Object.getOwnPropertyDescriptor(SharedArrayBuffer.prototype, "byteLength").get
     : null;
 
+const dv = (name) => Object.getOwnPropertyDescriptor(DataView.prototype, name).get;
+const dvBuffer = dv("buffer");
+const dvByteOffset = dv("byteOffset");
+const dvByteLength = dv("byteLength");
+
+/** A `Uint8Array` over a `DataView`'s bytes, or `undefined` if `v` is not one. */
+function dataViewBytes(v) {
+  let buffer;
+  try {
+    buffer = dvBuffer.call(v);
+  } catch {
+    return undefined;
+  }
+  return new Uint8Array(buffer, dvByteOffset.call(v), dvByteLength.call(v));
+}
+
 /** The typed-array kind of `v` ("Float32Array", ...) or `undefined`; never runs user code. */
 const typedArrayKind = (v) => taTag.call(v);
 
@@ -87,6 +103,14 @@ function messageOf(e) {
   }
 }
 
+function readMessage(e) {
+  try {
+    return String(e.message);
+  } catch {
+    return "(an Error whose message cannot be read)";
+  }
+}
+
 const fail = (message) => {
   throw new Error(message);
 };
@@ -99,42 +123,88 @@ function coded(message, code, cause) {
 }
 
 /**
- * A point cloud argument -> a clean `Float32Array` view (same memory, standard prototype) that
- * the glue can copy safely. Accepts a `Float32Array`, or an `Array` of numbers (copied).
+ * A point cloud argument -> `{ points, origin }`: `points` a clean `Float32Array` view (same
+ * memory, standard prototype) that the glue can copy safely, `origin` `null` or the f64 offset
+ * that `points` are relative to. Accepts a `Float32Array` (as is), a `Float64Array` (the origin
+ * is its bounding-box centre, so large coordinates keep their precision), an `Array` of numbers
+ * (copied), or `{ points: Float32Array, origin: [x, y, z] }` (points relative to an origin).
  */
 function cloudArg(v, what) {
   const kind = typedArrayKind(v);
-  let len;
-  let clean;
   if (kind === "Float32Array") {
-    len = taLength.call(v);
-    clean = () => new Float32Array(taBuffer.call(v), taByteOffset.call(v), len);
-  } else if (kind === "Float64Array") {
-    len = taLength.call(v);
-    clean = () => Float32Array.from(new Float64Array(taBuffer.call(v), taByteOffset.call(v), len));
-  } else if (kind === undefined && isPlainArray(v)) {
-    len = readLength(v, what);
-    clean = () => {
-      const out = new Float32Array(len);
-      for (let i = 0; i < len; i++) {
-        let x;
-        try {
-          x = v[i];
-        } catch (e) {
-          fail(`${what}: reading element ${i} threw: ${messageOf(e)}`);
-        }
-        if (typeof x !== "number") fail(`${what}: element ${i} is ${describe(x)}, expected a number`);
-        out[i] = x;
-      }
-      return out;
-    };
-  } else {
-    fail(`${what}: expected a Float32Array (or Float64Array) of packed xyz [x0, y0, z0, x1, ...], got ${describe(v)}`);
+    const len = checkLength(taLength.call(v), what);
+    return { points: new Float32Array(taBuffer.call(v), taByteOffset.call(v), len), origin: null };
   }
+  if (kind === "Float64Array") {
+    const len = checkLength(taLength.call(v), what);
+    return centred(new Float64Array(taBuffer.call(v), taByteOffset.call(v), len));
+  }
+  if (kind === undefined && isPlainArray(v)) {
+    const len = checkLength(readLength(v, what), what);
+    const out = new Float32Array(len);
+    for (let i = 0; i < len; i++) {
+      let x;
+      try {
+        x = v[i];
+      } catch (e) {
+        fail(`${what}: reading element ${i} threw: ${messageOf(e)}`);
+      }
+      if (typeof x !== "number") fail(`${what}: element ${i} is ${describe(x)}, expected a number`);
+      out[i] = x;
+    }
+    return { points: out, origin: null };
+  }
+  if (kind === undefined && v !== null && typeof v === "object") {
+    let points;
+    let origin;
+    try {
+      ({ points, origin } = v);
+    } catch (e) {
+      fail(`${what}: reading points/origin threw: ${messageOf(e)}`);
+    }
+    if (typedArrayKind(points) === "Float32Array") {
+      const cloud = cloudArg(points, `${what}.points`);
+      cloud.origin = originArg(origin, what);
+      return cloud;
+    }
+  }
+  return fail(
+    `${what}: expected a Float32Array (or Float64Array) of packed xyz [x0, y0, z0, x1, ...], or { points: Float32Array, origin: [x, y, z] }; got ${describe(v)}`,
+  );
+}
+
+function checkLength(len, what) {
   if (len > 3 * MAX_POINTS) {
     fail(`${what}: ${Math.floor(len / 3)} points is over the limit of ${MAX_POINTS} points per cloud; downsample it first`);
   }
-  return clean();
+  return len;
+}
+
+function originArg(o, what) {
+  if (o === undefined || o === null) return null;
+  const plain = plainValue(o, `${what}.origin`, 1, what);
+  if (!Array.isArray(plain) || plain.length !== 3 || !plain.every((x) => typeof x === "number" && Number.isFinite(x))) {
+    fail(`${what}: origin must be 3 finite numbers [x, y, z]`);
+  }
+  return plain;
+}
+
+/** f64 points -> f32 points relative to their bounding-box centre, and that centre. */
+function centred(p) {
+  const lo = [Infinity, Infinity, Infinity];
+  const hi = [-Infinity, -Infinity, -Infinity];
+  const n = p.length - (p.length % 3);
+  for (let i = 0; i < n; i += 3) {
+    for (let k = 0; k < 3; k++) {
+      const x = p[i + k];
+      if (x < lo[k]) lo[k] = x;
+      if (x > hi[k]) hi[k] = x; // NaN compares false: skipped here, reported by the engine
+    }
+  }
+  const origin = lo.map((l, k) => (Number.isFinite(l) && Number.isFinite(hi[k]) ? (l + hi[k]) / 2 : 0));
+  const out = new Float32Array(p.length);
+  for (let i = 0; i < p.length; i++) out[i] = p[i] - origin[i % 3];
+  return { points: out, origin };
 }
 
 function isPlainArray(v) {
@@ -164,7 +234,7 @@ function bytesArg(v, what) {
     view = new Uint8Array(taBuffer.call(v), taByteOffset.call(v), taByteLength.call(v));
   } else if (isArrayBuffer(v)) {
     view = new Uint8Array(v);
-  } else {
+  } else if ((view = dataViewBytes(v)) === undefined) {
     fail(`${what}: expected a Uint8Array or an ArrayBuffer, got ${describe(v)}`);
   }
   if (view.byteLength > MAX_FILE_BYTES) {
@@ -214,27 +284,27 @@ function optionsArg(options) {
   return out;
 }
 
-function plainValue(v, path, depth) {
+function plainValue(v, path, depth, prefix = "invalid options") {
   if (v === null || typeof v !== "object") return v;
-  if (depth >= 3) fail(`invalid options: \`${path}\` is nested too deeply`);
+  if (depth >= 3) fail(`${prefix}: \`${path}\` is nested too deeply`);
   const kind = typedArrayKind(v);
   if (kind !== undefined) {
     const len = taLength.call(v);
-    if (len > 64) fail(`invalid options: \`${path}\` has ${len} elements (too many)`);
+    if (len > 64) fail(`${prefix}: \`${path}\` has ${len} elements (too many)`);
     const copy = new globalThis[kind](taBuffer.call(v), taByteOffset.call(v), len);
     return Array.from(copy, (x) => (typeof x === "bigint" ? x : Number(x)));
   }
   if (isPlainArray(v)) {
-    const len = readLengthOption(v, path);
+    const len = readLengthOption(v, path, prefix);
     const out = [];
     for (let i = 0; i < len; i++) {
       let x;
       try {
         x = v[i];
       } catch (e) {
-        fail(`invalid options: reading \`${path}[${i}]\` threw: ${messageOf(e)}`);
+        fail(`${prefix}: reading \`${path}[${i}]\` threw: ${messageOf(e)}`);
       }
-      out.push(plainValue(x, `${path}[${i}]`, depth + 1));
+      out.push(plainValue(x, `${path}[${i}]`, depth + 1, prefix));
     }
     return out;
   }
@@ -242,7 +312,7 @@ function plainValue(v, path, depth) {
   try {
     keys = Object.keys(v);
   } catch (e) {
-    fail(`invalid options: listing \`${path}\` threw: ${messageOf(e)}`);
+    fail(`${prefix}: listing \`${path}\` threw: ${messageOf(e)}`);
   }
   const out = {};
   for (const k of keys) {
@@ -250,22 +320,22 @@ function plainValue(v, path, depth) {
     try {
       x = v[k];
     } catch (e) {
-      fail(`invalid options: reading \`${path}.${k}\` threw: ${messageOf(e)}`);
+      fail(`${prefix}: reading \`${path}.${k}\` threw: ${messageOf(e)}`);
     }
-    out[k] = plainValue(x, `${path}.${k}`, depth + 1);
+    out[k] = plainValue(x, `${path}.${k}`, depth + 1, prefix);
   }
   return out;
 }
 
-function readLengthOption(v, path) {
+function readLengthOption(v, path, prefix) {
   let len;
   try {
     len = v.length;
   } catch (e) {
-    fail(`invalid options: reading \`${path}.length\` threw: ${messageOf(e)}`);
+    fail(`${prefix}: reading \`${path}.length\` threw: ${messageOf(e)}`);
   }
   if (!Number.isSafeInteger(len) || len < 0 || len > 64) {
-    fail(`invalid options: \`${path}\` has ${String(len)} elements (too many)`);
+    fail(`${prefix}: \`${path}\` has ${String(len)} elements (too many)`);
   }
   return len;
 }
@@ -273,19 +343,41 @@ function readLengthOption(v, path) {
 function checkTransformShape(m) {
   if (m === undefined || m === null) return;
   const bad = (what) =>
-    fail(`invalid options: initialTransform ${what}; expected 16 numbers (column-major) or 4 rows of 4 numbers (row-major)`);
-  if (!Array.isArray(m)) bad(`is ${describe(m)}`);
+    fail(`invalid options: initialTransform${what}; expected 16 numbers (column-major) or 4 rows of 4 numbers (row-major)`);
+  if (!Array.isArray(m)) bad(` is ${describe(m)}`);
   if (m.every((x) => typeof x === "number")) {
-    if (m.length !== 16) bad(`has ${m.length} elements`);
+    if (m.length !== 16) bad(` has ${m.length} elements`);
     return;
   }
-  if (m.length !== 4 || !m.every((r) => Array.isArray(r))) bad(`has ${m.length} elements of mixed kinds`);
+  if (m.length !== 4 || !m.every((r) => Array.isArray(r))) bad(` has ${m.length} elements of mixed kinds`);
   m.forEach((r, i) => {
-    if (r.length !== 4) bad(`row ${i} has ${r.length} elements`);
+    if (r.length !== 4) bad(` row ${i} has ${r.length} elements`);
     r.forEach((x, j) => {
       if (typeof x !== "number") bad(`[${i}][${j}] is ${describe(x)}`);
     });
   });
+}
+
+/** A checked `initialTransform` (16 column-major numbers or 4 row-major rows) -> 16 column-major. */
+function toColumnMajor(m) {
+  if (m.length === 16) return Float64Array.from(m);
+  const out = new Float64Array(16);
+  for (let r = 0; r < 4; r++) for (let c = 0; c < 4; c++) out[c * 4 + r] = m[r][c];
+  return out;
+}
+
+/**
+ * `T(ot) M T(-os)` for a column-major rigid 4x4 `M` (a new `Float64Array`): the same motion
+ * between frames whose origins moved, so source points `p - os` map to target points `q - ot`.
+ */
+function shift(m, os, ot) {
+  const out = Float64Array.from(m);
+  for (let r = 0; r < 3; r++) {
+    let t = m[12 + r] + ot[r];
+    for (let c = 0; c < 3; c++) t -= m[c * 4 + r] * os[c];
+    out[12 + r] = t;
+  }
+  return out;
 }
 
 /**
@@ -387,13 +479,38 @@ export function makeApi(glue, isReady) {
       if (onProgress !== undefined && onProgress !== null && typeof onProgress !== "function") {
         fail(`onProgress: expected a function, got ${describe(onProgress)}`);
       }
-      const progress = onProgress ? (stage) => onProgress(stage) : undefined;
+      const shifted = s.origin !== null || t.origin !== null;
+      const os = s.origin ?? [0, 0, 0];
+      const ot = t.origin ?? [0, 0, 0];
+      // The engine works on points relative to the origins: T_local = T(-ot) T T(os).
+      if (shifted && o?.initialTransform != null) {
+        o.initialTransform = Array.from(shift(toColumnMajor(o.initialTransform), os.map((x) => -x), ot.map((x) => -x)));
+      }
+      // What the callback throws reaches the engine as a plain Error (its message read here).
+      const progress = onProgress
+        ? (stage) => {
+            try {
+              onProgress(stage);
+            } catch (e) {
+              throw new Error(e instanceof Error ? readMessage(e) : messageOf(e));
+            }
+          }
+        : undefined;
       this.#busy = true;
+      let r;
       try {
-        return guarded("register", () => inner.register(s, t, o, progress));
+        r = guarded("register", () => inner.register(s.points, t.points, o, progress));
       } finally {
         this.#busy = false;
       }
+      if (shifted) {
+        // Back to the caller's frame, in f64: T = T(ot) T_local T(-os).
+        r.matrix64 = shift(r.matrix64, os, ot);
+        r.networkMatrix64 = shift(r.networkMatrix64, os, ot);
+        r.matrix = Float32Array.from(r.matrix64);
+        r.networkMatrix = Float32Array.from(r.networkMatrix64);
+      }
+      return r;
     }
 
     /** How the loaded weights were made (the weights file's provenance). */

@@ -1,4 +1,4 @@
-import type { ModelConfig, ModelProvenance, RegisterOptions, RegistrationResult } from "./arps.js";
+import type { CloudInput, ModelConfig, ModelProvenance, RegisterOptions, RegistrationResult } from "./arps.js";
 
 /**
  * Progress of a request, in order: `"loading"` (fetching and compiling the engine and the
@@ -70,8 +70,8 @@ export interface WorkerRegistrar {
   /** The network sizes of the loaded weights. */
   readonly modelConfig: ModelConfig;
   /**
-   * Registers `source` onto `target` (packed xyz `[x0, y0, z0, x1, ...]`, the same units) in the
-   * worker. Resolves to the same plain object as `Registrar.register`; its `matrix` and
+   * Registers `source` onto `target` (packed xyz `[x0, y0, z0, x1, ...]`, the same units; see
+   * `CloudInput` for large coordinates) in the worker. Resolves to the same plain object as `Registrar.register`; its `matrix` and
    * `networkMatrix` buffers were transferred, not copied. Rejects with an `Error` carrying the
    * engine's message; the registrar stays usable. After a wasm trap (an engine bug or out of
    * memory) the error has `code: "ARPS_TRAPPED"`, and the worker is replaced: the next request
@@ -80,8 +80,8 @@ export interface WorkerRegistrar {
    * `"DataCloneError"`.
    */
   register(
-    source: Float32Array,
-    target: Float32Array,
+    source: CloudInput,
+    target: CloudInput,
     options?: RegisterOptions,
     request?: WorkerRequestOptions,
   ): Promise<RegistrationResult>;

@@ -9,7 +9,7 @@
 // Replies (worker -> main), with the request's `id`:
 //   { id, type: "progress", stage }         stage: "loading" | "preparing" | "network" | "refining" | "done"
 //   { id, type: "ready", provenance, modelConfig }
-//   { id, type: "result", result }          result.matrix / result.networkMatrix buffers transferred
+//   { id, type: "result", result }          the matrices' buffers transferred
 //   { id, type: "parsed", points }          points (Float32Array) buffer transferred
 //   { id, type: "error", message, name, code? }   code: "ARPS_TRAPPED" | "ARPS_UNUSABLE" after a trap
 import init, { Registrar, parsePointCloud } from "./arps.js";
@@ -53,7 +53,7 @@ async function handle(msg) {
         if (stage !== "preparing") progress(id, stage);
       });
       progress(id, "done");
-      post({ id, type: "result", result }, [result.matrix.buffer, result.networkMatrix.buffer]);
+      post({ id, type: "result", result }, [result.matrix, result.matrix64, result.networkMatrix, result.networkMatrix64].map((m) => m.buffer));
       return;
     }
     case "parse": {

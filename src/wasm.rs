@@ -6,7 +6,7 @@
 //! JS API (see `js/arps-extra.d.ts` and the generated `arps.d.ts` for the documented types):
 //! * `Registrar.withDefaultModel()`, `Registrar.fromBytes(Uint8Array)`;
 //! * `registrar.register(source: Float32Array, target: Float32Array, options?)` -> a plain object
-//!   `{ matrix, networkMatrix, start, fitness, inlierRmse, iterations, converged,
+//!   `{ matrix, matrix64, networkMatrix, networkMatrix64, start, fitness, inlierRmse, iterations, converged,
 //!   maxCorrespondenceDistance, timingsMs, warnings }`;
 //! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`.
 //!
@@ -82,7 +82,7 @@ pub fn version() -> String {
 /// vertices. Returns packed xyz (`[x0, y0, z0, x1, ...]`). Throws on unreadable input.
 #[wasm_bindgen(js_name = parsePointCloud)]
 pub fn parse_point_cloud(
-    bytes: &[u8],
+    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
     #[wasm_bindgen(js_name = "fileName")] file_name: &str,
 ) -> Result<Vec<f32>, JsError> {
     let cloud = crate::io::read_point_cloud(bytes, file_name).map_err(js_err)?;
@@ -108,14 +108,18 @@ impl Registrar {
     /// A registrar on custom weights (the bytes of an arps `.safetensors` file).
     /// Throws if the bytes are not a valid arps weights file.
     #[wasm_bindgen(js_name = fromBytes)]
-    pub fn from_bytes(bytes: &[u8]) -> Result<Registrar, JsError> {
+    pub fn from_bytes(
+        #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    ) -> Result<Registrar, JsError> {
         let mut inner = crate::Registrar::from_bytes(bytes).map_err(js_err)?;
         inner.set_clock(Some(js_clock()));
         Ok(Registrar { inner })
     }
 
     /// Registers `source` onto `target` (packed xyz, same units) and returns the transform
-    /// mapping source points into the target frame, with quality figures. `options` is a plain
+    /// mapping source points into the target frame, with quality figures. (The package's entry
+    /// points, `js/facade.js`, also take `Float64Array`s and `{ points, origin }` clouds: they
+    /// pass f32 points relative to an origin here and map the result back in f64.) `options` is a plain
     /// object (or `undefined`/`null`) mirroring the core `Options`; unknown fields throw.
     /// `onProgress`, if given, is called with `"preparing"`, `"network"` and `"refining"` as each
     /// stage starts (stages that do not run are skipped); if it throws, the registration still
@@ -123,8 +127,8 @@ impl Registrar {
     #[wasm_bindgen(unchecked_return_type = "RegistrationResult")]
     pub fn register(
         &mut self,
-        source: &[f32],
-        target: &[f32],
+        #[wasm_bindgen(unchecked_param_type = "CloudInput")] source: &[f32],
+        #[wasm_bindgen(unchecked_param_type = "CloudInput")] target: &[f32],
         #[wasm_bindgen(unchecked_optional_param_type = "RegisterOptions | null")] options: Option<JsValue>,
         #[wasm_bindgen(
             js_name = "onProgress",
@@ -156,6 +160,8 @@ impl Registrar {
         let out = Object::new();
         set(&out, "matrix", &matrix_js(&r.T_target_source))?;
         set(&out, "networkMatrix", &matrix_js(&r.T_target_source_network))?;
+        set(&out, "matrix64", &matrix_js_f64(&r.T_target_source))?;
+        set(&out, "networkMatrix64", &matrix_js_f64(&r.T_target_source_network))?;
         set(&out, "start", &JsValue::from_str(r.start.name()))?;
         set(&out, "fitness", &JsValue::from_f64(r.fitness))?;
         set(&out, "inlierRmse", &JsValue::from_f64(r.inlier_rmse))?;
@@ -235,6 +241,11 @@ fn camel_case(key: &str) -> String {
 /// A 4x4 as `Float32Array(16)`, column-major (three.js `Matrix4.fromArray`).
 fn matrix_js(m: &nalgebra::Matrix4<f64>) -> Float32Array {
     Float32Array::from(&transform::to_column_major_f32(m)[..])
+}
+
+/// A 4x4 as `Float64Array(16)`, column-major: the full precision of the engine's transform.
+fn matrix_js_f64(m: &nalgebra::Matrix4<f64>) -> js_sys::Float64Array {
+    js_sys::Float64Array::from(m.as_slice())
 }
 
 /// JS options object -> core [`Options`]. `undefined`/`null` give the defaults; missing fields

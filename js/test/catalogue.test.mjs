@@ -12,7 +12,7 @@ import { readFileSync } from "node:fs";
 import { createRequire } from "node:module";
 import path from "node:path";
 import { pathToFileURL } from "node:url";
-import { pkg, source, target, sourcePly, targetPly, errors } from "./common.mjs";
+import { pkg, source, target, sourcePly, targetPly, errors, groundTruth } from "./common.mjs";
 
 const nodeBuild = await import(pathToFileURL(path.join(pkg, "node", "index.mjs")).href);
 const webBuild = await import(pathToFileURL(path.join(pkg, "arps.js")).href);
@@ -175,6 +175,51 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     r.free();
   });
 }
+
+test("large coordinates: Float64Array or { points, origin } in, matrix64 exact in the caller's frame", () => {
+  const arps = nodeBuild;
+  const r = arps.Registrar.withDefaultModel();
+  // The fixture pair moved far from the origin (georeferenced-like), differently per cloud.
+  const a = [512345.25, 4123456.5, 87.125];
+  const b = [512349.75, 4123450.25, 91.0];
+  const far = (cloud, o) => Float64Array.from(cloud, (x, i) => x + o[i % 3]);
+  const s64 = far(source(), a);
+  const t64 = far(target(), b);
+  // Truth in the moved frames: T' = T(b) T T(-a).
+  const rows = groundTruth.map((row) => row.slice());
+  for (let i = 0; i < 3; i++) rows[i][3] = groundTruth[i][3] + b[i] - (groundTruth[i][0] * a[0] + groundTruth[i][1] * a[1] + groundTruth[i][2] * a[2]);
+  // The translation error where the clouds are (at the source's centre, a): the error of the
+  // transform's translation alone would scale a tiny rotation error by |a| (4e6).
+  const errorAtClouds = (m) => {
+    const { rot } = errors(m, rows);
+    const d = [0, 1, 2].map((i) => m[i] * a[0] + m[4 + i] * a[1] + m[8 + i] * a[2] + m[12 + i] - (rows[i][0] * a[0] + rows[i][1] * a[1] + rows[i][2] * a[2] + rows[i][3]));
+    return { rot, tr: Math.hypot(...d) };
+  };
+  const check = (res, label) => {
+    assert.ok(res.matrix64 instanceof Float64Array && res.matrix64.length === 16, label);
+    const { rot, tr } = errorAtClouds(res.matrix64);
+    assert.ok(rot < 1 && tr < 0.02, `${label}: rotation ${rot} deg, translation error at the clouds ${tr}`);
+    assert.deepEqual([...res.matrix], [...Float32Array.from(res.matrix64)], `${label}: matrix is matrix64 rounded`);
+  };
+  check(r.register(s64, t64), "Float64Array");
+  // The same clouds as f32 offsets beside their origins.
+  const rel = (c, o) => Float32Array.from(c, (x, i) => x - o[i % 3]);
+  check(r.register({ points: rel(s64, a), origin: a }, { points: rel(t64, b), origin: b }), "{ points, origin }");
+  check(r.register({ points: source(), origin: a }, t64), "mixed");
+  // initialTransform is in the caller's frame too: the truth itself as the start stays put.
+  const truthColMajor = [0, 1, 2, 3].flatMap((c) => [0, 1, 2, 3].map((row) => rows[row][c]));
+  const fromTruth = r.register(s64, t64, { initialTransform: truthColMajor, starts: ["initial"], network: false });
+  check(fromTruth, "initialTransform in the caller's frame");
+  // Without origins, float32 cannot hold these coordinates (0.25-0.5 units apart near 4e6).
+  const lossy = r.register(Float32Array.from(s64), Float32Array.from(t64));
+  const at = (res) => errorAtClouds(res.matrix64).tr.toExponential(2);
+  console.log(`large coordinates, translation error at the clouds: as Float32Array ${at(lossy)}, as Float64Array ${at(r.register(s64, t64))}`);
+  // Bad origins.
+  rejects(r, "origin of 2", () => r.register({ points: source(), origin: [1, 2] }, t64), /^source: origin must be 3 finite numbers/);
+  rejects(r, "NaN origin", () => r.register(s64, { points: target(), origin: [0, NaN, 0] }), /^target: origin must be 3 finite numbers/);
+  rejects(r, "points not f32", () => r.register({ points: [1, 2, 3], origin: a }, t64), /^source: expected a Float32Array/);
+  r.free();
+});
 
 test("a real trap in the engine: the module is re-instantiated and registrars keep working", () => {
   // The raw glue that the Node build's facade wraps; a facade over it whose parsePointCloud

@@ -137,8 +137,8 @@ test("worker: after the worker crashes, in-flight requests reject and the next r
 test("worker: abort mid-refinement rejects within 300 ms with an AbortError, then the client works", async () => {
   const arps = await createWorkerRegistrar({ createWorker: nodeWorker, wasm });
   try {
-    const s = upsampled(source(), 40);
-    const t = upsampled(target(), 40);
+    const s = upsampled(source(), 20);
+    const t = upsampled(target(), 20);
     const controller = new AbortController();
     let abortedAt = 0;
     const started = performance.now();
