@@ -17,8 +17,11 @@
 //
 // This file is ESM; scripts/build-pkg.sh also writes a CommonJS copy for the Node build.
 
-/** Points per cloud accepted at the boundary (the core's limit; larger clouds throw). */
-export const MAX_POINTS = 10_000_000;
+/**
+ * Points per cloud accepted at the boundary: the core's `limits::MAX_POINTS_PER_CLOUD`, checked
+ * here too because the glue would copy the whole buffer into wasm memory before the core sees it.
+ */
+export const MAX_POINTS = 8_000_000;
 /** Bytes of a file accepted by `parsePointCloud` and of a weights file (larger throw). */
 export const MAX_FILE_BYTES = 1 << 30;
 /** Longest accepted file name, in UTF-16 code units. */
@@ -175,7 +178,10 @@ function cloudArg(v, what) {
 
 function checkLength(len, what) {
   if (len > 3 * MAX_POINTS) {
-    fail(`${what}: ${Math.floor(len / 3)} points is over the limit of ${MAX_POINTS} points per cloud; downsample it first`);
+    fail(
+      `${what} has ${Math.floor(len / 3)} points, more than the ${MAX_POINTS} a registration accepts per cloud ` +
+        "(about 128 bytes per point, for WebAssembly's 4 GiB memory): downsample it first, e.g. on a voxel grid",
+    );
   }
   return len;
 }
