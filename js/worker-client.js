@@ -126,26 +126,41 @@ export async function createWorkerRegistrar(options = {}) {
     return w;
   };
 
-  const request = async (message, { onProgress, transfer = [], signal } = {}) => {
-    if (signal?.aborted) throw abortError(signal);
-    const w = await live(onProgress);
-    if (signal?.aborted) throw abortError(signal);
-    const { id, promise } = send(w, message, { onProgress, transfer });
-    if (!signal) return promise;
-    const onAbort = () => {
-      // The engine cannot be interrupted mid-call: stop the whole worker. Other requests it had
-      // in flight reject too (they were not run to completion); the next request starts afresh.
-      const aborted = abortError(signal);
-      retire(w, aborted, (other) =>
-        other === id ? aborted : new Error("arps worker: stopped to cancel another request; this request did not complete, send it again"),
-      );
-    };
-    signal.addEventListener("abort", onAbort, { once: true });
-    try {
-      return await promise;
-    } finally {
-      signal.removeEventListener("abort", onAbort);
-    }
+  const request = (message, { onProgress, transfer = [], signal } = {}) => {
+    if (signal?.aborted) return Promise.reject(abortError(signal));
+    return new Promise((resolve, reject) => {
+      let w = null;
+      let id = 0;
+      let done = false;
+      const onAbort = () => {
+        if (done) return;
+        done = true;
+        const aborted = abortError(signal);
+        reject(aborted);
+        // Still loading: nothing was sent, the new worker stays for the next request. Sent: the
+        // engine cannot be interrupted mid-call, so the whole worker stops; other requests it
+        // had in flight reject too (they did not complete); the next request starts afresh.
+        if (w && id) {
+          retire(w, aborted, (other) =>
+            other === id ? aborted : new Error("arps worker: stopped to cancel another request; this request did not complete, send it again"),
+          );
+        }
+      };
+      const settle = (fn) => (value) => {
+        if (done) return;
+        done = true;
+        signal?.removeEventListener("abort", onAbort);
+        fn(value);
+      };
+      signal?.addEventListener("abort", onAbort, { once: true });
+      live(onProgress).then((ready) => {
+        if (done) return; // aborted while the worker was loading: do not send
+        w = ready;
+        const sent = send(w, message, { onProgress, transfer });
+        id = sent.id;
+        sent.promise.then(settle(resolve), settle(reject));
+      }, settle(reject));
+    });
   };
 
   current = spawn(options.onProgress);

@@ -159,6 +159,20 @@ test("worker: abort mid-refinement rejects within 300 ms with an AbortError, the
     console.log(`abort: refining began ${(abortedAt - started).toFixed(0)} ms in; rejected ${latency.toFixed(1)} ms after abort()`);
     // An already-aborted signal rejects at once, without starting anything.
     await assert.rejects(arps.register(source(), target(), {}, { signal: AbortSignal.abort() }), { name: "AbortError" });
+    // Aborted while the replacement worker is still loading the engine: rejects at once too.
+    const c2 = new AbortController();
+    let loadingAbortAt = 0;
+    const duringLoad = arps.register(source(), target(), {}, {
+      signal: c2.signal,
+      onProgress: (stage) => {
+        if (stage === "loading") {
+          loadingAbortAt = performance.now();
+          c2.abort();
+        }
+      },
+    });
+    await assert.rejects(duringLoad, { name: "AbortError" });
+    assert.ok(loadingAbortAt > 0 && performance.now() - loadingAbortAt < 300, "rejected promptly while loading");
     const res = await arps.register(source(), target());
     assert.ok(errors(res.matrix).rot < 1, "the client works after the abort");
     // The uninterrupted large pair, for comparison: it takes longer than the abort did.
