@@ -10,8 +10,15 @@
 //!   maxCorrespondenceDistance, timingsMs, warnings }`;
 //! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`.
 //!
-//! Nothing here may panic on user input: a panic in wasm aborts the instance (there is no
-//! `catch_unwind`), so every fallible step returns `Result<_, JsError>`.
+//! Nothing here may panic on user input: a panic in wasm aborts the instance (wasm32 builds with
+//! `panic = "abort"`; there is no `catch_unwind`), so every fallible step returns
+//! `Result<_, JsError>`. Reading the options object (its keys and top-level values: getters,
+//! Proxy traps) and calling the progress callback go through `catch` imports, so those throws
+//! become this call's error instead of unwinding through wasm with the registrar borrowed.
+//! Deeper values are expected to be plain data: the package's public entry points
+//! (`js/facade.js`) copy the options into plain data and check every input before it reaches this
+//! binding's glue, and they recover from any trap that still happens (out of memory, an engine
+//! bug) by re-instantiating the module.
 
 use crate::{transform, Options, PointCloud};
 use js_sys::{Array, Float32Array, Object, Reflect};
@@ -32,9 +39,18 @@ extern "C" {
     fn object_keys(object: &JsValue) -> Result<Array, JsValue>;
 }
 
-/// The message of a thrown JS value (an `Error`'s `message`, else its debug form).
+/// The message of a thrown JS value: its `message` (read through `Reflect.get`, which catches a
+/// throwing getter), a thrown string itself, else a placeholder.
 fn js_message(e: &JsValue) -> String {
-    e.dyn_ref::<js_sys::Error>().map(|e| String::from(e.message())).unwrap_or_else(|| format!("{e:?}"))
+    if let Some(s) = e.as_string() {
+        return s;
+    }
+    if e.is_object() {
+        if let Some(m) = Reflect::get(e, &JsValue::from_str("message")).ok().and_then(|m| m.as_string()) {
+            return m;
+        }
+    }
+    "a thrown value that is not an Error".to_string()
 }
 
 /// The clock handed to the core: `performance.now()` where it exists, else `Date.now()`.
