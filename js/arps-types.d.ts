@@ -5,10 +5,21 @@
  *   float32 offsets from the cloud's bounding-box centre, and the result (`matrix64`) is mapped
  *   back in float64, exact in your frame;
  * - `{ points, origin }`: float32 `points` relative to `origin` (`[x, y, z]`, float64), e.g. what
- *   a loader that kept an offset gives; the result is in the frame of `points + origin`;
+ *   `readPointCloud` returns; the result is in the frame of `points + origin`;
  * - an `Array` of numbers (copied into a `Float32Array`).
  */
-export type CloudInput = Float32Array | Float64Array | number[] | { points: Float32Array; origin: ArrayLike<number> };
+export type CloudInput = Float32Array | Float64Array | number[] | CloudWithOrigin;
+
+/**
+ * A cloud as float32 offsets from a float64 origin: point `i` is `origin + points[i]` (what
+ * `readPointCloud` returns, and a `CloudInput`).
+ */
+export interface CloudWithOrigin {
+  /** Packed xyz offsets from `origin`, `[x0, y0, z0, x1, ...]`. */
+  points: Float32Array;
+  /** `[x, y, z]`, in your units (float64). */
+  origin: ArrayLike<number>;
+}
 
 /**
  * Options of `Registrar.register`. Every field is optional; a missing, `undefined` or `null`

@@ -1,6 +1,6 @@
 // The package's public API over the raw wasm-bindgen glue (arps_glue.js): the same classes and
-// functions (`Registrar`, `parsePointCloud`, `version`), with two guarantees the glue alone does
-// not give:
+// functions (`Registrar`, `parsePointCloud`, `readPointCloud`, `version`), with two guarantees
+// the glue alone does not give:
 //
 // 1. Inputs are checked here, in JavaScript, before they reach the glue: clouds must be real
 //    typed arrays (never a Proxy or an array-like whose `length` the glue would trust), options
@@ -556,10 +556,17 @@ export function makeApi(glue, isReady) {
     return guarded("parsePointCloud", () => glue.parsePointCloud(b, name));
   }
 
+  /** Reads a point cloud as `{ points, origin }` (large coordinates kept); see arps.d.ts. */
+  function readPointCloud(bytes, fileName) {
+    const b = bytesArg(bytes, "bytes");
+    const name = fileNameArg(fileName);
+    return guarded("readPointCloud", () => glue.readPointCloud(b, name));
+  }
+
   /** The crate version. */
   function version() {
     return guarded("version", () => glue.version());
   }
 
-  return { Registrar, parsePointCloud, version };
+  return { Registrar, parsePointCloud, readPointCloud, version };
 }

@@ -9,6 +9,7 @@ const api = makeApi(glue, () => true);
 module.exports = {
   Registrar: api.Registrar,
   parsePointCloud: api.parsePointCloud,
+  readPointCloud: api.readPointCloud,
   version: api.version,
   /** Nothing to do in Node (the module is ready on require); kept for parity with the web build. */
   default: async () => glue,

@@ -1,7 +1,7 @@
 // The package's web entry (pkg/arps.js): `await init()` (fetches arps_bg.wasm) or `initSync()`,
-// then `Registrar`, `parsePointCloud`, `version`. The API is the facade's (facade.js) over the
-// raw wasm-bindgen glue (arps_glue.js): inputs checked at the boundary, and a trap re-instantiates
-// the module instead of leaving it broken.
+// then `Registrar`, `parsePointCloud`, `readPointCloud`, `version`. The API is the facade's
+// (facade.js) over the raw wasm-bindgen glue (arps_glue.js): inputs checked at the boundary, and
+// a trap re-instantiates the module instead of leaving it broken.
 import glueInit, * as glue from "./arps_glue.js";
 import { makeApi } from "./facade.js";
 
@@ -24,4 +24,4 @@ export function initSync(module) {
   return exports;
 }
 
-export const { Registrar, parsePointCloud, version } = makeApi(glue, () => ready);
+export const { Registrar, parsePointCloud, readPointCloud, version } = makeApi(glue, () => ready);

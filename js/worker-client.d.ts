@@ -1,4 +1,4 @@
-import type { CloudInput, ModelConfig, ModelProvenance, RegisterOptions, RegistrationResult } from "./arps.js";
+import type { CloudInput, CloudWithOrigin, ModelConfig, ModelProvenance, RegisterOptions, RegistrationResult } from "./arps.js";
 
 /**
  * Progress of a request, in order: `"loading"` (fetching and compiling the engine and the
@@ -94,6 +94,15 @@ export interface WorkerRegistrar {
     fileName: string,
     request?: { transfer?: boolean; signal?: AbortSignal },
   ): Promise<Float32Array>;
+  /**
+   * Reads a point cloud in the worker as `{ points, origin }`, keeping large coordinates'
+   * precision (see `readPointCloud` in arps.d.ts); `register` takes the object as is.
+   */
+  readPointCloud(
+    bytes: Uint8Array | ArrayBuffer,
+    fileName: string,
+    request?: { transfer?: boolean; signal?: AbortSignal },
+  ): Promise<CloudWithOrigin>;
   /** Stops the worker; pending and later requests reject. */
   terminate(): void;
 }

@@ -182,6 +182,11 @@ export async function createWorkerRegistrar(options = {}) {
       const reply = await request({ type: "parse", bytes, fileName }, { transfer: buffers, signal });
       return reply.points;
     },
+    async readPointCloud(bytes, fileName, { transfer = false, signal } = {}) {
+      const buffers = transfer ? uniqueBuffers([bytes]) : [];
+      const reply = await request({ type: "read", bytes, fileName }, { transfer: buffers, signal });
+      return reply.cloud;
+    },
     terminate() {
       terminated = true;
       if (current) retire(current, new Error("arps worker: terminated"));

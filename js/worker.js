@@ -6,13 +6,15 @@
 //   { id, type: "init", wasm?, weights? }   load the engine and the model (once)
 //   { id, type: "register", source, target, options? }
 //   { id, type: "parse", bytes, fileName }
+//   { id, type: "read", bytes, fileName }   readPointCloud: { points, origin }
 // Replies (worker -> main), with the request's `id`:
 //   { id, type: "progress", stage }         stage: "loading" | "preparing" | "network" | "refining" | "done"
 //   { id, type: "ready", provenance, modelConfig }
 //   { id, type: "result", result }          the matrices' buffers transferred
 //   { id, type: "parsed", points }          points (Float32Array) buffer transferred
+//   { id, type: "read", cloud }             cloud.points buffer transferred
 //   { id, type: "error", message, name, code? }   code: "ARPS_TRAPPED" | "ARPS_UNUSABLE" after a trap
-import init, { Registrar, parsePointCloud } from "./arps.js";
+import init, { Registrar, parsePointCloud, readPointCloud } from "./arps.js";
 
 let registrar = null;
 let loading = null;
@@ -60,6 +62,12 @@ async function handle(msg) {
       await load(id);
       const points = parsePointCloud(msg.bytes, msg.fileName);
       post({ id, type: "parsed", points }, [points.buffer]);
+      return;
+    }
+    case "read": {
+      await load(id);
+      const cloud = readPointCloud(msg.bytes, msg.fileName);
+      post({ id, type: "read", cloud }, [cloud.points.buffer]);
       return;
     }
     default:

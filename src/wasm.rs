@@ -8,7 +8,8 @@
 //! * `registrar.register(source: Float32Array, target: Float32Array, options?)` -> a plain object
 //!   `{ matrix, matrix64, networkMatrix, networkMatrix64, start, fitness, inlierRmse, iterations, converged,
 //!   maxCorrespondenceDistance, timingsMs, warnings }`;
-//! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`.
+//! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`;
+//! * `readPointCloud(bytes: Uint8Array, fileName: string) -> { points: Float32Array, origin }`.
 //!
 //! Nothing here may panic on user input: a panic in wasm aborts the instance (wasm32 builds with
 //! `panic = "abort"`; there is no `catch_unwind`), so every fallible step returns
@@ -103,6 +104,25 @@ pub fn parse_point_cloud(
 ) -> Result<Vec<f32>, JsError> {
     let cloud = crate::io::read_point_cloud(bytes, file_name).map_err(js_err)?;
     Ok(cloud.to_xyz())
+}
+
+/// Reads a point cloud from a file's bytes like [`parse_point_cloud`], keeping the precision of
+/// large coordinates: returns `{ points, origin }`, `points` a `Float32Array` of offsets from
+/// `origin` (`[x, y, z]`, f64: zero unless the file's coordinates are far from zero relative to
+/// the cloud's size, then near the points). Point `i` is `origin + points[i]`; the object is a
+/// cloud `register` accepts as is. Throws on unreadable input.
+#[wasm_bindgen(js_name = readPointCloud, unchecked_return_type = "CloudWithOrigin")]
+pub fn read_point_cloud(
+    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    #[wasm_bindgen(js_name = "fileName")] file_name: &str,
+) -> Result<JsValue, JsError> {
+    let cloud = crate::io::read_point_cloud(bytes, file_name).map_err(js_err)?;
+    let out = Object::new();
+    let points: Vec<f32> = cloud.points.iter().flatten().copied().collect();
+    set(&out, "points", &Float32Array::from(&points[..]))?;
+    let origin: Array = cloud.origin.iter().map(|v| JsValue::from_f64(*v)).collect();
+    set(&out, "origin", &origin)?;
+    Ok(out.into())
 }
 
 /// Holds a loaded model and reusable buffers; registers pairs of clouds.

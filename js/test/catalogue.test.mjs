@@ -214,6 +214,24 @@ test("large coordinates: Float64Array or { points, origin } in, matrix64 exact i
   const lossy = r.register(Float32Array.from(s64), Float32Array.from(t64));
   const at = (res) => errorAtClouds(res.matrix64).tr.toExponential(2);
   console.log(`large coordinates, translation error at the clouds: as Float32Array ${at(lossy)}, as Float64Array ${at(r.register(s64, t64))}`);
+  // A file with double coordinates, read keeping its precision: { points, origin } registers as is.
+  const doublePly = (xyz) => {
+    const header = `ply\nformat binary_little_endian 1.0\nelement vertex ${xyz.length / 3}\nproperty double x\nproperty double y\nproperty double z\nend_header\n`;
+    const body = new Uint8Array(Float64Array.from(xyz).buffer);
+    const out = new Uint8Array(header.length + body.length);
+    out.set(new TextEncoder().encode(header));
+    out.set(body, header.length);
+    return out;
+  };
+  const read = arps.readPointCloud(doublePly(s64), "far.ply");
+  assert.ok(read.points instanceof Float32Array && read.points.length === s64.length);
+  assert.ok(Math.abs(read.origin[1] - a[1]) < 10, `origin near the points: ${read.origin}`);
+  let worst = 0;
+  for (let i = 0; i < s64.length; i++) worst = Math.max(worst, Math.abs(read.origin[i % 3] + read.points[i] - s64[i]));
+  assert.ok(worst < 1e-6, `read back to ${worst}`);
+  check(r.register(read, arps.readPointCloud(doublePly(t64), "far-target.ply")), "readPointCloud");
+  // parsePointCloud gives float32 in the file's frame (rounded: 0.25-0.5 apart near 4e6).
+  assert.ok(Math.abs(arps.parsePointCloud(doublePly(s64), "far.ply")[1] - s64[1]) < 0.5);
   // Bad origins.
   rejects(r, "origin of 2", () => r.register({ points: source(), origin: [1, 2] }, t64), /^source: origin must be 3 finite numbers/);
   rejects(r, "NaN origin", () => r.register(s64, { points: target(), origin: [0, NaN, 0] }), /^target: origin must be 3 finite numbers/);

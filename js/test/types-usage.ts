@@ -1,6 +1,6 @@
 // Compile-only check of the package's TypeScript declarations (tsc --noEmit -p js/test): typical
 // use must type-check, options are typed (not `any`), and misspelled options are rejected.
-import init, { Registrar, parsePointCloud, version } from "../../pkg/arps.js";
+import init, { Registrar, parsePointCloud, readPointCloud, version } from "../../pkg/arps.js";
 import type { RegisterOptions, RegistrationResult } from "../../pkg/arps.js";
 import { createWorkerRegistrar, type Stage, type WorkerRegistrar } from "../../pkg/worker-client.js";
 
@@ -32,6 +32,8 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   // Large coordinates: Float64Array or { points, origin } in, matrix64 out.
   const far: Float64Array = result.matrix64;
   r.register(new Float64Array(source), { points: target, origin: [5e5, 4e6, 0] }).matrix64.length;
+  const read = readPointCloud(new Uint8Array(), "far.ply");
+  r.register(read, read.points);
   // @ts-expect-error a cloud is not a string
   r.register("1 2 3", target);
   r.free();
@@ -44,6 +46,8 @@ export async function inAWorker(source: Float32Array, target: Float32Array): Pro
   const result = await arps.register(source, target, { icp: "point" }, { onProgress: (s) => void s, transfer: true, signal: controller.signal });
   await createWorkerRegistrar({ createWorker: () => new Worker(new URL("./worker.js", import.meta.url), { type: "module" }) });
   const points: Float32Array = await arps.parsePointCloud(new Uint8Array(), "cloud.pcd");
+  const cloud = await arps.readPointCloud(new Uint8Array(), "cloud.pcd");
+  await arps.register(cloud, points);
   arps.terminate();
   return points.length ? result.matrix : result.networkMatrix;
 }
