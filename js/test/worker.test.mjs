@@ -183,3 +183,41 @@ test("worker: abort mid-refinement rejects within 300 ms with an AbortError, the
     arps.terminate();
   }
 });
+
+test("worker: after a trap reported by the worker, the client replaces it and retries nothing", async () => {
+  // Stand-in workers speaking worker.js's protocol: the first reports a trap (as worker.js does
+  // with the facade's ARPS_TRAPPED error), the next ones answer normally.
+  const started = [];
+  const fakeWorker = () => {
+    const listeners = [];
+    const index = started.length;
+    const w = {
+      terminated: false,
+      requests: [],
+      postMessage(m) {
+        w.requests.push(m.type);
+        const reply = (data) => queueMicrotask(() => listeners.forEach((fn) => fn({ data })));
+        if (m.type === "init") reply({ id: m.id, type: "ready", provenance: {}, modelConfig: { preset: "web" } });
+        else if (index === 0) reply({ id: m.id, type: "error", name: "Error", code: "ARPS_TRAPPED", message: "arps: register trapped in the engine (RuntimeError: unreachable)" });
+        else reply({ id: m.id, type: "result", result: { matrix: new Float32Array(16) } });
+      },
+      addEventListener(type, fn) {
+        if (type === "message") listeners.push(fn);
+      },
+      terminate() {
+        w.terminated = true;
+      },
+    };
+    started.push(w);
+    return w;
+  };
+  const arps = await createWorkerRegistrar({ createWorker: fakeWorker });
+  await assert.rejects(arps.register(source(), target()), (e) => e.code === "ARPS_TRAPPED" && /trapped/.test(e.message));
+  assert.ok(started[0].terminated, "the trapped worker is stopped");
+  assert.deepEqual(started[0].requests, ["init", "register"], "nothing retried");
+  const res = await arps.register(source(), target());
+  assert.equal(res.matrix.length, 16);
+  assert.equal(started.length, 2, "a new worker served the next request");
+  assert.deepEqual(started[1].requests, ["init", "register"]);
+  arps.terminate();
+});
