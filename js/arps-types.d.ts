@@ -1,4 +1,27 @@
 /**
+ * A point cloud, packed xyz `[x0, y0, z0, x1, ...]` (at least 16 finite points):
+ * - a `Float32Array`, used as is;
+ * - a `Float64Array`: for large coordinates (e.g. georeferenced scans). The engine works on
+ *   float32 offsets from the cloud's bounding-box centre, and the result (`matrix64`) is mapped
+ *   back in float64, exact in your frame;
+ * - `{ points, origin }`: float32 `points` relative to `origin` (`[x, y, z]`, float64), e.g. what
+ *   `readPointCloud` returns; the result is in the frame of `points + origin`;
+ * - an `Array` of numbers (copied into a `Float32Array`).
+ */
+export type CloudInput = Float32Array | Float64Array | number[] | CloudWithOrigin;
+
+/**
+ * A cloud as float32 offsets from a float64 origin: point `i` is `origin + points[i]` (what
+ * `readPointCloud` returns, and a `CloudInput`).
+ */
+export interface CloudWithOrigin {
+  /** Packed xyz offsets from `origin`, `[x0, y0, z0, x1, ...]`. */
+  points: Float32Array;
+  /** `[x, y, z]`, in your units (float64). */
+  origin: ArrayLike<number>;
+}
+
+/**
  * Options of `Registrar.register`. Every field is optional; a missing, `undefined` or `null`
  * field takes its default (the core `arps::Options`, field by field). Unknown or misspelled
  * fields, wrong types and out-of-range values throw an `Error` naming the field.
@@ -107,10 +130,18 @@ export interface RegistrationResult {
    */
   matrix: Float32Array;
   /**
+   * `matrix` at full (f64) precision, the same layout: use it when coordinates are large (e.g.
+   * georeferenced scans given as `Float64Array`s), where float32 would round the translation.
+   * three.js reads it the same way (`Matrix4.fromArray(result.matrix64)`).
+   */
+  matrix64: Float64Array;
+  /**
    * The coarse estimate before ICP (network + GMR, or `initialTransform` with `network: false`);
    * same frames and layout as `matrix`.
    */
   networkMatrix: Float32Array;
+  /** `networkMatrix` at full (f64) precision, like `matrix64`. */
+  networkMatrix64: Float64Array;
   /** The start (of `RegisterOptions.starts`) whose refinement is `matrix`. */
   start: RegistrationStart;
   /**

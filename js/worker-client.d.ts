@@ -1,4 +1,4 @@
-import type { ModelConfig, ModelProvenance, RegisterOptions, RegistrationResult } from "./arps.js";
+import type { CloudInput, CloudWithOrigin, ModelConfig, ModelProvenance, RegisterOptions, RegistrationResult } from "./arps.js";
 
 /**
  * Progress of a request, in order: `"loading"` (fetching and compiling the engine and the
@@ -30,8 +30,18 @@ export interface CreateWorkerRegistrarOptions {
    * the model embedded in the package.
    */
   weights?: ArrayBuffer | Uint8Array;
-  /** A worker to use instead of starting `worker.js` from this package. */
+  /**
+   * A worker to use first instead of starting `worker.js` from this package. When it stops (a
+   * crash, a trap, an aborted request), later requests start a replacement with `createWorker`,
+   * and reject if that is not given.
+   */
   worker?: WorkerLike;
+  /**
+   * Starts a worker running this package's `worker.js` (the first one, and each replacement
+   * after a crash, a trap or an abort). Default: `new Worker(new URL("./worker.js",
+   * import.meta.url), { type: "module" })`.
+   */
+  createWorker?: () => WorkerLike;
   /** Progress of the initial load (`"loading"`). */
   onProgress?: (stage: Stage) => void;
 }
@@ -44,6 +54,13 @@ export interface WorkerRequestOptions {
    * the caller's arrays become detached, length 0). Default `false`.
    */
   transfer?: boolean;
+  /**
+   * Cancels the request: when it aborts, the promise rejects at once with a `DOMException`
+   * named `"AbortError"`. The engine cannot be interrupted mid-call, so the worker is stopped
+   * (other requests in flight on it reject with an `Error` saying so) and the next request
+   * starts a new one (paying the `"loading"` stage again).
+   */
+  signal?: AbortSignal;
 }
 
 /** A registrar living in a worker; every method returns a promise. */
@@ -53,16 +70,18 @@ export interface WorkerRegistrar {
   /** The network sizes of the loaded weights. */
   readonly modelConfig: ModelConfig;
   /**
-   * Registers `source` onto `target` (packed xyz `[x0, y0, z0, x1, ...]`, the same units) in the
-   * worker. Resolves to the same plain object as `Registrar.register`; its `matrix` and
+   * Registers `source` onto `target` (packed xyz `[x0, y0, z0, x1, ...]`, the same units; see
+   * `CloudInput` for large coordinates) in the worker. Resolves to the same plain object as `Registrar.register`; its `matrix` and
    * `networkMatrix` buffers were transferred, not copied. Rejects with an `Error` carrying the
-   * engine's message; the worker stays usable. Exception: after a wasm trap (an engine bug or
-   * out of memory: the error's `name` is `"RuntimeError"`) every later request rejects with a
-   * message starting `arps worker:`; start a new worker then.
+   * engine's message; the registrar stays usable. After a wasm trap (an engine bug or out of
+   * memory) the error has `code: "ARPS_TRAPPED"`, and the worker is replaced: the next request
+   * starts a fresh one. Nothing is retried behind your back. A `source`/`target` that cannot be
+   * sent (`postMessage` throws, e.g. a function in the options) rejects with an `Error` named
+   * `"DataCloneError"`.
    */
   register(
-    source: Float32Array,
-    target: Float32Array,
+    source: CloudInput,
+    target: CloudInput,
     options?: RegisterOptions,
     request?: WorkerRequestOptions,
   ): Promise<RegistrationResult>;
@@ -70,7 +89,20 @@ export interface WorkerRegistrar {
    * Reads a point cloud from a file's bytes in the worker (format from the file name's
    * extension, else sniffed). Resolves to packed xyz.
    */
-  parsePointCloud(bytes: Uint8Array | ArrayBuffer, fileName: string, request?: { transfer?: boolean }): Promise<Float32Array>;
+  parsePointCloud(
+    bytes: Uint8Array | ArrayBuffer,
+    fileName: string,
+    request?: { transfer?: boolean; signal?: AbortSignal },
+  ): Promise<Float32Array>;
+  /**
+   * Reads a point cloud in the worker as `{ points, origin }`, keeping large coordinates'
+   * precision (see `readPointCloud` in arps.d.ts); `register` takes the object as is.
+   */
+  readPointCloud(
+    bytes: Uint8Array | ArrayBuffer,
+    fileName: string,
+    request?: { transfer?: boolean; signal?: AbortSignal },
+  ): Promise<CloudWithOrigin>;
   /** Stops the worker; pending and later requests reject. */
   terminate(): void;
 }

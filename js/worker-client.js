@@ -3,8 +3,12 @@
 //
 //   import { createWorkerRegistrar } from "arps/worker-client";
 //   const arps = await createWorkerRegistrar();
-//   const result = await arps.register(source, target, { icp: "plane" }, { onProgress: console.log });
+//   const result = await arps.register(source, target, { icp: "plane" }, { onProgress: console.log, signal });
 //   mesh.matrix.fromArray(result.matrix);
+//
+// One worker at a time. It is replaced by a fresh one (started on the next request) when it
+// crashes, when the engine in it traps, and when a request is aborted: the requests it had in
+// flight reject, nothing is retried behind the caller's back, and the client keeps working.
 
 /** Progress stages, in order. */
 export const STAGES = Object.freeze(["loading", "preparing", "network", "refining", "done"]);
@@ -14,88 +18,187 @@ export const STAGES = Object.freeze(["loading", "preparing", "network", "refinin
  * methods return promises.
  */
 export async function createWorkerRegistrar(options = {}) {
-  const worker =
-    options.worker ?? new Worker(new URL("./worker.js", import.meta.url), { type: "module", name: "arps" });
-  const pending = new Map();
+  const given = options.worker ?? null;
+  const createWorker =
+    options.createWorker ??
+    (given ? null : () => new Worker(new URL("./worker.js", import.meta.url), { type: "module", name: "arps" }));
+  // A Response body can be read once; a restarted worker needs the bytes again.
+  let wasm = options.wasm;
+  if (typeof Response === "function" && wasm instanceof Response) wasm = await wasm.arrayBuffer();
+  const weights = options.weights;
   let nextId = 1;
-  let dead = null;
+  let current = null; // the live worker: { worker, pending, ready, dead }
+  let terminated = false;
+  let first = true;
 
-  const fail = (error) => {
-    dead = error;
-    for (const p of pending.values()) p.reject(error);
-    pending.clear();
-  };
-  worker.addEventListener("message", (event) => {
-    const msg = event.data;
-    const p = msg && pending.get(msg.id);
-    if (!p) return;
-    switch (msg.type) {
-      case "progress":
-        if (p.onProgress) {
-          try {
-            p.onProgress(msg.stage);
-          } catch (e) {
-            // A throwing progress callback must not break the request.
-            setTimeout(() => {
-              throw e;
-            });
-          }
-        }
-        return;
-      case "error": {
-        pending.delete(msg.id);
-        const e = new Error(msg.message);
-        if (msg.name && msg.name !== "Error") e.name = msg.name;
-        p.reject(e);
-        return;
-      }
-      default:
-        pending.delete(msg.id);
-        p.resolve(msg);
+  /** Stops worker `w` for good: its pending requests reject with `error` (or `errorFor(id)`). */
+  const retire = (w, error, errorFor = () => error) => {
+    if (w.dead) return;
+    w.dead = error;
+    if (current === w) current = null;
+    try {
+      w.worker.terminate();
+    } catch {
+      /* already gone */
     }
-  });
-  worker.addEventListener("error", (event) => {
-    // A worker that failed to load or crashed: every pending and later request rejects.
-    if (event && typeof event.preventDefault === "function") event.preventDefault();
-    const message = (event && (event.message || (event.error && event.error.message))) || "worker failed";
-    fail(new Error(`arps worker: ${message}`));
-  });
+    for (const [id, p] of w.pending) p.reject(errorFor(id));
+    w.pending.clear();
+  };
 
-  const request = (message, { onProgress, transfer = [] } = {}) => {
-    if (dead) return Promise.reject(dead);
+  const send = (w, message, { onProgress, transfer = [] } = {}) => {
+    if (w.dead) return { id: 0, promise: Promise.reject(w.dead) };
     const id = nextId++;
+    const promise = new Promise((resolve, reject) => {
+      w.pending.set(id, { resolve, reject, onProgress });
+      try {
+        w.worker.postMessage({ ...message, id }, transfer);
+      } catch (e) {
+        // Nothing reached the worker (e.g. a DataCloneError): this request alone fails.
+        w.pending.delete(id);
+        const err = new Error(`arps worker: the request cannot be sent to the worker (${e?.name ?? "Error"}: ${e?.message ?? e})`, { cause: e });
+        if (e?.name) err.name = e.name;
+        reject(err);
+      }
+    });
+    return { id, promise };
+  };
+
+  const spawn = (onProgress) => {
+    let worker;
+    if (first && given) worker = given;
+    else if (createWorker) worker = createWorker();
+    else throw new Error("arps worker: the worker stopped and cannot be restarted (pass `createWorker` instead of `worker` to allow restarts)");
+    first = false;
+    const w = { worker, pending: new Map(), dead: null, ready: null };
+    worker.addEventListener("message", (event) => {
+      const msg = event.data;
+      const p = msg && w.pending.get(msg.id);
+      if (!p) return;
+      switch (msg.type) {
+        case "progress":
+          if (p.onProgress) {
+            try {
+              p.onProgress(msg.stage);
+            } catch (e) {
+              // A throwing progress callback must not break the request.
+              setTimeout(() => {
+                throw e;
+              });
+            }
+          }
+          return;
+        case "error": {
+          w.pending.delete(msg.id);
+          const e = new Error(msg.message);
+          if (msg.name && msg.name !== "Error") e.name = msg.name;
+          if (msg.code) e.code = msg.code;
+          p.reject(e);
+          // After a trap the engine re-instantiated itself, but the worker's memory may be
+          // huge (wasm memory never shrinks): start afresh on the next request.
+          if (msg.code === "ARPS_TRAPPED" || msg.code === "ARPS_UNUSABLE") {
+            retire(w, new Error(`arps worker: stopped after a trap in another request (${msg.message})`));
+          }
+          return;
+        }
+        default:
+          w.pending.delete(msg.id);
+          p.resolve(msg);
+      }
+    });
+    worker.addEventListener("error", (event) => {
+      // A worker that failed to load or crashed: its pending requests reject; the next request
+      // starts a new worker.
+      if (event && typeof event.preventDefault === "function") event.preventDefault();
+      const message = (event && (event.message || (event.error && event.error.message))) || "worker failed";
+      retire(w, new Error(`arps worker: ${message}`));
+    });
+    w.ready = send(w, { type: "init", wasm, weights }, { onProgress }).promise;
+    w.ready.catch((e) => retire(w, e));
+    return w;
+  };
+
+  /** The live worker, started (and loaded) if there is none. */
+  const live = async (onProgress) => {
+    if (terminated) throw new Error("arps worker: terminated");
+    if (!current) current = spawn(onProgress);
+    const w = current;
+    await w.ready;
+    return w;
+  };
+
+  const request = (message, { onProgress, transfer = [], signal } = {}) => {
+    if (signal?.aborted) return Promise.reject(abortError(signal));
     return new Promise((resolve, reject) => {
-      pending.set(id, { resolve, reject, onProgress });
-      worker.postMessage({ ...message, id }, transfer);
+      let w = null;
+      let id = 0;
+      let done = false;
+      const onAbort = () => {
+        if (done) return;
+        done = true;
+        const aborted = abortError(signal);
+        reject(aborted);
+        // Still loading: nothing was sent, the new worker stays for the next request. Sent: the
+        // engine cannot be interrupted mid-call, so the whole worker stops; other requests it
+        // had in flight reject too (they did not complete); the next request starts afresh.
+        if (w && id) {
+          retire(w, aborted, (other) =>
+            other === id ? aborted : new Error("arps worker: stopped to cancel another request; this request did not complete, send it again"),
+          );
+        }
+      };
+      const settle = (fn) => (value) => {
+        if (done) return;
+        done = true;
+        signal?.removeEventListener("abort", onAbort);
+        fn(value);
+      };
+      signal?.addEventListener("abort", onAbort, { once: true });
+      live(onProgress).then((ready) => {
+        if (done) return; // aborted while the worker was loading: do not send
+        w = ready;
+        const sent = send(w, message, { onProgress, transfer });
+        id = sent.id;
+        sent.promise.then(settle(resolve), settle(reject));
+      }, settle(reject));
     });
   };
 
-  const ready = await request(
-    { type: "init", wasm: options.wasm, weights: options.weights },
-    { onProgress: options.onProgress },
-  ).catch((e) => {
-    worker.terminate();
-    throw e;
-  });
+  current = spawn(options.onProgress);
+  const ready = await current.ready; // on failure the worker was already stopped
 
   return {
     provenance: ready.provenance,
     modelConfig: ready.modelConfig,
-    async register(source, target, registerOptions, { onProgress, transfer = false } = {}) {
+    async register(source, target, registerOptions, { onProgress, transfer = false, signal } = {}) {
       const buffers = transfer ? uniqueBuffers([source, target]) : [];
-      const reply = await request({ type: "register", source, target, options: registerOptions }, { onProgress, transfer: buffers });
+      const reply = await request(
+        { type: "register", source, target, options: registerOptions },
+        { onProgress, transfer: buffers, signal },
+      );
       return reply.result;
     },
-    async parsePointCloud(bytes, fileName, { transfer = false } = {}) {
+    async parsePointCloud(bytes, fileName, { transfer = false, signal } = {}) {
       const buffers = transfer ? uniqueBuffers([bytes]) : [];
-      const reply = await request({ type: "parse", bytes, fileName }, { transfer: buffers });
+      const reply = await request({ type: "parse", bytes, fileName }, { transfer: buffers, signal });
       return reply.points;
     },
+    async readPointCloud(bytes, fileName, { transfer = false, signal } = {}) {
+      const buffers = transfer ? uniqueBuffers([bytes]) : [];
+      const reply = await request({ type: "read", bytes, fileName }, { transfer: buffers, signal });
+      return reply.cloud;
+    },
     terminate() {
-      worker.terminate();
-      fail(new Error("arps worker: terminated"));
+      terminated = true;
+      if (current) retire(current, new Error("arps worker: terminated"));
     },
   };
+}
+
+/** The rejection of an aborted request: a `DOMException` named `AbortError`. */
+function abortError(signal) {
+  const reason = signal.reason;
+  if (reason instanceof DOMException && reason.name === "AbortError") return reason;
+  return new DOMException("arps worker: the request was aborted", "AbortError");
 }
 
 function uniqueBuffers(views) {

@@ -6,20 +6,18 @@
 //   { id, type: "init", wasm?, weights? }   load the engine and the model (once)
 //   { id, type: "register", source, target, options? }
 //   { id, type: "parse", bytes, fileName }
+//   { id, type: "read", bytes, fileName }   readPointCloud: { points, origin }
 // Replies (worker -> main), with the request's `id`:
 //   { id, type: "progress", stage }         stage: "loading" | "preparing" | "network" | "refining" | "done"
 //   { id, type: "ready", provenance, modelConfig }
-//   { id, type: "result", result }          result.matrix / result.networkMatrix buffers transferred
+//   { id, type: "result", result }          the matrices' buffers transferred
 //   { id, type: "parsed", points }          points (Float32Array) buffer transferred
-//   { id, type: "error", message, name }
-import init, { Registrar, parsePointCloud } from "./arps.js";
+//   { id, type: "read", cloud }             cloud.points buffer transferred
+//   { id, type: "error", message, name, code? }   code: "ARPS_TRAPPED" | "ARPS_UNUSABLE" after a trap
+import init, { Registrar, parsePointCloud, readPointCloud } from "./arps.js";
 
 let registrar = null;
 let loading = null;
-// After a trap (a WebAssembly.RuntimeError: an engine bug, or out of memory) the instance's state
-// cannot be trusted and cannot be re-instantiated in this worker: every later request fails with
-// a message starting "arps worker:", and the app should start a new worker.
-let trapped = null;
 
 const post = (message, transfer = []) => self.postMessage(message, transfer);
 const progress = (id, stage) => post({ id, type: "progress", stage });
@@ -30,7 +28,7 @@ function load(id, { wasm, weights } = {}) {
     progress(id, "loading");
     loading = (async () => {
       await init(wasm === undefined || wasm === null ? undefined : { module_or_path: wasm });
-      registrar = weights ? Registrar.fromBytes(toBytes(weights)) : Registrar.withDefaultModel();
+      registrar = weights ? Registrar.fromBytes(weights) : Registrar.withDefaultModel();
       return registrar;
     })();
     // A failed load may be retried by a later request (e.g. with other `wasm`/`weights`).
@@ -41,15 +39,8 @@ function load(id, { wasm, weights } = {}) {
   return loading;
 }
 
-function toBytes(data) {
-  if (data instanceof Uint8Array) return data;
-  if (ArrayBuffer.isView(data)) return new Uint8Array(data.buffer, data.byteOffset, data.byteLength);
-  return new Uint8Array(data);
-}
-
 async function handle(msg) {
   const { id, type } = msg;
-  if (trapped) throw new Error(`arps worker: the engine trapped earlier (${trapped}); start a new worker`);
   switch (type) {
     case "init": {
       const r = await load(id, msg);
@@ -64,13 +55,19 @@ async function handle(msg) {
         if (stage !== "preparing") progress(id, stage);
       });
       progress(id, "done");
-      post({ id, type: "result", result }, [result.matrix.buffer, result.networkMatrix.buffer]);
+      post({ id, type: "result", result }, [result.matrix, result.matrix64, result.networkMatrix, result.networkMatrix64].map((m) => m.buffer));
       return;
     }
     case "parse": {
       await load(id);
-      const points = parsePointCloud(toBytes(msg.bytes), String(msg.fileName ?? ""));
+      const points = parsePointCloud(msg.bytes, msg.fileName);
       post({ id, type: "parsed", points }, [points.buffer]);
+      return;
+    }
+    case "read": {
+      await load(id);
+      const cloud = readPointCloud(msg.bytes, msg.fileName);
+      post({ id, type: "read", cloud }, [cloud.points.buffer]);
       return;
     }
     default:
@@ -81,12 +78,14 @@ async function handle(msg) {
 self.addEventListener("message", (event) => {
   const msg = event.data ?? {};
   handle(msg).catch((e) => {
-    if (e instanceof WebAssembly.RuntimeError && !trapped) trapped = e.message;
+    // `code`: "ARPS_TRAPPED" (the engine trapped and re-instantiated itself) or "ARPS_UNUSABLE"
+    // (it could not); the client replaces this worker after either.
     post({
       id: msg.id,
       type: "error",
       message: e instanceof Error ? e.message : String(e),
       name: e instanceof Error ? e.name : "Error",
+      code: typeof e?.code === "string" ? e.code : undefined,
     });
   });
 });

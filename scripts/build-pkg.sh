@@ -1,39 +1,74 @@
 #!/usr/bin/env bash
-# Builds the npm package into pkg/ with wasm-pack:
-#   pkg/            --target web: `import init, { Registrar } from "arps"`; `await init()` fetches
-#                   arps_bg.wasm next to arps.js (browsers, bundlers, workers)
-#   pkg/node/       --target nodejs (CommonJS, loads its .wasm from disk), plus node/index.mjs,
-#                   the ESM entry with the same API; package.json "exports" picks it under Node
+# Builds the npm package into pkg/: one cargo build for wasm32, then wasm-bindgen twice (the web
+# and the Node glue) with --experimental-reset-state-function, so that the facade can
+# re-instantiate the module after a trap (js/facade.js).
+#   pkg/arps.js     the public web entry (js/web-index.js): init(), Registrar, parsePointCloud,
+#                   version; the facade (pkg/facade.js) over the raw glue (pkg/arps_glue.js);
+#                   `await init()` fetches arps_bg.wasm next to them (browsers, bundlers, workers)
+#   pkg/node/       the Node build: node/arps.js (CommonJS entry: the facade, node/facade.cjs, over
+#                   node/arps_glue.js, which loads its .wasm from disk) and node/index.mjs (ESM
+#                   entry, same API); package.json "exports" picks it under Node
 #   pkg/worker.js, pkg/worker-client.js (+ .d.ts): the worker and its promise API
+#   pkg/arps.d.ts   the generated declarations (the facade has the glue's API) + js/arps-types.d.ts
 #   pkg/package.json from js/package.json, version from Cargo.toml
-# wasm-opt: wasm-pack's own is off (Cargo.toml); the pinned npm binaryen's wasm-opt runs here when
-# `npm ci` has installed it (scripts/setup.sh), else the .wasm ships as rustc + wasm-bindgen left
-# it. ARPS_WASM_OPT=0 skips it.
+# wasm-opt: the pinned npm binaryen's wasm-opt runs here when `npm ci` has installed it
+# (scripts/setup.sh), else the .wasm ships as rustc + wasm-bindgen left it. ARPS_WASM_OPT=0 skips it.
 # Usage: scripts/build-pkg.sh [--dev]
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-profile=--release
-[ "${1:-}" = "--dev" ] && profile=--dev
+profile=release
+cargo_profile=(--release)
+bindgen_debug=()
+if [ "${1:-}" = "--dev" ]; then
+  profile=debug
+  cargo_profile=()
+  bindgen_debug=(--debug)
+fi
 
 say() { printf 'build-pkg: %s\n' "$*"; }
 
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
+say "cargo build --lib --target wasm32-unknown-unknown ($profile)"
+cargo build --lib "${cargo_profile[@]}" --target wasm32-unknown-unknown
+target_dir=$(cargo metadata --format-version 1 --no-deps | node -e 'let s="";process.stdin.on("data",d=>s+=d).on("end",()=>console.log(JSON.parse(s).target_directory))')
+wasm="$target_dir/wasm32-unknown-unknown/$profile/arps.wasm"
 
-say "wasm-pack build --target web"
 rm -rf pkg
-wasm-pack build $profile --target web --out-dir pkg --out-name arps --no-pack
-say "wasm-pack build --target nodejs"
-wasm-pack build $profile --target nodejs --out-dir "$tmp/node" --out-name arps --no-pack
 mkdir -p pkg/node
-cp "$tmp"/node/arps.js "$tmp"/node/arps.d.ts "$tmp"/node/arps_bg.wasm "$tmp"/node/arps_bg.wasm.d.ts pkg/node/
+bindgen() {
+  wasm-bindgen "$wasm" --out-dir "$1" --out-name arps --target "$2" --typescript \
+    --experimental-reset-state-function "${bindgen_debug[@]}"
+}
+say "wasm-bindgen --target web"
+bindgen pkg web
+say "wasm-bindgen --target nodejs"
+bindgen pkg/node nodejs
+
+# The raw glue becomes arps_glue.js; the public entries are the facade's.
+mv pkg/arps.js pkg/arps_glue.js
+mv pkg/node/arps.js pkg/node/arps_glue.js
+rm -f pkg/node/arps.d.ts
+# The declarations describe the facade, which has the glue's API but not its reset hook.
+node -e '
+  const fs = require("fs");
+  const f = process.argv[1];
+  const s = fs.readFileSync(f, "utf8").replace(/^export function __wbg_reset_state\(\): void;\n/m, "");
+  if (/__wbg_reset_state/.test(s)) { console.error("build-pkg: __wbg_reset_state left in " + f); process.exit(1); }
+  fs.writeFileSync(f, s);
+' pkg/arps.d.ts
+cp pkg/arps.d.ts pkg/node/arps.d.ts
+grep -q "__wbg_reset_state" pkg/arps_glue.js || { echo "build-pkg: the glue has no __wbg_reset_state" >&2; exit 1; }
+cp js/facade.js pkg/facade.js
+cp js/web-index.js pkg/arps.js
+# CommonJS copy of the facade for the Node build (it has `export` statements only).
+sed -e 's/^export //' js/facade.js > pkg/node/facade.cjs
+printf '\nmodule.exports = { makeApi, MAX_POINTS, MAX_FILE_BYTES, MAX_FILE_NAME };\n' >> pkg/node/facade.cjs
+cp js/node-index.cjs pkg/node/arps.js
 cp js/node-index.mjs pkg/node/index.mjs
 printf '{\n  "type": "commonjs"\n}\n' > pkg/node/package.json
-rm -f pkg/.gitignore
 
 wasm_opt=node_modules/.bin/wasm-opt
-if [ "${ARPS_WASM_OPT:-1}" != "0" ] && [ "$profile" = --release ] && [ -x "$wasm_opt" ]; then
+if [ "${ARPS_WASM_OPT:-1}" != "0" ] && [ "$profile" = release ] && [ -x "$wasm_opt" ]; then
   for f in pkg/arps_bg.wasm pkg/node/arps_bg.wasm; do
     before=$(stat -c %s "$f")
     # Features as rustc emitted them (its target_features section); -O3 for speed.

@@ -77,4 +77,14 @@ else
   say "installing npm dev dependencies (npm ci)"
   npm ci --no-audit --no-fund --loglevel=error
 fi
+# cargo-fuzz for the fuzz smoke run in scripts/test.sh; only where a nightly toolchain is installed.
+CARGO_FUZZ_VERSION=0.13.1
+if cargo +nightly --version >/dev/null 2>&1; then
+  if [ "$(cargo +nightly fuzz --version 2>/dev/null | awk '{print $2}')" = "$CARGO_FUZZ_VERSION" ]; then
+    say "cargo-fuzz $CARGO_FUZZ_VERSION present"
+  else
+    say "installing cargo-fuzz $CARGO_FUZZ_VERSION (nightly is installed; a few minutes)"
+    cargo install cargo-fuzz --version "$CARGO_FUZZ_VERSION" --locked
+  fi
+fi
 say "done"

@@ -4,7 +4,10 @@
 #      registration, options, readers, every error case, instance reuse)
 #   2. scripts/build-pkg.sh: the npm package in pkg/
 #   3. scripts/check-wasm.sh: size budget and SIMD instructions
-#   4. node --test js/test/: the built package from JavaScript (both builds, exports, the worker)
+#   4. node --test js/test/: the built package from JavaScript (both builds, exports, the worker,
+#      cancellation and worker restarts, and js/test/catalogue.test.mjs: every class of hostile
+#      input, each followed by a correct registration on the same instance, large coordinates,
+#      and recovery from a real trap)
 #   5. tsc: the .d.ts type-checks typical use and rejects misspelled options
 #   6. examples/node-register.mjs on the fixture pair
 set -euo pipefail

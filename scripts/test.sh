@@ -38,6 +38,20 @@ fi
 step "core builds for wasm32 (no cli, no trainer)"
 cargo build --quiet --lib --target wasm32-unknown-unknown --release
 
+step "fuzz smoke: each target for a few seconds (only where nightly Rust and cargo-fuzz are installed)"
+if cargo +nightly --version >/dev/null 2>&1 && cargo +nightly fuzz --version >/dev/null 2>&1; then
+  (
+    cd fuzz
+    for target in read_point_cloud read_mesh weights_from_bytes options_json model_config; do
+      mkdir -p "corpus/$target"
+      cargo +nightly fuzz run -O -a "$target" "corpus/$target" "seeds/$target" -- \
+        -max_total_time="${FUZZ_SMOKE_SECONDS:-5}" -max_len=8192 -malloc_limit_mb=256
+    done
+  )
+else
+  echo "skipped: no nightly toolchain or no cargo-fuzz (scripts/setup.sh installs cargo-fuzz where nightly exists)"
+fi
+
 for extra in scripts/test-wasm.sh scripts/test-e2e.sh; do
   if [ -x "$extra" ]; then
     step "$extra"

@@ -1,4 +1,11 @@
-//! Point clouds: the owned `f32` xyz type, validation, and the joint normalisation.
+//! Point clouds: the owned `f32` xyz type with an `f64` origin, validation, and the joint
+//! normalisation.
+//!
+//! Coordinates far from zero (map grids, UTM: 5e6 m) do not fit `f32` with their shape intact,
+//! so a cloud stores `f32` offsets from an `f64` origin: point `i` in the caller's frame is
+//! `origin + points[i]`, computed in `f64`. Readers and [`PointCloud::from_xyz_f64`] choose the
+//! origin ([`PointCloud::from_points_f64`]) before anything becomes `f32`; the pipeline works on
+//! the offsets and composes its answer with the origins in `f64`.
 //!
 //! Downsampling lives in [`crate::sampling`], normals in [`crate::normals`].
 
@@ -8,14 +15,27 @@ use nalgebra::{Matrix4, Vector3};
 /// The fewest points a cloud may have to be registered.
 pub const MIN_POINTS: usize = 16;
 
-/// An owned cloud of `f32` xyz points.
+/// Ratio of a cloud's distance from zero (largest absolute coordinate of its bounding-box centre)
+/// to its size (largest half-extent) above which [`PointCloud::from_points_f64`] moves the
+/// origin to the bounding-box centre. Below it, `f32` keeps the shape to about `16 * 2^-24`
+/// (1e-6) of the cloud's size, and the points are stored as they are (origin zero).
+pub const RECENTER_RATIO: f64 = 16.0;
+
+/// An owned cloud of `f32` xyz points, offsets from an `f64` origin.
+///
+/// Point `i` in the caller's frame is `origin + points[i]` (in `f64`). [`PointCloud::new`] has
+/// origin zero; readers and [`PointCloud::from_xyz_f64`] pick an origin near the points when they
+/// are far from zero, so large coordinates keep their shape. Bounds, extents and centroids are
+/// of `points` (relative to the origin).
 ///
 /// Readers fill it faithfully (a PCD "no return" stays NaN); [`PointCloud::validated`] is where
 /// non-finite points are rejected or dropped, before any numerical work.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct PointCloud {
-    /// The points, `[x, y, z]` each.
+    /// The points relative to [`PointCloud::origin`], `[x, y, z]` each.
     pub points: Vec<[f32; 3]>,
+    /// Where `points` are measured from, in the caller's frame.
+    pub origin: [f64; 3],
 }
 
 /// What to do with points that have a NaN or infinite coordinate.
@@ -30,9 +50,52 @@ pub enum NonFinite {
 }
 
 impl PointCloud {
-    /// Wraps points without checking them.
+    /// Wraps points without checking them (origin zero: the points are in the caller's frame).
     pub fn new(points: Vec<[f32; 3]>) -> Self {
-        Self { points }
+        Self { points, origin: [0.0; 3] }
+    }
+
+    /// Wraps offsets from `origin` without checking them: point `i` is `origin + points[i]`.
+    pub fn with_origin(points: Vec<[f32; 3]>, origin: [f64; 3]) -> Self {
+        Self { points, origin }
+    }
+
+    /// From `f64` points in the caller's frame, keeping their shape: when the cloud is far from
+    /// zero relative to its size (more than [`RECENTER_RATIO`] times), the origin becomes the
+    /// `f64` bounding-box centre of the finite points and the offsets are stored as `f32`;
+    /// otherwise the origin is zero and the points are stored as they are. Non-finite points stay
+    /// non-finite ([`PointCloud::validated`] deals with them).
+    pub fn from_points_f64(points: &[[f64; 3]]) -> Self {
+        let origin = choose_origin(points.iter().copied());
+        let cloud = points.iter().map(|p| [0, 1, 2].map(|a| (p[a] - origin[a]) as f32)).collect();
+        Self { points: cloud, origin }
+    }
+
+    /// From a packed `f64` `[x0, y0, z0, x1, ...]` buffer (the JS `Float64Array` layout), keeping
+    /// large coordinates' shape as [`PointCloud::from_points_f64`] does. Fails if the length is
+    /// not a multiple of 3.
+    pub fn from_xyz_f64(flat: &[f64]) -> Result<Self> {
+        if !flat.len().is_multiple_of(3) {
+            return Err(Error::InvalidCloud(format!(
+                "packed xyz buffer has length {}, which is not a multiple of 3",
+                flat.len()
+            )));
+        }
+        let triples = || flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]);
+        let origin = choose_origin(triples());
+        let points = triples().map(|p| [0, 1, 2].map(|a| (p[a] - origin[a]) as f32)).collect();
+        Ok(Self { points, origin })
+    }
+
+    /// Point `i` in the caller's frame, in `f64` (`origin + points[i]`).
+    pub fn point_f64(&self, i: usize) -> [f64; 3] {
+        let p = self.points[i];
+        [0, 1, 2].map(|a| self.origin[a] + p[a] as f64)
+    }
+
+    /// True when the origin is zero (the points are in the caller's frame).
+    pub fn origin_is_zero(&self) -> bool {
+        self.origin == [0.0; 3]
     }
 
     /// From a packed `[x0, y0, z0, x1, ...]` buffer (the JS `Float32Array` layout).
@@ -44,12 +107,21 @@ impl PointCloud {
                 flat.len()
             )));
         }
-        Ok(Self { points: flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect() })
+        Ok(Self::new(flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect()))
     }
 
-    /// The packed `[x0, y0, z0, x1, ...]` layout.
+    /// The packed `[x0, y0, z0, x1, ...]` layout, in the caller's frame (`origin + points[i]`
+    /// rounded to `f32`; exactly `points` when the origin is zero).
     pub fn to_xyz(&self) -> Vec<f32> {
-        self.points.iter().flatten().copied().collect()
+        if self.origin_is_zero() {
+            return self.points.iter().flatten().copied().collect();
+        }
+        (0..self.len()).flat_map(|i| self.point_f64(i)).map(|v| v as f32).collect()
+    }
+
+    /// The packed `[x0, y0, z0, x1, ...]` layout in the caller's frame, in `f64`.
+    pub fn to_xyz_f64(&self) -> Vec<f64> {
+        (0..self.len()).flat_map(|i| self.point_f64(i)).collect()
     }
 
     /// Number of points.
@@ -76,12 +148,13 @@ impl PointCloud {
                     self.points[i]
                 )))
             }
-            (Some(_), NonFinite::Drop) => PointCloud::new(
+            (Some(_), NonFinite::Drop) => PointCloud::with_origin(
                 self.points
                     .iter()
                     .copied()
                     .filter(|p| p.iter().all(|v| v.is_finite()))
                     .collect(),
+                self.origin,
             ),
         };
         if cloud.len() < min_points {
@@ -98,7 +171,8 @@ impl PointCloud {
         Ok(cloud)
     }
 
-    /// Axis-aligned bounds `(min, max)`. For an empty cloud both are zero.
+    /// Axis-aligned bounds `(min, max)` of `points` (relative to the origin). For an empty cloud
+    /// both are zero.
     pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
         if self.points.is_empty() {
             return ([0.0; 3], [0.0; 3]);
@@ -120,7 +194,7 @@ impl PointCloud {
         half_extent_of(lo, hi)
     }
 
-    /// The mean point, accumulated in `f64`.
+    /// The mean of `points` (relative to the origin), accumulated in `f64`.
     pub fn centroid(&self) -> [f64; 3] {
         let mut s = [0.0f64; 3];
         for p in &self.points {
@@ -132,9 +206,48 @@ impl PointCloud {
         [s[0] / n, s[1] / n, s[2] / n]
     }
 
-    /// A copy with every point mapped by the rigid (or similarity) transform `m`.
+    /// A copy with every point mapped by the rigid (or similarity) transform `m`, in the
+    /// caller's frame. With origin zero the points are mapped and the origin stays zero; otherwise
+    /// the origin is mapped in `f64` and the offsets by `m`'s linear part, so large coordinates
+    /// keep their shape.
     pub fn transformed(&self, m: &Matrix4<f64>) -> PointCloud {
-        PointCloud::new(self.points.iter().map(|&p| crate::transform::apply(m, p)).collect())
+        if self.origin_is_zero() {
+            return PointCloud::new(self.points.iter().map(|&p| crate::transform::apply(m, p)).collect());
+        }
+        let o = m.transform_point(&nalgebra::Point3::from(self.origin));
+        let mut linear = *m;
+        linear.fixed_view_mut::<3, 1>(0, 3).fill(0.0);
+        let points = self.points.iter().map(|&p| crate::transform::apply(&linear, p)).collect();
+        PointCloud::with_origin(points, [o.x, o.y, o.z])
+    }
+
+    /// The same points with origin zero: the offsets, taken as points in their own frame.
+    pub fn into_local(self) -> PointCloud {
+        PointCloud::new(self.points)
+    }
+}
+
+/// The origin [`PointCloud::from_points_f64`] picks: the bounding-box centre of the finite points
+/// when it is more than [`RECENTER_RATIO`] times the cloud's half-extent from zero, else zero.
+fn choose_origin(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
+    let mut lo = [f64::INFINITY; 3];
+    let mut hi = [f64::NEG_INFINITY; 3];
+    for p in points.filter(|p| p.iter().all(|v| v.is_finite())) {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    if !lo[0].is_finite() {
+        return [0.0; 3];
+    }
+    let center = [0, 1, 2].map(|a| lo[a] * 0.5 + hi[a] * 0.5);
+    let half = (0..3).map(|a| (hi[a] - lo[a]) * 0.5).fold(0.0, f64::max);
+    let far = center.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    if far > RECENTER_RATIO * half {
+        center
+    } else {
+        [0.0; 3]
     }
 }
 

@@ -27,6 +27,13 @@ pub enum Error {
     /// An option outside its documented range.
     #[error("invalid option: {0}")]
     InvalidOption(String),
+    /// Input larger than the engine's budgets ([`crate::limits`]): the message names the limit,
+    /// the input's size, and how to make it fit (downsampling, `voxelSize`).
+    #[error("too large: {0}")]
+    TooLarge(String),
+    /// A computation that produced NaN or infinity from inputs that passed their checks.
+    #[error("numerical failure: {0}")]
+    Numerical(String),
     /// An operating-system I/O error (native only: reading a path, writing a file).
     #[error("I/O error: {0}")]
     Io(#[from] std::io::Error),

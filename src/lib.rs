@@ -18,6 +18,7 @@
 
 #![warn(missing_docs)]
 
+pub mod checks;
 pub mod cloud;
 #[cfg(feature = "cli")]
 pub mod data;
@@ -25,9 +26,11 @@ pub mod error;
 pub mod gmr;
 pub mod icp;
 pub mod io;
+pub mod limits;
 pub mod model;
 pub mod nn;
 pub mod normals;
+pub mod origin;
 pub mod refine;
 pub mod register;
 pub mod sampling;

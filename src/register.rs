@@ -6,8 +6,8 @@ use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Candidate, Refinement, Start};
 use crate::timing::{default_clock, Clock, Stopwatch};
 use crate::weights::Weights;
-use crate::{gmr, sampling, transform, Error, Result};
-use nalgebra::Matrix4;
+use crate::{checks, gmr, limits, origin, sampling, transform, Error, Result};
+use nalgebra::{Matrix3, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
 /// Options of [`Registrar::register`]. Every field has a documented default
@@ -227,17 +227,34 @@ impl Registrar {
             )));
         }
         refine::check_starts(&options.starts)?;
+        limits::check_cloud_points("source", source.len())?;
+        limits::check_cloud_points("target", target.len())?;
         let source = source.validated("source", MIN_POINTS, options.non_finite)?;
         let target = target.validated("target", MIN_POINTS, options.non_finite)?;
+        let spreads_source = checks::not_collinear("source", &source.points, &mut warnings)?;
+        let spreads_target = checks::not_collinear("target", &target.points, &mut warnings)?;
+        checks::flat_pair(spreads_source, spreads_target, &mut warnings);
         let init = match &options.initial_transform {
             Some(rows) => {
                 let m = transform::from_rows(rows);
+                if m.iter().any(|v| !v.is_finite()) {
+                    return Err(Error::InvalidOption("initialTransform has a non-finite entry".into()));
+                }
                 transform::check_rigid(&m, 1e-4)
                     .map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?;
                 m
             }
             None => Matrix4::identity(),
         };
+        // From here the pipeline works on each cloud's f32 offsets from its f64 origin (the local
+        // frames); the caller's initial guess moves into them in f64: `Tr(-o_t) * init * Tr(o_s)`.
+        // Its rotation is applied to the source's points, its translation kept in f64 (`shift`),
+        // so a guess that moves the source far keeps the source's shape.
+        let (origin_source, origin_target) = (source.origin, target.origin);
+        let (source, target) = (source.into_local(), target.into_local());
+        let init_local = origin::to_local(&init, origin_source, origin_target);
+        let rotate_init = transform::from_rotation_translation(&transform::rotation(&init_local), &Vector3::zeros());
+        let shift = Matrix4::new_translation(&transform::translation(&init_local));
         let (size_source, size_target) = (source.half_extent(), target.half_extent());
         let size_ratio = size_source.max(size_target) / size_source.min(size_target);
         if size_ratio > SIZE_RATIO_WARNING {
@@ -245,10 +262,18 @@ impl Registrar {
                 "the clouds differ in size by {size_ratio:.0}x (largest half-extents: source {size_source:.4}, target {size_target:.4}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres)"
             ));
         }
-        // The network sees the source already moved by the initial guess.
-        let source_init = if options.initial_transform.is_some() { source.transformed(&init) } else { source.clone() };
+        // The network sees the source already turned by the initial guess (its shift only moves
+        // the source's centre, which the normalisation removes).
+        let source_init = if transform::rotation(&init_local) == Matrix3::identity() {
+            source
+        } else {
+            source.transformed(&rotate_init)
+        };
         let norm = JointNormalization::of_pair(&source_init, &target);
         let s = norm.scale;
+        // the initial guess (identity with no initialTransform), from the turned source to the target
+        let t_initial = norm.normalize_transform(&shift);
+        checks::initial_distance(&t_initial)?;
         let src_n = source_init.transformed(&norm.source_to_normalized());
         let tgt_n = target.transformed(&norm.target_to_normalized());
 
@@ -297,7 +322,7 @@ impl Registrar {
             (t, network_ms, watch.lap())
         } else {
             // identity in user units (relative to the initial guess), in normalised units
-            (norm.normalize_transform(&Matrix4::identity()), 0.0, 0.0)
+            (t_initial, 0.0, 0.0)
         };
 
         progress(Stage::Refining);
@@ -310,7 +335,6 @@ impl Registrar {
             let moved = base.transform_point(&nalgebra::Point3::new(c[0], c[1], c[2]));
             refine::turned(base, [moved.x, moved.y, moved.z], refine::TURN_DEGREES)
         };
-        let t_initial = norm.normalize_transform(&Matrix4::identity());
         for &start in &options.starts {
             // without the network its start is the initial transform, and its turns are the initial's
             let start = match start {
@@ -343,8 +367,12 @@ impl Registrar {
         let Candidate { start, T_target_source: t_n, fitness, inlier_rmse: rmse_n, iterations, converged } = chosen;
         let icp_ms = watch.lap();
 
-        let T_target_source = norm.denormalize(&t_n) * init;
-        let T_target_source_network = norm.denormalize(&t_net_n) * init;
+        let to_caller =
+            |t: &Matrix4<f64>| origin::to_caller(&(norm.denormalize(t) * rotate_init), origin_source, origin_target);
+        let T_target_source = to_caller(&t_n);
+        let T_target_source_network = to_caller(&t_net_n);
+        checks::finite_transform(&T_target_source, "the result")?;
+        checks::finite_transform(&T_target_source_network, "the network's estimate")?;
         if fitness < LOW_FITNESS {
             warnings.push(format!(
                 "low fitness {fitness:.2}: fewer than {:.0}% of source points found a target point within {:.3}; the alignment may have failed (the method is local: rotations beyond about 45 degrees per axis are outside its training range)",

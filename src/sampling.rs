@@ -29,6 +29,8 @@ pub const TARGET_SEED_XOR: u64 = 0x5EED_7A26_E7C0_FFEE;
 ///   and keeps neighbouring voxels close in memory.
 /// * Points with a NaN or infinite coordinate are dropped (validation normally removed them).
 /// * `voxel` not finite or `<= 0`: a copy of the cloud, unchanged.
+/// * The grid is laid on the cloud's offsets (relative to its origin), and the result keeps the
+///   origin.
 pub fn voxel_downsample(cloud: &PointCloud, voxel: f32) -> PointCloud {
     if !(voxel.is_finite() && voxel > 0.0) {
         return cloud.clone();
@@ -59,7 +61,7 @@ pub fn voxel_downsample(cloud: &PointCloud, voxel: f32) -> PointCloud {
         out.push([(s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32]);
         run = &run[len..];
     }
-    PointCloud::new(out)
+    PointCloud::with_origin(out, cloud.origin)
 }
 
 /// Draws exactly `n` points for the network, deterministically for a seed.
@@ -108,7 +110,7 @@ pub fn network_sample(cloud: &PointCloud, n: usize, seed: u64) -> PointCloud {
             out.push(cloud.points[j as usize]);
         }
     }
-    PointCloud::new(out)
+    PointCloud::with_origin(out, cloud.origin)
 }
 
 #[cfg(test)]

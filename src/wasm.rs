@@ -6,12 +6,20 @@
 //! JS API (see `js/arps-types.d.ts` and the generated `arps.d.ts` for the documented types):
 //! * `Registrar.withDefaultModel()`, `Registrar.fromBytes(Uint8Array)`;
 //! * `registrar.register(source: Float32Array, target: Float32Array, options?)` -> a plain object
-//!   `{ matrix, networkMatrix, start, fitness, inlierRmse, iterations, converged,
+//!   `{ matrix, matrix64, networkMatrix, networkMatrix64, start, fitness, inlierRmse, iterations, converged,
 //!   maxCorrespondenceDistance, timingsMs, warnings }`;
-//! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`.
+//! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`;
+//! * `readPointCloud(bytes: Uint8Array, fileName: string) -> { points: Float32Array, origin }`.
 //!
-//! Nothing here may panic on user input: a panic in wasm aborts the instance (there is no
-//! `catch_unwind`), so every fallible step returns `Result<_, JsError>`.
+//! Nothing here may panic on user input: a panic in wasm aborts the instance (wasm32 builds with
+//! `panic = "abort"`; there is no `catch_unwind`), so every fallible step returns
+//! `Result<_, JsError>`. Reading the options object (its keys and top-level values: getters,
+//! Proxy traps) and calling the progress callback go through `catch` imports, so those throws
+//! become this call's error instead of unwinding through wasm with the registrar borrowed.
+//! Deeper values are expected to be plain data: the package's public entry points
+//! (`js/facade.js`) copy the options into plain data and check every input before it reaches this
+//! binding's glue, and they recover from any trap that still happens (out of memory, an engine
+//! bug) by re-instantiating the module.
 
 use crate::{transform, Options, PointCloud};
 use js_sys::{Array, Float32Array, Object, Reflect};
@@ -26,6 +34,24 @@ const TS_TYPES: &'static str = include_str!("../js/arps-types.d.ts");
 extern "C" {
     #[wasm_bindgen(js_namespace = performance, js_name = now)]
     fn performance_now() -> f64;
+
+    /// `Object.keys`, with a throw (a Proxy's `ownKeys` trap) returned instead of unwinding.
+    #[wasm_bindgen(catch, js_namespace = Object, js_name = keys)]
+    fn object_keys(object: &JsValue) -> Result<Array, JsValue>;
+}
+
+/// The message of a thrown JS value: its `message` (read through `Reflect.get`, which catches a
+/// throwing getter), a thrown string itself, else a placeholder.
+fn js_message(e: &JsValue) -> String {
+    if let Some(s) = e.as_string() {
+        return s;
+    }
+    if e.is_object() {
+        if let Some(m) = Reflect::get(e, &JsValue::from_str("message")).ok().and_then(|m| m.as_string()) {
+            return m;
+        }
+    }
+    "a thrown value that is not an Error".to_string()
 }
 
 /// The clock handed to the core: `performance.now()` where it exists, else `Date.now()`.
@@ -73,11 +99,30 @@ pub fn version() -> String {
 /// vertices. Returns packed xyz (`[x0, y0, z0, x1, ...]`). Throws on unreadable input.
 #[wasm_bindgen(js_name = parsePointCloud)]
 pub fn parse_point_cloud(
-    bytes: &[u8],
+    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
     #[wasm_bindgen(js_name = "fileName")] file_name: &str,
 ) -> Result<Vec<f32>, JsError> {
     let cloud = crate::io::read_point_cloud(bytes, file_name).map_err(js_err)?;
     Ok(cloud.to_xyz())
+}
+
+/// Reads a point cloud from a file's bytes like [`parse_point_cloud`], keeping the precision of
+/// large coordinates: returns `{ points, origin }`, `points` a `Float32Array` of offsets from
+/// `origin` (`[x, y, z]`, f64: zero unless the file's coordinates are far from zero relative to
+/// the cloud's size, then near the points). Point `i` is `origin + points[i]`; the object is a
+/// cloud `register` accepts as is. Throws on unreadable input.
+#[wasm_bindgen(js_name = readPointCloud, unchecked_return_type = "CloudWithOrigin")]
+pub fn read_point_cloud(
+    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    #[wasm_bindgen(js_name = "fileName")] file_name: &str,
+) -> Result<JsValue, JsError> {
+    let cloud = crate::io::read_point_cloud(bytes, file_name).map_err(js_err)?;
+    let out = Object::new();
+    let points: Vec<f32> = cloud.points.iter().flatten().copied().collect();
+    set(&out, "points", &Float32Array::from(&points[..]))?;
+    let origin: Array = cloud.origin.iter().map(|v| JsValue::from_f64(*v)).collect();
+    set(&out, "origin", &origin)?;
+    Ok(out.into())
 }
 
 /// Holds a loaded model and reusable buffers; registers pairs of clouds.
@@ -99,14 +144,18 @@ impl Registrar {
     /// A registrar on custom weights (the bytes of an arps `.safetensors` file).
     /// Throws if the bytes are not a valid arps weights file.
     #[wasm_bindgen(js_name = fromBytes)]
-    pub fn from_bytes(bytes: &[u8]) -> Result<Registrar, JsError> {
+    pub fn from_bytes(
+        #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    ) -> Result<Registrar, JsError> {
         let mut inner = crate::Registrar::from_bytes(bytes).map_err(js_err)?;
         inner.set_clock(Some(js_clock()));
         Ok(Registrar { inner })
     }
 
     /// Registers `source` onto `target` (packed xyz, same units) and returns the transform
-    /// mapping source points into the target frame, with quality figures. `options` is a plain
+    /// mapping source points into the target frame, with quality figures. (The package's entry
+    /// points, `js/facade.js`, also take `Float64Array`s and `{ points, origin }` clouds: they
+    /// pass f32 points relative to an origin here and map the result back in f64.) `options` is a plain
     /// object (or `undefined`/`null`) mirroring the core `Options`; unknown fields throw.
     /// `onProgress`, if given, is called with `"preparing"`, `"network"` and `"refining"` as each
     /// stage starts (stages that do not run are skipped); if it throws, the registration still
@@ -114,8 +163,8 @@ impl Registrar {
     #[wasm_bindgen(unchecked_return_type = "RegistrationResult")]
     pub fn register(
         &mut self,
-        source: &[f32],
-        target: &[f32],
+        #[wasm_bindgen(unchecked_param_type = "CloudInput")] source: &[f32],
+        #[wasm_bindgen(unchecked_param_type = "CloudInput")] target: &[f32],
         #[wasm_bindgen(unchecked_optional_param_type = "RegisterOptions | null")] options: Option<JsValue>,
         #[wasm_bindgen(
             js_name = "onProgress",
@@ -142,13 +191,13 @@ impl Registrar {
         };
         let r = self.inner.register_with_progress(&source, &target, &options, &mut progress).map_err(js_err)?;
         if let Some(e) = callback_error {
-            let message =
-                e.dyn_ref::<js_sys::Error>().map(|e| String::from(e.message())).unwrap_or_else(|| format!("{e:?}"));
-            return Err(JsError::new(&format!("onProgress threw: {message}")));
+            return Err(JsError::new(&format!("onProgress threw: {}", js_message(&e))));
         }
         let out = Object::new();
         set(&out, "matrix", &matrix_js(&r.T_target_source))?;
         set(&out, "networkMatrix", &matrix_js(&r.T_target_source_network))?;
+        set(&out, "matrix64", &matrix_js_f64(&r.T_target_source))?;
+        set(&out, "networkMatrix64", &matrix_js_f64(&r.T_target_source_network))?;
         set(&out, "start", &JsValue::from_str(r.start.name()))?;
         set(&out, "fitness", &JsValue::from_f64(r.fitness))?;
         set(&out, "inlierRmse", &JsValue::from_f64(r.inlier_rmse))?;
@@ -230,6 +279,11 @@ fn matrix_js(m: &nalgebra::Matrix4<f64>) -> Float32Array {
     Float32Array::from(&transform::to_column_major_f32(m)[..])
 }
 
+/// A 4x4 as `Float64Array(16)`, column-major: the full precision of the engine's transform.
+fn matrix_js_f64(m: &nalgebra::Matrix4<f64>) -> js_sys::Float64Array {
+    js_sys::Float64Array::from(m.as_slice())
+}
+
 /// JS options object -> core [`Options`]. `undefined`/`null` give the defaults; missing fields
 /// take their defaults; unknown fields and wrong types throw. `initialTransform` may be given as
 /// the core's four row-major rows, or as 16 numbers in column-major order (a three.js
@@ -249,9 +303,14 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
     // so it cannot drift).
     let fields = struct_fields::<Options>();
     let clean = Object::new();
-    for key in Object::keys(options.unchecked_ref::<Object>()).iter() {
+    // Every read of the caller's object may run a getter or a Proxy trap: each goes through a
+    // `catch` import, so a throw becomes this call's error instead of unwinding through wasm.
+    let keys = object_keys(&options)
+        .map_err(|e| JsError::new(&format!("invalid options: listing them threw: {}", js_message(&e))))?;
+    for key in keys.iter() {
         let name = key.as_string().unwrap_or_default();
-        let value = Reflect::get(&options, &key).unwrap_or(JsValue::UNDEFINED);
+        let value = Reflect::get(&options, &key)
+            .map_err(|e| JsError::new(&format!("invalid options: reading `{name}` threw: {}", js_message(&e))))?;
         if value.is_undefined() || value.is_null() {
             continue;
         }
@@ -320,7 +379,8 @@ fn column_major_16(name: &str, v: &JsValue) -> Result<Option<[f64; 16]>, JsError
         Some(Array::from(v).to_vec())
     } else if Array::is_array(v) {
         let a: &Array = v.unchecked_ref();
-        if a.length() == 16 {
+        // A flat list (its first element a number) must have 16; rows are left to serde.
+        if a.length() == 16 || a.get(0).as_f64().is_some() {
             Some(a.to_vec())
         } else {
             None

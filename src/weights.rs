@@ -112,7 +112,15 @@ impl Weights {
                 "format_version '{version}' is not supported (this engine reads version {FORMAT_VERSION})"
             )));
         }
-        let config: ModelConfig = serde_json::from_str(get("config")?)
+        let config_json = get("config")?;
+        if config_json.len() > crate::limits::MAX_MODEL_CONFIG_BYTES {
+            return Err(Error::Weights(format!(
+                "config metadata is {} bytes long; at most {} are allowed",
+                config_json.len(),
+                crate::limits::MAX_MODEL_CONFIG_BYTES
+            )));
+        }
+        let config: ModelConfig = serde_json::from_str(config_json)
             .map_err(|e| Error::Weights(format!("config metadata is not a valid model config: {e}")))?;
         config.validate()?;
         let provenance = match meta.get("provenance") {

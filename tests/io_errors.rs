@@ -87,18 +87,22 @@ fn ply_body_errors() {
     has(&cloud_err(format!("{PLY_XYZ}1 2 3\n1 zwei 3\n").as_bytes(), "a.ply"), &["line 9", "'y'", "'zwei'"]);
     has(&cloud_err(format!("{PLY_XYZ}1 2 3\n1 2\n").as_bytes(), "a.ply"), &["line 9", "missing a value", "'z'"]);
     has(&cloud_err(format!("{PLY_XYZ}1 2 3\n").as_bytes(), "a.ply"), &["ends after 1 of the 2 'vertex' lines"]);
-    // A header claiming 4e9 vertices in a tiny ascii file.
-    let lying = PLY_XYZ.replace("vertex 2", "vertex 4000000000") + "1 2 3\n";
-    has(&cloud_err(lying.as_bytes(), "a.ply"), &["ends after 1 of the 4000000000"]);
+    // A header claiming 7e6 vertices in a tiny ascii file (4e9 is over the budget: too large).
+    has(
+        &cloud_err(PLY_XYZ.replace("vertex 2", "vertex 4000000000").as_bytes(), "a.ply"),
+        &["too large", "4000000000 points"],
+    );
+    let lying = PLY_XYZ.replace("vertex 2", "vertex 7000000") + "1 2 3\n";
+    has(&cloud_err(lying.as_bytes(), "a.ply"), &["ends after 1 of the 7000000"]);
     // Binary: truncated vertex data.
     has(
         &cloud_err(&ply_binary(2, 0, &floats(&[1.0, 2.0, 3.0, 4.0])), "a.ply"),
         &["element 'vertex'", "declares 2 instances", "byte offset"],
     );
-    // A header claiming 4e9 vertices in a 1 KB binary file.
+    // A header claiming 7e6 vertices in a 1 KB binary file.
     has(
-        &cloud_err(&ply_binary(4_000_000_000, 0, &[0u8; 1024]), "a.ply"),
-        &["declares 4000000000 instances", "only 1024 bytes"],
+        &cloud_err(&ply_binary(7_000_000, 0, &[0u8; 1024]), "a.ply"),
+        &["declares 7000000 instances", "only 1024 bytes"],
     );
     // Faces: truncated list, out-of-range index, negative index.
     let verts = floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
@@ -190,13 +194,11 @@ fn pcd_body_errors() {
     let mut b = format!("{PCD_HEAD}DATA binary\n").into_bytes();
     b.extend_from_slice(&floats(&[1.0, 2.0, 3.0, 4.0]));
     has(&cloud_err(&b, "a.pcd"), &["truncated binary data", "2 points of 12 bytes need 24 bytes", "byte offset"]);
-    let lying = format!(
-        "{}DATA binary\n",
-        PCD_HEAD.replace("WIDTH 2", "WIDTH 4000000000").replace("POINTS 2", "POINTS 4000000000")
-    );
+    let lying =
+        format!("{}DATA binary\n", PCD_HEAD.replace("WIDTH 2", "WIDTH 7000000").replace("POINTS 2", "POINTS 7000000"));
     let mut b = lying.into_bytes();
     b.extend_from_slice(&[0u8; 1024]);
-    has(&cloud_err(&b, "a.pcd"), &["truncated binary data", "4000000000 points"]);
+    has(&cloud_err(&b, "a.pcd"), &["truncated binary data", "7000000 points"]);
     // Compressed: missing sizes, lying sizes, corrupt stream.
     let head = format!("{PCD_HEAD}DATA binary_compressed\n").into_bytes();
     let with = |comp: u32, uncomp: u32, payload: &[u8]| {
@@ -211,11 +213,11 @@ fn pcd_body_errors() {
     has(&cloud_err(&with(2, 25, &[0; 2]), "a.pcd"), &["declares 25 uncompressed bytes", "need 24"]);
     let big = format!(
         "{}DATA binary_compressed\n",
-        PCD_HEAD.replace("WIDTH 2", "WIDTH 300000000").replace("POINTS 2", "POINTS 300000000")
+        PCD_HEAD.replace("WIDTH 2", "WIDTH 3000000").replace("POINTS 2", "POINTS 3000000")
     );
     let mut b = big.into_bytes();
     b.extend_from_slice(&4u32.to_le_bytes());
-    b.extend_from_slice(&3_600_000_000u32.to_le_bytes());
+    b.extend_from_slice(&36_000_000u32.to_le_bytes());
     b.extend_from_slice(&[0; 4]);
     has(&cloud_err(&b, "a.pcd"), &["more than LZF can produce"]);
     // A back-reference before the start of the output.
@@ -256,7 +258,7 @@ fn off_errors() {
         &mesh_err(b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "a.off"),
         &["line 6", "vertex index 3 is out of range"],
     );
-    has(&mesh_err(b"OFF\n4000000000 1 0\n0 0 0\n", "a.off"), &["ends after 1 of the 4000000000 vertices"]);
+    has(&mesh_err(b"OFF\n7000000 1 0\n0 0 0\n", "a.off"), &["ends after 1 of the 7000000 vertices"]);
     has(&mesh_err(b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n", "a.off"), &["ends after 0 of the 1 faces"]);
     has(&mesh_err(b"OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4000000000 0 1 2\n", "a.off"), &["ends inside face 0"]);
     has(&mesh_err(b"4OFF\n3 1 0\n", "a.off"), &["not supported"]);

@@ -117,7 +117,9 @@ fn write_ply_binary_round_trips() {
     assert_eq!(bits(&read_point_cloud(&bytes, "out.ply").unwrap()), bits(&c));
     assert_eq!(bits(&read_point_cloud(&bytes, "no-extension").unwrap()), bits(&c));
     let empty = write_ply_binary(&PointCloud::default());
-    assert!(read_point_cloud(&empty, "e.ply").unwrap().is_empty());
+    // a file with no points is an error, not an empty cloud (issue 14)
+    let e = read_point_cloud(&empty, "e.ply").unwrap_err().to_string();
+    assert!(e.contains("holds no points"), "{e}");
 }
 
 // ---------------------------------------------------------------- PCD

@@ -226,6 +226,16 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     let opts = options("{}");
     js_sys::Reflect::set(&opts, &"initialTransform".into(), &Float32Array::new_with_length(9)).unwrap();
     expect_err(&mut r, &src, &tgt, opts, "initialTransform has 9 elements");
+    let fifteen = format!(r#"{{"initialTransform": [{}]}}"#, ["0"; 15].join(","));
+    expect_err(&mut r, &src, &tgt, options(&fifteen), "initialTransform has 15 elements");
+    // Getters and Proxy traps that throw: this call's error, never an exception through wasm.
+    let made = |body: &str| js_sys::Function::new_no_args(body).call0(&JsValue::NULL).unwrap();
+    let getter = made("return { get seed() { throw new Error('boom'); } }");
+    expect_err(&mut r, &src, &tgt, getter, "invalid options: reading `seed` threw: boom");
+    let keys = made("return new Proxy({}, { ownKeys() { throw new Error('no keys'); } })");
+    expect_err(&mut r, &src, &tgt, keys, "invalid options: listing them threw: no keys");
+    let get = made("return new Proxy({ icp: 'point' }, { get() { throw new Error('no get'); } })");
+    expect_err(&mut r, &src, &tgt, get, "invalid options: reading `icp` threw: no get");
     still_works(&mut r);
     // Reader and weights errors do not touch the registrar; it still works after them too.
     assert!(parse_point_cloud(b"\x00\x01garbage", "cloud.unknownext").is_err());

@@ -102,3 +102,34 @@ fn real_scan_recovers_a_known_motion() {
     let (rot, tr) = (rotation_error_deg(&m, &gt), translation_error(&m, &gt));
     assert!(rot < 1.0 && tr < 0.05, "rotation error {rot:.3} deg, translation error {tr:.4}");
 }
+
+/// `readPointCloud` keeps large coordinates: a PLY of doubles far from zero comes back as `f32`
+/// offsets from an origin near the points, equal to the file's values to well under a
+/// millimetre, where `parsePointCloud`'s `f32` coordinates are rounded to 0.25-0.5.
+#[wasm_bindgen_test]
+fn read_point_cloud_keeps_large_coordinates() {
+    let far = [512_345.25, 4_123_456.5, 87.125];
+    let mut body = Vec::new();
+    let mut expected = Vec::new();
+    for i in 0..200 {
+        let t = i as f64 * 0.05;
+        let p = [far[0] + t.cos(), far[1] + t.sin(), far[2] + 0.01 * i as f64];
+        for v in p {
+            body.extend_from_slice(&v.to_le_bytes());
+            expected.push(v);
+        }
+    }
+    let header = "ply\nformat binary_little_endian 1.0\nelement vertex 200\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+    let bytes = [header.as_bytes(), &body].concat();
+    let cloud = arps::wasm::read_point_cloud(&bytes, "far.ply").map_err(message).unwrap();
+    let get = |k: &str| js_sys::Reflect::get(&cloud, &k.into()).unwrap();
+    let points = js_sys::Float32Array::from(get("points")).to_vec();
+    let origin: Vec<f64> = js_sys::Array::from(&get("origin")).iter().map(|v| v.as_f64().unwrap()).collect();
+    assert_eq!(points.len(), expected.len());
+    assert!((origin[1] - far[1]).abs() < 10.0, "origin {origin:?} near the points");
+    let worst =
+        expected.iter().enumerate().map(|(i, v)| (origin[i % 3] + points[i] as f64 - v).abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-6, "read back to {worst}");
+    let rounded = parse_point_cloud(&bytes, "far.ply").map_err(message).unwrap();
+    assert!((rounded[1] as f64 - expected[1]).abs() < 0.5);
+}

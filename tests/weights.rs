@@ -167,3 +167,26 @@ fn embedded_default_model_loads() {
     assert_eq!(w.config.preset, "web");
     w.config.validate().unwrap();
 }
+
+/// Issue 14: a 6 MB file whose config lists two million hidden widths (each valid on its own)
+/// made loading allocate without bound; now it, and configs over any other bound, fail at once.
+#[test]
+fn configs_bounded_in_count_and_size_fail_before_allocating() {
+    let w = tiny();
+    let t = std::time::Instant::now();
+    let mut huge = ModelConfig::tiny();
+    huge.pos_hidden = vec![8; 2_000_000];
+    let e = err(&craft(&f32_tensors(&w), good_meta(&huge)));
+    assert!(e.contains("config metadata is") && e.contains("at most 65536"), "{e}");
+    let mut long = ModelConfig::tiny();
+    long.head_hidden = vec![8; 17];
+    let e = err(&craft(&f32_tensors(&w), good_meta(&long)));
+    assert!(e.contains("head_hidden lists 17 hidden widths"), "{e}");
+    let mut wide = ModelConfig::tiny();
+    wide.ffn_dim = 100_000;
+    let e = err(&craft(&f32_tensors(&w), good_meta(&wide)));
+    assert!(e.contains("ffn_dim = 100000 is outside 1..=4096"), "{e}");
+    assert!(t.elapsed().as_secs_f64() < 5.0, "{:?}", t.elapsed());
+    // the registrar built after such failures works
+    arps::Registrar::new(&w).unwrap();
+}

@@ -30,7 +30,7 @@ const state = {
   view: "before",
 };
 
-// ---- the engine (a worker), started at once, restarted after a crash ----------------------
+// ---- the engine (a worker client; it replaces its worker itself after a crash, a trap or a cancel) ----
 
 let engine = null;
 function getEngine() {
@@ -56,19 +56,6 @@ function getEngine() {
     );
   }
   return engine;
-}
-
-/** After a wasm trap or a dead worker, start a fresh worker on the next request. */
-async function maybeRestart(e) {
-  if (e?.name === "RuntimeError" || /^arps worker:/.test(e?.message ?? "")) {
-    const old = engine;
-    engine = null;
-    try {
-      (await old)?.terminate();
-    } catch {
-      // It never loaded.
-    }
-  }
 }
 
 function setBadge(text, kind, title = "") {
@@ -141,7 +128,6 @@ async function loadFile(which, file) {
     if (points.length === 0) throw new Error("the file holds no (finite) points");
     setCloud(which, { points, name: file.name, note: dropped ? `${dropped} non-finite dropped` : "" });
   } catch (e) {
-    await maybeRestart(e);
     if (token !== loads[which]) return;
     setCloud(which, null);
     showError(`Could not read ${file.name}: ${e?.message ?? e}`);
@@ -208,6 +194,9 @@ function clearResult() {
   updateButtons();
 }
 
+/** Cancels the running alignment (set while one runs). */
+let cancelAlign = null;
+
 async function align() {
   if (state.busy) return;
   clearError();
@@ -226,20 +215,24 @@ async function align() {
   state.busy = true;
   updateButtons();
   startProgress();
+  const controller = new AbortController();
+  cancelAlign = () => controller.abort();
   try {
     const arps = await getEngine();
     const truth = state.truth;
     const result = await arps.register(state.source.points, state.target.points, options, {
       onProgress: setStage,
+      signal: controller.signal,
     });
     state.result = result;
     showResult(result, truth);
     view.setAligned(result.matrix);
     setView("after");
   } catch (e) {
-    await maybeRestart(e);
-    showError(`Alignment failed: ${e?.message ?? e}`);
+    if (e?.name === "AbortError") showError("Alignment cancelled.");
+    else showError(`Alignment failed: ${e?.message ?? e}`);
   } finally {
+    cancelAlign = null;
     state.busy = false;
     stopProgress();
     updateButtons();
@@ -521,6 +514,7 @@ $("viewer").addEventListener("drop", (e) => {
 
 $("example").addEventListener("click", loadExample);
 $("align").addEventListener("click", align);
+$("cancel").addEventListener("click", () => cancelAlign?.());
 $("copy-matrix").addEventListener("click", copyMatrix);
 $("download-ply").addEventListener("click", downloadAligned);
 $("view-before").addEventListener("click", () => setView("before"));

@@ -14,7 +14,12 @@ globalThis.addEventListener = (type, fn) => {
 const deliver = (data) => {
   for (const fn of listeners) fn({ data });
 };
-parentPort.on("message", (data) => (started ? deliver(data) : queued.push(data)));
+parentPort.on("message", (data) => {
+  // Test hook (this shim is test code, not the package): crash the worker like a fatal error would.
+  if (data && data.type === "test:crash") throw new Error("worker crashed (test)");
+  if (started) deliver(data);
+  else queued.push(data);
+});
 await import(workerData.workerUrl);
 started = true;
 queued.splice(0).forEach(deliver);

@@ -1,6 +1,6 @@
 // Compile-only check of the package's TypeScript declarations (tsc --noEmit -p js/test): typical
 // use must type-check, options are typed (not `any`), and misspelled options are rejected.
-import init, { Registrar, parsePointCloud, version } from "../../pkg/arps.js";
+import init, { Registrar, parsePointCloud, readPointCloud, version } from "../../pkg/arps.js";
 import type { RegisterOptions, RegistrationResult } from "../../pkg/arps.js";
 import { createWorkerRegistrar, type Stage, type WorkerRegistrar } from "../../pkg/worker-client.js";
 
@@ -29,14 +29,25 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   r.register(source, target, { icpMaxIteration: 3 });
   // @ts-expect-error wrong enum value
   r.register(source, target, { icp: "planar" });
+  // Large coordinates: Float64Array or { points, origin } in, matrix64 out.
+  const far: Float64Array = result.matrix64;
+  r.register(new Float64Array(source), { points: target, origin: [5e5, 4e6, 0] }).matrix64.length;
+  const read = readPointCloud(new Uint8Array(), "far.ply");
+  r.register(read, read.points);
+  // @ts-expect-error a cloud is not a string
+  r.register("1 2 3", target);
   r.free();
-  return ms + networkPoints + reference.length + String(snake).length + w.length + start.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length;
+  return far.length + ms + networkPoints + reference.length + String(snake).length + w.length + start.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length;
 }
 
 export async function inAWorker(source: Float32Array, target: Float32Array): Promise<Float32Array> {
   const arps: WorkerRegistrar = await createWorkerRegistrar({ onProgress: (s: Stage) => void s });
-  const result = await arps.register(source, target, { icp: "point" }, { onProgress: (s) => void s, transfer: true });
+  const controller = new AbortController();
+  const result = await arps.register(source, target, { icp: "point" }, { onProgress: (s) => void s, transfer: true, signal: controller.signal });
+  await createWorkerRegistrar({ createWorker: () => new Worker(new URL("./worker.js", import.meta.url), { type: "module" }) });
   const points: Float32Array = await arps.parsePointCloud(new Uint8Array(), "cloud.pcd");
+  const cloud = await arps.readPointCloud(new Uint8Array(), "cloud.pcd");
+  await arps.register(cloud, points);
   arps.terminate();
   return points.length ? result.matrix : result.networkMatrix;
 }

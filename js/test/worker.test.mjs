@@ -12,16 +12,37 @@ import { pkg, source, target, sourcePly, errors } from "./common.mjs";
 const { createWorkerRegistrar, STAGES } = await import(pathToFileURL(path.join(pkg, "worker-client.js")).href);
 const wasm = readFileSync(path.join(pkg, "arps_bg.wasm"));
 
-/** A worker_threads Worker running pkg/worker.js, with the DOM Worker methods the client uses. */
+/**
+ * A worker_threads Worker running pkg/worker.js, with the DOM Worker methods the client uses.
+ * `crash()` makes it die with an uncaught error (through the test shim).
+ */
 function nodeWorker() {
   const w = new Worker(new URL("./node-worker-shim.mjs", import.meta.url), {
     workerData: { workerUrl: pathToFileURL(path.join(pkg, "worker.js")).href },
   });
+  nodeWorker.started++;
   return {
     postMessage: (m, transfer) => w.postMessage(m, transfer),
-    addEventListener: (type, fn) => w.on(type, (v) => fn(type === "message" ? { data: v } : { message: v?.message, error: v })),
+    addEventListener: (type, fn) => {
+      if (type === "message") w.on("message", (v) => fn({ data: v }));
+      if (type === "error") {
+        w.on("error", (v) => fn({ message: v?.message, error: v }));
+        w.on("exit", (code) => fn({ message: `exited with code ${code}` }));
+      }
+    },
     terminate: () => w.terminate(),
+    crash: () => w.postMessage({ type: "test:crash" }),
   };
+}
+nodeWorker.started = 0;
+
+/** A larger pair (the fixture, each point repeated with a small deterministic jitter). */
+function upsampled(cloud, copies) {
+  const out = new Float32Array(cloud.length * copies);
+  let seed = 12345;
+  const rand = () => ((seed = (seed * 1103515245 + 12345) >>> 0) / 2 ** 32 - 0.5) * 0.004;
+  for (let c = 0; c < copies; c++) for (let i = 0; i < cloud.length; i++) out[c * cloud.length + i] = cloud[i] + (c ? rand() : 0);
+  return out;
 }
 
 test("worker: loads, reports progress, rejects errors and keeps working", async () => {
@@ -76,4 +97,127 @@ test("worker: requests after terminate reject", async () => {
   const arps = await createWorkerRegistrar({ worker: nodeWorker(), wasm });
   arps.terminate();
   await assert.rejects(arps.register(source(), target()), /terminated/);
+});
+
+test("worker: a request that cannot be sent rejects alone, and the client keeps working", async () => {
+  const arps = await createWorkerRegistrar({ createWorker: nodeWorker, wasm });
+  try {
+    await assert.rejects(arps.register(source(), target(), { onProgress: () => {} }), (e) => e.name === "DataCloneError" && /cannot be sent/.test(e.message));
+    await assert.rejects(arps.register(source(), target(), { seed: () => 1 }), /DataCloneError/);
+    const res = await arps.register(source(), target());
+    assert.ok(errors(res.matrix).rot < 1);
+    // Hostile input is rejected by the engine's boundary checks, in the worker, with its message.
+    await assert.rejects(arps.register({ length: 1.2e9 }, target()), /^Error: source: expected a Float32Array/);
+    await assert.rejects(arps.parsePointCloud(sourcePly, 5), /^Error: fileName: expected a string/);
+    await assert.rejects(arps.register(source(), target(), { initialTransform: new Array(15).fill(0) }), /initialTransform has 15 elements/);
+    assert.ok(errors((await arps.register(source(), target())).matrix).rot < 1);
+  } finally {
+    arps.terminate();
+  }
+});
+
+test("worker: after the worker crashes, in-flight requests reject and the next request starts a new worker", async () => {
+  const workers = [];
+  const arps = await createWorkerRegistrar({ createWorker: () => workers[workers.push(nodeWorker()) - 1], wasm });
+  try {
+    workers[0].crash(); // processed before the request below
+    const inFlight = arps.register(source(), target());
+    await assert.rejects(inFlight, /^Error: arps worker: /);
+    assert.equal(workers.length, 1, "nothing retried behind the caller's back");
+    const stages = [];
+    const res = await arps.register(source(), target(), {}, { onProgress: (s) => stages.push(s) });
+    assert.equal(workers.length, 2, "a new worker");
+    assert.equal(stages[0], "loading", "the new worker loads the engine");
+    assert.ok(errors(res.matrix).rot < 1);
+  } finally {
+    arps.terminate();
+  }
+});
+
+test("worker: abort mid-refinement rejects within 300 ms with an AbortError, then the client works", async () => {
+  const arps = await createWorkerRegistrar({ createWorker: nodeWorker, wasm });
+  try {
+    const s = upsampled(source(), 20);
+    const t = upsampled(target(), 20);
+    const controller = new AbortController();
+    let abortedAt = 0;
+    const started = performance.now();
+    const call = arps.register(s, t, { voxelSize: 0 }, {
+      signal: controller.signal,
+      onProgress: (stage) => {
+        if (stage === "refining") {
+          abortedAt = performance.now();
+          controller.abort();
+        }
+      },
+    });
+    const e = await call.then(() => null, (err) => err);
+    const latency = performance.now() - abortedAt;
+    assert.ok(abortedAt > 0, "the refining stage was reported");
+    assert.ok(e instanceof DOMException && e.name === "AbortError", `rejected with ${e}`);
+    assert.ok(latency < 300, `rejected ${latency.toFixed(1)} ms after abort()`);
+    console.log(`abort: refining began ${(abortedAt - started).toFixed(0)} ms in; rejected ${latency.toFixed(1)} ms after abort()`);
+    // An already-aborted signal rejects at once, without starting anything.
+    await assert.rejects(arps.register(source(), target(), {}, { signal: AbortSignal.abort() }), { name: "AbortError" });
+    // Aborted while the replacement worker is still loading the engine: rejects at once too.
+    const c2 = new AbortController();
+    let loadingAbortAt = 0;
+    const duringLoad = arps.register(source(), target(), {}, {
+      signal: c2.signal,
+      onProgress: (stage) => {
+        if (stage === "loading") {
+          loadingAbortAt = performance.now();
+          c2.abort();
+        }
+      },
+    });
+    await assert.rejects(duringLoad, { name: "AbortError" });
+    assert.ok(loadingAbortAt > 0 && performance.now() - loadingAbortAt < 300, "rejected promptly while loading");
+    const res = await arps.register(source(), target());
+    assert.ok(errors(res.matrix).rot < 1, "the client works after the abort");
+    // The uninterrupted large pair, for comparison: it takes longer than the abort did.
+    const t0 = performance.now();
+    await arps.register(s, t, { voxelSize: 0 });
+    console.log(`abort: the same pair uninterrupted takes ${(performance.now() - t0).toFixed(0)} ms`);
+  } finally {
+    arps.terminate();
+  }
+});
+
+test("worker: after a trap reported by the worker, the client replaces it and retries nothing", async () => {
+  // Stand-in workers speaking worker.js's protocol: the first reports a trap (as worker.js does
+  // with the facade's ARPS_TRAPPED error), the next ones answer normally.
+  const started = [];
+  const fakeWorker = () => {
+    const listeners = [];
+    const index = started.length;
+    const w = {
+      terminated: false,
+      requests: [],
+      postMessage(m) {
+        w.requests.push(m.type);
+        const reply = (data) => queueMicrotask(() => listeners.forEach((fn) => fn({ data })));
+        if (m.type === "init") reply({ id: m.id, type: "ready", provenance: {}, modelConfig: { preset: "web" } });
+        else if (index === 0) reply({ id: m.id, type: "error", name: "Error", code: "ARPS_TRAPPED", message: "arps: register trapped in the engine (RuntimeError: unreachable)" });
+        else reply({ id: m.id, type: "result", result: { matrix: new Float32Array(16) } });
+      },
+      addEventListener(type, fn) {
+        if (type === "message") listeners.push(fn);
+      },
+      terminate() {
+        w.terminated = true;
+      },
+    };
+    started.push(w);
+    return w;
+  };
+  const arps = await createWorkerRegistrar({ createWorker: fakeWorker });
+  await assert.rejects(arps.register(source(), target()), (e) => e.code === "ARPS_TRAPPED" && /trapped/.test(e.message));
+  assert.ok(started[0].terminated, "the trapped worker is stopped");
+  assert.deepEqual(started[0].requests, ["init", "register"], "nothing retried");
+  const res = await arps.register(source(), target());
+  assert.equal(res.matrix.length, 16);
+  assert.equal(started.length, 2, "a new worker served the next request");
+  assert.deepEqual(started[1].requests, ["init", "register"]);
+  arps.terminate();
 });

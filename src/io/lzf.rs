@@ -7,10 +7,11 @@
 /// The largest expansion LZF can achieve: a 3-byte back-reference yields at most 264 bytes.
 pub(crate) const MAX_RATIO: u64 = 88;
 
-/// Decompresses `input` into exactly `out_len` bytes. The caller bounds `out_len` (at most
-/// [`MAX_RATIO`] times the input length) before calling, so the reservation is safe.
+/// Decompresses `input` into exactly `out_len` bytes. The output grows with the bytes actually
+/// produced (the reservation up front is at most 4 times the input), so a header that promises
+/// more than the data holds fails before it costs memory.
 pub(crate) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, String> {
-    let mut out: Vec<u8> = Vec::with_capacity(out_len);
+    let mut out: Vec<u8> = Vec::with_capacity(out_len.min(input.len().saturating_mul(4)));
     let mut i = 0usize;
     while i < input.len() {
         let at = i;

@@ -13,6 +13,10 @@
 //! and where (line number, byte offset, element name), never a panic, and no reservation is
 //! sized by a header count beyond what the remaining bytes could hold. Points are read
 //! faithfully (NaN stays NaN); [`PointCloud::validated`] is where they are checked.
+//!
+//! Coordinates are read as precisely as the file holds them (`double` properties and text in
+//! `f64`), and a cloud far from zero gets an origin near its points before anything becomes `f32`
+//! ([`PointCloud::from_points_f64`]), so map-grid coordinates (5e6) keep their shape.
 
 use crate::cloud::PointCloud;
 use crate::{Error, Result};
@@ -34,6 +38,25 @@ pub struct Mesh {
     pub vertices: Vec<[f32; 3]>,
     /// Triangles as vertex indices (polygons are fan-triangulated).
     pub triangles: Vec<[u32; 3]>,
+}
+
+/// What a reader returns: vertices in `f64` (as precise as the file), and triangles.
+pub(crate) struct Raw {
+    vertices: Vec<[f64; 3]>,
+    triangles: Vec<[u32; 3]>,
+}
+
+impl Raw {
+    /// The vertices as a cloud, large coordinates keeping their shape
+    /// ([`PointCloud::from_points_f64`]).
+    fn into_cloud(self) -> PointCloud {
+        PointCloud::from_points_f64(&self.vertices)
+    }
+
+    /// As a [`Mesh`] (vertices rounded to `f32`).
+    fn into_mesh(self) -> Mesh {
+        Mesh { vertices: self.vertices.iter().map(|p| p.map(|v| v as f32)).collect(), triangles: self.triangles }
+    }
 }
 
 /// A file format the readers understand.
@@ -140,11 +163,11 @@ fn sniff(bytes: &[u8]) -> Option<Format> {
     None
 }
 
-fn read_format(bytes: &[u8], format: Format, mesh: bool) -> Result<Mesh> {
+fn read_format(bytes: &[u8], format: Format, mesh: bool) -> Result<Raw> {
     match format {
         Format::Ply => ply::read(bytes, mesh),
         Format::Pcd => pcd::read(bytes),
-        Format::Xyz => text::read(bytes).map(|vertices| Mesh { vertices, triangles: Vec::new() }),
+        Format::Xyz => text::read(bytes).map(|vertices| Raw { vertices, triangles: Vec::new() }),
         Format::Obj => obj::read(bytes),
         Format::Off => off::read(bytes),
         Format::Stl => stl::read(bytes),
@@ -158,7 +181,12 @@ fn read_format(bytes: &[u8], format: Format, mesh: bool) -> Result<Mesh> {
 /// Non-finite coordinates are kept as they are.
 pub fn read_point_cloud(bytes: &[u8], file_name: &str) -> Result<PointCloud> {
     let format = detect_format(bytes, file_name)?;
-    Ok(PointCloud::new(read_format(bytes, format, false)?.vertices))
+    let raw = read_format(bytes, format, false)?;
+    crate::limits::check_file_points(format.name(), raw.vertices.len() as u64)?;
+    if raw.vertices.is_empty() {
+        return Err(Error::parse(format.name(), "the file holds no points"));
+    }
+    Ok(raw.into_cloud())
 }
 
 /// Reads a triangle mesh (OBJ, OFF, STL, or PLY with a `face` element) from a file's bytes;
@@ -169,12 +197,14 @@ pub fn read_mesh(bytes: &[u8], file_name: &str) -> Result<Mesh> {
     if !format.has_faces() {
         return Err(Error::parse(format.name(), "this format holds points only, not a mesh (use read_point_cloud)"));
     }
-    read_format(bytes, format, true)
+    Ok(read_format(bytes, format, true)?.into_mesh())
 }
 
-/// Writes a cloud as binary little-endian PLY with `float x y z` per vertex.
+/// Writes a cloud as binary little-endian PLY, in the caller's frame: `float x y z` per vertex
+/// when the cloud's origin is zero, else `double x y z` (`origin + points[i]`), so large
+/// coordinates keep their shape.
 pub fn write_ply_binary(cloud: &PointCloud) -> Vec<u8> {
-    ply::write_binary(&cloud.points)
+    ply::write_binary(cloud)
 }
 
 /// Reads a point cloud from a file (native only); the format comes from the file name.

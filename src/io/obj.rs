@@ -4,14 +4,14 @@
 //! An own reader rather than `tobj`: only positions and face indices are needed, and errors
 //! here name the line.
 
-use super::util::{check_index, fan, parse_f32, parse_int, utf8_line, Lines};
-use super::Mesh;
+use super::util::{check_index, fan, parse_f64, parse_int, utf8_line, Lines};
+use super::Raw;
 use crate::{Error, Result};
 
 const F: &str = "OBJ";
 
-pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
-    let mut vertices: Vec<[f32; 3]> = Vec::new();
+pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
+    let mut vertices: Vec<[f64; 3]> = Vec::new();
     // Faces are resolved at the end (positive indices may point forward); keep the line.
     let mut faces: Vec<(usize, usize, usize)> = Vec::new(); // (line, start in `corners`, len)
     let mut corners: Vec<i64> = Vec::new();
@@ -21,13 +21,16 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         if is(b"v") {
             let line = utf8_line(F, n, raw)?;
             let mut t = line.split_ascii_whitespace().skip(1);
-            let mut p = [0.0f32; 3];
+            let mut p = [0.0f64; 3];
             for (a, v) in p.iter_mut().enumerate() {
                 let axis = ["x", "y", "z"][a];
                 let tok = t
                     .next()
                     .ok_or_else(|| Error::parse(F, format!("line {n}: vertex has {a} coordinates, expected 3")))?;
-                *v = parse_f32(F, n, axis, tok)?;
+                *v = parse_f64(F, n, axis, tok)?;
+            }
+            if vertices.len() == crate::limits::MAX_FILE_POINTS {
+                crate::limits::check_file_points(F, vertices.len() as u64 + 1)?;
             }
             vertices.push(p);
         } else if is(b"f") {
@@ -70,7 +73,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         }
         fan(&poly, &mut triangles);
     }
-    Ok(Mesh { vertices, triangles })
+    Ok(Raw { vertices, triangles })
 }
 
 /// True when the first non-comment lines look like OBJ statements.

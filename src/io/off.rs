@@ -5,8 +5,8 @@
 //! comments and blank lines are skipped. The counts may share the header line, as in
 //! `OFF 8 6 0` or ModelNet's `OFF490 518 0`. `4OFF`, `nOFF` and `OFF BINARY` are rejected.
 
-use super::util::{bounded_capacity, check_index, fan, parse_count, parse_f32, parse_int, show, utf8_line, Lines};
-use super::Mesh;
+use super::util::{bounded_capacity, check_index, fan, parse_count, parse_f64, parse_int, show, utf8_line, Lines};
+use super::Raw;
 use crate::{Error, Result};
 
 const F: &str = "OFF";
@@ -60,7 +60,7 @@ fn header_keyword(tok: &str) -> Option<(&str, &str)> {
     }
 }
 
-pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
+pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
     let mut lines = Lines::new(bytes);
     let (hn, htoks) = next_tokens(&mut lines)?.ok_or_else(|| Error::parse(F, "the file is empty"))?;
     let mut count_toks: Vec<String> = Vec::new();
@@ -96,6 +96,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         return Err(Error::parse(F, format!("line {count_line}: expected the vertex and face counts")));
     }
     let nv = parse_count(F, count_line, "vertex count", &count_toks[0])?;
+    crate::limits::check_file_points(F, nv)?;
     let nf = parse_count(F, count_line, "face count", &count_toks[1])?;
 
     // "0 0 0\n" is the shortest vertex line.
@@ -108,7 +109,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
             )
         })?;
         let toks = continue_record(&mut lines, toks, 3, || format!("vertex {i} (line {n})"))?;
-        vertices.push([parse_f32(F, n, "x", toks[0])?, parse_f32(F, n, "y", toks[1])?, parse_f32(F, n, "z", toks[2])?]);
+        vertices.push([parse_f64(F, n, "x", toks[0])?, parse_f64(F, n, "y", toks[1])?, parse_f64(F, n, "z", toks[2])?]);
     }
     let mut triangles = Vec::with_capacity(bounded_capacity(nf, lines.remaining(), 8));
     let mut poly = Vec::new();
@@ -129,7 +130,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
         }
         fan(&poly, &mut triangles);
     }
-    Ok(Mesh { vertices, triangles })
+    Ok(Raw { vertices, triangles })
 }
 
 /// True when the first non-comment token is an OFF header keyword.

@@ -5,8 +5,8 @@
 //! before checking it; here x/y/z are read straight from their offsets and every size is
 //! checked against the bytes present first.
 
-use super::util::{bounded_capacity, parse_count, parse_f32, show, utf8_line, Lines};
-use super::{lzf, Mesh};
+use super::util::{bounded_capacity, parse_count, parse_f64, show, utf8_line, Lines};
+use super::{lzf, Raw};
 use crate::{Error, Result};
 
 const F: &str = "PCD";
@@ -25,19 +25,19 @@ impl Field {
     }
 
     /// Decodes one little-endian value of this field.
-    fn read_f32(&self, b: &[u8]) -> f32 {
+    fn read_f64(&self, b: &[u8]) -> f64 {
         match (self.ty, self.size) {
-            ('F', 4) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-            ('F', 8) => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]) as f32,
-            ('I', 1) => b[0] as i8 as f32,
-            ('U', 1) => b[0] as f32,
-            ('I', 2) => i16::from_le_bytes([b[0], b[1]]) as f32,
-            ('U', 2) => u16::from_le_bytes([b[0], b[1]]) as f32,
-            ('I', 4) => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
-            ('U', 4) => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
-            ('I', 8) => i64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]) as f32,
+            ('F', 4) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            ('F', 8) => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
+            ('I', 1) => b[0] as i8 as f64,
+            ('U', 1) => b[0] as f64,
+            ('I', 2) => i16::from_le_bytes([b[0], b[1]]) as f64,
+            ('U', 2) => u16::from_le_bytes([b[0], b[1]]) as f64,
+            ('I', 4) => i32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            ('U', 4) => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            ('I', 8) => i64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]) as f64,
             // Checked at header time: only U8 is left.
-            _ => u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]) as f32,
+            _ => u64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]) as f64,
         }
     }
 }
@@ -49,7 +49,7 @@ enum Data {
     Compressed,
 }
 
-pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
+pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
     let mut lines = Lines::new(bytes);
     let mut names: Option<Vec<String>> = None;
     let mut sizes: Option<(usize, Vec<usize>)> = None;
@@ -171,6 +171,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
     if n_points != wh {
         return Err(Error::parse(F, format!("WIDTH {width} x HEIGHT {height} = {wh}, but POINTS is {n_points}")));
     }
+    crate::limits::check_file_points(F, n_points)?;
     // Where x, y, z are: field index, value index (in ascii tokens), byte offset in a record.
     let mut axes = [(0usize, 0usize, 0usize); 3];
     for (a, axis) in ["x", "y", "z"].iter().enumerate() {
@@ -218,9 +219,9 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                         format!("line {n}: expected {n_tokens} values per point, found {}", toks.len()),
                     ));
                 }
-                let mut p = [0.0f32; 3];
+                let mut p = [0.0f64; 3];
                 for a in 0..3 {
-                    p[a] = parse_f32(F, n, &format!("field '{}'", fields[axes[a].0].name), toks[axes[a].1])?;
+                    p[a] = parse_f64(F, n, &format!("field '{}'", fields[axes[a].0].name), toks[axes[a].1])?;
                 }
                 out.push(p);
                 read += 1;
@@ -244,7 +245,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                 for rec in body[..n * stride].chunks_exact(stride) {
                     out.push([0, 1, 2].map(|a| {
                         let (fi, _, off) = axes[a];
-                        fields[fi].read_f32(&rec[off..off + fields[fi].size])
+                        fields[fi].read_f64(&rec[off..off + fields[fi].size])
                     }));
                 }
             } else {
@@ -283,6 +284,12 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                     ),
                 ));
             }
+            if uncomp > crate::limits::MAX_DECODED_BYTES {
+                return Err(Error::TooLarge(format!(
+                    "PCD binary_compressed data declares {uncomp} uncompressed bytes, more than the {} the reader decodes (WebAssembly has 4 GiB of memory): downsample the cloud or drop fields before saving",
+                    crate::limits::MAX_DECODED_BYTES
+                )));
+            }
             if uncomp > comp as u64 * lzf::MAX_RATIO {
                 return Err(Error::parse(
                     F,
@@ -300,10 +307,10 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
                 out.push([0, 1, 2].map(|a| {
                     let f = &fields[axes[a].0];
                     let at = starts[a] + i * f.size;
-                    f.read_f32(&raw[at..at + f.size])
+                    f.read_f64(&raw[at..at + f.size])
                 }));
             }
         }
     }
-    Ok(Mesh { vertices: out, triangles: Vec::new() })
+    Ok(Raw { vertices: out, triangles: Vec::new() })
 }

@@ -6,8 +6,9 @@
 //! needs (x/y/z of `vertex`, one index list of `face`, everything else skipped) is small enough
 //! to do directly, with every count checked against the bytes that remain.
 
-use super::util::{bounded_capacity, check_index, fan, parse_count, parse_f32, parse_int, show, utf8_line, Lines};
-use super::Mesh;
+use super::util::{bounded_capacity, check_index, fan, parse_count, parse_f64, parse_int, show, utf8_line, Lines};
+use super::Raw;
+use crate::cloud::PointCloud;
 use crate::{Error, Result};
 
 const F: &str = "PLY";
@@ -53,11 +54,11 @@ impl Scalar {
     }
 
     /// Reads a value from exactly `size()` bytes.
-    fn read_f32(self, b: &[u8], big: bool) -> f32 {
+    fn read_f64(self, b: &[u8], big: bool) -> f64 {
         match self {
-            Scalar::F32 => f32::from_bits(read_u32(b, big)),
-            Scalar::F64 => f64::from_bits(read_u64(b, big)) as f32,
-            _ => self.read_i64(b, big) as f32,
+            Scalar::F32 => f32::from_bits(read_u32(b, big)) as f64,
+            Scalar::F64 => f64::from_bits(read_u64(b, big)),
+            _ => self.read_i64(b, big) as f64,
         }
     }
 
@@ -251,7 +252,7 @@ enum Want {
 
 #[derive(Default)]
 struct Out {
-    points: Vec<[f32; 3]>,
+    points: Vec<[f64; 3]>,
     triangles: Vec<[u32; 3]>,
 }
 
@@ -289,13 +290,14 @@ fn face_want(el: &Element, n_vertices: usize) -> Result<Want> {
 }
 
 /// Reads the vertices (and, when `mesh`, the faces) of a PLY file.
-pub(crate) fn read(bytes: &[u8], mesh: bool) -> Result<Mesh> {
+pub(crate) fn read(bytes: &[u8], mesh: bool) -> Result<Raw> {
     let h = parse_header(bytes)?;
     let vi = h
         .elements
         .iter()
         .position(|e| e.name == "vertex")
         .ok_or_else(|| Error::parse(F, "the file has no 'vertex' element"))?;
+    crate::limits::check_file_points(F, h.elements[vi].count)?;
     let n_vertices = usize::try_from(h.elements[vi].count).unwrap_or(usize::MAX);
     let fi = if mesh {
         Some(
@@ -330,7 +332,7 @@ pub(crate) fn read(bytes: &[u8], mesh: bool) -> Result<Mesh> {
             }
         }
     }
-    Ok(Mesh { vertices: out.points, triangles: out.triangles })
+    Ok(Raw { vertices: out.points, triangles: out.triangles })
 }
 
 fn read_binary_element(
@@ -373,7 +375,7 @@ fn read_binary_element(
             for rec in body.chunks_exact(stride) {
                 let v = |a: usize| {
                     let (off, s) = layout[a];
-                    s.read_f32(&rec[off..off + s.size()], big)
+                    s.read_f64(&rec[off..off + s.size()], big)
                 };
                 out.points.push([v(0), v(1), v(2)]);
             }
@@ -387,7 +389,7 @@ fn read_binary_element(
     }
     let mut poly: Vec<u32> = Vec::new();
     for inst in 0..count {
-        let mut xyz = [0.0f32; 3];
+        let mut xyz = [0.0f64; 3];
         for (pi, p) in el.props.iter().enumerate() {
             let truncated = |need: usize, at: usize| {
                 Error::parse(
@@ -406,7 +408,7 @@ fn read_binary_element(
                     if let Want::Points(idx) = want {
                         for a in 0..3 {
                             if idx[a] == pi {
-                                xyz[a] = s.read_f32(b, big);
+                                xyz[a] = s.read_f64(b, big);
                             }
                         }
                     }
@@ -480,7 +482,7 @@ fn read_ascii_element(lines: &mut Lines, el: &Element, want: Want, out: &mut Out
         if t.peek().is_none() {
             continue; // blank line
         }
-        let mut xyz = [0.0f32; 3];
+        let mut xyz = [0.0f64; 3];
         for (pi, p) in el.props.iter().enumerate() {
             let mut next = |what: &str| {
                 t.next().ok_or_else(|| {
@@ -499,7 +501,7 @@ fn read_ascii_element(lines: &mut Lines, el: &Element, want: Want, out: &mut Out
                     };
                     // Skipped values are still checked to be numbers (integers written as
                     // "255.0" are accepted), so a shifted column is caught.
-                    let v = parse_f32(F, n, &format!("'{}'", p.name), tok)?;
+                    let v = parse_f64(F, n, &format!("'{}'", p.name), tok)?;
                     if let Some(a) = slot {
                         xyz[a] = v;
                     }
@@ -521,7 +523,7 @@ fn read_ascii_element(lines: &mut Lines, el: &Element, want: Want, out: &mut Out
                             let v = parse_int(F, n, "vertex index", tok)?;
                             poly.push(check_index(F, v, nv, || format!("line {n} (face {inst})"))?);
                         } else {
-                            parse_f32(F, n, &format!("item of list '{}'", p.name), tok)?;
+                            parse_f64(F, n, &format!("item of list '{}'", p.name), tok)?;
                         }
                     }
                     if is_faces {
@@ -541,16 +543,24 @@ fn read_ascii_element(lines: &mut Lines, el: &Element, want: Want, out: &mut Out
 }
 
 /// Binary little-endian PLY with `float x y z` per vertex.
-pub(crate) fn write_binary(points: &[[f32; 3]]) -> Vec<u8> {
+pub(crate) fn write_binary(cloud: &PointCloud) -> Vec<u8> {
+    let double = !cloud.origin_is_zero();
+    let ty = if double { "double" } else { "float" };
     let header = format!(
-        "ply\nformat binary_little_endian 1.0\ncomment written by arps\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nend_header\n",
-        points.len()
+        "ply\nformat binary_little_endian 1.0\ncomment written by arps\nelement vertex {}\nproperty {ty} x\nproperty {ty} y\nproperty {ty} z\nend_header\n",
+        cloud.len()
     );
-    let mut out = Vec::with_capacity(header.len() + points.len() * 12);
+    let mut out = Vec::with_capacity(header.len() + cloud.len() * if double { 24 } else { 12 });
     out.extend_from_slice(header.as_bytes());
-    for p in points {
-        for v in p {
-            out.extend_from_slice(&v.to_le_bytes());
+    for (i, p) in cloud.points.iter().enumerate() {
+        if double {
+            for v in cloud.point_f64(i) {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
+        } else {
+            for v in p {
+                out.extend_from_slice(&v.to_le_bytes());
+            }
         }
     }
     out

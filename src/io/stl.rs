@@ -5,8 +5,8 @@
 //! ascii from a binary file whose 80-byte header happens to start with `solid` needs the size
 //! rule used by [`is_binary`] anyway.
 
-use super::util::{fan, parse_f32, show, utf8_line, Lines};
-use super::Mesh;
+use super::util::{fan, parse_f64, show, utf8_line, Lines};
+use super::Raw;
 use crate::{Error, Result};
 use std::collections::HashMap;
 
@@ -44,7 +44,7 @@ impl Welder {
     }
 }
 
-pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
+pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
     if is_binary(bytes) {
         return read_binary(bytes);
     }
@@ -65,7 +65,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Mesh> {
     })
 }
 
-fn read_binary(bytes: &[u8]) -> Result<Mesh> {
+fn read_binary(bytes: &[u8]) -> Result<Raw> {
     if bytes.len() < 84 {
         return Err(Error::parse(
             F,
@@ -100,10 +100,10 @@ fn read_binary(bytes: &[u8]) -> Result<Mesh> {
         let t = [w.add(v(0)), w.add(v(1)), w.add(v(2))];
         triangles.push(t);
     }
-    Ok(Mesh { vertices: w.vertices, triangles })
+    Ok(Raw { vertices: w.vertices.iter().map(|p| p.map(f64::from)).collect(), triangles })
 }
 
-fn read_ascii(bytes: &[u8]) -> Result<Mesh> {
+fn read_ascii(bytes: &[u8]) -> Result<Raw> {
     let mut w = Welder::default();
     let mut triangles = Vec::new();
     let mut loop_: Option<(usize, Vec<u32>)> = None; // (line of `outer loop`, corners)
@@ -133,7 +133,7 @@ fn read_ascii(bytes: &[u8]) -> Result<Mesh> {
                     let tok = t
                         .next()
                         .ok_or_else(|| Error::parse(F, format!("line {n}: vertex has {a} coordinates, expected 3")))?;
-                    *v = parse_f32(F, n, axis, tok)?;
+                    *v = parse_f64(F, n, axis, tok)? as f32; // STL is single precision
                 }
                 corners.push(w.add(p));
             }
@@ -162,7 +162,7 @@ fn read_ascii(bytes: &[u8]) -> Result<Mesh> {
     if facets == 0 {
         return Err(Error::parse(F, "ascii STL has no facets"));
     }
-    Ok(Mesh { vertices: w.vertices, triangles })
+    Ok(Raw { vertices: w.vertices.iter().map(|p| p.map(f64::from)).collect(), triangles })
 }
 
 /// True when the content is STL: the binary size rule, or `solid` followed by `facet`.

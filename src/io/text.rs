@@ -7,16 +7,16 @@
 //! skipped anywhere. After data has started, a row without three leading numbers is an error
 //! naming its line.
 
-use super::util::{parse_f32, show, split_fields, utf8_line, Lines};
+use super::util::{parse_f64, show, split_fields, utf8_line, Lines};
 use crate::{Error, Result};
 
 const F: &str = "XYZ";
 
-fn data_row(line: &str) -> Option<[f32; 3]> {
+fn data_row(line: &str) -> Option<[f64; 3]> {
     let mut t = split_fields(line);
-    let mut p = [0.0f32; 3];
+    let mut p = [0.0f64; 3];
     for v in &mut p {
-        *v = t.next()?.parse::<f32>().ok()?;
+        *v = t.next()?.parse::<f64>().ok()?;
     }
     Some(p)
 }
@@ -27,7 +27,7 @@ fn is_comment(line: &str) -> bool {
     l.is_empty() || l.starts_with('#') || l.starts_with("//")
 }
 
-pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f32; 3]>> {
+pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
     let mut out = Vec::new();
     let mut started = false;
     for (n, raw) in Lines::new(bytes) {
@@ -38,6 +38,9 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f32; 3]>> {
         match data_row(line) {
             Some(p) => {
                 started = true;
+                if out.len() == crate::limits::MAX_FILE_POINTS {
+                    crate::limits::check_file_points(F, out.len() as u64 + 1)?;
+                }
                 out.push(p);
             }
             None if !started => {} // header
@@ -45,7 +48,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f32; 3]>> {
                 let toks: Vec<&str> = split_fields(line).take(3).collect();
                 // Name the offending value when there is one.
                 for (k, t) in toks.iter().enumerate() {
-                    parse_f32(F, n, ["x", "y", "z"][k], t)?;
+                    parse_f64(F, n, ["x", "y", "z"][k], t)?;
                 }
                 return Err(Error::parse(
                     F,

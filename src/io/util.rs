@@ -78,10 +78,10 @@ pub(crate) fn show(token: &str) -> String {
     }
 }
 
-/// Parses an `f32` coordinate token (`nan`, `inf` accepted: validation happens later).
-pub(crate) fn parse_f32(format: &'static str, line_no: usize, what: &str, token: &str) -> Result<f32> {
+/// Parses a coordinate token in `f64` (`nan`, `inf` accepted: validation happens later).
+pub(crate) fn parse_f64(format: &'static str, line_no: usize, what: &str, token: &str) -> Result<f64> {
     token
-        .parse::<f32>()
+        .parse::<f64>()
         .map_err(|_| Error::parse(format, format!("line {line_no}: {what} {} is not a number", show(token))))
 }
 

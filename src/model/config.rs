@@ -1,5 +1,6 @@
 //! Model configuration: read from the weights file, with the two named presets of docs/design.md §7.
 
+use crate::limits::{MAX_MODEL_DIM, MAX_MODEL_LAYERS, MAX_MODEL_LIST, MAX_MODEL_PARAMETERS};
 use crate::{Error, Result};
 use serde::{Deserialize, Serialize};
 
@@ -130,10 +131,22 @@ impl ModelConfig {
         2 * self.feature_dim
     }
 
-    /// Checks that the sizes are consistent and bounded (a hostile file cannot make the engine
-    /// allocate without limit).
+    /// Checks that the sizes are consistent and bounded in every dimension, count and size (a
+    /// hostile file cannot make the engine allocate without limit): every size at most
+    /// [`MAX_MODEL_DIM`], at most [`MAX_MODEL_LAYERS`] layers, at most [`MAX_MODEL_LIST`] entries
+    /// in each hidden-width list, a preset name of at most 64 bytes, and at most
+    /// [`MAX_MODEL_PARAMETERS`] parameters in all. Runs in time bounded by those limits, before
+    /// anything is allocated for the model.
     pub fn validate(&self) -> Result<()> {
         let bad = |m: String| Err(Error::Weights(format!("invalid model config: {m}")));
+        for (name, list) in [("pos_hidden", &self.pos_hidden), ("head_hidden", &self.head_hidden)] {
+            if list.len() > MAX_MODEL_LIST {
+                return bad(format!("{name} lists {} hidden widths; at most {MAX_MODEL_LIST} are allowed", list.len()));
+            }
+        }
+        if self.preset.len() > 64 {
+            return bad(format!("preset name is {} bytes long; at most 64 are allowed", self.preset.len()));
+        }
         let mut dims: Vec<(&str, usize)> = vec![
             ("n_points", self.n_points),
             ("feature_dim", self.feature_dim),
@@ -147,12 +160,16 @@ impl ModelConfig {
         dims.extend(self.pos_hidden.iter().map(|&v| ("pos_hidden", v)));
         dims.extend(self.head_hidden.iter().map(|&v| ("head_hidden", v)));
         for (name, v) in dims {
-            if v == 0 || v > 8192 {
-                return bad(format!("{name} = {v} is outside 1..=8192"));
+            if v == 0 || v > MAX_MODEL_DIM {
+                return bad(format!("{name} = {v} is outside 1..={MAX_MODEL_DIM}"));
             }
         }
-        if self.layers > 16 {
-            return bad(format!("layers = {} is more than 16", self.layers));
+        if self.layers > MAX_MODEL_LAYERS {
+            return bad(format!("layers = {} is more than {MAX_MODEL_LAYERS}", self.layers));
+        }
+        let params = self.parameter_count_u64();
+        if params > MAX_MODEL_PARAMETERS {
+            return bad(format!("the config needs {params} parameters; at most {MAX_MODEL_PARAMETERS} are allowed"));
         }
         if self.n_points < 16 {
             return bad(format!("n_points = {} is fewer than 16", self.n_points));
@@ -220,6 +237,40 @@ impl ModelConfig {
     pub fn parameter_count(&self) -> usize {
         self.tensor_specs().iter().map(|(_, s)| s.iter().product::<usize>()).sum()
     }
+
+    /// [`ModelConfig::parameter_count`] by arithmetic, without listing the tensors, saturating
+    /// instead of overflowing (for [`ModelConfig::validate`], on sizes not yet bounded).
+    fn parameter_count_u64(&self) -> u64 {
+        let n = |v: usize| v as u64;
+        let linear = |i: u64, o: u64| i.saturating_mul(o).saturating_add(o);
+        let (c, d) = (n(self.feature_dim), n(self.token_dim()));
+        let mlp = |first: u64, hidden: &[usize], last: u64| {
+            let mut prev = first;
+            let mut sum = 0u64;
+            for h in hidden.iter().map(|&h| n(h)).chain(std::iter::once(last)) {
+                sum = sum.saturating_add(linear(prev, h));
+                prev = h;
+            }
+            sum
+        };
+        let block = 4u64
+            .saturating_mul(linear(d, d))
+            .saturating_add(4u64.saturating_mul(d))
+            .saturating_add(linear(d, n(self.ffn_dim)))
+            .saturating_add(linear(n(self.ffn_dim), d));
+        let score = if self.reference == Reference::Soft { linear(c, 1) } else { 0 };
+        let layer = mlp(3, &self.pos_hidden, c)
+            .saturating_add(2u64.saturating_mul(block))
+            .saturating_add(linear(d, c))
+            .saturating_add(score)
+            .saturating_add(linear(3u64.saturating_add(c), n(self.step_hidden)))
+            .saturating_add(linear(n(self.step_hidden), 1));
+        n(self.layers).saturating_mul(layer).saturating_add(mlp(
+            2u64.saturating_mul(c),
+            &self.head_hidden,
+            n(self.gaussians),
+        ))
+    }
 }
 
 #[cfg(test)]
@@ -247,6 +298,41 @@ mod tests {
         assert!(c.validate().is_err());
         let mut c = ModelConfig::web();
         c.feature_dim = 1 << 20;
+        assert!(c.validate().is_err());
+    }
+
+    #[test]
+    fn arithmetic_parameter_count_matches_the_tensor_list() {
+        for c in [ModelConfig::web(), ModelConfig::paper(), ModelConfig::tiny()] {
+            assert_eq!(c.parameter_count_u64(), c.parameter_count() as u64, "{}", c.preset);
+        }
+        let mut c = ModelConfig::paper();
+        c.reference = Reference::Soft;
+        assert_eq!(c.parameter_count_u64(), c.parameter_count() as u64);
+    }
+
+    #[test]
+    fn validation_bounds_counts_and_total_size_quickly() {
+        // issue 14: two million hidden widths, each valid on its own, made loading allocate
+        // without bound (8.4 GB natively) before this was checked
+        let mut c = ModelConfig::web();
+        c.pos_hidden = vec![64; 2_000_000];
+        let t = std::time::Instant::now();
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("pos_hidden lists 2000000 hidden widths"), "{e}");
+        assert!(t.elapsed().as_secs_f64() < 0.5);
+        let mut c = ModelConfig::web();
+        c.head_hidden = vec![8; MAX_MODEL_LIST + 1];
+        assert!(c.validate().is_err());
+        // every dimension within its own bound, but the whole too large
+        let mut c = ModelConfig::web();
+        c.feature_dim = 2048;
+        c.ffn_dim = 4096;
+        c.layers = 16;
+        let e = c.validate().unwrap_err().to_string();
+        assert!(e.contains("parameters"), "{e}");
+        let mut c = ModelConfig::web();
+        c.preset = "x".repeat(1000);
         assert!(c.validate().is_err());
     }
 }

@@ -213,6 +213,21 @@ test("the example: bunny views aligned back to the known 20 degree motion", { ti
   await page.screenshot({ path: join(OUT, "example.png") });
 });
 
+test("Cancel stops an alignment, and the next one works", { timeout: TIMEOUT * 2 }, async () => {
+  await page.waitForFunction(() => !document.getElementById("align").disabled, null, { timeout: TIMEOUT });
+  // Align, then Cancel in the same task: the request is cancelled whatever stage it reached.
+  await page.evaluate(() => {
+    document.getElementById("align").click();
+    document.getElementById("cancel").click();
+  });
+  await page.waitForFunction(() => document.getElementById("error").textContent.trim(), null, { timeout: TIMEOUT });
+  assert.equal((await page.textContent("#error")).trim(), "Alignment cancelled.");
+  assert.equal((await page.textContent("#result")).trim(), "");
+  const { result, error } = await alignAndWait();
+  assert.equal(error, "");
+  assert.ok(result.exampleError.rotationDeg < 5, "the pair aligns after a cancel");
+});
+
 test("no uncaught errors on the page", () => {
   const errors = consoleLines.filter((l) => l.startsWith("pageerror:") || l.startsWith("console.error:"));
   assert.deepEqual(errors, []);

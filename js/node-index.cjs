@@ -1,0 +1,18 @@
+// CommonJS entry of the Node build (pkg/node/arps.js): the facade (facade.cjs) over the raw
+// wasm-bindgen glue (arps_glue.js, which loads arps_bg.wasm from disk on require). The same API
+// as the web build; `init` and `initSync` are no-ops kept for parity.
+"use strict";
+const glue = require("./arps_glue.js");
+const { makeApi } = require("./facade.cjs");
+
+const api = makeApi(glue, () => true);
+module.exports = {
+  Registrar: api.Registrar,
+  parsePointCloud: api.parsePointCloud,
+  readPointCloud: api.readPointCloud,
+  version: api.version,
+  /** Nothing to do in Node (the module is ready on require); kept for parity with the web build. */
+  default: async () => glue,
+  /** Nothing to do in Node; kept for parity with the web build. */
+  initSync: () => glue,
+};

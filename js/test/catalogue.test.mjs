@@ -1,0 +1,282 @@
+// The catalogue of hostile input, through the built package (pkg/): every case asserts the error
+// (or the correct answer) AND that the same Registrar then registers the fixture pair correctly.
+// Cases: bad lengths, NaN, too few / too many points, wrong types, array-likes that lie about
+// their length, bad options (unknown, wrong type, throwing getters, Proxies, bad
+// initialTransform), bad onProgress, bad files and file names, bad weights, use after free, and
+// a real trap inside the engine, after which the module is re-instantiated and the registrars
+// built before it keep working.
+// Run after scripts/build-pkg.sh: node --test js/test/
+import test from "node:test";
+import assert from "node:assert/strict";
+import { readFileSync } from "node:fs";
+import { createRequire } from "node:module";
+import path from "node:path";
+import { pathToFileURL } from "node:url";
+import { pkg, source, target, sourcePly, targetPly, errors, groundTruth } from "./common.mjs";
+
+const nodeBuild = await import(pathToFileURL(path.join(pkg, "node", "index.mjs")).href);
+const webBuild = await import(pathToFileURL(path.join(pkg, "arps.js")).href);
+const { MAX_POINTS, makeApi } = await import(pathToFileURL(path.join(pkg, "facade.js")).href);
+
+/** The registrar still recovers the fixture transform. */
+function stillWorks(r, label) {
+  const res = r.register(source(), target());
+  const { rot, tr } = errors(res.matrix);
+  assert.ok(rot < 1 && tr < 0.02, `${label}: afterwards rotation ${rot} deg, translation ${tr}`);
+}
+
+/** `fn` throws a plain Error (not a trap) whose message matches `re`; then `r` still works. */
+function rejects(r, label, fn, re) {
+  let thrown;
+  try {
+    fn();
+  } catch (e) {
+    thrown = e;
+  }
+  assert.ok(thrown !== undefined, `${label}: expected an error`);
+  assert.ok(thrown instanceof Error && !(thrown instanceof WebAssembly.RuntimeError), `${label}: ${thrown}`);
+  assert.match(thrown.message, re, label);
+  stillWorks(r, label);
+}
+
+const lyingLength = () => {
+  class Liar extends Float32Array {
+    get length() {
+      return 3;
+    }
+  }
+  const s = source();
+  const l = new Liar(s.length);
+  l.set(s);
+  return l;
+};
+
+for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]]) {
+  if (name === "web build") webBuild.initSync({ module: readFileSync(path.join(pkg, "arps_bg.wasm")) });
+
+  test(`${name}: hostile clouds`, () => {
+    const r = arps.Registrar.withDefaultModel();
+    const s = source();
+    const t = target();
+    const nan = s.slice();
+    nan[5] = NaN;
+    const cases = [
+      ["length not a multiple of 3", () => r.register(s.subarray(1), t), /^source: invalid point cloud: packed xyz buffer has length/],
+      ["target length", () => r.register(s, t.subarray(2)), /^target: invalid point cloud/],
+      ["NaN", () => r.register(nan, t), /source point 1 has a non-finite coordinate/],
+      ["Infinity", () => r.register(s, Float32Array.of(...t.subarray(0, 60), Infinity)), /./],
+      ["too few points", () => r.register(s.subarray(0, 30), t), /source has 10 finite points/],
+      ["empty", () => r.register(new Float32Array(0), t), /source has 0 finite points/],
+      ["a number", () => r.register(5, t), /^source: expected a Float32Array \(or Float64Array\) of packed xyz .*got a number/],
+      ["undefined", () => r.register(undefined, t), /^source: expected a Float32Array.*got undefined/],
+      ["a string", () => r.register("1 2 3", t), /^source: expected a Float32Array/],
+      ["an array-like claiming 1.2e9 elements", () => r.register({ length: 1.2e9 }, t), /^source: expected a Float32Array.*got an object/],
+      ["a Proxy of a Float32Array", () => r.register(new Proxy(s, {}), t), /^source: expected a Float32Array.*got an object/],
+      ["an Int32Array", () => r.register(new Int32Array(s.length), t), /^source: expected a Float32Array.*got an Int32Array/],
+      ["an Array with a string", () => r.register([...s.subarray(0, 59), "x"], t), /^source: element 59 is a string/],
+      ["an Array with a throwing getter", () => {
+        const a = [...s];
+        Object.defineProperty(a, 4, { get() { throw new Error("boom"); } });
+        return r.register(a, t);
+      }, /^source: reading element 4 threw: Error: boom/],
+      ["over the points limit", () => r.register(new Float32Array(3 * MAX_POINTS + 3), t), /^source has 8000001 points, more than the 8000000 a registration accepts per cloud .*downsample it first/],
+    ];
+    for (const [label, fn, re] of cases) rejects(r, label, fn, re);
+    // The array-like that leaked 482 MB per call and trapped on the 9th: rejected every time.
+    for (let i = 0; i < 12; i++) assert.throws(() => r.register({ length: 1.2e9 }, t), /expected a Float32Array/);
+    stillWorks(r, "after 12 array-likes");
+    // Accepted: a plain Array of numbers, a subclass that lies about its length (its real
+    // contents are used), a view into a larger buffer, and a Float64Array.
+    for (const [label, src] of [
+      ["Array", Array.from(s)],
+      ["lying subclass", lyingLength()],
+      ["offset view", (() => { const big = new Float32Array(s.length + 7); big.set(s, 7); return big.subarray(7); })()],
+      ["Float64Array", Float64Array.from(s)],
+    ]) {
+      const { rot, tr } = errors(r.register(src, t).matrix);
+      assert.ok(rot < 1 && tr < 0.02, `${label}: rotation ${rot} deg, translation ${tr}`);
+    }
+    r.free();
+  });
+
+  test(`${name}: hostile options`, () => {
+    const r = arps.Registrar.withDefaultModel();
+    const s = source();
+    const t = target();
+    const reg = (o, p) => () => r.register(s, t, o, p);
+    const proxy = (handler, obj = { icp: "point" }) => new Proxy(obj, handler);
+    const cases = [
+      ["unknown field", reg({ icpMaxIteration: 3 }), /unknown field `icpMaxIteration`/],
+      ["wrong enum", reg({ icp: "planar" }), /^invalid options/],
+      ["wrong type", reg({ seed: "seven" }), /^invalid options/],
+      ["out of range", reg({ networkPoints: 1 }), /networkPoints = 1/],
+      ["empty starts", reg({ starts: [] }), /starts is empty/],
+      ["a number", reg(3), /^invalid options: expected a plain object \(or undefined\), got a number/],
+      ["an array", reg([1, 2]), /^invalid options: expected a plain object.*got an Array/],
+      ["a string", reg("fast"), /^invalid options: expected a plain object/],
+      ["a throwing top-level getter", reg({ get seed() { throw new Error("boom"); } }), /^invalid options: reading `seed` threw: Error: boom/],
+      ["a Proxy whose ownKeys throws", reg(proxy({ ownKeys() { throw new Error("no keys"); } })), /^invalid options: listing the options threw: Error: no keys/],
+      ["a Proxy whose get throws", reg(proxy({ get() { throw new Error("no get"); } })), /^invalid options: reading `icp` threw: Error: no get/],
+      ["a revoked Proxy", reg((() => { const p = Proxy.revocable({}, {}); p.revoke(); return p.proxy; })()), /^invalid options/],
+      ["a throwing getter in starts", reg({ starts: Object.defineProperty(["network", "initial"], 1, { get() { throw new Error("nested"); } }) }), /^invalid options: reading `starts\[1\]` threw: Error: nested/],
+      ["a Proxy as initialTransform", reg({ initialTransform: proxy({ get() { throw new Error("matrix"); } }, []) }), /^invalid options: reading `initialTransform.length` threw: Error: matrix/],
+      ["15-element initialTransform", reg({ initialTransform: new Array(15).fill(0) }), /^invalid options: initialTransform has 15 elements; expected 16 numbers/],
+      ["15-element Float32Array initialTransform", reg({ initialTransform: new Float32Array(15) }), /^invalid options: initialTransform has 15 elements/],
+      ["3x4 rows", reg({ initialTransform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]] }), /^invalid options: initialTransform has 3 elements/],
+      ["a row with a string", reg({ initialTransform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, "0"], [0, 0, 0, 1]] }), /^invalid options: initialTransform\[2\]\[3\] is a string/],
+      ["non-rigid initialTransform", reg({ initialTransform: [2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1] }), /initialTransform is not rigid/],
+      ["a huge array", reg({ starts: { length: 1e9 } }), /^invalid options/],
+      ["onProgress not a function", reg({}, 42), /^onProgress: expected a function, got a number/],
+      ["onProgress throws", reg({}, () => { throw new Error("progress boom"); }), /^onProgress threw: progress boom/],
+      ["onProgress re-enters register", reg({}, () => r.register(s, t)), /^onProgress threw: arps: register while this Registrar is registering/],
+      ["onProgress frees the registrar", reg({}, () => r.free()), /^onProgress threw: arps: free\(\) while this Registrar is registering/],
+    ];
+    for (const [label, fn, re] of cases) rejects(r, label, fn, re);
+    // A getter that works is read once, like any value.
+    let reads = 0;
+    const res = r.register(s, t, { get icp() { reads++; return "off"; } });
+    assert.equal(res.iterations, 0);
+    assert.equal(reads, 1);
+    r.free();
+  });
+
+  test(`${name}: hostile files, weights, and use after free`, () => {
+    const r = arps.Registrar.withDefaultModel();
+    const parse = (b, n) => () => arps.parsePointCloud(b, n);
+    const cases = [
+      ["a number as file name", parse(sourcePly, 5), /^fileName: expected a string .*got a number/],
+      ["an object as file name", parse(sourcePly, { toString: () => "a.ply" }), /^fileName: expected a string/],
+      ["a huge file name", parse(sourcePly, "x".repeat(5000) + ".ply"), /^fileName: 5004 characters is over the limit/],
+      ["a string as bytes", parse("ply\n", "a.ply"), /^bytes: expected a Uint8Array or an ArrayBuffer, got a string/],
+      ["an array-like as bytes", parse({ length: 1.2e9 }, "a.ply"), /^bytes: expected a Uint8Array or an ArrayBuffer, got an object/],
+      ["truncated PLY", parse(sourcePly.subarray(0, 300), "a.ply"), /./],
+      ["empty file", parse(new Uint8Array(0), "a.ply"), /./],
+      ["garbage with an unknown extension", parse(new Uint8Array([0, 1, 2, 3]), "x.unknownext"), /./],
+      ["weights: 3 bytes", () => arps.Registrar.fromBytes(new Uint8Array([1, 2, 3])), /^weights: /],
+      ["weights: a string", () => arps.Registrar.fromBytes("model.safetensors"), /^weights: expected a Uint8Array or an ArrayBuffer, got a string/],
+      ["new Registrar()", () => new arps.Registrar(), /^arps: use Registrar.withDefaultModel\(\) or Registrar.fromBytes/],
+    ];
+    for (const [label, fn, re] of cases) rejects(r, label, fn, re);
+    // Accepted: an ArrayBuffer, a DataView, a Buffer; no file name (the format is sniffed).
+    const expected = [...source()];
+    const buf = sourcePly.buffer.slice(sourcePly.byteOffset, sourcePly.byteOffset + sourcePly.byteLength);
+    assert.deepEqual([...arps.parsePointCloud(buf, "s.ply")], expected);
+    assert.deepEqual([...arps.parsePointCloud(new DataView(buf), "s.ply")], expected);
+    assert.deepEqual([...arps.parsePointCloud(sourcePly)], expected);
+    // Use after free: a clear error, also for the getters; free twice is harmless.
+    const gone = arps.Registrar.withDefaultModel();
+    gone.free();
+    gone.free();
+    assert.throws(() => gone.register(source(), target()), /^Error: arps: register on a Registrar that was freed/);
+    assert.throws(() => gone.provenance, /arps: provenance on a Registrar that was freed/);
+    stillWorks(r, "after use after free");
+    const parsed = r.register(arps.parsePointCloud(sourcePly, "s.ply"), arps.parsePointCloud(targetPly, "t.ply"));
+    assert.ok(errors(parsed.matrix).rot < 1);
+    r.free();
+  });
+}
+
+test("large coordinates: Float64Array or { points, origin } in, matrix64 exact in the caller's frame", () => {
+  const arps = nodeBuild;
+  const r = arps.Registrar.withDefaultModel();
+  // The fixture pair moved far from the origin (georeferenced-like), differently per cloud.
+  const a = [512345.25, 4123456.5, 87.125];
+  const b = [512349.75, 4123450.25, 91.0];
+  const far = (cloud, o) => Float64Array.from(cloud, (x, i) => x + o[i % 3]);
+  const s64 = far(source(), a);
+  const t64 = far(target(), b);
+  // Truth in the moved frames: T' = T(b) T T(-a).
+  const rows = groundTruth.map((row) => row.slice());
+  for (let i = 0; i < 3; i++) rows[i][3] = groundTruth[i][3] + b[i] - (groundTruth[i][0] * a[0] + groundTruth[i][1] * a[1] + groundTruth[i][2] * a[2]);
+  // The translation error where the clouds are (at the source's centre, a): the error of the
+  // transform's translation alone would scale a tiny rotation error by |a| (4e6).
+  const errorAtClouds = (m) => {
+    const { rot } = errors(m, rows);
+    const d = [0, 1, 2].map((i) => m[i] * a[0] + m[4 + i] * a[1] + m[8 + i] * a[2] + m[12 + i] - (rows[i][0] * a[0] + rows[i][1] * a[1] + rows[i][2] * a[2] + rows[i][3]));
+    return { rot, tr: Math.hypot(...d) };
+  };
+  const check = (res, label) => {
+    assert.ok(res.matrix64 instanceof Float64Array && res.matrix64.length === 16, label);
+    const { rot, tr } = errorAtClouds(res.matrix64);
+    assert.ok(rot < 1 && tr < 0.02, `${label}: rotation ${rot} deg, translation error at the clouds ${tr}`);
+    assert.deepEqual([...res.matrix], [...Float32Array.from(res.matrix64)], `${label}: matrix is matrix64 rounded`);
+  };
+  check(r.register(s64, t64), "Float64Array");
+  // The same clouds as f32 offsets beside their origins.
+  const rel = (c, o) => Float32Array.from(c, (x, i) => x - o[i % 3]);
+  check(r.register({ points: rel(s64, a), origin: a }, { points: rel(t64, b), origin: b }), "{ points, origin }");
+  check(r.register({ points: source(), origin: a }, t64), "mixed");
+  // initialTransform is in the caller's frame too: the truth itself as the start stays put.
+  const truthColMajor = [0, 1, 2, 3].flatMap((c) => [0, 1, 2, 3].map((row) => rows[row][c]));
+  const fromTruth = r.register(s64, t64, { initialTransform: truthColMajor, starts: ["initial"], network: false });
+  check(fromTruth, "initialTransform in the caller's frame");
+  // Without origins, float32 cannot hold these coordinates (0.25-0.5 units apart near 4e6).
+  const lossy = r.register(Float32Array.from(s64), Float32Array.from(t64));
+  const at = (res) => errorAtClouds(res.matrix64).tr.toExponential(2);
+  console.log(`large coordinates, translation error at the clouds: as Float32Array ${at(lossy)}, as Float64Array ${at(r.register(s64, t64))}`);
+  // A file with double coordinates, read keeping its precision: { points, origin } registers as is.
+  const doublePly = (xyz) => {
+    const header = `ply\nformat binary_little_endian 1.0\nelement vertex ${xyz.length / 3}\nproperty double x\nproperty double y\nproperty double z\nend_header\n`;
+    const body = new Uint8Array(Float64Array.from(xyz).buffer);
+    const out = new Uint8Array(header.length + body.length);
+    out.set(new TextEncoder().encode(header));
+    out.set(body, header.length);
+    return out;
+  };
+  const read = arps.readPointCloud(doublePly(s64), "far.ply");
+  assert.ok(read.points instanceof Float32Array && read.points.length === s64.length);
+  assert.ok(Math.abs(read.origin[1] - a[1]) < 10, `origin near the points: ${read.origin}`);
+  let worst = 0;
+  for (let i = 0; i < s64.length; i++) worst = Math.max(worst, Math.abs(read.origin[i % 3] + read.points[i] - s64[i]));
+  assert.ok(worst < 1e-6, `read back to ${worst}`);
+  check(r.register(read, arps.readPointCloud(doublePly(t64), "far-target.ply")), "readPointCloud");
+  // parsePointCloud gives float32 in the file's frame (rounded: 0.25-0.5 apart near 4e6).
+  assert.ok(Math.abs(arps.parsePointCloud(doublePly(s64), "far.ply")[1] - s64[1]) < 0.5);
+  // Bad origins.
+  rejects(r, "origin of 2", () => r.register({ points: source(), origin: [1, 2] }, t64), /^source: origin must be 3 finite numbers/);
+  rejects(r, "NaN origin", () => r.register(s64, { points: target(), origin: [0, NaN, 0] }), /^target: origin must be 3 finite numbers/);
+  rejects(r, "points not f32", () => r.register({ points: [1, 2, 3], origin: a }, t64), /^source: expected a Float32Array/);
+  r.free();
+});
+
+test("a real trap in the engine: the module is re-instantiated and registrars keep working", () => {
+  // The raw glue that the Node build's facade wraps; a facade over it whose parsePointCloud
+  // passes a number as the file name, which traps inside the wasm instance (memory access out
+  // of bounds). The package never does this (it checks file names): the wrapper only stands in
+  // for any trap (out of memory, an engine bug).
+  const require = createRequire(import.meta.url);
+  const glue = require(path.join(pkg, "node", "arps_glue.js"));
+  const trapping = Object.create(glue, { parsePointCloud: { value: (bytes) => glue.parsePointCloud(bytes, 5) } });
+  const api = makeApi(trapping, () => true);
+  const before = api.Registrar.withDefaultModel();
+  stillWorks(before, "before the trap");
+  let thrown;
+  try {
+    api.parsePointCloud(sourcePly, "s.ply");
+  } catch (e) {
+    thrown = e;
+  }
+  assert.ok(thrown instanceof Error && !(thrown instanceof WebAssembly.RuntimeError), String(thrown));
+  assert.equal(thrown.code, "ARPS_TRAPPED");
+  assert.match(thrown.message, /^arps: parsePointCloud trapped in the engine \(RuntimeError: .*\).*the engine was re-instantiated/);
+  assert.ok(thrown.cause instanceof WebAssembly.RuntimeError, "the trap is the cause");
+  // The registrar built before the trap reloads its model and works; so do new ones.
+  stillWorks(before, "the registrar built before the trap");
+  stillWorks(api.Registrar.withDefaultModel(), "a new registrar");
+  const res = before.register(source(), target(), { icp: "off" });
+  assert.equal(res.iterations, 0);
+  assert.equal(api.version(), nodeBuild.version());
+  // Again: every trap is recovered from, not just the first.
+  assert.throws(() => api.parsePointCloud(sourcePly, "s.ply"), (e) => e.code === "ARPS_TRAPPED");
+  stillWorks(before, "after a second trap");
+  before.free();
+});
+
+test("web build: a call before init() says so, without breaking the module", async () => {
+  // A fresh copy of the web entry (a query string makes a new module instance).
+  const url = pathToFileURL(path.join(pkg, "arps.js")).href + "?fresh";
+  const fresh = await import(url);
+  assert.throws(() => fresh.Registrar.withDefaultModel(), /^Error: arps: the engine is not loaded yet; call and await init\(\) first/);
+  await fresh.default({ module_or_path: readFileSync(path.join(pkg, "arps_bg.wasm")) });
+  stillWorks(fresh.Registrar.withDefaultModel(), "after init");
+});

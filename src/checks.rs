@@ -1,0 +1,127 @@
+//! Checks on what the pipeline computes: results that are not finite, initial guesses that
+//! leave no overlap to find.
+
+use crate::{Error, Result};
+use nalgebra::Matrix4;
+
+/// The farthest, in normalised units (the clouds' shared half-extent), the initial guess (the
+/// caller's `initialTransform`, or the identity in the caller's frame) may put the source's
+/// centre from the target's. The network's start does not depend on it, but the starts from the
+/// initial guess are refined in `f32`, where squared distances beyond about 1e19 overflow; this
+/// bound keeps them finite with a wide margin, while clouds given in different frames (one in
+/// map-grid coordinates, one near zero) still register.
+pub const MAX_INITIAL_DISTANCE: f64 = 1.0e12;
+
+/// Fails when any entry of `t` (a `T_target_source`) is NaN or infinite; `what` names it.
+pub fn finite_transform(t: &Matrix4<f64>, what: &str) -> Result<()> {
+    if t.iter().all(|v| v.is_finite()) {
+        Ok(())
+    } else {
+        Err(Error::Numerical(format!(
+            "{what} is not finite (a NaN or infinite entry): the inputs are out of the range the engine can compute with"
+        )))
+    }
+}
+
+/// Fails when the initial guess `t_initial_n` (normalised units) moves the source's centre more
+/// than [`MAX_INITIAL_DISTANCE`] from the target's.
+pub fn initial_distance(t_initial_n: &Matrix4<f64>) -> Result<()> {
+    let d = t_initial_n.fixed_view::<3, 1>(0, 3).norm();
+    if d.is_finite() && d <= MAX_INITIAL_DISTANCE {
+        Ok(())
+    } else {
+        Err(Error::InvalidOption(format!(
+            "the initial guess (initialTransform, or the identity in the caller's frame) puts the source {d:.3e} cloud sizes away from the target, more than the {MAX_INITIAL_DISTANCE:e} the engine computes with: give an initialTransform that brings the clouds near each other"
+        )))
+    }
+}
+
+/// Ratio of a cloud's second principal spread to its first (standard deviations along the
+/// principal axes) below which the cloud is a line: the registration is refused, since a
+/// rotation about the line cannot be determined.
+pub const COLLINEAR_RATIO: f64 = 1e-3;
+
+/// Ratio below which a cloud is nearly a line: the registration runs, with a warning that the
+/// rotation about its axis is weakly constrained.
+pub const THIN_RATIO: f64 = 1e-2;
+
+/// Ratio of the third principal spread to the first below which a cloud is flat; when both
+/// clouds are, a warning says that sliding in the plane and turning about its normal are held
+/// only by the outlines.
+pub const FLAT_RATIO: f64 = 1e-3;
+
+/// The standard deviations of `points` along their principal axes, largest first (in `f64`).
+pub fn principal_spreads(points: &[[f32; 3]]) -> [f64; 3] {
+    let n = points.len().max(1) as f64;
+    let mut mean = [0.0f64; 3];
+    for p in points {
+        for a in 0..3 {
+            mean[a] += p[a] as f64 / n;
+        }
+    }
+    let mut cov = nalgebra::Matrix3::<f64>::zeros();
+    for p in points {
+        let d = nalgebra::Vector3::new(p[0] as f64 - mean[0], p[1] as f64 - mean[1], p[2] as f64 - mean[2]);
+        cov += d * d.transpose();
+    }
+    cov /= n;
+    let mut ev: Vec<f64> = cov.symmetric_eigenvalues().iter().map(|v| v.max(0.0).sqrt()).collect();
+    ev.sort_by(|a, b| b.total_cmp(a));
+    [ev[0], ev[1], ev[2]]
+}
+
+/// Refuses a collinear cloud (an error naming it) and warns about a nearly collinear one;
+/// returns its principal spreads. `what` names the cloud.
+pub fn not_collinear(what: &str, points: &[[f32; 3]], warnings: &mut Vec<String>) -> Result<[f64; 3]> {
+    let s = principal_spreads(points);
+    let ratio = s[1] / s[0];
+    if ratio.is_nan() || ratio < COLLINEAR_RATIO {
+        return Err(Error::InvalidCloud(format!(
+            "{what} is collinear: its points lie along a line (spread across it {ratio:.1e} of the spread along it, below {COLLINEAR_RATIO:e}), so the rotation about that line cannot be determined"
+        )));
+    }
+    if ratio < THIN_RATIO {
+        warnings.push(format!(
+            "{what} is nearly a line (spread across it {ratio:.1e} of the spread along it): the rotation about its axis is weakly constrained and may be wrong"
+        ));
+    }
+    Ok(s)
+}
+
+/// Warns when both clouds are flat (see [`FLAT_RATIO`]), given their principal spreads.
+pub fn flat_pair(source: [f64; 3], target: [f64; 3], warnings: &mut Vec<String>) {
+    if source[2] / source[0] < FLAT_RATIO && target[2] / target[0] < FLAT_RATIO {
+        warnings.push(
+            "both clouds are flat: sliding within the plane and turning about its normal are held only by the clouds' outlines, so check the result".into(),
+        );
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spreads_tell_lines_planes_and_volumes() {
+        let line: Vec<[f32; 3]> = (0..100).map(|i| [i as f32 * 0.1, i as f32 * 0.2, 1.0]).collect();
+        let mut w = Vec::new();
+        assert!(not_collinear("source", &line, &mut w).unwrap_err().to_string().contains("source is collinear"));
+        let rod: Vec<[f32; 3]> = (0..100).map(|i| [i as f32, (i % 2) as f32 * 0.5, 0.0]).collect();
+        not_collinear("target", &rod, &mut w).unwrap();
+        assert!(w[0].contains("target is nearly a line"), "{w:?}");
+        let plane: Vec<[f32; 3]> = (0..400).map(|i| [(i % 20) as f32, (i / 20) as f32, 0.0]).collect();
+        let mut w = Vec::new();
+        let s = not_collinear("source", &plane, &mut w).unwrap();
+        assert!(w.is_empty());
+        flat_pair(s, s, &mut w);
+        assert_eq!(w.len(), 1);
+        let cube: Vec<[f32; 3]> =
+            (0..1000).map(|i| [(i % 10) as f32, (i / 10 % 10) as f32, (i / 100) as f32]).collect();
+        let c = principal_spreads(&cube);
+        let mut w = Vec::new();
+        flat_pair(s, c, &mut w);
+        assert!(w.is_empty());
+        assert!(finite_transform(&Matrix4::identity(), "x").is_ok());
+        assert!(finite_transform(&(Matrix4::identity() * f64::NAN), "x").is_err());
+    }
+}
