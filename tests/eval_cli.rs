@@ -5,7 +5,7 @@
 use std::path::Path;
 use std::process::Command;
 
-const METHODS: [&str; 7] = [
+const METHODS: [&str; 10] = [
     "network",
     "network + ICP",
     "network + multi-start ICP",
@@ -13,6 +13,9 @@ const METHODS: [&str; 7] = [
     "ICP from identity",
     "ICP from centroids",
     "untrained network + ICP",
+    "FPFH + RANSAC + ICP",
+    "FPFH + RANSAC + network + ICP",
+    "exhaustive multi-start ICP",
 ];
 
 fn arps(args: &[&str]) -> (bool, String, String) {
