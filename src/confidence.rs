@@ -6,6 +6,7 @@
 //! rises early and steeply), and so does the overlap measured both ways.
 
 use crate::icp::IcpTarget;
+use crate::refine::{even_sample, SCREEN_POINTS};
 use crate::transform::rigid_inverse;
 use nalgebra::Matrix4;
 use serde::{Deserialize, Serialize};
@@ -31,7 +32,9 @@ pub struct Evidence {
 
 /// Measures the [`Evidence`] of `T_target_source` (source points moved into the target frame):
 /// `target` and `source_index` are the prepared clouds (the source's as an [`IcpTarget`] too,
-/// for the reverse overlap), `source` the source points, `d` the final distance.
+/// for the reverse overlap), `source` the source points, `d` the final distance. On clouds of
+/// more than [`crate::refine::SCREEN_POINTS`] points it is measured on that many, evenly spread,
+/// so its cost does not grow with the point count beyond the kd-tree queries' logarithm.
 #[allow(non_snake_case)]
 pub fn evidence(
     target: &IcpTarget,
@@ -40,9 +43,11 @@ pub fn evidence(
     T_target_source: &Matrix4<f64>,
     d: f64,
 ) -> Evidence {
-    let (fitness, rmse) = target.evaluate(source, T_target_source, d);
-    let f = |k: f64| target.evaluate(source, T_target_source, k * d).0;
-    let overlap_reverse = source_index.evaluate(target.points(), &rigid_inverse(T_target_source), d).0;
+    let source = even_sample(source, SCREEN_POINTS);
+    let target_points = even_sample(target.points(), SCREEN_POINTS);
+    let (fitness, rmse) = target.evaluate(&source, T_target_source, d);
+    let f = |k: f64| target.evaluate(&source, T_target_source, k * d).0;
+    let overlap_reverse = source_index.evaluate(&target_points, &rigid_inverse(T_target_source), d).0;
     Evidence {
         fitness,
         fitness_tight: f(0.5),

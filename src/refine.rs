@@ -191,7 +191,7 @@ pub fn refine_best(
 
 /// `n` points of `points` (all of them if there are not more), evenly spaced in its order; the
 /// voxel grid's order (`sampling::voxel_downsample`) makes that an even spread in space.
-fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
+pub fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
     if points.len() <= n {
         return points.to_vec();
     }

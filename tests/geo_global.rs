@@ -48,7 +48,8 @@ fn axes() -> [Vector3<f64>; 3] {
 #[test]
 fn global_starts_recover_180_degree_turns_about_each_axis() {
     let mut reg = untrained();
-    let options = Options { network: false, starts: vec![Start::Global], search: Search::Exhaustive, ..Options::default() };
+    let options =
+        Options { network: false, starts: vec![Start::Global], search: Search::Exhaustive, ..Options::default() };
     for &i in &PAIRS {
         for axis in axes() {
             let (s, t, gt) = moved_pair(i, &turn(axis, 180.0, [0.3, -0.2, 0.1]));
@@ -76,7 +77,11 @@ fn the_default_search_recovers_arbitrary_rotations() {
             let (s, t, gt) = moved_pair(i, &turn(axis, deg, [0.0, 0.4, -0.3]));
             let r = reg.register(&s, &t, &Options::default()).unwrap();
             let (re, te) = (rotation_error_deg(&r.T_target_source, &gt), translation_error(&r.T_target_source, &gt));
-            assert!(re < 5.0 && te < 0.05, "pair {i}, {deg} deg about {axis:?}: {re:.2} deg, {te:.4}, start {:?}", r.start);
+            assert!(
+                re < 5.0 && te < 0.05,
+                "pair {i}, {deg} deg about {axis:?}: {re:.2} deg, {te:.4}, start {:?}",
+                r.start
+            );
             assert!((0.0..=1.0).contains(&r.confidence));
         }
     }
@@ -146,10 +151,57 @@ fn descriptors_are_invariant_to_rigid_motion() {
 
 #[test]
 fn search_and_global_starts_parse_and_unknown_values_are_refused() {
-    let o: Options = serde_json::from_str(r#"{"search": "exhaustive", "starts": ["global", "globalNetwork"]}"#).unwrap();
+    let o: Options =
+        serde_json::from_str(r#"{"search": "exhaustive", "starts": ["global", "globalNetwork"]}"#).unwrap();
     assert_eq!(o.search, Search::Exhaustive);
     assert_eq!(o.starts, vec![Start::Global, Start::GlobalNetwork]);
     let e = serde_json::from_str::<Options>(r#"{"search": "sometimes"}"#).unwrap_err().to_string();
     assert!(e.contains("sometimes") && e.contains("adaptive"), "{e}");
     assert!("glob".parse::<Start>().unwrap_err().contains("global"));
+}
+
+/// Stage times of the global hypotheses on a fixture pair (`--ignored --nocapture` to see them).
+#[test]
+#[ignore]
+fn global_stage_times() {
+    let (s, t, _) = moved_pair(0, &turn(Vector3::new(1.0, 2.0, 3.0), 135.0, [0.1, 0.2, 0.3]));
+    // CPU time of this thread (ns, Linux), so that other processes on the machine do not count
+    #[derive(Clone, Copy)]
+    struct Cpu(f64);
+    fn now() -> Cpu {
+        let s = std::fs::read_to_string("/proc/thread-self/schedstat").unwrap_or_default();
+        Cpu(s.split_whitespace().next().and_then(|x| x.parse().ok()).unwrap_or(0.0))
+    }
+    for _ in 0..3 {
+        let t0 = now();
+        let v = global::feature_voxel(&s, &t, global::VOXEL_FRACTION);
+        let t1 = now();
+        let (a, b) = (global::describe(&s, v), global::describe(&t, v));
+        let t2 = now();
+        let m = global::matching::mutual_matches(&a.descriptors, &b.descriptors, 30);
+        let t3 = now();
+        let p = RansacParams {
+            max_iterations: 20_000,
+            confidence: 0.999,
+            inlier_distance: 1.5 * v,
+            edge_ratio: 0.9,
+            hypotheses: 5,
+            seed: 0,
+        };
+        let h = ransac::ransac(&a.points, &b.points, &m, &p);
+        let t4 = now();
+        let ms = |a: Cpu, b: Cpu| (b.0 - a.0) * 1e-6;
+        println!(
+            "CPU ms: voxel {v:.3} ({} + {} points): voxel {:.1} ms, describe {:.1} ms, match {:.1} ms ({} matches), ransac {:.1} ms ({} hypotheses, best {} inliers)",
+            a.points.len(),
+            b.points.len(),
+            ms(t0, t1),
+            ms(t1, t2),
+            ms(t2, t3),
+            m.len(),
+            ms(t3, t4),
+            h.len(),
+            h.first().map_or(0, |h| h.inliers)
+        );
+    }
 }

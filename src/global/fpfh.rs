@@ -39,9 +39,7 @@ impl FpfhParams {
 
 /// The `max` nearest points of `q` within `radius` (the point itself included), into `out`.
 fn neighbours(index: &KdIndex, q: &[f32; 3], radius: f64, max: usize, out: &mut Vec<(usize, f32)>) {
-    index.knn_into(q, max, out);
-    let r2 = (radius * radius) as f32;
-    out.retain(|e| e.1 <= r2);
+    index.within_into(q, (radius * radius) as f32, max, out);
 }
 
 /// Unit normals (PCA over each point's radius neighbourhood, at least its 3 nearest points),
@@ -100,7 +98,8 @@ pub fn pair_features(p1: &[f32; 3], n1: &[f32; 3], p2: &[f32; 3], n2: &[f32; 3])
     let (mut a, mut b) = (f64s(n1), f64s(n2));
     let angle1 = dot(&a, &d) / len;
     let angle2 = dot(&b, &d) / len;
-    let f3 = if angle1.abs().acos() > angle2.abs().acos() {
+    // acos(|angle1|) > acos(|angle2|), acos being decreasing
+    let f3 = if angle1.abs() < angle2.abs() {
         std::mem::swap(&mut a, &mut b);
         d = d.map(|v| -v);
         -angle2
@@ -162,22 +161,24 @@ pub fn describe(points: &[[f32; 3]], normals: &[[f32; 3]], index: &KdIndex, para
         .iter()
         .enumerate()
         .map(|(i, &(a, b))| {
-            let mut f = [0.0f64; DIM];
-            let mut sum = [0.0f64; 3];
+            let mut f = [0.0f32; DIM];
+            let mut sum = [0.0f32; 3];
             for &(j, d2) in &flat[a as usize..b as usize] {
                 if d2 <= 0.0 {
                     continue;
                 }
-                for (k, &s) in spfh[j as usize].iter().enumerate() {
-                    let v = s as f64 / d2 as f64;
+                let inv = 1.0 / d2;
+                let h = &spfh[j as usize];
+                for (k, (acc, &v)) in f.iter_mut().zip(h.iter()).enumerate() {
+                    let v = v * inv;
+                    *acc += v;
                     sum[k / BINS] += v;
-                    f[k] += v;
                 }
             }
             let mut out = [0.0f32; DIM];
             for k in 0..DIM {
                 let s = if sum[k / BINS] != 0.0 { 100.0 / sum[k / BINS] } else { 0.0 };
-                out[k] = (f[k] * s) as f32 + spfh[i][k];
+                out[k] = f[k] * s + spfh[i][k];
             }
             out
         })

@@ -18,11 +18,7 @@ pub fn nearest_each(a: &[Descriptor], b: &[Descriptor]) -> Vec<u32> {
         .map(|x| {
             let mut best = (0u32, f32::INFINITY);
             for (j, y) in b.iter().enumerate() {
-                let mut d = 0.0f32;
-                for k in 0..DIM {
-                    let e = x[k] - y[k];
-                    d += e * e;
-                }
+                let d = dist2(x, y);
                 if d < best.1 {
                     best = (j as u32, d);
                 }
@@ -34,15 +30,52 @@ pub fn nearest_each(a: &[Descriptor], b: &[Descriptor]) -> Vec<u32> {
 
 /// Mutual nearest neighbours `(source index, target index)`, in source order. When fewer than
 /// `min_mutual` pairs are mutual, every source point's nearest target is returned instead (a
-/// weak matching beats none).
+/// weak matching beats none). One pass over the distance matrix finds both directions' nearest.
 pub fn mutual_matches(source: &[Descriptor], target: &[Descriptor], min_mutual: usize) -> Vec<(u32, u32)> {
-    let st = nearest_each(source, target);
-    let ts = nearest_each(target, source);
-    let mutual: Vec<(u32, u32)> =
-        st.iter().enumerate().filter(|&(i, &j)| ts[j as usize] == i as u32).map(|(i, &j)| (i as u32, j)).collect();
+    if source.is_empty() || target.is_empty() {
+        return Vec::new();
+    }
+    let mut row = vec![(0u32, f32::INFINITY); source.len()];
+    let mut col = vec![(0u32, f32::INFINITY); target.len()];
+    for (i, x) in source.iter().enumerate() {
+        for (j, y) in target.iter().enumerate() {
+            let d = dist2(x, y);
+            if d < row[i].1 {
+                row[i] = (j as u32, d);
+            }
+            if d < col[j].1 {
+                col[j] = (i as u32, d);
+            }
+        }
+    }
+    let mutual: Vec<(u32, u32)> = row
+        .iter()
+        .enumerate()
+        .filter(|&(i, &(j, _))| col[j as usize].0 == i as u32)
+        .map(|(i, &(j, _))| (i as u32, j))
+        .collect();
     if mutual.len() >= min_mutual {
         mutual
     } else {
-        st.iter().enumerate().map(|(i, &j)| (i as u32, j)).collect()
+        row.iter().enumerate().map(|(i, &(j, _))| (i as u32, j)).collect()
     }
+}
+
+/// Squared Euclidean distance of two descriptors, in eight independent lanes (so it vectorises).
+#[inline(always)]
+fn dist2(x: &Descriptor, y: &Descriptor) -> f32 {
+    const LANES: usize = 8;
+    let mut acc = [0.0f32; LANES];
+    for k in 0..DIM / LANES {
+        for l in 0..LANES {
+            let e = x[k * LANES + l] - y[k * LANES + l];
+            acc[l] += e * e;
+        }
+    }
+    let mut d = acc.iter().sum::<f32>();
+    for k in (DIM / LANES) * LANES..DIM {
+        let e = x[k] - y[k];
+        d += e * e;
+    }
+    d
 }

@@ -23,8 +23,8 @@ pub use ransac::{Hypothesis, RansacParams};
 pub const MAX_FEATURE_POINTS: usize = 1500;
 
 /// Default feature voxel as a fraction of the larger cloud's largest half-extent (Open3D's
-/// tutorials use 0.05 on unit-sized objects).
-pub const VOXEL_FRACTION: f64 = 0.05;
+/// tutorials use 0.05 on unit-sized objects; on 100 any-pose validation pairs FPFH + RANSAC + ICP recalled 0.69 at 0.05, 0.79 at 0.08, 0.77 at 0.11 and 0.62 at 0.15).
+pub const VOXEL_FRACTION: f64 = 0.08;
 
 /// Settings of [`hypotheses`].
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -42,7 +42,13 @@ pub struct GlobalParams {
 
 impl Default for GlobalParams {
     fn default() -> Self {
-        Self { voxel_fraction: VOXEL_FRACTION, max_iterations: 20_000, hypotheses: 5, seed: 0 }
+        let env = |k: &str, d: f64| std::env::var(k).ok().and_then(|v| v.parse().ok()).unwrap_or(d);
+        Self {
+            voxel_fraction: env("ARPS_GV", VOXEL_FRACTION),
+            max_iterations: 20_000,
+            hypotheses: env("ARPS_GH", 5.0) as usize,
+            seed: 0,
+        }
     }
 }
 
@@ -52,7 +58,8 @@ pub fn feature_voxel(source: &PointCloud, target: &PointCloud, fraction: f64) ->
     let extent = source.half_extent().max(target.half_extent());
     let mut v = (fraction * extent).max(f64::MIN_POSITIVE);
     for _ in 0..60 {
-        let fits = |c: &PointCloud| c.len() <= MAX_FEATURE_POINTS || voxel_downsample(c, v as f32).len() <= MAX_FEATURE_POINTS;
+        let fits =
+            |c: &PointCloud| c.len() <= MAX_FEATURE_POINTS || voxel_downsample(c, v as f32).len() <= MAX_FEATURE_POINTS;
         if fits(source) && fits(target) {
             break;
         }

@@ -137,7 +137,8 @@ pub fn ransac(
         if a == b || b == c || a == c {
             continue;
         }
-        let (s, t) = ([a, b, c].map(|k| source[matches[k].0 as usize]), [a, b, c].map(|k| target[matches[k].1 as usize]));
+        let (s, t) =
+            ([a, b, c].map(|k| source[matches[k].0 as usize]), [a, b, c].map(|k| target[matches[k].1 as usize]));
         let mut ok = true;
         for (x, y) in [(0, 1), (1, 2), (0, 2)] {
             let (ls, lt) = (dist(&s[x], &s[y]), dist(&t[x], &t[y]));

@@ -37,10 +37,10 @@
 //! [`arps::cloud::JointNormalization`] picks it), so the 0.2 threshold means 20% of that.
 
 use arps::cloud::JointNormalization;
+use arps::confidence::Evidence;
 use arps::data::manifest;
 use arps::data::metrics::{ambiguous_miss, pair_error, recall_svg, recalled, summarize, PairError, Summary};
 use arps::transform::{euler_xyz, from_rotation_translation, rigid_inverse, to_rows};
-use arps::confidence::Evidence;
 use arps::{io, ModelConfig, Options, PointCloud, Registrar, Search, Start, Weights};
 use clap::{Args, ValueEnum};
 use nalgebra::{Matrix4, Vector3};
