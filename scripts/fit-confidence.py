@@ -19,7 +19,7 @@ import numpy as np
 def features(e):
     rise = e["fitnessTight"] / e["fitnessCoarse"] if e["fitnessCoarse"] > 0 else 0.0
     return [e["fitness"], e["fitnessTight"], e["fitnessLoose"], e["fitnessCoarse"], e["overlapReverse"],
-            e["rmseRatio"], rise]
+            e["rmseRatio"], rise, e["ambiguity"]]
 
 
 def load(paths):

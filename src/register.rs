@@ -50,7 +50,8 @@ pub struct Options {
     /// which): the highest fitness at the final distance, ties going to the lower inlier RMSE, then
     /// to the earlier start ([`refine::choose`]). Each extra start costs one ICP run on at most
     /// [`refine::SCREEN_POINTS`] source points ([`Start::Turned`] and [`Start::TurnedInitial`] are
-    /// six each). Default `[Network, Centroids, Initial, Turned, TurnedInitial]`. On 1,000 fresh
+    /// six each; [`Start::Global`] up to five). Default `[Network, Centroids, Initial, Turned,
+    /// TurnedInitial, Global]`, searched as [`Options::search`] says. On 1,000 fresh
     /// validation pairs (`arps eval`, `make-pairs --seed 1`, the model shipped before session 7)
     /// `TurnedInitial` raised recall from 0.936 to 0.947 (11 pairs gained, none lost) and cut MRE
     /// from 4.3 to 3.9 degrees, for about 1.8 times the ICP time; on session 3's model,
@@ -376,7 +377,9 @@ impl Registrar {
         };
         let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations };
         let source_index = IcpTarget::new(&icp_src.points, false);
-        let judge = |t: &Matrix4<f64>| confidence::evidence(&target_index, &source_index, &icp_src.points, t, d_final);
+        let judge = |t: &Matrix4<f64>| {
+            confidence::evidence(&target_index, &source_index, &icp_src.points, t, d_final, options.icp)
+        };
         let mut hypotheses: Option<Vec<Matrix4<f64>>> = None;
         let mut global_ms = 0.0;
         let mut best: Option<(Candidate, Evidence, f64)> = None;
@@ -417,6 +420,10 @@ impl Registrar {
                         }
                     }
                 }
+            }
+            if options.icp == IcpKind::Off {
+                // nothing is refined or compared: the first start is the answer
+                starts.truncate(1);
             }
             if starts.is_empty() {
                 continue;

@@ -42,13 +42,7 @@ pub struct GlobalParams {
 
 impl Default for GlobalParams {
     fn default() -> Self {
-        let env = |k: &str, d: f64| std::env::var(k).ok().and_then(|v| v.parse().ok()).unwrap_or(d);
-        Self {
-            voxel_fraction: env("ARPS_GV", VOXEL_FRACTION),
-            max_iterations: 20_000,
-            hypotheses: env("ARPS_GH", 5.0) as usize,
-            seed: 0,
-        }
+        Self { voxel_fraction: VOXEL_FRACTION, max_iterations: 20_000, hypotheses: 5, seed: 0 }
     }
 }
 
