@@ -227,3 +227,58 @@ fn scan_fixture_pairs() {
         println!("pair {i}: {}", errs.join(" "));
     }
 }
+
+/// The radius search the descriptors use returns exactly the brute-force neighbourhood (capped
+/// to the nearest `max`), nearest first.
+#[test]
+fn radius_search_matches_brute_force() {
+    let (s, _, _) = fixture_pair(1);
+    let index = arps::spatial::KdIndex::new(&s.points);
+    let mut out = Vec::new();
+    for (qi, q) in s.points.iter().enumerate().step_by(37) {
+        for (r2, max) in [(0.01f32, 1000), (0.04, 1000), (0.04, 5), (0.0, 10)] {
+            index.within_into(q, r2, max, &mut out);
+            let mut brute: Vec<(usize, f32)> = s
+                .points
+                .iter()
+                .enumerate()
+                .map(|(i, p)| (i, (0..3).map(|a| (p[a] - q[a]) * (p[a] - q[a])).sum::<f32>()))
+                .filter(|e| e.1 <= r2)
+                .collect();
+            brute.sort_by(|a, b| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0)));
+            brute.truncate(max);
+            let d: Vec<f32> = out.iter().map(|e| e.1).collect();
+            let db: Vec<f32> = brute.iter().map(|e| e.1).collect();
+            assert_eq!(d, db, "query {qi}, r2 {r2}, max {max}");
+            assert!(out.iter().any(|e| e.0 == qi) || max < 10, "the query point itself is within any radius");
+        }
+    }
+}
+
+/// The confidence separates the truth from a pose 90 degrees off on fixture pairs, and the result
+/// warns when it is below 0.5.
+#[test]
+fn confidence_is_high_for_the_truth_and_low_for_a_wrong_pose() {
+    let mut reg = untrained();
+    for &i in &PAIRS {
+        let (s, t, gt) = fixture_pair(i);
+        let at = |m: &Matrix4<f64>| Options {
+            network: false,
+            icp: arps::IcpKind::Off,
+            initial_transform: Some(arps::transform::to_rows(m)),
+            starts: vec![Start::Initial],
+            ..Options::default()
+        };
+        let right = reg.register(&s, &t, &at(&gt)).unwrap();
+        let wrong = reg.register(&s, &t, &at(&(turn(Vector3::new(1.0, 1.0, 1.0), 90.0, [0.0; 3]) * gt))).unwrap();
+        assert!(
+            right.confidence > 0.5 && wrong.confidence < 0.5,
+            "pair {i}: {} vs {}",
+            right.confidence,
+            wrong.confidence
+        );
+        assert!(wrong.warnings.iter().any(|w| w.contains("low confidence")), "{:?}", wrong.warnings);
+        assert!(!right.warnings.iter().any(|w| w.contains("low confidence")), "{:?}", right.warnings);
+        assert!(right.evidence.fitness > wrong.evidence.fitness);
+    }
+}
