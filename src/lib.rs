@@ -20,9 +20,11 @@
 
 pub mod checks;
 pub mod cloud;
+pub mod confidence;
 #[cfg(feature = "cli")]
 pub mod data;
 pub mod error;
+pub mod global;
 pub mod gmr;
 pub mod icp;
 pub mod io;
@@ -48,5 +50,5 @@ pub use error::{Error, Result};
 pub use icp::IcpKind;
 pub use model::{Model, ModelConfig};
 pub use refine::Start;
-pub use register::{Options, Registrar, Registration, Stage, Timings};
+pub use register::{Options, Registrar, Registration, Search, Stage, Timings};
 pub use weights::{StoreAs, Weights};

@@ -33,7 +33,7 @@ pub fn estimate_normals(points: &[[f32; 3]], k: usize) -> Vec<[f32; 3]> {
 }
 
 /// The PCA normal of the points `idx` of `points`.
-fn normal_of(points: &[[f32; 3]], idx: impl Iterator<Item = usize> + Clone) -> [f32; 3] {
+pub fn normal_of(points: &[[f32; 3]], idx: impl Iterator<Item = usize> + Clone) -> [f32; 3] {
     let count = idx.clone().count();
     if count < 3 {
         return DEFAULT_NORMAL;

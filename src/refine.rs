@@ -32,14 +32,30 @@ pub enum Start {
     /// centroid (after the initial transform). Beside the network's turns, for pairs where the
     /// network's estimate is far off; with `network: false` it is [`Start::Turned`].
     TurnedInitial,
+    /// Up to [`crate::global::GlobalParams::hypotheses`] starts from global registration: FPFH
+    /// descriptors, mutual correspondences and a seeded RANSAC ([`crate::global::hypotheses`]),
+    /// for motions of any size. None when the descriptors match too little.
+    Global,
+    /// The [`Start::Global`] hypotheses, each refined by the network first (it estimates the
+    /// motion left after the hypothesis, which is what it is trained for); with `network: false`
+    /// it is [`Start::Global`].
+    GlobalNetwork,
 }
 
 impl Start {
     /// Every start, in declaration order.
-    pub const ALL: [Start; 5] = [Start::Network, Start::Centroids, Start::Initial, Start::Turned, Start::TurnedInitial];
+    pub const ALL: [Start; 7] = [
+        Start::Network,
+        Start::Centroids,
+        Start::Initial,
+        Start::Turned,
+        Start::TurnedInitial,
+        Start::Global,
+        Start::GlobalNetwork,
+    ];
 
     /// The name used in options and results (`"network"`, `"centroids"`, `"initial"`, `"turned"`,
-    /// `"turnedInitial"`).
+    /// `"turnedInitial"`, `"global"`, `"globalNetwork"`).
     pub fn name(self) -> &'static str {
         match self {
             Start::Network => "network",
@@ -47,7 +63,15 @@ impl Start {
             Start::Initial => "initial",
             Start::Turned => "turned",
             Start::TurnedInitial => "turnedInitial",
+            Start::Global => "global",
+            Start::GlobalNetwork => "globalNetwork",
         }
+    }
+
+    /// True for the starts from global registration ([`Start::Global`], [`Start::GlobalNetwork`]):
+    /// the last stage of the adaptive search.
+    pub fn is_global(self) -> bool {
+        matches!(self, Start::Global | Start::GlobalNetwork)
     }
 }
 
@@ -167,7 +191,7 @@ pub fn refine_best(
 
 /// `n` points of `points` (all of them if there are not more), evenly spaced in its order; the
 /// voxel grid's order (`sampling::voxel_downsample`) makes that an even spread in space.
-fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
+pub fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
     if points.len() <= n {
         return points.to_vec();
     }

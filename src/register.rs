@@ -1,12 +1,13 @@
 //! The registration pipeline: normalise, sample, network, GMR, ICP, de-normalise.
 
 use crate::cloud::{JointNormalization, NonFinite, PointCloud, MIN_POINTS};
+use crate::confidence::{self, Evidence};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Candidate, Refinement, Start};
 use crate::timing::{default_clock, Clock, Stopwatch};
 use crate::weights::Weights;
-use crate::{checks, gmr, limits, origin, sampling, transform, Error, Result};
+use crate::{checks, global, gmr, limits, origin, sampling, transform, Error, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -49,7 +50,8 @@ pub struct Options {
     /// which): the highest fitness at the final distance, ties going to the lower inlier RMSE, then
     /// to the earlier start ([`refine::choose`]). Each extra start costs one ICP run on at most
     /// [`refine::SCREEN_POINTS`] source points ([`Start::Turned`] and [`Start::TurnedInitial`] are
-    /// six each). Default `[Network, Centroids, Initial, Turned, TurnedInitial]`. On 1,000 fresh
+    /// six each; [`Start::Global`] up to five). Default `[Network, Centroids, Initial, Turned,
+    /// TurnedInitial, Global]`, searched as [`Options::search`] says. On 1,000 fresh
     /// validation pairs (`arps eval`, `make-pairs --seed 1`, the model shipped before session 7)
     /// `TurnedInitial` raised recall from 0.936 to 0.947 (11 pairs gained, none lost) and cut MRE
     /// from 4.3 to 3.9 degrees, for about 1.8 times the ICP time; on session 3's model,
@@ -61,7 +63,27 @@ pub struct Options {
     /// With `icp: Off` nothing is refined or compared: the first start is the answer (choosing
     /// among unrefined starts by fitness measured worse than taking the network's).
     pub starts: Vec<Start>,
+    /// How the starts are searched. Default [`Search::Adaptive`]: the first start alone, then the
+    /// other local starts, then the global ones ([`Start::is_global`]), stopping as soon as the
+    /// best answer's [`Registration::confidence`] reaches [`STOP_CONFIDENCE`].
+    /// [`Search::Exhaustive`] refines every start.
+    pub search: Search,
 }
+
+/// How [`Options::starts`] are searched.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+pub enum Search {
+    /// In stages, cheapest first, stopping at a confident answer: the first start; then the other
+    /// local starts; then the global starts. The best of everything refined is returned.
+    #[default]
+    Adaptive,
+    /// Every start is refined and the best returned.
+    Exhaustive,
+}
+
+/// [`Search::Adaptive`] stops once the best answer's confidence reaches this.
+pub const STOP_CONFIDENCE: f64 = 0.9;
 
 impl Default for Options {
     fn default() -> Self {
@@ -75,7 +97,15 @@ impl Default for Options {
             voxel_size: None,
             initial_transform: None,
             non_finite: NonFinite::Error,
-            starts: vec![Start::Network, Start::Centroids, Start::Initial, Start::Turned, Start::TurnedInitial],
+            starts: vec![
+                Start::Network,
+                Start::Centroids,
+                Start::Initial,
+                Start::Turned,
+                Start::TurnedInitial,
+                Start::Global,
+            ],
+            search: Search::Adaptive,
         }
     }
 }
@@ -104,6 +134,8 @@ pub struct Timings {
     pub gmr_ms: f64,
     /// ICP refinement of every start (normals, kd-tree, iterations) and the quality figures.
     pub icp_ms: f64,
+    /// Global hypotheses (descriptors, matching, RANSAC); 0 when no global start ran.
+    pub global_ms: f64,
     /// Everything.
     pub total_ms: f64,
 }
@@ -131,8 +163,15 @@ pub struct Registration {
     pub max_correspondence_distance: f64,
     /// Time per stage.
     pub timings: Timings,
-    /// Things the caller should know (input padded, low fitness, large rotation, ...).
+    /// Things the caller should know (input padded, low confidence, ...).
     pub warnings: Vec<String>,
+    /// The estimated probability that `T_target_source` is right, in [0, 1]
+    /// ([`crate::confidence::confidence`]); below 0.5 a warning says so.
+    pub confidence: f64,
+    /// What the confidence is computed from.
+    pub evidence: Evidence,
+    /// How many distinct starts were refined (after merging).
+    pub starts_refined: usize,
 }
 
 /// Holds a loaded model and reusable buffers; registers pairs of clouds.
@@ -153,8 +192,8 @@ const DEFAULT_MAX_CORRESPONDENCE: f64 = 0.025;
 /// this much; metres against millimetres is 1000.
 const SIZE_RATIO_WARNING: f64 = 10.0;
 
-/// Fitness below which a warning says the alignment may have failed.
-const LOW_FITNESS: f64 = 0.3;
+/// Confidence below which a warning says the alignment may be wrong.
+const LOW_CONFIDENCE: f64 = 0.5;
 
 impl Registrar {
     /// A registrar for given weights.
@@ -328,42 +367,125 @@ impl Registrar {
         progress(Stage::Refining);
         let with_normals = options.icp == IcpKind::Plane;
         let target_index = IcpTarget::new(&icp_tgt.points, with_normals);
-        let mut starts: Vec<(Start, Matrix4<f64>)> = Vec::with_capacity(options.starts.len());
         // the six turns of `base` through the source's centroid as `base` moves it
         let c = src_n.centroid();
         let turns = |base: &Matrix4<f64>| {
             let moved = base.transform_point(&nalgebra::Point3::new(c[0], c[1], c[2]));
             refine::turned(base, [moved.x, moved.y, moved.z], refine::TURN_DEGREES)
         };
+        // the starts as the options name them, with the network off mapped to what they become
+        let mut kinds: Vec<Start> = Vec::with_capacity(options.starts.len());
         for &start in &options.starts {
-            // without the network its start is the initial transform, and its turns are the initial's
             let start = match start {
                 Start::Network if !options.network => Start::Initial,
                 Start::TurnedInitial if !options.network => Start::Turned,
+                Start::GlobalNetwork if !options.network => Start::Global,
                 s => s,
             };
-            if starts.iter().any(|(s, _)| *s == start) {
-                continue;
+            if !kinds.contains(&start) {
+                kinds.push(start);
             }
-            let t = match start {
-                Start::Network => t_net_n,
-                Start::Initial => t_initial,
-                Start::Centroids => centroid_alignment(&src_n, &tgt_n),
-                Start::Turned | Start::TurnedInitial => {
-                    // t_net_n is the initial transform when the network is off
-                    let base = if start == Start::Turned { t_net_n } else { t_initial };
-                    starts.extend(turns(&base).map(|t| (start, t)));
-                    continue;
-                }
-            };
-            starts.push((start, t));
         }
         if options.icp == IcpKind::Off {
-            starts.truncate(1);
+            kinds.truncate(1);
         }
+        // stages of the search: the first start; the other local ones; the global ones
+        let stages: Vec<Vec<Start>> = match options.search {
+            Search::Exhaustive => vec![kinds.clone()],
+            Search::Adaptive => {
+                let first = kinds[..1].to_vec();
+                let local: Vec<Start> = kinds[1..].iter().copied().filter(|s| !s.is_global()).collect();
+                let global: Vec<Start> = kinds[1..].iter().copied().filter(|s| s.is_global()).collect();
+                [first, local, global].into_iter().filter(|s| !s.is_empty()).collect()
+            }
+        };
         let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations };
-        let chosen = refine::refine_best(&target_index, &icp_src.points, &starts, &how)
-            .ok_or_else(|| Error::InvalidOption("starts is empty".into()))?;
+        let source_index = IcpTarget::new(&icp_src.points, false);
+        let judge = |t: &Matrix4<f64>| {
+            confidence::evidence(&target_index, &source_index, &icp_src.points, t, d_final, options.icp)
+        };
+        let mut hypotheses: Option<Vec<Matrix4<f64>>> = None;
+        let mut global_ms = 0.0;
+        let mut best: Option<(Candidate, Evidence, f64)> = None;
+        let mut starts_refined = 0usize;
+        for stage in &stages {
+            let mut starts: Vec<(Start, Matrix4<f64>)> = Vec::with_capacity(stage.len() * 6);
+            for &start in stage {
+                match start {
+                    Start::Network => starts.push((start, t_net_n)),
+                    Start::Initial => starts.push((start, t_initial)),
+                    Start::Centroids => starts.push((start, centroid_alignment(&src_n, &tgt_n))),
+                    Start::Turned | Start::TurnedInitial => {
+                        // t_net_n is the initial transform when the network is off
+                        let base = if start == Start::Turned { t_net_n } else { t_initial };
+                        starts.extend(turns(&base).map(|t| (start, t)));
+                    }
+                    Start::Global | Start::GlobalNetwork => {
+                        let hyps = hypotheses.get_or_insert_with(|| {
+                            let mut w = Stopwatch::start(self.clock);
+                            let params = global::GlobalParams { seed: options.seed, ..Default::default() };
+                            let h = global::hypotheses(&src_n, &tgt_n, &params);
+                            global_ms += w.lap();
+                            h.iter().map(|h| h.T_target_source).collect()
+                        });
+                        if start == Start::Global {
+                            starts.extend(hyps.iter().map(|&t| (start, t)));
+                        } else {
+                            for &h in hyps.iter() {
+                                // the network estimates the motion left after the hypothesis
+                                let moved: Vec<[f32; 3]> =
+                                    net_src.points.iter().map(|&p| transform::apply(&h, p)).collect();
+                                let out = self.model.forward(&moved, &net_tgt.points, &mut self.workspace)?;
+                                let j = self.model.config.gaussians;
+                                let g_src = gmr::gmm_params(&moved, &out.gamma_source, j);
+                                let g_tgt = gmr::gmm_params(&net_tgt.points, &out.gamma_target, j);
+                                starts.push((start, gmr::solve(&g_src, &g_tgt) * h));
+                            }
+                        }
+                    }
+                }
+            }
+            if options.icp == IcpKind::Off {
+                // nothing is refined or compared: the first start is the answer
+                starts.truncate(1);
+            }
+            if starts.is_empty() {
+                continue;
+            }
+            starts_refined += starts.len();
+            let Some(c) = refine::refine_best(&target_index, &icp_src.points, &starts, &how) else { continue };
+            let better = match &best {
+                None => true,
+                Some((b, _, _)) => refine::choose(&[*b, c]) == Some(1),
+            };
+            if better {
+                let e = judge(&c.T_target_source);
+                best = Some((c, e, confidence::confidence(&e)));
+            }
+            if options.search == Search::Adaptive && best.as_ref().is_some_and(|b| b.2 >= STOP_CONFIDENCE) {
+                break;
+            }
+        }
+        // no start at all (only global ones, and the descriptors matched too little): the first
+        // start the options name, unrefined
+        let (chosen, evidence, confidence) = match best {
+            Some(b) => b,
+            None => {
+                let t = if options.network { t_net_n } else { t_initial };
+                let start = if options.network { Start::Network } else { Start::Initial };
+                let e = judge(&t);
+                warnings.push("no start could be refined (the global descriptors matched too little): the answer is the network's estimate".into());
+                let c = Candidate {
+                    start,
+                    T_target_source: t,
+                    fitness: e.fitness,
+                    inlier_rmse: e.rmse_ratio * d_final,
+                    iterations: 0,
+                    converged: false,
+                };
+                (c, e, confidence::confidence(&e))
+            }
+        };
         let Candidate { start, T_target_source: t_n, fitness, inlier_rmse: rmse_n, iterations, converged } = chosen;
         let icp_ms = watch.lap();
 
@@ -373,11 +495,11 @@ impl Registrar {
         let T_target_source_network = to_caller(&t_net_n);
         checks::finite_transform(&T_target_source, "the result")?;
         checks::finite_transform(&T_target_source_network, "the network's estimate")?;
-        if fitness < LOW_FITNESS {
+        if confidence < LOW_CONFIDENCE {
             warnings.push(format!(
-                "low fitness {fitness:.2}: fewer than {:.0}% of source points found a target point within {:.3}; the alignment may have failed (the method is local: rotations beyond about 45 degrees per axis are outside its training range)",
-                LOW_FITNESS * 100.0,
-                d_final * s
+                "low confidence {confidence:.2}: the alignment may be wrong (fitness {fitness:.2} within {:.3}, reverse overlap {:.2})",
+                d_final * s,
+                evidence.overlap_reverse
             ));
         }
         Ok(Registration {
@@ -389,8 +511,18 @@ impl Registrar {
             icp_iterations: iterations,
             icp_converged: converged,
             max_correspondence_distance: d_final * s,
-            timings: Timings { preprocess_ms, network_ms, gmr_ms, icp_ms, total_ms: total.lap() },
+            timings: Timings {
+                preprocess_ms,
+                network_ms,
+                gmr_ms,
+                icp_ms: icp_ms - global_ms,
+                global_ms,
+                total_ms: total.lap(),
+            },
             warnings,
+            confidence,
+            evidence,
+            starts_refined,
         })
     }
 }

@@ -213,6 +213,61 @@ impl KdIndex {
             e.0 = self.ids[e.0] as usize;
         }
     }
+
+    /// The indexed points within squared distance `max_d2` of `q` (`<=`), at most `max` of them
+    /// (the nearest `max` when there are more), written into `out` (cleared first) as
+    /// `(index, squared distance)`, nearest first. Allocation-free once `out` has the capacity
+    /// of the neighbourhood; cheaper than [`KdIndex::knn_into`] when `max` is large.
+    pub fn within_into(&self, q: &[f32; 3], max_d2: f32, max: usize, out: &mut Vec<(usize, f32)>) {
+        out.clear();
+        if self.nodes.is_empty() || max == 0 || max_d2.is_nan() {
+            return;
+        }
+        let mut stack = [Pending::ROOT; STACK];
+        let mut sp = 1usize;
+        while sp > 0 {
+            sp -= 1;
+            let Pending { node, rd, off } = stack[sp];
+            if rd > max_d2 {
+                continue;
+            }
+            let mut ni = node;
+            loop {
+                let n = self.nodes[ni as usize];
+                if n.dim == IS_LEAF {
+                    let leaf = &self.pts[n.a as usize..n.b as usize];
+                    for (i, p) in (n.a as usize..).zip(leaf) {
+                        let d2 = dist2(p, q);
+                        if d2 <= max_d2 {
+                            out.push((i, d2));
+                        }
+                    }
+                    break;
+                }
+                let d = n.dim as usize;
+                let diff = q[d] - n.split;
+                let (near, far) = if diff < 0.0 { (n.a, n.b) } else { (n.b, n.a) };
+                let far_rd = rd - off[d] * off[d] + diff * diff;
+                if far_rd <= max_d2 {
+                    let mut far_off = off;
+                    far_off[d] = diff;
+                    stack[sp] = Pending { node: far, rd: far_rd, off: far_off };
+                    sp += 1;
+                }
+                ni = near;
+            }
+        }
+        // nearest first, ties by index: the same neighbourhood whatever the traversal order
+        let by = |a: &(usize, f32), b: &(usize, f32)| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0));
+        if out.len() > max {
+            out.select_nth_unstable_by(max - 1, by);
+            out.truncate(max);
+        }
+        out.sort_unstable_by(by);
+        for e in out.iter_mut() {
+            e.0 = self.ids[e.0] as usize;
+        }
+    }
 }
 
 #[inline(always)]

@@ -5,7 +5,7 @@
 use std::path::Path;
 use std::process::Command;
 
-const METHODS: [&str; 7] = [
+const METHODS: [&str; 10] = [
     "network",
     "network + ICP",
     "network + multi-start ICP",
@@ -13,6 +13,9 @@ const METHODS: [&str; 7] = [
     "ICP from identity",
     "ICP from centroids",
     "untrained network + ICP",
+    "FPFH + RANSAC + ICP",
+    "FPFH + RANSAC + network + ICP",
+    "exhaustive multi-start ICP",
 ];
 
 fn arps(args: &[&str]) -> (bool, String, String) {
@@ -75,7 +78,8 @@ fn eval_json_and_perturbation() {
     let first = &v["per_pair"][0]["results"];
     assert_eq!(first[1]["start"], "network");
     assert!(
-        ["network", "centroids", "initial", "turned", "turnedInitial"].contains(&first[2]["start"].as_str().unwrap()),
+        ["network", "centroids", "initial", "turned", "turnedInitial", "global"]
+            .contains(&first[2]["start"].as_str().unwrap()),
         "{first}"
     );
     assert_eq!(first[4]["start"], "initial");
@@ -115,6 +119,41 @@ fn make_pairs_writes_a_set_that_eval_reads() {
     let (ok, out, err) = arps(&["eval", dir.join("pairs.tsv").to_str().unwrap(), "--limit", "1"]);
     assert!(ok, "{out}{err}");
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// `--rotation-range 180` (an alias of `--max-angle`) makes any-pose pairs: the relative
+/// rotation reaches past 90 degrees; ranges outside [0, 180] are refused with a clear error.
+#[test]
+fn make_pairs_makes_any_pose_pairs_and_checks_the_range() {
+    let dir = std::env::temp_dir().join(format!("arps-any-pose-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let d = dir.to_str().unwrap();
+    let (ok, out, err) = arps(&[
+        "make-pairs",
+        "--out",
+        d,
+        "--count",
+        "8",
+        "--seed",
+        "2",
+        "--procedural-only",
+        "--rotation-range",
+        "180",
+    ]);
+    assert!(ok, "{out}{err}");
+    let entries = arps::data::manifest::parse(&std::fs::read_to_string(dir.join("pairs.tsv")).unwrap()).unwrap();
+    let angles: Vec<f64> = entries.iter().map(|e| arps::transform::rotation_angle_deg(&e.T_target_source)).collect();
+    assert!(angles.iter().any(|&a| a > 90.0), "{angles:?}");
+    let sidecar: arps::data::manifest::Sidecar =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("pairs.json")).unwrap()).unwrap();
+    assert_eq!(sidecar.params.max_angle_deg, 180.0);
+    let _ = std::fs::remove_dir_all(&dir);
+    for bad in ["200", "-1", "NaN"] {
+        let arg = format!("--rotation-range={bad}");
+        let (ok, _, err) = arps(&["make-pairs", "--out", d, "--count", "1", &arg]);
+        assert!(!ok && err.contains("--max-angle") && err.contains("[0, 180]"), "{bad}: {err}");
+        assert!(!dir.exists(), "nothing written for {bad}");
+    }
 }
 
 /// Real manifests store the truth to a few digits (`../shared/data/scans/pairs.tsv`): a ground

@@ -185,7 +185,7 @@ fn empty_or_repeated_starts_are_errors_and_names_parse() {
     assert!(e.contains("identity") && e.contains("centroids"), "{e}");
     assert_eq!(
         Options::default().starts,
-        vec![Start::Network, Start::Centroids, Start::Initial, Start::Turned, Start::TurnedInitial]
+        vec![Start::Network, Start::Centroids, Start::Initial, Start::Turned, Start::TurnedInitial, Start::Global]
     );
     let o: Options = serde_json::from_str(r#"{"starts": ["turned", "turnedInitial"]}"#).unwrap();
     assert_eq!(o.starts, vec![Start::Turned, Start::TurnedInitial]);

@@ -56,7 +56,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       assert.ok(res.networkMatrix instanceof Float32Array && res.networkMatrix.length === 16);
       for (const k of ["fitness", "inlierRmse", "iterations", "maxCorrespondenceDistance"]) assert.equal(typeof res[k], "number", k);
       assert.equal(typeof res.converged, "boolean");
-      assert.ok(["network", "centroids", "initial", "turned", "turnedInitial"].includes(res.start), `start ${res.start}`);
+      assert.ok(["network", "centroids", "initial", "turned", "turnedInitial", "global"].includes(res.start), `start ${res.start}`);
       for (const k of ["preprocessMs", "networkMs", "gmrMs", "icpMs", "totalMs"]) assert.equal(typeof res.timingsMs[k], "number", k);
       assert.ok(res.timingsMs.totalMs > 0);
       assert.ok(Array.isArray(res.warnings));

@@ -122,6 +122,17 @@ pub fn check_pose_angle(deg: f64) -> std::result::Result<f64, String> {
     }
 }
 
+/// Checks a [`PairParams::max_angle_deg`] given by a user (the range of the relative rotation's
+/// Euler angles): a finite angle in [0, 180] degrees (180: any relative rotation). The error
+/// message starts with the value (`"200: expected ..."`).
+pub fn check_max_angle(deg: f64) -> std::result::Result<f64, String> {
+    if deg.is_finite() && (0.0..=180.0).contains(&deg) {
+        Ok(deg)
+    } else {
+        Err(format!("{deg}: expected degrees in [0, 180] (180: any relative rotation)"))
+    }
+}
+
 /// Normalises a cloud as the protocol does for a full shape: bounding-box centre to the origin,
 /// largest half-extent to 1. Returns the cloud and the `(centre, scale)` used.
 pub fn normalize_shape(cloud: &PointCloud) -> (PointCloud, [f64; 3], f64) {

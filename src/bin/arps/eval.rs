@@ -14,7 +14,16 @@
 //! * `ICP from centroids`: the network skipped, ICP started at the translation that aligns the
 //!   two clouds' centroids (`starts: [initial]`);
 //! * `untrained network + ICP`: random weights (`Weights::random(&ModelConfig::web(), 0)`),
-//!   `starts: [network]`.
+//!   `starts: [network]`;
+//! * `FPFH + RANSAC + ICP`: global hypotheses only (`network: false`, `starts: [global]`);
+//! * `FPFH + RANSAC + network + ICP`: each hypothesis refined by the network, then ICP
+//!   (`starts: [globalNetwork]`);
+//! * `exhaustive multi-start ICP`: the multi-start method's starts, every one refined
+//!   (`search: exhaustive`) instead of the adaptive search.
+//!
+//! Confidence: for every method, the share of wrong answers (missed recall) whose
+//! `confidence` is below 0.5 and the share of right answers whose is; the JSON carries each
+//! answer's confidence and evidence.
 //!
 //! Failures that fit as well as the truth: for every pair the truth is refined too (ICP started
 //! at the ground truth, same settings), and a failed estimate whose fitness is at least that
@@ -28,10 +37,11 @@
 //! [`arps::cloud::JointNormalization`] picks it), so the 0.2 threshold means 20% of that.
 
 use arps::cloud::JointNormalization;
+use arps::confidence::Evidence;
 use arps::data::manifest;
 use arps::data::metrics::{ambiguous_miss, pair_error, recall_svg, recalled, summarize, PairError, Summary};
 use arps::transform::{euler_xyz, from_rotation_translation, rigid_inverse, to_rows};
-use arps::{io, ModelConfig, Options, PointCloud, Registrar, Start, Weights};
+use arps::{io, ModelConfig, Options, PointCloud, Registrar, Search, Start, Weights};
 use clap::{Args, ValueEnum};
 use nalgebra::{Matrix4, Vector3};
 use rand::Rng;
@@ -105,9 +115,15 @@ pub enum Method {
     IcpCentroids,
     /// `untrained network + ICP`.
     UntrainedIcp,
+    /// `FPFH + RANSAC + ICP`.
+    Global,
+    /// `FPFH + RANSAC + network + ICP`.
+    GlobalNetwork,
+    /// `exhaustive multi-start ICP`.
+    Exhaustive,
 }
 
-const METHODS: [Method; 7] = [
+const METHODS: [Method; 10] = [
     Method::Network,
     Method::NetworkIcp,
     Method::MultiStart,
@@ -115,6 +131,9 @@ const METHODS: [Method; 7] = [
     Method::IcpIdentity,
     Method::IcpCentroids,
     Method::UntrainedIcp,
+    Method::Global,
+    Method::GlobalNetwork,
+    Method::Exhaustive,
 ];
 
 impl Method {
@@ -128,11 +147,14 @@ impl Method {
             Method::IcpIdentity => "ICP from identity",
             Method::IcpCentroids => "ICP from centroids",
             Method::UntrainedIcp => "untrained network + ICP",
+            Method::Global => "FPFH + RANSAC + ICP",
+            Method::GlobalNetwork => "FPFH + RANSAC + network + ICP",
+            Method::Exhaustive => "exhaustive multi-start ICP",
         }
     }
     /// True for the methods that refine several starts.
     fn multi_start(self) -> bool {
-        matches!(self, Method::MultiStart | Method::MultiStartNoNetwork)
+        matches!(self, Method::MultiStart | Method::MultiStartNoNetwork | Method::Exhaustive)
     }
     /// The one place that says how each method calls the pipeline; `starts` are the multi-start
     /// method's.
@@ -143,6 +165,9 @@ impl Method {
             Method::Network => Options { icp: arps::IcpKind::Off, ..single(Start::Network) },
             Method::NetworkIcp | Method::UntrainedIcp => single(Start::Network),
             Method::MultiStart => Options { starts: starts.to_vec(), ..base },
+            Method::Exhaustive => Options { starts: starts.to_vec(), search: Search::Exhaustive, ..base },
+            Method::Global => Options { network: false, search: Search::Exhaustive, ..single(Start::Global) },
+            Method::GlobalNetwork => Options { search: Search::Exhaustive, ..single(Start::GlobalNetwork) },
             Method::MultiStartNoNetwork => {
                 Options { network: false, starts: vec![Start::Centroids, Start::Initial, Start::Turned], ..base }
             }
@@ -186,6 +211,8 @@ struct PairResult {
     fitness: Vec<Option<f64>>,
     /// The fitness of the truth, refined by ICP from the ground-truth pose.
     gt_fitness: f64,
+    /// Each method's confidence and its evidence (`None` when it failed).
+    confidence: Vec<Option<(f64, Evidence)>>,
 }
 
 impl PairResult {
@@ -209,6 +236,10 @@ struct MethodSummary {
     failed: usize,
     /// Pairs missed with a fit at least as good as the truth's ([`PairResult::ambiguous`]).
     ambiguous: usize,
+    /// Share of the missed pairs whose confidence is below 0.5 (`NaN` when none was missed).
+    wrong_doubted: f64,
+    /// Share of the recalled pairs whose confidence is below 0.5 (`NaN` when none was recalled).
+    right_doubted: f64,
 }
 
 pub fn run(a: EvalArgs) -> Result<(), String> {
@@ -273,6 +304,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             start: Vec::new(),
             fitness: Vec::new(),
             gt_fitness,
+            confidence: Vec::new(),
         };
         for &m in &methods {
             let options = m.options(&source, &target, &starts);
@@ -281,10 +313,11 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             let out = reg.register(&source, &target, &options);
             r.ms.push(t0.elapsed().as_secs_f64() * 1e3);
             // a failed registration counts as the identity (no estimate), and is reported
-            let (pred, fail, start, fitness) = match out {
-                Ok(x) => (x.T_target_source, None, Some(x.start), Some(x.fitness)),
-                Err(err) => (Matrix4::identity(), Some(err.to_string()), None, None),
+            let (pred, fail, start, fitness, conf) = match out {
+                Ok(x) => (x.T_target_source, None, Some(x.start), Some(x.fitness), Some((x.confidence, x.evidence))),
+                Err(err) => (Matrix4::identity(), Some(err.to_string()), None, None, None),
             };
+            r.confidence.push(conf);
             r.errors.push(pair_error(&pred, &gt, scale));
             r.failed.push(fail);
             r.start.push(start);
@@ -311,6 +344,8 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
                 errors,
                 failed: results.iter().filter(|r| r.failed[i].is_some()).count(),
                 ambiguous: results.iter().filter(|r| r.ambiguous(i, a.rot_threshold, a.trans_threshold)).count(),
+                wrong_doubted: doubted(&results, i, false, a.rot_threshold, a.trans_threshold),
+                right_doubted: doubted(&results, i, true, a.rot_threshold, a.trans_threshold),
             }
         })
         .collect();
@@ -350,6 +385,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "ambiguity_margin": AMBIGUITY_MARGIN,
             "methods": per_method.iter().map(|m| serde_json::json!({
                 "name": m.name, "summary": m.summary, "failed": m.failed, "fit_ge_gt": m.ambiguous,
+                "wrong_below_half": m.wrong_doubted, "right_below_half": m.right_doubted,
             })).collect::<Vec<_>>(),
             "per_pair": results.iter().map(|r| serde_json::json!({
                 "name": r.name,
@@ -362,6 +398,8 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
                     "ms": r.ms[i],
                     "start": r.start[i],
                     "fitness": r.fitness[i],
+                    "confidence": r.confidence[i].map(|c| c.0),
+                    "evidence": r.confidence[i].map(|c| c.1),
                     "error": r.failed[i],
                 })).collect::<Vec<_>>(),
             })).collect::<Vec<_>>(),
@@ -422,6 +460,14 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             m.ambiguous
         );
     }
+    for m in &per_method {
+        out!(
+            "  {}: confidence < 0.5 on {} of wrong answers, {} of right answers",
+            m.name,
+            num(m.wrong_doubted, 3),
+            num(m.right_doubted, 3)
+        );
+    }
     let wins = |i: usize, start: Start| results.iter().filter(|r| r.start[i] == Some(start)).count();
     for (i, m) in methods.iter().enumerate().filter(|(_, m)| m.multi_start()) {
         let counts: Vec<String> = Start::ALL
@@ -443,4 +489,16 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         out!("  curves: {}", p.display());
     }
     Ok(())
+}
+
+/// Among the pairs method `i` answered right (`right`) or wrong, the share whose confidence is
+/// below 0.5 (a failed call counts as wrong with confidence 0); `NaN` when there are none.
+fn doubted(results: &[PairResult], i: usize, right: bool, rot_thr: f64, trans_thr: f64) -> f64 {
+    let group: Vec<&PairResult> =
+        results.iter().filter(|r| recalled(&r.errors[i], rot_thr, trans_thr) == right).collect();
+    if group.is_empty() {
+        return f64::NAN;
+    }
+    let low = group.iter().filter(|r| r.confidence[i].map_or(0.0, |c| c.0) < 0.5).count();
+    low as f64 / group.len() as f64
 }

@@ -24,6 +24,14 @@ struct Cli {
 }
 
 #[derive(Clone, Copy, ValueEnum)]
+enum SearchArg {
+    /// The first start, then the other local starts, then the global ones, stopping at a confident answer.
+    Adaptive,
+    /// Every start refined, the best by fitness.
+    Exhaustive,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
 enum IcpArg {
     /// Point-to-point ICP.
     Point,
@@ -57,10 +65,14 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
         /// Where ICP starts from, comma-separated, from network, centroids, initial, turned,
-        /// turnedInitial; the best refinement by fitness wins
+        /// turnedInitial, global, globalNetwork; the best refinement by fitness wins
         /// [default: the engine's `Options::starts`].
         #[arg(long, value_delimiter = ',')]
         starts: Option<Vec<Start>>,
+        /// Search the starts in stages and stop at a confident answer (adaptive), or refine
+        /// them all (exhaustive).
+        #[arg(long, value_enum, default_value_t = SearchArg::Adaptive)]
+        search: SearchArg,
         /// Drop NaN/Inf points instead of failing.
         #[arg(long)]
         drop_non_finite: bool,
@@ -139,6 +151,7 @@ fn run(command: Command) -> Result<(), String> {
             network_points,
             seed,
             starts,
+            search,
             drop_non_finite,
             json,
         } => {
@@ -157,6 +170,10 @@ fn run(command: Command) -> Result<(), String> {
                 seed,
                 non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
                 starts: starts.unwrap_or_else(|| Options::default().starts),
+                search: match search {
+                    SearchArg::Adaptive => arps::Search::Adaptive,
+                    SearchArg::Exhaustive => arps::Search::Exhaustive,
+                },
                 ..Options::default()
             };
             let r = registrar.register(&src, &tgt, &options).map_err(|e| e.to_string())?;
@@ -167,6 +184,8 @@ fn run(command: Command) -> Result<(), String> {
                     "T_target_source_network": transform::to_rows(&r.T_target_source_network),
                     "start": r.start,
                     "fitness": r.fitness,
+                    "confidence": r.confidence,
+                    "evidence": r.evidence,
                     "inlier_rmse": r.inlier_rmse,
                     "icp_iterations": r.icp_iterations,
                     "icp_converged": r.icp_converged,
@@ -195,6 +214,7 @@ fn run(command: Command) -> Result<(), String> {
                     r.icp_iterations,
                     if r.icp_converged { "converged" } else { "not converged" }
                 );
+                out!("confidence {:.3}", r.confidence);
                 let t = r.timings;
                 out!(
                     "time {time_ms:.1} ms (read+all); preprocess {:.1}, network {:.1}, GMR {:.2}, ICP {:.1} ms",

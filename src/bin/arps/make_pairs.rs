@@ -5,7 +5,7 @@
 
 use arps::data::bank;
 use arps::data::manifest::{self, Entry, PairMeta, Sidecar};
-use arps::data::pairs::check_pose_angle;
+use arps::data::pairs::{check_max_angle, check_pose_angle};
 use arps::data::source::{ShapeSource, Split};
 use arps::data::PairParams;
 use arps::{io, PointCloud};
@@ -46,8 +46,9 @@ pub struct MakePairsArgs {
     /// Probability that a pair uses a bank shape (when the split has any).
     #[arg(long, default_value_t = 0.3)]
     bank_fraction: f64,
-    /// Euler angle range, degrees (each angle in [-a, a]).
-    #[arg(long, default_value_t = 45.0)]
+    /// Range of the relative rotation (source to target), degrees: each Euler angle in [-a, a].
+    /// 45 is the paper's protocol; 180 gives any-pose pairs (any relative rotation).
+    #[arg(long, visible_alias = "rotation-range", default_value_t = 45.0)]
     max_angle: f64,
     /// Maximum translation, normalised units.
     #[arg(long, default_value_t = 0.5)]
@@ -69,6 +70,7 @@ const OVERLAP_THRESHOLD: f64 = 0.05;
 
 pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let pose_angle_deg = check_pose_angle(a.pose_angle).map_err(|e| format!("--pose-angle {e}"))?;
+    let max_angle_deg = check_max_angle(a.max_angle).map_err(|e| format!("--max-angle {e}"))?;
     let mut source = match (&a.bank, a.procedural_only) {
         (Some(dir), false) => {
             let b = bank::load_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -86,7 +88,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
         SplitArg::Train => Split::Train,
     };
     let params = PairParams {
-        max_angle_deg: a.max_angle,
+        max_angle_deg,
         max_translation: a.max_translation,
         noise_sigma: a.noise,
         points: a.points,

@@ -1,0 +1,186 @@
+//! Fast Point Feature Histograms (Rusu et al. 2009), the descriptor Open3D computes
+//! (`pipelines/registration/Feature.cpp`): per point, a 33-bin histogram of the Darboux-frame
+//! angles to its neighbours (three angle features, 11 bins each), re-weighted by the neighbours'
+//! own histograms.
+//!
+//! Neighbourhoods are the `k` nearest points within a radius (the crate's [`KdIndex`]); normals
+//! are PCA normals oriented away from the cloud's centroid, which turns with the cloud, so the
+//! signed angle features agree between two views of one surface.
+
+use crate::spatial::KdIndex;
+
+/// Bins per angle feature.
+pub const BINS: usize = 11;
+/// Length of a descriptor: three features of [`BINS`] bins.
+pub const DIM: usize = 3 * BINS;
+/// One descriptor.
+pub type Descriptor = [f32; DIM];
+
+/// Where the neighbourhoods of [`describe`] end.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FpfhParams {
+    /// Normals: PCA over the neighbours within this radius (at most [`FpfhParams::normal_max`]).
+    pub normal_radius: f64,
+    /// Most neighbours of a normal.
+    pub normal_max: usize,
+    /// Histograms: neighbours within this radius (at most [`FpfhParams::feature_max`]).
+    pub feature_radius: f64,
+    /// Most neighbours of a histogram.
+    pub feature_max: usize,
+}
+
+impl FpfhParams {
+    /// Open3D's tutorial settings for voxel size `v`: normals within `2v` (at most 30
+    /// neighbours), histograms within `5v` (at most 100).
+    pub fn for_voxel(v: f64) -> Self {
+        Self { normal_radius: 2.0 * v, normal_max: 30, feature_radius: 5.0 * v, feature_max: 100 }
+    }
+}
+
+/// The `max` nearest points of `q` within `radius` (the point itself included), into `out`.
+fn neighbours(index: &KdIndex, q: &[f32; 3], radius: f64, max: usize, out: &mut Vec<(usize, f32)>) {
+    index.within_into(q, (radius * radius) as f32, max, out);
+}
+
+/// Unit normals (PCA over each point's radius neighbourhood, at least its 3 nearest points),
+/// each oriented away from the cloud's centroid.
+pub fn oriented_normals(points: &[[f32; 3]], index: &KdIndex, radius: f64, max: usize) -> Vec<[f32; 3]> {
+    let n = points.len().max(1) as f64;
+    let mut c = [0.0f64; 3];
+    for p in points {
+        for a in 0..3 {
+            c[a] += p[a] as f64 / n;
+        }
+    }
+    let mut nb = Vec::with_capacity(max + 1);
+    let mut near = Vec::with_capacity(4);
+    points
+        .iter()
+        .map(|q| {
+            neighbours(index, q, radius, max.max(3), &mut nb);
+            if nb.len() < 3 {
+                index.knn_into(q, 3, &mut near);
+                nb.clone_from(&near);
+            }
+            let mut normal = crate::normals::normal_of(points, nb.iter().map(|e| e.0));
+            let out = [0, 1, 2].map(|a| q[a] as f64 - c[a]);
+            let dot: f64 = (0..3).map(|a| normal[a] as f64 * out[a]).sum();
+            if dot < 0.0 {
+                normal = normal.map(|v| -v);
+            }
+            normal
+        })
+        .collect()
+}
+
+fn sub(a: &[f32; 3], b: &[f32; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|i| a[i] as f64 - b[i] as f64)
+}
+fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+fn f64s(v: &[f32; 3]) -> [f64; 3] {
+    v.map(|x| x as f64)
+}
+
+/// The three angle features of a point pair (Open3D's `ComputePairFeatures`): `(f1, f2, f3)`
+/// with `f1` in `[-pi, pi]`, `f2` and `f3` in `[-1, 1]`; `None` for coincident points or a
+/// degenerate frame.
+pub fn pair_features(p1: &[f32; 3], n1: &[f32; 3], p2: &[f32; 3], n2: &[f32; 3]) -> Option<[f64; 3]> {
+    let mut d = sub(p2, p1);
+    let len = dot(&d, &d).sqrt();
+    if len == 0.0 {
+        return None;
+    }
+    let (mut a, mut b) = (f64s(n1), f64s(n2));
+    let angle1 = dot(&a, &d) / len;
+    let angle2 = dot(&b, &d) / len;
+    // acos(|angle1|) > acos(|angle2|), acos being decreasing
+    let f3 = if angle1.abs() < angle2.abs() {
+        std::mem::swap(&mut a, &mut b);
+        d = d.map(|v| -v);
+        -angle2
+    } else {
+        angle1
+    };
+    let v = cross(&d, &a);
+    let vn = dot(&v, &v).sqrt();
+    if vn == 0.0 {
+        return None;
+    }
+    let v = v.map(|x| x / vn);
+    let w = cross(&a, &v);
+    let f2 = dot(&v, &b);
+    let f1 = dot(&w, &b).atan2(dot(&a, &b));
+    Some([f1, f2, f3])
+}
+
+fn bin(x: f64, lo: f64, hi: f64) -> usize {
+    let i = ((x - lo) / (hi - lo) * BINS as f64).floor();
+    if i.is_nan() {
+        0
+    } else {
+        (i.max(0.0) as usize).min(BINS - 1)
+    }
+}
+
+/// The FPFH descriptor of every point (Open3D's definition: SPFH in percent per feature, then
+/// each point's SPFH plus the inverse-squared-distance weighted sum of its neighbours' SPFH, each
+/// feature's block of that sum scaled to 100). `normals` are unit normals, one per point.
+/// Points without neighbours get an all-zero descriptor.
+pub fn describe(points: &[[f32; 3]], normals: &[[f32; 3]], index: &KdIndex, params: &FpfhParams) -> Vec<Descriptor> {
+    let mut nb = Vec::with_capacity(params.feature_max + 1);
+    // SPFH, and each point's neighbourhood (kept: reused by the weighting pass)
+    let mut spfh = vec![[0.0f32; DIM]; points.len()];
+    let mut lists: Vec<(u32, u32)> = Vec::with_capacity(points.len());
+    let mut flat: Vec<(u32, f32)> = Vec::new();
+    for (i, q) in points.iter().enumerate() {
+        neighbours(index, q, params.feature_radius, params.feature_max + 1, &mut nb);
+        let start = flat.len() as u32;
+        flat.extend(nb.iter().filter(|e| e.0 != i).map(|e| (e.0 as u32, e.1)));
+        lists.push((start, flat.len() as u32));
+        let others = &flat[start as usize..];
+        if others.is_empty() {
+            continue;
+        }
+        let inc = 100.0 / others.len() as f32;
+        let h = &mut spfh[i];
+        for &(j, _) in others {
+            let j = j as usize;
+            if let Some([f1, f2, f3]) = pair_features(q, &normals[i], &points[j], &normals[j]) {
+                h[bin(f1, -std::f64::consts::PI, std::f64::consts::PI)] += inc;
+                h[BINS + bin(f2, -1.0, 1.0)] += inc;
+                h[2 * BINS + bin(f3, -1.0, 1.0)] += inc;
+            }
+        }
+    }
+    lists
+        .iter()
+        .enumerate()
+        .map(|(i, &(a, b))| {
+            let mut f = [0.0f32; DIM];
+            let mut sum = [0.0f32; 3];
+            for &(j, d2) in &flat[a as usize..b as usize] {
+                if d2 <= 0.0 {
+                    continue;
+                }
+                let inv = 1.0 / d2;
+                let h = &spfh[j as usize];
+                for (k, (acc, &v)) in f.iter_mut().zip(h.iter()).enumerate() {
+                    let v = v * inv;
+                    *acc += v;
+                    sum[k / BINS] += v;
+                }
+            }
+            let mut out = [0.0f32; DIM];
+            for k in 0..DIM {
+                let s = if sum[k / BINS] != 0.0 { 100.0 / sum[k / BINS] } else { 0.0 };
+                out[k] = f[k] * s + spfh[i][k];
+            }
+            out
+        })
+        .collect()
+}
