@@ -274,7 +274,8 @@ pub struct JointNormalization {
 }
 
 impl JointNormalization {
-    /// Computes the normalisation of a (validated) pair.
+    /// Computes the normalisation of a (validated) pair, from their `points` (the offsets from
+    /// their origins: the pipeline normalises each cloud's local frame).
     pub fn of_pair(source: &PointCloud, target: &PointCloud) -> Self {
         let box_of = |c: &PointCloud| {
             let (lo, hi) = c.bounds();
@@ -349,6 +350,30 @@ mod tests {
         let same = PointCloud::new(vec![[1.0, 1.0, 1.0]; 30]);
         assert!(same.validated("source", MIN_POINTS, NonFinite::Error).is_err());
         assert!(PointCloud::default().validated("source", MIN_POINTS, NonFinite::Error).is_err());
+    }
+
+    #[test]
+    fn origins_carry_large_coordinates_through_transforms_and_validation() {
+        let far: Vec<[f64; 3]> =
+            (0..40).map(|i| [5e6 + (i % 7) as f64 * 0.01, 4e6 + (i % 5) as f64 * 0.02, 0.5]).collect();
+        let c = PointCloud::from_points_f64(&far);
+        assert!(!c.origin_is_zero());
+        assert!((0..40).all(|i| (0..3).all(|a| (c.point_f64(i)[a] - far[i][a]).abs() < 1e-6)));
+        let m = from_rotation_translation(&euler_xyz(0.3, -0.1, 0.2), &Vector3::new(12.0, -3.0, 7.0));
+        let moved = c.transformed(&m);
+        for (i, p) in far.iter().enumerate() {
+            let want = m.transform_point(&nalgebra::Point3::from(*p));
+            let got = moved.point_f64(i);
+            assert!((0..3).all(|a| (got[a] - want[a]).abs() < 1e-6), "{got:?} vs {want:?}");
+        }
+        let mut bad = c.clone();
+        bad.points[3][0] = f32::NAN;
+        let kept = bad.validated("source", MIN_POINTS, NonFinite::Drop).unwrap();
+        assert_eq!((kept.len(), kept.origin), (39, c.origin));
+        assert_eq!(c.clone().into_local().origin, [0.0; 3]);
+        // near zero, nothing changes: origin zero, the points as given
+        let near = PointCloud::from_points_f64(&[[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]);
+        assert_eq!((near.origin, near.points.clone()), ([0.0; 3], vec![[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]));
     }
 
     #[test]
