@@ -227,8 +227,15 @@ impl PointCloud {
     }
 }
 
+/// Largest half-extent for which [`PointCloud::from_points_f64`] recentres: beyond it the
+/// offsets would not fit `f32` (whose largest value is 3.4e38) and finite points would become
+/// infinite, so such a cloud keeps origin zero (its points beyond `f32`'s range are infinite as
+/// they would be anyway).
+const MAX_OFFSET: f64 = 1e37;
+
 /// The origin [`PointCloud::from_points_f64`] picks: the bounding-box centre of the finite points
-/// when it is more than [`RECENTER_RATIO`] times the cloud's half-extent from zero, else zero.
+/// when it is more than [`RECENTER_RATIO`] times the cloud's half-extent from zero (and that
+/// half-extent fits `f32`), else zero.
 fn choose_origin(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
@@ -244,7 +251,8 @@ fn choose_origin(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
     let center = [0, 1, 2].map(|a| lo[a] * 0.5 + hi[a] * 0.5);
     let half = (0..3).map(|a| (hi[a] - lo[a]) * 0.5).fold(0.0, f64::max);
     let far = center.iter().fold(0.0f64, |m, c| m.max(c.abs()));
-    if far > RECENTER_RATIO * half {
+    // offsets from the centre are at most `half`: recentring needs them to fit f32
+    if far > RECENTER_RATIO * half && half < MAX_OFFSET {
         center
     } else {
         [0.0; 3]
@@ -371,6 +379,10 @@ mod tests {
         let kept = bad.validated("source", MIN_POINTS, NonFinite::Drop).unwrap();
         assert_eq!((kept.len(), kept.origin), (39, c.origin));
         assert_eq!(c.clone().into_local().origin, [0.0; 3]);
+        // a spread beyond f32's range is not recentred (that would make the near points infinite)
+        let wild = PointCloud::from_points_f64(&[[5e6, 4e6, 1.0], [5e6, 4e6, 1.9e185], [5e6, -1.2e147, 1.0]]);
+        assert_eq!(wild.origin, [0.0; 3]);
+        assert_eq!(wild.points[0], [5e6, 4e6, 1.0]);
         // near zero, nothing changes: origin zero, the points as given
         let near = PointCloud::from_points_f64(&[[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]);
         assert_eq!((near.origin, near.points.clone()), ([0.0; 3], vec![[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]));
