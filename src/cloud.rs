@@ -62,7 +62,7 @@ impl PointCloud {
 
     /// From `f64` points in the caller's frame, keeping their shape: when the cloud is far from
     /// zero relative to its size (more than [`RECENTER_RATIO`] times), the origin becomes the
-    /// `f64` bounding-box centre of the finite points and the offsets are stored as `f32`;
+    /// `f64` bounding-box centre of the points finite in `f32` and the offsets are stored as `f32`;
     /// otherwise the origin is zero and the points are stored as they are. Non-finite points stay
     /// non-finite ([`PointCloud::validated`] deals with them).
     pub fn from_points_f64(points: &[[f64; 3]]) -> Self {
@@ -233,13 +233,14 @@ impl PointCloud {
 /// they would be anyway).
 const MAX_OFFSET: f64 = 1e37;
 
-/// The origin [`PointCloud::from_points_f64`] picks: the bounding-box centre of the finite points
-/// when it is more than [`RECENTER_RATIO`] times the cloud's half-extent from zero (and that
+/// The origin [`PointCloud::from_points_f64`] picks: the bounding-box centre of the points that
+/// are finite in `f32` when it is more than [`RECENTER_RATIO`] times the cloud's half-extent from zero (and that
 /// half-extent fits `f32`), else zero.
 fn choose_origin(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points.filter(|p| p.iter().all(|v| v.is_finite())) {
+    // the points that are finite as f32 (a coordinate beyond f32's range is infinite either way)
+    for p in points.filter(|p| p.iter().all(|v| v.abs() <= f32::MAX as f64)) {
         for a in 0..3 {
             lo[a] = lo[a].min(p[a]);
             hi[a] = hi[a].max(p[a]);
@@ -379,10 +380,11 @@ mod tests {
         let kept = bad.validated("source", MIN_POINTS, NonFinite::Drop).unwrap();
         assert_eq!((kept.len(), kept.origin), (39, c.origin));
         assert_eq!(c.clone().into_local().origin, [0.0; 3]);
-        // a spread beyond f32's range is not recentred (that would make the near points infinite)
+        // points beyond f32's range (infinite either way) do not pull the origin away from the rest
         let wild = PointCloud::from_points_f64(&[[5e6, 4e6, 1.0], [5e6, 4e6, 1.9e185], [5e6, -1.2e147, 1.0]]);
-        assert_eq!(wild.origin, [0.0; 3]);
-        assert_eq!(wild.points[0], [5e6, 4e6, 1.0]);
+        assert_eq!(wild.origin, [5e6, 4e6, 1.0]);
+        assert_eq!(wild.points[0], [0.0; 3]);
+        assert!(wild.points[1][2] == f32::INFINITY && wild.points[2][1] == f32::NEG_INFINITY);
         // near zero, nothing changes: origin zero, the points as given
         let near = PointCloud::from_points_f64(&[[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]);
         assert_eq!((near.origin, near.points.clone()), ([0.0; 3], vec![[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]));
