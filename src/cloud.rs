@@ -62,7 +62,7 @@ impl PointCloud {
 
     /// From `f64` points in the caller's frame, keeping their shape: when the cloud is far from
     /// zero relative to its size (more than [`RECENTER_RATIO`] times), the origin becomes the
-    /// `f64` bounding-box centre of the finite points and the offsets are stored as `f32`;
+    /// `f64` bounding-box centre of the points finite in `f32` and the offsets are stored as `f32`;
     /// otherwise the origin is zero and the points are stored as they are. Non-finite points stay
     /// non-finite ([`PointCloud::validated`] deals with them).
     pub fn from_points_f64(points: &[[f64; 3]]) -> Self {
@@ -227,12 +227,20 @@ impl PointCloud {
     }
 }
 
-/// The origin [`PointCloud::from_points_f64`] picks: the bounding-box centre of the finite points
-/// when it is more than [`RECENTER_RATIO`] times the cloud's half-extent from zero, else zero.
+/// Largest half-extent for which [`PointCloud::from_points_f64`] recentres: beyond it the
+/// offsets would not fit `f32` (whose largest value is 3.4e38) and finite points would become
+/// infinite, so such a cloud keeps origin zero (its points beyond `f32`'s range are infinite as
+/// they would be anyway).
+const MAX_OFFSET: f64 = 1e37;
+
+/// The origin [`PointCloud::from_points_f64`] picks: the bounding-box centre of the points that
+/// are finite in `f32` when it is more than [`RECENTER_RATIO`] times the cloud's half-extent from zero (and that
+/// half-extent fits `f32`), else zero.
 fn choose_origin(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    for p in points.filter(|p| p.iter().all(|v| v.is_finite())) {
+    // the points that are finite as f32 (a coordinate beyond f32's range is infinite either way)
+    for p in points.filter(|p| p.iter().all(|v| v.abs() <= f32::MAX as f64)) {
         for a in 0..3 {
             lo[a] = lo[a].min(p[a]);
             hi[a] = hi[a].max(p[a]);
@@ -244,7 +252,8 @@ fn choose_origin(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
     let center = [0, 1, 2].map(|a| lo[a] * 0.5 + hi[a] * 0.5);
     let half = (0..3).map(|a| (hi[a] - lo[a]) * 0.5).fold(0.0, f64::max);
     let far = center.iter().fold(0.0f64, |m, c| m.max(c.abs()));
-    if far > RECENTER_RATIO * half {
+    // offsets from the centre are at most `half`: recentring needs them to fit f32
+    if far > RECENTER_RATIO * half && half < MAX_OFFSET {
         center
     } else {
         [0.0; 3]
@@ -274,7 +283,8 @@ pub struct JointNormalization {
 }
 
 impl JointNormalization {
-    /// Computes the normalisation of a (validated) pair.
+    /// Computes the normalisation of a (validated) pair, from their `points` (the offsets from
+    /// their origins: the pipeline normalises each cloud's local frame).
     pub fn of_pair(source: &PointCloud, target: &PointCloud) -> Self {
         let box_of = |c: &PointCloud| {
             let (lo, hi) = c.bounds();
@@ -349,6 +359,35 @@ mod tests {
         let same = PointCloud::new(vec![[1.0, 1.0, 1.0]; 30]);
         assert!(same.validated("source", MIN_POINTS, NonFinite::Error).is_err());
         assert!(PointCloud::default().validated("source", MIN_POINTS, NonFinite::Error).is_err());
+    }
+
+    #[test]
+    fn origins_carry_large_coordinates_through_transforms_and_validation() {
+        let far: Vec<[f64; 3]> =
+            (0..40).map(|i| [5e6 + (i % 7) as f64 * 0.01, 4e6 + (i % 5) as f64 * 0.02, 0.5]).collect();
+        let c = PointCloud::from_points_f64(&far);
+        assert!(!c.origin_is_zero());
+        assert!((0..40).all(|i| (0..3).all(|a| (c.point_f64(i)[a] - far[i][a]).abs() < 1e-6)));
+        let m = from_rotation_translation(&euler_xyz(0.3, -0.1, 0.2), &Vector3::new(12.0, -3.0, 7.0));
+        let moved = c.transformed(&m);
+        for (i, p) in far.iter().enumerate() {
+            let want = m.transform_point(&nalgebra::Point3::from(*p));
+            let got = moved.point_f64(i);
+            assert!((0..3).all(|a| (got[a] - want[a]).abs() < 1e-6), "{got:?} vs {want:?}");
+        }
+        let mut bad = c.clone();
+        bad.points[3][0] = f32::NAN;
+        let kept = bad.validated("source", MIN_POINTS, NonFinite::Drop).unwrap();
+        assert_eq!((kept.len(), kept.origin), (39, c.origin));
+        assert_eq!(c.clone().into_local().origin, [0.0; 3]);
+        // points beyond f32's range (infinite either way) do not pull the origin away from the rest
+        let wild = PointCloud::from_points_f64(&[[5e6, 4e6, 1.0], [5e6, 4e6, 1.9e185], [5e6, -1.2e147, 1.0]]);
+        assert_eq!(wild.origin, [5e6, 4e6, 1.0]);
+        assert_eq!(wild.points[0], [0.0; 3]);
+        assert!(wild.points[1][2] == f32::INFINITY && wild.points[2][1] == f32::NEG_INFINITY);
+        // near zero, nothing changes: origin zero, the points as given
+        let near = PointCloud::from_points_f64(&[[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]);
+        assert_eq!((near.origin, near.points.clone()), ([0.0; 3], vec![[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]));
     }
 
     #[test]

@@ -23,9 +23,12 @@
 //! cloud (12 B), the validated copy (12 B), the turned copy when an initial rotation is given
 //! (12 B), the normalised copy (12 B), the voxel grid's sort keys while it runs (32 B natively,
 //! 28 B on wasm32), and the ICP cloud and its kd-tree and normals when voxelisation is off
-//! (up to 40 B): 120 B, rounded up to 128 B. Measured natively with `/usr/bin/time -v arps
-//! register` on synthetic pairs (`BENCHMARK.md`, "Memory"), the peak grew by about 100 B per
-//! input point (both clouds counted), including reading the files.
+//! (up to 40 B): 120 B, rounded up to 128 B. Measured natively (peak RSS of `arps register` on
+//! synthetic binary PLY pairs with default options, reading included; `BENCHMARK.md`, "Memory"),
+//! the peak grows by 53 B per input point; in WebAssembly the binding's copies of the caller's
+//! arrays add 24 B, and `voxelSize: 0` (ICP on the full clouds) adds the kd-tree and normals.
+//! The issue that set these budgets saw 2 GB of wasm memory at 10M points per cloud (100 B per
+//! point) and a trap at 20M.
 //!
 //! A cloud over the limit should be downsampled before it is registered, e.g. on a voxel grid
 //! ([`crate::sampling::voxel_downsample`]); the `voxelSize` option thins only the clouds ICP
