@@ -65,7 +65,7 @@ try {
     const t = r.timingsMs;
     console.log(`time ${ms.toFixed(1)} ms (preprocess ${t.preprocessMs.toFixed(1)}, network ${t.networkMs.toFixed(1)}, ` +
       `GMR ${t.gmrMs.toFixed(1)}, ICP ${t.icpMs.toFixed(1)}, global ${t.globalMs.toFixed(1)}); ` +
-      `best of ${r.startsRefined} starts: ${r.start}`);
+      `best of ${r.startsRefined} start${r.startsRefined === 1 ? "" : "s"} refined: ${r.start}`);
     for (const w of r.warnings) console.log(`warning: ${w}`);
     if (registrar.provenance?.kind === "random") console.log("note: the loaded model is an untrained placeholder (random weights)");
   }

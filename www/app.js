@@ -297,7 +297,7 @@ function showResult(r, truth = null) {
     ["Inlier RMSE", fmt(r.inlierRmse)],
     [
       "ICP",
-      `from the ${r.start} start (best of ${r.startsRefined} refined), ${r.iterations} iterations${r.iterations ? (r.converged ? ", converged" : ", not converged") : ""}`,
+      `from the ${r.start} start (best of ${r.startsRefined} start${r.startsRefined === 1 ? "" : "s"} refined), ${r.iterations} iterations${r.iterations ? (r.converged ? ", converged" : ", not converged") : ""}`,
     ],
     [
       "Time",
