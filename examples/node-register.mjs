@@ -1,7 +1,7 @@
 #!/usr/bin/env node
 // Registers two point-cloud files with the WebAssembly build in Node and prints T_target_source.
 //   scripts/build-pkg.sh     # once: builds pkg/
-//   node examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--json]
+//   node examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] [--json]
 // SOURCE and TARGET are any format the readers know (PLY, PCD, XYZ/PTS/CSV, OBJ, OFF, STL).
 // In an app that installed the package, import from "arps" instead of ../pkg/node/index.mjs.
 import { readFileSync } from "node:fs";
@@ -13,7 +13,7 @@ const entry = path.join(here, "..", "pkg", "node", "index.mjs");
 
 function usage(message) {
   if (message) console.error(`node-register: ${message}`);
-  console.error("usage: node examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--json]");
+  console.error("usage: node examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] [--json]");
   process.exit(2);
 }
 
@@ -24,6 +24,7 @@ let json = false;
 for (let i = 0; i < args.length; i++) {
   if (args[i] === "--json") json = true;
   else if (args[i] === "--icp") options.icp = args[++i] ?? usage("--icp needs a value");
+  else if (args[i] === "--search") options.search = args[++i] ?? usage("--search needs a value");
   else if (args[i].startsWith("--")) usage(`unknown flag ${args[i]}`);
   else files.push(args[i]);
 }
@@ -48,21 +49,23 @@ try {
   const rows = [0, 1, 2, 3].map((row) => [0, 1, 2, 3].map((col) => r.matrix[col * 4 + row]));
   if (json) {
     console.log(JSON.stringify({
-      T_target_source: rows, fitness: r.fitness, inlier_rmse: r.inlierRmse, icp_iterations: r.iterations,
+      T_target_source: rows, confidence: r.confidence, evidence: r.evidence, fitness: r.fitness, inlier_rmse: r.inlierRmse, icp_iterations: r.iterations,
       icp_converged: r.converged, max_correspondence_distance: r.maxCorrespondenceDistance,
-      time_ms: ms, timings_ms: r.timingsMs, warnings: r.warnings,
+      time_ms: ms, timings_ms: r.timingsMs, warnings: r.warnings, start: r.start, starts_refined: r.startsRefined,
       source_points: source.length / 3, target_points: target.length / 3,
     }));
   } else {
     console.log(`source ${files[0]}: ${source.length / 3} points; target ${files[1]}: ${target.length / 3} points`);
     console.log("T_target_source (maps source points into the target frame):");
     for (const row of rows) console.log("  " + row.map((v) => v.toFixed(6).padStart(11)).join(" "));
+    console.log(`confidence ${r.confidence.toFixed(3)} (the engine's estimate that the answer is right; below 0.5 it warns)`);
     console.log(`fitness ${r.fitness.toFixed(4)}  inlier RMSE ${r.inlierRmse.toPrecision(4)}  ` +
       `(max correspondence distance ${r.maxCorrespondenceDistance.toPrecision(4)})`);
     console.log(`ICP iterations ${r.iterations}${r.converged ? ", converged" : ""}`);
     const t = r.timingsMs;
     console.log(`time ${ms.toFixed(1)} ms (preprocess ${t.preprocessMs.toFixed(1)}, network ${t.networkMs.toFixed(1)}, ` +
-      `GMR ${t.gmrMs.toFixed(1)}, ICP ${t.icpMs.toFixed(1)})`);
+      `GMR ${t.gmrMs.toFixed(1)}, ICP ${t.icpMs.toFixed(1)}, global ${t.globalMs.toFixed(1)}); ` +
+      `best of ${r.startsRefined} start${r.startsRefined === 1 ? "" : "s"} refined: ${r.start}`);
     for (const w of r.warnings) console.log(`warning: ${w}`);
     if (registrar.provenance?.kind === "random") console.log("note: the loaded model is an untrained placeholder (random weights)");
   }

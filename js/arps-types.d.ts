@@ -81,11 +81,12 @@ export interface RegisterOptions {
    * against the same prepared target) and the best is returned, with `start` saying which: the
    * highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier start. Starts
    * that meet during refinement are refined once, as the earlier; on large clouds the starts are
-   * compared on 2048 of the source points and only the winner is refined on all of them. Default
-   * `["network", "centroids", "initial", "turned", "turnedInitial"]`; each extra start costs one ICP
-   * run (on at most 2048 points; `"turned"` and `"turnedInitial"` are six each), so `["network"]`
-   * is the fastest and `["network", "centroids", "initial", "turned"]` saves about 40% of the
-   * refinement time for about a point of recall. Must be non-empty, without repeats.
+   * compared on 2048 of the source points and only the winner is refined on all of them. Which
+   * starts are refined at all depends on `search`. Default
+   * `["network", "centroids", "initial", "turned", "turnedInitial", "global"]`; each extra start
+   * costs one ICP run (on at most 2048 points; `"turned"` and `"turnedInitial"` are six each,
+   * `"global"` and `"globalNetwork"` up to five each, plus the descriptor matching), so
+   * `["network"]` is the fastest. Must be non-empty, without repeats.
    * - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
    *   reported as `"initial"`);
    * - `"centroids"`: `initialTransform`'s rotation (none if unset) with the translation that moves
@@ -96,15 +97,41 @@ export interface RegisterOptions {
    *   that landed outside ICP's basin;
    * - `"turnedInitial"`: six starts, `initialTransform` (the identity if unset) turned the same
    *   way, for pairs where the network's estimate is far off (with `network: false`, the same
-   *   starts as `"turned"`, reported as `"turned"`).
+   *   starts as `"turned"`, reported as `"turned"`);
+   * - `"global"`: up to five hypotheses from global registration (FPFH descriptors, mutual
+   *   matches, a seeded RANSAC), for motions of any size, e.g. scans in unrelated frames; none
+   *   when the descriptors match too little;
+   * - `"globalNetwork"`: the `"global"` hypotheses, each refined by the network first (with
+   *   `network: false`, the same starts as `"global"`, reported as `"global"`).
    *
    * With `icp: "off"` nothing is refined or compared: the first start is the answer.
    */
   starts?: RegistrationStart[];
+  /**
+   * How `starts` are searched:
+   * - `"adaptive"` (the default): in stages, cheapest first, stopping as soon as the best answer's
+   *   `confidence` reaches 0.9: the first start alone; then the other local starts; then the
+   *   global ones (`"global"`, `"globalNetwork"`). The best of everything refined is returned.
+   *   Easy pairs cost one start; hard ones still get every start.
+   * - `"exhaustive"`: every start is refined and the best returned (slower, never stops early).
+   *
+   * `startsRefined` in the result says how many were refined.
+   */
+  search?: RegistrationSearch;
 }
 
+/** How `RegisterOptions.starts` are searched (see `RegisterOptions.search`). */
+export type RegistrationSearch = "adaptive" | "exhaustive";
+
 /** A transform ICP starts from (see `RegisterOptions.starts`). */
-export type RegistrationStart = "network" | "centroids" | "initial" | "turned" | "turnedInitial";
+export type RegistrationStart =
+  | "network"
+  | "centroids"
+  | "initial"
+  | "turned"
+  | "turnedInitial"
+  | "global"
+  | "globalNetwork";
 
 /** Milliseconds spent in each stage of one registration (measured with `performance.now()`). */
 export interface RegistrationTimings {
@@ -116,6 +143,8 @@ export interface RegistrationTimings {
   gmrMs: number;
   /** ICP from every start (normals, kd-tree, iterations) and the quality figures. */
   icpMs: number;
+  /** Global hypotheses (descriptors, matching, RANSAC); 0 when no global start ran. */
+  globalMs: number;
   /** The whole `register` call inside the engine. */
   totalMs: number;
 }
@@ -146,8 +175,8 @@ export interface RegistrationResult {
   start: RegistrationStart;
   /**
    * Fraction of (voxelised) source points that have a target point within
-   * `maxCorrespondenceDistance` under `matrix`, in [0, 1]. Below 0.3 a warning is added: the
-   * alignment may have failed.
+   * `maxCorrespondenceDistance` under `matrix`, in [0, 1]. Right answers on partial,
+   * independently sampled scans often score only 0.15-0.3: judge the result by `confidence`.
    */
   fitness: number;
   /** RMS distance of those inlier pairs, in your units (0 when there are none). */
@@ -160,8 +189,49 @@ export interface RegistrationResult {
   maxCorrespondenceDistance: number;
   /** Time per stage, in milliseconds. */
   timingsMs: RegistrationTimings;
-  /** Things to know about this result (input resampled, low fitness, ...), as sentences. */
+  /**
+   * Things to know about this result (input resampled, low confidence, ...), as sentences. One
+   * starting with `"low confidence"` comes with every result whose `confidence` is below 0.5.
+   */
   warnings: string[];
+  /**
+   * An estimate of the probability that `matrix` is right (within the evaluation's recall
+   * thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on validation pairs
+   * (the paper's protocol and pairs of any pose). Read it as "likely right" near 1, "likely
+   * wrong" near 0; below 0.5 `warnings` says the alignment may be wrong. It judges the fit, so a
+   * symmetric or featureless shape that fits in several poses lowers it (`evidence.ambiguity`).
+   */
+  confidence: number;
+  /** The figures `confidence` is computed from, measured under `matrix`. */
+  evidence: RegistrationEvidence;
+  /** How many distinct starts were refined (after merging those that met); see `RegisterOptions.search`. */
+  startsRefined: number;
+}
+
+/**
+ * The evidence behind `RegistrationResult.confidence`, measured on the (voxelised) clouds under
+ * the answer, at multiples of the final `maxCorrespondenceDistance` `d`.
+ */
+export interface RegistrationEvidence {
+  /** Fraction of source points with a target point within `d` (in [0, 1]). */
+  fitness: number;
+  /** The same within `d / 2`. */
+  fitnessTight: number;
+  /** The same within `2 d`. */
+  fitnessLoose: number;
+  /** The same within `4 d`. */
+  fitnessCoarse: number;
+  /** Fraction of target points with a source point within `d`: the overlap measured the other way. */
+  overlapReverse: number;
+  /** Inlier RMSE at `d`, divided by `d` (0 without inliers). */
+  rmseRatio: number;
+  /**
+   * How well the best *different* pose fits, as a fraction of the answer's fitness (the answer
+   * turned 180 degrees about each principal axis of the moved source, each refined by a short
+   * ICP), in [0, 2]; 0 when every one fell back onto the answer. Near 1 or above: the shape is
+   * symmetric and the answer, though it fits, may not be the only one.
+   */
+  ambiguity: number;
 }
 
 /** How a weights file was made (its `provenance` metadata); `kind: "random"` means untrained. */

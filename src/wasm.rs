@@ -7,7 +7,7 @@
 //! * `Registrar.withDefaultModel()`, `Registrar.fromBytes(Uint8Array)`;
 //! * `registrar.register(source: Float32Array, target: Float32Array, options?)` -> a plain object
 //!   `{ matrix, matrix64, networkMatrix, networkMatrix64, start, fitness, inlierRmse, iterations, converged,
-//!   maxCorrespondenceDistance, timingsMs, warnings }`;
+//!   maxCorrespondenceDistance, timingsMs, warnings, confidence, evidence, startsRefined }`;
 //! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`;
 //! * `readPointCloud(bytes: Uint8Array, fileName: string) -> { points: Float32Array, origin }`.
 //!
@@ -207,6 +207,9 @@ impl Registrar {
         set(&out, "timingsMs", &to_js(&r.timings)?)?;
         let warnings: Array = r.warnings.iter().map(|w| JsValue::from_str(w)).collect();
         set(&out, "warnings", &warnings)?;
+        set(&out, "confidence", &JsValue::from_f64(r.confidence))?;
+        set(&out, "evidence", &to_js(&r.evidence)?)?;
+        set(&out, "startsRefined", &JsValue::from_f64(r.starts_refined as f64))?;
         Ok(out.into())
     }
 

@@ -56,7 +56,8 @@ fn known_transform_is_recovered_with_default_options() {
     assert!(get(&res, "converged").as_bool().is_some());
     let start = get(&res, "start").as_string().unwrap_or_default();
     assert!(
-        ["network", "centroids", "initial", "turned", "turnedInitial", "global"].contains(&start.as_str()),
+        ["network", "centroids", "initial", "turned", "turnedInitial", "global", "globalNetwork"]
+            .contains(&start.as_str()),
         "start {start:?}"
     );
     let timings = get(&res, "timingsMs");
@@ -64,7 +65,77 @@ fn known_transform_is_recovered_with_default_options() {
         assert!(num(&timings, k) >= 0.0, "timingsMs.{k}");
     }
     assert!(num(&timings, "totalMs") > 0.0, "the performance.now clock is installed");
-    let _ = strings(&get(&res, "warnings"));
+    assert!(num(&timings, "globalMs") >= 0.0, "timingsMs.globalMs");
+    let warnings = strings(&get(&res, "warnings"));
+    // How sure the engine is: high on this known pair, so no "low confidence" warning.
+    let confidence = num(&res, "confidence");
+    assert!((0.8..=1.0).contains(&confidence), "confidence {confidence} on the known pair");
+    assert!(!warnings.iter().any(|w| w.starts_with("low confidence")), "{warnings:?}");
+    assert!(num(&res, "startsRefined") >= 1.0);
+    assert_evidence_is_sane(&get(&res, "evidence"));
+}
+
+/// The result's `evidence`: exactly the core's fields, camelCase, each in its range.
+fn assert_evidence_is_sane(evidence: &JsValue) {
+    let fractions = ["fitness", "fitnessTight", "fitnessLoose", "fitnessCoarse", "overlapReverse"];
+    for k in fractions {
+        let v = num(evidence, k);
+        assert!((0.0..=1.0).contains(&v), "evidence.{k} = {v}");
+    }
+    // The fitness curve rises with the distance.
+    let curve = ["fitnessTight", "fitness", "fitnessLoose", "fitnessCoarse"].map(|k| num(evidence, k));
+    assert!(curve.windows(2).all(|w| w[0] <= w[1]), "fitness curve {curve:?}");
+    let rmse_ratio = num(evidence, "rmseRatio");
+    assert!((0.0..=1.0).contains(&rmse_ratio), "evidence.rmseRatio = {rmse_ratio}");
+    let ambiguity = num(evidence, "ambiguity");
+    assert!((0.0..=2.0).contains(&ambiguity), "evidence.ambiguity = {ambiguity}");
+    let mut keys: Vec<String> =
+        js_sys::Object::keys(evidence.unchecked_ref::<js_sys::Object>()).iter().filter_map(|k| k.as_string()).collect();
+    keys.sort();
+    let mut want: Vec<String> = fractions.iter().chain(&["rmseRatio", "ambiguity"]).map(|k| k.to_string()).collect();
+    want.sort();
+    assert_eq!(keys, want, "evidence fields");
+}
+
+#[wasm_bindgen_test]
+fn search_option_and_global_starts() {
+    let mut r = Registrar::with_default_model().map_err(message).unwrap();
+    let adaptive = register_ok(&mut r, JsValue::UNDEFINED);
+    let explicit = register_ok(&mut r, options(r#"{"search": "adaptive"}"#));
+    assert_eq!(matrix(&adaptive, "matrix"), matrix(&explicit, "matrix"), "adaptive is the default");
+    assert_eq!(num(&adaptive, "startsRefined"), num(&explicit, "startsRefined"));
+    // Exhaustive refines every start: at least as many as the adaptive search, which stops early
+    // on this easy pair.
+    let exhaustive = register_ok(&mut r, options(r#"{"search": "exhaustive"}"#));
+    let (rot, tr) = errors(&exhaustive);
+    assert!(rot < 1.0 && tr < 0.02, "exhaustive: {rot:.3} deg, {tr:.4}");
+    assert!(
+        num(&exhaustive, "startsRefined") > num(&adaptive, "startsRefined"),
+        "exhaustive refined {} starts, adaptive {}",
+        num(&exhaustive, "startsRefined"),
+        num(&adaptive, "startsRefined")
+    );
+    let c = num(&exhaustive, "confidence");
+    assert!((0.8..=1.0).contains(&c), "exhaustive confidence {c}");
+    assert_evidence_is_sane(&get(&exhaustive, "evidence"));
+    // The global starts are accepted by name; the answer is rigid and its confidence a probability.
+    for starts in [r#"["global"]"#, r#"["globalNetwork"]"#, r#"["network", "global", "globalNetwork"]"#] {
+        let res = register_ok(&mut r, options(&format!(r#"{{"starts": {starts}, "search": "exhaustive"}}"#)));
+        assert!(arps::transform::check_rigid(&matrix(&res, "matrix"), 1e-3).is_ok(), "starts {starts}");
+        let start = get(&res, "start").as_string().unwrap_or_default();
+        assert!(["network", "global", "globalNetwork"].contains(&start.as_str()), "starts {starts}: start {start:?}");
+        let c = num(&res, "confidence");
+        assert!((0.0..=1.0).contains(&c), "starts {starts}: confidence {c}");
+    }
+    // A bad value: a clear error naming the accepted ones, and the registrar still works.
+    for bad in [r#"{"search": "thorough"}"#, r#"{"search": 1}"#] {
+        let e = r.register(&source(), &target(), Some(options(bad)), None).err().map(message).expect(bad);
+        assert!(e.starts_with("invalid options"), "{bad}: {e}");
+        if bad.contains("thorough") {
+            assert!(e.contains("thorough") && e.contains("adaptive") && e.contains("exhaustive"), "{e}");
+        }
+    }
+    still_works(&mut r);
 }
 
 #[wasm_bindgen_test]

@@ -1,10 +1,11 @@
 // The arps demo page: load two scans (parsed in wasm), align them in the worker, show the result
 // in three.js. Test hooks: #source-file, #target-file, #align, #result (the result as JSON),
-// #error (the message).
+// #verdict (the confidence in words), #error (the message).
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
 import { createWorkerRegistrar, STAGES } from "../pkg/worker-client.js";
 import {
+  confidenceWords,
   finitePoints,
   makeExample,
   multiply,
@@ -170,7 +171,7 @@ async function loadExample() {
 // ---- aligning -----------------------------------------------------------------------------
 
 function readOptions() {
-  const options = { icp: $("icp").value };
+  const options = { icp: $("icp").value, search: $("search").value };
   const dist = $("max-distance").value.trim();
   if (dist !== "") {
     const d = Number(dist);
@@ -245,8 +246,10 @@ function resultJson(r, truth) {
   const m = r.matrix;
   const out = {
     T_target_source: rowMajor(m),
+    confidence: r.confidence,
     fitness: r.fitness,
     inlierRmse: r.inlierRmse,
+    evidence: r.evidence,
     rotationDeg: rotationAngleDeg(m),
     translation: [m[12], m[13], m[14]],
     iterations: r.iterations,
@@ -256,6 +259,7 @@ function resultJson(r, truth) {
     warnings: r.warnings,
     networkT_target_source: rowMajor(r.networkMatrix),
     start: r.start,
+    startsRefined: r.startsRefined,
   };
   if (truth) {
     const err = multiply(invertRigid(truth), m);
@@ -283,6 +287,9 @@ function showResult(r, truth = null) {
     }),
   );
   const t = json.timingsMs;
+  const verdict = confidenceWords(r.confidence);
+  $("verdict").textContent = verdict.words;
+  $("verdict").dataset.level = verdict.level;
   const rows = [
     ["Rotation", `${json.rotationDeg.toFixed(2)}°`],
     ["Translation", `(${json.translation.map((v) => fmt(v)).join(", ")}) · |t| = ${fmt(Math.hypot(...json.translation))}`],
@@ -290,11 +297,11 @@ function showResult(r, truth = null) {
     ["Inlier RMSE", fmt(r.inlierRmse)],
     [
       "ICP",
-      `from the ${r.start} start, ${r.iterations} iterations${r.iterations ? (r.converged ? ", converged" : ", not converged") : ""}`,
+      `from the ${r.start} start (best of ${r.startsRefined} start${r.startsRefined === 1 ? "" : "s"} refined), ${r.iterations} iterations${r.iterations ? (r.converged ? ", converged" : ", not converged") : ""}`,
     ],
     [
       "Time",
-      `${t.totalMs.toFixed(0)} ms: prepare ${t.preprocessMs.toFixed(0)}, network ${t.networkMs.toFixed(0)}, GMR ${t.gmrMs.toFixed(0)}, ICP ${t.icpMs.toFixed(0)}`,
+      `${t.totalMs.toFixed(0)} ms: prepare ${t.preprocessMs.toFixed(0)}, network ${t.networkMs.toFixed(0)}, GMR ${t.gmrMs.toFixed(0)}, ICP ${t.icpMs.toFixed(0)}${t.globalMs ? `, global ${t.globalMs.toFixed(0)}` : ""}`,
     ],
   ];
   if (json.exampleError) {

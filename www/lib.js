@@ -184,3 +184,16 @@ export function makeExample({ positions, cells }, count = 6000, seed = 1) {
   }
   return { source, target: b.points, truth: EXAMPLE_TRUTH, overlap: shared / (a.points.length / 3) };
 }
+
+/**
+ * A result's `confidence` (the engine's estimate, in [0, 1], that the answer is right) in words:
+ * `{ words, level }`, `level` one of `"right"` (>= 0.8), `"uncertain"` (>= 0.5) and `"wrong"`
+ * (below 0.5, where the engine also warns), e.g. `"likely right (confidence 0.93)"`.
+ */
+export function confidenceWords(confidence) {
+  if (!Number.isFinite(confidence)) return { words: "unknown confidence", level: "uncertain" };
+  const figure = `(confidence ${confidence.toFixed(2)})`;
+  if (confidence >= 0.8) return { words: `likely right ${figure}`, level: "right" };
+  if (confidence >= 0.5) return { words: `uncertain ${figure}`, level: "uncertain" };
+  return { words: `likely wrong ${figure}`, level: "wrong" };
+}

@@ -44,6 +44,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     throws(() => r.register(s, t, { icp: "planar" }), /invalid options/);
     throws(() => r.register(s, t, { networkPoints: 1 }), /networkPoints = 1/);
     throws(() => r.register(s, t, { starts: [] }), /starts is empty/);
+    throws(() => r.register(s, t, { search: "thorough" }), /invalid options: .*thorough.*adaptive.*exhaustive/);
     throws(() => arps.Registrar.fromBytes(new Uint8Array([1, 2, 3])), /^weights: /);
     throws(() => arps.parsePointCloud(new Uint8Array([0, 1, 2, 3]), "x.unknownext"), /./);
     r.free();
@@ -56,8 +57,12 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       assert.ok(res.networkMatrix instanceof Float32Array && res.networkMatrix.length === 16);
       for (const k of ["fitness", "inlierRmse", "iterations", "maxCorrespondenceDistance"]) assert.equal(typeof res[k], "number", k);
       assert.equal(typeof res.converged, "boolean");
-      assert.ok(["network", "centroids", "initial", "turned", "turnedInitial", "global"].includes(res.start), `start ${res.start}`);
-      for (const k of ["preprocessMs", "networkMs", "gmrMs", "icpMs", "totalMs"]) assert.equal(typeof res.timingsMs[k], "number", k);
+      assert.ok(["network", "centroids", "initial", "turned", "turnedInitial", "global", "globalNetwork"].includes(res.start), `start ${res.start}`);
+      for (const k of ["preprocessMs", "networkMs", "gmrMs", "icpMs", "globalMs", "totalMs"]) assert.equal(typeof res.timingsMs[k], "number", k);
+      assert.ok(res.confidence >= 0.8 && res.confidence <= 1, `confidence ${res.confidence} on the known pair`);
+      assert.ok(!res.warnings.some((w) => w.startsWith("low confidence")), String(res.warnings));
+      assert.deepEqual(Object.keys(res.evidence).sort(), ["ambiguity", "fitness", "fitnessCoarse", "fitnessLoose", "fitnessTight", "overlapReverse", "rmseRatio"]);
+      assert.ok(Number.isInteger(res.startsRefined) && res.startsRefined >= 1, `startsRefined ${res.startsRefined}`);
       assert.ok(res.timingsMs.totalMs > 0);
       assert.ok(Array.isArray(res.warnings));
       const { rot, tr } = errors(res.matrix);
@@ -68,6 +73,9 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     assert.throws(() => r.register(source(), target(), { bogus: 1 }));
     assert.throws(() => r.register(new Float32Array(7), target()));
     check(r.register(source(), target(), {}));
+    const exhaustive = r.register(source(), target(), { search: "exhaustive" });
+    check(exhaustive);
+    assert.ok(exhaustive.startsRefined > r.register(source(), target()).startsRefined, "exhaustive refines more starts");
     // A previous result's matrix as the initial guess (column-major, as three.js holds it).
     const first = r.register(source(), target());
     check(r.register(source(), target(), { initialTransform: first.matrix }));

@@ -1,7 +1,7 @@
 // Compile-only check of the package's TypeScript declarations (tsc --noEmit -p js/test): typical
 // use must type-check, options are typed (not `any`), and misspelled options are rejected.
 import init, { Registrar, parsePointCloud, readPointCloud, version } from "../../pkg/arps.js";
-import type { RegisterOptions, RegistrationResult } from "../../pkg/arps.js";
+import type { RegisterOptions, RegistrationEvidence, RegistrationResult, RegistrationSearch } from "../../pkg/arps.js";
 import { createWorkerRegistrar, type Stage, type WorkerRegistrar } from "../../pkg/worker-client.js";
 
 export async function onMainThread(source: Float32Array, target: Float32Array): Promise<number> {
@@ -15,9 +15,24 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   r.register(source, target, null);
   const ms: number = again.timingsMs.totalMs + result.fitness + result.inlierRmse + result.iterations;
   const w: string[] = result.warnings;
-  const start: "network" | "centroids" | "initial" | "turned" | "turnedInitial" = result.start;
+  const start: "network" | "centroids" | "initial" | "turned" | "turnedInitial" | "global" | "globalNetwork" = result.start;
   r.register(source, target, { starts: ["network", "initial"] });
   r.register(source, target, { starts: ["turned", "turnedInitial"] });
+  r.register(source, target, { starts: ["network", "global", "globalNetwork"], search: "exhaustive" });
+  const search: RegistrationSearch = "adaptive";
+  r.register(source, target, { search });
+  // How sure the engine is, and why.
+  const confidence: number = result.confidence;
+  const evidence: RegistrationEvidence = result.evidence;
+  const figures: number =
+    evidence.fitness + evidence.fitnessTight + evidence.fitnessLoose + evidence.fitnessCoarse +
+    evidence.overlapReverse + evidence.rmseRatio + evidence.ambiguity + result.startsRefined + result.timingsMs.globalMs;
+  // @ts-expect-error the evidence is camelCase
+  const snakeEvidence = result.evidence.overlap_reverse;
+  // @ts-expect-error misspelled search value
+  r.register(source, target, { search: "exhaustve" });
+  // @ts-expect-error search is a name, not a flag
+  r.register(source, target, { search: true });
   // @ts-expect-error unknown start
   r.register(source, target, { starts: ["identity"] });
   const kind: string | undefined = r.provenance.kind;
@@ -37,7 +52,7 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   // @ts-expect-error a cloud is not a string
   r.register("1 2 3", target);
   r.free();
-  return far.length + ms + networkPoints + reference.length + String(snake).length + w.length + start.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length;
+  return far.length + ms + confidence + figures + String(snakeEvidence).length + networkPoints + reference.length + String(snake).length + w.length + start.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length;
 }
 
 export async function inAWorker(source: Float32Array, target: Float32Array): Promise<Float32Array> {
@@ -47,7 +62,8 @@ export async function inAWorker(source: Float32Array, target: Float32Array): Pro
   await createWorkerRegistrar({ createWorker: () => new Worker(new URL("./worker.js", import.meta.url), { type: "module" }) });
   const points: Float32Array = await arps.parsePointCloud(new Uint8Array(), "cloud.pcd");
   const cloud = await arps.readPointCloud(new Uint8Array(), "cloud.pcd");
-  await arps.register(cloud, points);
+  const fromWorker = await arps.register(cloud, points, { search: "exhaustive" });
+  if (fromWorker.confidence < 0.5) console.warn(fromWorker.warnings, fromWorker.evidence.ambiguity);
   arps.terminate();
   return points.length ? result.matrix : result.networkMatrix;
 }

@@ -15,7 +15,7 @@ import { fileURLToPath } from "node:url";
 import { chromium } from "playwright-core";
 import { PNG } from "pngjs";
 import { serve } from "../../scripts/serve.mjs";
-import { crop, invertRigid, multiply, rigid, rotationAngleDeg, transformPoints, writePly } from "../../www/lib.js";
+import { confidenceWords, crop, invertRigid, multiply, rigid, rotationAngleDeg, transformPoints, writePly } from "../../www/lib.js";
 
 const ROOT = resolve(dirname(fileURLToPath(import.meta.url)), "../..");
 const CHROMIUM = process.env.ARPS_CHROMIUM ?? "/usr/bin/chromium";
@@ -120,13 +120,29 @@ test("aligns two uploaded scans with a known transform", { timeout: TIMEOUT * 2 
   const e = errorsAgainstTruth(result);
   console.log(
     `known transform (15 deg): rotation error ${e.rotationDeg.toFixed(3)} deg, translation error ${e.translation.toFixed(4)} m, ` +
-      `fitness ${result.fitness.toFixed(3)}, ${result.timingsMs.totalMs.toFixed(0)} ms`,
+      `fitness ${result.fitness.toFixed(3)}, confidence ${result.confidence.toFixed(3)}, ${result.timingsMs.totalMs.toFixed(0)} ms`,
   );
   assert.ok(e.rotationDeg < 5, `rotation error ${e.rotationDeg} deg`);
   assert.ok(e.translation < 0.25, `translation error ${e.translation} m (scene about 60 m across)`);
   assert.ok(result.fitness > 0.3, `fitness ${result.fitness}`);
   // The page's own figures agree with the matrix.
   assert.ok(Math.abs(result.rotationDeg - 15) < 5, `page says ${result.rotationDeg} deg`);
+  // The engine's confidence, in words next to the figures, agrees with the result.
+  assert.ok(result.confidence >= 0 && result.confidence <= 1, `confidence ${result.confidence}`);
+  assert.equal(typeof result.evidence.overlapReverse, "number");
+  assert.ok(result.startsRefined >= 1, `startsRefined ${result.startsRefined}`);
+  const verdict = (await page.textContent("#verdict")).trim();
+  assert.equal(verdict, confidenceWords(result.confidence).words);
+  assert.match(verdict, /^(likely right|uncertain|likely wrong) \(confidence [01]\.\d\d\)$/);
+  assert.match(await page.textContent("#figures-help"), /RMSE.*in the scans' units/);
+});
+
+test("confidence in words: thresholds at 0.8 and 0.5", () => {
+  assert.deepEqual(confidenceWords(0.93), { words: "likely right (confidence 0.93)", level: "right" });
+  assert.deepEqual(confidenceWords(0.8), { words: "likely right (confidence 0.80)", level: "right" });
+  assert.deepEqual(confidenceWords(0.62), { words: "uncertain (confidence 0.62)", level: "uncertain" });
+  assert.deepEqual(confidenceWords(0.12), { words: "likely wrong (confidence 0.12)", level: "wrong" });
+  assert.equal(confidenceWords(undefined).level, "uncertain");
 });
 
 test("download the aligned source as PLY; copy the matrix as JSON", async () => {
