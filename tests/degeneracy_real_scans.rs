@@ -1,3 +1,4 @@
+#![cfg(not(target_arch = "wasm32"))]
 //! The degeneracy checks (collinear: error; nearly a line, or both clouds flat: warning) stay
 //! quiet on real scans: every fixture, and the shared scans when `/work/shared` is present. The
 //! one truly flat fixture (a tray bottom, a planar STL part) is found flat. On these files the

@@ -1,6 +1,6 @@
 //! Every reader on its committed real fixture (fixtures/formats, see LICENSES.md there).
 
-use arps::io::{self, detect_format, read_mesh, read_point_cloud, Format};
+use arps::io::{detect_format, read_mesh, read_point_cloud, Format};
 use arps::PointCloud;
 
 fn fixture(name: &str) -> Vec<u8> {
@@ -179,7 +179,7 @@ fn extensions_are_case_insensitive() {
 #[test]
 fn read_path_uses_the_file_name() {
     let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/formats/ballA.off");
-    assert_eq!(io::read_path(&p).unwrap().len(), 1900);
-    let err = io::read_path(std::path::Path::new("/nonexistent/x.ply")).unwrap_err().to_string();
+    assert_eq!(arps::io::read_path(&p).unwrap().len(), 1900);
+    let err = arps::io::read_path(std::path::Path::new("/nonexistent/x.ply")).unwrap_err().to_string();
     assert!(err.contains("/nonexistent/x.ply"), "{err}");
 }
