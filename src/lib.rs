@@ -33,6 +33,7 @@ pub mod model;
 pub mod nn;
 pub mod normals;
 pub mod origin;
+mod pipeline;
 pub mod refine;
 pub mod register;
 pub mod sampling;

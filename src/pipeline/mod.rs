@@ -1,0 +1,19 @@
+//! The registration pipeline of [`crate::Registrar::register_with_progress`] as typed stages, each
+//! taking the previous one's output:
+//!
+//! 1. [`options`]: the caller's [`crate::Options`] checked and resolved ([`options::Resolved`]).
+//! 2. [`prepare`]: the validated clouds in their local, jointly normalised frames, sampled for the
+//!    network and voxelised for ICP ([`prepare::Prepared`]).
+//! 3. [`network`]: the network + GMR estimate in normalised units.
+//! 4. [`starts`]: the stages of the search and the candidate starts of each ([`starts::Starts`]).
+//! 5. [`search`]: the adaptive or exhaustive refinement of the starts, with the confidence stop
+//!    ([`search::Chosen`]).
+//! 6. [`result`]: the chosen answer mapped back to the caller's frame and units, checked, with
+//!    its warnings ([`crate::Registration`]).
+
+pub(crate) mod network;
+pub(crate) mod options;
+pub(crate) mod prepare;
+pub(crate) mod result;
+pub(crate) mod search;
+pub(crate) mod starts;

@@ -1,0 +1,83 @@
+//! Stage 1: the caller's [`Options`] checked and resolved.
+//!
+//! Takes the options and the model; gives [`Resolved`] (or an [`Error::InvalidOption`]). The
+//! checks that need the clouds' scale (distances, voxel size) are [`distances`], called by
+//! [`crate::pipeline::prepare`] once the normalisation is known.
+
+use crate::model::Model;
+use crate::refine;
+use crate::register::{Options, MAX_NETWORK_POINTS};
+use crate::{transform, Error, Result};
+use nalgebra::Matrix4;
+
+/// Default final ICP distance in normalised units.
+const DEFAULT_MAX_CORRESPONDENCE: f64 = 0.025;
+
+/// The options that need no cloud to check, resolved.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Resolved {
+    /// Points per cloud fed to the network.
+    pub n_net: usize,
+}
+
+/// Checks the network size, the ICP iteration cap and the starts.
+pub(crate) fn resolve(options: &Options, model: &Model) -> Result<Resolved> {
+    let n_net = options.network_points.unwrap_or(model.config.n_points);
+    if n_net < model.min_points() || n_net > MAX_NETWORK_POINTS {
+        return Err(Error::InvalidOption(format!(
+            "networkPoints = {n_net} is outside {}..={MAX_NETWORK_POINTS} for this model",
+            model.min_points()
+        )));
+    }
+    if options.icp_max_iterations > 10_000 {
+        return Err(Error::InvalidOption(format!(
+            "icpMaxIterations = {} is more than 10000",
+            options.icp_max_iterations
+        )));
+    }
+    refine::check_starts(&options.starts)?;
+    Ok(Resolved { n_net })
+}
+
+/// The initial guess `T_target_source` in the caller's frame (identity when none is given);
+/// an error when it is non-finite or not rigid.
+pub(crate) fn initial_transform(options: &Options) -> Result<Matrix4<f64>> {
+    Ok(match &options.initial_transform {
+        Some(rows) => {
+            let m = transform::from_rows(rows);
+            if m.iter().any(|v| !v.is_finite()) {
+                return Err(Error::InvalidOption("initialTransform has a non-finite entry".into()));
+            }
+            transform::check_rigid(&m, 1e-4)
+                .map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?;
+            m
+        }
+        None => Matrix4::identity(),
+    })
+}
+
+/// The final ICP distance and the ICP voxel size in normalised units, for a normalisation of
+/// scale `s` (user units per normalised unit).
+pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
+    let d_final = match options.max_correspondence_distance {
+        Some(d) if d.is_finite() && d > 0.0 => d / s,
+        Some(d) => {
+            return Err(Error::InvalidOption(format!("maxCorrespondenceDistance = {d} must be a positive number")))
+        }
+        None => DEFAULT_MAX_CORRESPONDENCE,
+    };
+    let voxel = match options.voxel_size {
+        // Voxels below a millionth of the clouds' half-extent cannot merge distinct f32 points
+        // meaningfully (and would saturate the grid keys): treat them as "no voxelisation".
+        Some(v) if v.is_finite() && v >= 0.0 => {
+            if v / s < 1e-6 {
+                0.0
+            } else {
+                v / s
+            }
+        }
+        Some(v) => return Err(Error::InvalidOption(format!("voxelSize = {v} must be >= 0"))),
+        None => d_final * 0.5,
+    };
+    Ok((d_final, voxel))
+}

@@ -1,0 +1,116 @@
+//! Stage 2: the clouds prepared for the network and ICP.
+//!
+//! Takes the caller's clouds, the [`Options`] and [`Resolved`]; gives [`Prepared`]: the
+//! validated clouds in their local frames (f32 offsets from f64 origins), turned by the initial
+//! guess's rotation, jointly normalised, sampled for the network and voxelised for ICP, with the
+//! initial guess and the ICP distances in normalised units. Warnings (collinear or flat clouds,
+//! unit mismatch, too few points for the network) go to `warnings`.
+
+use super::options::{self, Resolved};
+use crate::cloud::{JointNormalization, PointCloud, MIN_POINTS};
+use crate::register::Options;
+use crate::{checks, limits, origin, sampling, transform, Result};
+use nalgebra::{Matrix3, Matrix4, Vector3};
+
+/// Ratio of the clouds' sizes (largest half-extents) above which a warning says they may be in
+/// different units. A partial scan of an object is smaller than a model of the whole, but not by
+/// this much; metres against millimetres is 1000.
+const SIZE_RATIO_WARNING: f64 = 10.0;
+
+/// The clouds and figures every later stage works on (normalised units unless named otherwise).
+pub(crate) struct Prepared {
+    /// The source's f64 origin (caller's frame).
+    pub origin_source: [f64; 3],
+    /// The target's f64 origin (caller's frame).
+    pub origin_target: [f64; 3],
+    /// The initial guess's rotation, applied to the local source before normalising.
+    pub rotate_init: Matrix4<f64>,
+    /// The joint normalisation of the turned source and the target.
+    pub norm: JointNormalization,
+    /// The initial guess (identity with no initial transform), turned source to target.
+    pub t_initial: Matrix4<f64>,
+    /// The normalised, turned source.
+    pub src_n: PointCloud,
+    /// The normalised target.
+    pub tgt_n: PointCloud,
+    /// The final ICP max correspondence distance.
+    pub d_final: f64,
+    /// The source points fed to the network.
+    pub net_src: PointCloud,
+    /// The target points fed to the network.
+    pub net_tgt: PointCloud,
+    /// The voxelised source for ICP.
+    pub icp_src: PointCloud,
+    /// The voxelised target for ICP.
+    pub icp_tgt: PointCloud,
+}
+
+/// Validates, normalises and samples the pair (see the module docs).
+pub(crate) fn prepare(
+    source: &PointCloud,
+    target: &PointCloud,
+    options: &Options,
+    resolved: &Resolved,
+    warnings: &mut Vec<String>,
+) -> Result<Prepared> {
+    let n_net = resolved.n_net;
+    limits::check_cloud_points("source", source.len())?;
+    limits::check_cloud_points("target", target.len())?;
+    let source = source.validated("source", MIN_POINTS, options.non_finite)?;
+    let target = target.validated("target", MIN_POINTS, options.non_finite)?;
+    let spreads_source = checks::not_collinear("source", &source.points, warnings)?;
+    let spreads_target = checks::not_collinear("target", &target.points, warnings)?;
+    checks::flat_pair(spreads_source, spreads_target, warnings);
+    let init = options::initial_transform(options)?;
+    // From here the pipeline works on each cloud's f32 offsets from its f64 origin (the local
+    // frames); the caller's initial guess moves into them in f64: `Tr(-o_t) * init * Tr(o_s)`.
+    // Its rotation is applied to the source's points, its translation kept in f64 (`shift`),
+    // so a guess that moves the source far keeps the source's shape.
+    let (origin_source, origin_target) = (source.origin, target.origin);
+    let (source, target) = (source.into_local(), target.into_local());
+    let init_local = origin::to_local(&init, origin_source, origin_target);
+    let rotate_init = transform::from_rotation_translation(&transform::rotation(&init_local), &Vector3::zeros());
+    let shift = Matrix4::new_translation(&transform::translation(&init_local));
+    let (size_source, size_target) = (source.half_extent(), target.half_extent());
+    let size_ratio = size_source.max(size_target) / size_source.min(size_target);
+    if size_ratio > SIZE_RATIO_WARNING {
+        warnings.push(format!(
+            "the clouds differ in size by {size_ratio:.0}x (largest half-extents: source {size_source:.4}, target {size_target:.4}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres)"
+        ));
+    }
+    // The network sees the source already turned by the initial guess (its shift only moves
+    // the source's centre, which the normalisation removes).
+    let source_init =
+        if transform::rotation(&init_local) == Matrix3::identity() { source } else { source.transformed(&rotate_init) };
+    let norm = JointNormalization::of_pair(&source_init, &target);
+    // the initial guess (identity with no initialTransform), from the turned source to the target
+    let t_initial = norm.normalize_transform(&shift);
+    checks::initial_distance(&t_initial)?;
+    let src_n = source_init.transformed(&norm.source_to_normalized());
+    let tgt_n = target.transformed(&norm.target_to_normalized());
+    let (d_final, voxel) = options::distances(options, norm.scale)?;
+    for (what, c) in [("source", &src_n), ("target", &tgt_n)] {
+        if c.len() < n_net {
+            warnings
+                .push(format!("{what} has {} points, fewer than the network's {n_net}: some were used twice", c.len()));
+        }
+    }
+    let net_src = sampling::network_sample(&src_n, n_net, options.seed);
+    let net_tgt = sampling::network_sample(&tgt_n, n_net, options.seed ^ sampling::TARGET_SEED_XOR);
+    let icp_src = sampling::voxel_downsample(&src_n, voxel as f32);
+    let icp_tgt = sampling::voxel_downsample(&tgt_n, voxel as f32);
+    Ok(Prepared {
+        origin_source,
+        origin_target,
+        rotate_init,
+        norm,
+        t_initial,
+        src_n,
+        tgt_n,
+        d_final,
+        net_src,
+        net_tgt,
+        icp_src,
+        icp_tgt,
+    })
+}

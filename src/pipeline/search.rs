@@ -1,0 +1,96 @@
+//! Stage 5: the search over the starts.
+//!
+//! Takes the [`Prepared`] clouds, the stages of [`super::starts`] and the options; gives
+//! [`Chosen`]: the best refined start ([`refine::refine_best`], compared across stages by
+//! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
+//! first stage whose best reaches [`STOP_CONFIDENCE`]. With no start refined at all, the
+//! network's estimate (the initial transform with the network off), unrefined, and a warning.
+
+use super::prepare::Prepared;
+use super::starts::Starts;
+use crate::confidence::{self, Evidence};
+use crate::icp::{IcpKind, IcpTarget};
+use crate::model::{Model, ModelWorkspace};
+use crate::refine::{self, Candidate, Refinement, Start};
+use crate::register::{Options, Search, STOP_CONFIDENCE};
+use crate::Result;
+use nalgebra::Matrix4;
+
+/// The answer of the search, in normalised units.
+pub(crate) struct Chosen {
+    /// The chosen refined start.
+    pub candidate: Candidate,
+    /// What its confidence is computed from.
+    pub evidence: Evidence,
+    /// Its confidence.
+    pub confidence: f64,
+    /// How many starts were refined.
+    pub starts_refined: usize,
+}
+
+/// Refines the starts of each stage in turn (see the module docs).
+pub(crate) fn search(
+    prepared: &Prepared,
+    stages: &[Vec<Start>],
+    starts: &mut Starts,
+    options: &Options,
+    model: &Model,
+    workspace: &mut ModelWorkspace,
+    warnings: &mut Vec<String>,
+) -> Result<Chosen> {
+    let p = prepared;
+    let d_final = p.d_final;
+    let with_normals = options.icp == IcpKind::Plane;
+    let target_index = IcpTarget::new(&p.icp_tgt.points, with_normals);
+    let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations };
+    let source_index = IcpTarget::new(&p.icp_src.points, false);
+    let judge = |t: &Matrix4<f64>| {
+        confidence::evidence(&target_index, &source_index, &p.icp_src.points, t, d_final, options.icp)
+    };
+    let mut best: Option<(Candidate, Evidence, f64)> = None;
+    let mut starts_refined = 0usize;
+    for stage in stages {
+        let mut starts = starts.build(stage, model, workspace)?;
+        if options.icp == IcpKind::Off {
+            // nothing is refined or compared: the first start is the answer
+            starts.truncate(1);
+        }
+        if starts.is_empty() {
+            continue;
+        }
+        starts_refined += starts.len();
+        let Some(c) = refine::refine_best(&target_index, &p.icp_src.points, &starts, &how) else { continue };
+        let better = match &best {
+            None => true,
+            Some((b, _, _)) => refine::choose(&[*b, c]) == Some(1),
+        };
+        if better {
+            let e = judge(&c.T_target_source);
+            best = Some((c, e, confidence::confidence(&e)));
+        }
+        if options.search == Search::Adaptive && best.as_ref().is_some_and(|b| b.2 >= STOP_CONFIDENCE) {
+            break;
+        }
+    }
+    // no start at all (only global ones, and the descriptors matched too little): the first
+    // start the options name, unrefined
+    let (candidate, evidence, confidence) = match best {
+        Some(b) => b,
+        None => {
+            let t = if options.network { starts.t_net_n() } else { p.t_initial };
+            let start = if options.network { Start::Network } else { Start::Initial };
+            let e = judge(&t);
+            warnings.push("no start could be refined (the global descriptors matched too little): the answer is the network's estimate".into());
+            let c = Candidate {
+                start,
+                T_target_source: t,
+                fitness: e.fitness,
+                inlier_rmse: e.rmse_ratio * d_final,
+                iterations: 0,
+                converged: false,
+            };
+            (c, e, confidence::confidence(&e))
+        }
+    };
+    Ok(Chosen { candidate, evidence, confidence, starts_refined })
+}

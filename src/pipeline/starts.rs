@@ -1,0 +1,137 @@
+//! Stage 4: the candidate starts.
+//!
+//! Takes the [`Options`], the [`Prepared`] clouds and the network's estimate; gives the stages of
+//! the search ([`stages`]: lists of [`Start`] kinds) and, per stage, the transforms ICP starts
+//! from ([`Starts::build`], normalised units). A new start kind is added here (and in
+//! [`Start`]).
+
+use super::network;
+use super::prepare::Prepared;
+use crate::cloud::PointCloud;
+use crate::icp::IcpKind;
+use crate::model::{Model, ModelWorkspace};
+use crate::refine::{self, Start};
+use crate::register::{Options, Search};
+use crate::timing::{Clock, Stopwatch};
+use crate::{global, transform, Result};
+use nalgebra::Matrix4;
+
+/// The starts as the options name them, with the network off mapped to what they become, without
+/// repeats; only the first with ICP off.
+pub(crate) fn kinds(options: &Options) -> Vec<Start> {
+    let mut kinds: Vec<Start> = Vec::with_capacity(options.starts.len());
+    for &start in &options.starts {
+        let start = match start {
+            Start::Network if !options.network => Start::Initial,
+            Start::TurnedInitial if !options.network => Start::Turned,
+            Start::GlobalNetwork if !options.network => Start::Global,
+            s => s,
+        };
+        if !kinds.contains(&start) {
+            kinds.push(start);
+        }
+    }
+    if options.icp == IcpKind::Off {
+        kinds.truncate(1);
+    }
+    kinds
+}
+
+/// The stages of the search: all of `kinds` at once ([`Search::Exhaustive`]), or the first
+/// start; the other local ones; the global ones ([`Search::Adaptive`]), leaving out empty stages.
+pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Vec<Start>> {
+    match search {
+        Search::Exhaustive => vec![kinds.to_vec()],
+        Search::Adaptive => {
+            let first = kinds[..1].to_vec();
+            let local: Vec<Start> = kinds[1..].iter().copied().filter(|s| !s.is_global()).collect();
+            let global: Vec<Start> = kinds[1..].iter().copied().filter(|s| s.is_global()).collect();
+            [first, local, global].into_iter().filter(|s| !s.is_empty()).collect()
+        }
+    }
+}
+
+/// Builds the start transforms of each stage; computes the global hypotheses once, when a
+/// global start first needs them.
+pub(crate) struct Starts<'a> {
+    prepared: &'a Prepared,
+    /// The network's estimate (the initial transform with the network off).
+    t_net_n: Matrix4<f64>,
+    seed: u64,
+    clock: Option<Clock>,
+    hypotheses: Option<Vec<Matrix4<f64>>>,
+    /// Milliseconds spent on the global hypotheses so far.
+    pub global_ms: f64,
+}
+
+impl<'a> Starts<'a> {
+    /// Starts for `prepared`, with the network's estimate `t_net_n` (normalised units).
+    pub(crate) fn new(prepared: &'a Prepared, t_net_n: Matrix4<f64>, seed: u64, clock: Option<Clock>) -> Self {
+        Self { prepared, t_net_n, seed, clock, hypotheses: None, global_ms: 0.0 }
+    }
+
+    /// The network's estimate these starts were built from (normalised units).
+    pub(crate) fn t_net_n(&self) -> Matrix4<f64> {
+        self.t_net_n
+    }
+
+    /// The (kind, transform) starts of one stage, in order (turned starts are six each, global
+    /// ones one per hypothesis).
+    pub(crate) fn build(
+        &mut self,
+        stage: &[Start],
+        model: &Model,
+        workspace: &mut ModelWorkspace,
+    ) -> Result<Vec<(Start, Matrix4<f64>)>> {
+        let p = self.prepared;
+        let (t_net_n, t_initial) = (self.t_net_n, p.t_initial);
+        // the six turns of `base` through the source's centroid as `base` moves it
+        let c = p.src_n.centroid();
+        let turns = |base: &Matrix4<f64>| {
+            let moved = base.transform_point(&nalgebra::Point3::new(c[0], c[1], c[2]));
+            refine::turned(base, [moved.x, moved.y, moved.z], refine::TURN_DEGREES)
+        };
+        let mut starts: Vec<(Start, Matrix4<f64>)> = Vec::with_capacity(stage.len() * 6);
+        for &start in stage {
+            match start {
+                Start::Network => starts.push((start, t_net_n)),
+                Start::Initial => starts.push((start, t_initial)),
+                Start::Centroids => starts.push((start, centroid_alignment(&p.src_n, &p.tgt_n))),
+                Start::Turned | Start::TurnedInitial => {
+                    // t_net_n is the initial transform when the network is off
+                    let base = if start == Start::Turned { t_net_n } else { t_initial };
+                    starts.extend(turns(&base).map(|t| (start, t)));
+                }
+                Start::Global | Start::GlobalNetwork => {
+                    let (clock, seed, global_ms) = (self.clock, self.seed, &mut self.global_ms);
+                    let hyps = self.hypotheses.get_or_insert_with(|| {
+                        let mut w = Stopwatch::start(clock);
+                        let params = global::GlobalParams { seed, ..Default::default() };
+                        let h = global::hypotheses(&p.src_n, &p.tgt_n, &params);
+                        *global_ms += w.lap();
+                        h.iter().map(|h| h.T_target_source).collect()
+                    });
+                    if start == Start::Global {
+                        starts.extend(hyps.iter().map(|&t| (start, t)));
+                    } else {
+                        for &h in hyps.iter() {
+                            // the network estimates the motion left after the hypothesis
+                            let moved: Vec<[f32; 3]> =
+                                p.net_src.points.iter().map(|&q| transform::apply(&h, q)).collect();
+                            let t = network::estimate(model, workspace, &moved, &p.net_tgt.points)?;
+                            starts.push((start, t * h));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(starts)
+    }
+}
+
+/// The [`Start::Centroids`] transform between two clouds in one frame: no rotation, the
+/// translation taking the source's centroid onto the target's.
+fn centroid_alignment(source: &PointCloud, target: &PointCloud) -> Matrix4<f64> {
+    let (cs, ct) = (source.centroid(), target.centroid());
+    Matrix4::new_translation(&nalgebra::Vector3::new(ct[0] - cs[0], ct[1] - cs[1], ct[2] - cs[2]))
+}
