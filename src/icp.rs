@@ -1,7 +1,7 @@
 //! ICP refinement: point-to-point and point-to-plane.
 
 use crate::spatial::KdIndex;
-use crate::{gmr, normals, transform};
+use crate::{normals, rigid, transform};
 use nalgebra::{Matrix4, Matrix6, Rotation3, SymmetricEigen, Vector3, Vector6};
 use std::sync::OnceLock;
 
@@ -90,7 +90,7 @@ struct Scratch {
     /// Per source point, its partner in the previous pass (`u32::MAX`: none): warm-starts the
     /// nearest-neighbour search.
     prev: Vec<u32>,
-    /// Contiguous copies for [`gmr::kabsch`].
+    /// Contiguous copies for [`rigid::kabsch`].
     target_xyz: Vec<[f64; 3]>,
 }
 
@@ -144,7 +144,7 @@ impl IcpTarget {
     /// Each iteration: move the source by the current transform, pair every moved point with
     /// its nearest target point, keep pairs closer than `max_correspondence_distance`
     /// (strictly), solve an update on them and compose it on the left (`T <- dT * T`).
-    /// * [`IcpKind::Point`]: the closed-form [`gmr::kabsch`] fit of the inlier pairs.
+    /// * [`IcpKind::Point`]: the closed-form [`rigid::kabsch`] fit of the inlier pairs.
     /// * [`IcpKind::Plane`]: minimises `sum ((R p + t - q) . n_q)^2` linearised about the
     ///   inliers' centroid (small-angle `R ~ I + [w]x`), a 6x6 least-squares problem in `f64`
     ///   solved by a truncated eigen-decomposition (directions with eigenvalue below
@@ -265,7 +265,7 @@ impl IcpTarget {
     fn point_update(&self, scratch: &mut Scratch) -> Option<Matrix4<f64>> {
         scratch.target_xyz.clear();
         scratch.target_xyz.extend(scratch.target.iter().map(|&j| self.points[j].map(|v| v as f64)));
-        Some(gmr::kabsch(&scratch.moved, &scratch.target_xyz, None))
+        Some(rigid::kabsch(&scratch.moved, &scratch.target_xyz, None))
     }
 
     /// Point-to-plane update on the current inlier pairs (see [`IcpTarget::align`]).
@@ -339,6 +339,6 @@ impl IcpTarget {
 /// compositions do not drift.
 fn compose_rigid(a: &Matrix4<f64>, b: &Matrix4<f64>) -> Matrix4<f64> {
     let m = a * b;
-    let r = gmr::nearest_rotation(&transform::rotation(&m));
+    let r = rigid::nearest_rotation(&transform::rotation(&m));
     transform::from_rotation_translation(&r, &transform::translation(&m))
 }

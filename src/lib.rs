@@ -36,6 +36,7 @@ pub mod origin;
 mod pipeline;
 pub mod refine;
 pub mod register;
+pub mod rigid;
 pub mod sampling;
 pub mod spatial;
 pub mod timing;
