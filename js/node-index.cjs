@@ -16,3 +16,6 @@ module.exports = {
   /** Nothing to do in Node; kept for parity with the web build. */
   initSync: () => glue,
 };
+// Marks the default export as real, so that TypeScript's and bundlers' CommonJS interop
+// (`esModuleInterop`'s __importDefault) gives `import init from "arps"` the function above.
+Object.defineProperty(module.exports, "__esModule", { value: true });

@@ -39,7 +39,8 @@ export interface CreateWorkerRegistrarOptions {
   /**
    * Starts a worker running this package's `worker.js` (the first one, and each replacement
    * after a crash, a trap or an abort). Default: `new Worker(new URL("./worker.js",
-   * import.meta.url), { type: "module" })`.
+   * import.meta.url), { type: "module" })`; under Node (no DOM `Worker`), a `worker_threads`
+   * Worker running this package's `node-worker.mjs`.
    */
   createWorker?: () => WorkerLike;
   /** Progress of the initial load (`"loading"`). */

@@ -13,6 +13,37 @@
 /** Progress stages, in order. */
 export const STAGES = Object.freeze(["loading", "preparing", "network", "refining", "done"]);
 
+/** The default worker where there is a DOM Worker (browsers, Deno, bundlers). */
+const domWorker = () => new Worker(new URL("./worker.js", import.meta.url), { type: "module", name: "arps" });
+
+/**
+ * The default worker under Node (no DOM Worker): a worker_threads Worker running node-worker.mjs,
+ * behind the DOM Worker methods the client uses. An exit reports as an error, so a crashed
+ * worker's requests reject.
+ */
+async function nodeWorkerFactory() {
+  if (typeof process !== "object" || !process?.versions?.node) {
+    throw new Error("arps worker: no Worker in this environment (pass `createWorker` or `worker`)");
+  }
+  // A variable specifier keeps bundlers from resolving the Node module for the browser.
+  const specifier = "node:worker_threads";
+  const { Worker: ThreadWorker } = await import(/* webpackIgnore: true */ /* @vite-ignore */ specifier);
+  return () => {
+    const w = new ThreadWorker(new URL("./node-worker.mjs", import.meta.url), { name: "arps" });
+    return {
+      postMessage: (message, transfer) => w.postMessage(message, transfer),
+      addEventListener: (type, fn) => {
+        if (type === "message") w.on("message", (data) => fn({ data }));
+        if (type === "error") {
+          w.on("error", (error) => fn({ message: error?.message, error }));
+          w.on("exit", (code) => fn({ message: `the worker exited with code ${code}` }));
+        }
+      },
+      terminate: () => void w.terminate(),
+    };
+  };
+}
+
 /**
  * Starts the worker, loads the engine and the model, and resolves to a registrar whose
  * methods return promises.
@@ -20,8 +51,7 @@ export const STAGES = Object.freeze(["loading", "preparing", "network", "refinin
 export async function createWorkerRegistrar(options = {}) {
   const given = options.worker ?? null;
   const createWorker =
-    options.createWorker ??
-    (given ? null : () => new Worker(new URL("./worker.js", import.meta.url), { type: "module", name: "arps" }));
+    options.createWorker ?? (given ? null : typeof Worker === "function" ? domWorker : await nodeWorkerFactory());
   // A Response body can be read once; a restarted worker needs the bytes again.
   let wasm = options.wasm;
   if (typeof Response === "function" && wasm instanceof Response) wasm = await wasm.arrayBuffer();

@@ -82,7 +82,7 @@ else
   say "wasm-opt skipped (npm binaryen not installed, ARPS_WASM_OPT=0, or --dev)"
 fi
 
-cp js/worker.js js/worker-client.js js/worker-client.d.ts pkg/
+cp js/worker.js js/node-worker.mjs js/worker-client.js js/worker-client.d.ts pkg/
 [ -f js/README.md ] && cp js/README.md pkg/README.md
 version=$(sed -n 's/^version = "\(.*\)"/\1/p' Cargo.toml | head -n1)
 node -e '

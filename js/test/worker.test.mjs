@@ -221,3 +221,20 @@ test("worker: after a trap reported by the worker, the client replaces it and re
   assert.deepEqual(started[1].requests, ["init", "register"]);
   arps.terminate();
 });
+
+test("worker: the default worker under Node (worker_threads, .wasm read from disk) registers a pair", async () => {
+  assert.equal(typeof globalThis.Worker, "undefined", "this test is about Node without a DOM Worker");
+  const arps = await createWorkerRegistrar(); // no worker, createWorker or wasm given
+  try {
+    assert.equal(arps.modelConfig.preset, "web");
+    const res = await arps.register(source(), target());
+    const { rot, tr } = errors(res.matrix);
+    assert.ok(rot < 1 && tr < 0.02, `rotation ${rot} deg, translation ${tr}`);
+    const parsed = await arps.parsePointCloud(sourcePly, "source.ply");
+    assert.ok(parsed instanceof Float32Array && parsed.length > 0 && parsed.length % 3 === 0);
+    await assert.rejects(arps.register(new Float32Array(5), target()), /packed xyz buffer has length 5/);
+    assert.ok(errors((await arps.register(source(), target())).matrix).rot < 1);
+  } finally {
+    arps.terminate();
+  }
+});
