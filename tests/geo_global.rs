@@ -2,23 +2,19 @@
 //! recovered from arbitrary rotations, 180 degrees about each axis included, on the committed
 //! fixture pairs; determinism; the RANSAC core on synthetic correspondences with outliers.
 
+mod common;
+
 use arps::global::{self, ransac, GlobalParams, RansacParams};
 use arps::transform::{from_rotation_translation, rotation_error_deg, translation_error};
 use arps::{ModelConfig, Options, PointCloud, Registrar, Search, Start, Weights};
 use nalgebra::{Matrix4, Rotation3, Vector3};
-use std::path::Path;
 
-/// A committed fixture pair (`fixtures/pairs`, paper protocol, normalised units) and its ground truth.
+/// A committed fixture pair ([`common::fixture_pair`]), its ground truth's rotation projected onto
+/// an exact rotation.
 fn fixture_pair(index: usize) -> (PointCloud, PointCloud, Matrix4<f64>) {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs");
-    let text = std::fs::read_to_string(dir.join("pairs.tsv")).unwrap();
-    let line = text.lines().nth(1 + index).unwrap();
-    let fields: Vec<&str> = line.split('\t').collect();
-    let read = |name: &str| arps::io::read_point_cloud(&std::fs::read(dir.join(name)).unwrap(), name).unwrap();
-    let v: Vec<f64> = fields[5].split_whitespace().map(|x| x.parse().unwrap()).collect();
-    let gt = Matrix4::from_row_slice(&v);
+    let (source, target, gt) = common::fixture_pair(index);
     let r = arps::gmr::nearest_rotation(&arps::transform::rotation(&gt));
-    (read(fields[1]), read(fields[2]), from_rotation_translation(&r, &arps::transform::translation(&gt)))
+    (source, target, from_rotation_translation(&r, &arps::transform::translation(&gt)))
 }
 
 /// A turn of `deg` about `axis` through the origin, then a shift.

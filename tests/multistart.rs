@@ -4,13 +4,14 @@
 
 mod common;
 
+use common::fixture_pair;
+
 use arps::icp::{IcpKind, IcpTarget};
 use arps::refine::{self, Candidate, Refinement, Start};
 use arps::transform::{rotation_error_deg, translation_error};
 use arps::{ModelConfig, Options, PointCloud, Registrar, Weights};
 use common::{bumpy_surface, crop, motion};
 use nalgebra::Matrix4;
-use std::path::Path;
 
 fn untrained() -> Registrar {
     Registrar::new(&Weights::random(&ModelConfig::web(), 0).unwrap()).unwrap()
@@ -23,18 +24,6 @@ fn how(kind: IcpKind, d: f64) -> Refinement {
 
 fn starts(list: &[Start]) -> Options {
     Options { starts: list.to_vec(), ..Options::default() }
-}
-
-/// A committed fixture pair (`fixtures/pairs`, paper protocol, normalised units) and its ground truth.
-fn fixture_pair(index: usize) -> (PointCloud, PointCloud, Matrix4<f64>) {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs");
-    let text = std::fs::read_to_string(dir.join("pairs.tsv")).unwrap();
-    // name, source, target, overlap_threshold, note, 16 numbers (row-major)
-    let line = text.lines().nth(1 + index).unwrap();
-    let fields: Vec<&str> = line.split('\t').collect();
-    let read = |name: &str| arps::io::read_point_cloud(&std::fs::read(dir.join(name)).unwrap(), name).unwrap();
-    let v: Vec<f64> = fields[5].split_whitespace().map(|x| x.parse().unwrap()).collect();
-    (read(fields[1]), read(fields[2]), Matrix4::from_row_slice(&v))
 }
 
 /// Fixture 19 (a lamp, 1024 + 1024 points, rotated about 50 degrees): with random weights the

@@ -47,3 +47,15 @@ pub fn crop(cloud: &PointCloud, dir: [f32; 3], keep: f64) -> PointCloud {
     let k = (cloud.len() as f64 * keep) as usize;
     PointCloud::new(d[..k].iter().map(|x| x.1).collect())
 }
+
+/// A committed fixture pair (`fixtures/pairs`, paper protocol, normalised units) and its ground truth.
+pub fn fixture_pair(index: usize) -> (PointCloud, PointCloud, Matrix4<f64>) {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs");
+    let text = std::fs::read_to_string(dir.join("pairs.tsv")).unwrap();
+    // name, source, target, overlap_threshold, note, 16 numbers (row-major)
+    let line = text.lines().nth(1 + index).unwrap();
+    let fields: Vec<&str> = line.split('\t').collect();
+    let read = |name: &str| arps::io::read_point_cloud(&std::fs::read(dir.join(name)).unwrap(), name).unwrap();
+    let v: Vec<f64> = fields[5].split_whitespace().map(|x| x.parse().unwrap()).collect();
+    (read(fields[1]), read(fields[2]), Matrix4::from_row_slice(&v))
+}
