@@ -1,29 +1,20 @@
-// The arps demo page: load two scans (parsed in wasm), align them in the worker, show the result
-// in three.js. Test hooks: #source-file, #target-file, #align, #result (the result as JSON),
-// #verdict (the confidence in words), #error (the message).
-import * as THREE from "three";
-import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+// The arps demo page: load two scans (parsed in the engine's worker, readied for drawing in the
+// page's worker), align them in the engine's worker, show the result in three.js. The main thread
+// never walks a whole scan. Test hooks: #source-file, #target-file, #align, #result (the result
+// as JSON), #verdict (the confidence in words), #error (the message).
 import { createWorkerRegistrar, STAGES } from "../pkg/worker-client.js";
-import {
-  confidenceWords,
-  finitePoints,
-  makeExample,
-  multiply,
-  invertRigid,
-  parseBunny,
-  rotationAngleDeg,
-  rowMajor,
-  transformPoints,
-  writePly,
-} from "./lib.js";
+import { confidenceWords, makeExample, modelSummary, multiply, invertRigid, parseBunny, rotationAngleDeg, rowMajor } from "./lib.js";
+import { alignedPly, copyCloud, dropCloud, storeCloud } from "./prep.js";
+import { MAX_DRAWN, createView } from "./view.js";
 
 const $ = (id) => document.getElementById(id);
-const COLORS = { source: 0xf97316, target: 0x38bdf8, aligned: 0x4ade80 };
 
 // ---- state --------------------------------------------------------------------------------
 
 const state = {
-  source: null, // { points: Float32Array, name }
+  // { key (its points in the page's store, www/prep.js), count, bounds: { min, max }, name, note };
+  // the main thread holds no whole scan
+  source: null,
   target: null,
   truth: null, // the example's known T_target_source (column-major), if the example is loaded
   result: null, // the last RegistrationResult
@@ -39,14 +30,8 @@ function getEngine() {
     setBadge("loading the engine…", "");
     engine = createWorkerRegistrar().then(
       (arps) => {
-        const untrained = arps.provenance?.kind === "random";
-        setBadge(
-          `engine ready · ${untrained ? "untrained placeholder model" : `model “${arps.modelConfig?.preset ?? "?"}”`}`,
-          untrained ? "warn" : "ok",
-          untrained
-            ? "The embedded network weights are an untrained placeholder: ICP does the work until trained weights ship."
-            : `Model preset ${arps.modelConfig?.preset}, N = ${arps.modelConfig?.nPoints}; provenance ${JSON.stringify(arps.provenance)}`,
-        );
+        const model = modelSummary(arps.provenance, arps.modelConfig);
+        setBadge(`engine ready · ${model.label}`, model.untrained ? "warn" : "ok", model.about);
         return arps;
       },
       (e) => {
@@ -59,11 +44,13 @@ function getEngine() {
   return engine;
 }
 
-function setBadge(text, kind, title = "") {
+/** The engine badge: `text` on it, `about` in its tooltip and in the panel it opens. */
+function setBadge(text, kind, about = "") {
   const b = $("engine-status");
   b.textContent = text;
   b.className = `badge ${kind}`;
-  b.title = title;
+  b.title = about;
+  $("engine-about").textContent = about;
 }
 
 // ---- errors and progress ------------------------------------------------------------------
@@ -114,6 +101,25 @@ function updateButtons() {
 
 const loads = { source: 0, target: 0 }; // the latest load of each slot wins
 
+const count = (n) => n.toLocaleString("en");
+
+/**
+ * Hands `points` (transferred) to the page's store under a key of this load; resolves to the
+ * page's cloud `{ key, count, drawn, bounds, name, note }` (`drawn`: the view's subsample).
+ */
+async function readyCloud(points, name, which, token) {
+  const key = `${which}#${token}`;
+  const ready = await storeCloud(key, points, MAX_DRAWN, which === "source" ? 1 : 2);
+  if (!ready.bounds) {
+    dropCloud(key);
+    throw new Error("the file holds no (finite) points");
+  }
+  const notes = [];
+  if (ready.drawn.length / 3 < ready.count) notes.push(`${count(ready.drawn.length / 3)} drawn`);
+  if (ready.dropped) notes.push(`${count(ready.dropped)} non-finite dropped`);
+  return { key, count: ready.count, drawn: ready.drawn, bounds: ready.bounds, name, note: notes.join(" · ") };
+}
+
 async function loadFile(which, file) {
   if (!file || state.busy) return;
   const token = ++loads[which];
@@ -125,9 +131,10 @@ async function loadFile(which, file) {
     const arps = await getEngine();
     const parsed = await arps.parsePointCloud(bytes, file.name, { transfer: true });
     if (token !== loads[which]) return;
-    const { points, dropped } = finitePoints(parsed);
-    if (points.length === 0) throw new Error("the file holds no (finite) points");
-    setCloud(which, { points, name: file.name, note: dropped ? `${dropped} non-finite dropped` : "" });
+    $(`${which}-info`).textContent = `${file.name}: preparing ${count(parsed.length / 3)} points…`;
+    const cloud = await readyCloud(parsed, file.name, which, token);
+    if (token !== loads[which]) return dropCloud(cloud.key);
+    setCloud(which, cloud);
   } catch (e) {
     if (token !== loads[which]) return;
     setCloud(which, null);
@@ -135,17 +142,22 @@ async function loadFile(which, file) {
   }
 }
 
+/** Puts `cloud` (or nothing) in slot `which`: the store forgets the old one, the view draws the new. */
 function setCloud(which, cloud) {
+  if (state[which] && state[which].key !== cloud?.key) dropCloud(state[which].key);
   state[which] = cloud;
   state.result = null;
   state.truth = null;
   const info = $(`${which}-info`);
   info.textContent = cloud
-    ? `${cloud.name} · ${(cloud.points.length / 3).toLocaleString("en")} points${cloud.note ? ` · ${cloud.note}` : ""}`
+    ? `${cloud.name} · ${count(cloud.count)} points${cloud.note ? ` · ${cloud.note}` : ""}`
     : "drop a file or click to choose";
   $(`${which}-drop`).classList.toggle("loaded", !!cloud);
   showResult(null);
-  view.setClouds(state.source?.points ?? null, state.target?.points ?? null);
+  view.setAligned(null);
+  view.setCloud(which, cloud); // hands cloud.drawn over to the view
+  if (cloud) delete cloud.drawn;
+  $("empty").hidden = !!(state.source || state.target);
   setView("before");
   view.fit();
   updateButtons();
@@ -158,10 +170,16 @@ async function loadExample() {
     const response = await fetch(new URL("../node_modules/bunny/index.js", import.meta.url));
     if (!response.ok) throw new Error(`HTTP ${response.status} fetching the bunny mesh`);
     const example = makeExample(parseBunny(await response.text()));
-    loads.source++;
-    loads.target++;
-    setCloud("source", { points: example.source, name: "bunny, view A (moved)" });
-    setCloud("target", { points: example.target, name: "bunny, view B" });
+    const tokens = [++loads.source, ++loads.target];
+    const source = await readyCloud(example.source, "bunny, view A (moved)", "source", tokens[0]);
+    const target = await readyCloud(example.target, "bunny, view B", "target", tokens[1]);
+    if (tokens[0] !== loads.source || tokens[1] !== loads.target) {
+      dropCloud(source.key);
+      dropCloud(target.key);
+      return;
+    }
+    setCloud("source", source);
+    setCloud("target", target);
     state.truth = example.truth;
   } catch (e) {
     showError(`Could not make the example: ${e?.message ?? e}`);
@@ -221,14 +239,21 @@ async function align() {
   try {
     const arps = await getEngine();
     const truth = state.truth;
-    const result = await arps.register(state.source.points, state.target.points, options, {
+    // Copies made in the page's store, handed (transferred) to the engine's worker: the main
+    // thread neither copies nor serialises the scans.
+    const [source, target] = await Promise.all([copyCloud(state.source.key), copyCloud(state.target.key)]);
+    controller.signal.throwIfAborted();
+    const result = await arps.register(source, target, options, {
       onProgress: setStage,
       signal: controller.signal,
+      transfer: true,
     });
     state.result = result;
     showResult(result, truth);
     view.setAligned(result.matrix);
     setView("after");
+    // One column (phones): bring the result into view.
+    if (window.matchMedia("(max-width: 800px)").matches) $("results").scrollIntoView({ block: "start" });
   } catch (e) {
     if (e?.name === "AbortError") showError("Alignment cancelled.");
     else showError(`Alignment failed: ${e?.message ?? e}`);
@@ -270,6 +295,7 @@ function resultJson(r, truth) {
 
 function showResult(r, truth = null) {
   $("summary").hidden = !r;
+  $("results-empty").hidden = !!r;
   if (!r) {
     $("result").textContent = "";
     return;
@@ -290,11 +316,25 @@ function showResult(r, truth = null) {
   const verdict = confidenceWords(r.confidence);
   $("verdict").textContent = verdict.words;
   $("verdict").dataset.level = verdict.level;
+  const d = fmt(r.maxCorrespondenceDistance, 3);
+  // [term, figure, what it means in plain words]
   const rows = [
-    ["Rotation", `${json.rotationDeg.toFixed(2)}°`],
-    ["Translation", `(${json.translation.map((v) => fmt(v)).join(", ")}) · |t| = ${fmt(Math.hypot(...json.translation))}`],
-    ["Fitness", `${(r.fitness * 100).toFixed(1)}% of source points within ${fmt(r.maxCorrespondenceDistance, 3)}`],
-    ["Inlier RMSE", fmt(r.inlierRmse)],
+    ["Rotation", `${json.rotationDeg.toFixed(2)}°`, "How far the source turns to land on the target."],
+    [
+      "Translation",
+      `(${json.translation.map((v) => fmt(v)).join(", ")}) · |t| = ${fmt(Math.hypot(...json.translation))} units`,
+      "How far it then moves, in the scans' units.",
+    ],
+    [
+      "Fitness",
+      `${(r.fitness * 100).toFixed(1)}% of source points within ${d} units`,
+      `The share of the moved source's points with a target point within ${d} units (the max correspondence distance). Partial overlap caps it below 100%.`,
+    ],
+    [
+      "Inlier RMSE",
+      `${fmt(r.inlierRmse)} units`,
+      `The typical (root mean square) distance between those matched points: the misfit left. Good alignments come near the scanner's noise, well under ${d}.`,
+    ],
     [
       "ICP",
       `from the ${r.start} start (best of ${r.startsRefined} start${r.startsRefined === 1 ? "" : "s"} refined), ${r.iterations} iterations${r.iterations ? (r.converged ? ", converged" : ", not converged") : ""}`,
@@ -311,11 +351,17 @@ function showResult(r, truth = null) {
     ]);
   }
   $("figures").replaceChildren(
-    ...rows.flatMap(([k, v]) => {
+    ...rows.flatMap(([k, v, help]) => {
       const dt = document.createElement("dt");
       dt.textContent = k;
       const dd = document.createElement("dd");
       dd.textContent = v;
+      if (help) {
+        const small = document.createElement("small");
+        small.className = "explain";
+        small.textContent = help;
+        dd.append(small);
+      }
       return [dt, dd];
     }),
   );
@@ -348,130 +394,26 @@ async function copyMatrix() {
   setTimeout(() => (button.textContent = "Copy matrix as JSON"), 1500);
 }
 
-function downloadAligned() {
+async function downloadAligned() {
   if (!state.result || !state.source) return;
-  const aligned = transformPoints(state.source.points, state.result.matrix);
-  const bytes = writePly(aligned, `arps: ${state.source.name} aligned onto ${state.target.name}`);
-  const a = document.createElement("a");
-  a.href = URL.createObjectURL(new Blob([bytes], { type: "application/octet-stream" }));
-  a.download = `${state.source.name.replace(/\.[^.]*$/, "").replace(/[^\w.-]+/g, "_") || "source"}-aligned.ply`;
-  document.body.append(a);
-  a.click();
-  a.remove();
-  setTimeout(() => URL.revokeObjectURL(a.href), 10_000);
-}
-
-// ---- the three.js view --------------------------------------------------------------------
-
-function createView(canvas) {
-  const renderer = new THREE.WebGLRenderer({ canvas, antialias: true, preserveDrawingBuffer: true });
-  renderer.setPixelRatio(Math.min(window.devicePixelRatio, 2));
-  const scene = new THREE.Scene();
-  scene.background = new THREE.Color(0x0f172a);
-  const camera = new THREE.PerspectiveCamera(45, 1, 0.01, 1000);
-  camera.position.set(3, 2, 4);
-  let controls = null;
-  const objects = { source: null, target: null, aligned: null };
-  let size = 2;
-  let pending = false;
-
-  const render = () => {
-    pending = false;
-    renderer.render(scene, camera);
-  };
-  const requestRender = () => {
-    if (!pending) {
-      pending = true;
-      requestAnimationFrame(render);
-    }
-  };
-
-  const makeControls = () => {
-    controls?.dispose();
-    controls = new OrbitControls(camera, canvas);
-    controls.addEventListener("change", requestRender);
-  };
-  makeControls();
-
-  const material = (color) =>
-    new THREE.PointsMaterial({ color, size: size * renderer.getPixelRatio(), sizeAttenuation: false });
-
-  const replace = (key, points, color) => {
-    if (objects[key]) {
-      scene.remove(objects[key]);
-      if (key !== "aligned") objects[key].geometry.dispose(); // aligned shares the source's
-      objects[key].material.dispose();
-      objects[key] = null;
-    }
-    if (!points) return;
-    const geometry = new THREE.BufferGeometry();
-    geometry.setAttribute("position", new THREE.BufferAttribute(points, 3));
-    geometry.computeBoundingSphere();
-    objects[key] = new THREE.Points(geometry, material(color));
-    scene.add(objects[key]);
-  };
-
-  new ResizeObserver(() => {
-    const { clientWidth: w, clientHeight: h } = canvas;
-    if (!w || !h) return;
-    renderer.setSize(w, h, false);
-    camera.aspect = w / h;
-    camera.updateProjectionMatrix();
-    render();
-  }).observe(canvas);
-
-  return {
-    setClouds(source, target) {
-      replace("aligned", null);
-      replace("source", source ? source.slice() : null, COLORS.source);
-      replace("target", target ? target.slice() : null, COLORS.target);
-      $("empty").hidden = !!(source || target);
-      requestRender();
-    },
-    setAligned(matrix) {
-      replace("aligned", null);
-      requestRender();
-      if (!objects.source || !matrix) return;
-      const aligned = new THREE.Points(objects.source.geometry, material(COLORS.aligned));
-      aligned.matrixAutoUpdate = false;
-      aligned.matrix.fromArray(matrix);
-      aligned.matrixWorldNeedsUpdate = true;
-      objects.aligned = aligned;
-      scene.add(aligned);
-      requestRender();
-    },
-    show(which) {
-      if (objects.source) objects.source.visible = which === "before" || !objects.aligned;
-      if (objects.aligned) objects.aligned.visible = which === "after";
-      requestRender();
-    },
-    setPointSize(px) {
-      size = px;
-      for (const o of Object.values(objects)) if (o) o.material.size = size * renderer.getPixelRatio();
-      requestRender();
-    },
-    /** Frames every cloud; Z up when the data is flat in z (scans), else Y up (three.js). */
-    fit() {
-      const box = new THREE.Box3();
-      for (const o of Object.values(objects)) if (o) box.expandByObject(o);
-      if (box.isEmpty()) return requestRender();
-      const extent = box.getSize(new THREE.Vector3());
-      const center = box.getCenter(new THREE.Vector3());
-      const radius = Math.max(extent.length() / 2, 1e-6);
-      const zUp = extent.z < 0.5 * Math.min(extent.x, extent.y);
-      camera.up.set(0, zUp ? 0 : 1, zUp ? 1 : 0);
-      const dir = zUp ? new THREE.Vector3(-0.6, -1, 0.8) : new THREE.Vector3(0.5, 0.45, 1);
-      const dist = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) / Math.min(1, camera.aspect || 1);
-      camera.position.copy(center).addScaledVector(dir.normalize(), dist * 0.9);
-      camera.near = dist / 1000;
-      camera.far = dist * 10;
-      camera.updateProjectionMatrix();
-      makeControls();
-      controls.target.copy(center);
-      controls.update();
-      requestRender();
-    },
-  };
+  const { source, target, result } = state;
+  const button = $("download-ply");
+  button.disabled = true;
+  try {
+    // The transform and the PLY writing run in the page's store, where the points are.
+    const bytes = await alignedPly(source.key, result.matrix, `arps: ${source.name} aligned onto ${target.name}`);
+    const a = document.createElement("a");
+    a.href = URL.createObjectURL(new Blob([bytes], { type: "application/octet-stream" }));
+    a.download = `${source.name.replace(/\.[^.]*$/, "").replace(/[^\w.-]+/g, "_") || "source"}-aligned.ply`;
+    document.body.append(a);
+    a.click();
+    a.remove();
+    setTimeout(() => URL.revokeObjectURL(a.href), 10_000);
+  } catch (e) {
+    showError(`Could not write the aligned source: ${e?.message ?? e}`);
+  } finally {
+    button.disabled = false;
+  }
 }
 
 function setView(which) {
@@ -485,7 +427,7 @@ function setView(which) {
 
 // ---- wiring -------------------------------------------------------------------------------
 
-const view = createView($("canvas"));
+const view = createView($("canvas"), { onError: (e) => showError(`The view failed: ${e.message}`) });
 
 for (const which of ["source", "target"]) {
   const input = $(`${which}-file`);

@@ -197,3 +197,152 @@ export function confidenceWords(confidence) {
   if (confidence >= 0.5) return { words: `uncertain ${figure}`, level: "uncertain" };
   return { words: `likely wrong ${figure}`, level: "wrong" };
 }
+
+/**
+ * At most `max` of the packed xyz `points` for drawing: all of them when there are few enough,
+ * else a stratified random subsample (the i-th point drawn from the i-th of `max` equal runs of
+ * the input, at a seeded random offset), so scan-line order does not alias. Points with a
+ * non-finite coordinate are skipped. Always a new array (the input can be transferred after).
+ */
+export function decimate(points, max, seed = 0) {
+  const n = points.length / 3;
+  const take = Math.min(n, Math.max(0, Math.floor(max)));
+  const out = new Float32Array(take * 3);
+  const rand = random(seed);
+  let k = 0;
+  for (let i = 0; i < take; i++) {
+    const j = take === n ? i : Math.min(n - 1, Math.floor(((i + rand()) * n) / take));
+    const x = points[j * 3];
+    const y = points[j * 3 + 1];
+    const z = points[j * 3 + 2];
+    if (!(Number.isFinite(x) && Number.isFinite(y) && Number.isFinite(z))) continue;
+    out[k++] = x;
+    out[k++] = y;
+    out[k++] = z;
+  }
+  return k === out.length ? out : out.slice(0, k);
+}
+
+/** Axis-aligned bounds `{ min: [x, y, z], max: [x, y, z] }` of the finite points; `null` if none. */
+export function bounds(points) {
+  let x0 = Infinity, y0 = Infinity, z0 = Infinity, x1 = -Infinity, y1 = -Infinity, z1 = -Infinity;
+  for (let i = 0; i < points.length; i += 3) {
+    const x = points[i];
+    const y = points[i + 1];
+    const z = points[i + 2];
+    if (!(Number.isFinite(x) && Number.isFinite(y) && Number.isFinite(z))) continue;
+    if (x < x0) x0 = x;
+    if (x > x1) x1 = x;
+    if (y < y0) y0 = y;
+    if (y > y1) y1 = y;
+    if (z < z0) z0 = z;
+    if (z > z1) z1 = z;
+  }
+  return x0 <= x1 ? { min: [x0, y0, z0], max: [x1, y1, z1] } : null;
+}
+
+/** The bounds of `b`'s eight corners mapped through the column-major rigid transform `m`. */
+export function transformBounds(b, m) {
+  const corners = new Float32Array(24);
+  for (let c = 0; c < 8; c++)
+    for (let d = 0; d < 3; d++) corners[c * 3 + d] = (c >> d) & 1 ? b.max[d] : b.min[d];
+  return bounds(transformPoints(corners, m));
+}
+
+/** The smallest bounds holding every one of `list` (`null` entries skipped); `null` if none. */
+export function unionBounds(list) {
+  let out = null;
+  for (const b of list) {
+    if (!b) continue;
+    out = out
+      ? { min: out.min.map((v, d) => Math.min(v, b.min[d])), max: out.max.map((v, d) => Math.max(v, b.max[d])) }
+      : { min: [...b.min], max: [...b.max] };
+  }
+  return out;
+}
+
+/**
+ * Parameters of a network with these sizes (a `modelConfig` from the engine), by the same
+ * arithmetic as the engine's `ModelConfig::parameter_count`: L ARPS layers (position MLP, two
+ * attention blocks on 2C-wide tokens, output, soft-reference score, step MLP) and the membership
+ * head.
+ */
+export function parameterCount(config) {
+  const linear = (i, o) => i * o + o;
+  const mlp = (first, hidden, last) => {
+    let prev = first;
+    let sum = 0;
+    for (const h of [...hidden, last]) {
+      sum += linear(prev, h);
+      prev = h;
+    }
+    return sum;
+  };
+  const c = config.featureDim;
+  const d = 2 * c;
+  const block = 4 * linear(d, d) + 4 * d + linear(d, config.ffnDim) + linear(config.ffnDim, d);
+  const score = config.reference === "soft" ? linear(c, 1) : 0;
+  const layer =
+    mlp(3, config.posHidden, c) + 2 * block + linear(d, c) + score + linear(3 + c, config.stepHidden) + linear(config.stepHidden, 1);
+  return config.layers * layer + mlp(2 * c, config.headHidden, config.gaussians);
+}
+
+const STORED = { f16: "16-bit floats", f32: "32-bit floats", i8: "8-bit integers", int8: "8-bit integers", q8: "8-bit integers" };
+const word = (v) => (typeof v === "string" && /^[\w.+-]{1,40}$/.test(v) ? v : null);
+const count = (v) => (Number.isFinite(v) && v >= 0 ? Math.round(v).toLocaleString("en") : null);
+
+/**
+ * The engine's model in words, for the engine badge: `{ label, about, untrained }`. `label` is
+ * short (name and size); `about` says what the network is and how it was trained, from the
+ * weights' provenance and config (only counts and short names, never paths or raw JSON).
+ */
+export function modelSummary(provenance, config) {
+  const p = provenance && typeof provenance === "object" ? provenance : {};
+  if (p.kind === "random") {
+    return {
+      label: "untrained placeholder model",
+      about: "The network's weights are an untrained placeholder: ICP and the global search do the work.",
+      untrained: true,
+    };
+  }
+  const name = word(config?.preset) ?? "custom";
+  let params = null;
+  try {
+    const n = parameterCount(config);
+    if (Number.isFinite(n) && n > 0) params = n;
+  } catch {
+    /* a config without the sizes: no count */
+  }
+  const millions = params ? `${(params / 1e6).toFixed(2)} M parameters` : null;
+  const label = `model “${name}”${millions ? ` · ${millions}` : ""}`;
+  const sentences = [];
+  const run = word(p.run);
+  const what = [];
+  if (params) what.push(`${(params / 1e6).toFixed(2)} million parameters`);
+  if (config?.layers && config?.featureDim)
+    what.push(`${config.layers} attention layers on ${2 * config.featureDim}-wide tokens, ${config.gaussians} Gaussians`);
+  if (config?.nPoints) what.push(`${config.nPoints} points per scan into the network`);
+  const stored = STORED[p.stored_as] ?? null;
+  sentences.push(
+    `Model “${name}”${run ? ` (run ${run})` : ""}${what.length ? `: ${what.join("; ")}` : ""}${stored ? `, weights stored as ${stored}` : ""}.`,
+  );
+  const steps = count(p.step);
+  const pairs = count(p.pairs_seen);
+  const hours = Number.isFinite(p.run_total?.wall_clock_s ?? p.wall_clock_s) ? (p.run_total?.wall_clock_s ?? p.wall_clock_s) / 3600 : null;
+  const sessions = count(p.run_total?.sessions);
+  if (steps || pairs) {
+    const data = [];
+    if (p.data?.procedural) data.push("procedurally generated shapes");
+    const meshes = count(p.data?.bank_meshes?.train);
+    if (meshes && meshes !== "0") data.push(`a bank of ${meshes} meshes`);
+    const trainer = word(String(p.trainer ?? p.exported_by ?? "").split(" ")[0]);
+    sentences.push(
+      `Trained${trainer ? ` with ${trainer}` : ""}${steps ? ` for ${steps} steps` : ""}${pairs ? ` on ${pairs} synthetic partial-scan pairs` : ""}` +
+        `${data.length ? ` (${data.join(" and ")})` : ""}` +
+        `${hours ? `, about ${hours.toFixed(1)} hours of CPU time${sessions ? ` over ${sessions} sessions` : ""}` : ""}.`,
+    );
+  } else {
+    sentences.push("No training record came with these weights.");
+  }
+  return { label, about: sentences.join(" "), untrained: false };
+}

@@ -1,0 +1,61 @@
+// Promise API of the page's cloud store (prep-worker.js): every point of each loaded scan lives
+// there; the main thread gets a subsample to draw, bounds, and transferable copies for the engine.
+// The worker starts on the first request; after a crash the next request starts a new (empty) one.
+
+let worker = null;
+let nextId = 1;
+const pending = new Map();
+
+function start() {
+  const w = new Worker(new URL("./prep-worker.js", import.meta.url), { type: "module", name: "arps-page-store" });
+  w.addEventListener("message", ({ data }) => {
+    const p = pending.get(data.id);
+    if (!p) return;
+    pending.delete(data.id);
+    if (data.error) p.reject(new Error(data.error));
+    else p.resolve(data);
+  });
+  w.addEventListener("error", (event) => {
+    event.preventDefault();
+    const error = new Error(`the page's scan store failed: ${event.message || "unknown error"}; load the scans again`);
+    for (const p of pending.values()) p.reject(error);
+    pending.clear();
+    w.terminate();
+    if (worker === w) worker = null;
+  });
+  return w;
+}
+
+function request(message, transfer = []) {
+  worker ??= start();
+  const id = nextId++;
+  return new Promise((resolve, reject) => {
+    pending.set(id, { resolve, reject });
+    worker.postMessage({ ...message, id }, transfer);
+  });
+}
+
+/**
+ * Stores `points` (packed xyz; transferred, so detached here afterwards) under `key`, without its
+ * non-finite points. Resolves to `{ count, drawn, bounds, dropped }`: `drawn` at most `maxDrawn`
+ * of the points (a seeded stratified subsample) for the view, `bounds` `{ min, max }` of all of
+ * them (`null` when none is finite), `dropped` how many were non-finite.
+ */
+export function storeCloud(key, points, maxDrawn, seed = 0) {
+  return request({ type: "store", key, points, maxDrawn, seed }, [points.buffer]);
+}
+
+/** A fresh copy of the points stored under `key` (yours to transfer). */
+export async function copyCloud(key) {
+  return (await request({ type: "copy", key })).points;
+}
+
+/** The binary PLY bytes of the points stored under `key` mapped through `matrix` (column-major). */
+export async function alignedPly(key, matrix, comment) {
+  return (await request({ type: "ply", key, matrix: Float64Array.from(matrix), comment })).bytes;
+}
+
+/** Forgets the points stored under `key`. */
+export function dropCloud(key) {
+  if (worker) worker.postMessage({ type: "drop", key, id: 0 });
+}

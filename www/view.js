@@ -1,0 +1,119 @@
+// The demo page's view, main-thread side: the camera and its OrbitControls, framing from bounding
+// boxes (eight corners per cloud, never a pass over the points), and the scene (www/scene.js),
+// which draws in a worker on an OffscreenCanvas where the browser can (render-worker.js), else
+// here. Clouds arrive already subsampled (at most MAX_DRAWN points each; the engine gets them all).
+import * as THREE from "three";
+import { OrbitControls } from "three/addons/controls/OrbitControls.js";
+import { transformBounds, unionBounds } from "./lib.js";
+import { createScene } from "./scene.js";
+
+/** At most this many points of each cloud are drawn (`?drawn=N` in the page's URL overrides it). */
+export const MAX_DRAWN = Math.max(1000, Number(new URLSearchParams(location.search).get("drawn")) || 200_000);
+
+/** Sends messages to the scene: to its worker (`drawn` arrays are transferred), or to it here. */
+function sceneBackend(canvas, onError) {
+  if (typeof canvas.transferControlToOffscreen === "function" && typeof Worker === "function") {
+    try {
+      const offscreen = canvas.transferControlToOffscreen();
+      const worker = new Worker(new URL("./render-worker.js", import.meta.url), { type: "module", name: "arps-page-render" });
+      worker.addEventListener("message", ({ data }) => data.type === "error" && onError(new Error(data.message)));
+      worker.addEventListener("error", (e) => {
+        e.preventDefault();
+        onError(new Error(`the view's worker failed: ${e.message || "unknown error"}`));
+      });
+      worker.postMessage({ type: "init", canvas: offscreen }, [offscreen]);
+      return { send: (msg) => worker.postMessage(msg, msg.drawn ? [msg.drawn.buffer] : []), offscreen: true };
+    } catch {
+      /* no OffscreenCanvas WebGL here: draw on the page */
+    }
+  }
+  const handle = createScene(canvas);
+  return { send: (msg) => handle(msg), offscreen: false };
+}
+
+/**
+ * The view on `canvas`: `setCloud(key, cloud)` (`key` "source" or "target", `cloud`
+ * `{ drawn, bounds }` or null; `drawn` is handed over, detached afterwards), `setAligned(matrix)`,
+ * `show("before" | "after")`, `setPointSize(px)`, `fit()`. `offscreen` says where it draws.
+ */
+export function createView(canvas, { onError = (e) => console.error(e) } = {}) {
+  const backend = sceneBackend(canvas, onError);
+  const pixelRatio = Math.min(window.devicePixelRatio || 1, 2);
+  const camera = new THREE.PerspectiveCamera(45, 1, 0.01, 1000);
+  camera.position.set(3, 2, 4);
+  const boxes = { source: null, target: null, aligned: null };
+  const visible = { source: true, aligned: false };
+
+  const sendCamera = () =>
+    backend.send({
+      type: "camera",
+      position: camera.position.toArray(),
+      quaternion: camera.quaternion.toArray(),
+      up: camera.up.toArray(),
+      fov: camera.fov,
+      near: camera.near,
+      far: camera.far,
+    });
+
+  // OrbitControls keep the up axis they were made with: fit() makes new ones after turning it.
+  let controls = null;
+  const makeControls = () => {
+    controls?.dispose();
+    controls = new OrbitControls(camera, canvas);
+    controls.addEventListener("change", sendCamera);
+  };
+  makeControls();
+
+  new ResizeObserver(() => {
+    const { clientWidth: w, clientHeight: h } = canvas;
+    if (!w || !h) return;
+    camera.aspect = w / h;
+    camera.updateProjectionMatrix();
+    backend.send({ type: "resize", width: Math.round(w * pixelRatio), height: Math.round(h * pixelRatio) });
+  }).observe(canvas);
+  backend.send({ type: "pointSize", px: 2 * pixelRatio });
+  sendCamera();
+
+  return {
+    offscreen: backend.offscreen,
+    setCloud(key, cloud) {
+      if (key === "source") boxes.aligned = null;
+      boxes[key] = cloud?.bounds ?? null;
+      backend.send({ type: "cloud", key, drawn: cloud?.drawn ?? null, bounds: cloud?.bounds ?? null });
+    },
+    setAligned(matrix) {
+      boxes.aligned = matrix && boxes.source ? transformBounds(boxes.source, matrix) : null;
+      backend.send({ type: "aligned", matrix: matrix ? Array.from(matrix) : null });
+    },
+    show(which) {
+      visible.aligned = which === "after" && !!boxes.aligned;
+      visible.source = !visible.aligned;
+      backend.send({ type: "visible", ...visible });
+    },
+    setPointSize(px) {
+      backend.send({ type: "pointSize", px: px * pixelRatio });
+    },
+    /** Frames the visible clouds' boxes; Z up when the data is flat in z (scans), else Y up (three.js). */
+    fit() {
+      const box = unionBounds([visible.source ? boxes.source : null, boxes.target, visible.aligned ? boxes.aligned : null]);
+      if (!box) return;
+      const min = new THREE.Vector3(...box.min);
+      const max = new THREE.Vector3(...box.max);
+      const extent = max.clone().sub(min);
+      const center = min.clone().add(max).multiplyScalar(0.5);
+      const radius = Math.max(extent.length() / 2, 1e-6);
+      const zUp = extent.z < 0.5 * Math.min(extent.x, extent.y);
+      camera.up.set(0, zUp ? 0 : 1, zUp ? 1 : 0);
+      const dir = zUp ? new THREE.Vector3(-0.6, -1, 0.8) : new THREE.Vector3(0.5, 0.45, 1);
+      const dist = radius / Math.sin(THREE.MathUtils.degToRad(camera.fov / 2)) / Math.min(1, camera.aspect || 1);
+      camera.position.copy(center).addScaledVector(dir.normalize(), dist * 0.9);
+      camera.near = dist / 1000;
+      camera.far = dist * 10;
+      camera.updateProjectionMatrix();
+      makeControls();
+      controls.target.copy(center);
+      controls.update();
+      sendCamera();
+    },
+  };
+}
