@@ -8,6 +8,8 @@
 //   { type: "pointSize", px }
 //   { type: "camera", position, quaternion, up, fov, near, far }
 //   { type: "resize", width, height }             device pixels
+// Each message may carry a sequence number `seq`; after a frame is drawn, `onRendered(seq)` gets
+// that of the last message it shows.
 // A URL, not the bare "three": workers do not see the page's import map. It resolves to the same
 // module the map gives the page, so the page and this file share one three.js.
 import * as THREE from "../node_modules/three/build/three.module.js";
@@ -16,8 +18,11 @@ const COLORS = { source: 0xf97316, target: 0x38bdf8, aligned: 0x4ade80 };
 
 const nextFrame = typeof requestAnimationFrame === "function" ? requestAnimationFrame : (f) => setTimeout(f, 16);
 
-/** A renderer on `canvas` (an HTMLCanvasElement or OffscreenCanvas); returns its message handler. */
-export function createScene(canvas) {
+/**
+ * A renderer on `canvas` (an HTMLCanvasElement or OffscreenCanvas); returns its message handler.
+ * `onRendered(seq)` is called after each frame.
+ */
+export function createScene(canvas, onRendered = () => {}) {
   const renderer = new THREE.WebGLRenderer({ canvas, antialias: false, preserveDrawingBuffer: true });
   const scene = new THREE.Scene();
   scene.background = new THREE.Color(0x0f172a);
@@ -26,10 +31,12 @@ export function createScene(canvas) {
   let px = 2;
   let pending = false;
   let size = [0, 0];
+  let seq = 0;
 
   const render = () => {
     pending = false;
     if (size[0] && size[1]) renderer.render(scene, camera);
+    onRendered(seq);
   };
   const requestRender = () => {
     if (!pending) {
@@ -48,6 +55,7 @@ export function createScene(canvas) {
   };
 
   return function handle(msg) {
+    if (Number.isFinite(msg.seq)) seq = msg.seq;
     switch (msg.type) {
       case "cloud": {
         if (msg.key === "source") remove("aligned");

@@ -10,13 +10,19 @@ import { createScene } from "./scene.js";
 /** At most this many points of each cloud are drawn (`?drawn=N` in the page's URL overrides it). */
 export const MAX_DRAWN = Math.max(1000, Number(new URLSearchParams(location.search).get("drawn")) || 200_000);
 
-/** Sends messages to the scene: to its worker (`drawn` arrays are transferred), or to it here. */
-function sceneBackend(canvas, onError) {
+/**
+ * Sends messages to the scene: to its worker (`drawn` arrays are transferred), or to it here.
+ * `onRendered(seq)` hears of each frame drawn.
+ */
+function sceneBackend(canvas, onError, onRendered) {
   if (typeof canvas.transferControlToOffscreen === "function" && typeof Worker === "function") {
     try {
       const offscreen = canvas.transferControlToOffscreen();
       const worker = new Worker(new URL("./render-worker.js", import.meta.url), { type: "module", name: "arps-page-render" });
-      worker.addEventListener("message", ({ data }) => data.type === "error" && onError(new Error(data.message)));
+      worker.addEventListener("message", ({ data }) => {
+        if (data.type === "rendered") onRendered(data.seq);
+        else if (data.type === "error") onError(new Error(data.message));
+      });
       worker.addEventListener("error", (e) => {
         e.preventDefault();
         onError(new Error(`the view's worker failed: ${e.message || "unknown error"}`));
@@ -27,17 +33,24 @@ function sceneBackend(canvas, onError) {
       /* no OffscreenCanvas WebGL here: draw on the page */
     }
   }
-  const handle = createScene(canvas);
+  const handle = createScene(canvas, onRendered);
   return { send: (msg) => handle(msg), offscreen: false };
 }
 
 /**
- * The view on `canvas`: `setCloud(key, cloud)` (`key` "source" or "target", `cloud`
+ * The view on `canvas`. Test hook: `canvas.dataset.sent` counts the changes sent to the scene,
+ * `canvas.dataset.drawn` is the count the last drawn frame shows (equal: the view is up to date).
+ * Methods: `setCloud(key, cloud)` (`key` "source" or "target", `cloud`
  * `{ drawn, bounds }` or null; `drawn` is handed over, detached afterwards), `setAligned(matrix)`,
  * `show("before" | "after")`, `setPointSize(px)`, `fit()`. `offscreen` says where it draws.
  */
 export function createView(canvas, { onError = (e) => console.error(e) } = {}) {
-  const backend = sceneBackend(canvas, onError);
+  let seq = 0;
+  const backend = sceneBackend(canvas, onError, (drawn) => (canvas.dataset.drawn = drawn));
+  const send = (msg) => {
+    canvas.dataset.sent = ++seq;
+    backend.send({ ...msg, seq });
+  };
   const pixelRatio = Math.min(window.devicePixelRatio || 1, 2);
   const camera = new THREE.PerspectiveCamera(45, 1, 0.01, 1000);
   camera.position.set(3, 2, 4);
@@ -45,7 +58,7 @@ export function createView(canvas, { onError = (e) => console.error(e) } = {}) {
   const visible = { source: true, aligned: false };
 
   const sendCamera = () =>
-    backend.send({
+    send({
       type: "camera",
       position: camera.position.toArray(),
       quaternion: camera.quaternion.toArray(),
@@ -69,9 +82,9 @@ export function createView(canvas, { onError = (e) => console.error(e) } = {}) {
     if (!w || !h) return;
     camera.aspect = w / h;
     camera.updateProjectionMatrix();
-    backend.send({ type: "resize", width: Math.round(w * pixelRatio), height: Math.round(h * pixelRatio) });
+    send({ type: "resize", width: Math.round(w * pixelRatio), height: Math.round(h * pixelRatio) });
   }).observe(canvas);
-  backend.send({ type: "pointSize", px: 2 * pixelRatio });
+  send({ type: "pointSize", px: 2 * pixelRatio });
   sendCamera();
 
   return {
@@ -79,19 +92,19 @@ export function createView(canvas, { onError = (e) => console.error(e) } = {}) {
     setCloud(key, cloud) {
       if (key === "source") boxes.aligned = null;
       boxes[key] = cloud?.bounds ?? null;
-      backend.send({ type: "cloud", key, drawn: cloud?.drawn ?? null, bounds: cloud?.bounds ?? null });
+      send({ type: "cloud", key, drawn: cloud?.drawn ?? null, bounds: cloud?.bounds ?? null });
     },
     setAligned(matrix) {
       boxes.aligned = matrix && boxes.source ? transformBounds(boxes.source, matrix) : null;
-      backend.send({ type: "aligned", matrix: matrix ? Array.from(matrix) : null });
+      send({ type: "aligned", matrix: matrix ? Array.from(matrix) : null });
     },
     show(which) {
       visible.aligned = which === "after" && !!boxes.aligned;
       visible.source = !visible.aligned;
-      backend.send({ type: "visible", ...visible });
+      send({ type: "visible", ...visible });
     },
     setPointSize(px) {
-      backend.send({ type: "pointSize", px: px * pixelRatio });
+      send({ type: "pointSize", px: px * pixelRatio });
     },
     /** Frames the visible clouds' boxes; Z up when the data is flat in z (scans), else Y up (three.js). */
     fit() {

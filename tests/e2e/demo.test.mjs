@@ -1,11 +1,17 @@
 // End-to-end test of the demo page (www/) in Debian's Chromium, headless, through playwright-core.
 // Needs the built package (scripts/build-pkg.sh) and the npm dev dependencies; run it with
-// scripts/test-e2e.sh. The screenshot goes to $ARPS_E2E_OUT (default target/e2e/demo.png).
+// scripts/test-e2e.sh. Screenshots go to $ARPS_E2E_OUT (default target/e2e/): demo.png,
+// example.png, big-1400x860.png and big-390x844.png (the 1M-point pair's result, desktop and phone).
 //
 // The known-transform pair: two half-space crops (85% each) of the committed Velodyne fixture
 // (fixtures/scans/velodyne-small.ply, MIT), the target moved by 15 degrees about a near-vertical
 // axis plus (1.0, -0.6, 0.2) m. A modest motion on purpose: the embedded default model may still be
 // an untrained placeholder, and ICP alone recovers this one.
+//
+// The 1M-point pair: the same crops densified to 1,000,000 points each (every fixture point
+// repeated with independent jitter, about 0.08 m, different seeds for source and target), written
+// as binary PLY and uploaded like the small pair. The main thread's long tasks (Chromium's
+// `longtask` performance entries, > 50 ms) are recorded while loading, fitting and aligning it.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from "node:fs";
@@ -15,7 +21,22 @@ import { fileURLToPath } from "node:url";
 import { chromium } from "playwright-core";
 import { PNG } from "pngjs";
 import { serve } from "../../scripts/serve.mjs";
-import { confidenceWords, crop, invertRigid, multiply, rigid, rotationAngleDeg, transformPoints, writePly } from "../../www/lib.js";
+import {
+  bounds,
+  confidenceWords,
+  crop,
+  decimate,
+  invertRigid,
+  modelSummary,
+  multiply,
+  parameterCount,
+  random,
+  rigid,
+  rotationAngleDeg,
+  transformBounds,
+  transformPoints,
+  writePly,
+} from "../../www/lib.js";
 
 const ROOT = resolve(dirname(fileURLToPath(import.meta.url)), "../..");
 const CHROMIUM = process.env.ARPS_CHROMIUM ?? "/usr/bin/chromium";
@@ -23,6 +44,23 @@ const OUT = resolve(ROOT, process.env.ARPS_E2E_OUT ?? "target/e2e");
 const TIMEOUT = 120_000;
 
 const TRUTH = rigid([0.1, 0.15, 1], 15, [1.0, -0.6, 0.2]);
+const BIG = 1_000_000;
+/** The longest main-thread task allowed while loading, fitting or aligning the 1M-point pair. */
+const LONGEST_TASK_MS = 200;
+const DESKTOP = { width: 1400, height: 860 };
+const PHONE = { width: 390, height: 844 };
+
+/** `n` points: the given ones in turn, each moved by a seeded jitter of about `sigma` per axis. */
+function densify(points, n, sigma, seed) {
+  const rand = random(seed);
+  const m = points.length / 3;
+  const out = new Float32Array(n * 3);
+  for (let i = 0; i < n; i++) {
+    const j = i % m;
+    for (let d = 0; d < 3; d++) out[i * 3 + d] = points[j * 3 + d] + (rand() + rand() + rand() - 1.5) * 2 * sigma;
+  }
+  return out;
+}
 
 let server;
 let url;
@@ -48,13 +86,15 @@ before(async () => {
   const target = transformPoints(crop(scan, [-1, 0.3, 0], 0.85).points, TRUTH);
   writeFileSync(join(dir, "source.ply"), writePly(source, "e2e source"));
   writeFileSync(join(dir, "target.ply"), writePly(target, "e2e target: source frame moved by a known transform"));
+  writeFileSync(join(dir, "big-source.ply"), writePly(densify(source, BIG, 0.08, 11), "e2e 1M source"));
+  writeFileSync(join(dir, "big-target.ply"), writePly(transformPoints(densify(crop(scan, [-1, 0.3, 0], 0.85).points, BIG, 0.08, 12), TRUTH), "e2e 1M target"));
   writeFileSync(join(dir, "broken.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\nnot numbers\n");
 
   ({ server, url } = await serve({ port: 0 }));
   // A fresh profile (--user-data-dir) in the temp dir, through playwright's persistent context.
   browser = await chromium.launchPersistentContext(join(dir, "profile"), {
     executablePath: CHROMIUM,
-    viewport: { width: 1280, height: 800 },
+    viewport: DESKTOP,
     headless: true,
     args: [
       "--no-sandbox",
@@ -70,6 +110,13 @@ before(async () => {
   page = browser.pages()[0] ?? (await browser.newPage());
   page.on("console", (m) => consoleLines.push(`console.${m.type()}: ${m.text()}`));
   page.on("pageerror", (e) => consoleLines.push(`pageerror: ${e.message}`));
+  // Every main-thread task over 50 ms, as [startTime, duration] (ms, page clock).
+  await page.addInitScript(() => {
+    window.__longTasks = [];
+    new PerformanceObserver((list) => {
+      for (const e of list.getEntries()) window.__longTasks.push([e.startTime, e.duration]);
+    }).observe({ type: "longtask", buffered: true });
+  });
   await page.goto(url);
   await page.waitForFunction(() => /engine ready/.test(document.getElementById("engine-status").textContent), null, {
     timeout: TIMEOUT,
@@ -134,7 +181,13 @@ test("aligns two uploaded scans with a known transform", { timeout: TIMEOUT * 2 
   const verdict = (await page.textContent("#verdict")).trim();
   assert.equal(verdict, confidenceWords(result.confidence).words);
   assert.match(verdict, /^(likely right|uncertain|likely wrong) \(confidence [01]\.\d\d\)$/);
-  assert.match(await page.textContent("#figures-help"), /RMSE.*in the scans' units/);
+  assert.match(await page.textContent("#units-help"), /your scans' own units/);
+  // Each of fitness and inlier RMSE comes with its explanation, in the scan's units.
+  const figures = await page.$$eval("#figures dt", (dts) => dts.map((dt) => [dt.textContent, dt.nextElementSibling.textContent]));
+  const fitness = figures.find(([k]) => k === "Fitness")[1];
+  const rmse = figures.find(([k]) => k === "Inlier RMSE")[1];
+  assert.match(fitness, /% of source points within [\d.]+ units.*max correspondence distance/);
+  assert.match(rmse, /^[\d.e-]+ units.*root mean square/);
 });
 
 test("confidence in words: thresholds at 0.8 and 0.5", () => {
@@ -143,6 +196,70 @@ test("confidence in words: thresholds at 0.8 and 0.5", () => {
   assert.deepEqual(confidenceWords(0.62), { words: "uncertain (confidence 0.62)", level: "uncertain" });
   assert.deepEqual(confidenceWords(0.12), { words: "likely wrong (confidence 0.12)", level: "wrong" });
   assert.equal(confidenceWords(undefined).level, "uncertain");
+});
+
+/** The shipped model's config, camelCase as the engine reports it, from the weights file's header. */
+function shippedModelConfig() {
+  const buf = readFileSync(join(ROOT, "models/web.safetensors"));
+  const meta = JSON.parse(buf.subarray(8, 8 + Number(buf.readBigUInt64LE(0))).toString()).__metadata__;
+  const c = JSON.parse(meta.config);
+  const camel = Object.fromEntries(Object.entries(c).map(([k, v]) => [k.replace(/_(\w)/g, (_, ch) => ch.toUpperCase()), v]));
+  return { config: camel, provenance: JSON.parse(meta.provenance ?? "{}") };
+}
+
+test("page helpers: drawn subsample, bounds, parameter count, model in words", () => {
+  const n = 50_000;
+  const pts = new Float32Array(n * 3).map((_, i) => (i % 3) + i / (3 * n)); // x in [0,1), y in [1,2), z in [2,3)
+  for (let i = 350; i < 400; i++) pts[3 * i + 1] = NaN; // the 8th run of 50: whichever is picked is skipped
+  const drawn = decimate(pts, 1000, 3);
+  assert.equal(drawn.length, 3 * 999, "one point from each of the 1000 runs, but none from the non-finite one");
+  assert.ok(drawn.every(Number.isFinite));
+  // Stratified: the i-th drawn point comes from the i-th run of 50 input points.
+  assert.ok(Math.abs(drawn[3 * 500] - 0.5) < 0.002, `middle drawn point at x = ${drawn[3 * 500]}`);
+  assert.deepEqual(decimate(pts, 1000, 3), drawn, "seeded");
+  assert.equal(decimate(pts.subarray(3 * 395, 3 * 405), 1000).length, 15, "few points: all the finite ones");
+  const b = bounds(pts);
+  assert.ok(b.min[0] >= 0 && b.min[0] < 1e-4 && b.max[2] > 2.99 && b.max[2] < 3);
+  assert.equal(bounds(new Float32Array([NaN, 0, 0])), null);
+  const turned = transformBounds({ min: [0, 0, 0], max: [1, 2, 3] }, rigid([0, 0, 1], 90, [1, 0, 0]));
+  assert.deepEqual(turned.min.map((v) => Math.round(v * 1e6) / 1e6), [-1, 0, 0]);
+  assert.deepEqual(turned.max.map((v) => Math.round(v * 1e6) / 1e6), [1, 1, 3]);
+
+  // The count the engine's ModelConfig::parameter_count gives the shipped model (models/MODEL.md).
+  const { config, provenance } = shippedModelConfig();
+  assert.equal(parameterCount(config), 1_162_200);
+  const words = modelSummary(provenance, config);
+  assert.match(words.label, /^model “web” · 1\.16 M parameters$/);
+  assert.doesNotMatch(words.about, /[{}"\/\\]/, "no JSON, no paths");
+  assert.equal(modelSummary({ kind: "random" }, config).untrained, true);
+  assert.doesNotMatch(modelSummary({ run: "../../etc/x", data: { bank: "/home/me/meshes" } }, config).about, /\//);
+});
+
+test("the engine badge names the model, its size and training in words", async () => {
+  const label = (await page.textContent("#engine-status")).trim();
+  const about = (await page.textContent("#engine-about")).trim();
+  console.log(`badge: ${label}\n  ${about}`);
+  assert.match(label, /^engine ready · (model “\w+” · [\d.]+ M parameters|untrained placeholder model)$/);
+  assert.ok(about.length > 40, about);
+  assert.doesNotMatch(about + (await page.getAttribute("#engine-status", "title")), /[{}\/\\]|":/, "no raw JSON, no paths");
+  if (!/untrained/.test(label)) assert.match(about, /parameters.*Trained.* for [\d,]+ steps on [\d,]+ synthetic/);
+});
+
+test("the long-task observer sees a task that blocks the main thread", async () => {
+  const t0 = await page.evaluate(() => performance.now());
+  await page.evaluate(
+    () =>
+      new Promise((resolve) =>
+        setTimeout(() => {
+          const t = performance.now();
+          while (performance.now() - t < 150);
+          setTimeout(resolve, 100);
+        }),
+      ),
+  );
+  await page.waitForTimeout(200);
+  const tasks = await longTasksSince(t0);
+  assert.ok(tasks.some(([, d]) => d >= 140), `long tasks seen: ${JSON.stringify(tasks)}`);
 });
 
 test("download the aligned source as PLY; copy the matrix as JSON", async () => {
@@ -177,9 +294,10 @@ test("download the aligned source as PLY; copy the matrix as JSON", async () => 
 
 test("the view is not blank (screenshot)", async () => {
   mkdirSync(OUT, { recursive: true });
+  await viewUpToDate();
   await page.screenshot({ path: join(OUT, "demo.png") });
   const png = PNG.sync.read(await page.locator("#canvas").screenshot());
-  const bg = [png.data[0], png.data[1], png.data[2]]; // a corner: the background
+  const bg = [0x0f, 0x17, 0x2a]; // the scene's background (www/scene.js)
   let lit = 0;
   for (let i = 0; i < png.data.length; i += 4) {
     const d = Math.abs(png.data[i] - bg[0]) + Math.abs(png.data[i + 1] - bg[1]) + Math.abs(png.data[i + 2] - bg[2]);
@@ -242,6 +360,112 @@ test("Cancel stops an alignment, and the next one works", { timeout: TIMEOUT * 2
   const { result, error } = await alignAndWait();
   assert.equal(error, "");
   assert.ok(result.exampleError.rotationDeg < 5, "the pair aligns after a cancel");
+});
+
+/** The main thread's long tasks ([startTime, duration], ms) that started at or after `t0`. */
+async function longTasksSince(t0) {
+  return page.evaluate((t) => window.__longTasks.filter(([start]) => start >= t), t0);
+}
+
+/** Waits until the view has drawn every change sent to it (the page's test hook on #canvas). */
+async function viewUpToDate() {
+  await page.waitForFunction(
+    () => {
+      const { sent, drawn } = document.getElementById("canvas").dataset;
+      return sent !== undefined && sent === drawn;
+    },
+    null,
+    { timeout: TIMEOUT },
+  );
+}
+
+/** The view up to date, then two animation frames and a little time for late tasks. */
+async function settle() {
+  await viewUpToDate();
+  await page.evaluate(() => new Promise((r) => requestAnimationFrame(() => requestAnimationFrame(() => setTimeout(r, 300)))));
+}
+
+/** Canvas pixels within a small distance of `rgb`. */
+async function pixelsNear(rgb) {
+  const png = PNG.sync.read(await page.locator("#canvas").screenshot());
+  let n = 0;
+  for (let i = 0; i < png.data.length; i += 4) {
+    if (Math.abs(png.data[i] - rgb[0]) + Math.abs(png.data[i + 1] - rgb[1]) + Math.abs(png.data[i + 2] - rgb[2]) < 60) n++;
+  }
+  return n;
+}
+
+/** Runs `action` and reports `{ ms, tasks, longest }`: its wall time and the long tasks meanwhile. */
+async function measured(action) {
+  const t0 = await page.evaluate(() => performance.now());
+  const wall = performance.now();
+  await action();
+  const ms = performance.now() - wall;
+  await settle();
+  const tasks = await longTasksSince(t0);
+  return { ms, tasks: tasks.map(([, d]) => Math.round(d)), longest: Math.max(0, ...tasks.map(([, d]) => d)) };
+}
+
+function inViewport(box, viewport) {
+  return box && box.x >= 0 && box.y >= 0 && box.x + box.width <= viewport.width && box.y + box.height <= viewport.height;
+}
+
+test("a 1M-point pair: loaded, fitted and aligned without blocking the main thread", { timeout: TIMEOUT * 3 }, async () => {
+  const infoDone = (which) =>
+    page.waitForFunction((id) => /[\d,]+ points( ·|$)/.test(document.getElementById(id).textContent), `${which}-info`, { timeout: TIMEOUT });
+  const load = await measured(async () => {
+    await page.setInputFiles("#source-file", join(dir, "big-source.ply"));
+    await infoDone("source");
+    await page.setInputFiles("#target-file", join(dir, "big-target.ply"));
+    await infoDone("target");
+  });
+  assert.match(await page.textContent("#source-info"), /1,000,000 points · [\d,]+ drawn/);
+  assert.match(await page.textContent("#target-info"), /1,000,000 points · [\d,]+ drawn/);
+  const fit = await measured(() => page.click("#fit"));
+  let result = null;
+  const align = await measured(async () => {
+    let error;
+    ({ result, error } = await alignAndWait());
+    assert.equal(error, "", `unexpected #error: ${error}`);
+  });
+  const e = errorsAgainstTruth(result);
+  console.log(
+    `1M vs 1M: load ${(load.ms / 1000).toFixed(1)} s (long tasks ${JSON.stringify(load.tasks)} ms), fit (long tasks ${JSON.stringify(fit.tasks)}), ` +
+      `align ${(align.ms / 1000).toFixed(1)} s, engine ${result.timingsMs.totalMs.toFixed(0)} ms (long tasks ${JSON.stringify(align.tasks)}); ` +
+      `rotation error ${e.rotationDeg.toFixed(3)} deg, translation error ${e.translation.toFixed(4)} m, fitness ${result.fitness.toFixed(3)}`,
+  );
+  assert.ok(e.rotationDeg < 2, `rotation error ${e.rotationDeg} deg`);
+  assert.ok(e.translation < 0.25, `translation error ${e.translation} m`);
+  for (const [phase, m] of Object.entries({ load, fit, align })) {
+    assert.ok(m.longest < LONGEST_TASK_MS, `${phase}: the main thread was blocked for ${m.longest.toFixed(0)} ms (long tasks ${JSON.stringify(m.tasks)})`);
+  }
+
+  // Desktop: the result and its buttons are on screen without scrolling.
+  mkdirSync(OUT, { recursive: true });
+  await settle();
+  await page.screenshot({ path: join(OUT, "big-1400x860.png") });
+  // The view shows the aligned source (green), not the source where it was (orange).
+  const green = await pixelsNear([0x4a, 0xde, 0x80]);
+  const orange = await pixelsNear([0xf9, 0x73, 0x16]);
+  assert.ok(green > 2000 && orange < green / 10, `aligned (green) pixels ${green}, source (orange) ${orange}`);
+  for (const id of ["#verdict", "#matrix", "#copy-matrix", "#download-ply"]) {
+    assert.ok(inViewport(await page.locator(id).boundingBox(), DESKTOP), `${id} is not inside the 1400x860 viewport`);
+  }
+  // Phone: one column; nothing wider than the screen; the result scrolls into view whole-width.
+  await page.setViewportSize(PHONE);
+  try {
+    await page.locator("#results").scrollIntoViewIfNeeded();
+    await settle();
+    await page.screenshot({ path: join(OUT, "big-390x844.png") });
+    assert.ok((await page.evaluate(() => document.documentElement.scrollWidth)) <= PHONE.width, "the page scrolls sideways at 390 px");
+    for (const id of ["#verdict", "#copy-matrix", "#download-ply"]) {
+      const box = await page.locator(id).boundingBox();
+      assert.ok(box.x >= 0 && box.x + box.width <= PHONE.width, `${id} is cut off at 390 px: ${JSON.stringify(box)}`);
+    }
+    assert.ok(inViewport(await page.locator("#verdict").boundingBox(), PHONE), "#verdict not on screen at 390x844");
+  } finally {
+    await page.setViewportSize(DESKTOP);
+  }
 });
 
 test("no uncaught errors on the page", () => {
