@@ -204,7 +204,9 @@ impl Registrar {
         })
     }
 
-    /// A registrar on the embedded default model ([`crate::weights::DEFAULT_MODEL`]).
+    /// A registrar on the embedded default model ([`crate::weights::DEFAULT_MODEL`]; feature
+    /// `embed-model`, on by default).
+    #[cfg(feature = "embed-model")]
     pub fn with_default_model() -> Result<Self> {
         Self::from_bytes(crate::weights::DEFAULT_MODEL)
     }
