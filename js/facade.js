@@ -406,12 +406,13 @@ export async function modelBytes(source, signal, readUrl) {
   source = await source;
   if (isBytes(source)) return bytesArg(source, "model");
   let response = source;
+  let url = "";
   if (typeof Response !== "function" || !(source instanceof Response)) {
     const isRequest = typeof Request === "function" && source instanceof Request;
     if (!isRequest && typeof source !== "string" && !(source instanceof URL)) {
       fail(`model: expected a URL (string or URL), a Request, a Response or bytes, got ${describe(source)}`);
     }
-    const url = isRequest ? source.url : String(source);
+    url = isRequest ? source.url : String(source);
     if (signal?.aborted) throw aborted(signal);
     const local = readUrl ? await readUrl(url, signal) : undefined;
     if (local !== undefined) return bytesArg(local, `model ${url}`);
@@ -423,7 +424,7 @@ export async function modelBytes(source, signal, readUrl) {
     }
   }
   if (!response.ok) {
-    fail(`arps: fetching the model ${response.url || "(a Response)"} failed: HTTP ${response.status} ${response.statusText}`.trimEnd());
+    fail(`arps: fetching the model ${response.url || url || "(a Response)"} failed: HTTP ${response.status} ${response.statusText}`.trimEnd());
   }
   return new Uint8Array(await response.arrayBuffer());
 }
