@@ -4,7 +4,8 @@
 Each seed is one byte choosing the file name (see the NAMES arrays of the targets) followed by
 the file's bytes. Sources are tiny hand-made files and cut-down fixtures from
 ../fixtures/formats (see LICENSES.md there). The weights seeds were written by
-`Weights::random(&ModelConfig::tiny(), 1).to_bytes(..)`.
+`Weights::random(&ModelConfig::tiny(), 1).to_bytes(..)` (tiny_i8: `arps quantize tiny_f32.safetensors
+tiny_i8.safetensors --bits 8`).
 """
 import os
 import struct

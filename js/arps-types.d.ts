@@ -30,7 +30,7 @@ export interface RegisterOptions {
   /**
    * Points per cloud fed to the network (each cloud is resampled to exactly this many; a cloud
    * with fewer points has some used twice, with a warning). Default: the model's N (128 for the
-   * embedded model, `modelConfig.nPoints`). Range: the model's minimum up to 4096 (attention cost grows with its square).
+   * default model, `modelConfig.nPoints`). Range: the model's minimum up to 4096 (attention cost grows with its square).
    */
   networkPoints?: number | null;
   /**

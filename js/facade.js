@@ -386,12 +386,62 @@ function shift(m, os, ot) {
   return out;
 }
 
+/** Whether `v` is bytes (a typed array, DataView or ArrayBuffer); never runs user code. */
+function isBytes(v) {
+  return typedArrayKind(v) !== undefined || isArrayBuffer(v) || dataViewBytes(v) !== undefined;
+}
+
+/** An abort's rejection: the signal's reason, else a `DOMException` named `AbortError`. */
+function aborted(signal) {
+  return signal.reason ?? new DOMException("arps: the model download was aborted", "AbortError");
+}
+
+/**
+ * The bytes of a model given as bytes, a `Response`, or a URL (string, `URL` or `Request`;
+ * fetched with `signal`). `readUrl(url, signal)`, if given, may read a URL itself (the Node build
+ * reads `file:` URLs from disk) and returns `undefined` for the ones `fetch` should get. Errors
+ * name the URL and the HTTP status.
+ */
+export async function modelBytes(source, signal, readUrl) {
+  source = await source;
+  if (isBytes(source)) return bytesArg(source, "model");
+  let response = source;
+  let url = "";
+  if (typeof Response !== "function" || !(source instanceof Response)) {
+    const isRequest = typeof Request === "function" && source instanceof Request;
+    if (!isRequest && typeof source !== "string" && !(source instanceof URL)) {
+      fail(`model: expected a URL (string or URL), a Request, a Response or bytes, got ${describe(source)}`);
+    }
+    url = isRequest ? source.url : String(source);
+    if (signal?.aborted) throw aborted(signal);
+    const local = readUrl ? await readUrl(url, signal) : undefined;
+    if (local !== undefined) return bytesArg(local, `model ${url}`);
+    try {
+      response = await fetch(source, signal ? { signal } : undefined);
+    } catch (e) {
+      if (signal?.aborted || e?.name === "AbortError") throw e;
+      throw new Error(`arps: fetching the model ${url} failed: ${messageOf(e)}`, { cause: e });
+    }
+  }
+  if (!response.ok) {
+    fail(`arps: fetching the model ${response.url || url || "(a Response)"} failed: HTTP ${response.status} ${response.statusText}`.trimEnd());
+  }
+  return new Uint8Array(await response.arrayBuffer());
+}
+
 /**
  * Builds the public API over a wasm-bindgen glue module (`Registrar`, `parsePointCloud`,
  * `version`, `__wbg_reset_state`). `isReady()` says whether the glue's wasm is instantiated
- * (`init()` has resolved in the web build; always in the Node build).
+ * (`init()` has resolved in the web build; always in the Node build). `env` is what differs
+ * between the builds: `readDefaultModel()` (Node: the model file's bytes, read from disk when
+ * `withDefaultModel()` first needs them), `defaultModelHint` (what to do when the default model
+ * is not loaded) and `readUrl(url, signal)` (Node: reads `file:` URLs; see [`modelBytes`]).
+ * Besides the public API it returns `setDefaultModel(bytes, what)`, for the entries' `init`.
  */
-export function makeApi(glue, isReady) {
+export function makeApi(glue, isReady, env = {}) {
+  // The default model's bytes, checked: what withDefaultModel() loads. Set by init() (web) or
+  // read from disk on first use (Node).
+  let defaultModel = null;
   // Bumped on each re-instantiation; a Registrar built in an older one reloads its model.
   let instance = 0;
   // Set when re-instantiating failed: the module cannot be used any more.
@@ -436,19 +486,29 @@ export function makeApi(glue, isReady) {
   class Registrar {
     #inner = null;
     #instance = -1;
-    #weights; // null: the embedded model; else a private copy of the weights bytes
+    #weights; // the weights bytes (a private copy, or the default model's)
     #freed = false;
     #busy = false;
 
     constructor(key, weights) {
-      if (key !== token) fail("arps: use Registrar.withDefaultModel() or Registrar.fromBytes(bytes)");
+      if (key !== token) fail("arps: use Registrar.withDefaultModel(), Registrar.fromBytes(bytes) or await Registrar.fromUrl(url)");
       this.#weights = weights;
       this.#load();
     }
 
-    /** A registrar on the model embedded in the package. */
+    /** A registrar on the package's default model (loaded by `init()`; see arps.d.ts). */
     static withDefaultModel() {
-      return new Registrar(token, null);
+      if (!isReady()) fail("arps: the engine is not loaded yet; call and await init() first");
+      if (!defaultModel && env.readDefaultModel) defaultModel = readDefault();
+      if (!defaultModel) {
+        fail(
+          "arps: the default model is not loaded: " +
+            (env.defaultModelHint ??
+              "`await init()` fetches it (models/arps-web.safetensors next to arps_bg.wasm) unless called with `{ model: false }`; " +
+                "or load a model with `Registrar.fromBytes(bytes)` or `await Registrar.fromUrl(url)`"),
+        );
+      }
+      return new Registrar(token, defaultModel); // shared: the bytes are private and never change
     }
 
     /** A registrar on custom weights (the bytes of an arps `.safetensors` file). */
@@ -457,11 +517,22 @@ export function makeApi(glue, isReady) {
       return new Registrar(token, new Uint8Array(view)); // a copy: reloads after a trap use it
     }
 
+    /** A registrar on the weights file at `url` (fetched; `signal` aborts); see arps.d.ts. */
+    static async fromUrl(url, options) {
+      let signal;
+      try {
+        signal = options?.signal ?? undefined;
+      } catch (e) {
+        fail(`fromUrl: reading options.signal threw: ${messageOf(e)}`);
+      }
+      if (typeof url !== "string" && !(url instanceof URL)) fail(`fromUrl: expected a URL (string or URL), got ${describe(url)}`);
+      const bytes = await modelBytes(url, signal, env.readUrl);
+      return checked(bytes, String(url)).registrar;
+    }
+
     #load() {
       const weights = this.#weights;
-      this.#inner = guarded("loading the model", () =>
-        weights ? glue.Registrar.fromBytes(weights) : glue.Registrar.withDefaultModel(),
-      );
+      this.#inner = guarded("loading the model", () => glue.Registrar.fromBytes(weights));
       this.#instance = instance;
     }
 
@@ -549,6 +620,42 @@ export function makeApi(glue, isReady) {
   }
   if (typeof Symbol.dispose === "symbol") Registrar.prototype[Symbol.dispose] = Registrar.prototype.free;
 
+  /**
+   * `{ registrar, bytes }`: a registrar on a private copy of `bytes`, and that copy; an error
+   * that names `what` (a URL, a file) when they do not load.
+   */
+  function checked(bytes, what) {
+    const copy = new Uint8Array(bytesArg(bytes, "model"));
+    try {
+      return { registrar: new Registrar(token, copy), bytes: copy };
+    } catch (e) {
+      if (e?.code) throw e; // a trap: its own message
+      throw new Error(`arps: ${what} is not a valid arps weights file (${readMessage(e)})`, { cause: e });
+    }
+  }
+
+  /** The checked bytes of a model (the registrar that checked them freed). */
+  function checkedBytes(bytes, what) {
+    const { registrar, bytes: copy } = checked(bytes, what);
+    registrar.free();
+    return copy;
+  }
+
+  /** Makes `bytes` the default model, after checking that they load. */
+  function setDefaultModel(bytes, what) {
+    defaultModel = checkedBytes(bytes, what);
+  }
+
+  function readDefault() {
+    let bytes;
+    try {
+      bytes = env.readDefaultModel();
+    } catch (e) {
+      fail(`arps: reading the default model failed: ${messageOf(e)}`);
+    }
+    return checkedBytes(bytes, "the default model");
+  }
+
   /** Reads a point cloud from a file's bytes; see arps.d.ts. */
   function parsePointCloud(bytes, fileName) {
     const b = bytesArg(bytes, "bytes");
@@ -568,5 +675,5 @@ export function makeApi(glue, isReady) {
     return guarded("version", () => glue.version());
   }
 
-  return { Registrar, parsePointCloud, readPointCloud, version };
+  return { Registrar, parsePointCloud, readPointCloud, version, setDefaultModel };
 }

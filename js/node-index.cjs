@@ -1,20 +1,66 @@
 // CommonJS entry of the Node build (pkg/node/arps.js): the facade (facade.cjs) over the raw
-// wasm-bindgen glue (arps_glue.js, which loads arps_bg.wasm from disk on require). The same API
-// as the web build; `init` and `initSync` are no-ops kept for parity.
+// wasm-bindgen glue (arps_glue.js, which loads ../arps_bg.wasm, the web build's, from disk on
+// require). The same API as the web build. The default model is ../models/arps-web.safetensors,
+// read from disk when `Registrar.withDefaultModel()` first needs it; `Registrar.fromUrl` reads
+// `file:` URLs from disk and fetches the others. `init` and `initSync` need not be called; they
+// take the same options as the web build's (`{ model }` sets another default model).
 "use strict";
+const fs = require("node:fs");
+const path = require("node:path");
+const { fileURLToPath } = require("node:url");
 const glue = require("./arps_glue.js");
-const { makeApi } = require("./facade.cjs");
+const { makeApi, modelBytes } = require("./facade.cjs");
 
-const api = makeApi(glue, () => true);
+const DEFAULT_MODEL = path.join(__dirname, "..", "models", "arps-web.safetensors");
+
+/** `file:` URLs (and plain paths that are not URLs) are read from disk; `undefined`: fetch it. */
+async function readUrl(url, signal) {
+  let file;
+  try {
+    const u = new URL(url);
+    if (u.protocol !== "file:") return undefined;
+    file = fileURLToPath(u);
+  } catch {
+    file = url; // not a URL: a path
+  }
+  try {
+    return await fs.promises.readFile(file, signal ? { signal } : undefined);
+  } catch (e) {
+    if (e?.name === "AbortError") throw e;
+    throw new Error(`arps: reading the model ${url} failed: ${e.message}`, { cause: e });
+  }
+}
+
+const api = makeApi(glue, () => true, {
+  readDefaultModel: () => fs.readFileSync(DEFAULT_MODEL),
+  readUrl,
+});
+
+const modelOption = (options) =>
+  options !== null && typeof options === "object" && Object.getPrototypeOf(options) === Object.prototype ? options.model : undefined;
+
 module.exports = {
   Registrar: api.Registrar,
   parsePointCloud: api.parsePointCloud,
   readPointCloud: api.readPointCloud,
   version: api.version,
-  /** Nothing to do in Node (the module is ready on require); kept for parity with the web build. */
-  default: async () => glue,
-  /** Nothing to do in Node; kept for parity with the web build. */
-  initSync: () => glue,
+  /**
+   * Nothing to do in Node (the engine is ready on require; the default model is read from disk on
+   * first use); `init({ model })` with a URL, path or bytes sets another default model.
+   */
+  default: async (options) => {
+    const model = modelOption(options);
+    if (model !== undefined && model !== null && typeof model !== "boolean") {
+      api.setDefaultModel(await modelBytes(model, undefined, readUrl), "the model given to init()");
+    }
+    return glue;
+  },
+  /** Nothing to do in Node; `initSync({ model: bytes })` sets another default model. */
+  initSync: (options) => {
+    const model = modelOption(options);
+    if (model !== undefined && model !== null && typeof model !== "boolean") api.setDefaultModel(model, "the model given to initSync()");
+    return glue;
+  },
 };
 // Marks the default export as real, so that TypeScript's and bundlers' CommonJS interop
 // (`esModuleInterop`'s __importDefault) gives `import init from "arps"` the function above.

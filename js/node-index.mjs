@@ -8,12 +8,14 @@ const arps = require("./arps.js");
 
 export const { Registrar, parsePointCloud, readPointCloud, version } = arps;
 
-/** Nothing to do in Node (the module is ready on import); kept for parity with the web build. */
-export default async function init() {
+/** Nothing to do in Node (the engine is ready on import); `init({ model })` sets another default model. */
+export default async function init(options) {
+  await arps.default(options);
   return arps;
 }
 
-/** Nothing to do in Node; kept for parity with the web build. */
-export function initSync() {
+/** Nothing to do in Node; `initSync({ model: bytes })` sets another default model. */
+export function initSync(options) {
+  arps.initSync(options);
   return arps;
 }

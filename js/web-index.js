@@ -1,27 +1,65 @@
-// The package's web entry (pkg/arps.js): `await init()` (fetches arps_bg.wasm) or `initSync()`,
-// then `Registrar`, `parsePointCloud`, `readPointCloud`, `version`. The API is the facade's
-// (facade.js) over the raw wasm-bindgen glue (arps_glue.js): inputs checked at the boundary, and
-// a trap re-instantiates the module instead of leaving it broken.
+// The package's web entry (pkg/arps.js): `await init()` (instantiates arps_bg.wasm and fetches the
+// default model, models/arps-web.safetensors, in parallel; both next to this file by default) or
+// `initSync()`, then `Registrar`, `parsePointCloud`, `readPointCloud`, `version`. The API is the
+// facade's (facade.js) over the raw wasm-bindgen glue (arps_glue.js): inputs checked at the
+// boundary, and a trap re-instantiates the module instead of leaving it broken.
 import glueInit, * as glue from "./arps_glue.js";
-import { makeApi } from "./facade.js";
+import { makeApi, modelBytes } from "./facade.js";
 
 let ready = false;
 
+const api = makeApi(glue, () => ready);
+
+/** `{ module_or_path, model }` from init's argument (or the deprecated bare module/path). */
+function initArgs(options) {
+  const plain = options !== null && typeof options === "object" && Object.getPrototypeOf(options) === Object.prototype;
+  if (!plain) return { moduleOrPath: options, model: true };
+  const { module_or_path: moduleOrPath, model = true } = options;
+  return { moduleOrPath, model };
+}
+
 /**
- * Loads and instantiates the engine (`arps_bg.wasm` next to this file by default; or
- * `{ module_or_path }`: a URL, `Response`, bytes or `WebAssembly.Module`). Call once, first.
+ * Loads and instantiates the engine and, in parallel, the default model. Call once, first.
+ * `options.module_or_path`: the engine (a URL, `Response`, bytes or `WebAssembly.Module`;
+ * default `arps_bg.wasm` next to this file). `options.model`: the default model that
+ * `Registrar.withDefaultModel()` uses (`true`, the default: `models/arps-web.safetensors` next to
+ * this file; a URL, `Request`, `Response` or bytes; `false`: none, e.g. when only
+ * `Registrar.fromBytes`/`fromUrl` are used). Rejects with an `Error` naming the URL and the HTTP
+ * status when the model cannot be fetched, or saying that the file is not an arps weights file.
  */
-export default async function init(moduleOrPath) {
-  const exports = await glueInit(moduleOrPath);
-  ready = true;
+export default async function init(options) {
+  const { moduleOrPath, model } = initArgs(options);
+  const engine = glueInit(moduleOrPath === undefined ? undefined : { module_or_path: moduleOrPath }).then((exports) => {
+    ready = true;
+    return exports;
+  });
+  let bytes = null;
+  let what = "the model given to init()";
+  if (model === true) {
+    // A literal `new URL("./…", import.meta.url)`: bundlers (Vite, webpack) emit the file as an asset.
+    const url = new URL("./models/arps-web.safetensors", import.meta.url);
+    what = `the default model ${url}`;
+    bytes = modelBytes(url).catch((e) => {
+      throw new Error(`${e.message} (init({ model: false }) skips the default model; init({ model: url }) loads it from elsewhere)`, { cause: e });
+    });
+  } else if (model !== false && model !== null) {
+    bytes = modelBytes(model);
+  }
+  const [exports, modelData] = await Promise.all([engine, bytes]);
+  if (modelData) api.setDefaultModel(modelData, what);
   return exports;
 }
 
-/** `init` from bytes or a compiled module, synchronously: `initSync({ module })`. */
-export function initSync(module) {
-  const exports = glue.initSync(module);
+/**
+ * `init` from bytes or a compiled module, synchronously: `initSync({ module, model? })`, `model`
+ * the default model's bytes (nothing is fetched: without `model`, `withDefaultModel()` throws).
+ */
+export function initSync(options) {
+  const plain = options !== null && typeof options === "object" && Object.getPrototypeOf(options) === Object.prototype;
+  const exports = glue.initSync(plain ? { module: options.module } : options);
   ready = true;
+  if (plain && options.model !== undefined && options.model !== null) api.setDefaultModel(options.model, "the model given to initSync()");
   return exports;
 }
 
-export const { Registrar, parsePointCloud, readPointCloud, version } = makeApi(glue, () => ready);
+export const { Registrar, parsePointCloud, readPointCloud, version } = api;

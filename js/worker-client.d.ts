@@ -26,10 +26,17 @@ export interface CreateWorkerRegistrarOptions {
    */
   wasm?: string | URL | Response | BufferSource | WebAssembly.Module;
   /**
-   * Custom weights (the bytes of an arps `.safetensors` file), copied to the worker. Default:
-   * the model embedded in the package.
+   * Where the default model comes from (fetched by the worker in parallel with the engine): a URL
+   * (string or `URL`; relative ones resolve against `worker.js`), a `Response` or the bytes.
+   * Default: `models/arps-web.safetensors` next to the package's `arps.js` (in Node, read from disk).
    */
-  weights?: ArrayBuffer | Uint8Array;
+  model?: string | URL | Response | ArrayBuffer | Uint8Array;
+  /**
+   * Custom weights instead of the default model: the bytes of an arps `.safetensors` file (copied
+   * to the worker) or its URL (string or `URL`, fetched by the worker; in Node `file:` URLs are
+   * read from disk). Rejects with an `Error` naming the URL and HTTP status if the download fails.
+   */
+  weights?: ArrayBuffer | Uint8Array | string | URL;
   /**
    * A worker to use first instead of starting `worker.js` from this package. When it stops (a
    * crash, a trap, an aborted request), later requests start a replacement with `createWorker`,

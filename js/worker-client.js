@@ -52,10 +52,15 @@ export async function createWorkerRegistrar(options = {}) {
   const given = options.worker ?? null;
   const createWorker =
     options.createWorker ?? (given ? null : typeof Worker === "function" ? domWorker : await nodeWorkerFactory());
-  // A Response body can be read once; a restarted worker needs the bytes again.
-  let wasm = options.wasm;
-  if (typeof Response === "function" && wasm instanceof Response) wasm = await wasm.arrayBuffer();
-  const weights = options.weights;
+  // A Response body can be read once; a restarted worker needs the bytes again. URLs travel as
+  // strings (a URL object cannot be posted).
+  const portable = async (v) => {
+    if (typeof Response === "function" && v instanceof Response) return v.arrayBuffer();
+    return v instanceof URL ? v.href : v;
+  };
+  const wasm = await portable(options.wasm);
+  const model = await portable(options.model);
+  const weights = await portable(options.weights);
   let nextId = 1;
   let current = null; // the live worker: { worker, pending, ready, dead }
   let terminated = false;
@@ -142,7 +147,7 @@ export async function createWorkerRegistrar(options = {}) {
       const message = (event && (event.message || (event.error && event.error.message))) || "worker failed";
       retire(w, new Error(`arps worker: ${message}`));
     });
-    w.ready = send(w, { type: "init", wasm, weights }, { onProgress }).promise;
+    w.ready = send(w, { type: "init", wasm, model, weights }, { onProgress }).promise;
     w.ready.catch((e) => retire(w, e));
     return w;
   };

@@ -3,7 +3,9 @@
 // import.meta.url), { type: "module" })` and the message protocol below).
 //
 // Requests (main -> worker), each with a numeric `id`:
-//   { id, type: "init", wasm?, weights? }   load the engine and the model (once)
+//   { id, type: "init", wasm?, model?, weights? }   load the engine and the model (once): `model`
+//                                           the default model (init's option), `weights` a custom
+//                                           one instead (bytes, or a URL string: fetched)
 //   { id, type: "register", source, target, options? }
 //   { id, type: "parse", bytes, fileName }
 //   { id, type: "read", bytes, fileName }   readPointCloud: { points, origin }
@@ -22,13 +24,17 @@ let loading = null;
 const post = (message, transfer = []) => self.postMessage(message, transfer);
 const progress = (id, stage) => post({ id, type: "progress", stage });
 
-function load(id, { wasm, weights } = {}) {
+function load(id, { wasm, model, weights } = {}) {
   if (registrar) return Promise.resolve(registrar);
   if (!loading) {
     progress(id, "loading");
     loading = (async () => {
-      await init(wasm === undefined || wasm === null ? undefined : { module_or_path: wasm });
-      registrar = weights ? Registrar.fromBytes(weights) : Registrar.withDefaultModel();
+      const custom = weights !== undefined && weights !== null;
+      // The default model is fetched in parallel with the engine, unless custom weights replace it.
+      await init({ module_or_path: wasm ?? undefined, model: custom ? false : (model ?? true) });
+      if (!custom) registrar = Registrar.withDefaultModel();
+      else if (typeof weights === "string") registrar = await Registrar.fromUrl(weights);
+      else registrar = Registrar.fromBytes(weights);
       return registrar;
     })();
     // A failed load may be retried by a later request (e.g. with other `wasm`/`weights`).

@@ -1,32 +1,44 @@
 #!/usr/bin/env bash
-# Checks the built package's .wasm (scripts/build-pkg.sh first):
-#   1. size budget: the whole .wasm (embedded model included) and the engine alone (the .wasm
-#      minus models/web.safetensors), raw and gzip -9;
+# Checks the built package (scripts/build-pkg.sh first):
+#   1. size budgets, each on its own: the engine (the package's one .wasm, built without the
+#      embedded model) and the default model (pkg/models/arps-web.safetensors, a separate
+#      file), raw and gzip -9;
 #   2. SIMD: simd128 instructions are really in the code, and f32x4 arithmetic (add/sub/mul/fma:
 #      what the network's kernels compute with) is among them, not just lane moves; counted with
 #      npm binaryen's disassembler.
 # Budgets (bytes), overridable from the environment:
-#   ARPS_WASM_BUDGET       whole .wasm, raw               default 3,400,000
-#   ARPS_WASM_GZ_BUDGET    whole .wasm, gzip -9           default 3,000,000
-#   ARPS_ENGINE_BUDGET     .wasm minus the model, raw     default   900,000
+#   ARPS_ENGINE_BUDGET     engine .wasm, raw              default   900,000
+#   ARPS_ENGINE_GZ_BUDGET  engine .wasm, gzip -9          default   500,000
+#   ARPS_MODEL_BUDGET      default model, raw             default 1,260,000
+#   ARPS_MODEL_GZ_BUDGET   default model, gzip -9         default 1,200,000
 #   ARPS_SIMD_MIN          SIMD instructions, at least    default       200
 #   ARPS_SIMD_F32_MIN      f32x4 add/sub/mul/fma, at least default        16
-# Usage: scripts/check-wasm.sh [FILE.wasm ...]   (default: pkg/arps_bg.wasm pkg/node/arps_bg.wasm)
+# Usage: scripts/check-wasm.sh [FILE.wasm ...]   (default: pkg/arps_bg.wasm)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-budget=${ARPS_WASM_BUDGET:-3400000}
-gz_budget=${ARPS_WASM_GZ_BUDGET:-3000000}
 engine_budget=${ARPS_ENGINE_BUDGET:-900000}
+engine_gz_budget=${ARPS_ENGINE_GZ_BUDGET:-500000}
+model_budget=${ARPS_MODEL_BUDGET:-1260000}
+model_gz_budget=${ARPS_MODEL_GZ_BUDGET:-1200000}
 simd_min=${ARPS_SIMD_MIN:-200}
 simd_f32_min=${ARPS_SIMD_F32_MIN:-16}
-model=models/web.safetensors
-model_bytes=$(stat -c %s "$model")
+model=pkg/models/arps-web.safetensors
 
 files=("$@")
-[ ${#files[@]} -eq 0 ] && files=(pkg/arps_bg.wasm pkg/node/arps_bg.wasm)
+[ ${#files[@]} -eq 0 ] && files=(pkg/arps_bg.wasm)
 
 fail=0
+if [ ! -f "$model" ]; then
+  echo "check-wasm: $model not found (run scripts/build-pkg.sh)" >&2
+  exit 1
+fi
+model_raw=$(stat -c %s "$model")
+model_gz=$(gzip -9 -c "$model" | wc -c)
+printf 'check-wasm: model %s: %d bytes raw (budget %d), %d gzip -9 (budget %d)\n' \
+  "$model" "$model_raw" "$model_budget" "$model_gz" "$model_gz_budget"
+[ "$model_raw" -le "$model_budget" ] || { echo "check-wasm: FAIL the model is over its raw size budget" >&2; fail=1; }
+[ "$model_gz" -le "$model_gz_budget" ] || { echo "check-wasm: FAIL the model is over its gzip size budget" >&2; fail=1; }
 for f in "${files[@]}"; do
   if [ ! -f "$f" ]; then
     echo "check-wasm: $f not found (run scripts/build-pkg.sh)" >&2
@@ -34,12 +46,10 @@ for f in "${files[@]}"; do
   fi
   raw=$(stat -c %s "$f")
   gz=$(gzip -9 -c "$f" | wc -c)
-  engine=$((raw - model_bytes))
-  printf 'check-wasm: %s: %d bytes raw (budget %d), %d gzip (budget %d); engine without the %d-byte model: %d (budget %d)\n' \
-    "$f" "$raw" "$budget" "$gz" "$gz_budget" "$model_bytes" "$engine" "$engine_budget"
-  [ "$raw" -le "$budget" ] || { echo "check-wasm: FAIL $f is over the raw size budget" >&2; fail=1; }
-  [ "$gz" -le "$gz_budget" ] || { echo "check-wasm: FAIL $f is over the gzip size budget" >&2; fail=1; }
-  [ "$engine" -le "$engine_budget" ] || { echo "check-wasm: FAIL $f: the engine is over its size budget" >&2; fail=1; }
+  printf 'check-wasm: engine %s: %d bytes raw (budget %d), %d gzip -9 (budget %d)\n' \
+    "$f" "$raw" "$engine_budget" "$gz" "$engine_gz_budget"
+  [ "$raw" -le "$engine_budget" ] || { echo "check-wasm: FAIL $f: the engine is over its raw size budget" >&2; fail=1; }
+  [ "$gz" -le "$engine_gz_budget" ] || { echo "check-wasm: FAIL $f: the engine is over its gzip size budget" >&2; fail=1; }
 
   node --input-type=module - "$f" "$simd_min" "$simd_f32_min" <<'JS' || fail=1
 import { readFileSync } from "node:fs";
@@ -47,7 +57,7 @@ import binaryen from "binaryen";
 const [file, min, f32min] = process.argv.slice(2);
 const mod = binaryen.readBinary(readFileSync(file));
 mod.setFeatures(binaryen.Features.All);
-// Text of the code only (the data segments, i.e. the embedded model, are dropped first).
+// Text of the code only (the data segments are dropped first).
 const text = mod.emitText().split("\n").filter((l) => !l.trimStart().startsWith("(data ")).join("\n");
 mod.dispose();
 const ops = text.match(/\b(v128|[if](8x16|16x8|32x4|64x2)|i8x16|i16x8|i32x4|i64x2|f32x4|f64x2)\.[a-z_0-9]+/g) ?? [];

@@ -15,6 +15,10 @@
 //! ```
 //!
 //! Conventions (frames, the 4x4 layout) are documented once, in [`transform`].
+//!
+//! Features: `embed-model` (default) embeds the default model (`Registrar::with_default_model`,
+//! [`weights::DEFAULT_MODEL`]); without it the library loads models from bytes only, as the npm
+//! package's engine does. `cli` and `train` build the command-line tools.
 
 #![warn(missing_docs)]
 

@@ -21,7 +21,7 @@ use serde::{Deserialize, Serialize};
 #[serde(rename_all = "camelCase", default, deny_unknown_fields)]
 pub struct Options {
     /// Points per cloud fed to the network, at most [`MAX_NETWORK_POINTS`]. Default `None`: the
-    /// model's N (128 for the embedded model, which was fine-tuned at 128; the `web` preset's
+    /// model's N (128 for the default model, which was fine-tuned at 128; the `web` preset's
     /// runs start at 256).
     pub network_points: Option<usize>,
     /// Seed of every random choice (network sampling). Default 0. Same inputs + same seed = same
@@ -204,7 +204,9 @@ impl Registrar {
         })
     }
 
-    /// A registrar on the embedded default model ([`crate::weights::DEFAULT_MODEL`]).
+    /// A registrar on the embedded default model ([`crate::weights::DEFAULT_MODEL`]; feature
+    /// `embed-model`, on by default).
+    #[cfg(feature = "embed-model")]
     pub fn with_default_model() -> Result<Self> {
         Self::from_bytes(crate::weights::DEFAULT_MODEL)
     }

@@ -4,7 +4,8 @@
 //! `Error`s. All logic lives in the core ([`crate::Registrar`], [`crate::io`]).
 //!
 //! JS API (see `js/arps-types.d.ts` and the generated `arps.d.ts` for the documented types):
-//! * `Registrar.withDefaultModel()`, `Registrar.fromBytes(Uint8Array)`;
+//! * `Registrar.fromBytes(Uint8Array)`, and `Registrar.withDefaultModel()` in builds with the
+//!   `embed-model` feature (the package's facade provides it over the model file otherwise);
 //! * `registrar.register(source: Float32Array, target: Float32Array, options?)` -> a plain object
 //!   `{ matrix, matrix64, networkMatrix, networkMatrix64, start, fitness, inlierRmse, iterations, converged,
 //!   maxCorrespondenceDistance, timingsMs, warnings, confidence, evidence, startsRefined }`;
@@ -133,7 +134,11 @@ pub struct Registrar {
 
 #[wasm_bindgen]
 impl Registrar {
-    /// A registrar on the model embedded in the package (`models/web.safetensors`).
+    /// A registrar on the model embedded in the engine (`models/web.safetensors`); only in
+    /// builds with the `embed-model` feature. The npm package's engine is built without it: its
+    /// facade (`js/facade.js`) loads the model file next to the `.wasm` and passes the bytes to
+    /// [`Registrar::from_bytes`].
+    #[cfg(feature = "embed-model")]
     #[wasm_bindgen(js_name = withDefaultModel)]
     pub fn with_default_model() -> Result<Registrar, JsError> {
         let mut inner = crate::Registrar::with_default_model().map_err(js_err)?;

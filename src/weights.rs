@@ -1,4 +1,4 @@
-//! The weights file: safetensors with `f32` or `f16` tensors and JSON metadata.
+//! The weights file: safetensors with `f32`, `f16` or int8-quantised tensors and JSON metadata.
 //!
 //! Metadata keys (all strings, as safetensors requires):
 //! * `format` = `"arps-weights"`, `format_version` = `"1"`;
@@ -6,9 +6,17 @@
 //! * `provenance` = free-form JSON describing how the weights were made (trainer, steps, data,
 //!   date, or `"random"` with its seed).
 //!
+//! Tensors are stored as `F32`, `F16`, or `I8` with a scale per row (see [`int8`]: a 2-D tensor
+//! `NAME` of dtype `I8` comes with a tensor `NAME.scale`, `F32` or `F16`, one positive scale per
+//! row; the value is `q * scale[row]`). Every tensor is `f32` once loaded: quantised files are
+//! dequantised here, so the network computes in `f32` whatever the file stores.
+//!
 //! Loading checks the format and version, validates the config, and checks that every tensor the
-//! config needs is present with the right shape and a supported dtype (and that there are no
-//! extra tensors), reporting the first mismatch by name.
+//! config needs is present with the right shape and a supported dtype, that every `I8` tensor has
+//! its valid scale tensor (and that there are no other tensors), reporting the first mismatch by
+//! name.
+
+pub mod int8;
 
 use crate::model::config::ModelConfig;
 use crate::{Error, Result};
@@ -24,6 +32,9 @@ pub const FORMAT: &str = "arps-weights";
 pub const FORMAT_VERSION: u32 = 1;
 
 /// The embedded default model (`models/web.safetensors`; see `models/MODEL.md` for how it was made).
+/// Only with the `embed-model` feature (on by default); the npm package's `.wasm` is built without
+/// it and loads the same file as a separate asset.
+#[cfg(feature = "embed-model")]
 pub const DEFAULT_MODEL: &[u8] = include_bytes!("../models/web.safetensors");
 
 /// Storage precision when saving.
@@ -31,8 +42,11 @@ pub const DEFAULT_MODEL: &[u8] = include_bytes!("../models/web.safetensors");
 pub enum StoreAs {
     /// 32-bit floats (exact).
     F32,
-    /// 16-bit floats (half the size; what the shipped model uses).
+    /// 16-bit floats (half the size).
     F16,
+    /// 8-bit integers with an `f32` scale per row ([`int8`]) for the 2-D weight matrices (a
+    /// quarter of the size of `f32`), `f16` for the vectors (biases, LayerNorm).
+    I8,
 }
 
 /// A model's configuration, provenance and tensors (always held as `f32` in memory).
@@ -141,41 +155,65 @@ impl Weights {
                     view.shape()
                 )));
             }
-            let data = decode(name, &view)?;
+            let data = if view.dtype() == Dtype::I8 {
+                int8::dequantize(name, shape, view.data(), &st)?
+            } else {
+                decode(name, &view)?
+            };
             if let Some(i) = data.iter().position(|v| !v.is_finite()) {
                 return Err(Error::Weights(format!("tensor '{name}' has a non-finite value at element {i}")));
             }
             tensors.insert(name.clone(), data);
         }
-        if st.len() != specs.len() {
+        let scales = specs
+            .iter()
+            .filter(|(n, _)| st.tensor(n).is_ok_and(|v| v.dtype() == Dtype::I8))
+            .map(|(n, _)| int8::scale_name(n))
+            .collect::<std::collections::HashSet<_>>();
+        if st.len() != specs.len() + scales.len() {
             let known: std::collections::HashSet<&str> = specs.iter().map(|(n, _)| n.as_str()).collect();
-            let extra = st.names().into_iter().find(|n| !known.contains(n)).unwrap_or_default().to_string();
-            return Err(Error::Weights(format!(
-                "tensor '{extra}' is not part of the declared config (wrong config or wrong file)"
-            )));
+            let extra = st
+                .names()
+                .into_iter()
+                .find(|n| !known.contains(n) && !scales.contains(*n))
+                .unwrap_or_default()
+                .to_string();
+            return Err(Error::Weights(match extra.strip_suffix(int8::SCALE_SUFFIX) {
+                Some(of) if known.contains(of) => {
+                    format!("tensor '{extra}' is a scale, but tensor '{of}' is not stored as I8")
+                }
+                _ => format!("tensor '{extra}' is not part of the declared config (wrong config or wrong file)"),
+            }));
         }
         Ok(Self { config, provenance, tensors })
     }
 
     /// Serialises to safetensors bytes.
     pub fn to_bytes(&self, store: StoreAs) -> Result<Vec<u8>> {
-        let mut raw: Vec<(String, Vec<usize>, Vec<u8>)> = Vec::new();
+        let mut raw: Vec<(String, Dtype, Vec<usize>, Vec<u8>)> = Vec::new();
         for (name, shape) in self.config.tensor_specs() {
             let data = self.tensors.get(&name).ok_or_else(|| Error::Weights(format!("tensor '{name}' is missing")))?;
-            let bytes: Vec<u8> = match store {
-                StoreAs::F32 => data.iter().flat_map(|v| v.to_le_bytes()).collect(),
-                StoreAs::F16 => data.iter().flat_map(|v| f16::from_f32(*v).to_le_bytes()).collect(),
-            };
-            raw.push((name, shape, bytes));
+            match store {
+                StoreAs::F32 => {
+                    raw.push((name, Dtype::F32, shape, data.iter().flat_map(|v| v.to_le_bytes()).collect()))
+                }
+                StoreAs::I8 if shape.len() == 2 => {
+                    let (q, scale) = int8::quantize(data, shape[0]);
+                    raw.push((int8::scale_name(&name), Dtype::F32, vec![shape[0]], int8::f32_bytes(&scale)));
+                    raw.push((name, Dtype::I8, shape, q.iter().map(|v| *v as u8).collect()));
+                }
+                StoreAs::F16 | StoreAs::I8 => raw.push((
+                    name,
+                    Dtype::F16,
+                    shape,
+                    data.iter().flat_map(|v| f16::from_f32(*v).to_le_bytes()).collect(),
+                )),
+            }
         }
-        let dtype = match store {
-            StoreAs::F32 => Dtype::F32,
-            StoreAs::F16 => Dtype::F16,
-        };
         let views = raw
             .iter()
-            .map(|(n, s, b)| {
-                Ok((n.clone(), TensorView::new(dtype, s.clone(), b).map_err(|e| Error::Weights(format!("{n}: {e}")))?))
+            .map(|(n, d, s, b)| {
+                Ok((n.clone(), TensorView::new(*d, s.clone(), b).map_err(|e| Error::Weights(format!("{n}: {e}")))?))
             })
             .collect::<Result<Vec<_>>>()?;
         let mut meta = HashMap::new();
@@ -190,11 +228,14 @@ impl Weights {
     }
 }
 
+/// An `F32` or `F16` tensor's values.
 fn decode(name: &str, view: &TensorView<'_>) -> Result<Vec<f32>> {
     let data = view.data();
     match view.dtype() {
         Dtype::F32 => Ok(data.chunks_exact(4).map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]])).collect()),
         Dtype::F16 => Ok(data.chunks_exact(2).map(|c| f16::from_le_bytes([c[0], c[1]]).to_f32()).collect()),
-        other => Err(Error::Weights(format!("tensor '{name}' has dtype {other:?}; only F32 and F16 are supported"))),
+        other => Err(Error::Weights(format!(
+            "tensor '{name}' has dtype {other:?}; only F32, F16 and I8 (with a scale tensor) are supported"
+        ))),
     }
 }

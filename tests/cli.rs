@@ -115,3 +115,35 @@ fn a_closed_stdout_ends_quietly() {
     assert!(out.status.success(), "status {:?}, stderr: {stderr}", out.status);
     assert!(!stderr.contains("panicked"), "{stderr}");
 }
+
+/// `quantize` writes a loadable file at each precision, records it in the provenance, and
+/// refuses other bit widths with one line on stderr.
+#[test]
+fn quantize_writes_each_precision_and_refuses_others() {
+    let dir = std::env::temp_dir().join(format!("arps-quantize-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let input = "fuzz/seeds/weights_from_bytes/tiny_f32.safetensors";
+    let original = arps::Weights::from_bytes(&std::fs::read(input).unwrap()).unwrap();
+    let mut sizes = Vec::new();
+    for bits in ["8", "16", "32"] {
+        let out_path = dir.join(format!("w{bits}.safetensors"));
+        let out = arps(&["quantize", input, out_path.to_str().unwrap(), "--bits", bits]);
+        assert!(out.status.success(), "{bits}: {}", String::from_utf8_lossy(&out.stderr));
+        let text = String::from_utf8(out.stdout).unwrap();
+        assert!(text.starts_with("wrote ") && text.contains("largest change"), "{text}");
+        let bytes = std::fs::read(&out_path).unwrap();
+        let w = arps::Weights::from_bytes(&bytes).unwrap();
+        assert_eq!(w.config, original.config);
+        assert_eq!(w.provenance["quantized"]["bits"], bits.parse::<u32>().unwrap());
+        sizes.push(bytes.len());
+    }
+    assert!(sizes[0] < sizes[1] && sizes[1] < sizes[2], "{sizes:?}");
+    let out = arps(&["quantize", input, dir.join("w4.safetensors").to_str().unwrap(), "--bits", "4"]);
+    assert!(!out.status.success());
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert_eq!(err.trim_end(), "arps: --bits 4 is not supported: use 8 (int8), 16 (f16) or 32 (f32)");
+    let out = arps(&["quantize", "fixtures/wasm/source.ply", dir.join("x.safetensors").to_str().unwrap()]);
+    assert!(!out.status.success());
+    assert!(String::from_utf8(out.stderr).unwrap().starts_with("arps: fixtures/wasm/source.ply: weights: "));
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -52,7 +52,7 @@ const lyingLength = () => {
 };
 
 for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]]) {
-  if (name === "web build") webBuild.initSync({ module: readFileSync(path.join(pkg, "arps_bg.wasm")) });
+  if (name === "web build") webBuild.initSync({ module: readFileSync(path.join(pkg, "arps_bg.wasm")), model: readFileSync(path.join(pkg, "models", "arps-web.safetensors")) });
 
   test(`${name}: hostile clouds`, () => {
     const r = arps.Registrar.withDefaultModel();
@@ -154,7 +154,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       ["garbage with an unknown extension", parse(new Uint8Array([0, 1, 2, 3]), "x.unknownext"), /./],
       ["weights: 3 bytes", () => arps.Registrar.fromBytes(new Uint8Array([1, 2, 3])), /^weights: /],
       ["weights: a string", () => arps.Registrar.fromBytes("model.safetensors"), /^weights: expected a Uint8Array or an ArrayBuffer, got a string/],
-      ["new Registrar()", () => new arps.Registrar(), /^arps: use Registrar.withDefaultModel\(\) or Registrar.fromBytes/],
+      ["new Registrar()", () => new arps.Registrar(), /^arps: use Registrar.withDefaultModel\(\), Registrar.fromBytes\(bytes\) or await Registrar.fromUrl/],
     ];
     for (const [label, fn, re] of cases) rejects(r, label, fn, re);
     // Accepted: an ArrayBuffer, a DataView, a Buffer; no file name (the format is sniffed).
@@ -247,7 +247,7 @@ test("a real trap in the engine: the module is re-instantiated and registrars ke
   const require = createRequire(import.meta.url);
   const glue = require(path.join(pkg, "node", "arps_glue.js"));
   const trapping = Object.create(glue, { parsePointCloud: { value: (bytes) => glue.parsePointCloud(bytes, 5) } });
-  const api = makeApi(trapping, () => true);
+  const api = makeApi(trapping, () => true, { readDefaultModel: () => readFileSync(path.join(pkg, "models", "arps-web.safetensors")) });
   const before = api.Registrar.withDefaultModel();
   stillWorks(before, "before the trap");
   let thrown;
@@ -277,6 +277,6 @@ test("web build: a call before init() says so, without breaking the module", asy
   const url = pathToFileURL(path.join(pkg, "arps.js")).href + "?fresh";
   const fresh = await import(url);
   assert.throws(() => fresh.Registrar.withDefaultModel(), /^Error: arps: the engine is not loaded yet; call and await init\(\) first/);
-  await fresh.default({ module_or_path: readFileSync(path.join(pkg, "arps_bg.wasm")) });
+  await fresh.default({ module_or_path: readFileSync(path.join(pkg, "arps_bg.wasm")), model: readFileSync(path.join(pkg, "models", "arps-web.safetensors")) });
   stillWorks(fresh.Registrar.withDefaultModel(), "after init");
 });

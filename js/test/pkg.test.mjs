@@ -13,12 +13,13 @@ import { pkg, source, target, sourcePly, errors } from "./common.mjs";
 
 const nodeBuild = await import(pathToFileURL(path.join(pkg, "node", "index.mjs")).href);
 const webBuild = await import(pathToFileURL(path.join(pkg, "arps.js")).href);
-webBuild.initSync({ module: readFileSync(path.join(pkg, "arps_bg.wasm")) });
+const modelFile = path.join(pkg, "models", "arps-web.safetensors");
+webBuild.initSync({ module: readFileSync(path.join(pkg, "arps_bg.wasm")), model: readFileSync(modelFile) });
 
 for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]]) {
   test(`${name}: API surface`, async () => {
     assert.equal(typeof arps.default, "function", "default export init()");
-    await arps.default(name === "web build" ? { module_or_path: readFileSync(path.join(pkg, "arps_bg.wasm")) } : undefined);
+    await arps.default(name === "web build" ? { module_or_path: readFileSync(path.join(pkg, "arps_bg.wasm")), model: readFileSync(modelFile) } : undefined);
     assert.equal(arps.version(), JSON.parse(readFileSync(path.join(pkg, "package.json"), "utf8")).version);
     const r = arps.Registrar.withDefaultModel();
     assert.equal(typeof r.provenance, "object");
@@ -115,10 +116,13 @@ test("package.json exports resolve for import and require under Node", () => {
 test("package files: what npm would publish, and nothing else", () => {
   const out = execFileSync("npm", ["pack", "--dry-run", "--json"], { cwd: pkg, encoding: "utf8" });
   const files = JSON.parse(out)[0].files.map((f) => f.path).sort();
-  for (const f of ["arps.js", "arps.d.ts", "arps_bg.wasm", "worker.js", "worker-client.js", "worker-client.d.ts", "node/arps.js", "node/index.mjs", "node/arps_bg.wasm", "package.json"]) {
+  for (const f of ["arps.js", "arps.d.ts", "arps_bg.wasm", "worker.js", "worker-client.js", "worker-client.d.ts", "node/arps.js", "node/index.mjs", "models/arps-web.safetensors", "package.json"]) {
     assert.ok(files.includes(f), `${f} is published`);
   }
   for (const f of files) {
+    if (f === "models/arps-web.safetensors") continue; // the default model, the one data file
     assert.ok(!/\.(ply|pcd|xyz|obj|off|stl|safetensors|bin|npz|h5)$/i.test(f), `${f}: no data files in the package`);
   }
+  // The engine once: the Node build loads the web build's .wasm.
+  assert.deepEqual(files.filter((f) => f.endsWith(".wasm")), ["arps_bg.wasm"]);
 });

@@ -1,8 +1,27 @@
 // Compile-only check of the package's TypeScript declarations (tsc --noEmit -p js/test): typical
 // use must type-check, options are typed (not `any`), and misspelled options are rejected.
-import init, { Registrar, parsePointCloud, readPointCloud, version } from "../../pkg/arps.js";
-import type { RegisterOptions, RegistrationEvidence, RegistrationResult, RegistrationSearch } from "../../pkg/arps.js";
+import init, { initSync, Registrar, parsePointCloud, readPointCloud, version } from "../../pkg/arps.js";
+import type { InitOptions, RegisterOptions, RegistrationEvidence, RegistrationResult, RegistrationSearch } from "../../pkg/arps.js";
 import { createWorkerRegistrar, type Stage, type WorkerRegistrar } from "../../pkg/worker-client.js";
+
+export async function modelFiles(wasm: Uint8Array, model: Uint8Array, signal: AbortSignal): Promise<Registrar> {
+  // The default model: fetched by init() (or not, or from elsewhere), or given to initSync.
+  await init({ model: false });
+  await init({ module_or_path: wasm, model: "https://cdn.example/arps-web.safetensors" });
+  await init({ model: new URL("https://cdn.example/m.safetensors") });
+  initSync({ module: wasm, model });
+  initSync({ module: wasm });
+  // @ts-expect-error model is a URL, bytes, a Response or a boolean
+  const bad: InitOptions = { model: 3 };
+  void bad;
+  const fromUrl: Registrar = await Registrar.fromUrl("/models/custom.safetensors", { signal });
+  fromUrl.free();
+  // @ts-expect-error fromUrl is async
+  Registrar.fromUrl("/m.safetensors").register(new Float32Array(), new Float32Array());
+  const w = await createWorkerRegistrar({ model: "/m.safetensors", weights: new URL("https://cdn.example/w.safetensors") });
+  w.terminate();
+  return Registrar.withDefaultModel();
+}
 
 export async function onMainThread(source: Float32Array, target: Float32Array): Promise<number> {
   await init();

@@ -11,6 +11,8 @@ import { pkg, source, target, sourcePly, errors } from "./common.mjs";
 
 const { createWorkerRegistrar, STAGES } = await import(pathToFileURL(path.join(pkg, "worker-client.js")).href);
 const wasm = readFileSync(path.join(pkg, "arps_bg.wasm"));
+// The test shim is a plain worker: it gets the default model like the engine, as bytes.
+const model = readFileSync(path.join(pkg, "models", "arps-web.safetensors"));
 
 /**
  * A worker_threads Worker running pkg/worker.js, with the DOM Worker methods the client uses.
@@ -47,7 +49,7 @@ function upsampled(cloud, copies) {
 
 test("worker: loads, reports progress, rejects errors and keeps working", async () => {
   const initStages = [];
-  const arps = await createWorkerRegistrar({ worker: nodeWorker(), wasm, onProgress: (s) => initStages.push(s) });
+  const arps = await createWorkerRegistrar({ worker: nodeWorker(), wasm, model, onProgress: (s) => initStages.push(s) });
   try {
     assert.deepEqual(initStages, ["loading"]);
     assert.equal(arps.modelConfig.preset, "web");
@@ -88,19 +90,19 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
 
 test("worker: custom weights that do not load reject createWorkerRegistrar", async () => {
   await assert.rejects(
-    createWorkerRegistrar({ worker: nodeWorker(), wasm, weights: new Uint8Array([1, 2, 3]) }),
+    createWorkerRegistrar({ worker: nodeWorker(), wasm, model, weights: new Uint8Array([1, 2, 3]) }),
     /^Error: weights: /,
   );
 });
 
 test("worker: requests after terminate reject", async () => {
-  const arps = await createWorkerRegistrar({ worker: nodeWorker(), wasm });
+  const arps = await createWorkerRegistrar({ worker: nodeWorker(), wasm, model });
   arps.terminate();
   await assert.rejects(arps.register(source(), target()), /terminated/);
 });
 
 test("worker: a request that cannot be sent rejects alone, and the client keeps working", async () => {
-  const arps = await createWorkerRegistrar({ createWorker: nodeWorker, wasm });
+  const arps = await createWorkerRegistrar({ createWorker: nodeWorker, wasm, model });
   try {
     await assert.rejects(arps.register(source(), target(), { onProgress: () => {} }), (e) => e.name === "DataCloneError" && /cannot be sent/.test(e.message));
     await assert.rejects(arps.register(source(), target(), { seed: () => 1 }), /DataCloneError/);
@@ -118,7 +120,7 @@ test("worker: a request that cannot be sent rejects alone, and the client keeps 
 
 test("worker: after the worker crashes, in-flight requests reject and the next request starts a new worker", async () => {
   const workers = [];
-  const arps = await createWorkerRegistrar({ createWorker: () => workers[workers.push(nodeWorker()) - 1], wasm });
+  const arps = await createWorkerRegistrar({ createWorker: () => workers[workers.push(nodeWorker()) - 1], wasm, model });
   try {
     workers[0].crash(); // processed before the request below
     const inFlight = arps.register(source(), target());
@@ -135,7 +137,7 @@ test("worker: after the worker crashes, in-flight requests reject and the next r
 });
 
 test("worker: abort mid-refinement rejects within 300 ms with an AbortError, then the client works", async () => {
-  const arps = await createWorkerRegistrar({ createWorker: nodeWorker, wasm });
+  const arps = await createWorkerRegistrar({ createWorker: nodeWorker, wasm, model });
   try {
     const s = upsampled(source(), 20);
     const t = upsampled(target(), 20);

@@ -1,7 +1,8 @@
 """Files shared with the Rust side.
 
-* The engine's weights (``src/weights.rs``): safetensors, tensors by engine name in ``f32`` or
-  ``f16``, metadata ``format = arps-weights``, ``format_version = 1``, ``config`` (the
+* The engine's weights (``src/weights.rs``): safetensors, tensors by engine name in ``f32``,
+  ``f16`` or ``i8`` (2-D weights, with ``NAME.scale``: one scale per row, read as ``q * scale``;
+  ``src/weights/int8.rs``), metadata ``format = arps-weights``, ``format_version = 1``, ``config`` (the
   ``ModelConfig`` JSON) and ``provenance`` (JSON).
 * The CPU trainer's checkpoint (``src/train/run/checkpoint.rs``): flat ``f32`` tensors
   ``param/<name>``, ``adam_m/<name>``, ``adam_v/<name>`` and ``ema/<name>`` (when the run keeps a
@@ -47,8 +48,15 @@ def read_weights(path):
         a = arrays[name]
         if list(a.shape) != list(shape):
             raise ValueError(f"{path}: tensor {name!r} has shape {list(a.shape)}, config needs {shape}")
-        tensors[name] = a.astype(np.float32)
-    if len(arrays) != len(tensors):
+        if a.dtype == np.int8:
+            scale = arrays.get(name + ".scale")
+            if a.ndim != 2 or scale is None or list(scale.shape) != [shape[0]]:
+                raise ValueError(f"{path}: int8 tensor {name!r} needs a 2-D shape and a scale per row")
+            tensors[name] = a.astype(np.float32) * scale.astype(np.float32)[:, None]
+        else:
+            tensors[name] = a.astype(np.float32)
+    scales = sum(1 for n in tensors if n + ".scale" in arrays and arrays[n].dtype == np.int8)
+    if len(arrays) != len(tensors) + scales:
         raise ValueError(f"{path}: tensors beyond the config")
     return cfg, prov, tensors
 

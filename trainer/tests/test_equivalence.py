@@ -70,7 +70,8 @@ def test_weights_round_trip(tmp_path):
         cfg2, prov2, back = read_weights(str(p))
         assert cfg2 == cfg and prov2 == {"x": 1}
         for k, v in tensors.items():
-            assert np.array_equal(back[k], v), k  # stored f16 already: exact both ways
+            # f32 is exact; the shipped model is int8 (q * scale), so f16 rounds it a little
+            assert np.allclose(back[k], v, rtol=1e-3, atol=1e-6) if f16 else np.array_equal(back[k], v), k
     bad = dict(tensors)
     bad.pop(next(iter(bad)))
     with pytest.raises(KeyError):

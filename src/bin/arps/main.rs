@@ -1,5 +1,5 @@
-//! `arps`: register two point clouds from the command line, describe a weights file, or benchmark
-//! the pipeline.
+//! `arps`: register two point clouds from the command line, describe or quantise a weights file,
+//! or benchmark the pipeline.
 //!
 //! Errors print one line on stderr (`arps: ...`) and exit with status 1 (2 for usage errors).
 
@@ -15,6 +15,7 @@ mod bench;
 mod compare;
 mod eval;
 mod make_pairs;
+mod quantize;
 
 #[derive(Parser)]
 #[command(name = "arps", version, about = "Partial-to-partial point-cloud registration (DGMR-ARPS + ICP)")]
@@ -97,6 +98,9 @@ enum Command {
     Compare(compare::CompareArgs),
     /// Write a pair set made with the paper's protocol (PLY files, pairs.tsv, pairs.json).
     MakePairs(make_pairs::MakePairsArgs),
+    /// Rewrite a weights file at another precision: `--bits 8` (int8 with a scale per row, about a
+    /// quarter of f32), 16 (f16) or 32 (f32).
+    Quantize(quantize::QuantizeArgs),
     /// Write deterministic random (untrained) weights for a preset; for development and tests.
     RandomWeights {
         /// Preset: web, paper or tiny.
@@ -260,6 +264,7 @@ fn run(command: Command) -> Result<(), String> {
         Command::Eval(args) => eval::run(args),
         Command::Compare(args) => compare::run(args),
         Command::MakePairs(args) => make_pairs::run(args),
+        Command::Quantize(args) => quantize::run(args),
         Command::RandomWeights { preset, seed, f16, out } => {
             let config = ModelConfig::preset(&preset).map_err(|e| e.to_string())?;
             let w = Weights::random(&config, seed).map_err(|e| e.to_string())?;
