@@ -101,6 +101,14 @@ test("the tarball holds the package, its licences, changelog and examples, and n
   assert.match(manifest.repository?.url ?? "", /^git\+https:\/\/github\.com\/[^/]+\/[^/]+\.git$/);
   assert.match(manifest.homepage ?? "", /^https:\/\/github\.com\//);
   assert.match(manifest.bugs?.url ?? "", /^https:\/\/github\.com\/.*\/issues$/);
+  // The docs' repository links agree with package.json's (which comes from Cargo.toml).
+  const repository = manifest.repository.url.replace(/^git\+/, "").replace(/\.git$/, "");
+  for (const doc of ["README.md", "CHANGELOG.md"]) {
+    const text = readFileSync(join(app, "node_modules/arps", doc), "utf8");
+    for (const [link] of text.matchAll(/https:\/\/github\.com\/[\w.-]+\/[\w.-]+/g)) {
+      assert.equal(link, repository, `${doc} links to ${link}, package.json's repository is ${repository}`);
+    }
+  }
   console.log(`${packed.filename}: ${files.length} files, ${packed.size} bytes packed, ${packed.unpackedSize} unpacked`);
 });
 
