@@ -204,7 +204,7 @@ test("TypeScript and Node, ESM: bundler and NodeNext resolution type-check; the 
   const web = await nodeJson(["--input-type=module", "-e", 'import * as m from "arps/web"; console.log(JSON.stringify(Object.keys(m)))']);
   assert.deepEqual(bundler.arps.values, sorted(web), "web build: typed vs runtime exports");
   assert.deepEqual(bundler["arps/worker-client"].values, sorted(out.keys["arps/worker-client"]));
-  for (const name of [...web, ...out.keys.arps]) assert.doesNotMatch(name, /^__|wbg|wbindgen|^makeApi$|^glue$/, `internal export ${name}`);
+  for (const name of [...web, ...out.keys.arps, ...out.keys.init]) assert.doesNotMatch(name, /^__|wbg|wbindgen|^makeApi$|^glue$/, `internal export ${name}`);
 });
 
 test("TypeScript and Node, CommonJS with esModuleInterop: `import init from \"arps\"` type-checks and runs (node10 and Node16)", async () => {
@@ -216,6 +216,7 @@ test("TypeScript and Node, CommonJS with esModuleInterop: `import init from \"ar
     assert.equal(out.initType, "function", `${config}: the default import is not init()`);
     assert.match(out.errors.afterFree ?? "", /freed/);
     assert.deepEqual(typed.arps.values, sorted(out.keys.arps), `${config}: typed vs runtime exports`);
+    for (const name of out.keys.init) assert.doesNotMatch(name, /^__|wbg|wbindgen/, `${config}: init() resolves to internals (${name})`);
     console.log(`${config}:`, JSON.stringify(assertRecovered(out.matrix, config)));
   }
 });

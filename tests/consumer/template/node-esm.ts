@@ -22,7 +22,8 @@ const [sourcePath, targetPath] = process.argv.slice(2);
 const sourceBytes = readFileSync(sourcePath);
 const targetBytes = readFileSync(targetPath);
 
-await init();
+// Under Node init() is a no-op; what it resolves to must not be the raw glue.
+const initKeys = Object.keys(await init());
 const registrar = Registrar.withDefaultModel();
 const source: Float32Array = parsePointCloud(sourceBytes, basename(sourcePath));
 const target = readPointCloud(targetBytes, basename(targetPath));
@@ -53,6 +54,6 @@ console.log(
     confidence: result.confidence,
     worker: { matrix: Array.from(fromWorker.matrix64), stages, knownStages: STAGES },
     errors,
-    keys: { arps: Object.keys(arps), "arps/worker-client": Object.keys(workerClient) },
+    keys: { init: initKeys, arps: Object.keys(arps), "arps/worker-client": Object.keys(workerClient) },
   }),
 );

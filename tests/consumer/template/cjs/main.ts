@@ -8,7 +8,7 @@ import * as arps from "arps";
 
 async function main(): Promise<void> {
   const [sourcePath, targetPath] = process.argv.slice(2);
-  await init();
+  const initKeys = Object.keys(await init());
   const source = parsePointCloud(readFileSync(sourcePath), basename(sourcePath));
   const target = parsePointCloud(readFileSync(targetPath), basename(targetPath));
   const registrar = Registrar.withDefaultModel();
@@ -27,7 +27,7 @@ async function main(): Promise<void> {
       matrix: Array.from(result.matrix64),
       confidence: result.confidence,
       errors: { afterFree },
-      keys: { arps: Object.keys(arps) },
+      keys: { init: initKeys, arps: Object.keys(arps) },
     }),
   );
 }
