@@ -113,7 +113,7 @@ test("the tarball holds the package, its licences, changelog and examples, and n
 });
 
 test("npm publish --dry-run prints no warning", async () => {
-  const { stdout, stderr } = await run("npm", ["publish", "--dry-run"], { cwd: PKG, env });
+  const { stdout, stderr } = await run("npm", ["publish", "--dry-run", "--offline"], { cwd: PKG, env });
   // Only the missing login is expected here (this machine publishes nothing).
   const warnings = `${stdout}\n${stderr}`
     .split("\n")
