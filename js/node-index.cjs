@@ -4,6 +4,8 @@
 // read from disk when `Registrar.withDefaultModel()` first needs it; `Registrar.fromUrl` reads
 // `file:` URLs from disk and fetches the others. `init` and `initSync` need not be called; they
 // take the same options as the web build's (`{ model }` sets another default model).
+// `init`/`initSync` return this module's public exports, never the raw glue (whose reset hook
+// would break the facade).
 "use strict";
 const fs = require("node:fs");
 const path = require("node:path");
@@ -53,13 +55,13 @@ module.exports = {
     if (model !== undefined && model !== null && typeof model !== "boolean") {
       api.setDefaultModel(await modelBytes(model, undefined, readUrl), "the model given to init()");
     }
-    return glue;
+    return module.exports;
   },
   /** Nothing to do in Node; `initSync({ model: bytes })` sets another default model. */
   initSync: (options) => {
     const model = modelOption(options);
     if (model !== undefined && model !== null && typeof model !== "boolean") api.setDefaultModel(model, "the model given to initSync()");
-    return glue;
+    return module.exports;
   },
 };
 // Marks the default export as real, so that TypeScript's and bundlers' CommonJS interop

@@ -13,7 +13,8 @@
 #   pkg/worker.js, pkg/worker-client.js (+ .d.ts): the worker and its promise API
 #   pkg/arps.d.ts   the generated declarations (the facade has the glue's API) + js/arps-types.d.ts,
 #                   with init/initSync and Registrar.withDefaultModel/fromUrl from js/arps-entry.d.ts
-#   pkg/package.json from js/package.json, version from Cargo.toml
+#   pkg/package.json from js/package.json, version and repository links from Cargo.toml
+#   pkg/LICENSE-MIT, pkg/LICENSE-APACHE, pkg/CHANGELOG.md, pkg/examples/ (from js/examples/)
 # wasm-opt: the pinned npm binaryen's wasm-opt runs here when `npm ci` has installed it
 # (scripts/setup.sh), else the .wasm ships as rustc + wasm-bindgen left it. ARPS_WASM_OPT=0 skips it.
 # Usage: scripts/build-pkg.sh [--dev]
@@ -108,11 +109,24 @@ fi
 
 cp js/worker.js js/node-worker.mjs js/worker-client.js js/worker-client.d.ts pkg/
 [ -f js/README.md ] && cp js/README.md pkg/README.md
+# Publishing: the licences, the changelog, the package's runnable examples (js/examples/), and
+# the repository links, derived from Cargo.toml's `repository` (the one place it is written).
+cp LICENSE-MIT LICENSE-APACHE CHANGELOG.md pkg/
+cp -R js/examples pkg/examples
 version=$(sed -n 's/^version = "\(.*\)"/\1/p' Cargo.toml | head -n1)
+repository=$(sed -n 's/^repository = "\(.*\)"/\1/p' Cargo.toml | head -n1)
 node -e '
   const fs = require("fs");
+  const [version, repository] = process.argv.slice(1);
+  if (!/^https:\/\/github\.com\/[^/]+\/[^/]+$/.test(repository)) {
+    console.error(`build-pkg: Cargo.toml repository "${repository}" is not https://github.com/OWNER/NAME`);
+    process.exit(1);
+  }
   const p = JSON.parse(fs.readFileSync("js/package.json", "utf8"));
-  p.version = process.argv[1];
+  p.version = version;
+  p.repository = { type: "git", url: `git+${repository}.git` };
+  p.homepage = `${repository}#readme`;
+  p.bugs = { url: `${repository}/issues` };
   fs.writeFileSync("pkg/package.json", JSON.stringify(p, null, 2) + "\n");
-' "$version"
+' "$version" "$repository"
 say "pkg/ ready (arps $version): $(stat -c %s pkg/arps_bg.wasm) bytes wasm"

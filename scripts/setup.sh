@@ -5,7 +5,8 @@
 #   - wasm-pack (WASM_PACK_VERSION below)
 #   - wasm-bindgen-cli at exactly the version Cargo.toml pins for the wasm-bindgen crate
 #   - npm dev dependencies from package-lock.json (binaryen's wasm-opt, used by build-pkg.sh;
-#     three, bunny, playwright-core, pngjs for the demo page www/ and its end-to-end test)
+#     three, bunny, playwright-core, pngjs for the demo page www/ and its end-to-end test; vite and
+#     @types/node for the consumer test of the packed package, scripts/test-consumer.sh)
 #   - Debian's Chromium (apt) for the end-to-end test, when /usr/bin/chromium is missing
 set -euo pipefail
 cd "$(dirname "$0")/.."

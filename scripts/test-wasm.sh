@@ -9,7 +9,7 @@
 #      input, each followed by a correct registration on the same instance, large coordinates,
 #      and recovery from a real trap)
 #   5. tsc: the .d.ts type-checks typical use and rejects misspelled options
-#   6. examples/node-register.mjs on the fixture pair
+#   6. the package's examples/node-register.mjs (js/examples/) on the fixture pair
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -32,5 +32,5 @@ node --test js/test/*.test.mjs
 step "TypeScript declarations (tsc -p js/test)"
 node_modules/.bin/tsc -p js/test
 
-step "examples/node-register.mjs"
-node examples/node-register.mjs fixtures/wasm/source.ply fixtures/wasm/target.ply
+step "pkg/examples/node-register.mjs"
+node pkg/examples/node-register.mjs fixtures/wasm/source.ply fixtures/wasm/target.ply

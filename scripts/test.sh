@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Runs every test: native (unit, integration, CLI), the wasm32 build of the core, and (once set up)
-# the wasm tests in headless Node and the browser end-to-end test. Installs what it needs first.
+# the wasm tests in headless Node, the browser end-to-end test, and the consumer test of the packed
+# npm package (scripts/test-consumer.sh). Installs what it needs first.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -52,7 +53,7 @@ else
   echo "skipped: no nightly toolchain or no cargo-fuzz (scripts/setup.sh installs cargo-fuzz where nightly exists)"
 fi
 
-for extra in scripts/test-wasm.sh scripts/test-e2e.sh; do
+for extra in scripts/test-wasm.sh scripts/test-e2e.sh scripts/test-consumer.sh; do
   if [ -x "$extra" ]; then
     step "$extra"
     "$extra"

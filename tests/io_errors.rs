@@ -301,6 +301,9 @@ fn detection_and_kind_errors() {
     let e = detect_format(b"\x00\x01\x02 binary junk", "upload.bin").unwrap_err().to_string();
     has(&e, &["cannot tell the format of 'upload.bin'"]);
     has(&cloud_err(b"hello world\n", "README"), &["cannot tell the format"]);
+    // No file name at all (e.g. `parsePointCloud(bytes)` from JavaScript): the message says so.
+    let e = detect_format(b"hello world\n", "").unwrap_err().to_string();
+    has(&e, &["no file name was given", "scan.ply"]);
     has(&mesh_err(b"1 2 3\n", "a.xyz"), &["XYZ", "points only"]);
     has(&mesh_err(format!("{PCD_HEAD}DATA ascii\n1 2 3\n4 5 6\n").as_bytes(), "a.pcd"), &["PCD", "points only"]);
     // The extension wins over the content: a PCD named .ply is a PLY error.

@@ -118,14 +118,19 @@ pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
         return Ok(f);
     }
     sniff(bytes).ok_or_else(|| {
-        Error::parse(
-            "input",
+        const KNOWN: &str = "and the content does not look like PLY, PCD, OFF, STL, OBJ or a text list of points";
+        let message = if file_name.is_empty() {
             format!(
-                "cannot tell the format of '{}': the extension is not one of .ply .pcd .xyz .pts .txt .csv .obj .off .stl, \
-                 and the content does not look like PLY, PCD, OFF, STL, OBJ or a text list of points",
+                "cannot tell the format: no file name was given (pass the file's name, e.g. \"scan.ply\", \
+                 so that its extension names the format), {KNOWN}"
+            )
+        } else {
+            format!(
+                "cannot tell the format of '{}': the extension is not one of .ply .pcd .xyz .pts .txt .csv .obj .off .stl, {KNOWN}",
                 file_name.chars().take(200).collect::<String>()
-            ),
-        )
+            )
+        };
+        Error::parse("input", message)
     })
 }
 

@@ -1,15 +1,12 @@
 #!/usr/bin/env node
-// Registers two point-cloud files with the WebAssembly build in Node and prints T_target_source.
-//   scripts/build-pkg.sh     # once: builds pkg/
-//   node examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] [--json]
+// Registers two point-cloud files in Node and prints T_target_source.
+//   node node_modules/arps/examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] [--json]
 // SOURCE and TARGET are any format the readers know (PLY, PCD, XYZ/PTS/CSV, OBJ, OFF, STL).
-// In an app that installed the package, import from "arps" instead of ../pkg/node/index.mjs.
+// It imports "arps" as an app that installed the package does (inside the package, Node resolves
+// the package's own name to itself).
 import { readFileSync } from "node:fs";
 import path from "node:path";
-import { fileURLToPath, pathToFileURL } from "node:url";
-
-const here = path.dirname(fileURLToPath(import.meta.url));
-const entry = path.join(here, "..", "pkg", "node", "index.mjs");
+import init, { Registrar, parsePointCloud } from "arps";
 
 function usage(message) {
   if (message) console.error(`node-register: ${message}`);
@@ -30,18 +27,10 @@ for (let i = 0; i < args.length; i++) {
 }
 if (files.length !== 2) usage();
 
-let arps;
 try {
-  arps = await import(pathToFileURL(entry).href);
-} catch (e) {
-  console.error(`node-register: cannot load ${entry} (${e.message}); run scripts/build-pkg.sh first`);
-  process.exit(1);
-}
-
-try {
-  await arps.default();
-  const [source, target] = files.map((f) => arps.parsePointCloud(readFileSync(f), path.basename(f)));
-  const registrar = arps.Registrar.withDefaultModel();
+  await init(); // a no-op under Node; loads the .wasm in a browser
+  const [source, target] = files.map((f) => parsePointCloud(readFileSync(f), path.basename(f)));
+  const registrar = Registrar.withDefaultModel();
   const t0 = performance.now();
   const r = registrar.register(source, target, options);
   const ms = performance.now() - t0;
