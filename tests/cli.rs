@@ -135,6 +135,14 @@ fn quantize_writes_each_precision_and_refuses_others() {
         let w = arps::Weights::from_bytes(&bytes).unwrap();
         assert_eq!(w.config, original.config);
         assert_eq!(w.provenance["quantized"]["bits"], bits.parse::<u32>().unwrap());
+        if original.provenance.is_object() {
+            let stored_as = match bits {
+                "8" => "int8",
+                "16" => "f16",
+                _ => "f32",
+            };
+            assert_eq!(w.provenance["stored_as"], stored_as);
+        }
         sizes.push(bytes.len());
     }
     assert!(sizes[0] < sizes[1] && sizes[1] < sizes[2], "{sizes:?}");

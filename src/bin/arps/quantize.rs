@@ -37,6 +37,13 @@ pub fn run(args: QuantizeArgs) -> Result<(), String> {
     match &mut w.provenance {
         serde_json::Value::Object(map) => {
             map.insert("quantized".to_string(), note);
+            // `stored_as` (written by the trainer's export) names how the weights are stored now.
+            let stored_as = match store {
+                StoreAs::I8 => "int8",
+                StoreAs::F16 => "f16",
+                StoreAs::F32 => "f32",
+            };
+            map.insert("stored_as".to_string(), serde_json::json!(stored_as));
         }
         other => *other = serde_json::json!({ "original": other.take(), "quantized": note }),
     }
