@@ -227,7 +227,7 @@ async function align() {
     });
     state.result = result;
     showResult(result, truth);
-    view.setAligned(result.matrix);
+    view.setAligned(result.T_target_source);
     setView("after");
   } catch (e) {
     if (e?.name === "AbortError") showError("Alignment cancelled.");
@@ -243,7 +243,7 @@ async function align() {
 const fmt = (x, digits = 4) => (Number.isFinite(x) ? Number(x.toPrecision(digits)).toString() : String(x));
 
 function resultJson(r, truth) {
-  const m = r.matrix;
+  const m = r.T_target_source;
   const out = {
     T_target_source: rowMajor(m),
     confidence: r.confidence,
@@ -252,12 +252,12 @@ function resultJson(r, truth) {
     evidence: r.evidence,
     rotationDeg: rotationAngleDeg(m),
     translation: [m[12], m[13], m[14]],
-    iterations: r.iterations,
-    converged: r.converged,
+    icpIterations: r.icpIterations,
+    icpConverged: r.icpConverged,
     maxCorrespondenceDistance: r.maxCorrespondenceDistance,
-    timingsMs: r.timingsMs,
+    timings: r.timings,
     warnings: r.warnings,
-    networkT_target_source: rowMajor(r.networkMatrix),
+    T_target_source_network: rowMajor(r.T_target_source_network),
     start: r.start,
     startsRefined: r.startsRefined,
   };
@@ -286,7 +286,7 @@ function showResult(r, truth = null) {
       return tr;
     }),
   );
-  const t = json.timingsMs;
+  const t = json.timings;
   const verdict = confidenceWords(r.confidence);
   $("verdict").textContent = verdict.words;
   $("verdict").dataset.level = verdict.level;
@@ -297,7 +297,7 @@ function showResult(r, truth = null) {
     ["Inlier RMSE", fmt(r.inlierRmse)],
     [
       "ICP",
-      `from the ${r.start} start (best of ${r.startsRefined} start${r.startsRefined === 1 ? "" : "s"} refined), ${r.iterations} iterations${r.iterations ? (r.converged ? ", converged" : ", not converged") : ""}`,
+      `from the ${r.start} start (best of ${r.startsRefined} start${r.startsRefined === 1 ? "" : "s"} refined), ${r.icpIterations} iterations${r.icpIterations ? (r.icpConverged ? ", converged" : ", not converged") : ""}`,
     ],
     [
       "Time",
@@ -331,7 +331,7 @@ function showResult(r, truth = null) {
 
 async function copyMatrix() {
   if (!state.result) return;
-  const text = JSON.stringify({ T_target_source: rowMajor(state.result.matrix) });
+  const text = JSON.stringify({ T_target_source: rowMajor(state.result.T_target_source) });
   const button = $("copy-matrix");
   try {
     await navigator.clipboard.writeText(text);
@@ -350,7 +350,7 @@ async function copyMatrix() {
 
 function downloadAligned() {
   if (!state.result || !state.source) return;
-  const aligned = transformPoints(state.source.points, state.result.matrix);
+  const aligned = transformPoints(state.source.points, state.result.T_target_source);
   const bytes = writePly(aligned, `arps: ${state.source.name} aligned onto ${state.target.name}`);
   const a = document.createElement("a");
   a.href = URL.createObjectURL(new Blob([bytes], { type: "application/octet-stream" }));

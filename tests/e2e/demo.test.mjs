@@ -120,7 +120,7 @@ test("aligns two uploaded scans with a known transform", { timeout: TIMEOUT * 2 
   const e = errorsAgainstTruth(result);
   console.log(
     `known transform (15 deg): rotation error ${e.rotationDeg.toFixed(3)} deg, translation error ${e.translation.toFixed(4)} m, ` +
-      `fitness ${result.fitness.toFixed(3)}, confidence ${result.confidence.toFixed(3)}, ${result.timingsMs.totalMs.toFixed(0)} ms`,
+      `fitness ${result.fitness.toFixed(3)}, confidence ${result.confidence.toFixed(3)}, ${result.timings.totalMs.toFixed(0)} ms`,
   );
   assert.ok(e.rotationDeg < 5, `rotation error ${e.rotationDeg} deg`);
   assert.ok(e.translation < 0.25, `translation error ${e.translation} m (scene about 60 m across)`);
