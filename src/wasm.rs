@@ -234,7 +234,8 @@ fn to_js<T: serde::Serialize + ?Sized>(value: &T) -> Result<JsValue, JsError> {
 
 /// JS options object -> core [`Options`]. `undefined`/`null` give the defaults; missing fields
 /// take their defaults; unknown fields and wrong types throw. Values are read by the core's serde
-/// types (`initialTransform`: [`crate::contract::initial_transform`], typed arrays included).
+/// types (`initialTransform`: [`crate::contract::initial_transform`]; typed arrays are copied to
+/// plain arrays first).
 fn parse_options(options: JsValue) -> Result<Options, JsError> {
     if options.is_undefined() || options.is_null() {
         return Ok(Options::default());
@@ -267,6 +268,13 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
                 fields.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ")
             )));
         }
+        // A typed array (a 4x4 as `Float32Array`/`Float64Array`) as a plain `Array`: serde reads
+        // untagged layouts (`initialTransform`) through `deserialize_any`, which sees only `Array`s.
+        let value = if value.is_instance_of::<Float32Array>() || value.is_instance_of::<js_sys::Float64Array>() {
+            Array::from(&value).into()
+        } else {
+            value
+        };
         Reflect::set(&clean, &key, &value)
             .map_err(|_| JsError::new(&format!("internal: could not copy option {name}")))?;
     }

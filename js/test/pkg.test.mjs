@@ -55,7 +55,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     const check = (res) => {
       assert.ok(Array.isArray(res.T_target_source) && res.T_target_source.length === 16);
       assert.ok(Array.isArray(res.T_target_source_network) && res.T_target_source_network.length === 16);
-      for (const k of ["fitness", "inlierRmse", "iterations", "maxCorrespondenceDistance"]) assert.equal(typeof res[k], "number", k);
+      for (const k of ["fitness", "inlierRmse", "icpIterations", "maxCorrespondenceDistance"]) assert.equal(typeof res[k], "number", k);
       assert.equal(typeof res.icpConverged, "boolean");
       assert.ok(["network", "centroids", "initial", "turned", "turnedInitial", "global", "globalNetwork"].includes(res.start), `start ${res.start}`);
       for (const k of ["preprocessMs", "networkMs", "gmrMs", "icpMs", "globalMs", "totalMs"]) assert.equal(typeof res.timings[k], "number", k);
@@ -68,6 +68,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       const { rot, tr } = errors(res.T_target_source);
       assert.ok(rot < 1 && tr < 0.02, `rotation ${rot} deg, translation ${tr}`);
       structuredClone(res); // plain data: postMessage-able
+      assert.deepEqual(JSON.parse(JSON.stringify(res)), res, "JSON round trip (the CLI prints the same object)");
     };
     check(r.register(source(), target()));
     assert.throws(() => r.register(source(), target(), { bogus: 1 }));
