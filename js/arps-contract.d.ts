@@ -188,11 +188,10 @@ export type RegistrationResult = {
   warnings: Array<string>,
   /**
    * An estimate of the probability that `T_target_source` is right (within the evaluation's
-   * recall thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on
-   * validation pairs (`arps::confidence`). Read it as "likely
-   * right" near 1, "likely wrong" near 0; below 0.5 `warnings` says the alignment may be
-   * wrong. It judges the fit, so a symmetric or featureless shape that fits in several poses
-   * lowers it (`evidence.ambiguity`).
+   * recall thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on validation
+   * pairs (`arps::confidence`). Read it as "likely right" near 1, "likely wrong" near 0; below
+   * 0.5 `warnings` says the alignment may be wrong. It judges the fit, so a symmetric or
+   * featureless shape that fits in several poses lowers it (`evidence.ambiguity`).
    */
   confidence: number,
   /**

@@ -226,11 +226,10 @@ pub struct Registration {
     /// 0.5.
     pub warnings: Vec<String>,
     /// An estimate of the probability that `T_target_source` is right (within the evaluation's
-    /// recall thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on
-    /// validation pairs (`arps::confidence`). Read it as "likely
-    /// right" near 1, "likely wrong" near 0; below 0.5 `warnings` says the alignment may be
-    /// wrong. It judges the fit, so a symmetric or featureless shape that fits in several poses
-    /// lowers it (`evidence.ambiguity`).
+    /// recall thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on validation
+    /// pairs (`arps::confidence`). Read it as "likely right" near 1, "likely wrong" near 0; below
+    /// 0.5 `warnings` says the alignment may be wrong. It judges the fit, so a symmetric or
+    /// featureless shape that fits in several poses lowers it (`evidence.ambiguity`).
     pub confidence: f64,
     /// The figures `confidence` is computed from, measured under `T_target_source`.
     pub evidence: Evidence,

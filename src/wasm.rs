@@ -162,11 +162,12 @@ impl Registrar {
     /// Registers `source` onto `target` (packed xyz, same units) and returns the transform
     /// mapping source points into the target frame, with quality figures. (The package's entry
     /// points, `js/facade.js`, also take `Float64Array`s and `{ points, origin }` clouds: they
-    /// pass f32 points relative to an origin here and map the result back in f64.) `options` is a plain
-    /// object (or `undefined`/`null`) with the core [`Options`]' fields; unknown fields throw.
-    /// `onProgress`, if given, is called with each [`crate::Stage`] (`"preparing"`, `"network"`,
-    /// `"refining"`) as it starts (stages that do not run are skipped); if it throws, the
-    /// registration still completes and then the call throws that error.
+    /// pass f32 points relative to an origin here and map the result back in f64.) `options` is a
+    /// plain object (`RegisterOptions`, or `undefined`/`null`); unknown fields throw. The result
+    /// is a plain `RegistrationResult`, the same object as `arps register --json` prints.
+    /// `onProgress`, if given, is called with each `RegistrationStage` (`"preparing"`,
+    /// `"network"`, `"refining"`) as it starts (stages that do not run are skipped); if it throws,
+    /// the registration still completes and then the call throws that error.
     #[wasm_bindgen(unchecked_return_type = "RegistrationResult")]
     pub fn register(
         &mut self,
@@ -207,8 +208,8 @@ impl Registrar {
     }
 
     /// The network configuration of the loaded weights (sizes, preset name): the core's
-    /// [`crate::ModelConfig`] with camelCase keys (`nPoints`, `featureDim`, ...), like the rest of
-    /// the JS API ([`crate::contract::model_config_json`]).
+    /// `ModelConfig` with camelCase keys (`nPoints`, `featureDim`, ...), like the rest of the JS
+    /// API (the weights file stores them in snake_case).
     #[wasm_bindgen(getter, js_name = modelConfig, unchecked_return_type = "ModelConfig")]
     pub fn model_config(&self) -> Result<JsValue, JsError> {
         to_js(&crate::contract::model_config_json(&self.inner.model().config))
