@@ -176,7 +176,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
   });
 }
 
-test("large coordinates: Float64Array or { points, origin } in, matrix64 exact in the caller's frame", () => {
+test("large coordinates: Float64Array or { points, origin } in, T_target_source exact in the caller's frame", () => {
   const arps = nodeBuild;
   const r = arps.Registrar.withDefaultModel();
   // The fixture pair moved far from the origin (georeferenced-like), differently per cloud.
