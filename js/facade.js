@@ -373,11 +373,11 @@ function toColumnMajor(m) {
 }
 
 /**
- * `T(ot) M T(-os)` for a column-major rigid 4x4 `M` (a new `Float64Array`): the same motion
+ * `T(ot) M T(-os)` for a column-major rigid 4x4 `M` (a new array of 16 numbers): the same motion
  * between frames whose origins moved, so source points `p - os` map to target points `q - ot`.
  */
 function shift(m, os, ot) {
-  const out = Float64Array.from(m);
+  const out = Array.from(m);
   for (let r = 0; r < 3; r++) {
     let t = m[12 + r] + ot[r];
     for (let c = 0; c < 3; c++) t -= m[c * 4 + r] * os[c];
@@ -582,10 +582,8 @@ export function makeApi(glue, isReady, env = {}) {
       }
       if (shifted) {
         // Back to the caller's frame, in f64: T = T(ot) T_local T(-os).
-        r.matrix64 = shift(r.matrix64, os, ot);
-        r.networkMatrix64 = shift(r.networkMatrix64, os, ot);
-        r.matrix = Float32Array.from(r.matrix64);
-        r.networkMatrix = Float32Array.from(r.networkMatrix64);
+        r.T_target_source = shift(r.T_target_source, os, ot);
+        r.T_target_source_network = shift(r.T_target_source_network, os, ot);
       }
       return r;
     }

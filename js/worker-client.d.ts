@@ -1,4 +1,4 @@
-import type { CloudInput, CloudWithOrigin, ModelConfig, ModelProvenance, RegisterOptions, RegistrationResult } from "./arps.js";
+import type { CloudInput, CloudWithOrigin, ModelConfig, ModelProvenance, RegisterOptions, RegistrationResult, RegistrationStage } from "./arps.js";
 
 /**
  * Progress of a request, in order: `"loading"` (fetching and compiling the engine and the
@@ -6,7 +6,7 @@ import type { CloudInput, CloudWithOrigin, ModelConfig, ModelProvenance, Registe
  * `"network"` and `"refining"` (the network, then ICP, as the engine starts them),
  * `"done"` (the result is on its way).
  */
-export type Stage = "loading" | "preparing" | "network" | "refining" | "done";
+export type Stage = "loading" | RegistrationStage | "done";
 
 /** The stages, in order. */
 export declare const STAGES: readonly Stage[];
@@ -79,8 +79,8 @@ export interface WorkerRegistrar {
   readonly modelConfig: ModelConfig;
   /**
    * Registers `source` onto `target` (packed xyz `[x0, y0, z0, x1, ...]`, the same units; see
-   * `CloudInput` for large coordinates) in the worker. Resolves to the same plain object as `Registrar.register`; its `matrix` and
-   * `networkMatrix` buffers were transferred, not copied. Rejects with an `Error` carrying the
+   * `CloudInput` for large coordinates) in the worker. Resolves to the same plain object as `Registrar.register`.
+   * Rejects with an `Error` carrying the
    * engine's message; the registrar stays usable. After a wasm trap (an engine bug or out of
    * memory) the error has `code: "ARPS_TRAPPED"`, and the worker is replaced: the next request
    * starts a fresh one. Nothing is retried behind your back. A `source`/`target` that cannot be

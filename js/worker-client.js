@@ -4,7 +4,7 @@
 //   import { createWorkerRegistrar } from "arps/worker-client";
 //   const arps = await createWorkerRegistrar();
 //   const result = await arps.register(source, target, { icp: "plane" }, { onProgress: console.log, signal });
-//   mesh.matrix.fromArray(result.matrix);
+//   mesh.matrix.fromArray(result.T_target_source);
 //
 // One worker at a time. It is replaced by a fresh one (started on the next request) when it
 // crashes, when the engine in it traps, and when a request is aborted: the requests it had in

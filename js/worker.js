@@ -61,7 +61,7 @@ async function handle(msg) {
         if (stage !== "preparing") progress(id, stage);
       });
       progress(id, "done");
-      post({ id, type: "result", result }, [result.matrix, result.matrix64, result.networkMatrix, result.networkMatrix64].map((m) => m.buffer));
+      post({ id, type: "result", result }, []);
       return;
     }
     case "parse": {

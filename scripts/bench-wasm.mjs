@@ -11,9 +11,9 @@
 // --starts sets `starts` for both builds (default: the engine's default starts).
 // Columns:
 //   "read+register": wasm = parsePointCloud of both files' bytes + register (wall clock);
-//                    native = the CLI's `time_ms` (reads both files + registers, in-process; model
+//                    native = the CLI's `wallMs` (reads both files + registers, in-process; model
 //                    loading and process start are excluded, as for wasm).
-//   "engine":        the engine's own timingsMs.totalMs / timings_ms.total_ms (register only).
+//   "engine":        the engine's own timings.totalMs (register only; the same field in the CLI's JSON).
 // Also prints the largest rotation difference between the two builds' answers (a sanity check:
 // the builds run the same code and should agree closely; not bit for bit).
 import { readFileSync, existsSync } from "node:fs";
@@ -67,7 +67,7 @@ const runWasm = (p) => {
   const s = arps.parsePointCloud(sb, path.basename(p.source));
   const t = arps.parsePointCloud(tb, path.basename(p.target));
   const r = registrar.register(s, t, options);
-  return { wall: performance.now() - t0, engine: r.timingsMs.totalMs, stages: r.timingsMs, matrix: r.matrix };
+  return { wall: performance.now() - t0, engine: r.timings.totalMs, stages: r.timings, matrix: r.T_target_source };
 };
 for (const p of pairs) runWasm(p); // warm-up: compile tiers, grow memory
 for (const p of pairs) {
@@ -76,7 +76,7 @@ for (const p of pairs) {
     wasm.wall.push(r.wall);
     wasm.engine.push(r.engine);
     wasm.stages.push(r.stages);
-    wasm.rows.set(p.name, r.matrix);
+    wasm.rows.set(p.name, r.T_target_source);
   }
 }
 
@@ -92,9 +92,9 @@ if (withNative) {
     for (const p of pairs) {
       for (let i = 0; i < reps; i++) {
         const out = JSON.parse(execFileSync(bin, ["register", p.source, p.target, "--json", ...(starts ? ["--starts", starts] : [])], { encoding: "utf8" }));
-        native.wall.push(out.time_ms);
-        native.engine.push(out.timings_ms?.totalMs ?? out.timings_ms?.total_ms ?? NaN);
-        native.stages.push(out.timings_ms ?? {});
+        native.wall.push(out.wallMs);
+        native.engine.push(out.timings?.totalMs ?? NaN);
+        native.stages.push(out.timings ?? {});
         native.rotDiff = Math.max(native.rotDiff, rotationDiffDeg(wasm.rows.get(p.name), out.T_target_source));
       }
     }
@@ -104,9 +104,10 @@ if (withNative) {
   }
 }
 
-function rotationDiffDeg(colMajor, rows) {
+function rotationDiffDeg(a, b) {
+  // a, b column-major: trace(R_a^T R_b) = sum over (row k, col i) of a(k, i) b(k, i)
   let trace = 0;
-  for (let i = 0; i < 3; i++) for (let k = 0; k < 3; k++) trace += rows[k][i] * colMajor[i * 4 + k];
+  for (let i = 0; i < 3; i++) for (let k = 0; k < 3; k++) trace += a[i * 4 + k] * b[i * 4 + k];
   return (Math.acos(Math.min(1, Math.max(-1, (trace - 1) / 2))) * 180) / Math.PI;
 }
 
@@ -116,7 +117,7 @@ console.log(`bench-wasm: ${pairs.length} pairs from ${path.relative(root, pairsD
 console.log("median ms/pair      wasm (Node)   native   wasm/native");
 console.log(`  read+register   ${fmt(w.wall)}    ${fmt(n.wall)}    ${native ? (w.wall / n.wall).toFixed(2).padStart(6) : "     -"}`);
 console.log(`  engine only     ${fmt(w.engine)}    ${fmt(n.engine)}    ${native ? (w.engine / n.engine).toFixed(2).padStart(6) : "     -"}`);
-const stageMedian = (runs, k) => median(runs.map((t) => t[k] ?? t[k.replace(/Ms$/, "_ms")] ?? NaN));
+const stageMedian = (runs, k) => median(runs.map((t) => t[k] ?? NaN));
 for (const k of STAGE_KEYS) {
   const a = stageMedian(wasm.stages, k);
   const b = native ? stageMedian(native.stages, k) : NaN;

@@ -16,10 +16,12 @@ fi
 
 step "format and lints"
 cargo fmt --check
-cargo clippy --quiet --all-targets --features train -- -D warnings
+cargo clippy --quiet --all-targets --features train,ts -- -D warnings
 
-step "native tests (cargo test --features train)"
-cargo test --features train
+# `ts` adds the TypeScript generation of the JS/JSON contract: tests/contract.rs fails when the
+# committed js/arps-contract.d.ts differs from what the Rust types generate (scripts/gen-types.sh).
+step "native tests (cargo test --features train,ts)"
+cargo test --features train,ts
 
 step "PyTorch trainer tests (trainer/tests; where torch is installed)"
 if python3 -c "import torch, numpy, safetensors, pytest" 2>/dev/null; then

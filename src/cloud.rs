@@ -41,6 +41,7 @@ pub struct PointCloud {
 /// What to do with points that have a NaN or infinite coordinate.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "NonFinite"))]
 pub enum NonFinite {
     /// Fail with an error naming the first bad point (the default).
     #[default]

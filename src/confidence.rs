@@ -17,6 +17,7 @@ use serde::{Deserialize, Serialize};
 /// multiples of the final max correspondence distance `d`.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationEvidence"))]
 pub struct Evidence {
     /// Fraction of source points with a target point within `d` (the result's `fitness`).
     pub fitness: f64,

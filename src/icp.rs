@@ -8,6 +8,7 @@ use std::sync::OnceLock;
 /// Which ICP to run after the network.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "IcpKind"))]
 pub enum IcpKind {
     /// No refinement: the network's transform is the answer.
     Off,
@@ -27,9 +28,10 @@ pub struct IcpParams {
     pub max_correspondence_distance: f64,
     /// Iteration cap.
     pub max_iterations: u32,
-    /// Stop when the relative change of fitness is below this ...
+    /// Stop when the change of fitness between iterations is below this ... (an absolute
+    /// difference, as Open3D's `relative_fitness` is, despite the name)
     pub relative_fitness: f64,
-    /// ... and the relative change of inlier RMSE is below this.
+    /// ... and the change of inlier RMSE is below this (likewise absolute).
     pub relative_rmse: f64,
 }
 
@@ -50,8 +52,9 @@ pub struct IcpResult {
 }
 
 impl IcpParams {
-    /// Open3D's defaults for a given distance: point-to-plane, 30 iterations, relative
-    /// fitness and RMSE changes of 1e-6.
+    /// Parameters for the given ICP kind and max correspondence distance, with Open3D's
+    /// convergence defaults: at most 30 iterations, stopping when the changes of fitness and of
+    /// inlier RMSE between iterations both fall below 1e-6.
     pub fn new(kind: IcpKind, max_correspondence_distance: f64) -> Self {
         Self { kind, max_correspondence_distance, max_iterations: 30, relative_fitness: 1e-6, relative_rmse: 1e-6 }
     }

@@ -25,6 +25,7 @@
 pub mod checks;
 pub mod cloud;
 pub mod confidence;
+pub mod contract;
 #[cfg(feature = "cli")]
 pub mod data;
 pub mod error;

@@ -12,9 +12,10 @@ use crate::icp::{IcpKind, IcpParams, IcpTarget};
 use nalgebra::Matrix4;
 use serde::{Deserialize, Serialize};
 
-/// A transform ICP starts from ([`crate::Options::starts`]).
+/// A transform ICP starts from (the options' `starts`, which describe each).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationStart"))]
 pub enum Start {
     /// The network + GMR estimate. With `network: false` there is none: this start is then the
     /// initial transform, reported as [`Start::Initial`].

@@ -14,78 +14,108 @@ use crate::Result;
 use nalgebra::Matrix4;
 use serde::{Deserialize, Serialize};
 
-/// Options of [`Registrar::register`]. Every field has a documented default
-/// ([`Options::default`]); the JS options object mirrors it field by field (camelCase).
+/// Options of a registration (`Registrar::register` in Rust, `Registrar.register` in JS). Every
+/// field has a default, given in its docs. In JS and JSON the fields are camelCase
+/// (`networkPoints`, `icpMaxIterations`, ...; the conventions are in the `arps::contract` module
+/// docs and `js/README.md`); every field may be left out (or be `null` in JS), which takes its
+/// default; unknown fields, wrong types and out-of-range values are errors naming the field.
 #[allow(non_snake_case)]
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase", default, deny_unknown_fields)]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegisterOptions", optional_fields = nullable))]
 pub struct Options {
-    /// Points per cloud fed to the network, at most [`MAX_NETWORK_POINTS`]. Default `None`: the
-    /// model's N (128 for the default model, which was fine-tuned at 128; the `web` preset's
-    /// runs start at 256).
+    /// Points per cloud fed to the network (each cloud is resampled to exactly this many; a
+    /// cloud with fewer points has some used twice, with a warning). Default: the model's N
+    /// (`ModelConfig.nPoints`, 128 for the default model). Range: the model's minimum
+    /// (`max(topH, 16)`) up to 4096 (`MAX_NETWORK_POINTS`; attention cost grows with its square).
     pub network_points: Option<usize>,
-    /// Seed of every random choice (network sampling). Default 0. Same inputs + same seed = same
-    /// output, bit for bit, on a given build.
+    /// Seed of every random choice (the network's point sampling, the global starts' RANSAC).
+    /// Default 0. The same inputs and seed give the same output, bit for bit, on a given build.
+    /// A non-negative integer (in JS a `bigint` for values above 2^53).
+    #[cfg_attr(feature = "ts", ts(type = "number | bigint", optional = nullable))]
     pub seed: u64,
-    /// Refinement after the network. Default [`IcpKind::Plane`] (point-to-plane).
+    /// Refinement after the network: `"plane"` (point-to-plane ICP, target normals; the
+    /// default), `"point"` (point-to-point ICP) or `"off"` (the network + GMR estimate is the
+    /// answer).
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub icp: IcpKind,
-    /// Run the network. Default `true`. With `false` the coarse estimate is the initial transform
-    /// (identity unless [`Options::initial_transform`] is set) and only ICP runs: the classical
-    /// baseline, or a refinement when a good initial guess is known.
+    /// Run the network. Default `true`. With `false` the coarse estimate is `initialTransform`
+    /// (the identity if unset) and only ICP runs: the classical baseline, or a refinement when a
+    /// good initial guess is known.
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub network: bool,
-    /// ICP's final max correspondence distance, in the **user's units**. Default `None`: 0.025
-    /// normalised units (2.5% of the clouds' shared half-extent). ICP runs coarse to fine at
-    /// 4x, 2x and 1x this distance; `fitness` and `inlier_rmse` are measured at 1x.
+    /// ICP's final maximum correspondence distance, in the clouds' units. Default: 2.5% of the
+    /// clouds' shared half-extent. ICP runs coarse to fine at 4x, 2x and 1x this distance;
+    /// `fitness` and `inlierRmse` are measured at 1x. Must be > 0.
     pub max_correspondence_distance: Option<f64>,
-    /// Iteration cap of each ICP stage. Default 30.
+    /// Iteration cap of each of the three ICP stages. Default 30; at most 10000.
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub icp_max_iterations: u32,
-    /// Voxel size for the ICP clouds, in the user's units. Default `None`: half the final max
-    /// correspondence distance. `Some(0.0)` uses the full clouds.
+    /// Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
+    /// correspondence distance. `0` uses the full clouds. Must be >= 0.
     pub voxel_size: Option<f64>,
-    /// An initial guess of `T_target_source` (4x4, user units). The network then estimates the
-    /// remaining motion from there. Default `None` (identity).
+    /// An initial guess of `T_target_source` (rigid, the clouds' units); the network then
+    /// estimates the remaining motion from there. Default: the identity. Either 16 numbers in
+    /// **column-major** order (a previous result's `T_target_source`, a three.js
+    /// `Matrix4.elements`; in JS also a `Float32Array` or `Float64Array`), or four **row-major**
+    /// rows `[[r00, r01, r02, tx], [r10, r11, r12, ty], [r20, r21, r22, tz], [0, 0, 0, 1]]`. A
+    /// non-rigid or non-finite matrix is an error. (In Rust: four row-major rows.)
+    #[serde(with = "crate::contract::initial_transform")]
+    #[cfg_attr(feature = "ts", ts(type = "ArrayLike<number> | number[][] | null", optional = nullable))]
     pub initial_transform: Option<[[f64; 4]; 4]>,
-    /// What to do with NaN/Inf points. Default [`NonFinite::Error`].
+    /// What to do with points that have a NaN or infinite coordinate: `"error"` (an error naming
+    /// the first bad point; the default) or `"drop"` (ignore them, e.g. PCD "no return" points).
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub non_finite: NonFinite,
-    /// The transforms ICP starts from ([`Start`]), in order of preference. Each is refined coarse
-    /// to fine against the same prepared target ([`refine::refine_best`]; starts that meet on the
-    /// way are merged into the earlier one) and the best is returned ([`Registration::start`] says
-    /// which): the highest fitness at the final distance, ties going to the lower inlier RMSE, then
-    /// to the earlier start ([`refine::choose`]). Each extra start costs one ICP run on at most
-    /// [`refine::SCREEN_POINTS`] source points ([`Start::Turned`] and [`Start::TurnedInitial`] are
-    /// six each; [`Start::Global`] up to five). Default `[Network, Centroids, Initial, Turned,
-    /// TurnedInitial, Global]`, searched as [`Options::search`] says. On 1,000 fresh
-    /// validation pairs (`arps eval`, `make-pairs --seed 1`, the model shipped before session 7)
-    /// `TurnedInitial` raised recall from 0.936 to 0.947 (11 pairs gained, none lost) and cut MRE
-    /// from 4.3 to 3.9 degrees, for about 1.8 times the ICP time; on session 3's model,
-    /// `[Network, Centroids, Initial]` recalled 0.880 / 5.6 and `[Network]` alone 0.820 / 7.6
-    /// (`BENCHMARK.md`, `models/MODEL.md`). Must be non-empty and without repeats.
+    /// The transforms ICP starts from, in order of preference. Each is refined coarse to fine
+    /// against the same prepared target and the best is returned (the result's `start` says
+    /// which): the highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier
+    /// start. Starts that meet during refinement are refined once, as the earlier; on large clouds
+    /// the starts are compared on 2048 of the source points and only the winner is refined on all
+    /// of them. Which starts are refined at all depends on `search`. Default
+    /// `["network", "centroids", "initial", "turned", "turnedInitial", "global"]`; each extra
+    /// start costs one ICP run on at most 2048 points (`"turned"` and `"turnedInitial"` are six
+    /// each, `"global"` and `"globalNetwork"` up to five each, plus the descriptor matching), so
+    /// `["network"]` is the fastest. Must be non-empty, without repeats.
+    /// - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
+    ///   reported as `"initial"`);
+    /// - `"centroids"`: `initialTransform`'s rotation (none if unset) with the translation that
+    ///   moves the source's centroid onto the target's;
+    /// - `"initial"`: `initialTransform` itself (the identity if unset);
+    /// - `"turned"`: six starts, the network estimate (the initial transform with
+    ///   `network: false`) turned 45 degrees both ways about each axis through the source's
+    ///   centroid, for estimates that landed outside ICP's basin;
+    /// - `"turnedInitial"`: six starts, `initialTransform` (the identity if unset) turned the same
+    ///   way, for pairs where the network's estimate is far off (with `network: false`, the same
+    ///   starts as `"turned"`, reported as `"turned"`);
+    /// - `"global"`: up to five hypotheses from global registration (FPFH descriptors, mutual
+    ///   matches, a seeded RANSAC), for motions of any size, e.g. scans in unrelated frames; none
+    ///   when the descriptors match too little;
+    /// - `"globalNetwork"`: the `"global"` hypotheses, each refined by the network first (with
+    ///   `network: false`, the same starts as `"global"`, reported as `"global"`).
     ///
-    /// With `network: false`, a `Network` start is the initial transform (reported as `Initial`),
-    /// and `Turned` and `TurnedInitial` both turn the initial transform (reported as `Turned`).
-    /// With `icp: Off` nothing is refined or compared: the first start is the answer (choosing
-    /// among unrefined starts by fitness measured worse than taking the network's).
-    ///
-    /// [`refine::refine_best`]: crate::refine::refine_best
-    /// [`refine::choose`]: crate::refine::choose
-    /// [`refine::SCREEN_POINTS`]: crate::refine::SCREEN_POINTS
+    /// With `icp: "off"` nothing is refined or compared: the first start is the answer.
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub starts: Vec<Start>,
-    /// How the starts are searched. Default [`Search::Adaptive`]: the first start alone, then the
-    /// other local starts, then the global ones ([`Start::is_global`]), stopping as soon as the
-    /// best answer's [`Registration::confidence`] reaches [`STOP_CONFIDENCE`].
-    /// [`Search::Exhaustive`] refines every start.
+    /// How `starts` are searched. Default `"adaptive"`: in stages, cheapest first, stopping as
+    /// soon as the best answer's `confidence` reaches 0.9 (`STOP_CONFIDENCE`): the first start
+    /// alone; then the other local starts; then the global ones (`"global"`, `"globalNetwork"`).
+    /// `"exhaustive"` refines every start. The result's `startsRefined` says how many were refined.
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub search: Search,
 }
 
-/// How [`Options::starts`] are searched.
+/// How the options' `starts` are searched (see `search`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationSearch"))]
 pub enum Search {
     /// In stages, cheapest first, stopping at a confident answer: the first start; then the other
-    /// local starts; then the global starts. The best of everything refined is returned.
+    /// local starts; then the global starts. The best of everything refined is returned. Easy
+    /// pairs cost one start; hard ones still get every start.
     #[default]
     Adaptive,
-    /// Every start is refined and the best returned.
+    /// Every start is refined and the best returned (slower, never stops early).
     Exhaustive,
 }
 
@@ -117,67 +147,94 @@ impl Default for Options {
     }
 }
 
-/// A stage of [`Registrar::register_with_progress`], reported as it starts.
+/// A stage of a registration, reported as it starts (to `Registrar::register_with_progress`'s
+/// callback in Rust, to `onProgress` in JS, as `"preparing"`, `"network"`, `"refining"`); stages
+/// that do not run are skipped.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationStage"))]
 pub enum Stage {
     /// Validation, normalisation, downsampling.
     Preparing,
-    /// The network forward pass and the GMR solve.
+    /// The network forward pass and the GMR solve (skipped with `network: false`).
     Network,
-    /// ICP refinement and the quality figures (reported even with ICP off, for the figures).
+    /// ICP refinement of the starts (and the global starts' descriptors and RANSAC), and the
+    /// quality figures (reported even with ICP off, for the figures).
     Refining,
 }
 
-/// Milliseconds spent in each stage of one registration (0 where no clock is available).
+/// Milliseconds spent in each stage of one registration (0 where no clock is available; in JS
+/// measured with `performance.now()`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationTimings"))]
 pub struct Timings {
-    /// Validation, normalisation and downsampling (network points and ICP voxels).
+    /// Validation, normalisation, network sampling and ICP voxel downsampling.
     pub preprocess_ms: f64,
-    /// The network forward pass.
+    /// The network forward pass (0 with `network: false`).
     pub network_ms: f64,
     /// GMM parameters and the weighted Procrustes solve.
     pub gmr_ms: f64,
-    /// ICP refinement of every start (normals, kd-tree, iterations) and the quality figures.
+    /// ICP from every start (normals, kd-tree, iterations) and the quality figures.
     pub icp_ms: f64,
     /// Global hypotheses (descriptors, matching, RANSAC); 0 when no global start ran.
     pub global_ms: f64,
-    /// Everything.
+    /// The whole registration inside the engine.
     pub total_ms: f64,
 }
 
-/// The result of one registration.
+/// The result of one registration. In JS (`Registrar.register`) and JSON (`arps register
+/// --json`) it is a plain object with these fields in camelCase, the transforms as 16
+/// column-major numbers (the conventions are in the `arps::contract` module docs and
+/// `js/README.md`); safe to `postMessage`, `structuredClone` or `JSON.stringify`.
 #[allow(non_snake_case)]
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationResult"))]
 pub struct Registration {
-    /// The answer: maps source points into the target frame (user units), after ICP.
+    /// The answer, `T_target_source`: the rigid transform that maps source points into the
+    /// target frame (`p_target = R p_source + t`), in the clouds' units, after ICP. In JS and
+    /// JSON 16 numbers in **column-major** order (element (row r, col c) at index `c * 4 + r`),
+    /// ready for three.js: `sourceObject.matrix.fromArray(result.T_target_source)`.
+    #[serde(rename = "T_target_source", with = "crate::contract::column_major")]
+    #[cfg_attr(feature = "ts", ts(type = "number[]"))]
     pub T_target_source: Matrix4<f64>,
-    /// The network + GMR estimate, before ICP (user units); the initial transform with `network: false`.
+    /// The coarse estimate before ICP (network + GMR, or `initialTransform` with
+    /// `network: false`); same frames and layout as `T_target_source`.
+    #[serde(rename = "T_target_source_network", with = "crate::contract::column_major")]
+    #[cfg_attr(feature = "ts", ts(type = "number[]"))]
     pub T_target_source_network: Matrix4<f64>,
-    /// The start whose refinement is `T_target_source` (one of [`Options::starts`]).
+    /// The start (one of the options' `starts`) whose refinement is `T_target_source`.
     pub start: Start,
-    /// Fraction of (voxelised) source points with a target point within the final max
-    /// correspondence distance, under `T_target_source`; in [0, 1].
+    /// Fraction of (voxelised) source points that have a target point within
+    /// `maxCorrespondenceDistance` under `T_target_source`, in [0, 1]. Right answers on partial,
+    /// independently sampled scans often score only 0.15-0.3: judge the result by `confidence`.
     pub fitness: f64,
-    /// RMS distance of those inlier pairs, user units (0 if there are none).
+    /// RMS distance of those inlier pairs, in the clouds' units (0 when there are none).
     pub inlier_rmse: f64,
-    /// ICP iterations over all stages of the chosen start's refinement (0 with ICP off).
+    /// ICP iterations over all stages of the chosen start's refinement (0 with `icp: "off"`).
     pub icp_iterations: u32,
-    /// True when the chosen start's last ICP stage met its convergence criteria (false with ICP off).
+    /// True when the chosen start's last ICP stage met its convergence criteria (false with
+    /// `icp: "off"`).
     pub icp_converged: bool,
-    /// The final max correspondence distance used, user units.
+    /// The final max correspondence distance used, in the clouds' units (the default resolved).
     pub max_correspondence_distance: f64,
-    /// Time per stage.
+    /// Time per stage, in milliseconds.
     pub timings: Timings,
-    /// Things the caller should know (input padded, low confidence, ...).
+    /// Things to know about this result (input resampled, low confidence, ...), as sentences.
+    /// One starting with `"low confidence"` comes with every result whose `confidence` is below
+    /// 0.5.
     pub warnings: Vec<String>,
-    /// The estimated probability that `T_target_source` is right, in [0, 1]
-    /// ([`crate::confidence::confidence`]); below 0.5 a warning says so.
+    /// An estimate of the probability that `T_target_source` is right (within the evaluation's
+    /// recall thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on validation
+    /// pairs (`arps::confidence`). Read it as "likely right" near 1, "likely wrong" near 0; below
+    /// 0.5 `warnings` says the alignment may be wrong. It judges the fit, so a symmetric or
+    /// featureless shape that fits in several poses lowers it (`evidence.ambiguity`).
     pub confidence: f64,
-    /// What the confidence is computed from.
+    /// The figures `confidence` is computed from, measured under `T_target_source`.
     pub evidence: Evidence,
-    /// How many distinct starts were refined (after merging).
+    /// How many distinct starts were refined (after merging those that met); see the options'
+    /// `search`.
     pub starts_refined: usize,
 }
 

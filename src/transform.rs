@@ -4,11 +4,11 @@
 //! * `T_target_source` maps a point expressed in the source frame into the target frame:
 //!   `p_target = R * p_source + t`, with `T = [[R, t], [0, 0, 0, 1]]`.
 //! * In Rust the transform is a [`nalgebra::Matrix4<f64>`].
-//! * Across the JavaScript boundary a 4x4 is a `Float32Array(16)` in **column-major** order
-//!   (element `(row r, col c)` at index `c * 4 + r`), exactly what three.js `Matrix4.fromArray`
-//!   reads. [`to_column_major_f32`] and [`from_column_major`] convert.
-//! * The CLI's JSON prints four **row-major** rows (`[[r00, r01, r02, t0], ...]`), as people read
-//!   matrices; [`to_rows`] converts.
+//! * Across the JavaScript and JSON boundary ([`crate::contract`]) a 4x4 is 16 numbers in
+//!   **column-major** order (element `(row r, col c)` at index `c * 4 + r`), exactly what three.js
+//!   `Matrix4.fromArray` reads. [`from_column_major`] and [`to_column_major_f32`] convert.
+//! * Four **row-major** rows (`[[r00, r01, r02, t0], ...]`), as people read matrices, are
+//!   [`to_rows`] and [`from_rows`]; [`crate::Options::initial_transform`] holds them.
 
 use nalgebra::{Matrix3, Matrix4, Vector3};
 

@@ -3,12 +3,14 @@
 //! A thin layer: it converts JS values to core types and back, and core errors to thrown JS
 //! `Error`s. All logic lives in the core ([`crate::Registrar`], [`crate::io`]).
 //!
-//! JS API (see `js/arps-types.d.ts` and the generated `arps.d.ts` for the documented types):
+//! JS API (the declarations: `js/arps-contract.d.ts`, generated from the core types, and
+//! `js/arps-types.d.ts`, both appended to the generated `arps.d.ts`):
 //! * `Registrar.fromBytes(Uint8Array)`, and `Registrar.withDefaultModel()` in builds with the
 //!   `embed-model` feature (the package's facade provides it over the model file otherwise);
-//! * `registrar.register(source: Float32Array, target: Float32Array, options?)` -> a plain object
-//!   `{ matrix, matrix64, networkMatrix, networkMatrix64, start, fitness, inlierRmse, iterations, converged,
-//!   maxCorrespondenceDistance, timingsMs, warnings, confidence, evidence, startsRefined }`;
+//! * `registrar.register(source: Float32Array, target: Float32Array, options?, onProgress?)` ->
+//!   the core [`crate::Registration`] as a plain object (`RegistrationResult`), serialised by
+//!   serde like the CLI's JSON ([`crate::contract`]); the options are the core [`Options`]
+//!   (`RegisterOptions`), read by serde;
 //! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`;
 //! * `readPointCloud(bytes: Uint8Array, fileName: string) -> { points: Float32Array, origin }`.
 //!
@@ -22,12 +24,17 @@
 //! binding's glue, and they recover from any trap that still happens (out of memory, an engine
 //! bug) by re-instantiating the module.
 
-use crate::{transform, Options, PointCloud};
+use crate::{Options, PointCloud};
 use js_sys::{Array, Float32Array, Object, Reflect};
 use wasm_bindgen::prelude::*;
 
-/// The documented option and result types (`RegisterOptions`, `RegistrationResult`, ...),
-/// hand-written in `js/arps-types.d.ts` and appended to the generated `arps.d.ts`.
+/// The option and result types (`RegisterOptions`, `RegistrationResult`, ...), generated from
+/// the core types ([`crate::contract::typescript`]) and appended to the generated `arps.d.ts`.
+#[wasm_bindgen(typescript_custom_section)]
+const TS_CONTRACT: &'static str = include_str!("../js/arps-contract.d.ts");
+
+/// The JS-only types (`CloudInput`, `CloudWithOrigin`, `ModelProvenance`), hand-written in
+/// `js/arps-types.d.ts` and appended to the generated `arps.d.ts`.
 #[wasm_bindgen(typescript_custom_section)]
 const TS_TYPES: &'static str = include_str!("../js/arps-types.d.ts");
 
@@ -160,11 +167,12 @@ impl Registrar {
     /// Registers `source` onto `target` (packed xyz, same units) and returns the transform
     /// mapping source points into the target frame, with quality figures. (The package's entry
     /// points, `js/facade.js`, also take `Float64Array`s and `{ points, origin }` clouds: they
-    /// pass f32 points relative to an origin here and map the result back in f64.) `options` is a plain
-    /// object (or `undefined`/`null`) mirroring the core `Options`; unknown fields throw.
-    /// `onProgress`, if given, is called with `"preparing"`, `"network"` and `"refining"` as each
-    /// stage starts (stages that do not run are skipped); if it throws, the registration still
-    /// completes and then the call throws that error.
+    /// pass f32 points relative to an origin here and map the result back in f64.) `options` is a
+    /// plain object (`RegisterOptions`, or `undefined`/`null`); unknown fields throw. The result
+    /// is a plain `RegistrationResult`, the same object as `arps register --json` prints.
+    /// `onProgress`, if given, is called with each `RegistrationStage` (`"preparing"`,
+    /// `"network"`, `"refining"`) as it starts (stages that do not run are skipped); if it throws,
+    /// the registration still completes and then the call throws that error.
     #[wasm_bindgen(unchecked_return_type = "RegistrationResult")]
     pub fn register(
         &mut self,
@@ -173,7 +181,7 @@ impl Registrar {
         #[wasm_bindgen(unchecked_optional_param_type = "RegisterOptions | null")] options: Option<JsValue>,
         #[wasm_bindgen(
             js_name = "onProgress",
-            unchecked_optional_param_type = "((stage: \"preparing\" | \"network\" | \"refining\") => void) | null"
+            unchecked_optional_param_type = "((stage: RegistrationStage) => void) | null"
         )]
         on_progress: Option<js_sys::Function>,
     ) -> Result<JsValue, JsError> {
@@ -184,12 +192,8 @@ impl Registrar {
         let mut callback_error: Option<JsValue> = None;
         let mut progress = |stage: crate::Stage| {
             if let (Some(f), None) = (&on_progress, &callback_error) {
-                let name = match stage {
-                    crate::Stage::Preparing => "preparing",
-                    crate::Stage::Network => "network",
-                    crate::Stage::Refining => "refining",
-                };
-                if let Err(e) = f.call1(&JsValue::NULL, &JsValue::from_str(name)) {
+                let called = to_js(&stage).map_err(JsValue::from).and_then(|name| f.call1(&JsValue::NULL, &name));
+                if let Err(e) = called {
                     callback_error = Some(e);
                 }
             }
@@ -198,24 +202,7 @@ impl Registrar {
         if let Some(e) = callback_error {
             return Err(JsError::new(&format!("onProgress threw: {}", js_message(&e))));
         }
-        let out = Object::new();
-        set(&out, "matrix", &matrix_js(&r.T_target_source))?;
-        set(&out, "networkMatrix", &matrix_js(&r.T_target_source_network))?;
-        set(&out, "matrix64", &matrix_js_f64(&r.T_target_source))?;
-        set(&out, "networkMatrix64", &matrix_js_f64(&r.T_target_source_network))?;
-        set(&out, "start", &JsValue::from_str(r.start.name()))?;
-        set(&out, "fitness", &JsValue::from_f64(r.fitness))?;
-        set(&out, "inlierRmse", &JsValue::from_f64(r.inlier_rmse))?;
-        set(&out, "iterations", &JsValue::from_f64(r.icp_iterations as f64))?;
-        set(&out, "converged", &JsValue::from_bool(r.icp_converged))?;
-        set(&out, "maxCorrespondenceDistance", &JsValue::from_f64(r.max_correspondence_distance))?;
-        set(&out, "timingsMs", &to_js(&r.timings)?)?;
-        let warnings: Array = r.warnings.iter().map(|w| JsValue::from_str(w)).collect();
-        set(&out, "warnings", &warnings)?;
-        set(&out, "confidence", &JsValue::from_f64(r.confidence))?;
-        set(&out, "evidence", &to_js(&r.evidence)?)?;
-        set(&out, "startsRefined", &JsValue::from_f64(r.starts_refined as f64))?;
-        Ok(out.into())
+        to_js(&r)
     }
 
     /// How the loaded weights were made (the weights file's provenance JSON), e.g.
@@ -225,14 +212,12 @@ impl Registrar {
         to_js(self.inner.provenance())
     }
 
-    /// The network configuration of the loaded weights (sizes, preset name), with the core's
-    /// [`crate::ModelConfig`] fields in camelCase (`nPoints`, `featureDim`, ...), like the rest of
-    /// the JS API.
+    /// The network configuration of the loaded weights (sizes, preset name): the core's
+    /// `ModelConfig` with camelCase keys (`nPoints`, `featureDim`, ...), like the rest of the JS
+    /// API (the weights file stores them in snake_case).
     #[wasm_bindgen(getter, js_name = modelConfig, unchecked_return_type = "ModelConfig")]
     pub fn model_config(&self) -> Result<JsValue, JsError> {
-        let value =
-            serde_json::to_value(&self.inner.model().config).map_err(|e| JsError::new(&format!("internal: {e}")))?;
-        to_js(&camel_case_keys(value))
+        to_js(&crate::contract::model_config_json(&self.inner.model().config))
     }
 }
 
@@ -253,49 +238,10 @@ fn to_js<T: serde::Serialize + ?Sized>(value: &T) -> Result<JsValue, JsError> {
     value.serialize(&ser).map_err(|e| JsError::new(&format!("internal: {e}")))
 }
 
-/// Object keys from `snake_case` to `camelCase`, recursively (values are left alone).
-fn camel_case_keys(value: serde_json::Value) -> serde_json::Value {
-    use serde_json::Value;
-    match value {
-        Value::Object(map) => {
-            Value::Object(map.into_iter().map(|(k, v)| (camel_case(&k), camel_case_keys(v))).collect())
-        }
-        Value::Array(items) => Value::Array(items.into_iter().map(camel_case_keys).collect()),
-        other => other,
-    }
-}
-
-/// `n_points` -> `nPoints`.
-fn camel_case(key: &str) -> String {
-    let mut out = String::with_capacity(key.len());
-    let mut upper = false;
-    for c in key.chars() {
-        if c == '_' {
-            upper = true;
-        } else if upper {
-            out.extend(c.to_uppercase());
-            upper = false;
-        } else {
-            out.push(c);
-        }
-    }
-    out
-}
-
-/// A 4x4 as `Float32Array(16)`, column-major (three.js `Matrix4.fromArray`).
-fn matrix_js(m: &nalgebra::Matrix4<f64>) -> Float32Array {
-    Float32Array::from(&transform::to_column_major_f32(m)[..])
-}
-
-/// A 4x4 as `Float64Array(16)`, column-major: the full precision of the engine's transform.
-fn matrix_js_f64(m: &nalgebra::Matrix4<f64>) -> js_sys::Float64Array {
-    js_sys::Float64Array::from(m.as_slice())
-}
-
 /// JS options object -> core [`Options`]. `undefined`/`null` give the defaults; missing fields
-/// take their defaults; unknown fields and wrong types throw. `initialTransform` may be given as
-/// the core's four row-major rows, or as 16 numbers in column-major order (a three.js
-/// `Matrix4.elements`, or a previous result's `matrix`); the latter is converted to rows here.
+/// take their defaults; unknown fields and wrong types throw. Values are read by the core's serde
+/// types (`initialTransform`: [`crate::contract::initial_transform`]; typed arrays are copied to
+/// plain arrays first).
 fn parse_options(options: JsValue) -> Result<Options, JsError> {
     if options.is_undefined() || options.is_null() {
         return Ok(Options::default());
@@ -328,9 +274,12 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
                 fields.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ")
             )));
         }
-        let value = match column_major_16(&name, &value)? {
-            Some(elements) => rows_js(&transform::to_rows(&transform::from_column_major(&elements))),
-            None => value,
+        // A typed array (a 4x4 as `Float32Array`/`Float64Array`) as a plain `Array`: serde reads
+        // untagged layouts (`initialTransform`) through `deserialize_any`, which sees only `Array`s.
+        let value = if value.is_instance_of::<Float32Array>() || value.is_instance_of::<js_sys::Float64Array>() {
+            Array::from(&value).into()
+        } else {
+            value
         };
         Reflect::set(&clean, &key, &value)
             .map_err(|_| JsError::new(&format!("internal: could not copy option {name}")))?;
@@ -366,48 +315,4 @@ fn struct_fields<T: serde::de::DeserializeOwned>() -> &'static [&'static str] {
     let mut fields: &'static [&'static str] = &[];
     let _ = T::deserialize(Capture(&mut fields));
     fields
-}
-
-/// Four row-major rows as a JS array of arrays (the core's `initialTransform` layout).
-fn rows_js(rows: &[[f64; 4]; 4]) -> JsValue {
-    let out: Array =
-        rows.iter().map(|r| -> JsValue { r.iter().map(|v| JsValue::from_f64(*v)).collect::<Array>().into() }).collect();
-    out.into()
-}
-
-/// For the `initialTransform` option: `Some` when `v` is a flat array-like of 16 numbers
-/// (column-major); `None` for any other option, and for rows or other shapes (serde reports
-/// those); an error for a typed array of the wrong length or a non-number element.
-fn column_major_16(name: &str, v: &JsValue) -> Result<Option<[f64; 16]>, JsError> {
-    if name != "initialTransform" {
-        return Ok(None);
-    }
-    let flat: Option<Vec<JsValue>> = if v.is_instance_of::<Float32Array>() || v.is_instance_of::<js_sys::Float64Array>()
-    {
-        Some(Array::from(v).to_vec())
-    } else if Array::is_array(v) {
-        let a: &Array = v.unchecked_ref();
-        // A flat list (its first element a number) must have 16; rows are left to serde.
-        if a.length() == 16 || a.get(0).as_f64().is_some() {
-            Some(a.to_vec())
-        } else {
-            None
-        }
-    } else {
-        None
-    };
-    let Some(flat) = flat else { return Ok(None) };
-    if flat.len() != 16 {
-        return Err(JsError::new(&format!(
-            "invalid options: initialTransform has {} elements; expected 16 (column-major) or 4 rows of 4",
-            flat.len()
-        )));
-    }
-    let mut out = [0.0; 16];
-    for (i, (o, x)) in out.iter_mut().zip(&flat).enumerate() {
-        *o = x
-            .as_f64()
-            .ok_or_else(|| JsError::new(&format!("invalid options: initialTransform[{i}] is not a number")))?;
-    }
-    Ok(Some(out))
 }

@@ -8,22 +8,47 @@ fn arps(args: &[&str]) -> std::process::Output {
     Command::new(env!("CARGO_BIN_EXE_arps")).args(args).current_dir(env!("CARGO_MANIFEST_DIR")).output().unwrap()
 }
 
+/// `--json` prints the engine's result as the contract says (`arps::contract`): camelCase fields,
+/// the transform as 16 column-major numbers, plus the CLI's `wallMs`; it parses back into an
+/// `arps::Registration` that equals the library's answer on the same pair, and has exactly the
+/// library result's fields (and `wallMs`).
 #[test]
-fn register_json_is_one_object_with_row_major_rows() {
+fn register_json_is_the_engines_result() {
     let out = arps(&["register", "fixtures/wasm/source.ply", "fixtures/wasm/target.ply", "--json"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let stdout = String::from_utf8(out.stdout).unwrap();
     assert_eq!(stdout.trim().lines().count(), 1, "{stdout}");
     let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
-    let rows = v["T_target_source"].as_array().unwrap();
-    assert_eq!(rows.len(), 4);
-    assert!(rows.iter().all(|r| r.as_array().unwrap().len() == 4));
-    let last: Vec<f64> = rows[3].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
-    assert_eq!(last, [0.0, 0.0, 0.0, 1.0]);
-    for key in ["fitness", "inlier_rmse", "time_ms"] {
+    let m: Vec<f64> = v["T_target_source"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    assert_eq!(m.len(), 16);
+    // column-major: the bottom row is elements 3, 7, 11, 15
+    assert_eq!([m[3], m[7], m[11], m[15]], [0.0, 0.0, 0.0, 1.0]);
+    for key in ["fitness", "inlierRmse", "confidence", "maxCorrespondenceDistance", "wallMs"] {
         assert!(v[key].as_f64().is_some(), "{key} missing in {v}");
     }
+    assert!(v["icpIterations"].as_u64().is_some() && v["icpConverged"].is_boolean(), "{v}");
+    assert!(v["timings"]["totalMs"].as_f64().is_some() && v["evidence"]["fitnessTight"].as_f64().is_some(), "{v}");
     assert!(v["fitness"].as_f64().unwrap() > 0.5);
+
+    let parsed: arps::Registration = serde_json::from_str(stdout.trim()).unwrap();
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let read = |p: &str| arps::io::read_path(&dir.join(p)).unwrap();
+    let lib = arps::Registrar::with_default_model()
+        .unwrap()
+        .register(&read("fixtures/wasm/source.ply"), &read("fixtures/wasm/target.ply"), &arps::Options::default())
+        .unwrap();
+    let mut expected: Vec<String> = serde_json::to_value(&lib).unwrap().as_object().unwrap().keys().cloned().collect();
+    expected.push("wallMs".into());
+    expected.sort();
+    let mut got: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
+    got.sort();
+    assert_eq!(got, expected);
+    let err = (parsed.T_target_source - lib.T_target_source).abs().max();
+    assert!(err < 1e-9, "CLI {} vs library {}", parsed.T_target_source, lib.T_target_source);
+    assert_eq!(
+        (parsed.start, parsed.icp_iterations, parsed.starts_refined),
+        (lib.start, lib.icp_iterations, lib.starts_refined)
+    );
 }
 
 #[test]

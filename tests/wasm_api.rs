@@ -12,9 +12,9 @@ use wasm_bindgen::prelude::*;
 use wasm_bindgen_test::wasm_bindgen_test;
 use wasm_common::*;
 
-/// Rotation (degrees) and translation errors of a result's `matrix` against the ground truth.
+/// Rotation (degrees) and translation errors of a result's `T_target_source` against the ground truth.
 fn errors(result: &JsValue) -> (f64, f64) {
-    let m = matrix(result, "matrix");
+    let m = matrix(result, "T_target_source");
     let gt = ground_truth();
     (rotation_error_deg(&m, &gt), translation_error(&m, &gt))
 }
@@ -46,26 +46,26 @@ fn known_transform_is_recovered_with_default_options() {
     assert!(rot < 1.0, "rotation error {rot:.3} deg");
     assert!(tr < 0.02, "translation error {tr:.4} (clouds are ~2 units across)");
     // The rest of the result object.
-    let net = matrix(&res, "networkMatrix");
-    assert!(arps::transform::check_rigid(&net, 1e-3).is_ok(), "networkMatrix is rigid: {net}");
+    let net = matrix(&res, "T_target_source_network");
+    assert!(arps::transform::check_rigid(&net, 1e-3).is_ok(), "T_target_source_network is rigid: {net}");
     let fitness = num(&res, "fitness");
     assert!((0.5..=1.0).contains(&fitness), "fitness {fitness}");
     let rmse = num(&res, "inlierRmse");
     assert!(rmse > 0.0 && rmse < num(&res, "maxCorrespondenceDistance"), "inlierRmse {rmse}");
-    assert!(num(&res, "iterations") >= 1.0);
-    assert!(get(&res, "converged").as_bool().is_some());
+    assert!(num(&res, "icpIterations") >= 1.0);
+    assert!(get(&res, "icpConverged").as_bool().is_some());
     let start = get(&res, "start").as_string().unwrap_or_default();
     assert!(
         ["network", "centroids", "initial", "turned", "turnedInitial", "global", "globalNetwork"]
             .contains(&start.as_str()),
         "start {start:?}"
     );
-    let timings = get(&res, "timingsMs");
+    let timings = get(&res, "timings");
     for k in ["preprocessMs", "networkMs", "gmrMs", "icpMs", "totalMs"] {
-        assert!(num(&timings, k) >= 0.0, "timingsMs.{k}");
+        assert!(num(&timings, k) >= 0.0, "timings.{k}");
     }
     assert!(num(&timings, "totalMs") > 0.0, "the performance.now clock is installed");
-    assert!(num(&timings, "globalMs") >= 0.0, "timingsMs.globalMs");
+    assert!(num(&timings, "globalMs") >= 0.0, "timings.globalMs");
     let warnings = strings(&get(&res, "warnings"));
     // How sure the engine is: high on this known pair, so no "low confidence" warning.
     let confidence = num(&res, "confidence");
@@ -73,6 +73,29 @@ fn known_transform_is_recovered_with_default_options() {
     assert!(!warnings.iter().any(|w| w.starts_with("low confidence")), "{warnings:?}");
     assert!(num(&res, "startsRefined") >= 1.0);
     assert_evidence_is_sane(&get(&res, "evidence"));
+}
+
+/// The JS result is the core's `Registration` serialised (`arps::contract`): `JSON.stringify` of it
+/// parses back into a `Registration` equal to the core's own answer on the same clouds, with the
+/// same fields as the core result's JSON (what `arps register --json` prints).
+#[wasm_bindgen_test]
+fn the_js_result_is_the_core_result() {
+    let mut r = Registrar::with_default_model().map_err(message).unwrap();
+    let res = register_ok(&mut r, JsValue::UNDEFINED);
+    let json = String::from(js_sys::JSON::stringify(&res).unwrap());
+    let from_js: arps::Registration = serde_json::from_str(&json).unwrap();
+    let src = arps::PointCloud::from_xyz(&source()).unwrap();
+    let tgt = arps::PointCloud::from_xyz(&target()).unwrap();
+    let core = arps::Registrar::with_default_model().unwrap().register(&src, &tgt, &arps::Options::default()).unwrap();
+    assert!((from_js.T_target_source - core.T_target_source).abs().max() < 1e-12);
+    assert_eq!(
+        (from_js.start, from_js.icp_iterations, from_js.starts_refined),
+        (core.start, core.icp_iterations, core.starts_refined)
+    );
+    let js_keys: serde_json::Value = serde_json::from_str(&json).unwrap();
+    let core_keys = serde_json::to_value(&core).unwrap();
+    let names = |v: &serde_json::Value| v.as_object().unwrap().keys().cloned().collect::<Vec<_>>();
+    assert_eq!(names(&js_keys), names(&core_keys));
 }
 
 /// The result's `evidence`: exactly the core's fields, camelCase, each in its range.
@@ -102,7 +125,7 @@ fn search_option_and_global_starts() {
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
     let adaptive = register_ok(&mut r, JsValue::UNDEFINED);
     let explicit = register_ok(&mut r, options(r#"{"search": "adaptive"}"#));
-    assert_eq!(matrix(&adaptive, "matrix"), matrix(&explicit, "matrix"), "adaptive is the default");
+    assert_eq!(matrix(&adaptive, "T_target_source"), matrix(&explicit, "T_target_source"), "adaptive is the default");
     assert_eq!(num(&adaptive, "startsRefined"), num(&explicit, "startsRefined"));
     // Exhaustive refines every start: at least as many as the adaptive search, which stops early
     // on this easy pair.
@@ -121,7 +144,7 @@ fn search_option_and_global_starts() {
     // The global starts are accepted by name; the answer is rigid and its confidence a probability.
     for starts in [r#"["global"]"#, r#"["globalNetwork"]"#, r#"["network", "global", "globalNetwork"]"#] {
         let res = register_ok(&mut r, options(&format!(r#"{{"starts": {starts}, "search": "exhaustive"}}"#)));
-        assert!(arps::transform::check_rigid(&matrix(&res, "matrix"), 1e-3).is_ok(), "starts {starts}");
+        assert!(arps::transform::check_rigid(&matrix(&res, "T_target_source"), 1e-3).is_ok(), "starts {starts}");
         let start = get(&res, "start").as_string().unwrap_or_default();
         assert!(["network", "global", "globalNetwork"].contains(&start.as_str()), "starts {starts}: start {start:?}");
         let c = num(&res, "confidence");
@@ -151,8 +174,8 @@ fn empty_and_null_options_mean_defaults_and_results_are_deterministic() {
     js_sys::Reflect::set(&e_opts, &"someFutureOption".into(), &JsValue::UNDEFINED).unwrap();
     let e = register_ok(&mut r, e_opts);
     for other in [&b, &c, &d, &e] {
-        assert_eq!(matrix(&a, "matrix"), matrix(other, "matrix"));
-        assert_eq!(matrix(&a, "networkMatrix"), matrix(other, "networkMatrix"));
+        assert_eq!(matrix(&a, "T_target_source"), matrix(other, "T_target_source"));
+        assert_eq!(matrix(&a, "T_target_source_network"), matrix(other, "T_target_source_network"));
     }
 }
 
@@ -160,9 +183,13 @@ fn empty_and_null_options_mean_defaults_and_results_are_deterministic() {
 fn options_are_honoured() {
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
     let off = register_ok(&mut r, options(r#"{"icp": "off"}"#));
-    assert_eq!(num(&off, "iterations"), 0.0);
-    assert_eq!(get(&off, "converged").as_bool(), Some(false));
-    assert_eq!(matrix(&off, "matrix"), matrix(&off, "networkMatrix"), "with ICP off the answer is the network's");
+    assert_eq!(num(&off, "icpIterations"), 0.0);
+    assert_eq!(get(&off, "icpConverged").as_bool(), Some(false));
+    assert_eq!(
+        matrix(&off, "T_target_source"),
+        matrix(&off, "T_target_source_network"),
+        "with ICP off the answer is the network's"
+    );
 
     let point = register_ok(&mut r, options(r#"{"icp": "point", "seed": 7, "networkPoints": 256}"#));
     let (rot, tr) = errors(&point);
@@ -170,7 +197,7 @@ fn options_are_honoured() {
 
     // ICP alone (the classical baseline): the coarse estimate is the identity.
     let icp_only = register_ok(&mut r, options(r#"{"network": false}"#));
-    let coarse = matrix(&icp_only, "networkMatrix");
+    let coarse = matrix(&icp_only, "T_target_source_network");
     assert!(
         (coarse - nalgebra::Matrix4::identity()).abs().max() < 1e-6,
         "network off: the coarse estimate is the identity, got {coarse}"
@@ -193,7 +220,7 @@ fn options_are_honoured() {
     assert!((num(&d, "maxCorrespondenceDistance") - 0.08).abs() < 1e-9);
 
     // initialTransform as the core's row-major rows, and as a column-major Float32Array(16)
-    // (three.js `matrix.elements`, or a previous result's `matrix`); both start at the answer.
+    // (three.js `matrix.elements`, or a previous result's `T_target_source`); both start at the answer.
     let gt = ground_truth();
     let rows = serde_json::to_string(&arps::transform::to_rows(&gt)).unwrap();
     let from_rows = register_ok(&mut r, options(&format!(r#"{{"initialTransform": {rows}}}"#)));
@@ -203,7 +230,7 @@ fn options_are_honoured() {
     js_sys::Reflect::set(&opts, &"initialTransform".into(), &column_major_js(&gt)).unwrap();
     let from_cm = register_ok(&mut r, opts.clone());
     assert!(
-        (matrix(&from_rows, "matrix") - matrix(&from_cm, "matrix")).abs().max() < 1e-5,
+        (matrix(&from_rows, "T_target_source") - matrix(&from_cm, "T_target_source")).abs().max() < 1e-5,
         "rows and column-major (f32) give the same, up to f32 rounding of the initial guess"
     );
     assert!(get(&opts, "initialTransform").is_instance_of::<Float32Array>(), "the caller's object is not modified");
@@ -211,7 +238,7 @@ fn options_are_honoured() {
     js_sys::Reflect::set(&opts, &"initialTransform".into(), &flat).unwrap();
     let from_array = register_ok(&mut r, opts);
     assert!(
-        (matrix(&from_rows, "matrix") - matrix(&from_array, "matrix")).abs().max() < 1e-5,
+        (matrix(&from_rows, "T_target_source") - matrix(&from_array, "T_target_source")).abs().max() < 1e-5,
         "a plain array of 16 works too"
     );
 }
@@ -347,7 +374,7 @@ fn custom_weights_from_bytes_match_the_default_model() {
     let mut b = Registrar::from_bytes(&default_model_bytes()).map_err(message).unwrap();
     let ra = register_ok(&mut a, JsValue::UNDEFINED);
     let rb = register_ok(&mut b, JsValue::UNDEFINED);
-    assert_eq!(matrix(&ra, "matrix"), matrix(&rb, "matrix"));
+    assert_eq!(matrix(&ra, "T_target_source"), matrix(&rb, "T_target_source"));
     // A different (tiny) model loads from bytes, reports its config, and registers.
     let tiny = arps::Weights::random(&arps::ModelConfig::tiny(), 1).unwrap().to_bytes(arps::StoreAs::F32).unwrap();
     let mut t = Registrar::from_bytes(&tiny).map_err(message).unwrap();
@@ -364,7 +391,7 @@ fn custom_weights_from_bytes_match_the_default_model() {
     assert_eq!(keys as usize, fields);
     assert_eq!(get(&t.provenance().map_err(message).unwrap(), "kind").as_string().as_deref(), Some("random"));
     let res = t.register(&source(), &target(), None, None).map_err(message).unwrap();
-    assert!(arps::transform::check_rigid(&matrix(&res, "matrix"), 1e-3).is_ok());
+    assert!(arps::transform::check_rigid(&matrix(&res, "T_target_source"), 1e-3).is_ok());
 }
 
 #[wasm_bindgen_test]
@@ -432,7 +459,7 @@ fn degenerate_inputs_never_trap() {
     for (name, s, t) in &cases {
         for opts in [None, Some(options(r#"{"icp": "point", "voxelSize": 0}"#))] {
             if let Ok(res) = r.register(s, t, opts, None) {
-                let m = matrix(&res, "matrix");
+                let m = matrix(&res, "T_target_source");
                 assert!(m.iter().all(|v| v.is_finite()), "{name}: non-finite matrix {m}");
             }
         }

@@ -250,7 +250,7 @@ async function align() {
     });
     state.result = result;
     showResult(result, truth);
-    view.setAligned(result.matrix);
+    view.setAligned(result.T_target_source);
     setView("after");
     // One column (phones): bring the result into view.
     if (window.matchMedia("(max-width: 800px)").matches) $("results").scrollIntoView({ block: "start" });
@@ -268,7 +268,7 @@ async function align() {
 const fmt = (x, digits = 4) => (Number.isFinite(x) ? Number(x.toPrecision(digits)).toString() : String(x));
 
 function resultJson(r, truth) {
-  const m = r.matrix;
+  const m = r.T_target_source;
   const out = {
     T_target_source: rowMajor(m),
     confidence: r.confidence,
@@ -277,12 +277,12 @@ function resultJson(r, truth) {
     evidence: r.evidence,
     rotationDeg: rotationAngleDeg(m),
     translation: [m[12], m[13], m[14]],
-    iterations: r.iterations,
-    converged: r.converged,
+    icpIterations: r.icpIterations,
+    icpConverged: r.icpConverged,
     maxCorrespondenceDistance: r.maxCorrespondenceDistance,
-    timingsMs: r.timingsMs,
+    timings: r.timings,
     warnings: r.warnings,
-    networkT_target_source: rowMajor(r.networkMatrix),
+    T_target_source_network: rowMajor(r.T_target_source_network),
     start: r.start,
     startsRefined: r.startsRefined,
   };
@@ -312,7 +312,7 @@ function showResult(r, truth = null) {
       return tr;
     }),
   );
-  const t = json.timingsMs;
+  const t = json.timings;
   const verdict = confidenceWords(r.confidence);
   $("verdict").textContent = verdict.words;
   $("verdict").dataset.level = verdict.level;
@@ -337,7 +337,7 @@ function showResult(r, truth = null) {
     ],
     [
       "ICP",
-      `from the ${r.start} start (best of ${r.startsRefined} start${r.startsRefined === 1 ? "" : "s"} refined), ${r.iterations} iterations${r.iterations ? (r.converged ? ", converged" : ", not converged") : ""}`,
+      `from the ${r.start} start (best of ${r.startsRefined} start${r.startsRefined === 1 ? "" : "s"} refined), ${r.icpIterations} iterations${r.icpIterations ? (r.icpConverged ? ", converged" : ", not converged") : ""}`,
     ],
     [
       "Time",
@@ -377,7 +377,7 @@ function showResult(r, truth = null) {
 
 async function copyMatrix() {
   if (!state.result) return;
-  const text = JSON.stringify({ T_target_source: rowMajor(state.result.matrix) });
+  const text = JSON.stringify({ T_target_source: rowMajor(state.result.T_target_source) });
   const button = $("copy-matrix");
   try {
     await navigator.clipboard.writeText(text);
@@ -401,7 +401,7 @@ async function downloadAligned() {
   button.disabled = true;
   try {
     // The transform and the PLY writing run in the page's store, where the points are.
-    const bytes = await alignedPly(source.key, result.matrix, `arps: ${source.name} aligned onto ${target.name}`);
+    const bytes = await alignedPly(source.key, result.T_target_source, `arps: ${source.name} aligned onto ${target.name}`);
     const a = document.createElement("a");
     a.href = URL.createObjectURL(new Blob([bytes], { type: "application/octet-stream" }));
     a.download = `${source.name.replace(/\.[^.]*$/, "").replace(/[^\w.-]+/g, "_") || "source"}-aligned.ply`;

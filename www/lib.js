@@ -1,6 +1,6 @@
 // Pure helpers of the demo page (no DOM, no three.js): matrices, the PLY writer, the example pair.
 // Matrices are 4x4 column-major arrays (element (row r, col c) at index c * 4 + r), like the
-// package's `result.matrix` and three.js `Matrix4.elements`.
+// package's `result.T_target_source` and three.js `Matrix4.elements`.
 
 /** Four row-major rows of a column-major 4x4. */
 export function rowMajor(m) {

@@ -34,15 +34,11 @@ try {
   const t0 = performance.now();
   const r = registrar.register(source, target, options);
   const ms = performance.now() - t0;
-  // r.matrix is column-major (three.js); print row-major rows, as people read matrices.
-  const rows = [0, 1, 2, 3].map((row) => [0, 1, 2, 3].map((col) => r.matrix[col * 4 + row]));
+  // r.T_target_source is column-major (three.js); print row-major rows, as people read matrices.
+  const rows = [0, 1, 2, 3].map((row) => [0, 1, 2, 3].map((col) => r.T_target_source[col * 4 + row]));
   if (json) {
-    console.log(JSON.stringify({
-      T_target_source: rows, confidence: r.confidence, evidence: r.evidence, fitness: r.fitness, inlier_rmse: r.inlierRmse, icp_iterations: r.iterations,
-      icp_converged: r.converged, max_correspondence_distance: r.maxCorrespondenceDistance,
-      time_ms: ms, timings_ms: r.timingsMs, warnings: r.warnings, start: r.start, starts_refined: r.startsRefined,
-      source_points: source.length / 3, target_points: target.length / 3,
-    }));
+    // The result as it is: the same object `arps register --json` prints.
+    console.log(JSON.stringify(r));
   } else {
     console.log(`source ${files[0]}: ${source.length / 3} points; target ${files[1]}: ${target.length / 3} points`);
     console.log("T_target_source (maps source points into the target frame):");
@@ -50,8 +46,8 @@ try {
     console.log(`confidence ${r.confidence.toFixed(3)} (the engine's estimate that the answer is right; below 0.5 it warns)`);
     console.log(`fitness ${r.fitness.toFixed(4)}  inlier RMSE ${r.inlierRmse.toPrecision(4)}  ` +
       `(max correspondence distance ${r.maxCorrespondenceDistance.toPrecision(4)})`);
-    console.log(`ICP iterations ${r.iterations}${r.converged ? ", converged" : ""}`);
-    const t = r.timingsMs;
+    console.log(`ICP iterations ${r.icpIterations}${r.icpConverged ? ", converged" : ""}`);
+    const t = r.timings;
     console.log(`time ${ms.toFixed(1)} ms (preprocess ${t.preprocessMs.toFixed(1)}, network ${t.networkMs.toFixed(1)}, ` +
       `GMR ${t.gmrMs.toFixed(1)}, ICP ${t.icpMs.toFixed(1)}, global ${t.globalMs.toFixed(1)}); ` +
       `best of ${r.startsRefined} start${r.startsRefined === 1 ? "" : "s"} refined: ${r.start}`);

@@ -23,7 +23,7 @@ const webEntry = () => import(`${pathToFileURL(path.join(pkg, "arps.js")).href}?
 /** The registrar registers the fixture pair (ground truth recovered). */
 function registers(r) {
   const res = r.register(source(), target(), { icp: "plane" });
-  const e = errors(res.matrix);
+  const e = errors(res.T_target_source);
   assert.ok(e.rot < 2 && e.tr < 0.05, `rotation error ${e.rot} deg, translation error ${e.tr}`);
 }
 
@@ -170,7 +170,7 @@ test("worker: weights as a URL (file: in Node), and a clear error for a failed d
   try {
     assert.equal(arps.modelConfig.preset, "web");
     const res = await arps.register(source(), target(), { icp: "plane" });
-    const e = errors(res.matrix);
+    const e = errors(res.T_target_source);
     assert.ok(e.rot < 2 && e.tr < 0.05, `rotation error ${e.rot} deg`);
   } finally {
     arps.terminate();

@@ -54,21 +54,22 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
   test(`${name}: registers the fixture pair, before and after errors`, () => {
     const r = arps.Registrar.withDefaultModel();
     const check = (res) => {
-      assert.ok(res.matrix instanceof Float32Array && res.matrix.length === 16);
-      assert.ok(res.networkMatrix instanceof Float32Array && res.networkMatrix.length === 16);
-      for (const k of ["fitness", "inlierRmse", "iterations", "maxCorrespondenceDistance"]) assert.equal(typeof res[k], "number", k);
-      assert.equal(typeof res.converged, "boolean");
+      assert.ok(Array.isArray(res.T_target_source) && res.T_target_source.length === 16);
+      assert.ok(Array.isArray(res.T_target_source_network) && res.T_target_source_network.length === 16);
+      for (const k of ["fitness", "inlierRmse", "icpIterations", "maxCorrespondenceDistance"]) assert.equal(typeof res[k], "number", k);
+      assert.equal(typeof res.icpConverged, "boolean");
       assert.ok(["network", "centroids", "initial", "turned", "turnedInitial", "global", "globalNetwork"].includes(res.start), `start ${res.start}`);
-      for (const k of ["preprocessMs", "networkMs", "gmrMs", "icpMs", "globalMs", "totalMs"]) assert.equal(typeof res.timingsMs[k], "number", k);
+      for (const k of ["preprocessMs", "networkMs", "gmrMs", "icpMs", "globalMs", "totalMs"]) assert.equal(typeof res.timings[k], "number", k);
       assert.ok(res.confidence >= 0.8 && res.confidence <= 1, `confidence ${res.confidence} on the known pair`);
       assert.ok(!res.warnings.some((w) => w.startsWith("low confidence")), String(res.warnings));
       assert.deepEqual(Object.keys(res.evidence).sort(), ["ambiguity", "fitness", "fitnessCoarse", "fitnessLoose", "fitnessTight", "overlapReverse", "rmseRatio"]);
       assert.ok(Number.isInteger(res.startsRefined) && res.startsRefined >= 1, `startsRefined ${res.startsRefined}`);
-      assert.ok(res.timingsMs.totalMs > 0);
+      assert.ok(res.timings.totalMs > 0);
       assert.ok(Array.isArray(res.warnings));
-      const { rot, tr } = errors(res.matrix);
+      const { rot, tr } = errors(res.T_target_source);
       assert.ok(rot < 1 && tr < 0.02, `rotation ${rot} deg, translation ${tr}`);
       structuredClone(res); // plain data: postMessage-able
+      assert.deepEqual(JSON.parse(JSON.stringify(res)), res, "JSON round trip (the CLI prints the same object)");
     };
     check(r.register(source(), target()));
     assert.throws(() => r.register(source(), target(), { bogus: 1 }));
@@ -79,7 +80,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     assert.ok(exhaustive.startsRefined > r.register(source(), target()).startsRefined, "exhaustive refines more starts");
     // A previous result's matrix as the initial guess (column-major, as three.js holds it).
     const first = r.register(source(), target());
-    check(r.register(source(), target(), { initialTransform: first.matrix }));
+    check(r.register(source(), target(), { initialTransform: first.T_target_source }));
     // The readers' output registers as is.
     check(r.register(arps.parsePointCloud(sourcePly, "source.ply"), target()));
     r.free();

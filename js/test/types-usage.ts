@@ -28,11 +28,11 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   const r = Registrar.withDefaultModel();
   const options: RegisterOptions = { icp: "plane", seed: 3, maxCorrespondenceDistance: 0.05, nonFinite: "drop" };
   const result: RegistrationResult = r.register(source, target, options);
-  const m: Float32Array = result.matrix;
+  const m: number[] = result.T_target_source;
   const again = r.register(source, target, { initialTransform: m, network: false });
   r.register(source, target);
   r.register(source, target, null);
-  const ms: number = again.timingsMs.totalMs + result.fitness + result.inlierRmse + result.iterations;
+  const ms: number = again.timings.totalMs + result.fitness + result.inlierRmse + result.icpIterations;
   const w: string[] = result.warnings;
   const start: "network" | "centroids" | "initial" | "turned" | "turnedInitial" | "global" | "globalNetwork" = result.start;
   r.register(source, target, { starts: ["network", "initial"] });
@@ -45,7 +45,7 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   const evidence: RegistrationEvidence = result.evidence;
   const figures: number =
     evidence.fitness + evidence.fitnessTight + evidence.fitnessLoose + evidence.fitnessCoarse +
-    evidence.overlapReverse + evidence.rmseRatio + evidence.ambiguity + result.startsRefined + result.timingsMs.globalMs;
+    evidence.overlapReverse + evidence.rmseRatio + evidence.ambiguity + result.startsRefined + result.timings.globalMs;
   // @ts-expect-error the evidence is camelCase
   const snakeEvidence = result.evidence.overlap_reverse;
   // @ts-expect-error misspelled search value
@@ -63,9 +63,9 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   r.register(source, target, { icpMaxIteration: 3 });
   // @ts-expect-error wrong enum value
   r.register(source, target, { icp: "planar" });
-  // Large coordinates: Float64Array or { points, origin } in, matrix64 out.
-  const far: Float64Array = result.matrix64;
-  r.register(new Float64Array(source), { points: target, origin: [5e5, 4e6, 0] }).matrix64.length;
+  // Large coordinates: Float64Array or { points, origin } in, T_target_source in the caller's frame out.
+  const far: number[] = result.T_target_source;
+  r.register(new Float64Array(source), { points: target, origin: [5e5, 4e6, 0] }).T_target_source.length;
   const read = readPointCloud(new Uint8Array(), "far.ply");
   r.register(read, read.points);
   // @ts-expect-error a cloud is not a string
@@ -74,7 +74,7 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   return far.length + ms + confidence + figures + String(snakeEvidence).length + networkPoints + reference.length + String(snake).length + w.length + start.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length;
 }
 
-export async function inAWorker(source: Float32Array, target: Float32Array): Promise<Float32Array> {
+export async function inAWorker(source: Float32Array, target: Float32Array): Promise<number[]> {
   const arps: WorkerRegistrar = await createWorkerRegistrar({ onProgress: (s: Stage) => void s });
   const controller = new AbortController();
   const result = await arps.register(source, target, { icp: "point" }, { onProgress: (s) => void s, transfer: true, signal: controller.signal });
@@ -84,5 +84,5 @@ export async function inAWorker(source: Float32Array, target: Float32Array): Pro
   const fromWorker = await arps.register(cloud, points, { search: "exhaustive" });
   if (fromWorker.confidence < 0.5) console.warn(fromWorker.warnings, fromWorker.evidence.ambiguity);
   arps.terminate();
-  return points.length ? result.matrix : result.networkMatrix;
+  return points.length ? result.T_target_source : result.T_target_source_network;
 }

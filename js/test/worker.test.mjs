@@ -62,8 +62,8 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     const stages = [];
     const res = await arps.register(source(), target(), undefined, { onProgress: (s) => stages.push(s) });
     assert.deepEqual(stages.filter((s) => s !== "network" && s !== "refining"), ["preparing", "done"]);
-    assert.ok(res.matrix instanceof Float32Array && res.matrix.length === 16);
-    const { rot, tr } = errors(res.matrix);
+    assert.ok(Array.isArray(res.T_target_source) && res.T_target_source.length === 16);
+    const { rot, tr } = errors(res.T_target_source);
     assert.ok(rot < 1 && tr < 0.02, `rotation ${rot} deg, translation ${tr}`);
 
     // Transferred inputs: the caller's arrays are detached; the result is the same.
@@ -71,15 +71,15 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     const t = target();
     const res2 = await arps.register(s, t, {}, { transfer: true });
     assert.equal(s.length, 0, "source buffer transferred");
-    assert.deepEqual([...res2.matrix], [...res.matrix]);
+    assert.deepEqual(res2.T_target_source, res.T_target_source);
 
     // Concurrent requests resolve to their own results.
     const [a, b] = await Promise.all([
       arps.register(source(), target(), { icp: "off" }),
       arps.register(source(), target(), { icp: "point" }),
     ]);
-    assert.equal(a.iterations, 0);
-    assert.ok(b.iterations > 0);
+    assert.equal(a.icpIterations, 0);
+    assert.ok(b.icpIterations > 0);
 
     const points = await arps.parsePointCloud(sourcePly, "source.ply");
     assert.deepEqual([...points], [...source()]);
@@ -107,12 +107,12 @@ test("worker: a request that cannot be sent rejects alone, and the client keeps 
     await assert.rejects(arps.register(source(), target(), { onProgress: () => {} }), (e) => e.name === "DataCloneError" && /cannot be sent/.test(e.message));
     await assert.rejects(arps.register(source(), target(), { seed: () => 1 }), /DataCloneError/);
     const res = await arps.register(source(), target());
-    assert.ok(errors(res.matrix).rot < 1);
+    assert.ok(errors(res.T_target_source).rot < 1);
     // Hostile input is rejected by the engine's boundary checks, in the worker, with its message.
     await assert.rejects(arps.register({ length: 1.2e9 }, target()), /^Error: source: expected a Float32Array/);
     await assert.rejects(arps.parsePointCloud(sourcePly, 5), /^Error: fileName: expected a string/);
     await assert.rejects(arps.register(source(), target(), { initialTransform: new Array(15).fill(0) }), /initialTransform has 15 elements/);
-    assert.ok(errors((await arps.register(source(), target())).matrix).rot < 1);
+    assert.ok(errors((await arps.register(source(), target())).T_target_source).rot < 1);
   } finally {
     arps.terminate();
   }
@@ -130,7 +130,7 @@ test("worker: after the worker crashes, in-flight requests reject and the next r
     const res = await arps.register(source(), target(), {}, { onProgress: (s) => stages.push(s) });
     assert.equal(workers.length, 2, "a new worker");
     assert.equal(stages[0], "loading", "the new worker loads the engine");
-    assert.ok(errors(res.matrix).rot < 1);
+    assert.ok(errors(res.T_target_source).rot < 1);
   } finally {
     arps.terminate();
   }
@@ -176,7 +176,7 @@ test("worker: abort mid-refinement rejects within 300 ms with an AbortError, the
     await assert.rejects(duringLoad, { name: "AbortError" });
     assert.ok(loadingAbortAt > 0 && performance.now() - loadingAbortAt < 300, "rejected promptly while loading");
     const res = await arps.register(source(), target());
-    assert.ok(errors(res.matrix).rot < 1, "the client works after the abort");
+    assert.ok(errors(res.T_target_source).rot < 1, "the client works after the abort");
     // The uninterrupted large pair, for comparison: it takes longer than the abort did.
     const t0 = performance.now();
     await arps.register(s, t, { voxelSize: 0 });
@@ -201,7 +201,7 @@ test("worker: after a trap reported by the worker, the client replaces it and re
         const reply = (data) => queueMicrotask(() => listeners.forEach((fn) => fn({ data })));
         if (m.type === "init") reply({ id: m.id, type: "ready", provenance: {}, modelConfig: { preset: "web" } });
         else if (index === 0) reply({ id: m.id, type: "error", name: "Error", code: "ARPS_TRAPPED", message: "arps: register trapped in the engine (RuntimeError: unreachable)" });
-        else reply({ id: m.id, type: "result", result: { matrix: new Float32Array(16) } });
+        else reply({ id: m.id, type: "result", result: { T_target_source: new Array(16).fill(0) } });
       },
       addEventListener(type, fn) {
         if (type === "message") listeners.push(fn);
@@ -218,7 +218,7 @@ test("worker: after a trap reported by the worker, the client replaces it and re
   assert.ok(started[0].terminated, "the trapped worker is stopped");
   assert.deepEqual(started[0].requests, ["init", "register"], "nothing retried");
   const res = await arps.register(source(), target());
-  assert.equal(res.matrix.length, 16);
+  assert.equal(res.T_target_source.length, 16);
   assert.equal(started.length, 2, "a new worker served the next request");
   assert.deepEqual(started[1].requests, ["init", "register"]);
   arps.terminate();
@@ -230,12 +230,12 @@ test("worker: the default worker under Node (worker_threads, .wasm read from dis
   try {
     assert.equal(arps.modelConfig.preset, "web");
     const res = await arps.register(source(), target());
-    const { rot, tr } = errors(res.matrix);
+    const { rot, tr } = errors(res.T_target_source);
     assert.ok(rot < 1 && tr < 0.02, `rotation ${rot} deg, translation ${tr}`);
     const parsed = await arps.parsePointCloud(sourcePly, "source.ply");
     assert.ok(parsed instanceof Float32Array && parsed.length > 0 && parsed.length % 3 === 0);
     await assert.rejects(arps.register(new Float32Array(5), target()), /packed xyz buffer has length 5/);
-    assert.ok(errors((await arps.register(source(), target())).matrix).rot < 1);
+    assert.ok(errors((await arps.register(source(), target())).T_target_source).rot < 1);
   } finally {
     arps.terminate();
   }

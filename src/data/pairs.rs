@@ -10,15 +10,16 @@
 //! 3. two half-space crops keeping `keep_ratio` of the dense points each: for a direction `u`
 //!    uniform on S², keep the points with the largest `(p - c_full) · u`; both directions are
 //!    redrawn until the overlap `|S ∩ T| / min(|S|, |T|)` is at least `min_overlap` (at most
-//!    `max_crop_tries` draws; after that the second crop reuses the first direction);
+//!    `max_crop_tries` draws; after that both sets are the same crop, along a fresh random
+//!    direction, overlap 1);
 //! 4. each crop is resampled independently to exactly `points` points without replacement
 //!    (padded with replacement if a crop is short);
 //! 5. random rigid motion applied to the target: Euler angles `U[-a, a]` each,
 //!    `R = Rx·Ry·Rz` ([`crate::transform::euler_xyz`]), translation `s·u`, `u` uniform on S²,
 //!    `s ~ U[0, max_translation]`; GT `T_target_source = (R, t)`;
-//! 6. Gaussian noise `σ = noise_sigma` on every coordinate of both sets, clipped to
-//!    `±noise_clip`;
-//! 7. both sets shuffled.
+//! 6. both sets shuffled;
+//! 7. Gaussian noise `σ = noise_sigma` on every coordinate of both sets, clipped to
+//!    `±noise_clip`.
 
 use crate::cloud::{JointNormalization, PointCloud};
 use crate::io::Mesh;
@@ -264,8 +265,8 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
     let t = unit_vector(&mut rng) * (rng.random::<f64>() * params.max_translation);
     let gt = from_rotation_translation(&r, &t);
 
-    // 7. shuffle (the order of the index lists is already random; shuffle once more so the
-    // order does not depend on the resampling scheme), then 6. noise
+    // 6. shuffle (the order of the index lists is already random; shuffle once more so the
+    // order does not depend on the resampling scheme), then 7. noise
     shuffle(&mut src_i, &mut rng);
     shuffle(&mut tgt_i, &mut rng);
     let sigma = params.noise_sigma.max(0.0);

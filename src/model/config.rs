@@ -7,6 +7,7 @@ use serde::{Deserialize, Serialize};
 /// How each ARPS layer picks its reference point.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "ModelReference"))]
 pub enum Reference {
     /// The paper's rule: the mean of the H points with the largest feature norm (no gradient
     /// through the selection).
@@ -16,8 +17,10 @@ pub enum Reference {
     Soft,
 }
 
-/// Every size of the network. Stored as JSON in the weights file's metadata.
+/// Every size of the network. Stored as JSON in the weights file's metadata, with snake_case
+/// keys; in JS (`Registrar.modelConfig`) the keys are camelCase (`arps::contract`).
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "ModelConfig", rename_all = "camelCase"))]
 pub struct ModelConfig {
     /// Preset name this config started from (`web`, `paper`, or a custom label).
     pub preset: String,
@@ -31,7 +34,7 @@ pub struct ModelConfig {
     pub ffn_dim: usize,
     /// Number of ARPS layers, L.
     pub layers: usize,
-    /// Top-H size for [`Reference::TopH`].
+    /// Top-H size of the `"top_h"` reference rule.
     pub top_h: usize,
     /// Number of Gaussians, J.
     pub gaussians: usize,
@@ -43,7 +46,7 @@ pub struct ModelConfig {
     pub head_hidden: Vec<usize>,
     /// Reference-point rule.
     pub reference: Reference,
-    /// Softmax temperature of [`Reference::Soft`].
+    /// Softmax temperature of the `"soft"` reference rule.
     pub soft_temperature: f32,
     /// LayerNorm epsilon.
     pub layer_norm_eps: f32,

@@ -62,6 +62,8 @@ impl Model {
 
     /// Runs the network on a pair. Points are in normalised units; each cloud is pre-centred
     /// here (its own mean subtracted), so the output does not depend on where the clouds sit.
+    /// Each cloud needs at least [`Model::min_points`] points (`max(top_h, 16)`), else
+    /// [`Error::InvalidCloud`].
     pub fn forward(&self, source: &[[f32; 3]], target: &[[f32; 3]], ws: &mut ModelWorkspace) -> Result<ForwardOutput> {
         let min = self.min_points();
         for (what, c) in [("source", source), ("target", target)] {

@@ -167,7 +167,7 @@ test("aligns two uploaded scans with a known transform", { timeout: TIMEOUT * 2 
   const e = errorsAgainstTruth(result);
   console.log(
     `known transform (15 deg): rotation error ${e.rotationDeg.toFixed(3)} deg, translation error ${e.translation.toFixed(4)} m, ` +
-      `fitness ${result.fitness.toFixed(3)}, confidence ${result.confidence.toFixed(3)}, ${result.timingsMs.totalMs.toFixed(0)} ms`,
+      `fitness ${result.fitness.toFixed(3)}, confidence ${result.confidence.toFixed(3)}, ${result.timings.totalMs.toFixed(0)} ms`,
   );
   assert.ok(e.rotationDeg < 5, `rotation error ${e.rotationDeg} deg`);
   assert.ok(e.translation < 0.25, `translation error ${e.translation} m (scene about 60 m across)`);
@@ -431,7 +431,7 @@ test("a 1M-point pair: loaded, fitted and aligned without blocking the main thre
   const e = errorsAgainstTruth(result);
   console.log(
     `1M vs 1M: load ${(load.ms / 1000).toFixed(1)} s (long tasks ${JSON.stringify(load.tasks)} ms), fit (long tasks ${JSON.stringify(fit.tasks)}), ` +
-      `align ${(align.ms / 1000).toFixed(1)} s, engine ${result.timingsMs.totalMs.toFixed(0)} ms (long tasks ${JSON.stringify(align.tasks)}); ` +
+      `align ${(align.ms / 1000).toFixed(1)} s, engine ${result.timings.totalMs.toFixed(0)} ms (long tasks ${JSON.stringify(align.tasks)}); ` +
       `rotation error ${e.rotationDeg.toFixed(3)} deg, translation error ${e.translation.toFixed(4)} m, fitness ${result.fitness.toFixed(3)}`,
   );
   assert.ok(e.rotationDeg < 2, `rotation error ${e.rotationDeg} deg`);

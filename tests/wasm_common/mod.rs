@@ -50,15 +50,15 @@ pub fn num(obj: &JsValue, key: &str) -> f64 {
     get(obj, key).as_f64().unwrap_or_else(|| panic!("{key} is a number"))
 }
 
-/// A result matrix field (`Float32Array(16)`, column-major) as a `Matrix4`.
+/// A result transform field (an `Array` of 16 numbers, column-major) as a `Matrix4`.
 pub fn matrix(obj: &JsValue, key: &str) -> Matrix4<f64> {
     let v = get(obj, key);
-    assert!(v.is_instance_of::<Float32Array>(), "{key} is a Float32Array");
-    let a: Float32Array = v.unchecked_into();
+    assert!(Array::is_array(&v), "{key} is an Array");
+    let a: Array = v.unchecked_into();
     assert_eq!(a.length(), 16, "{key} has 16 elements");
     let mut m = [0.0f64; 16];
-    for (i, x) in a.to_vec().into_iter().enumerate() {
-        m[i] = x as f64;
+    for (i, x) in a.iter().enumerate() {
+        m[i] = x.as_f64().unwrap_or_else(|| panic!("{key}[{i}] is not a number"));
     }
     transform::from_column_major(&m)
 }

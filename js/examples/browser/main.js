@@ -1,6 +1,6 @@
 // The browser example's script (index.html): reads the two chosen files, aligns them in a worker
 // through arps/worker-client, and prints T_target_source (row-major rows, as people read
-// matrices; `result.matrix` itself is column-major for three.js `Matrix4.fromArray`).
+// matrices; `result.T_target_source` itself is column-major for three.js `Matrix4.fromArray`).
 import { createWorkerRegistrar } from "arps/worker-client";
 
 const $ = (id) => document.getElementById(id);
@@ -30,7 +30,7 @@ $("align").addEventListener("click", async () => {
     );
     const t0 = performance.now();
     const r = await arps.register(source, target, {}, { onProgress: (stage) => status(`registering: ${stage}`) });
-    const m = r.matrix64; // column-major, exact in the files' frame
+    const m = r.T_target_source; // column-major, f64, exact in the files' frame
     const rows = [0, 1, 2, 3].map((row) => [0, 1, 2, 3].map((col) => m[col * 4 + row]));
     $("result").textContent = JSON.stringify(
       {

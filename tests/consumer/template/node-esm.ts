@@ -50,9 +50,9 @@ worker.terminate();
 console.log(
   JSON.stringify({
     version: version(),
-    matrix: Array.from(result.matrix64),
+    matrix: Array.from(result.T_target_source),
     confidence: result.confidence,
-    worker: { matrix: Array.from(fromWorker.matrix64), stages, knownStages: STAGES },
+    worker: { matrix: Array.from(fromWorker.T_target_source), stages, knownStages: STAGES },
     errors,
     keys: { init: initKeys, arps: Object.keys(arps), "arps/worker-client": Object.keys(workerClient) },
   }),

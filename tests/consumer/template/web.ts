@@ -3,7 +3,7 @@
 import init, { Registrar, parsePointCloud, readPointCloud, version, type RegisterOptions, type RegistrationResult } from "arps";
 import { createWorkerRegistrar, STAGES, type Stage, type WorkerRegistrar } from "arps/worker-client";
 
-export async function onMainThread(sourceFile: File, targetFile: File): Promise<Float32Array> {
+export async function onMainThread(sourceFile: File, targetFile: File): Promise<number[]> {
   await init();
   const registrar = Registrar.withDefaultModel();
   const source = parsePointCloud(new Uint8Array(await sourceFile.arrayBuffer()), sourceFile.name);
@@ -12,15 +12,15 @@ export async function onMainThread(sourceFile: File, targetFile: File): Promise<
   const result: RegistrationResult = registrar.register(source, target, options);
   if (result.confidence < 0.5) console.warn(version(), result.warnings);
   registrar.free();
-  return result.matrix;
+  return result.T_target_source;
 }
 
-export async function inAWorker(source: Float32Array, target: Float32Array, signal: AbortSignal): Promise<Float64Array> {
+export async function inAWorker(source: Float32Array, target: Float32Array, signal: AbortSignal): Promise<number[]> {
   const stages: readonly Stage[] = STAGES;
   const arps: WorkerRegistrar = await createWorkerRegistrar({ onProgress: (stage: Stage) => console.log(stage, stages.length) });
   try {
     const r = await arps.register(source, target, { starts: ["network", "global"] }, { signal, onProgress: (s) => void s });
-    return r.matrix64;
+    return r.T_target_source;
   } finally {
     arps.terminate();
   }

@@ -24,7 +24,7 @@ async function main(): Promise<void> {
     JSON.stringify({
       version: version(),
       initType: typeof init,
-      matrix: Array.from(result.matrix64),
+      matrix: Array.from(result.T_target_source),
       confidence: result.confidence,
       errors: { afterFree },
       keys: { init: initKeys, arps: Object.keys(arps) },

@@ -1,0 +1,343 @@
+// Generated from the Rust types by `scripts/gen-types.sh` (arps::contract::typescript);
+// do not edit: change the Rust types and their docs, then run the script.
+
+/**
+ * Options of a registration (`Registrar::register` in Rust, `Registrar.register` in JS). Every
+ * field has a default, given in its docs. In JS and JSON the fields are camelCase
+ * (`networkPoints`, `icpMaxIterations`, ...; the conventions are in the `arps::contract` module
+ * docs and `js/README.md`); every field may be left out (or be `null` in JS), which takes its
+ * default; unknown fields, wrong types and out-of-range values are errors naming the field.
+ */
+export type RegisterOptions = {
+  /**
+   * Points per cloud fed to the network (each cloud is resampled to exactly this many; a
+   * cloud with fewer points has some used twice, with a warning). Default: the model's N
+   * (`ModelConfig.nPoints`, 128 for the default model). Range: the model's minimum
+   * (`max(topH, 16)`) up to 4096 (`MAX_NETWORK_POINTS`; attention cost grows with its square).
+   */
+  networkPoints?: number | null,
+  /**
+   * Seed of every random choice (the network's point sampling, the global starts' RANSAC).
+   * Default 0. The same inputs and seed give the same output, bit for bit, on a given build.
+   * A non-negative integer (in JS a `bigint` for values above 2^53).
+   */
+  seed?: number | bigint,
+  /**
+   * Refinement after the network: `"plane"` (point-to-plane ICP, target normals; the
+   * default), `"point"` (point-to-point ICP) or `"off"` (the network + GMR estimate is the
+   * answer).
+   */
+  icp?: IcpKind,
+  /**
+   * Run the network. Default `true`. With `false` the coarse estimate is `initialTransform`
+   * (the identity if unset) and only ICP runs: the classical baseline, or a refinement when a
+   * good initial guess is known.
+   */
+  network?: boolean,
+  /**
+   * ICP's final maximum correspondence distance, in the clouds' units. Default: 2.5% of the
+   * clouds' shared half-extent. ICP runs coarse to fine at 4x, 2x and 1x this distance;
+   * `fitness` and `inlierRmse` are measured at 1x. Must be > 0.
+   */
+  maxCorrespondenceDistance?: number | null,
+  /**
+   * Iteration cap of each of the three ICP stages. Default 30; at most 10000.
+   */
+  icpMaxIterations?: number,
+  /**
+   * Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
+   * correspondence distance. `0` uses the full clouds. Must be >= 0.
+   */
+  voxelSize?: number | null,
+  /**
+   * An initial guess of `T_target_source` (rigid, the clouds' units); the network then
+   * estimates the remaining motion from there. Default: the identity. Either 16 numbers in
+   * **column-major** order (a previous result's `T_target_source`, a three.js
+   * `Matrix4.elements`; in JS also a `Float32Array` or `Float64Array`), or four **row-major**
+   * rows `[[r00, r01, r02, tx], [r10, r11, r12, ty], [r20, r21, r22, tz], [0, 0, 0, 1]]`. A
+   * non-rigid or non-finite matrix is an error. (In Rust: four row-major rows.)
+   */
+  initialTransform?: ArrayLike<number> | number[][] | null,
+  /**
+   * What to do with points that have a NaN or infinite coordinate: `"error"` (an error naming
+   * the first bad point; the default) or `"drop"` (ignore them, e.g. PCD "no return" points).
+   */
+  nonFinite?: NonFinite,
+  /**
+   * The transforms ICP starts from, in order of preference. Each is refined coarse to fine
+   * against the same prepared target and the best is returned (the result's `start` says
+   * which): the highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier
+   * start. Starts that meet during refinement are refined once, as the earlier; on large clouds
+   * the starts are compared on 2048 of the source points and only the winner is refined on all
+   * of them. Which starts are refined at all depends on `search`. Default
+   * `["network", "centroids", "initial", "turned", "turnedInitial", "global"]`; each extra
+   * start costs one ICP run on at most 2048 points (`"turned"` and `"turnedInitial"` are six
+   * each, `"global"` and `"globalNetwork"` up to five each, plus the descriptor matching), so
+   * `["network"]` is the fastest. Must be non-empty, without repeats.
+   * - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
+   *   reported as `"initial"`);
+   * - `"centroids"`: `initialTransform`'s rotation (none if unset) with the translation that
+   *   moves the source's centroid onto the target's;
+   * - `"initial"`: `initialTransform` itself (the identity if unset);
+   * - `"turned"`: six starts, the network estimate (the initial transform with
+   *   `network: false`) turned 45 degrees both ways about each axis through the source's
+   *   centroid, for estimates that landed outside ICP's basin;
+   * - `"turnedInitial"`: six starts, `initialTransform` (the identity if unset) turned the same
+   *   way, for pairs where the network's estimate is far off (with `network: false`, the same
+   *   starts as `"turned"`, reported as `"turned"`);
+   * - `"global"`: up to five hypotheses from global registration (FPFH descriptors, mutual
+   *   matches, a seeded RANSAC), for motions of any size, e.g. scans in unrelated frames; none
+   *   when the descriptors match too little;
+   * - `"globalNetwork"`: the `"global"` hypotheses, each refined by the network first (with
+   *   `network: false`, the same starts as `"global"`, reported as `"global"`).
+   *
+   * With `icp: "off"` nothing is refined or compared: the first start is the answer.
+   */
+  starts?: Array<RegistrationStart>,
+  /**
+   * How `starts` are searched. Default `"adaptive"`: in stages, cheapest first, stopping as
+   * soon as the best answer's `confidence` reaches 0.9 (`STOP_CONFIDENCE`): the first start
+   * alone; then the other local starts; then the global ones (`"global"`, `"globalNetwork"`).
+   * `"exhaustive"` refines every start. The result's `startsRefined` says how many were refined.
+   */
+  search?: RegistrationSearch,
+};
+
+/**
+ * A transform ICP starts from (the options' `starts`, which describe each).
+ */
+export type RegistrationStart = "network" | "centroids" | "initial" | "turned" | "turnedInitial" | "global" | "globalNetwork";
+
+/**
+ * How the options' `starts` are searched (see `search`).
+ */
+export type RegistrationSearch = "adaptive" | "exhaustive";
+
+/**
+ * Which ICP to run after the network.
+ */
+export type IcpKind = "off" | "point" | "plane";
+
+/**
+ * What to do with points that have a NaN or infinite coordinate.
+ */
+export type NonFinite = "error" | "drop";
+
+/**
+ * A stage of a registration, reported as it starts (to `Registrar::register_with_progress`'s
+ * callback in Rust, to `onProgress` in JS, as `"preparing"`, `"network"`, `"refining"`); stages
+ * that do not run are skipped.
+ */
+export type RegistrationStage = "preparing" | "network" | "refining";
+
+/**
+ * The result of one registration. In JS (`Registrar.register`) and JSON (`arps register
+ * --json`) it is a plain object with these fields in camelCase, the transforms as 16
+ * column-major numbers (the conventions are in the `arps::contract` module docs and
+ * `js/README.md`); safe to `postMessage`, `structuredClone` or `JSON.stringify`.
+ */
+export type RegistrationResult = {
+  /**
+   * The answer, `T_target_source`: the rigid transform that maps source points into the
+   * target frame (`p_target = R p_source + t`), in the clouds' units, after ICP. In JS and
+   * JSON 16 numbers in **column-major** order (element (row r, col c) at index `c * 4 + r`),
+   * ready for three.js: `sourceObject.matrix.fromArray(result.T_target_source)`.
+   */
+  T_target_source: number[],
+  /**
+   * The coarse estimate before ICP (network + GMR, or `initialTransform` with
+   * `network: false`); same frames and layout as `T_target_source`.
+   */
+  T_target_source_network: number[],
+  /**
+   * The start (one of the options' `starts`) whose refinement is `T_target_source`.
+   */
+  start: RegistrationStart,
+  /**
+   * Fraction of (voxelised) source points that have a target point within
+   * `maxCorrespondenceDistance` under `T_target_source`, in [0, 1]. Right answers on partial,
+   * independently sampled scans often score only 0.15-0.3: judge the result by `confidence`.
+   */
+  fitness: number,
+  /**
+   * RMS distance of those inlier pairs, in the clouds' units (0 when there are none).
+   */
+  inlierRmse: number,
+  /**
+   * ICP iterations over all stages of the chosen start's refinement (0 with `icp: "off"`).
+   */
+  icpIterations: number,
+  /**
+   * True when the chosen start's last ICP stage met its convergence criteria (false with
+   * `icp: "off"`).
+   */
+  icpConverged: boolean,
+  /**
+   * The final max correspondence distance used, in the clouds' units (the default resolved).
+   */
+  maxCorrespondenceDistance: number,
+  /**
+   * Time per stage, in milliseconds.
+   */
+  timings: RegistrationTimings,
+  /**
+   * Things to know about this result (input resampled, low confidence, ...), as sentences.
+   * One starting with `"low confidence"` comes with every result whose `confidence` is below
+   * 0.5.
+   */
+  warnings: Array<string>,
+  /**
+   * An estimate of the probability that `T_target_source` is right (within the evaluation's
+   * recall thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on validation
+   * pairs (`arps::confidence`). Read it as "likely right" near 1, "likely wrong" near 0; below
+   * 0.5 `warnings` says the alignment may be wrong. It judges the fit, so a symmetric or
+   * featureless shape that fits in several poses lowers it (`evidence.ambiguity`).
+   */
+  confidence: number,
+  /**
+   * The figures `confidence` is computed from, measured under `T_target_source`.
+   */
+  evidence: RegistrationEvidence,
+  /**
+   * How many distinct starts were refined (after merging those that met); see the options'
+   * `search`.
+   */
+  startsRefined: number,
+};
+
+/**
+ * Milliseconds spent in each stage of one registration (0 where no clock is available; in JS
+ * measured with `performance.now()`).
+ */
+export type RegistrationTimings = {
+  /**
+   * Validation, normalisation, network sampling and ICP voxel downsampling.
+   */
+  preprocessMs: number,
+  /**
+   * The network forward pass (0 with `network: false`).
+   */
+  networkMs: number,
+  /**
+   * GMM parameters and the weighted Procrustes solve.
+   */
+  gmrMs: number,
+  /**
+   * ICP from every start (normals, kd-tree, iterations) and the quality figures.
+   */
+  icpMs: number,
+  /**
+   * Global hypotheses (descriptors, matching, RANSAC); 0 when no global start ran.
+   */
+  globalMs: number,
+  /**
+   * The whole registration inside the engine.
+   */
+  totalMs: number,
+};
+
+/**
+ * The evidence behind `confidence`, measured on the (voxelised) clouds under the answer, in
+ * multiples of the final max correspondence distance `d`.
+ */
+export type RegistrationEvidence = {
+  /**
+   * Fraction of source points with a target point within `d` (the result's `fitness`).
+   */
+  fitness: number,
+  /**
+   * The same within `d / 2`.
+   */
+  fitnessTight: number,
+  /**
+   * The same within `2 d`.
+   */
+  fitnessLoose: number,
+  /**
+   * The same within `4 d`.
+   */
+  fitnessCoarse: number,
+  /**
+   * Fraction of target points with a source point within `d` (overlap the other way).
+   */
+  overlapReverse: number,
+  /**
+   * Inlier RMSE at `d`, divided by `d` (0 without inliers).
+   */
+  rmseRatio: number,
+  /**
+   * How well the best *different* pose fits, as a fraction of the answer's fitness: the
+   * answer turned 180 degrees about each principal axis of the moved source (through its
+   * centroid), each refined by a short ICP; 0 when every one fell back onto the answer.
+   * Near 1 or above: a symmetric shape, the answer may fit and still not be unique.
+   */
+  ambiguity: number,
+};
+
+/**
+ * Every size of the network. Stored as JSON in the weights file's metadata, with snake_case
+ * keys; in JS (`Registrar.modelConfig`) the keys are camelCase (`arps::contract`).
+ */
+export type ModelConfig = {
+  /**
+   * Preset name this config started from (`web`, `paper`, or a custom label).
+   */
+  preset: string,
+  /**
+   * Network points per cloud, N.
+   */
+  nPoints: number,
+  /**
+   * Per-point feature width C; attention tokens are `2C` wide (`[f ; phi]`).
+   */
+  featureDim: number,
+  /**
+   * Attention heads; `2C` must be divisible by it.
+   */
+  heads: number,
+  /**
+   * Hidden width of each attention block's feed-forward network.
+   */
+  ffnDim: number,
+  /**
+   * Number of ARPS layers, L.
+   */
+  layers: number,
+  /**
+   * Top-H size of the `"top_h"` reference rule.
+   */
+  topH: number,
+  /**
+   * Number of Gaussians, J.
+   */
+  gaussians: number,
+  /**
+   * Hidden widths of the position MLP `3 -> ... -> C`.
+   */
+  posHidden: Array<number>,
+  /**
+   * Hidden width of the step-size MLP `(3 + C) -> hidden -> 1`.
+   */
+  stepHidden: number,
+  /**
+   * Hidden widths of the membership head `2C -> ... -> J`.
+   */
+  headHidden: Array<number>,
+  /**
+   * Reference-point rule.
+   */
+  reference: ModelReference,
+  /**
+   * Softmax temperature of the `"soft"` reference rule.
+   */
+  softTemperature: number,
+  /**
+   * LayerNorm epsilon.
+   */
+  layerNormEps: number,
+};
+
+/**
+ * How each ARPS layer picks its reference point.
+ */
+export type ModelReference = "top_h" | "soft";
