@@ -198,8 +198,10 @@ export interface RegistrationResult {
    * An estimate of the probability that `matrix` is right (within the evaluation's recall
    * thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on validation pairs
    * (the paper's protocol and pairs of any pose). Read it as "likely right" near 1, "likely
-   * wrong" near 0; below 0.5 `warnings` says the alignment may be wrong. It judges the fit, so a
-   * symmetric or featureless shape that fits in several poses lowers it (`evidence.ambiguity`).
+   * wrong" near 0; below 0.5 `warnings` says the alignment may be wrong. It judges the fit and
+   * whether the fit is unique: on a symmetric or featureless shape where other poses fit about as
+   * well (`evidence.alternatives`, `evidence.ambiguity`, `evidence.slide`) it is low even when
+   * the answer happens to be right, since nothing in the clouds tells the poses apart.
    */
   confidence: number;
   /** The figures `confidence` is computed from, measured under `matrix`. */
@@ -227,11 +229,23 @@ export interface RegistrationEvidence {
   rmseRatio: number;
   /**
    * How well the best *different* pose fits, as a fraction of the answer's fitness (the answer
-   * turned 180 degrees about each principal axis of the moved source, each refined by a short
-   * ICP), in [0, 2]; 0 when every one fell back onto the answer. Near 1 or above: the shape is
-   * symmetric and the answer, though it fits, may not be the only one.
+   * turned 90 degrees both ways and 180 degrees about each principal axis of the moved source,
+   * each refined by a short ICP), in [0, 2]; 0 when every one fell back onto the answer. Near 1
+   * or above: the shape is symmetric and the answer, though it fits, may not be the only one.
    */
   ambiguity: number;
+  /**
+   * How many distinct poses among those turns fit at least 0.9 as well as the answer (an
+   * integer, 0 to 9): with `k` of them the answer is one of `k + 1` about equally good poses.
+   */
+  alternatives: number;
+  /**
+   * Fitness after sliding the answer along the motion its fit constrains least (moving the
+   * points a quarter of the clouds' half-extent on average), as a fraction of the answer's, in
+   * [0, 2]. Near 1: the fit does not pin the pose down along that motion (a surface of
+   * revolution turned about its axis, a plane shifted in itself).
+   */
+  slide: number;
 }
 
 /** How a weights file was made (its `provenance` metadata); `kind: "random"` means untrained. */
