@@ -8,6 +8,9 @@ Every answer of every method in the files is one sample: its evidence (the featu
 (RE < rot threshold, TE < trans threshold). Only the answers of the methods named by
 `--fit-methods` (default: all) are fitted; every method is reported.
 
+The model is fitted without the cap that `confidence::confidence` puts on it (at most
+1 / (1 + alternatives)); the reports apply it.
+
 Cross-validation: the pairs of each file are split by index parity; the model fitted on one half
 scores the other, so every answer gets a confidence from a model that never saw its pair. The
 script prints, per file and method, the share of wrong answers with that confidence < 0.5 and
@@ -22,14 +25,14 @@ import sys
 
 # The names of `confidence::features`, in order (the bias is the last weight).
 NAMES = ["fitness", "fitness_tight", "fitness_loose", "fitness_coarse", "overlap_reverse", "rmse_ratio", "rise",
-         "ambiguity"]
+         "ambiguity", "alternatives", "slide"]
 
 
 def features(e):
     """`confidence::features` of one evidence object (camelCase JSON)."""
     rise = e["fitnessTight"] / e["fitnessCoarse"] if e["fitnessCoarse"] > 0 else 0.0
     return [e["fitness"], e["fitnessTight"], e["fitnessLoose"], e["fitnessCoarse"], e["overlapReverse"],
-            e["rmseRatio"], rise, e["ambiguity"]]
+            e["rmseRatio"], rise, e["ambiguity"], e["alternatives"], e["slide"]]
 
 
 def load(paths):
@@ -69,7 +72,8 @@ def sigmoid(z):
 
 
 def predict(w, x):
-    return sigmoid(sum(a * b for a, b in zip(w, x)) + w[-1])
+    """`confidence::confidence`: the logistic model, capped at 1 / (1 + alternatives)."""
+    return min(sigmoid(sum(a * b for a, b in zip(w, x)) + w[-1]), 1 / (1 + max(x[NAMES.index("alternatives")], 0)))
 
 
 def fit(xs, ys, l2=1e-3, iters=50):
@@ -142,6 +146,7 @@ def main():
     report(samples, conf, "cross-validated (fitted on the other parity of pairs):")
     w = fit([s[3] for s in used], [s[4] for s in used])
     report(samples, [predict(w, s[3]) for s in samples], "refitted on all (in-sample):")
+    print("  " + ", ".join(f"{n} {v:.3}" for n, v in zip(NAMES + ["bias"], w)))
     print("const WEIGHTS: [f64; %d] = [%s];" % (len(w), ", ".join(f"{v:.4}" for v in w)))
 
 

@@ -223,20 +223,25 @@ fn features(e: &Evidence) -> [f64; 10] {
 }
 
 /// Logistic-regression weights of [`features`] and the bias (last), fitted by
-/// `scripts/fit-confidence.py` (`BENCHMARK.md`, "Confidence").
-const WEIGHTS: [f64; 11] = [2.168, 0.5486, 2.729, 0.564, 2.344, -0.2764, 0.7207, -2.711, -0.6065, -2.771, 1.399];
+/// `scripts/fit-confidence.py` on 2,400 answers: network + ICP, FPFH + RANSAC + ICP and the
+/// exhaustive search on 500 paper-protocol and 300 any-pose validation pairs (`BENCHMARK.md`,
+/// "Confidence", where the cross-validated figures are).
+const WEIGHTS: [f64; 11] = [2.257, 0.5685, 2.755, 0.6824, 2.431, -0.2873, 0.7299, -2.536, -0.6525, -2.881, 1.072];
 
 /// The probability that the answer is right (within the evaluation's recall thresholds: rotation
 /// error below 15 degrees and translation error below 0.2 of the normalised half-extent), in
-/// [0, 1]: a logistic model over the [`Evidence`], calibrated on validation pairs. It is low
-/// when the clouds overlap poorly under the answer, and also when other poses fit about as well
-/// (a symmetric or featureless shape): then the answer may be right, but nothing in the clouds
-/// says so. Below 0.5 the result carries a warning. Non-finite evidence gives 0.
+/// [0, 1]: a logistic model over the [`Evidence`], calibrated on validation pairs, and at most
+/// `1 / (1 + alternatives)`: an answer that is one of `k` poses fitting about as well is right
+/// with a probability of about `1 / k` at best. So it is low when the clouds overlap poorly under
+/// the answer, and also when other poses fit about as well (a symmetric or featureless shape):
+/// then the answer may be right, but nothing in the clouds says so. Below 0.5 the result
+/// carries a warning. Non-finite evidence gives 0.
 pub fn confidence(e: &Evidence) -> f64 {
     let x = features(e);
     let z: f64 = x.iter().zip(WEIGHTS.iter()).map(|(a, w)| a * w).sum::<f64>() + WEIGHTS[x.len()];
-    if z.is_finite() {
-        1.0 / (1.0 + (-z).exp())
+    let cap = 1.0 / (1.0 + e.alternatives.max(0.0));
+    if z.is_finite() && cap.is_finite() {
+        (1.0 / (1.0 + (-z).exp())).min(cap)
     } else {
         0.0
     }
