@@ -189,7 +189,7 @@ fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64) -> f
     // the points' RMS displacement per unit of that motion
     let rms =
         (moved.iter().map(|p| (w.cross(&(p - c)) + shift).norm_squared()).sum::<f64>() / moved.len() as f64).sqrt();
-    if !(rms > 0.0) {
+    if rms.is_nan() || rms <= 0.0 {
         return 0.0;
     }
     let mut best = 0.0f64;
