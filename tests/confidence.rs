@@ -135,6 +135,7 @@ fn any_answer_on_a_symmetric_box_is_doubted() {
         assert!(r.evidence.alternatives >= 1.0, "{what}: {:?}", r.evidence);
         assert!(r.confidence < 0.5, "{what}: {} {:?}", r.confidence, r.evidence);
         assert!(r.confidence <= 1.0 / (1.0 + r.evidence.alternatives), "{what}: {}", r.confidence);
+        assert!(r.warnings.iter().any(|w| w.contains("fit about as well")), "{what}: {:?}", r.warnings);
     }
 }
 
