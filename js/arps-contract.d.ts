@@ -190,8 +190,10 @@ export type RegistrationResult = {
    * An estimate of the probability that `T_target_source` is right (within the evaluation's
    * recall thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on validation
    * pairs (`arps::confidence`). Read it as "likely right" near 1, "likely wrong" near 0; below
-   * 0.5 `warnings` says the alignment may be wrong. It judges the fit, so a symmetric or
-   * featureless shape that fits in several poses lowers it (`evidence.ambiguity`).
+   * 0.5 `warnings` says the alignment may be wrong. It judges the fit and whether the fit is
+   * unique: on a symmetric or featureless shape where other poses fit about as well
+   * (`evidence.alternatives`, `evidence.ambiguity`, `evidence.slide`) it is low even when the
+   * answer happens to be right, since nothing in the clouds tells the poses apart.
    */
   confidence: number,
   /**
@@ -266,12 +268,26 @@ export type RegistrationEvidence = {
    */
   rmseRatio: number,
   /**
-   * How well the best *different* pose fits, as a fraction of the answer's fitness: the
-   * answer turned 180 degrees about each principal axis of the moved source (through its
-   * centroid), each refined by a short ICP; 0 when every one fell back onto the answer.
-   * Near 1 or above: a symmetric shape, the answer may fit and still not be unique.
+   * How well the best *different* pose fits, as a fraction of the answer's fitness (at most
+   * 2): the answer turned 90 degrees both ways and 180 degrees about each principal axis of
+   * the moved source (through its centroid), each refined by a short ICP; 0 when every one
+   * fell back onto the answer (within 15 degrees). Near 1 or above: the answer may fit and
+   * still not be unique.
    */
   ambiguity: number,
+  /**
+   * How many distinct poses among those turns fit at least 0.9 as well as the answer: with
+   * `k` alternatives the answer is one of `k + 1` about equally good poses.
+   */
+  alternatives: number,
+  /**
+   * Fitness after sliding the answer along the motion its point-to-plane fit constrains
+   * least (the weakest eigenvector of the fit's 6x6 information matrix, scaled to move the
+   * points 0.25 of the normalised half-extent on average), the better of both ways, as a
+   * fraction of the answer's fitness (at most 2). Near 1: the fit does not pin the pose down
+   * along that motion (a surface of revolution, a plane, a cylinder).
+   */
+  slide: number,
 };
 
 /**

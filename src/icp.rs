@@ -264,6 +264,17 @@ impl IcpTarget {
         (inliers as f64 / source.len() as f64, (sum2 / inliers as f64).sqrt())
     }
 
+    /// The target point nearest to `q` (target frame) if it is closer than `max_distance`
+    /// (strictly): its index into [`IcpTarget::points`].
+    pub fn nearest_within(&self, q: &[f32; 3], max_distance: f64) -> Option<usize> {
+        let max2 = max_distance * max_distance;
+        let search2 = (max2 * (1.0 + 1e-5)) as f32;
+        let (j, _) = self.index.nearest_within(q, search2, None)?;
+        let p = self.points[j];
+        let d2: f64 = (0..3).map(|a| (q[a] as f64 - p[a] as f64).powi(2)).sum();
+        (d2 < max2).then_some(j)
+    }
+
     /// Point-to-point update: Kabsch on the current inlier pairs.
     fn point_update(&self, scratch: &mut Scratch) -> Option<Matrix4<f64>> {
         scratch.target_xyz.clear();

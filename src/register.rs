@@ -228,8 +228,10 @@ pub struct Registration {
     /// An estimate of the probability that `T_target_source` is right (within the evaluation's
     /// recall thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on validation
     /// pairs (`arps::confidence`). Read it as "likely right" near 1, "likely wrong" near 0; below
-    /// 0.5 `warnings` says the alignment may be wrong. It judges the fit, so a symmetric or
-    /// featureless shape that fits in several poses lowers it (`evidence.ambiguity`).
+    /// 0.5 `warnings` says the alignment may be wrong. It judges the fit and whether the fit is
+    /// unique: on a symmetric or featureless shape where other poses fit about as well
+    /// (`evidence.alternatives`, `evidence.ambiguity`, `evidence.slide`) it is low even when the
+    /// answer happens to be right, since nothing in the clouds tells the poses apart.
     pub confidence: f64,
     /// The figures `confidence` is computed from, measured under `T_target_source`.
     pub evidence: Evidence,

@@ -112,10 +112,18 @@ fn assert_evidence_is_sane(evidence: &JsValue) {
     assert!((0.0..=1.0).contains(&rmse_ratio), "evidence.rmseRatio = {rmse_ratio}");
     let ambiguity = num(evidence, "ambiguity");
     assert!((0.0..=2.0).contains(&ambiguity), "evidence.ambiguity = {ambiguity}");
+    let alternatives = num(evidence, "alternatives");
+    assert!(
+        alternatives.fract() == 0.0 && (0.0..=9.0).contains(&alternatives),
+        "evidence.alternatives = {alternatives}"
+    );
+    let slide = num(evidence, "slide");
+    assert!((0.0..=2.0).contains(&slide), "evidence.slide = {slide}");
     let mut keys: Vec<String> =
         js_sys::Object::keys(evidence.unchecked_ref::<js_sys::Object>()).iter().filter_map(|k| k.as_string()).collect();
     keys.sort();
-    let mut want: Vec<String> = fractions.iter().chain(&["rmseRatio", "ambiguity"]).map(|k| k.to_string()).collect();
+    let mut want: Vec<String> =
+        fractions.iter().chain(&["rmseRatio", "ambiguity", "alternatives", "slide"]).map(|k| k.to_string()).collect();
     want.sort();
     assert_eq!(keys, want, "evidence fields");
 }

@@ -45,7 +45,7 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   const evidence: RegistrationEvidence = result.evidence;
   const figures: number =
     evidence.fitness + evidence.fitnessTight + evidence.fitnessLoose + evidence.fitnessCoarse +
-    evidence.overlapReverse + evidence.rmseRatio + evidence.ambiguity + result.startsRefined + result.timings.globalMs;
+    evidence.overlapReverse + evidence.rmseRatio + evidence.ambiguity + evidence.alternatives + evidence.slide + result.startsRefined + result.timings.globalMs;
   // @ts-expect-error the evidence is camelCase
   const snakeEvidence = result.evidence.overlap_reverse;
   // @ts-expect-error misspelled search value

@@ -38,8 +38,14 @@ pub(crate) fn finish(
     checks::finite_transform(&T_target_source, "the result")?;
     checks::finite_transform(&T_target_source_network, "the network's estimate")?;
     if confidence < LOW_CONFIDENCE {
+        // the evidence of another pose fitting as well, when there is some
+        let others = match evidence.alternatives as usize {
+            0 => String::new(),
+            1 => "; another pose fits about as well (a symmetric shape?)".to_string(),
+            k => format!("; {k} other poses fit about as well (a symmetric shape?)"),
+        };
         warnings.push(format!(
-            "low confidence {confidence:.2}: the alignment may be wrong (fitness {fitness:.2} within {:.3}, reverse overlap {:.2})",
+            "low confidence {confidence:.2}: the alignment may be wrong (fitness {fitness:.2} within {:.3}, reverse overlap {:.2}{others})",
             d_final * s,
             evidence.overlap_reverse
         ));

@@ -1,0 +1,178 @@
+//! The confidence (`src/confidence.rs`): deterministic, in [0, 1], high on a right answer of a
+//! distinct shape, low on a wrong one, and low on any answer of a shape that fits as well in
+//! another pose (a symmetric box: right or turned, the answer is not unique).
+
+mod common;
+
+use arps::confidence::{self, Evidence};
+use arps::icp::{IcpKind, IcpTarget};
+use arps::transform::from_rotation_translation;
+use arps::{ModelConfig, Options, PointCloud, Registrar, Start, Weights};
+use nalgebra::{Matrix4, Rotation3, Vector3};
+
+fn untrained() -> Registrar {
+    Registrar::new(&Weights::random(&ModelConfig::web(), 0).unwrap()).unwrap()
+}
+
+/// A turn of `deg` degrees about `axis` through `pivot`.
+fn turn_about(axis: Vector3<f64>, deg: f64, pivot: Vector3<f64>) -> Matrix4<f64> {
+    let r = Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), deg.to_radians()).into_inner();
+    from_rotation_translation(&r, &(pivot - r * pivot))
+}
+
+/// The fixture pair with its truth projected onto a rigid motion.
+fn fixture_pair(index: usize) -> (PointCloud, PointCloud, Matrix4<f64>) {
+    let (source, target, gt) = common::fixture_pair(index);
+    let r = arps::gmr::nearest_rotation(&arps::transform::rotation(&gt));
+    (source, target, from_rotation_translation(&r, &arps::transform::translation(&gt)))
+}
+
+/// The registration's verdict on `T_target_source` itself: ICP off, the answer is that pose.
+#[allow(non_snake_case)]
+fn judge(reg: &mut Registrar, s: &PointCloud, t: &PointCloud, T_target_source: &Matrix4<f64>) -> arps::Registration {
+    let options = Options {
+        network: false,
+        icp: IcpKind::Off,
+        initial_transform: Some(arps::transform::to_rows(T_target_source)),
+        starts: vec![Start::Initial],
+        ..Options::default()
+    };
+    reg.register(s, t, &options).unwrap()
+}
+
+/// `n` points on the surface of a box with half-extents `h` (all different: its only rigid
+/// symmetries are the turns of 180 degrees about its axes), uniform by area, from `seed`.
+fn box_surface(n: usize, h: [f64; 3], seed: u64) -> PointCloud {
+    use rand::Rng;
+    let mut rng = arps::sampling::rng(seed);
+    let areas = [h[1] * h[2], h[0] * h[2], h[0] * h[1]];
+    let total: f64 = areas.iter().sum();
+    let pts = (0..n)
+        .map(|_| {
+            // a face: its axis k (by area) and its side
+            let mut pick = rng.random::<f64>() * total;
+            let mut k = 0;
+            while k < 2 && pick > areas[k] {
+                pick -= areas[k];
+                k += 1;
+            }
+            let mut p = [0.0; 3];
+            for (a, v) in p.iter_mut().enumerate() {
+                *v = (2.0 * rng.random::<f64>() - 1.0) * h[a];
+            }
+            p[k] = if rng.random::<bool>() { h[k] } else { -h[k] };
+            p.map(|q| q as f32)
+        })
+        .collect();
+    PointCloud::new(pts)
+}
+
+#[test]
+fn confidence_is_deterministic_and_in_the_unit_interval() {
+    let mut reg = untrained();
+    let (s, t, gt) = fixture_pair(0);
+    let a = reg.register(&s, &t, &Options::default()).unwrap();
+    let b = reg.register(&s, &t, &Options::default()).unwrap();
+    assert_eq!(a.confidence, b.confidence);
+    assert_eq!(a.evidence, b.evidence);
+    for m in [gt, turn_about(Vector3::new(0.3, 1.0, -0.2), 120.0, Vector3::zeros()) * gt, Matrix4::identity()] {
+        let r = judge(&mut reg, &s, &t, &m);
+        assert!((0.0..=1.0).contains(&r.confidence), "{}", r.confidence);
+    }
+    // extreme or broken evidence still gives a probability
+    let odd = [
+        Evidence::default(),
+        Evidence {
+            fitness: 1.0,
+            fitness_tight: 1.0,
+            fitness_loose: 1.0,
+            fitness_coarse: 1.0,
+            overlap_reverse: 1.0,
+            ..Evidence::default()
+        },
+        Evidence { fitness: f64::NAN, ..Evidence::default() },
+        Evidence { rmse_ratio: f64::INFINITY, ..Evidence::default() },
+        Evidence { ambiguity: -1e300, ..Evidence::default() },
+    ];
+    for e in odd {
+        let c = confidence::confidence(&e);
+        assert!((0.0..=1.0).contains(&c), "{e:?}: {c}");
+    }
+}
+
+/// On fixture pairs of distinct (asymmetric) shapes, the truth is trusted, and the truth turned
+/// 180 degrees about an axis through the moved source's centroid is doubted.
+#[test]
+fn a_right_answer_is_trusted_and_a_turned_one_doubted() {
+    let mut reg = untrained();
+    for i in [0, 7, 8] {
+        let (s, t, gt) = fixture_pair(i);
+        let c = Vector3::from(arps::transform::apply(&gt, s.centroid().map(|v| v as f32)).map(|v| v as f64));
+        let right = judge(&mut reg, &s, &t, &gt);
+        assert!(right.confidence > 0.5, "pair {i}: truth {}", right.confidence);
+        for axis in [Vector3::x(), Vector3::y(), Vector3::z()] {
+            let wrong = judge(&mut reg, &s, &t, &(turn_about(axis, 180.0, c) * gt));
+            assert!(wrong.confidence < 0.5, "pair {i}, 180 about {axis:?}: {}", wrong.confidence);
+            assert!(wrong.warnings.iter().any(|w| w.contains("low confidence")), "{:?}", wrong.warnings);
+        }
+    }
+}
+
+/// A box fits itself turned 180 degrees about any of its axes: the answer is one of four that
+/// fit as well, so the confidence is low whether it is the right one or a turned one, and the
+/// evidence counts the alternatives.
+#[test]
+fn any_answer_on_a_symmetric_box_is_doubted() {
+    let mut reg = untrained();
+    let h = [1.0, 0.6, 0.35];
+    let source = box_surface(1500, h, 1);
+    let gt = common::motion([20.0, -35.0, 10.0], [0.3, -0.2, 0.4]);
+    let target = box_surface(1500, h, 2).transformed(&gt);
+    let c = Vector3::from(arps::transform::apply(&gt, [0.0; 3]).map(|v| v as f64));
+    let axis = arps::transform::rotation(&gt) * Vector3::x();
+    for (what, m) in [("right", gt), ("turned", turn_about(axis, 180.0, c) * gt)] {
+        let r = judge(&mut reg, &source, &target, &m);
+        assert!(r.evidence.alternatives >= 1.0, "{what}: {:?}", r.evidence);
+        assert!(r.confidence < 0.5, "{what}: {} {:?}", r.confidence, r.evidence);
+        assert!(r.confidence <= 1.0 / (1.0 + r.evidence.alternatives), "{what}: {}", r.confidence);
+        assert!(r.warnings.iter().any(|w| w.contains("fit about as well")), "{what}: {:?}", r.warnings);
+    }
+}
+
+/// CPU time of the evidence next to one ICP refinement of the same pair (`--ignored
+/// --nocapture` to see them; `BENCHMARK.md` quotes them).
+#[test]
+#[ignore]
+fn evidence_cost() {
+    fn cpu_ms() -> f64 {
+        let s = std::fs::read_to_string("/proc/thread-self/schedstat").unwrap_or_default();
+        s.split_whitespace().next().and_then(|x| x.parse::<f64>().ok()).unwrap_or(0.0) * 1e-6
+    }
+    let d = 0.025;
+    let mut ratios = Vec::new();
+    for i in 0..24 {
+        let (s, t, gt) = fixture_pair(i);
+        // fixture pairs are in normalised units already (largest half-extent 1)
+        let (sn, gt_n) = (&s, gt);
+        let target = IcpTarget::new(&t.points, true);
+        let source_index = IcpTarget::new(&sn.points, false);
+        let how = arps::refine::Refinement { kind: IcpKind::Plane, d_final: d, max_iterations: 30 };
+        let start = turn_about(Vector3::new(1.0, 0.5, 0.2), 10.0, Vector3::zeros()) * gt_n;
+        let (mut icp, mut ev) = (Vec::new(), Vec::new());
+        for _ in 0..5 {
+            let t0 = cpu_ms();
+            let c = arps::refine::refine_best(&target, &sn.points, &[(Start::Initial, start)], &how).unwrap();
+            let t1 = cpu_ms();
+            let _ = confidence::evidence(&target, &source_index, &sn.points, &c.T_target_source, d, IcpKind::Plane);
+            let t2 = cpu_ms();
+            icp.push(t1 - t0);
+            ev.push(t2 - t1);
+        }
+        icp.sort_by(f64::total_cmp);
+        ev.sort_by(f64::total_cmp);
+        println!("pair {i}: ICP {:.2} ms, evidence {:.2} ms", icp[2], ev[2]);
+        ratios.push(ev[2] / icp[2]);
+    }
+    ratios.sort_by(f64::total_cmp);
+    println!("evidence / ICP, median over 24 pairs: {:.2}", ratios[12]);
+}
