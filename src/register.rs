@@ -158,7 +158,8 @@ pub struct Registration {
     /// The start whose refinement is `T_target_source` (one of [`Options::starts`]).
     pub start: Start,
     /// Fraction of (voxelised) source points with a target point within the final max
-    /// correspondence distance, under `T_target_source`; in [0, 1].
+    /// correspondence distance, under `T_target_source`; in [0, 1]. Measured on at most
+    /// [`crate::refine::REFINE_POINTS`] of them, evenly spread.
     pub fitness: f64,
     /// RMS distance of those inlier pairs, user units (0 if there are none).
     pub inlier_rmse: f64,

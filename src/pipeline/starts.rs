@@ -107,7 +107,7 @@ impl<'a> Starts<'a> {
                     let hyps = self.hypotheses.get_or_insert_with(|| {
                         let mut w = Stopwatch::start(clock);
                         let params = global::GlobalParams { seed, ..Default::default() };
-                        let h = global::hypotheses(&p.src_n, &p.tgt_n, &params);
+                        let h = global::hypotheses(&p.icp_src, &p.icp_tgt, &params);
                         *global_ms += w.lap();
                         h.iter().map(|h| h.T_target_source).collect()
                     });
