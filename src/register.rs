@@ -71,8 +71,10 @@ pub struct Options {
     /// [`refine::SCREEN_POINTS`]: crate::refine::SCREEN_POINTS
     pub starts: Vec<Start>,
     /// How the starts are searched. Default [`Search::Adaptive`]: the first start alone, then the
-    /// other local starts, then the global ones ([`Start::is_global`]), stopping as soon as the
-    /// best answer's [`Registration::confidence`] reaches [`STOP_CONFIDENCE`].
+    /// others in the order of [`Options::starts`], each run of local starts and each run of global
+    /// ones ([`Start::is_global`]) a stage (with the default starts: the other local starts, then
+    /// the global ones), stopping as soon as the best answer's [`Registration::confidence`]
+    /// reaches [`STOP_CONFIDENCE`].
     /// [`Search::Exhaustive`] refines every start.
     pub search: Search,
 }
@@ -81,8 +83,8 @@ pub struct Options {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
 pub enum Search {
-    /// In stages, cheapest first, stopping at a confident answer: the first start; then the other
-    /// local starts; then the global starts. The best of everything refined is returned.
+    /// In stages, stopping at a confident answer: the first start; then the others in order, each
+    /// run of local or of global starts a stage. The best of everything refined is returned.
     #[default]
     Adaptive,
     /// Every start is refined and the best returned.

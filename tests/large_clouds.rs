@@ -109,7 +109,8 @@ fn the_feature_voxel_follows_the_data() {
     assert!((v_mm / (1000.0 * v) - 1.0).abs() < 1e-3, "{v_mm} vs {v}");
     // a sparse cloud is described as it is
     let sparse = PointCloud::new(refine::even_sample(&cloud.points, 800));
-    assert_eq!(global::feature_voxel(&sparse, &sparse, global::VOXEL_FRACTION), start);
+    let own = global::VOXEL_FRACTION * sparse.half_extent();
+    assert_eq!(global::feature_voxel(&sparse, &sparse, global::VOXEL_FRACTION), own);
 }
 
 /// A 280k + 280k-point pair (70% crops of a noisy bumpy surface against another, 25 degrees
@@ -118,7 +119,7 @@ fn the_feature_voxel_follows_the_data() {
 fn a_large_pair_registers_with_the_default_options() {
     let full = bumpy_surface(400_000, 0.9);
     let mut r = rng(3);
-    let noisy = |c: PointCloud| {
+    let mut noisy = |c: PointCloud| {
         PointCloud::new(c.points.iter().map(|p| p.map(|x| x + (r.random::<f32>() - 0.5) * 0.004)).collect())
     };
     let source_full = noisy(crop(&full, [1.0, 0.3, 0.0], 0.7));

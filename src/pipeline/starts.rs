@@ -38,16 +38,48 @@ pub(crate) fn kinds(options: &Options) -> Vec<Start> {
 }
 
 /// The stages of the search: all of `kinds` at once ([`Search::Exhaustive`]), or the first
-/// start; the other local ones; the global ones ([`Search::Adaptive`]), leaving out empty stages.
+/// start alone, then the others in their order, grouped into runs of local and of global starts
+/// ([`Search::Adaptive`]; with the default starts: the first; the other local ones; the global
+/// ones).
 pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Vec<Start>> {
     match search {
         Search::Exhaustive => vec![kinds.to_vec()],
         Search::Adaptive => {
-            let first = kinds[..1].to_vec();
-            let local: Vec<Start> = kinds[1..].iter().copied().filter(|s| !s.is_global()).collect();
-            let global: Vec<Start> = kinds[1..].iter().copied().filter(|s| s.is_global()).collect();
-            [first, local, global].into_iter().filter(|s| !s.is_empty()).collect()
+            let mut stages: Vec<Vec<Start>> = kinds.iter().take(1).map(|&k| vec![k]).collect();
+            for &k in kinds.iter().skip(1) {
+                let joins = stages.len() > 1 && stages.last().is_some_and(|l| l[0].is_global() == k.is_global());
+                match stages.last_mut() {
+                    Some(last) if joins => last.push(k),
+                    _ => stages.push(vec![k]),
+                }
+            }
+            stages
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use Start::*;
+
+    #[test]
+    fn adaptive_stages_follow_the_order_of_the_starts() {
+        let default = [Network, Centroids, Initial, Turned, TurnedInitial, Global];
+        assert_eq!(
+            stages(&default, Search::Adaptive),
+            vec![vec![Network], vec![Centroids, Initial, Turned, TurnedInitial], vec![Global]]
+        );
+        assert_eq!(
+            stages(&[Network, Global, Centroids, Turned], Search::Adaptive),
+            vec![vec![Network], vec![Global], vec![Centroids, Turned]]
+        );
+        assert_eq!(
+            stages(&[Global, GlobalNetwork, Initial], Search::Adaptive),
+            vec![vec![Global], vec![GlobalNetwork], vec![Initial]]
+        );
+        assert_eq!(stages(&default, Search::Exhaustive), vec![default.to_vec()]);
+        assert!(stages(&[], Search::Adaptive).is_empty());
     }
 }
 
