@@ -81,9 +81,9 @@ export interface RegisterOptions {
    * against the same prepared target) and the best is returned, with `start` saying which: the
    * highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier start. Starts
    * that meet during refinement are refined once, as the earlier; on large clouds the starts are
-   * compared on 2048 of the source points and only the winner is refined on all of them. Which
+   * compared on 2048 of the source points and only the winner is refined on 8192. Which
    * starts are refined at all depends on `search`. Default
-   * `["network", "centroids", "initial", "turned", "turnedInitial", "global"]`; each extra start
+   * `["network", "global", "centroids", "initial", "turned", "turnedInitial"]`; each extra start
    * costs one ICP run (on at most 2048 points; `"turned"` and `"turnedInitial"` are six each,
    * `"global"` and `"globalNetwork"` up to five each, plus the descriptor matching), so
    * `["network"]` is the fastest. Must be non-empty, without repeats.
@@ -109,9 +109,10 @@ export interface RegisterOptions {
   starts?: RegistrationStart[];
   /**
    * How `starts` are searched:
-   * - `"adaptive"` (the default): in stages, cheapest first, stopping as soon as the best answer's
-   *   `confidence` reaches 0.9: the first start alone; then the other local starts; then the
-   *   global ones (`"global"`, `"globalNetwork"`). The best of everything refined is returned.
+   * - `"adaptive"` (the default): in stages, stopping as soon as the best answer's `confidence`
+   *   reaches 0.9: the first start alone; then the others in order, each run of local starts or
+   *   of global ones (`"global"`, `"globalNetwork"`) one stage (by default: the global ones, then
+   *   the other local ones). The best of everything refined is returned.
    *   Easy pairs cost one start; hard ones still get every start.
    * - `"exhaustive"`: every start is refined and the best returned (slower, never stops early).
    *

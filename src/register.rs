@@ -53,8 +53,10 @@ pub struct Options {
     /// which): the highest fitness at the final distance, ties going to the lower inlier RMSE, then
     /// to the earlier start ([`refine::choose`]). Each extra start costs one ICP run on at most
     /// [`refine::SCREEN_POINTS`] source points ([`Start::Turned`] and [`Start::TurnedInitial`] are
-    /// six each; [`Start::Global`] up to five). Default `[Network, Centroids, Initial, Turned,
-    /// TurnedInitial, Global]`, searched as [`Options::search`] says. On 1,000 fresh
+    /// six each; [`Start::Global`] up to five). Default `[Network, Global, Centroids, Initial,
+    /// Turned, TurnedInitial]`, searched as [`Options::search`] says (the global hypotheses before
+    /// the local starts: on 500 paper-protocol and 300 any-pose validation pairs the same recall
+    /// but one any-pose miss, for 0.55 times the any-pose median time; `BENCHMARK.md`). On 1,000 fresh
     /// validation pairs (`arps eval`, `make-pairs --seed 1`, the model shipped before session 7)
     /// `TurnedInitial` raised recall from 0.936 to 0.947 (11 pairs gained, none lost) and cut MRE
     /// from 4.3 to 3.9 degrees, for about 1.8 times the ICP time; on session 3's model,
@@ -72,8 +74,8 @@ pub struct Options {
     pub starts: Vec<Start>,
     /// How the starts are searched. Default [`Search::Adaptive`]: the first start alone, then the
     /// others in the order of [`Options::starts`], each run of local starts and each run of global
-    /// ones ([`Start::is_global`]) a stage (with the default starts: the other local starts, then
-    /// the global ones), stopping as soon as the best answer's [`Registration::confidence`]
+    /// ones ([`Start::is_global`]) a stage (with the default starts: the global ones, then the
+    /// other local ones), stopping as soon as the best answer's [`Registration::confidence`]
     /// reaches [`STOP_CONFIDENCE`].
     /// [`Search::Exhaustive`] refines every start.
     pub search: Search,
@@ -108,11 +110,11 @@ impl Default for Options {
             non_finite: NonFinite::Error,
             starts: vec![
                 Start::Network,
+                Start::Global,
                 Start::Centroids,
                 Start::Initial,
                 Start::Turned,
                 Start::TurnedInitial,
-                Start::Global,
             ],
             search: Search::Adaptive,
         }

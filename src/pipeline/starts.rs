@@ -39,8 +39,8 @@ pub(crate) fn kinds(options: &Options) -> Vec<Start> {
 
 /// The stages of the search: all of `kinds` at once ([`Search::Exhaustive`]), or the first
 /// start alone, then the others in their order, grouped into runs of local and of global starts
-/// ([`Search::Adaptive`]; with the default starts: the first; the other local ones; the global
-/// ones).
+/// ([`Search::Adaptive`]; with the default starts: the network's; the global ones; the other
+/// local ones).
 pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Vec<Start>> {
     match search {
         Search::Exhaustive => vec![kinds.to_vec()],
@@ -65,10 +65,15 @@ mod tests {
 
     #[test]
     fn adaptive_stages_follow_the_order_of_the_starts() {
-        let default = [Network, Centroids, Initial, Turned, TurnedInitial, Global];
+        let default = [Network, Global, Centroids, Initial, Turned, TurnedInitial];
         assert_eq!(
             stages(&default, Search::Adaptive),
-            vec![vec![Network], vec![Centroids, Initial, Turned, TurnedInitial], vec![Global]]
+            vec![vec![Network], vec![Global], vec![Centroids, Initial, Turned, TurnedInitial]]
+        );
+        assert_eq!(crate::Options::default().starts, default.to_vec());
+        assert_eq!(
+            stages(&[Network, Centroids, Initial, Global], Search::Adaptive),
+            vec![vec![Network], vec![Centroids, Initial], vec![Global]]
         );
         assert_eq!(
             stages(&[Network, Global, Centroids, Turned], Search::Adaptive),
@@ -139,7 +144,7 @@ impl<'a> Starts<'a> {
                     let hyps = self.hypotheses.get_or_insert_with(|| {
                         let mut w = Stopwatch::start(clock);
                         let params = global::GlobalParams { seed, ..Default::default() };
-                        let h = global::hypotheses(&p.icp_src, &p.icp_tgt, &params);
+                        let h = global::hypotheses(&p.src_n, &p.tgt_n, &params);
                         *global_ms += w.lap();
                         h.iter().map(|h| h.T_target_source).collect()
                     });
