@@ -159,8 +159,9 @@ pub struct Candidate {
 /// converge to the same answer, and refining them again would only cost time.
 pub const MERGE_FRACTION: f64 = 0.5;
 
-/// With more source points than this, several starts are compared on an evenly spread sample
-/// of this many, and only the winner is refined on every point ([`refine_best`]).
+/// With more source points than this, the starts go through the coarse stages and are compared
+/// on an evenly spread sample of this many, and only the winner is refined on more (at most
+/// [`REFINE_POINTS`]; [`refine_best`]).
 pub const SCREEN_POINTS: usize = 2048;
 
 /// Most source points any start is refined and scored on: larger (voxelised) sources are
