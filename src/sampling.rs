@@ -83,8 +83,8 @@ pub fn voxel_downsample(cloud: &PointCloud, voxel: f32) -> PointCloud {
             (voxels.len() - 1) as u32
         });
         let v = &mut voxels[slot as usize];
-        for a in 0..3 {
-            v.1[a] += p[a] as f64;
+        for (sum, &x) in v.1.iter_mut().zip(p) {
+            *sum += x as f64;
         }
         v.2 += 1;
     }

@@ -46,7 +46,7 @@ fn the_voxel_grid_equals_the_sorting_reference() {
         let mut pts: Vec<[f32; 3]> =
             (0..n).map(|_| [0, 1, 2].map(|_| (r.random::<f32>() * 2.0 - 1.0) * spread)).collect();
         // repeats, points on voxel boundaries and a non-finite point
-        pts.extend_from_slice(&pts[..100].to_vec());
+        pts.extend_from_within(..100);
         pts.push([0.0, -voxel, 2.0 * voxel]);
         pts.push([f32::NAN, 0.0, 0.0]);
         let got = voxel_downsample(&PointCloud::new(pts.clone()), voxel).points;

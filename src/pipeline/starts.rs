@@ -58,36 +58,6 @@ pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Vec<Start>> {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use Start::*;
-
-    #[test]
-    fn adaptive_stages_follow_the_order_of_the_starts() {
-        let default = [Network, Global, Centroids, Initial, Turned, TurnedInitial];
-        assert_eq!(
-            stages(&default, Search::Adaptive),
-            vec![vec![Network], vec![Global], vec![Centroids, Initial, Turned, TurnedInitial]]
-        );
-        assert_eq!(crate::Options::default().starts, default.to_vec());
-        assert_eq!(
-            stages(&[Network, Centroids, Initial, Global], Search::Adaptive),
-            vec![vec![Network], vec![Centroids, Initial], vec![Global]]
-        );
-        assert_eq!(
-            stages(&[Network, Global, Centroids, Turned], Search::Adaptive),
-            vec![vec![Network], vec![Global], vec![Centroids, Turned]]
-        );
-        assert_eq!(
-            stages(&[Global, GlobalNetwork, Initial], Search::Adaptive),
-            vec![vec![Global], vec![GlobalNetwork], vec![Initial]]
-        );
-        assert_eq!(stages(&default, Search::Exhaustive), vec![default.to_vec()]);
-        assert!(stages(&[], Search::Adaptive).is_empty());
-    }
-}
-
 /// Builds the start transforms of each stage; computes the global hypotheses once, when a
 /// global start first needs them.
 pub(crate) struct Starts<'a> {
@@ -171,4 +141,34 @@ impl<'a> Starts<'a> {
 fn centroid_alignment(source: &PointCloud, target: &PointCloud) -> Matrix4<f64> {
     let (cs, ct) = (source.centroid(), target.centroid());
     Matrix4::new_translation(&nalgebra::Vector3::new(ct[0] - cs[0], ct[1] - cs[1], ct[2] - cs[2]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use Start::*;
+
+    #[test]
+    fn adaptive_stages_follow_the_order_of_the_starts() {
+        let default = [Network, Global, Centroids, Initial, Turned, TurnedInitial];
+        assert_eq!(
+            stages(&default, Search::Adaptive),
+            vec![vec![Network], vec![Global], vec![Centroids, Initial, Turned, TurnedInitial]]
+        );
+        assert_eq!(crate::Options::default().starts, default.to_vec());
+        assert_eq!(
+            stages(&[Network, Centroids, Initial, Global], Search::Adaptive),
+            vec![vec![Network], vec![Centroids, Initial], vec![Global]]
+        );
+        assert_eq!(
+            stages(&[Network, Global, Centroids, Turned], Search::Adaptive),
+            vec![vec![Network], vec![Global], vec![Centroids, Turned]]
+        );
+        assert_eq!(
+            stages(&[Global, GlobalNetwork, Initial], Search::Adaptive),
+            vec![vec![Global], vec![GlobalNetwork], vec![Initial]]
+        );
+        assert_eq!(stages(&default, Search::Exhaustive), vec![default.to_vec()]);
+        assert!(stages(&[], Search::Adaptive).is_empty());
+    }
 }
