@@ -5,7 +5,8 @@
 #   scripts/bench-peers.sh            # about 10-15 minutes on a 2-core machine
 #
 # Not part of CI: it downloads Open3D from PyPI into a benchmark-only virtualenv (.venv-bench,
-# ignored by git; reused when present). Environment:
+# ignored by git; reused when present; Open3D 0.19 needs CPython 3.8-3.12 as `python3`). It builds
+# pkg/ only when missing: run scripts/build-pkg.sh after changing the engine. Environment:
 #   BENCH_PAIRS   pairs per synthetic 1024-point set (default 100)
 #   BENCH_LARGE   large sets as POINTS:COUNT ... (default "10000:10 100000:5 1000000:3")
 #   BENCH_THREADS Open3D's threads (default 1, as the wasm build)
