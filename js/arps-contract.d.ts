@@ -68,9 +68,9 @@ export type RegisterOptions = {
    * against the same prepared target and the best is returned (the result's `start` says
    * which): the highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier
    * start. Starts that meet during refinement are refined once, as the earlier; on large clouds
-   * the starts are compared on 2048 of the source points and only the winner is refined on all
-   * of them. Which starts are refined at all depends on `search`. Default
-   * `["network", "centroids", "initial", "turned", "turnedInitial", "global"]`; each extra
+   * the starts are compared on 2048 of the source points and only the winner is refined on
+   * 8192 of them. Which starts are refined at all depends on `search`. Default
+   * `["network", "global", "centroids", "initial", "turned", "turnedInitial"]`; each extra
    * start costs one ICP run on at most 2048 points (`"turned"` and `"turnedInitial"` are six
    * each, `"global"` and `"globalNetwork"` up to five each, plus the descriptor matching), so
    * `["network"]` is the fastest. Must be non-empty, without repeats.
@@ -95,9 +95,11 @@ export type RegisterOptions = {
    */
   starts?: Array<RegistrationStart>,
   /**
-   * How `starts` are searched. Default `"adaptive"`: in stages, cheapest first, stopping as
-   * soon as the best answer's `confidence` reaches 0.9 (`STOP_CONFIDENCE`): the first start
-   * alone; then the other local starts; then the global ones (`"global"`, `"globalNetwork"`).
+   * How `starts` are searched. Default `"adaptive"`: in stages, stopping as soon as the best
+   * answer's `confidence` reaches 0.9 (`STOP_CONFIDENCE`): the first start alone; then the
+   * others in order, each run of local starts or of global ones (`"global"`,
+   * `"globalNetwork"`) one stage (with the default starts: the global ones, then the other
+   * local ones).
    * `"exhaustive"` refines every start. The result's `startsRefined` says how many were refined.
    */
   search?: RegistrationSearch,
@@ -157,6 +159,7 @@ export type RegistrationResult = {
    * Fraction of (voxelised) source points that have a target point within
    * `maxCorrespondenceDistance` under `T_target_source`, in [0, 1]. Right answers on partial,
    * independently sampled scans often score only 0.15-0.3: judge the result by `confidence`.
+   * Measured on at most 8192 source points, evenly spread.
    */
   fitness: number,
   /**

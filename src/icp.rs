@@ -69,17 +69,22 @@ pub const NORMAL_NEIGHBOURS: usize = 20;
 pub const PLANE_RANK_TOL: f64 = 1e-9;
 
 /// A target prepared once (kd-tree, normals) and reused by several ICP runs.
+///
+/// Normals are estimated point by point as point-to-plane ICP first pairs a source point with
+/// them, and kept: on a large target only the points that take part in a correspondence (a few
+/// per sampled source point) ever need one, so their cost follows the source sample, not the
+/// target's size. A normal's value does not depend on when it is estimated.
 pub struct IcpTarget {
     points: Vec<[f32; 3]>,
     index: KdIndex,
-    normals: OnceLock<Vec<[f32; 3]>>,
+    normals: Vec<OnceLock<[f32; 3]>>,
 }
 
 impl std::fmt::Debug for IcpTarget {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("IcpTarget")
             .field("points", &self.points.len())
-            .field("normals", &self.normals.get().is_some())
+            .field("normals", &self.normals.iter().filter(|n| n.get().is_some()).count())
             .finish()
     }
 }
@@ -98,12 +103,16 @@ struct Scratch {
 }
 
 impl IcpTarget {
-    /// Builds the kd-tree (and the normals, for point-to-plane) of the target.
+    /// Builds the kd-tree of the target; with `with_normals`, every normal too.
     ///
-    /// With `with_normals = false` the normals are still computed on first use if a
-    /// point-to-plane run asks for them. Normals use [`NORMAL_NEIGHBOURS`] neighbours.
+    /// Otherwise each normal is estimated when a point-to-plane run first needs it (the same
+    /// value either way: [`normals::normal_at`] with [`NORMAL_NEIGHBOURS`] neighbours).
     pub fn new(points: &[[f32; 3]], with_normals: bool) -> Self {
-        let target = Self { points: points.to_vec(), index: KdIndex::new(points), normals: OnceLock::new() };
+        let target = Self {
+            points: points.to_vec(),
+            index: KdIndex::new(points),
+            normals: (0..points.len()).map(|_| OnceLock::new()).collect(),
+        };
         if with_normals {
             target.normals();
         }
@@ -116,18 +125,15 @@ impl IcpTarget {
     pub fn with_normals(points: &[[f32; 3]], normals: &[[f32; 3]]) -> Self {
         let target = Self::new(points, false);
         if normals.len() == points.len() {
-            let clean = normals
-                .iter()
-                .map(|n| {
-                    let len = (n[0] as f64).hypot(n[1] as f64).hypot(n[2] as f64);
-                    if len > 0.0 && len.is_finite() {
-                        n.map(|v| (v as f64 / len) as f32)
-                    } else {
-                        normals::DEFAULT_NORMAL
-                    }
-                })
-                .collect();
-            let _ = target.normals.set(clean);
+            for (cell, n) in target.normals.iter().zip(normals) {
+                let len = (n[0] as f64).hypot(n[1] as f64).hypot(n[2] as f64);
+                let clean = if len > 0.0 && len.is_finite() {
+                    n.map(|v| (v as f64 / len) as f32)
+                } else {
+                    normals::DEFAULT_NORMAL
+                };
+                let _ = cell.set(clean);
+            }
         }
         target
     }
@@ -137,9 +143,19 @@ impl IcpTarget {
         &self.points
     }
 
-    /// The target normals, estimating them now if they were not yet.
-    pub fn normals(&self) -> &[[f32; 3]] {
-        self.normals.get_or_init(|| normals::estimate_normals(&self.points, NORMAL_NEIGHBOURS))
+    /// Every target normal (one per point), estimating those not yet estimated.
+    pub fn normals(&self) -> Vec<[f32; 3]> {
+        (0..self.points.len()).map(|j| self.normal(j)).collect()
+    }
+
+    /// How many target normals have been estimated (or given) so far.
+    pub fn normals_estimated(&self) -> usize {
+        self.normals.iter().filter(|n| n.get().is_some()).count()
+    }
+
+    /// The normal of target point `j`, estimated now if it was not yet.
+    fn normal(&self, j: usize) -> [f32; 3] {
+        *self.normals[j].get_or_init(|| normals::normal_at(&self.points, &self.index, j, NORMAL_NEIGHBOURS))
     }
 
     /// Runs ICP from `init` (`T_target_source`).
@@ -172,12 +188,11 @@ impl IcpTarget {
         if params.kind == IcpKind::Off || scratch.moved.is_empty() {
             return result;
         }
-        let target_normals = if params.kind == IcpKind::Plane { Some(self.normals()) } else { None };
         let mut t = *init;
         for it in 1..=params.max_iterations {
-            let update = match target_normals {
-                Some(n) => self.plane_update(&scratch, n),
-                None => self.point_update(&mut scratch),
+            let update = match params.kind {
+                IcpKind::Plane => self.plane_update(&scratch),
+                _ => self.point_update(&mut scratch),
             };
             let Some(update) = update else { break };
             let next = compose_rigid(&update, &t);
@@ -283,7 +298,7 @@ impl IcpTarget {
     }
 
     /// Point-to-plane update on the current inlier pairs (see [`IcpTarget::align`]).
-    fn plane_update(&self, scratch: &Scratch, normals: &[[f32; 3]]) -> Option<Matrix4<f64>> {
+    fn plane_update(&self, scratch: &Scratch) -> Option<Matrix4<f64>> {
         let n = scratch.moved.len();
         if n == 0 {
             return None;
@@ -300,7 +315,7 @@ impl IcpTarget {
         for (p, &j) in scratch.moved.iter().zip(&scratch.target) {
             let p = Vector3::from(*p) - c;
             let q = Vector3::from(self.points[j].map(|v| v as f64)) - c;
-            let nq = Vector3::from(normals[j].map(|v| v as f64));
+            let nq = Vector3::from(self.normal(j).map(|v| v as f64));
             let pxn = p.cross(&nq);
             let a = Vector6::new(pxn.x, pxn.y, pxn.z, nq.x, nq.y, nq.z);
             let b = (q - p).dot(&nq);

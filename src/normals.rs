@@ -32,6 +32,19 @@ pub fn estimate_normals(points: &[[f32; 3]], k: usize) -> Vec<[f32; 3]> {
         .collect()
 }
 
+/// The normal [`estimate_normals`] gives point `j` of `points`, alone: from its `k` nearest
+/// neighbours in `index` (which must index `points`), `k` raised to 3 and capped at the cloud
+/// size; [`DEFAULT_NORMAL`] for clouds of fewer than 3 points.
+pub fn normal_at(points: &[[f32; 3]], index: &KdIndex, j: usize, k: usize) -> [f32; 3] {
+    if points.len() < 3 {
+        return DEFAULT_NORMAL;
+    }
+    let k = k.clamp(3, points.len());
+    let mut nbrs = Vec::with_capacity(k + 1);
+    index.knn_into(&points[j], k, &mut nbrs);
+    normal_of(points, nbrs.iter().map(|e| e.0))
+}
+
 /// The PCA normal of the points `idx` of `points`.
 pub fn normal_of(points: &[[f32; 3]], idx: impl Iterator<Item = usize> + Clone) -> [f32; 3] {
     let count = idx.clone().count();

@@ -6,7 +6,8 @@
 //! so the pipeline refines every start in [`crate::Options::starts`] against one shared
 //! [`IcpTarget`] and keeps the best by [`choose`] ([`refine_best`]). Two things keep that cheap:
 //! starts that meet are merged ([`MERGE_FRACTION`]), and large sources are compared on a sample
-//! of [`SCREEN_POINTS`] points, only the winner being refined on all of them.
+//! of [`SCREEN_POINTS`] points, only the winner being refined on more (at most
+//! [`REFINE_POINTS`]).
 
 use crate::icp::{IcpKind, IcpParams, IcpTarget};
 use nalgebra::Matrix4;
@@ -159,25 +160,35 @@ pub struct Candidate {
 /// converge to the same answer, and refining them again would only cost time.
 pub const MERGE_FRACTION: f64 = 0.5;
 
-/// With more source points than this, several starts are compared on an evenly spread sample
-/// of this many, and only the winner is refined on every point ([`refine_best`]).
+/// With more source points than this, the starts go through the coarse stages and are compared
+/// on an evenly spread sample of this many, and only the winner is refined on more (at most
+/// [`REFINE_POINTS`]; [`refine_best`]).
 pub const SCREEN_POINTS: usize = 2048;
+
+/// Most source points any start is refined and scored on: larger (voxelised) sources are
+/// replaced by this many evenly spread points ([`even_sample`]) before anything else, so the
+/// cost of refinement stops growing with the point count. 8,192 points pin a rigid motion far
+/// below the recall thresholds (`BENCHMARK.md`, "Large clouds").
+pub const REFINE_POINTS: usize = 8192;
 
 /// The best start after refinement: [`refine_starts`] then [`choose`]. `None` for no starts.
 ///
-/// With several starts and more than [`SCREEN_POINTS`] source points (large scans, where one ICP
-/// run costs hundreds of milliseconds), the starts are refined and compared on
-/// [`SCREEN_POINTS`] evenly spread source points, and only the winner is refined again on all of
-/// them, from where the sample left it, at the final distance only (the sample's run has been
-/// through the coarse stages); its figures are those of the full run (its `iterations` count both
-/// runs). So each extra start costs an ICP run on at most [`SCREEN_POINTS`] points.
+/// The source is first capped at [`REFINE_POINTS`] evenly spread points. With more than
+/// [`SCREEN_POINTS`] left (large scans), the starts (even a single one) are refined through the
+/// coarse stages and compared on [`SCREEN_POINTS`] evenly spread source points, and only the
+/// winner is refined again on all the capped points, from where the sample left it, at the final
+/// distance only (the sample's run has been through the coarse stages); its figures are those of
+/// that run (its `iterations` count both runs). So each start costs an ICP run on at most
+/// [`SCREEN_POINTS`] points, and the answer one final stage on at most [`REFINE_POINTS`].
 pub fn refine_best(
     target: &IcpTarget,
     source: &[[f32; 3]],
     starts: &[(Start, Matrix4<f64>)],
     how: &Refinement,
 ) -> Option<Candidate> {
-    if starts.len() > 1 && how.kind != IcpKind::Off && source.len() > SCREEN_POINTS {
+    let capped = even_sample(source, REFINE_POINTS);
+    let source = capped.as_slice();
+    if how.kind != IcpKind::Off && source.len() > SCREEN_POINTS && !starts.is_empty() {
         let sample = even_sample(source, SCREEN_POINTS);
         let screened = refine_starts(target, &sample, starts, how);
         let w = screened[choose(&screened)?];

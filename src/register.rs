@@ -71,9 +71,9 @@ pub struct Options {
     /// against the same prepared target and the best is returned (the result's `start` says
     /// which): the highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier
     /// start. Starts that meet during refinement are refined once, as the earlier; on large clouds
-    /// the starts are compared on 2048 of the source points and only the winner is refined on all
-    /// of them. Which starts are refined at all depends on `search`. Default
-    /// `["network", "centroids", "initial", "turned", "turnedInitial", "global"]`; each extra
+    /// the starts are compared on 2048 of the source points and only the winner is refined on
+    /// 8192 of them. Which starts are refined at all depends on `search`. Default
+    /// `["network", "global", "centroids", "initial", "turned", "turnedInitial"]`; each extra
     /// start costs one ICP run on at most 2048 points (`"turned"` and `"turnedInitial"` are six
     /// each, `"global"` and `"globalNetwork"` up to five each, plus the descriptor matching), so
     /// `["network"]` is the fastest. Must be non-empty, without repeats.
@@ -97,9 +97,11 @@ pub struct Options {
     /// With `icp: "off"` nothing is refined or compared: the first start is the answer.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub starts: Vec<Start>,
-    /// How `starts` are searched. Default `"adaptive"`: in stages, cheapest first, stopping as
-    /// soon as the best answer's `confidence` reaches 0.9 (`STOP_CONFIDENCE`): the first start
-    /// alone; then the other local starts; then the global ones (`"global"`, `"globalNetwork"`).
+    /// How `starts` are searched. Default `"adaptive"`: in stages, stopping as soon as the best
+    /// answer's `confidence` reaches 0.9 (`STOP_CONFIDENCE`): the first start alone; then the
+    /// others in order, each run of local starts or of global ones (`"global"`,
+    /// `"globalNetwork"`) one stage (with the default starts: the global ones, then the other
+    /// local ones).
     /// `"exhaustive"` refines every start. The result's `startsRefined` says how many were refined.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub search: Search,
@@ -110,8 +112,8 @@ pub struct Options {
 #[serde(rename_all = "camelCase")]
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationSearch"))]
 pub enum Search {
-    /// In stages, cheapest first, stopping at a confident answer: the first start; then the other
-    /// local starts; then the global starts. The best of everything refined is returned. Easy
+    /// In stages, stopping at a confident answer: the first start; then the others in order, each
+    /// run of local or of global starts a stage. The best of everything refined is returned. Easy
     /// pairs cost one start; hard ones still get every start.
     #[default]
     Adaptive,
@@ -136,11 +138,11 @@ impl Default for Options {
             non_finite: NonFinite::Error,
             starts: vec![
                 Start::Network,
+                Start::Global,
                 Start::Centroids,
                 Start::Initial,
                 Start::Turned,
                 Start::TurnedInitial,
-                Start::Global,
             ],
             search: Search::Adaptive,
         }
@@ -209,6 +211,7 @@ pub struct Registration {
     /// Fraction of (voxelised) source points that have a target point within
     /// `maxCorrespondenceDistance` under `T_target_source`, in [0, 1]. Right answers on partial,
     /// independently sampled scans often score only 0.15-0.3: judge the result by `confidence`.
+    /// Measured on at most 8192 source points, evenly spread.
     pub fitness: f64,
     /// RMS distance of those inlier pairs, in the clouds' units (0 when there are none).
     pub inlier_rmse: f64,

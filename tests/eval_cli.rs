@@ -283,7 +283,7 @@ fn compare_reads_what_eval_writes() {
     let (ok, out, err) = arps(&["compare", p.to_str().unwrap(), p.to_str().unwrap()]);
     assert!(ok, "{err}");
     assert!(out.contains("arps compare: 2 pairs"), "{out}");
-    assert!(out.contains("multi-start: network, centroids, initial, turned, turnedInitial"), "{out}");
+    assert!(out.contains("multi-start: network, global, centroids, initial, turned, turnedInitial"), "{out}");
     for m in METHODS {
         let line = out.lines().find(|l| l.starts_with(&format!("{m} "))).unwrap_or_else(|| panic!("{m}:\n{out}"));
         // a result against itself: no discordant pairs

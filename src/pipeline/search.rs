@@ -40,8 +40,8 @@ pub(crate) fn search(
 ) -> Result<Chosen> {
     let p = prepared;
     let d_final = p.d_final;
-    let with_normals = options.icp == IcpKind::Plane;
-    let target_index = IcpTarget::new(&p.icp_tgt.points, with_normals);
+    // normals are estimated as ICP first needs them (only near the source's sampled points)
+    let target_index = IcpTarget::new(&p.icp_tgt.points, false);
     let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations };
     let source_index = IcpTarget::new(&p.icp_src.points, false);
     let judge = |t: &Matrix4<f64>| {

@@ -38,15 +38,22 @@ pub(crate) fn kinds(options: &Options) -> Vec<Start> {
 }
 
 /// The stages of the search: all of `kinds` at once ([`Search::Exhaustive`]), or the first
-/// start; the other local ones; the global ones ([`Search::Adaptive`]), leaving out empty stages.
+/// start alone, then the others in their order, grouped into runs of local and of global starts
+/// ([`Search::Adaptive`]; with the default starts: the network's; the global ones; the other
+/// local ones).
 pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Vec<Start>> {
     match search {
         Search::Exhaustive => vec![kinds.to_vec()],
         Search::Adaptive => {
-            let first = kinds[..1].to_vec();
-            let local: Vec<Start> = kinds[1..].iter().copied().filter(|s| !s.is_global()).collect();
-            let global: Vec<Start> = kinds[1..].iter().copied().filter(|s| s.is_global()).collect();
-            [first, local, global].into_iter().filter(|s| !s.is_empty()).collect()
+            let mut stages: Vec<Vec<Start>> = kinds.iter().take(1).map(|&k| vec![k]).collect();
+            for &k in kinds.iter().skip(1) {
+                let joins = stages.len() > 1 && stages.last().is_some_and(|l| l[0].is_global() == k.is_global());
+                match stages.last_mut() {
+                    Some(last) if joins => last.push(k),
+                    _ => stages.push(vec![k]),
+                }
+            }
+            stages
         }
     }
 }
@@ -134,4 +141,34 @@ impl<'a> Starts<'a> {
 fn centroid_alignment(source: &PointCloud, target: &PointCloud) -> Matrix4<f64> {
     let (cs, ct) = (source.centroid(), target.centroid());
     Matrix4::new_translation(&nalgebra::Vector3::new(ct[0] - cs[0], ct[1] - cs[1], ct[2] - cs[2]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use Start::*;
+
+    #[test]
+    fn adaptive_stages_follow_the_order_of_the_starts() {
+        let default = [Network, Global, Centroids, Initial, Turned, TurnedInitial];
+        assert_eq!(
+            stages(&default, Search::Adaptive),
+            vec![vec![Network], vec![Global], vec![Centroids, Initial, Turned, TurnedInitial]]
+        );
+        assert_eq!(crate::Options::default().starts, default.to_vec());
+        assert_eq!(
+            stages(&[Network, Centroids, Initial, Global], Search::Adaptive),
+            vec![vec![Network], vec![Centroids, Initial], vec![Global]]
+        );
+        assert_eq!(
+            stages(&[Network, Global, Centroids, Turned], Search::Adaptive),
+            vec![vec![Network], vec![Global], vec![Centroids, Turned]]
+        );
+        assert_eq!(
+            stages(&[Global, GlobalNetwork, Initial], Search::Adaptive),
+            vec![vec![Global], vec![GlobalNetwork], vec![Initial]]
+        );
+        assert_eq!(stages(&default, Search::Exhaustive), vec![default.to_vec()]);
+        assert!(stages(&[], Search::Adaptive).is_empty());
+    }
 }

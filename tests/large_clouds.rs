@@ -1,0 +1,135 @@
+//! Large clouds: the work of every stage is bounded whatever the point count. The voxel grid
+//! gives the same clouds as the sort-based grid it replaced, target normals are estimated only
+//! where ICP needs them (and equal the eager ones), refinement runs on a capped, evenly spread
+//! source, the feature voxel follows the data's scale, and a 280k-point pair is registered.
+
+mod common;
+
+use arps::icp::{IcpKind, IcpTarget};
+use arps::refine::{self, Refinement, Start};
+use arps::sampling::{rng, voxel_downsample};
+use arps::transform::{rigid_inverse, rotation_error_deg, translation_error};
+use arps::{global, normals, Options, PointCloud, Registrar};
+use common::{bumpy_surface, crop, motion};
+use rand::Rng;
+
+/// The grid as it was computed before (every point keyed, all keys sorted, runs averaged).
+fn voxel_reference(points: &[[f32; 3]], voxel: f32) -> Vec<[f32; 3]> {
+    let inv = 1.0 / voxel as f64;
+    let mut keyed: Vec<([i64; 3], usize)> = points
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.iter().all(|v| v.is_finite()))
+        .map(|(i, p)| (p.map(|v| (v as f64 * inv).floor() as i64), i))
+        .collect();
+    keyed.sort_unstable();
+    let mut out = Vec::new();
+    let mut run = keyed.as_slice();
+    while let Some(&(key, _)) = run.first() {
+        let len = run.iter().take_while(|(k, _)| *k == key).count();
+        let mut s = [0.0f64; 3];
+        for &(_, i) in &run[..len] {
+            for a in 0..3 {
+                s[a] += points[i][a] as f64;
+            }
+        }
+        out.push(s.map(|v| (v / len as f64) as f32));
+        run = &run[len..];
+    }
+    out
+}
+
+#[test]
+fn the_voxel_grid_equals_the_sorting_reference() {
+    let mut r = rng(7);
+    for (n, spread, voxel) in [(5_000usize, 1.0f32, 0.05f32), (20_000, 300.0, 0.7), (3_000, 0.01, 0.002)] {
+        let mut pts: Vec<[f32; 3]> =
+            (0..n).map(|_| [0, 1, 2].map(|_| (r.random::<f32>() * 2.0 - 1.0) * spread)).collect();
+        // repeats, points on voxel boundaries and a non-finite point
+        pts.extend_from_within(..100);
+        pts.push([0.0, -voxel, 2.0 * voxel]);
+        pts.push([f32::NAN, 0.0, 0.0]);
+        let got = voxel_downsample(&PointCloud::new(pts.clone()), voxel).points;
+        assert_eq!(got, voxel_reference(&pts, voxel), "n = {n}, voxel = {voxel}");
+    }
+}
+
+#[test]
+fn normals_are_estimated_only_where_icp_needs_them_and_equal_the_eager_ones() {
+    let cloud = bumpy_surface(30_000, 0.0).points;
+    let target = IcpTarget::new(&cloud, false);
+    assert_eq!(target.normals_estimated(), 0);
+    let truth = motion([3.0, -2.0, 1.0], [0.02, 0.0, -0.01]);
+    let source = PointCloud::new(refine::even_sample(&cloud, 1000)).transformed(&rigid_inverse(&truth)).points;
+    let how = Refinement { kind: IcpKind::Plane, d_final: 0.03, max_iterations: 30 };
+    let c = refine::refine_best(&target, &source, &[(Start::Initial, nalgebra::Matrix4::identity())], &how).unwrap();
+    assert!(rotation_error_deg(&c.T_target_source, &truth) < 0.05, "{}", c.T_target_source);
+    let used = target.normals_estimated();
+    assert!(used > 0 && used < cloud.len() / 5, "{used} of {} normals estimated", cloud.len());
+    assert_eq!(target.normals(), normals::estimate_normals(&cloud, arps::icp::NORMAL_NEIGHBOURS));
+    assert_eq!(target.normals_estimated(), cloud.len());
+}
+
+#[test]
+fn refinement_of_a_large_source_is_capped_and_recovers_the_motion() {
+    let cloud = bumpy_surface(120_000, 0.3).points;
+    let target = IcpTarget::new(&cloud, false);
+    let truth = motion([8.0, -6.0, 5.0], [0.05, -0.04, 0.03]);
+    let source = PointCloud::new(cloud.clone()).transformed(&rigid_inverse(&truth)).points;
+    assert!(source.len() > 10 * refine::REFINE_POINTS);
+    let how = Refinement { kind: IcpKind::Plane, d_final: 0.02, max_iterations: 30 };
+    let one = [(Start::Network, nalgebra::Matrix4::identity())];
+    let c = refine::refine_best(&target, &source, &one, &how).unwrap();
+    assert!(rotation_error_deg(&c.T_target_source, &truth) < 0.05, "{}", c.T_target_source);
+    assert!(translation_error(&c.T_target_source, &truth) < 1e-3);
+    // scored on the capped, evenly spread source
+    let capped = refine::even_sample(&source, refine::REFINE_POINTS);
+    assert_eq!((c.fitness, c.inlier_rmse), target.evaluate(&capped, &c.T_target_source, how.d_final));
+    // every normal ICP asked for lies near a capped source point: a small share of the target
+    let used = target.normals_estimated();
+    assert!(used <= 2 * refine::REFINE_POINTS, "{used} normals for a {}-point target", cloud.len());
+    // deterministic
+    assert_eq!(refine::refine_best(&target, &source, &one, &how), Some(c));
+}
+
+#[test]
+fn the_feature_voxel_follows_the_data() {
+    let cloud = bumpy_surface(40_000, 0.6);
+    let other = PointCloud::new(refine::even_sample(&cloud.points, 30_000));
+    let v = global::feature_voxel(&cloud, &other, global::VOXEL_FRACTION);
+    for c in [&cloud, &other] {
+        assert!(voxel_downsample(c, v as f32).len() <= global::MAX_FEATURE_POINTS);
+    }
+    // no smaller than the fraction of the extent, and not grown past one 25% step too many
+    let start = global::VOXEL_FRACTION * cloud.half_extent().max(other.half_extent());
+    assert!(v >= start && voxel_downsample(&cloud, (v / 1.25) as f32).len() > global::MAX_FEATURE_POINTS);
+    // the same shape in millimetres: the voxel in millimetres
+    let mm = |c: &PointCloud| PointCloud::new(c.points.iter().map(|p| p.map(|x| x * 1000.0)).collect());
+    let v_mm = global::feature_voxel(&mm(&cloud), &mm(&other), global::VOXEL_FRACTION);
+    assert!((v_mm / (1000.0 * v) - 1.0).abs() < 1e-3, "{v_mm} vs {v}");
+    // a sparse cloud is described as it is
+    let sparse = PointCloud::new(refine::even_sample(&cloud.points, 800));
+    let own = global::VOXEL_FRACTION * sparse.half_extent();
+    assert_eq!(global::feature_voxel(&sparse, &sparse, global::VOXEL_FRACTION), own);
+}
+
+/// A 280k + 280k-point pair (70% crops of a noisy bumpy surface against another, 25 degrees
+/// apart) registers with the default options and the embedded model.
+#[test]
+fn a_large_pair_registers_with_the_default_options() {
+    let full = bumpy_surface(400_000, 0.9);
+    let mut r = rng(3);
+    let mut noisy = |c: PointCloud| {
+        PointCloud::new(c.points.iter().map(|p| p.map(|x| x + (r.random::<f32>() - 0.5) * 0.004)).collect())
+    };
+    let source_full = noisy(crop(&full, [1.0, 0.3, 0.0], 0.7));
+    let target = noisy(crop(&full, [-0.2, 1.0, 0.4], 0.7));
+    let truth = motion([25.0, -10.0, 15.0], [0.3, -0.2, 0.1]);
+    let source = source_full.transformed(&rigid_inverse(&truth));
+    assert!(source.len() >= 270_000 && target.len() >= 270_000);
+    let mut reg = Registrar::with_default_model().unwrap();
+    let out = reg.register(&source, &target, &Options::default()).unwrap();
+    let re = rotation_error_deg(&out.T_target_source, &truth);
+    let te = translation_error(&out.T_target_source, &truth);
+    assert!(re < 1.0 && te < 0.02, "RE {re:.3} deg, TE {te:.4}, start {:?}", out.start);
+}
