@@ -58,11 +58,11 @@ for (const set of sets) {
     rows.push({
       name: p.name,
       ms,
-      timingsMs: r.timingsMs,
+      timingsMs: r.timings ?? r.timingsMs, // (timingsMs: builds before the generated contract)
       start: r.start,
       confidence: r.confidence,
       startsRefined: r.startsRefined,
-      matrixColumnMajor: Array.from(r.matrix64),
+      matrixColumnMajor: Array.from(r.T_target_source ?? r.matrix64),
     });
     console.error(`bench-peers: arps ${set.name} ${p.name} ${ms.toFixed(1)} ms`);
   }
