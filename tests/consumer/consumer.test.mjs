@@ -236,7 +236,7 @@ test("only the exported entry points can be imported", async () => {
 
 test("the package's examples/node-register.mjs aligns the pair", async () => {
   const out = await nodeJson(["node_modules/arps/examples/node-register.mjs", SOURCE, TARGET, "--json"]);
-  console.log("examples/node-register.mjs:", JSON.stringify(assertRecovered(flatten(out.T_target_source), "examples/node-register.mjs")));
+  console.log("examples/node-register.mjs:", JSON.stringify(assertRecovered(out.T_target_source, "examples/node-register.mjs")));
 });
 
 /** Opens `url` (the browser example), uploads the pair, aligns; returns the parsed #result. */
