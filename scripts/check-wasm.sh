@@ -29,28 +29,24 @@ files=("$@")
 [ ${#files[@]} -eq 0 ] && files=(pkg/arps_bg.wasm)
 
 fail=0
-if [ ! -f "$model" ]; then
-  echo "check-wasm: $model not found (run scripts/build-pkg.sh)" >&2
-  exit 1
-fi
-model_raw=$(stat -c %s "$model")
-model_gz=$(gzip -9 -c "$model" | wc -c)
-printf 'check-wasm: model %s: %d bytes raw (budget %d), %d gzip -9 (budget %d)\n' \
-  "$model" "$model_raw" "$model_budget" "$model_gz" "$model_gz_budget"
-[ "$model_raw" -le "$model_budget" ] || { echo "check-wasm: FAIL the model is over its raw size budget" >&2; fail=1; }
-[ "$model_gz" -le "$model_gz_budget" ] || { echo "check-wasm: FAIL the model is over its gzip size budget" >&2; fail=1; }
-for f in "${files[@]}"; do
+# check_size WHAT FILE RAW_BUDGET GZ_BUDGET: prints the file's raw and gzip -9 sizes against its
+# budgets; a missing file stops the check, a size over budget sets fail=1.
+check_size() {
+  local what=$1 f=$2 raw_budget=$3 gz_budget=$4 raw gz
   if [ ! -f "$f" ]; then
     echo "check-wasm: $f not found (run scripts/build-pkg.sh)" >&2
     exit 1
   fi
   raw=$(stat -c %s "$f")
   gz=$(gzip -9 -c "$f" | wc -c)
-  printf 'check-wasm: engine %s: %d bytes raw (budget %d), %d gzip -9 (budget %d)\n' \
-    "$f" "$raw" "$engine_budget" "$gz" "$engine_gz_budget"
-  [ "$raw" -le "$engine_budget" ] || { echo "check-wasm: FAIL $f: the engine is over its raw size budget" >&2; fail=1; }
-  [ "$gz" -le "$engine_gz_budget" ] || { echo "check-wasm: FAIL $f: the engine is over its gzip size budget" >&2; fail=1; }
-
+  printf 'check-wasm: %s %s: %d bytes raw (budget %d), %d gzip -9 (budget %d)\n' \
+    "$what" "$f" "$raw" "$raw_budget" "$gz" "$gz_budget"
+  [ "$raw" -le "$raw_budget" ] || { echo "check-wasm: FAIL $f: the $what is over its raw size budget" >&2; fail=1; }
+  [ "$gz" -le "$gz_budget" ] || { echo "check-wasm: FAIL $f: the $what is over its gzip size budget" >&2; fail=1; }
+}
+check_size model "$model" "$model_budget" "$model_gz_budget"
+for f in "${files[@]}"; do
+  check_size engine "$f" "$engine_budget" "$engine_gz_budget"
   node --input-type=module - "$f" "$simd_min" "$simd_f32_min" <<'JS' || fail=1
 import { readFileSync } from "node:fs";
 import binaryen from "binaryen";
