@@ -95,6 +95,13 @@ pub struct KdIndex {
     /// `pos[j]`: position in `pts` of original point `j` (`u32::MAX` if not indexed).
     pos: Vec<u32>,
     nodes: Vec<Node>,
+    /// `parent[n]`: the parent of node `n` (the root's is `u32::MAX`).
+    parent: Vec<u32>,
+    /// `cell[n]`: the region node `n` splits, `[lo, hi]` per axis (infinite at the root): every
+    /// indexed point outside the subtree lies outside it or on its boundary.
+    cell: Vec<[[f32; 3]; 2]>,
+    /// `leaf_of[i]`: the leaf holding position `i` of `pts`.
+    leaf_of: Vec<u32>,
 }
 
 impl KdIndex {
@@ -116,7 +123,27 @@ impl KdIndex {
         for (p, &i) in order.iter().enumerate() {
             pos[i as usize] = p as u32;
         }
-        Self { pts, ids: order, pos, nodes }
+        let mut parent = vec![u32::MAX; nodes.len()];
+        let mut cell = vec![[[f32::NEG_INFINITY; 3], [f32::INFINITY; 3]]; nodes.len()];
+        let mut leaf_of = vec![0u32; order.len()];
+        // children come after their parent in `nodes` (pre-order)
+        for (i, n) in nodes.iter().enumerate() {
+            if n.dim == IS_LEAF {
+                leaf_of[n.a as usize..n.b as usize].fill(i as u32);
+                continue;
+            }
+            let d = n.dim as usize;
+            let [lo, hi] = cell[i];
+            parent[n.a as usize] = i as u32;
+            parent[n.b as usize] = i as u32;
+            let mut left_hi = hi;
+            left_hi[d] = n.split;
+            let mut right_lo = lo;
+            right_lo[d] = n.split;
+            cell[n.a as usize] = [lo, left_hi];
+            cell[n.b as usize] = [right_lo, hi];
+        }
+        Self { pts, ids: order, pos, nodes, parent, cell, leaf_of }
     }
 
     /// Number of indexed (finite) points.
@@ -140,22 +167,95 @@ impl KdIndex {
     /// or `None`. `hint` is the index of a point believed to be close (e.g. the previous ICP
     /// iteration's partner); it only speeds the search up, never changes which distance is
     /// found (among points at exactly equal distance, which one is returned may depend on it).
+    ///
+    /// With a hint the search starts at the hint's leaf and climbs: at each node, once the ball
+    /// of the best distance so far around `q` lies inside the node's cell, nothing outside can be
+    /// nearer; else the parent's other child is searched top-down and the climb goes on. An ICP
+    /// iteration's partner is usually the previous one or a neighbour, so most queries end in
+    /// the hint's leaf or one level up, without descending from the root.
     #[inline]
     pub fn nearest_within(&self, q: &[f32; 3], max_d2: f32, hint: Option<usize>) -> Option<(usize, f32)> {
-        if self.nodes.is_empty() {
+        if self.nodes.is_empty() || q.iter().any(|v| v.is_nan()) {
             return None;
         }
         // best = (position in `pts` or u32::MAX, squared distance bound)
         let mut best = (u32::MAX, max_d2);
-        if let Some(&p) = hint.and_then(|h| self.pos.get(h)) {
-            if p != u32::MAX {
+        let start = hint.and_then(|h| self.pos.get(h)).copied().filter(|&p| p != u32::MAX);
+        match start {
+            Some(p) => {
                 let d2 = dist2(&self.pts[p as usize], q);
                 if d2 < best.1 {
                     best = (p, d2);
                 }
+                let mut node = self.leaf_of[p as usize];
+                self.scan_leaf(node, q, &mut best);
+                loop {
+                    if self.ball_inside(node, q, best.1) {
+                        break;
+                    }
+                    let up = self.parent[node as usize];
+                    if up == u32::MAX {
+                        break;
+                    }
+                    let n = self.nodes[up as usize];
+                    let other = if n.a == node { n.b } else { n.a };
+                    let off = self.offsets(other, q);
+                    let rd = off[0] * off[0] + off[1] * off[1] + off[2] * off[2];
+                    if rd < best.1 {
+                        self.nearest_from(Pending { node: other, rd, off }, q, &mut best);
+                    }
+                    node = up;
+                }
+            }
+            None => self.nearest_from(Pending::ROOT, q, &mut best),
+        }
+        (best.0 != u32::MAX).then(|| (self.ids[best.0 as usize] as usize, best.1))
+    }
+
+    /// Scans leaf `node` for points nearer than `best` (strictly).
+    #[inline(always)]
+    fn scan_leaf(&self, node: u32, q: &[f32; 3], best: &mut (u32, f32)) {
+        let n = self.nodes[node as usize];
+        let leaf = &self.pts[n.a as usize..n.b as usize];
+        for (i, p) in (n.a..).zip(leaf) {
+            let d2 = dist2(p, q);
+            if d2 < best.1 {
+                *best = (i, d2);
             }
         }
+    }
+
+    /// True when every point outside node `node`'s subtree is at squared distance `>= d2` from
+    /// `q`: `q` is inside the node's cell, at least `sqrt(d2)` from each of its faces.
+    #[inline(always)]
+    fn ball_inside(&self, node: u32, q: &[f32; 3], d2: f32) -> bool {
+        let [lo, hi] = self.cell[node as usize];
+        (0..3).all(|a| {
+            let (l, h) = (q[a] - lo[a], hi[a] - q[a]);
+            l >= 0.0 && h >= 0.0 && l * l >= d2 && h * h >= d2
+        })
+    }
+
+    /// Per-axis offsets from `q` to node `node`'s cell (0 inside its slab).
+    #[inline(always)]
+    fn offsets(&self, node: u32, q: &[f32; 3]) -> [f32; 3] {
+        let [lo, hi] = self.cell[node as usize];
+        std::array::from_fn(|a| {
+            if q[a] < lo[a] {
+                q[a] - lo[a]
+            } else if q[a] > hi[a] {
+                q[a] - hi[a]
+            } else {
+                0.0
+            }
+        })
+    }
+
+    /// The top-down bounded nearest search of the subtree `from`, updating `best`.
+    #[inline(always)]
+    fn nearest_from(&self, from: Pending, q: &[f32; 3], best: &mut (u32, f32)) {
         let mut stack = Stack::root();
+        stack.items[0].write(from);
         while let Some(Pending { node, rd, off }) = stack.pop() {
             if rd >= best.1 {
                 continue;
@@ -164,13 +264,7 @@ impl KdIndex {
             loop {
                 let n = self.nodes[ni as usize];
                 if n.dim == IS_LEAF {
-                    let leaf = &self.pts[n.a as usize..n.b as usize];
-                    for (i, p) in (n.a..).zip(leaf) {
-                        let d2 = dist2(p, q);
-                        if d2 < best.1 {
-                            best = (i, d2);
-                        }
-                    }
+                    self.scan_leaf(ni, q, best);
                     break;
                 }
                 let d = n.dim as usize;
@@ -185,7 +279,6 @@ impl KdIndex {
                 ni = near;
             }
         }
-        (best.0 != u32::MAX).then(|| (self.ids[best.0 as usize] as usize, best.1))
     }
 
     /// The `k` nearest indexed points to `q` (fewer if the index is smaller), nearest first,
@@ -400,6 +493,28 @@ mod tests {
         idx.knn_into(&[0.0; 3], 5000, &mut out);
         assert_eq!(out.len(), 2040);
         assert!(idx.nearest(&[f32::NAN, 0.0, 0.0]).is_none());
+    }
+
+    #[test]
+    fn hinted_search_climbs_to_the_exact_nearest() {
+        // ICP-like queries: points moved a little, hinted with a point near the old position
+        let pts = cloud(3000);
+        let idx = KdIndex::new(&pts);
+        for (k, p) in pts.iter().enumerate().step_by(3) {
+            let f = k as f32;
+            let q = [p[0] + 0.05 * (f * 0.7).sin(), p[1] + 0.05 * (f * 1.3).cos(), p[2] - 0.03 * (f * 0.3).sin()];
+            let all = brute(&pts, &q);
+            for bound in [f32::INFINITY, all[0] * 4.0 + 1e-4, all[0], all[0] * 0.5] {
+                let want = (all[0] < bound).then_some(all[0]);
+                for h in [k, (k + 1) % 3000, (k * 7919) % 3000] {
+                    let got = idx.nearest_within(&q, bound, Some(h));
+                    assert_eq!(got.map(|r| r.1), want, "query {k}, hint {h}, bound {bound}");
+                    if let Some((i, d)) = got {
+                        assert_eq!(dist2(&pts[i], &q), d);
+                    }
+                }
+            }
+        }
     }
 
     #[test]
