@@ -102,6 +102,8 @@ pub struct KdIndex {
     cell: Vec<[[f32; 3]; 2]>,
     /// `leaf_of[i]`: the leaf holding position `i` of `pts`.
     leaf_of: Vec<u32>,
+    /// `bbox[n]`: the bounding box `[lo, hi]` of node `n`'s points (tighter than its cell).
+    bbox: Vec<[[f32; 3]; 2]>,
 }
 
 impl KdIndex {
@@ -115,8 +117,9 @@ impl KdIndex {
         let mut order: Vec<u32> =
             (0..points.len() as u32).filter(|&i| points[i as usize].iter().all(|v| v.is_finite())).collect();
         let mut nodes = Vec::with_capacity(4 * order.len() / LEAF + 1);
+        let mut bbox = Vec::with_capacity(nodes.capacity());
         if !order.is_empty() {
-            build(points, &mut order, 0, &mut nodes);
+            build(points, &mut order, 0, &mut nodes, &mut bbox);
         }
         let pts = order.iter().map(|&i| points[i as usize]).collect();
         let mut pos = vec![u32::MAX; points.len()];
@@ -143,7 +146,7 @@ impl KdIndex {
             cell[n.a as usize] = [lo, left_hi];
             cell[n.b as usize] = [right_lo, hi];
         }
-        Self { pts, ids: order, pos, nodes, parent, cell, leaf_of }
+        Self { pts, ids: order, pos, nodes, parent, cell, leaf_of, bbox }
     }
 
     /// Number of indexed (finite) points.
@@ -236,6 +239,18 @@ impl KdIndex {
         })
     }
 
+    /// Squared distance from `q` to node `node`'s bounding box (a lower bound of its points').
+    #[inline(always)]
+    fn box_d2(&self, node: u32, q: &[f32; 3]) -> f32 {
+        let [lo, hi] = self.bbox[node as usize];
+        let mut d2 = 0.0;
+        for a in 0..3 {
+            let e = (lo[a] - q[a]).max(q[a] - hi[a]).max(0.0);
+            d2 += e * e;
+        }
+        d2
+    }
+
     /// Per-axis offsets from `q` to node `node`'s cell (0 inside its slab).
     #[inline(always)]
     fn offsets(&self, node: u32, q: &[f32; 3]) -> [f32; 3] {
@@ -262,6 +277,11 @@ impl KdIndex {
             }
             let mut ni = node;
             loop {
+                // the points' own box: prunes queries beyond the cloud's edge, which the
+                // (unbounded) border cells do not
+                if self.box_d2(ni, q) >= best.1 {
+                    break;
+                }
                 let n = self.nodes[ni as usize];
                 if n.dim == IS_LEAF {
                     self.scan_leaf(ni, q, best);
@@ -396,13 +416,10 @@ fn dist2(p: &[f32; 3], q: &[f32; 3]) -> f32 {
 
 /// Builds the subtree over `idx` (whose points will occupy positions `offset..` of the
 /// reordered array) and returns its node index.
-fn build(points: &[[f32; 3]], idx: &mut [u32], offset: u32, nodes: &mut Vec<Node>) -> u32 {
+fn build(points: &[[f32; 3]], idx: &mut [u32], offset: u32, nodes: &mut Vec<Node>, bbox: &mut Vec<[[f32; 3]; 2]>) -> u32 {
     let me = nodes.len() as u32;
     let leaf = Node { dim: IS_LEAF, split: 0.0, a: offset, b: offset + idx.len() as u32 };
     nodes.push(leaf);
-    if idx.len() <= LEAF {
-        return me;
-    }
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
     for &i in idx.iter() {
@@ -411,6 +428,10 @@ fn build(points: &[[f32; 3]], idx: &mut [u32], offset: u32, nodes: &mut Vec<Node
             lo[a] = lo[a].min(p[a]);
             hi[a] = hi[a].max(p[a]);
         }
+    }
+    bbox.push([lo, hi]);
+    if idx.len() <= LEAF {
+        return me;
     }
     let mut dim = 0;
     for a in 1..3 {
@@ -426,8 +447,8 @@ fn build(points: &[[f32; 3]], idx: &mut [u32], offset: u32, nodes: &mut Vec<Node
     idx.select_nth_unstable_by(mid, |&a, &b| points[a as usize][dim].total_cmp(&points[b as usize][dim]));
     let split = points[idx[mid] as usize][dim];
     let (l, r) = idx.split_at_mut(mid);
-    let left = build(points, l, offset, nodes);
-    let right = build(points, r, offset + mid as u32, nodes);
+    let left = build(points, l, offset, nodes, bbox);
+    let right = build(points, r, offset + mid as u32, nodes, bbox);
     nodes[me as usize] = Node { dim: dim as u32, split, a: left, b: right };
     me
 }
