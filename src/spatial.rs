@@ -245,7 +245,17 @@ impl KdIndex {
         let [lo, hi] = self.bbox[node as usize];
         let mut d2 = 0.0;
         for a in 0..3 {
-            let e = (lo[a] - q[a]).max(q[a] - hi[a]).max(0.0);
+            // comparisons, not f32::max: wasm's f32.max differs from Rust's on NaN, so `max`
+            // compiles to a call there
+            let below = lo[a] - q[a];
+            let above = q[a] - hi[a];
+            let e = if below > 0.0 {
+                below
+            } else if above > 0.0 {
+                above
+            } else {
+                0.0
+            };
             d2 += e * e;
         }
         d2
