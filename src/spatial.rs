@@ -426,7 +426,13 @@ fn dist2(p: &[f32; 3], q: &[f32; 3]) -> f32 {
 
 /// Builds the subtree over `idx` (whose points will occupy positions `offset..` of the
 /// reordered array) and returns its node index.
-fn build(points: &[[f32; 3]], idx: &mut [u32], offset: u32, nodes: &mut Vec<Node>, bbox: &mut Vec<[[f32; 3]; 2]>) -> u32 {
+fn build(
+    points: &[[f32; 3]],
+    idx: &mut [u32],
+    offset: u32,
+    nodes: &mut Vec<Node>,
+    bbox: &mut Vec<[[f32; 3]; 2]>,
+) -> u32 {
     let me = nodes.len() as u32;
     let leaf = Node { dim: IS_LEAF, split: 0.0, a: offset, b: offset + idx.len() as u32 };
     nodes.push(leaf);
