@@ -15,7 +15,9 @@
 //! axis of their points' bounding box at the median (`select_nth_unstable`), so the depth is at
 //! most `log2(n / LEAF) + 1`; leaves hold at most [`LEAF`] points. Queries descend
 //! iteratively with a fixed-size stack, pruning subtrees by the incremental query-to-cell
-//! distance (Arya & Mount). Distances are squared Euclidean in `f32`.
+//! distance (Arya & Mount) and, in the bounded nearest search, by each node's tight bounding box;
+//! a hinted nearest search starts at the hint's leaf and climbs (`KdIndex::nearest_within`).
+//! Distances are squared Euclidean in `f32`.
 
 /// Most points in a leaf.
 pub const LEAF: usize = 12;
