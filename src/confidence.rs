@@ -8,10 +8,15 @@
 //! A good fit is not enough either: on a symmetric or featureless shape other poses fit as well,
 //! and an answer that is one of `k` equally good poses is right with a probability of about
 //! `1 / k`, however well it fits. So the evidence also looks for such poses: the answer turned
-//! about the moved source's principal axes and refined by a short ICP ([`Evidence::ambiguity`],
-//! [`Evidence::alternatives`]), and the answer slid along the motion its point-to-plane fit
-//! constrains least ([`Evidence::slide`]: a surface of revolution turned about its axis, a plane
+//! about the principal axes of the moved source and of the target points it overlaps, and along
+//! the motion its point-to-plane fit constrains least, each refined by a short ICP
+//! ([`Evidence::ambiguity`], [`Evidence::alternatives`]), and the answer slid along that motion
+//! without refinement ([`Evidence::slide`]: a surface of revolution turned about its axis, a plane
 //! shifted in itself). The confidence is low on such answers, right or wrong.
+//!
+//! The probes are also a search: a probe pose that fits *better* than the answer ([`probe`],
+//! [`Probed::better`]; typically the answer flipped about an axis of an elongated shape) is
+//! refined by the pipeline like one more start.
 
 use crate::icp::{IcpKind, IcpParams, IcpTarget};
 use crate::refine::{even_sample, SCREEN_POINTS};
@@ -41,11 +46,13 @@ pub struct Evidence {
     pub rmse_ratio: f64,
     /// How well the best *different* pose fits, as a fraction of the answer's fitness (at most
     /// 2): the answer turned 90 degrees both ways and 180 degrees about each principal axis of
-    /// the moved source (through its centroid), each refined by a short ICP; 0 when every one
-    /// fell back onto the answer (within 15 degrees). Near 1 or above: the answer may fit and
-    /// still not be unique.
+    /// the moved source, 180 degrees about each principal axis of the target points it
+    /// overlaps (both through the moved source's centroid), and 60 degrees both ways along the
+    /// least constrained motion of [`Evidence::slide`], each refined by a short ICP; 0 when
+    /// every one fell back onto the answer (within 15 degrees). Near 1 or above: the answer may
+    /// fit and still not be unique.
     pub ambiguity: f64,
-    /// How many distinct poses among those turns fit at least 0.9 as well as the answer: with
+    /// How many distinct poses among those probes fit at least 0.9 as well as the answer: with
     /// `k` alternatives the answer is one of `k + 1` about equally good poses.
     pub alternatives: f64,
     /// Fitness after sliding the answer along the motion its point-to-plane fit constrains
@@ -72,14 +79,41 @@ pub fn evidence(
     d: f64,
     kind: IcpKind,
 ) -> Evidence {
+    probe(target, source_index, source, T_target_source, d, kind).evidence
+}
+
+/// [`evidence`] together with the best different pose its turned probes found, when that pose
+/// fits the probe points better than the answer does.
+#[derive(Clone, Copy, Debug)]
+pub struct Probed {
+    /// The evidence of the answer.
+    pub evidence: Evidence,
+    /// A pose (turned and briefly refined; `T_target_source`) that fits better than the answer
+    /// ([`Evidence::ambiguity`] above 1): the answer is then not the best fit, and a search
+    /// refines this pose as one more start.
+    pub better: Option<Matrix4<f64>>,
+}
+
+/// [`evidence`], and the better pose its probes found, if any ([`Probed`]).
+#[allow(non_snake_case)]
+pub fn probe(
+    target: &IcpTarget,
+    source_index: &IcpTarget,
+    source: &[[f32; 3]],
+    T_target_source: &Matrix4<f64>,
+    d: f64,
+    kind: IcpKind,
+) -> Probed {
     let source = even_sample(source, SCREEN_POINTS);
     let target_points = even_sample(target.points(), SCREEN_POINTS);
     let (fitness, rmse) = target.evaluate(&source, T_target_source, d);
     let f = |k: f64| target.evaluate(&source, T_target_source, k * d).0;
     let overlap_reverse = source_index.evaluate(&target_points, &rigid_inverse(T_target_source), d).0;
     let probe = even_sample(&source, PROBE_POINTS);
-    let (ambiguity, alternatives) = turns(target, &probe, T_target_source, d, kind);
-    Evidence {
+    let (slide, screw) = slide(target, &probe, T_target_source, d);
+    let turned = turns(target, &probe, T_target_source, d, kind, &screw_turns(screw, T_target_source));
+    let (ambiguity, alternatives) = (turned.best_ratio.min(2.0), turned.alternatives as f64);
+    let evidence = Evidence {
         fitness,
         fitness_tight: f(0.5),
         fitness_loose: f(2.0),
@@ -88,8 +122,10 @@ pub fn evidence(
         rmse_ratio: if d > 0.0 { rmse / d } else { 0.0 },
         ambiguity,
         alternatives,
-        slide: slide(target, &probe, T_target_source, d),
-    }
+        slide,
+    };
+    let better = turned.best.filter(|_| turned.best_ratio > 1.0);
+    Probed { evidence, better }
 }
 
 /// Points of the probes ([`Evidence::ambiguity`], [`Evidence::slide`]).
@@ -97,55 +133,101 @@ pub const PROBE_POINTS: usize = 512;
 /// A probe pose that ends within this many degrees of the answer has fallen back onto it; two
 /// alternatives this close are one.
 const SAME_POSE_DEGREES: f64 = 15.0;
-/// The turns of the ambiguity probe, degrees, about each principal axis.
+/// The turns of the ambiguity probe, degrees, about each principal axis of the moved source.
 const TURNS: [f64; 3] = [180.0, 90.0, -90.0];
 /// An alternative fitting at least this fraction of the answer's fitness counts in
 /// [`Evidence::alternatives`].
 const ALTERNATIVE_FIT: f64 = 0.9;
-/// Each probe's ICP: iterations at `2 d`, then at `d`.
+/// Each probe's ICP: iterations at `4 d`, at `2 d`, then at `d`.
 const PROBE_ITERATIONS: u32 = 10;
 /// A probe whose fitness after the `2 d` stage is below this fraction of the answer's (at
-/// `2 d`) stops there: it cannot come near the answer's fit.
+/// `2 d`) stops there: it cannot come near the answer's fit. (The `4 d` stage lets a probe
+/// whose turn axis is some degrees off the true one still reach that pose.)
 const PROBE_CUT: f64 = 0.6;
 /// How far [`Evidence::slide`] moves the points, on average (normalised units).
 const SLIDE_RMS: f64 = 0.25;
 
-/// [`Evidence::ambiguity`] and [`Evidence::alternatives`] of `t` on the probe points `sample`.
-fn turns(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64, kind: IcpKind) -> (f64, f64) {
+/// What the turned probes of [`turns`] found.
+struct Turned {
+    /// The best different pose's fitness over the answer's (0: none).
+    best_ratio: f64,
+    /// That pose.
+    best: Option<Matrix4<f64>>,
+    /// Distinct poses fitting at least [`ALTERNATIVE_FIT`] as well as the answer.
+    alternatives: usize,
+}
+
+/// The turned probes of `t` on the probe points `sample` ([`Evidence::ambiguity`],
+/// [`Evidence::alternatives`]): [`TURNS`] about each principal axis of the moved sample, and a
+/// half turn about each principal axis of the target points it overlaps (the target is another
+/// view: its axes differ from the partial source's, and a flip about one of them is a common
+/// wrong answer of elongated shapes), each through the moved sample's centroid; then the
+/// `extra` starts (the turns along the least constrained motion, [`screw_turns`]).
+fn turns(
+    target: &IcpTarget,
+    sample: &[[f32; 3]],
+    t: &Matrix4<f64>,
+    d: f64,
+    kind: IcpKind,
+    extra: &[Matrix4<f64>],
+) -> Turned {
+    let mut out = Turned { best_ratio: 0.0, best: None, alternatives: 0 };
     let base = target.evaluate(sample, t, d).0;
     let base_loose = target.evaluate(sample, t, 2.0 * d).0;
     if base <= 0.0 || sample.len() < 3 {
-        return (0.0, 0.0);
+        return out;
     }
     let (c, axes) = principal_axes(sample, t);
+    let mut probes: Vec<(f64, Vector3<f64>)> = Vec::with_capacity(12);
+    for degrees in TURNS {
+        probes.extend((0..3).map(|k| (degrees, axes.column(k).into_owned())));
+    }
+    if let Some(target_axes) = overlap_axes(target, sample, t, 2.0 * d) {
+        probes.extend((0..3).map(|k| (180.0, target_axes.column(k).into_owned())));
+    }
+    let turn = |(degrees, axis): (f64, Vector3<f64>)| {
+        let axis = nalgebra::Unit::new_normalize(axis);
+        let r = Rotation3::from_axis_angle(&axis, degrees.to_radians()).into_inner();
+        from_rotation_translation(&r, &(c - r * c)) * t
+    };
+    let starts: Vec<Matrix4<f64>> = probes.into_iter().map(turn).chain(extra.iter().copied()).collect();
     let kind = if kind == IcpKind::Off { IcpKind::Point } else { kind };
     let params = |factor: f64| IcpParams { max_iterations: PROBE_ITERATIONS, ..IcpParams::new(kind, factor * d) };
-    let mut best = 0.0f64;
     let mut alternatives: Vec<Matrix4<f64>> = Vec::new();
-    for degrees in TURNS {
-        for k in 0..3 {
-            let axis = nalgebra::Unit::new_normalize(axes.column(k).into_owned());
-            let r = Rotation3::from_axis_angle(&axis, degrees.to_radians()).into_inner();
-            let start = from_rotation_translation(&r, &(c - r * c)) * t;
-            let coarse = target.align(sample, &start, &params(2.0));
-            let alt = if coarse.fitness < PROBE_CUT * base_loose {
-                coarse.T_target_source
-            } else {
-                target.align(sample, &coarse.T_target_source, &params(1.0)).T_target_source
-            };
-            if rotation_error_deg(&alt, t) <= SAME_POSE_DEGREES {
-                continue;
-            }
-            let ratio = target.evaluate(sample, &alt, d).0 / base;
-            best = best.max(ratio);
-            if ratio >= ALTERNATIVE_FIT
-                && !alternatives.iter().any(|a| rotation_error_deg(a, &alt) <= SAME_POSE_DEGREES)
-            {
-                alternatives.push(alt);
-            }
+    for start in starts {
+        let wide = target.align(sample, &start, &params(4.0));
+        let coarse = target.align(sample, &wide.T_target_source, &params(2.0));
+        let alt = if coarse.fitness < PROBE_CUT * base_loose {
+            coarse.T_target_source
+        } else {
+            target.align(sample, &coarse.T_target_source, &params(1.0)).T_target_source
+        };
+        if rotation_error_deg(&alt, t) <= SAME_POSE_DEGREES {
+            continue;
+        }
+        let ratio = target.evaluate(sample, &alt, d).0 / base;
+        if ratio > out.best_ratio {
+            out.best_ratio = ratio;
+            out.best = Some(alt);
+        }
+        if ratio >= ALTERNATIVE_FIT && !alternatives.iter().any(|a| rotation_error_deg(a, &alt) <= SAME_POSE_DEGREES) {
+            alternatives.push(alt);
         }
     }
-    (best.min(2.0), alternatives.len() as f64)
+    out.alternatives = alternatives.len();
+    out
+}
+
+/// The principal axes (columns) of the target points within `radius` of the sample moved by
+/// `t`; `None` when fewer than three are.
+fn overlap_axes(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, radius: f64) -> Option<Matrix3<f64>> {
+    let points = target.points();
+    let near: Vec<[f32; 3]> =
+        sample.iter().filter_map(|&p| target.nearest_within(&apply(t, p), radius).map(|j| points[j])).collect();
+    if near.len() < 3 {
+        return None;
+    }
+    Some(principal_axes(&near, &Matrix4::identity()).1)
 }
 
 /// The centroid of `sample` moved by `t`, and its principal axes (the columns).
@@ -157,11 +239,46 @@ fn principal_axes(sample: &[[f32; 3]], t: &Matrix4<f64>) -> (Vector3<f64>, Matri
     (c, SymmetricEigen::new(cov).eigenvectors)
 }
 
-/// [`Evidence::slide`] of `t` on the probe points `sample`.
-fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64) -> f64 {
+/// The least constrained motion of a fit: a screw about the axis `w` (radians per unit) with the
+/// shift `shift` per unit, through `c`.
+#[derive(Clone, Copy, Debug)]
+struct Screw {
+    w: Vector3<f64>,
+    shift: Vector3<f64>,
+    c: Vector3<f64>,
+}
+
+/// The pose `t` moved by `s` units of `screw`.
+fn screw_move(screw: &Screw, s: f64, t: &Matrix4<f64>) -> Matrix4<f64> {
+    let Screw { w, shift, c } = *screw;
+    let r = match nalgebra::Unit::try_new(w * s, 1e-12) {
+        Some(axis) => Rotation3::from_axis_angle(&axis, (w * s).norm()).into_inner(),
+        None => Matrix3::identity(),
+    };
+    from_rotation_translation(&r, &(c - r * c + shift * s)) * t
+}
+
+/// Degrees that the slide probes turn the answer along its least constrained motion.
+const SCREW_DEGREES: f64 = 60.0;
+
+/// `t` turned [`SCREW_DEGREES`] both ways along `screw` (none without one, or when that motion
+/// barely turns).
+fn screw_turns(screw: Option<Screw>, t: &Matrix4<f64>) -> Vec<Matrix4<f64>> {
+    let Some(screw) = screw else { return Vec::new() };
+    let turn = screw.w.norm();
+    if !(turn > 1e-6) {
+        return Vec::new();
+    }
+    let s = SCREW_DEGREES.to_radians() / turn;
+    [1.0, -1.0].iter().map(|sign| screw_move(&screw, sign * s, t)).collect()
+}
+
+/// [`Evidence::slide`] of `t` on the probe points `sample`, and the least constrained motion it
+/// slid along (`None` with too few inliers).
+fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64) -> (f64, Option<Screw>) {
     let base = target.evaluate(sample, t, d).0;
     if base <= 0.0 || sample.len() < 3 {
-        return 0.0;
+        return (0.0, None);
     }
     let normals = target.normals();
     let moved: Vec<Vector3<f64>> = sample.iter().map(|&p| Vector3::from(apply(t, p).map(|v| v as f64))).collect();
@@ -174,7 +291,7 @@ fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64) -> f
         })
         .collect();
     if pairs.len() < 6 {
-        return 0.0;
+        return (0.0, None);
     }
     let c = pairs.iter().fold(Vector3::zeros(), |a, p| a + p.0) / pairs.len() as f64;
     let mut info = Matrix6::<f64>::zeros();
@@ -190,20 +307,16 @@ fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64) -> f
     // the points' RMS displacement per unit of that motion
     let rms =
         (moved.iter().map(|p| (w.cross(&(p - c)) + shift).norm_squared()).sum::<f64>() / moved.len() as f64).sqrt();
+    let screw = Screw { w, shift, c };
     if rms.is_nan() || rms <= 0.0 {
-        return 0.0;
+        return (0.0, None);
     }
     let mut best = 0.0f64;
     for sign in [1.0, -1.0] {
-        let s = sign * SLIDE_RMS / rms;
-        let r = match nalgebra::Unit::try_new(w * s, 1e-12) {
-            Some(axis) => Rotation3::from_axis_angle(&axis, (w * s).norm()).into_inner(),
-            None => Matrix3::identity(),
-        };
-        let m = from_rotation_translation(&r, &(c - r * c + shift * s)) * t;
+        let m = screw_move(&screw, sign * SLIDE_RMS / rms, t);
         best = best.max(target.evaluate(sample, &m, d).0 / base);
     }
-    best.min(2.0)
+    (best.min(2.0), Some(screw))
 }
 
 /// The model's inputs: the evidence, plus how steeply the fitness curve rises (tight over coarse).
@@ -227,7 +340,7 @@ fn features(e: &Evidence) -> [f64; 10] {
 /// `scripts/fit-confidence.py` on 2,400 answers: network + ICP, FPFH + RANSAC + ICP and the
 /// exhaustive search on 500 paper-protocol and 300 any-pose validation pairs (`BENCHMARK.md`,
 /// "Confidence", where the cross-validated figures are).
-const WEIGHTS: [f64; 11] = [2.257, 0.5685, 2.755, 0.6824, 2.431, -0.2873, 0.7299, -2.536, -0.6525, -2.881, 1.072];
+const WEIGHTS: [f64; 11] = [1.934, 0.5453, 1.618, -0.3148, 2.136, -0.3885, 0.7574, -4.072, -0.5617, -1.558, 4.201];
 
 /// The probability that the answer is right (within the evaluation's recall thresholds: rotation
 /// error below 15 degrees and translation error below 0.2 of the normalised half-extent), in

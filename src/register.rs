@@ -94,6 +94,11 @@ pub struct Options {
     /// - `"globalNetwork"`: the `"global"` hypotheses, each refined by the network first (with
     ///   `network: false`, the same starts as `"global"`, reported as `"global"`).
     ///
+    /// The refined answer is then probed for poses that fit about as well (the `confidence`'s
+    /// turns, `evidence.ambiguity`); when one fits better (typically the answer flipped about an
+    /// axis of an elongated shape), it is refined like one more start, reported under the start
+    /// it came from, and kept if it fits best.
+    ///
     /// With `icp: "off"` nothing is refined or compared: the first start is the answer.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub starts: Vec<Start>,

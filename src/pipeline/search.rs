@@ -3,8 +3,10 @@
 //! Takes the [`Prepared`] clouds, the stages of [`super::starts`] and the options; gives
 //! [`Chosen`]: the best refined start ([`refine::refine_best`], compared across stages by
 //! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
-//! first stage whose best reaches [`STOP_CONFIDENCE`]. With no start refined at all, the
-//! network's estimate (the initial transform with the network off), unrefined, and a warning.
+//! first stage whose best reaches [`STOP_CONFIDENCE`]. Each stage's best is judged by the
+//! confidence probe, and a probe pose that fits better is refined as one more start ([`settle`]).
+//! With no start refined at all, the network's estimate (the initial transform with the network
+//! off), unrefined, and a warning.
 
 use super::prepare::Prepared;
 use super::starts::Starts;
@@ -44,9 +46,8 @@ pub(crate) fn search(
     let target_index = IcpTarget::new(&p.icp_tgt.points, false);
     let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations };
     let source_index = IcpTarget::new(&p.icp_src.points, false);
-    let judge = |t: &Matrix4<f64>| {
-        confidence::evidence(&target_index, &source_index, &p.icp_src.points, t, d_final, options.icp)
-    };
+    let judge =
+        |t: &Matrix4<f64>| confidence::probe(&target_index, &source_index, &p.icp_src.points, t, d_final, options.icp);
     let mut best: Option<(Candidate, Evidence, f64)> = None;
     let mut starts_refined = 0usize;
     for stage in stages {
@@ -65,7 +66,13 @@ pub(crate) fn search(
             Some((b, _, _)) => refine::choose(&[*b, c]) == Some(1),
         };
         if better {
-            let e = judge(&c.T_target_source);
+            // with ICP off the first start is the answer, unrefined: the probe only judges it
+            let (c, e, extra) = if options.icp == IcpKind::Off {
+                (c, judge(&c.T_target_source).evidence, 0)
+            } else {
+                settle(c, &judge, |t| refine::refine_best(&target_index, &p.icp_src.points, &[(c.start, t)], &how))
+            };
+            starts_refined += extra;
             best = Some((c, e, confidence::confidence(&e)));
         }
         if options.search == Search::Adaptive && best.as_ref().is_some_and(|b| b.2 >= STOP_CONFIDENCE) {
@@ -79,7 +86,7 @@ pub(crate) fn search(
         None => {
             let t = if options.network { starts.t_net_n() } else { p.t_initial };
             let start = if options.network { Start::Network } else { Start::Initial };
-            let e = judge(&t);
+            let e = judge(&t).evidence;
             warnings.push("no start could be refined (the global descriptors matched too little): the answer is the network's estimate".into());
             let c = Candidate {
                 start,
@@ -93,4 +100,31 @@ pub(crate) fn search(
         }
     };
     Ok(Chosen { candidate, evidence, confidence, starts_refined })
+}
+
+/// Most better poses of the confidence probe that [`settle`] refines in a row.
+const MAX_PROBE_STARTS: usize = 2;
+
+/// Judges the candidate `c`; while the confidence probe finds a pose that fits better
+/// ([`confidence::Probed::better`]: typically the answer flipped about an axis), refines that
+/// pose like a start (`refine`, reported as `c`'s start) and keeps it if [`refine::choose`]
+/// prefers it, at most [`MAX_PROBE_STARTS`] times. Gives the settled candidate, its evidence and
+/// how many probe poses were refined.
+fn settle(
+    c: Candidate,
+    judge: &impl Fn(&Matrix4<f64>) -> confidence::Probed,
+    refine: impl Fn(Matrix4<f64>) -> Option<Candidate>,
+) -> (Candidate, Evidence, usize) {
+    let (mut c, mut probed, mut refined) = (c, judge(&c.T_target_source), 0);
+    while let Some(t) = probed.better.filter(|_| refined < MAX_PROBE_STARTS) {
+        refined += 1;
+        match refine(t) {
+            Some(next) if refine::choose(&[c, next]) == Some(1) => {
+                c = next;
+                probed = judge(&c.T_target_source);
+            }
+            _ => break,
+        }
+    }
+    (c, probed.evidence, refined)
 }
