@@ -91,6 +91,11 @@ export type RegisterOptions = {
    * - `"globalNetwork"`: the `"global"` hypotheses, each refined by the network first (with
    *   `network: false`, the same starts as `"global"`, reported as `"global"`).
    *
+   * The refined answer is then probed for poses that fit about as well (the `confidence`'s
+   * turns, `evidence.ambiguity`); when one fits better (typically the answer flipped about an
+   * axis of an elongated shape), it is refined like one more start, reported under the start
+   * it came from, and kept if it fits best.
+   *
    * With `icp: "off"` nothing is refined or compared: the first start is the answer.
    */
   starts?: Array<RegistrationStart>,
@@ -273,13 +278,15 @@ export type RegistrationEvidence = {
   /**
    * How well the best *different* pose fits, as a fraction of the answer's fitness (at most
    * 2): the answer turned 90 degrees both ways and 180 degrees about each principal axis of
-   * the moved source (through its centroid), each refined by a short ICP; 0 when every one
-   * fell back onto the answer (within 15 degrees). Near 1 or above: the answer may fit and
-   * still not be unique.
+   * the moved source, 180 degrees about each principal axis of the target points it
+   * overlaps (both through the moved source's centroid), and 60 degrees both ways along the
+   * least constrained motion of `Evidence::slide`, each refined by a short ICP; 0 when
+   * every one fell back onto the answer (within 15 degrees). Near 1 or above: the answer may
+   * fit and still not be unique.
    */
   ambiguity: number,
   /**
-   * How many distinct poses among those turns fit at least 0.9 as well as the answer: with
+   * How many distinct poses among those probes fit at least 0.9 as well as the answer: with
    * `k` alternatives the answer is one of `k + 1` about equally good poses.
    */
   alternatives: number,

@@ -138,11 +138,12 @@ const TURNS: [f64; 3] = [180.0, 90.0, -90.0];
 /// An alternative fitting at least this fraction of the answer's fitness counts in
 /// [`Evidence::alternatives`].
 const ALTERNATIVE_FIT: f64 = 0.9;
-/// Each probe's ICP: iterations at `4 d`, at `2 d`, then at `d`.
+/// Each probe's ICP: iterations at `4 d` (the half turns and the turns along the least
+/// constrained motion only), at `2 d`, then at `d`.
 const PROBE_ITERATIONS: u32 = 10;
-/// A probe whose fitness after the `2 d` stage is below this fraction of the answer's (at
-/// `2 d`) stops there: it cannot come near the answer's fit. (The `4 d` stage lets a probe
-/// whose turn axis is some degrees off the true one still reach that pose.)
+/// A probe whose fitness after its `4 d` or `2 d` stage is below this fraction of the answer's
+/// at that distance stops there: it cannot come near the answer's fit. (The `4 d` stage lets a
+/// half turn whose axis is some degrees off the true one still reach that pose.)
 const PROBE_CUT: f64 = 0.6;
 /// How far [`Evidence::slide`] moves the points, on average (normalised units).
 const SLIDE_RMS: f64 = 0.25;
@@ -190,17 +191,29 @@ fn turns(
         let r = Rotation3::from_axis_angle(&axis, degrees.to_radians()).into_inner();
         from_rotation_translation(&r, &(c - r * c)) * t
     };
-    let starts: Vec<Matrix4<f64>> = probes.into_iter().map(turn).chain(extra.iter().copied()).collect();
+    // (start, whether it first goes through the wide stage): the half turns and the screw turns
+    // do, since their axes are only estimates of the true one
+    let starts: Vec<(Matrix4<f64>, bool)> =
+        probes.into_iter().map(|p| (turn(p), p.0 == 180.0)).chain(extra.iter().map(|&m| (m, true))).collect();
     let kind = if kind == IcpKind::Off { IcpKind::Point } else { kind };
     let params = |factor: f64| IcpParams { max_iterations: PROBE_ITERATIONS, ..IcpParams::new(kind, factor * d) };
+    let base_coarse = target.evaluate(sample, t, 4.0 * d).0;
     let mut alternatives: Vec<Matrix4<f64>> = Vec::new();
-    for start in starts {
-        let wide = target.align(sample, &start, &params(4.0));
-        let coarse = target.align(sample, &wide.T_target_source, &params(2.0));
-        let alt = if coarse.fitness < PROBE_CUT * base_loose {
-            coarse.T_target_source
-        } else {
-            target.align(sample, &coarse.T_target_source, &params(1.0)).T_target_source
+    for (start, wide) in starts {
+        // each stage stops the probe when it cannot come near the answer's fit at that distance
+        let alt = 'probe: {
+            let mut at = start;
+            for (factor, base_at) in [(4.0, base_coarse), (2.0, base_loose)] {
+                if factor == 4.0 && !wide {
+                    continue;
+                }
+                let r = target.align(sample, &at, &params(factor));
+                at = r.T_target_source;
+                if r.fitness < PROBE_CUT * base_at {
+                    break 'probe at;
+                }
+            }
+            target.align(sample, &at, &params(1.0)).T_target_source
         };
         if rotation_error_deg(&alt, t) <= SAME_POSE_DEGREES {
             continue;
@@ -266,7 +279,7 @@ const SCREW_DEGREES: f64 = 60.0;
 fn screw_turns(screw: Option<Screw>, t: &Matrix4<f64>) -> Vec<Matrix4<f64>> {
     let Some(screw) = screw else { return Vec::new() };
     let turn = screw.w.norm();
-    if !(turn > 1e-6) {
+    if turn.is_nan() || turn <= 1e-6 {
         return Vec::new();
     }
     let s = SCREW_DEGREES.to_radians() / turn;
@@ -340,7 +353,7 @@ fn features(e: &Evidence) -> [f64; 10] {
 /// `scripts/fit-confidence.py` on 2,400 answers: network + ICP, FPFH + RANSAC + ICP and the
 /// exhaustive search on 500 paper-protocol and 300 any-pose validation pairs (`BENCHMARK.md`,
 /// "Confidence", where the cross-validated figures are).
-const WEIGHTS: [f64; 11] = [1.934, 0.5453, 1.618, -0.3148, 2.136, -0.3885, 0.7574, -4.072, -0.5617, -1.558, 4.201];
+const WEIGHTS: [f64; 11] = [1.952, 0.5387, 1.646, -0.1892, 2.143, -0.319, 0.7317, -4.179, -0.5561, -1.79, 4.077];
 
 /// The probability that the answer is right (within the evaluation's recall thresholds: rotation
 /// error below 15 degrees and translation error below 0.2 of the normalised half-extent), in
