@@ -209,8 +209,8 @@ export type RegistrationResult = {
    */
   evidence: RegistrationEvidence,
   /**
-   * How many distinct starts were refined (after merging those that met); see the options'
-   * `search`.
+   * How many distinct starts were refined (after merging those that met), counting the
+   * probe poses refined as starts (see the options' `starts`); see the options' `search`.
    */
   startsRefined: number,
 };

@@ -243,8 +243,8 @@ pub struct Registration {
     pub confidence: f64,
     /// The figures `confidence` is computed from, measured under `T_target_source`.
     pub evidence: Evidence,
-    /// How many distinct starts were refined (after merging those that met); see the options'
-    /// `search`.
+    /// How many distinct starts were refined (after merging those that met), counting the
+    /// probe poses refined as starts (see the options' `starts`); see the options' `search`.
     pub starts_refined: usize,
 }
 
