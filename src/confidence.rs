@@ -8,7 +8,8 @@
 //! A good fit is not enough either: on a symmetric or featureless shape other poses fit as well,
 //! and an answer that is one of `k` equally good poses is right with a probability of about
 //! `1 / k`, however well it fits. So the evidence also looks for such poses: the answer turned
-//! about the principal axes of the moved source and of the target points it overlaps, and along
+//! about the principal axes of the moved source (and the diagonals between them) and of the
+//! target points it overlaps, and along
 //! the motion its point-to-plane fit constrains least, each refined by a short ICP
 //! ([`Evidence::ambiguity`], [`Evidence::alternatives`]), and the answer slid along that motion
 //! without refinement ([`Evidence::slide`]: a surface of revolution turned about its axis, a plane
@@ -46,8 +47,9 @@ pub struct Evidence {
     pub rmse_ratio: f64,
     /// How well the best *different* pose fits, as a fraction of the answer's fitness (at most
     /// 2): the answer turned 90 degrees both ways and 180 degrees about each principal axis of
-    /// the moved source, 180 degrees about each principal axis of the target points it
-    /// overlaps (both through the moved source's centroid), and 60 degrees both ways along the
+    /// the moved source, 180 degrees about the four diagonals between those axes and about each
+    /// principal axis of the target points it overlaps (all through the moved source's
+    /// centroid), and 60 degrees both ways along the
     /// least constrained motion of [`Evidence::slide`], each refined by a short ICP; 0 when
     /// every one fell back onto the answer (within 15 degrees). Near 1 or above: the answer may
     /// fit and still not be unique.
@@ -159,7 +161,8 @@ struct Turned {
 }
 
 /// The turned probes of `t` on the probe points `sample` ([`Evidence::ambiguity`],
-/// [`Evidence::alternatives`]): [`TURNS`] about each principal axis of the moved sample, and a
+/// [`Evidence::alternatives`]): [`TURNS`] about each principal axis of the moved sample, a half
+/// turn about each of the four diagonals between them, and a
 /// half turn about each principal axis of the target points it overlaps (the target is another
 /// view: its axes differ from the partial source's, and a flip about one of them is a common
 /// wrong answer of elongated shapes), each through the moved sample's centroid; then the
@@ -179,9 +182,14 @@ fn turns(
         return out;
     }
     let (c, axes) = principal_axes(sample, t);
-    let mut probes: Vec<(f64, Vector3<f64>)> = Vec::with_capacity(12);
+    let mut probes: Vec<(f64, Vector3<f64>)> = Vec::with_capacity(16);
     for degrees in TURNS {
         probes.extend((0..3).map(|k| (degrees, axes.column(k).into_owned())));
+    }
+    // a partial view's principal axes are only estimates of the shape's: half turns about the
+    // four diagonals between them too (with the axes, the thirteen axes of a cube's turns)
+    for signs in [[1.0, 1.0, 1.0], [1.0, 1.0, -1.0], [1.0, -1.0, 1.0], [-1.0, 1.0, 1.0]] {
+        probes.push((180.0, axes * Vector3::from(signs)));
     }
     if let Some(target_axes) = overlap_axes(target, sample, t, 2.0 * d) {
         probes.extend((0..3).map(|k| (180.0, target_axes.column(k).into_owned())));
@@ -353,7 +361,7 @@ fn features(e: &Evidence) -> [f64; 10] {
 /// `scripts/fit-confidence.py` on 2,400 answers: network + ICP, FPFH + RANSAC + ICP and the
 /// exhaustive search on 500 paper-protocol and 300 any-pose validation pairs (`BENCHMARK.md`,
 /// "Confidence", where the cross-validated figures are).
-const WEIGHTS: [f64; 11] = [1.952, 0.5387, 1.646, -0.1892, 2.143, -0.319, 0.7317, -4.179, -0.5561, -1.79, 4.077];
+const WEIGHTS: [f64; 11] = [1.953, 0.527, 1.586, -0.3713, 2.149, -0.337, 0.729, -4.172, -0.5628, -1.732, 4.288];
 
 /// The probability that the answer is right (within the evaluation's recall thresholds: rotation
 /// error below 15 degrees and translation error below 0.2 of the normalised half-extent), in

@@ -103,7 +103,7 @@ pub(crate) fn search(
 }
 
 /// Most better poses of the confidence probe that [`settle`] refines in a row.
-const MAX_PROBE_STARTS: usize = 2;
+const MAX_PROBE_STARTS: usize = 4;
 
 /// Judges the candidate `c`; while the confidence probe finds a pose that fits better
 /// ([`confidence::Probed::better`]: typically the answer flipped about an axis), refines that
