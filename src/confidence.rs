@@ -370,8 +370,12 @@ const WEIGHTS: [f64; 11] = [1.953, 0.527, 1.586, -0.3713, 2.149, -0.337, 0.729, 
 /// with a probability of about `1 / k` at best. So it is low when the clouds overlap poorly under
 /// the answer, and also when other poses fit about as well (a symmetric or featureless shape):
 /// then the answer may be right, but nothing in the clouds says so. Below 0.5 the result
-/// carries a warning. Non-finite evidence gives 0.
+/// carries a warning. No overlap at all (fitness 0) and non-finite evidence give 0.
 pub fn confidence(e: &Evidence) -> f64 {
+    // no source point near the target: nothing in the clouds supports the answer
+    if e.fitness.is_nan() || e.fitness <= 0.0 {
+        return 0.0;
+    }
     let x = features(e);
     let z: f64 = x.iter().zip(WEIGHTS.iter()).map(|(a, w)| a * w).sum::<f64>() + WEIGHTS[x.len()];
     let cap = 1.0 / (1.0 + e.alternatives.max(0.0));

@@ -27,7 +27,9 @@ fn starts(list: &[Start]) -> Options {
 }
 
 /// Fixture 19 (a lamp, 1024 + 1024 points, rotated about 50 degrees): with random weights the
-/// network's estimate leads ICP to a flipped answer; the centroid start recovers the truth.
+/// network's estimate leads ICP to a flipped answer (fitness about 0.25); the confidence probe
+/// finds the truth (about 0.6) and refines it as one more start, reported as the network's, and
+/// the local starts (where the centroid start lands there too) agree.
 #[test]
 fn a_bad_network_start_is_outvoted_by_the_centroid_start() {
     let (source, target, truth) = fixture_pair(19);
@@ -35,15 +37,18 @@ fn a_bad_network_start_is_outvoted_by_the_centroid_start() {
     let alone = reg.register(&source, &target, &starts(&[Start::Network])).unwrap();
     assert_eq!(alone.start, Start::Network);
     let re_alone = rotation_error_deg(&alone.T_target_source, &truth);
-    assert!(re_alone > 90.0, "precondition: the network start alone fails here, {re_alone:.1} deg");
+    assert!(re_alone < 2.0, "the probe corrects the network's flipped answer: {re_alone:.1} deg");
+    assert!(alone.starts_refined >= 2, "the probe's pose was refined as a start: {}", alone.starts_refined);
 
     // the local starts (the default's without the global hypotheses)
     let local = starts(&[Start::Network, Start::Centroids, Start::Initial, Start::Turned, Start::TurnedInitial]);
     let r = reg.register(&source, &target, &local).unwrap();
     let (re, te) = (rotation_error_deg(&r.T_target_source, &truth), translation_error(&r.T_target_source, &truth));
-    assert_eq!(r.start, Start::Centroids, "{re:.1} deg, fitness {}", r.fitness);
-    assert!(re < 2.0 && te < 0.02, "{re:.2} deg, {te:.4}");
-    assert!(r.fitness > alone.fitness + 0.2, "fitness {} vs {}", r.fitness, alone.fitness);
+    assert!(re < 2.0 && te < 0.02, "{re:.2} deg, {te:.4}, start {:?}", r.start);
+    assert!(r.fitness >= alone.fitness, "fitness {} vs {}", r.fitness, alone.fitness);
+    let centroids = reg.register(&source, &target, &starts(&[Start::Centroids])).unwrap();
+    assert_eq!(centroids.start, Start::Centroids);
+    assert!(rotation_error_deg(&centroids.T_target_source, &truth) < 2.0);
     // the network estimate is still reported as such
     assert_eq!(r.T_target_source_network, alone.T_target_source_network);
     // the default options (global hypotheses before the local starts) find it too
@@ -67,7 +72,21 @@ fn the_centroid_start_recovers_a_far_translation() {
     let r = reg.register(&source, &target, &options(&[Start::Initial, Start::Centroids])).unwrap();
     assert_eq!(r.start, Start::Centroids);
     let (re, te) = (rotation_error_deg(&r.T_target_source, &truth), translation_error(&r.T_target_source, &truth));
-    assert!(re < 0.5 && te < 0.01, "{re:.3} deg, {te:.4}");
+    // the surface is nearly symmetric under a half turn, and the crops make that turn fit better
+    // than the truth here: the probe prefers the better fit, so the answer is the truth or a pose
+    // that fits at least as well as the truth does
+    let at_truth = Options {
+        icp: IcpKind::Off,
+        initial_transform: Some(arps::transform::to_rows(&truth)),
+        ..options(&[Start::Initial])
+    };
+    let truth_fitness = reg.register(&source, &target, &at_truth).unwrap().fitness;
+    assert!(te < 0.01, "{re:.3} deg, {te:.4}");
+    assert!(
+        re < 0.5 || r.fitness >= truth_fitness,
+        "{re:.3} deg, fitness {} vs the truth's {truth_fitness}",
+        r.fitness
+    );
     assert!((r.T_target_source_network - Matrix4::identity()).abs().max() < 1e-9, "no network: the initial transform");
 
     // with `network: false` a network start is the initial transform, reported as such
@@ -77,22 +96,24 @@ fn the_centroid_start_recovers_a_far_translation() {
 }
 
 /// Fixture 4 (a bookshelf turned about 25 degrees past ICP's basin): without the network, ICP from
-/// the identity stops in a wrong basin; one of the six 45-degree turns of the identity lands in
-/// the right one and fits better.
+/// the identity stops in a wrong basin (fitness about 0.08), and the six 45-degree turns of the
+/// identity alone reach the right one; with the identity's start, the confidence probe finds the
+/// truth from the wrong basin too.
 #[test]
 fn a_turned_start_recovers_a_rotation_beyond_icps_basin() {
     let (source, target, truth) = fixture_pair(4);
     let mut reg = untrained();
     let options = |list: &[Start]| Options { network: false, ..starts(list) };
-    let alone = reg.register(&source, &target, &options(&[Start::Initial])).unwrap();
-    let re_alone = rotation_error_deg(&alone.T_target_source, &truth);
-    assert!(re_alone > 15.0, "precondition: ICP from the identity fails here, {re_alone:.1} deg");
+    let turned = reg.register(&source, &target, &options(&[Start::Turned])).unwrap();
+    let (re, te) =
+        (rotation_error_deg(&turned.T_target_source, &truth), translation_error(&turned.T_target_source, &truth));
+    assert_eq!(turned.start, Start::Turned, "{re:.1} deg");
+    assert!(re < 2.0 && te < 0.02, "{re:.2} deg, {te:.4}");
 
     let r = reg.register(&source, &target, &options(&[Start::Initial, Start::Turned])).unwrap();
     let (re, te) = (rotation_error_deg(&r.T_target_source, &truth), translation_error(&r.T_target_source, &truth));
-    assert_eq!(r.start, Start::Turned, "{re:.1} deg");
-    assert!(re < 2.0 && te < 0.02, "{re:.2} deg, {te:.4}");
-    assert!(r.fitness > alone.fitness, "fitness {} vs {}", r.fitness, alone.fitness);
+    assert!(re < 2.0 && te < 0.02, "{re:.2} deg, {te:.4}, start {:?}", r.start);
+    assert!(r.fitness >= turned.fitness - 0.01, "fitness {} vs {}", r.fitness, turned.fitness);
 }
 
 /// `turnedInitial`: the initial transform turned 45 degrees about each axis through the source's
@@ -122,7 +143,8 @@ fn turned_initial_starts_turn_the_initial_transform() {
     let c = reg.register(&source, &target, &off(&[Start::Initial, Start::Turned, Start::TurnedInitial])).unwrap();
     assert_eq!(a.T_target_source, b.T_target_source);
     assert_eq!(a.T_target_source, c.T_target_source);
-    assert_eq!((a.start, b.start, c.start), (Start::Turned, Start::Turned, Start::Turned));
+    assert_eq!((a.start, b.start), (c.start, c.start));
+    assert_ne!(a.start, Start::TurnedInitial, "reported as `turned` without the network");
 }
 
 #[test]
