@@ -112,8 +112,10 @@ pub fn probe(
     let f = |k: f64| target.evaluate(&source, T_target_source, k * d).0;
     let overlap_reverse = source_index.evaluate(&target_points, &rigid_inverse(T_target_source), d).0;
     let probe = even_sample(&source, PROBE_POINTS);
-    let (slide, screw) = slide(target, &probe, T_target_source, d);
-    let turned = turns(target, &probe, T_target_source, d, kind, &screw_turns(screw, T_target_source));
+    // the answer's fitness on the probe points, which both probes compare against
+    let base = target.evaluate(&probe, T_target_source, d).0;
+    let (slide, screw) = slide(target, &probe, T_target_source, d, base);
+    let turned = turns(target, &probe, T_target_source, d, base, kind, &screw_turns(screw, T_target_source));
     let (ambiguity, alternatives) = (turned.best_ratio.min(2.0), turned.alternatives as f64);
     let evidence = Evidence {
         fitness,
@@ -166,17 +168,18 @@ struct Turned {
 /// half turn about each principal axis of the target points it overlaps (the target is another
 /// view: its axes differ from the partial source's, and a flip about one of them is a common
 /// wrong answer of elongated shapes), each through the moved sample's centroid; then the
-/// `extra` starts (the turns along the least constrained motion, [`screw_turns`]).
+/// `extra` starts (the turns along the least constrained motion, [`screw_turns`]). `base` is the
+/// fitness of `t` on `sample` at `d`.
 fn turns(
     target: &IcpTarget,
     sample: &[[f32; 3]],
     t: &Matrix4<f64>,
     d: f64,
+    base: f64,
     kind: IcpKind,
     extra: &[Matrix4<f64>],
 ) -> Turned {
     let mut out = Turned { best_ratio: 0.0, best: None, alternatives: 0 };
-    let base = target.evaluate(sample, t, d).0;
     let base_loose = target.evaluate(sample, t, 2.0 * d).0;
     if base <= 0.0 || sample.len() < 3 {
         return out;
@@ -209,12 +212,10 @@ fn turns(
     let mut alternatives: Vec<Matrix4<f64>> = Vec::new();
     for (start, wide) in starts {
         // each stage stops the probe when it cannot come near the answer's fit at that distance
+        let stages = [(4.0, base_coarse), (2.0, base_loose)];
         let alt = 'probe: {
             let mut at = start;
-            for (factor, base_at) in [(4.0, base_coarse), (2.0, base_loose)] {
-                if factor == 4.0 && !wide {
-                    continue;
-                }
+            for &(factor, base_at) in if wide { &stages[..] } else { &stages[1..] } {
                 let r = target.align(sample, &at, &params(factor));
                 at = r.T_target_source;
                 if r.fitness < PROBE_CUT * base_at {
@@ -295,9 +296,8 @@ fn screw_turns(screw: Option<Screw>, t: &Matrix4<f64>) -> Vec<Matrix4<f64>> {
 }
 
 /// [`Evidence::slide`] of `t` on the probe points `sample`, and the least constrained motion it
-/// slid along (`None` with too few inliers).
-fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64) -> (f64, Option<Screw>) {
-    let base = target.evaluate(sample, t, d).0;
+/// slid along (`None` with too few inliers). `base` is the fitness of `t` on `sample` at `d`.
+fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64, base: f64) -> (f64, Option<Screw>) {
     if base <= 0.0 || sample.len() < 3 {
         return (0.0, None);
     }
