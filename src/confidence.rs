@@ -19,7 +19,7 @@
 //! [`Probed::better`]; typically the answer flipped about an axis of an elongated shape) is
 //! refined by the pipeline like one more start.
 
-use crate::icp::{IcpKind, IcpParams, IcpTarget};
+use crate::icp::{IcpKind, IcpParams, IcpTarget, Partners};
 use crate::refine::{even_sample, SCREEN_POINTS};
 use crate::transform::rigid_inverse;
 use crate::transform::{apply, from_rotation_translation, rotation_error_deg};
@@ -108,20 +108,25 @@ pub fn probe(
 ) -> Probed {
     let source = even_sample(source, SCREEN_POINTS);
     let target_points = even_sample(target.points(), SCREEN_POINTS);
-    let (fitness, rmse) = target.evaluate(&source, T_target_source, d);
-    let f = |k: f64| target.evaluate(&source, T_target_source, k * d).0;
+    // the evaluations of one point set warm-start each other's searches (same results)
+    let mut partners = Partners::default();
+    let (fitness, rmse) = target.evaluate_warm(&source, T_target_source, d, &mut partners);
+    let mut f = |k: f64| target.evaluate_warm(&source, T_target_source, k * d, &mut partners).0;
     let overlap_reverse = source_index.evaluate(&target_points, &rigid_inverse(T_target_source), d).0;
     let probe = even_sample(&source, PROBE_POINTS);
     // the answer's fitness on the probe points, which both probes compare against
-    let base = target.evaluate(&probe, T_target_source, d).0;
+    let mut probe_partners = Partners::default();
+    let base = target.evaluate_warm(&probe, T_target_source, d, &mut probe_partners).0;
     let (slide, screw) = slide(target, &probe, T_target_source, d, base);
-    let turned = turns(target, &probe, T_target_source, d, base, kind, &screw_turns(screw, T_target_source));
+    let answer = AnswerOnProbe { fitness: base, partners: probe_partners };
+    let turned = turns(target, &probe, T_target_source, d, answer, kind, &screw_turns(screw, T_target_source));
     let (ambiguity, alternatives) = (turned.best_ratio.min(2.0), turned.alternatives as f64);
+    let (fitness_tight, fitness_loose, fitness_coarse) = (f(0.5), f(2.0), f(4.0));
     let evidence = Evidence {
         fitness,
-        fitness_tight: f(0.5),
-        fitness_loose: f(2.0),
-        fitness_coarse: f(4.0),
+        fitness_tight,
+        fitness_loose,
+        fitness_coarse,
         overlap_reverse,
         rmse_ratio: if d > 0.0 { rmse / d } else { 0.0 },
         ambiguity,
@@ -152,6 +157,13 @@ const PROBE_CUT: f64 = 0.6;
 /// How far [`Evidence::slide`] moves the points, on average (normalised units).
 const SLIDE_RMS: f64 = 0.25;
 
+/// The answer on the probe points: its fitness at `d`, and the points' partners in that
+/// evaluation (they warm-start the next).
+struct AnswerOnProbe {
+    fitness: f64,
+    partners: Partners,
+}
+
 /// What the turned probes of [`turns`] found.
 struct Turned {
     /// The best different pose's fitness over the answer's (0: none).
@@ -168,19 +180,20 @@ struct Turned {
 /// half turn about each principal axis of the target points it overlaps (the target is another
 /// view: its axes differ from the partial source's, and a flip about one of them is a common
 /// wrong answer of elongated shapes), each through the moved sample's centroid; then the
-/// `extra` starts (the turns along the least constrained motion, [`screw_turns`]). `base` is the
-/// fitness of `t` on `sample` at `d`.
+/// `extra` starts (the turns along the least constrained motion, [`screw_turns`]). `answer` is
+/// `t` on `sample`.
 fn turns(
     target: &IcpTarget,
     sample: &[[f32; 3]],
     t: &Matrix4<f64>,
     d: f64,
-    base: f64,
+    answer: AnswerOnProbe,
     kind: IcpKind,
     extra: &[Matrix4<f64>],
 ) -> Turned {
+    let AnswerOnProbe { fitness: base, mut partners } = answer;
     let mut out = Turned { best_ratio: 0.0, best: None, alternatives: 0 };
-    let base_loose = target.evaluate(sample, t, 2.0 * d).0;
+    let base_loose = target.evaluate_warm(sample, t, 2.0 * d, &mut partners).0;
     if base <= 0.0 || sample.len() < 3 {
         return out;
     }
@@ -208,26 +221,28 @@ fn turns(
         probes.into_iter().map(|p| (turn(p), p.0 == 180.0)).chain(extra.iter().map(|&m| (m, true))).collect();
     let kind = if kind == IcpKind::Off { IcpKind::Point } else { kind };
     let params = |factor: f64| IcpParams { max_iterations: PROBE_ITERATIONS, ..IcpParams::new(kind, factor * d) };
-    let base_coarse = target.evaluate(sample, t, 4.0 * d).0;
+    let base_coarse = target.evaluate_warm(sample, t, 4.0 * d, &mut partners).0;
     let mut alternatives: Vec<Matrix4<f64>> = Vec::new();
     for (start, wide) in starts {
         // each stage stops the probe when it cannot come near the answer's fit at that distance
         let stages = [(4.0, base_coarse), (2.0, base_loose)];
+        // each probe's stages warm-start each other's searches
+        let mut partners = Partners::default();
         let alt = 'probe: {
             let mut at = start;
             for &(factor, base_at) in if wide { &stages[..] } else { &stages[1..] } {
-                let r = target.align(sample, &at, &params(factor));
+                let r = target.align_warm(sample, &at, &params(factor), &mut partners);
                 at = r.T_target_source;
                 if r.fitness < PROBE_CUT * base_at {
                     break 'probe at;
                 }
             }
-            target.align(sample, &at, &params(1.0)).T_target_source
+            target.align_warm(sample, &at, &params(1.0), &mut partners).T_target_source
         };
         if rotation_error_deg(&alt, t) <= SAME_POSE_DEGREES {
             continue;
         }
-        let ratio = target.evaluate(sample, &alt, d).0 / base;
+        let ratio = target.evaluate_warm(sample, &alt, d, &mut partners).0 / base;
         if ratio > out.best_ratio {
             out.best_ratio = ratio;
             out.best = Some(alt);

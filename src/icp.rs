@@ -89,6 +89,14 @@ impl std::fmt::Debug for IcpTarget {
     }
 }
 
+/// Each source point's nearest target point in the last correspondence pass of an
+/// [`IcpTarget::align_warm`] or [`IcpTarget::evaluate_warm`] (empty at first): the next pass over
+/// the same source points starts its searches there. It is only a hint: a pass finds the same
+/// partners with or without it (among points at exactly equal distance, possibly another), and
+/// one made for other source points is ignored where its length differs.
+#[derive(Clone, Debug, Default)]
+pub struct Partners(Vec<u32>);
+
 /// Buffers reused across the iterations of one run.
 #[derive(Default)]
 struct Scratch {
@@ -180,9 +188,36 @@ impl IcpTarget {
     ///
     /// The result's `fitness` and `inlier_rmse` are those of the returned transform.
     pub fn align(&self, source: &[[f32; 3]], init: &Matrix4<f64>, params: &IcpParams) -> IcpResult {
+        self.align_warm(source, init, params, &mut Partners::default())
+    }
+
+    /// [`IcpTarget::align`], starting each source point's nearest-neighbour search from its
+    /// partner in `partners` (those of an earlier pass over the same `source`: the previous
+    /// stage of a coarse-to-fine run) and leaving the last pass's partners there. The result is
+    /// that of [`IcpTarget::align`]; only the searches are cheaper.
+    pub fn align_warm(
+        &self,
+        source: &[[f32; 3]],
+        init: &Matrix4<f64>,
+        params: &IcpParams,
+        partners: &mut Partners,
+    ) -> IcpResult {
+        let mut scratch = Scratch { prev: std::mem::take(&mut partners.0), ..Scratch::default() };
+        let result = self.align_scratch(source, init, params, &mut scratch);
+        partners.0 = scratch.prev;
+        result
+    }
+
+    /// [`IcpTarget::align`] on the given scratch buffers.
+    fn align_scratch(
+        &self,
+        source: &[[f32; 3]],
+        init: &Matrix4<f64>,
+        params: &IcpParams,
+        scratch: &mut Scratch,
+    ) -> IcpResult {
         let d = params.max_correspondence_distance;
-        let mut scratch = Scratch::default();
-        let (mut fitness, mut rmse) = self.correspond(source, init, d, &mut scratch);
+        let (mut fitness, mut rmse) = self.correspond(source, init, d, scratch);
         let mut result =
             IcpResult { T_target_source: *init, fitness, inlier_rmse: rmse, iterations: 0, converged: false };
         if params.kind == IcpKind::Off || scratch.moved.is_empty() {
@@ -191,15 +226,15 @@ impl IcpTarget {
         let mut t = *init;
         for it in 1..=params.max_iterations {
             let update = match params.kind {
-                IcpKind::Plane => self.plane_update(&scratch),
-                _ => self.point_update(&mut scratch),
+                IcpKind::Plane => self.plane_update(scratch),
+                _ => self.point_update(scratch),
             };
             let Some(update) = update else { break };
             let next = compose_rigid(&update, &t);
             if next.iter().any(|v| !v.is_finite()) {
                 break;
             }
-            let (f, r) = self.correspond(source, &next, d, &mut scratch);
+            let (f, r) = self.correspond(source, &next, d, scratch);
             result.iterations = it;
             if scratch.moved.is_empty() {
                 // Every pair lost: keep the last transform that had some.
@@ -228,6 +263,21 @@ impl IcpTarget {
     /// An empty source or target, or a `max_distance` that is not positive, gives `(0, 0)`.
     pub fn evaluate(&self, source: &[[f32; 3]], t: &Matrix4<f64>, max_distance: f64) -> (f64, f64) {
         self.correspond(source, t, max_distance, &mut Scratch::default())
+    }
+
+    /// [`IcpTarget::evaluate`], warm-started from `partners` like [`IcpTarget::align_warm`]
+    /// (same result, cheaper searches), leaving this pass's partners there.
+    pub fn evaluate_warm(
+        &self,
+        source: &[[f32; 3]],
+        t: &Matrix4<f64>,
+        max_distance: f64,
+        partners: &mut Partners,
+    ) -> (f64, f64) {
+        let mut scratch = Scratch { prev: std::mem::take(&mut partners.0), ..Scratch::default() };
+        let out = self.correspond(source, t, max_distance, &mut scratch);
+        partners.0 = scratch.prev;
+        out
     }
 
     /// One correspondence pass: fills `scratch` with the inlier pairs and returns

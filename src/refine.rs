@@ -9,7 +9,7 @@
 //! of [`SCREEN_POINTS`] points, only the winner being refined on more (at most
 //! [`REFINE_POINTS`]).
 
-use crate::icp::{IcpKind, IcpParams, IcpTarget};
+use crate::icp::{IcpKind, IcpParams, IcpTarget, Partners};
 use nalgebra::Matrix4;
 use serde::{Deserialize, Serialize};
 
@@ -236,15 +236,19 @@ fn refine_stages(
     schedule: &[f64],
 ) -> Vec<Candidate> {
     let Refinement { kind, d_final, max_iterations } = *how;
-    let mut live: Vec<Candidate> = starts
+    // each start with its points' partners in the previous stage (warm-starts the next)
+    let mut live: Vec<(Candidate, Partners)> = starts
         .iter()
-        .map(|&(start, t)| Candidate {
-            start,
-            T_target_source: t,
-            fitness: 0.0,
-            inlier_rmse: 0.0,
-            iterations: 0,
-            converged: false,
+        .map(|&(start, t)| {
+            let c = Candidate {
+                start,
+                T_target_source: t,
+                fitness: 0.0,
+                inlier_rmse: 0.0,
+                iterations: 0,
+                converged: false,
+            };
+            (c, Partners::default())
         })
         .collect();
     if kind != IcpKind::Off {
@@ -257,26 +261,28 @@ fn refine_stages(
                 relative_fitness: 1e-6,
                 relative_rmse: 1e-6,
             };
-            for c in &mut live {
-                let r = target.align(source, &c.T_target_source, &params);
+            for (c, partners) in &mut live {
+                let r = target.align_warm(source, &c.T_target_source, &params, partners);
                 c.T_target_source = r.T_target_source;
                 c.iterations += r.iterations;
                 c.converged = r.converged;
             }
         }
     }
-    for c in &mut live {
-        (c.fitness, c.inlier_rmse) = target.evaluate(source, &c.T_target_source, d_final);
-    }
-    live
+    live.into_iter()
+        .map(|(mut c, mut partners)| {
+            (c.fitness, c.inlier_rmse) = target.evaluate_warm(source, &c.T_target_source, d_final, &mut partners);
+            c
+        })
+        .collect()
 }
 
 /// Drops every candidate whose transform moves no point of `source` farther than `tolerance`
 /// from where an earlier (kept) candidate's moves it.
-fn merge_coincident(live: &mut Vec<Candidate>, source: &[[f32; 3]], tolerance: f64) {
-    let mut kept: Vec<Candidate> = Vec::with_capacity(live.len());
+fn merge_coincident<X>(live: &mut Vec<(Candidate, X)>, source: &[[f32; 3]], tolerance: f64) {
+    let mut kept: Vec<(Candidate, X)> = Vec::with_capacity(live.len());
     for c in live.drain(..) {
-        if !kept.iter().any(|k| max_displacement(&k.T_target_source, &c.T_target_source, source) <= tolerance) {
+        if !kept.iter().any(|k| max_displacement(&k.0.T_target_source, &c.0.T_target_source, source) <= tolerance) {
             kept.push(c);
         }
     }
