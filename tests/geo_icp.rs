@@ -1,7 +1,7 @@
 //! ICP on a real LiDAR scan (fixtures/scans/velodyne-small.ply, 5,000 points, MIT): both
 //! variants recover a known 10-degree / 0.05-unit motion from the identity.
 
-use arps::icp::{IcpKind, IcpParams, IcpTarget};
+use arps::icp::{IcpKind, IcpParams, IcpTarget, Partners};
 use arps::transform::{check_rigid, from_rotation_translation, rotation_error_deg, translation_error};
 use arps::PointCloud;
 use nalgebra::{Matrix4, Unit, UnitQuaternion, Vector3};
@@ -151,6 +151,31 @@ fn deterministic() {
     let a = run(IcpKind::Plane, &target, &source);
     let b = run(IcpKind::Plane, &target, &source);
     assert_eq!(a.0, b.0);
+}
+
+/// Warm-started runs (each stage from the previous stage's partners) give the cold runs'
+/// results exactly; partners left by other source points are ignored.
+#[test]
+fn warm_starts_change_no_result() {
+    let source = fixture();
+    let target = IcpTarget::new(&moved(&ten_degrees(), &source), true);
+    for kind in [IcpKind::Point, IcpKind::Plane] {
+        let (mut cold, mut warm) = (Matrix4::identity(), Matrix4::identity());
+        // partners of a different point set first: a length mismatch resets them
+        let mut partners = Partners::default();
+        target.evaluate_warm(&source[..100], &warm, 0.4, &mut partners);
+        for d in [0.4, 0.2, 0.1, 0.05] {
+            let p = IcpParams::new(kind, d);
+            let a = target.align(&source, &cold, &p);
+            let b = target.align_warm(&source, &warm, &p, &mut partners);
+            assert_eq!(a, b, "{kind:?} at {d}");
+            assert_eq!(
+                target.evaluate(&source, &a.T_target_source, d),
+                target.evaluate_warm(&source, &b.T_target_source, d, &mut partners)
+            );
+            (cold, warm) = (a.T_target_source, b.T_target_source);
+        }
+    }
 }
 
 /// The fastest of 5 runs of `f`, in ms (the minimum is the figure least disturbed by other
