@@ -20,7 +20,7 @@
 //! refined by the pipeline like one more start.
 
 use crate::icp::{IcpKind, IcpParams, IcpTarget, Partners};
-use crate::refine::{even_sample, SCREEN_POINTS};
+use crate::refine::{coincide, even_sample, SCREEN_POINTS};
 use crate::transform::rigid_inverse;
 use crate::transform::{apply, from_rotation_translation, rotation_error_deg};
 use nalgebra::Matrix4;
@@ -150,6 +150,12 @@ const ALTERNATIVE_FIT: f64 = 0.9;
 /// Each probe's ICP: iterations at `4 d` (the half turns and the turns along the least
 /// constrained motion only), at `2 d`, then at `d`.
 const PROBE_ITERATIONS: u32 = 10;
+/// A probe's ICP stage stops when an iteration changes its fitness by less than this and its
+/// inlier RMSE by less than [`PROBE_CONVERGED_RMSE`] times `d` (a probe only has to reach its
+/// basin, not polish the pose in it).
+const PROBE_CONVERGED_FITNESS: f64 = 0.005;
+/// See [`PROBE_CONVERGED_FITNESS`].
+const PROBE_CONVERGED_RMSE: f64 = 3e-3;
 /// A probe whose fitness after its `4 d` or `2 d` stage is below this fraction of the answer's
 /// at that distance stops there: it cannot come near the answer's fit. (The `4 d` stage lets a
 /// half turn whose axis is some degrees off the true one still reach that pose.)
@@ -220,25 +226,42 @@ fn turns(
     let starts: Vec<(Matrix4<f64>, bool)> =
         probes.into_iter().map(|p| (turn(p), p.0 == 180.0)).chain(extra.iter().map(|&m| (m, true))).collect();
     let kind = if kind == IcpKind::Off { IcpKind::Point } else { kind };
-    let params = |factor: f64| IcpParams { max_iterations: PROBE_ITERATIONS, ..IcpParams::new(kind, factor * d) };
+    let params = |factor: f64| IcpParams {
+        max_iterations: PROBE_ITERATIONS,
+        relative_fitness: PROBE_CONVERGED_FITNESS,
+        relative_rmse: PROBE_CONVERGED_RMSE * d,
+        ..IcpParams::new(kind, factor * d)
+    };
     let base_coarse = target.evaluate_warm(sample, t, 4.0 * d, &mut partners).0;
     let mut alternatives: Vec<Matrix4<f64>> = Vec::new();
+    // each earlier probe's pose after each stage (4d, 2d, d; `None`: not run)
+    let mut paths: Vec<[Option<Matrix4<f64>>; 3]> = Vec::with_capacity(starts.len());
     for (start, wide) in starts {
         // each stage stops the probe when it cannot come near the answer's fit at that distance
-        let stages = [(4.0, base_coarse), (2.0, base_loose)];
+        let stages = [(4.0, base_coarse), (2.0, base_loose), (1.0, 0.0)];
         // each probe's stages warm-start each other's searches
         let mut partners = Partners::default();
-        let alt = 'probe: {
-            let mut at = start;
-            for &(factor, base_at) in if wide { &stages[..] } else { &stages[1..] } {
-                let r = target.align_warm(sample, &at, &params(factor), &mut partners);
-                at = r.T_target_source;
-                if r.fitness < PROBE_CUT * base_at {
-                    break 'probe at;
-                }
+        let mut path = [None; 3];
+        let mut at = start;
+        // a probe that has come back onto the answer, or onto where an earlier probe was after
+        // the same stage, would end where that one did: it is dropped (the answer's own pose is
+        // skipped below anyway, and an earlier probe's end is already counted)
+        let mut repeats = false;
+        for (k, &(factor, base_at)) in stages.iter().enumerate().skip(if wide { 0 } else { 1 }) {
+            let r = target.align_warm(sample, &at, &params(factor), &mut partners);
+            at = r.T_target_source;
+            repeats =
+                coincide(&at, t, sample, d) || paths.iter().any(|p| p[k].is_some_and(|q| coincide(&at, &q, sample, d)));
+            path[k] = Some(at);
+            if repeats || r.fitness < PROBE_CUT * base_at {
+                break;
             }
-            target.align_warm(sample, &at, &params(1.0), &mut partners).T_target_source
-        };
+        }
+        paths.push(path);
+        if repeats {
+            continue;
+        }
+        let alt = at;
         if rotation_error_deg(&alt, t) <= SAME_POSE_DEGREES {
             continue;
         }
@@ -376,7 +399,7 @@ fn features(e: &Evidence) -> [f64; 10] {
 /// `scripts/fit-confidence.py` on 2,400 answers: network + ICP, FPFH + RANSAC + ICP and the
 /// exhaustive search on 500 paper-protocol and 300 any-pose validation pairs (`BENCHMARK.md`,
 /// "Confidence", where the cross-validated figures are).
-const WEIGHTS: [f64; 11] = [1.953, 0.527, 1.586, -0.3713, 2.149, -0.337, 0.729, -4.172, -0.5628, -1.732, 4.288];
+const WEIGHTS: [f64; 11] = [1.953, 0.5287, 1.717, -0.2602, 2.24, -0.3462, 0.7331, -4.483, -0.4561, -1.781, 4.207];
 
 /// The probability that the answer is right (within the evaluation's recall thresholds: rotation
 /// error below 15 degrees and translation error below 0.2 of the normalised half-extent), in

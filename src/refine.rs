@@ -266,6 +266,11 @@ fn refine_stages(
                 c.T_target_source = r.T_target_source;
                 c.iterations += r.iterations;
                 c.converged = r.converged;
+                // this stage's fitness, for the cut below (scored again at the end)
+                c.fitness = r.fitness;
+            }
+            if factor > 1.0 {
+                cut_behind(&mut live);
             }
         }
     }
@@ -275,6 +280,17 @@ fn refine_stages(
             c
         })
         .collect()
+}
+
+/// After a coarse stage, a start whose fitness at that stage's distance is below this fraction of
+/// the best start's is dropped: it cannot come near the best fit, and refining it further would
+/// only cost time.
+pub const CUT_BEHIND: f64 = 0.6;
+
+/// Drops the candidates whose `fitness` is below [`CUT_BEHIND`] times the best one's.
+fn cut_behind<X>(live: &mut Vec<(Candidate, X)>) {
+    let best = live.iter().map(|c| c.0.fitness).fold(0.0, f64::max);
+    live.retain(|c| c.0.fitness >= CUT_BEHIND * best);
 }
 
 /// Drops every candidate whose transform moves no point of `source` farther than `tolerance`
@@ -287,6 +303,12 @@ fn merge_coincident<X>(live: &mut Vec<(Candidate, X)>, source: &[[f32; 3]], tole
         }
     }
     *live = kept;
+}
+
+/// True when `a` and `b` move no point of `source` farther than [`MERGE_FRACTION`] of `d_final`
+/// apart: the same answer (ICP from one would converge to the other).
+pub fn coincide(a: &Matrix4<f64>, b: &Matrix4<f64>, source: &[[f32; 3]], d_final: f64) -> bool {
+    max_displacement(a, b, source) <= MERGE_FRACTION * d_final
 }
 
 /// The largest distance between `a p` and `b p` over the points `p`.

@@ -268,6 +268,50 @@ fn starts_that_meet_are_merged_into_the_earlier_one() {
     assert_eq!(refine::choose(&c), Some(2));
 }
 
+/// After a coarse stage, a start fitting far worse than the best (below `CUT_BEHIND` of its
+/// fitness at that stage's distance) is dropped; starts that fit about as well all go on.
+#[test]
+fn starts_far_behind_after_a_coarse_stage_are_dropped() {
+    let cloud = bumpy_surface(1500, 0.0).points;
+    let target = IcpTarget::new(&cloud, true);
+    let truth = motion([3.0, -2.0, 1.0], [0.05, 0.0, -0.03]);
+    let source = PointCloud::new(cloud.clone()).transformed(&arps::transform::rigid_inverse(&truth)).points;
+    let d = 0.05;
+    // three extents away: no point within reach at any stage
+    let away = Matrix4::new_translation(&nalgebra::Vector3::new(6.0, 0.0, 0.0)) * truth;
+    let list = [(Start::Network, away), (Start::Initial, truth)];
+    let c = refine::refine_starts(&target, &source, &list, &how(IcpKind::Plane, d));
+    assert_eq!(c.len(), 1, "{c:?}");
+    assert_eq!(c[0].start, Start::Initial);
+    assert!(c[0].fitness > 0.99);
+    // a start a little off the truth fits about as well at 4d: both go on (and meet)
+    let near = motion([2.0, 0.0, 0.0], [0.0, 0.0, 0.0]) * truth;
+    let c = refine::refine_starts(
+        &target,
+        &source,
+        &[(Start::Network, near), (Start::Initial, truth)],
+        &how(IcpKind::Plane, d),
+    );
+    assert_eq!(c[0].start, Start::Network, "{c:?}");
+    assert!(rotation_error_deg(&c[0].T_target_source, &truth) < 0.01);
+}
+
+/// `coincide`: two transforms that move no source point farther apart than half the final
+/// distance are the same answer.
+#[test]
+fn coincide_is_half_the_final_distance_at_the_farthest_point() {
+    let source = bumpy_surface(500, 0.0).points;
+    let d = 0.05;
+    let t = motion([10.0, 20.0, -5.0], [0.1, 0.2, 0.3]);
+    assert!(refine::coincide(&t, &t, &source, d));
+    let shift = |x: f64| Matrix4::new_translation(&nalgebra::Vector3::new(x, 0.0, 0.0)) * t;
+    assert!(refine::coincide(&t, &shift(0.4 * d), &source, d));
+    assert!(!refine::coincide(&t, &shift(0.6 * d), &source, d));
+    // a small turn moves the farthest points most
+    let turned = motion([5.0, 0.0, 0.0], [0.0, 0.0, 0.0]) * t;
+    assert!(!refine::coincide(&t, &turned, &source, d));
+}
+
 /// More source points than `SCREEN_POINTS`: the starts are compared on a sample, and the winner's
 /// figures are those of a full run.
 #[test]

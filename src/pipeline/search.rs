@@ -48,6 +48,13 @@ pub(crate) fn search(
     let source_index = IcpTarget::new(&p.icp_src.points, false);
     let judge =
         |t: &Matrix4<f64>| confidence::probe(&target_index, &source_index, &p.icp_src.points, t, d_final, options.icp);
+    // `c` is a better answer than `b`: it fits better (`refine::choose`) and is another pose. A
+    // start that only found the answer again (a hair better, perhaps) leaves it as it was judged:
+    // probing the same pose again would say the same.
+    let improves = |b: &Candidate, c: &Candidate| {
+        refine::choose(&[*b, *c]) == Some(1)
+            && !refine::coincide(&b.T_target_source, &c.T_target_source, &p.icp_src.points, d_final)
+    };
     let mut best: Option<(Candidate, Evidence, f64)> = None;
     let mut starts_refined = 0usize;
     for stage in stages {
@@ -63,14 +70,15 @@ pub(crate) fn search(
         let Some(c) = refine::refine_best(&target_index, &p.icp_src.points, &starts, &how) else { continue };
         let better = match &best {
             None => true,
-            Some((b, _, _)) => refine::choose(&[*b, c]) == Some(1),
+            Some((b, _, _)) => improves(b, &c),
         };
         if better {
             // with ICP off the first start is the answer, unrefined: the probe only judges it
             let (c, e, extra) = if options.icp == IcpKind::Off {
                 (c, judge(&c.T_target_source).evidence, 0)
             } else {
-                settle(c, &judge, |t| refine::refine_best(&target_index, &p.icp_src.points, &[(c.start, t)], &how))
+                let refine = |t| refine::refine_best(&target_index, &p.icp_src.points, &[(c.start, t)], &how);
+                settle(c, &judge, refine, &improves)
             };
             starts_refined += extra;
             best = Some((c, e, confidence::confidence(&e)));
@@ -107,19 +115,20 @@ const MAX_PROBE_STARTS: usize = 4;
 
 /// Judges the candidate `c`; while the confidence probe finds a pose that fits better
 /// ([`confidence::Probed::better`]: typically the answer flipped about an axis), refines that
-/// pose like a start (`refine`, reported as `c`'s start) and keeps it if [`refine::choose`]
-/// prefers it, at most [`MAX_PROBE_STARTS`] times. Gives the settled candidate, its evidence and
+/// pose like a start (`refine`, reported as `c`'s start) and keeps it if it `improves` on `c`
+/// (fits better and is another pose), at most [`MAX_PROBE_STARTS`] times. Gives the settled candidate, its evidence and
 /// how many probe poses were refined.
 fn settle(
     c: Candidate,
     judge: &impl Fn(&Matrix4<f64>) -> confidence::Probed,
     refine: impl Fn(Matrix4<f64>) -> Option<Candidate>,
+    improves: &impl Fn(&Candidate, &Candidate) -> bool,
 ) -> (Candidate, Evidence, usize) {
     let (mut c, mut probed, mut refined) = (c, judge(&c.T_target_source), 0);
     while let Some(t) = probed.better.filter(|_| refined < MAX_PROBE_STARTS) {
         refined += 1;
         match refine(t) {
-            Some(next) if refine::choose(&[c, next]) == Some(1) => {
+            Some(next) if improves(&c, &next) => {
                 c = next;
                 probed = judge(&c.T_target_source);
             }
