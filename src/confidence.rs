@@ -150,12 +150,6 @@ const ALTERNATIVE_FIT: f64 = 0.9;
 /// Each probe's ICP: iterations at `4 d` (the half turns and the turns along the least
 /// constrained motion only), at `2 d`, then at `d`.
 const PROBE_ITERATIONS: u32 = 10;
-/// A probe's ICP stage stops when an iteration changes its fitness by less than this and its
-/// inlier RMSE by less than [`PROBE_CONVERGED_RMSE`] times `d` (a probe only has to reach its
-/// basin, not polish the pose in it).
-const PROBE_CONVERGED_FITNESS: f64 = 0.005;
-/// See [`PROBE_CONVERGED_FITNESS`].
-const PROBE_CONVERGED_RMSE: f64 = 3e-3;
 /// A probe whose fitness after its `4 d` or `2 d` stage is below this fraction of the answer's
 /// at that distance stops there: it cannot come near the answer's fit. (The `4 d` stage lets a
 /// half turn whose axis is some degrees off the true one still reach that pose.)
@@ -226,12 +220,7 @@ fn turns(
     let starts: Vec<(Matrix4<f64>, bool)> =
         probes.into_iter().map(|p| (turn(p), p.0 == 180.0)).chain(extra.iter().map(|&m| (m, true))).collect();
     let kind = if kind == IcpKind::Off { IcpKind::Point } else { kind };
-    let params = |factor: f64| IcpParams {
-        max_iterations: PROBE_ITERATIONS,
-        relative_fitness: PROBE_CONVERGED_FITNESS,
-        relative_rmse: PROBE_CONVERGED_RMSE * d,
-        ..IcpParams::new(kind, factor * d)
-    };
+    let params = |factor: f64| IcpParams { max_iterations: PROBE_ITERATIONS, ..IcpParams::new(kind, factor * d) };
     let base_coarse = target.evaluate_warm(sample, t, 4.0 * d, &mut partners).0;
     let mut alternatives: Vec<Matrix4<f64>> = Vec::new();
     // each earlier probe's pose after each stage (4d, 2d, d; `None`: not run)
@@ -399,7 +388,7 @@ fn features(e: &Evidence) -> [f64; 10] {
 /// `scripts/fit-confidence.py` on 2,400 answers: network + ICP, FPFH + RANSAC + ICP and the
 /// exhaustive search on 500 paper-protocol and 300 any-pose validation pairs (`BENCHMARK.md`,
 /// "Confidence", where the cross-validated figures are).
-const WEIGHTS: [f64; 11] = [1.953, 0.5287, 1.717, -0.2602, 2.24, -0.3462, 0.7331, -4.483, -0.4561, -1.781, 4.207];
+const WEIGHTS: [f64; 11] = [1.946, 0.5272, 1.555, -0.4126, 2.147, -0.3371, 0.7336, -4.283, -0.5125, -1.836, 4.44];
 
 /// The probability that the answer is right (within the evaluation's recall thresholds: rotation
 /// error below 15 degrees and translation error below 0.2 of the normalised half-extent), in

@@ -4,10 +4,10 @@
 //! The network, the initial transform and a centroid alignment fail on partly different pairs, and
 //! once the target is prepared (kd-tree, normals) each extra start costs only its ICP iterations,
 //! so the pipeline refines every start in [`crate::Options::starts`] against one shared
-//! [`IcpTarget`] and keeps the best by [`choose`] ([`refine_best`]). Two things keep that cheap:
-//! starts that meet are merged ([`MERGE_FRACTION`]), and large sources are compared on a sample
-//! of [`SCREEN_POINTS`] points, only the winner being refined on more (at most
-//! [`REFINE_POINTS`]).
+//! [`IcpTarget`] and keeps the best by [`choose`] ([`refine_best`]). Three things keep that cheap:
+//! starts that meet are merged ([`MERGE_FRACTION`]), starts far behind the best after a coarse
+//! stage are dropped ([`CUT_BEHIND`]), and large sources are compared on a sample of
+//! [`SCREEN_POINTS`] points, only the winner being refined on more (at most [`REFINE_POINTS`]).
 
 use crate::icp::{IcpKind, IcpParams, IcpTarget, Partners};
 use nalgebra::Matrix4;
@@ -216,7 +216,9 @@ pub fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
 ///
 /// The starts advance stage by stage together; before each stage a start that has come within
 /// [`MERGE_FRACTION`] of `how.d_final` of an earlier one (largest displacement of a source point) is
-/// dropped, so the result has one candidate per distinct basin, in the order of `starts`. With
+/// dropped, so the result has one candidate per distinct basin, in the order of `starts`; after
+/// each coarse stage a start below [`CUT_BEHIND`] of the best fitness at that stage's distance is
+/// dropped too. With
 /// [`IcpKind::Off`] nothing moves: every start is scored as it is.
 pub fn refine_starts(
     target: &IcpTarget,

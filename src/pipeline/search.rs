@@ -3,8 +3,9 @@
 //! Takes the [`Prepared`] clouds, the stages of [`super::starts`] and the options; gives
 //! [`Chosen`]: the best refined start ([`refine::refine_best`], compared across stages by
 //! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
-//! first stage whose best reaches [`STOP_CONFIDENCE`]. Each stage's best is judged by the
-//! confidence probe, and a probe pose that fits better is refined as one more start ([`settle`]).
+//! first stage whose best reaches [`STOP_CONFIDENCE`]. Each stage's best, when it is better than
+//! the answer so far and another pose ([`refine::coincide`]), is judged by the confidence probe,
+//! and a probe pose that fits better is refined as one more start ([`settle`]).
 //! With no start refined at all, the network's estimate (the initial transform with the network
 //! off), unrefined, and a warning.
 
