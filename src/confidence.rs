@@ -50,7 +50,8 @@ pub struct Evidence {
     /// the moved source, 180 degrees about the four diagonals between those axes and about each
     /// principal axis of the target points it overlaps (all through the moved source's
     /// centroid), and 60 degrees both ways along the
-    /// least constrained motion of [`Evidence::slide`], each refined by a short ICP; 0 when
+    /// least constrained motion of [`Evidence::slide`] (when that slide is at least 0.5), each
+    /// refined by a short ICP; 0 when
     /// every one fell back onto the answer (within 15 degrees). Near 1 or above: the answer may
     /// fit and still not be unique.
     pub ambiguity: f64,
@@ -119,6 +120,8 @@ pub fn probe(
     let base = target.evaluate_warm(&probe, T_target_source, d, &mut probe_partners).0;
     let (slide, screw) = slide(target, &probe, T_target_source, d, base);
     let answer = AnswerOnProbe { fitness: base, partners: probe_partners };
+    // turns along the least constrained motion only where sliding along it keeps much of the fit
+    let screw = screw.filter(|_| slide >= SCREW_MIN_SLIDE);
     let turned = turns(target, &probe, T_target_source, d, answer, kind, &screw_turns(screw, T_target_source));
     let (ambiguity, alternatives) = (turned.best_ratio.min(2.0), turned.alternatives as f64);
     let (fitness_tight, fitness_loose, fitness_coarse) = (f(0.5), f(2.0), f(4.0));
@@ -307,6 +310,11 @@ fn screw_move(screw: &Screw, s: f64, t: &Matrix4<f64>) -> Matrix4<f64> {
     from_rotation_translation(&r, &(c - r * c + shift * s)) * t
 }
 
+/// The turns of [`screw_turns`] are probed only when [`Evidence::slide`] is at least this: where
+/// sliding along the least constrained motion loses half the fit, the fit pins that motion down,
+/// and turning 60 degrees along it is one more arbitrary turn.
+const SCREW_MIN_SLIDE: f64 = 0.5;
+
 /// Degrees that the slide probes turn the answer along its least constrained motion.
 const SCREW_DEGREES: f64 = 60.0;
 
@@ -388,7 +396,7 @@ fn features(e: &Evidence) -> [f64; 10] {
 /// `scripts/fit-confidence.py` on 2,400 answers: network + ICP, FPFH + RANSAC + ICP and the
 /// exhaustive search on 500 paper-protocol and 300 any-pose validation pairs (`BENCHMARK.md`,
 /// "Confidence", where the cross-validated figures are).
-const WEIGHTS: [f64; 11] = [1.946, 0.5272, 1.555, -0.4126, 2.147, -0.3371, 0.7336, -4.283, -0.5125, -1.836, 4.44];
+const WEIGHTS: [f64; 11] = [1.977, 0.5273, 1.661, -0.2899, 2.178, -0.334, 0.7324, -4.187, -0.5047, -1.748, 4.049];
 
 /// The probability that the answer is right (within the evaluation's recall thresholds: rotation
 /// error below 15 degrees and translation error below 0.2 of the normalised half-extent), in
