@@ -184,7 +184,9 @@ struct Turned {
 /// view: its axes differ from the partial source's, and a flip about one of them is a common
 /// wrong answer of elongated shapes), each through the moved sample's centroid; then the
 /// `extra` starts (the turns along the least constrained motion, [`screw_turns`]). `answer` is
-/// `t` on `sample`.
+/// `t` on `sample`. A probe that comes back onto the answer, or onto where an earlier probe was
+/// after the same stage ([`coincide`]), stops there and counts for nothing: it would end where
+/// that pose did.
 fn turns(
     target: &IcpTarget,
     sample: &[[f32; 3]],

@@ -170,6 +170,36 @@ fn any_answer_on_a_symmetric_box_is_doubted() {
     }
 }
 
+/// `n` points on an open cylinder (radius `r`, half-length `h`, axis z), uniform by area, from
+/// `seed`.
+fn cylinder_surface(n: usize, r: f64, h: f64, seed: u64) -> PointCloud {
+    use rand::Rng;
+    let mut rng = arps::sampling::rng(seed);
+    let pts = (0..n)
+        .map(|_| {
+            let a = rng.random::<f64>() * std::f64::consts::TAU;
+            let z = (2.0 * rng.random::<f64>() - 1.0) * h;
+            [(r * a.cos()) as f32, (r * a.sin()) as f32, z as f32]
+        })
+        .collect();
+    PointCloud::new(pts)
+}
+
+/// A surface of revolution fits itself turned by any angle about its axis: the slide along the
+/// least constrained motion (that turn) keeps the fit, so the turns along it are probed, other
+/// poses fit as well, and the right answer is doubted like any other.
+#[test]
+fn an_answer_on_a_surface_of_revolution_is_doubted() {
+    let mut reg = untrained();
+    let source = cylinder_surface(1500, 0.4, 1.0, 3);
+    let gt = common::motion([-25.0, 15.0, 40.0], [0.2, 0.3, -0.1]);
+    let target = cylinder_surface(1500, 0.4, 1.0, 4).transformed(&gt);
+    let r = judge(&mut reg, &source, &target, &gt);
+    assert!(r.evidence.slide >= 0.5, "{:?}", r.evidence);
+    assert!(r.evidence.alternatives >= 1.0, "{:?}", r.evidence);
+    assert!(r.confidence < 0.5, "{} {:?}", r.confidence, r.evidence);
+}
+
 /// CPU time of the evidence next to one ICP refinement of the same pair (`--ignored
 /// --nocapture` to see them; `BENCHMARK.md` quotes them).
 #[test]

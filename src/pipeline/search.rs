@@ -117,8 +117,8 @@ const MAX_PROBE_STARTS: usize = 4;
 /// Judges the candidate `c`; while the confidence probe finds a pose that fits better
 /// ([`confidence::Probed::better`]: typically the answer flipped about an axis), refines that
 /// pose like a start (`refine`, reported as `c`'s start) and keeps it if it `improves` on `c`
-/// (fits better and is another pose), at most [`MAX_PROBE_STARTS`] times. Gives the settled candidate, its evidence and
-/// how many probe poses were refined.
+/// (fits better and is another pose), at most [`MAX_PROBE_STARTS`] times. Gives the settled
+/// candidate, its evidence and how many probe poses were refined.
 fn settle(
     c: Candidate,
     judge: &impl Fn(&Matrix4<f64>) -> confidence::Probed,
