@@ -338,14 +338,13 @@ fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64, base
     if base <= 0.0 || sample.len() < 3 {
         return (0.0, None);
     }
-    let normals = target.normals();
     let moved: Vec<Vector3<f64>> = sample.iter().map(|&p| Vector3::from(apply(t, p).map(|v| v as f64))).collect();
     // the inliers at d with their target normals
     let pairs: Vec<(Vector3<f64>, Vector3<f64>)> = moved
         .iter()
         .filter_map(|p| {
             let j = target.nearest_within(&[p.x as f32, p.y as f32, p.z as f32], d)?;
-            Some((*p, Vector3::from(normals[j].map(|v| v as f64))))
+            Some((*p, Vector3::from(target.normal(j).map(|v| v as f64))))
         })
         .collect();
     if pairs.len() < 6 {

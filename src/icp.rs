@@ -161,8 +161,12 @@ impl IcpTarget {
         self.normals.iter().filter(|n| n.get().is_some()).count()
     }
 
-    /// The normal of target point `j`, estimated now if it was not yet.
-    fn normal(&self, j: usize) -> [f32; 3] {
+    /// The unit normal of target point `j` (an index into [`IcpTarget::points`]), estimated now
+    /// if it was not yet, as [`IcpTarget::normals`] estimates it.
+    ///
+    /// # Panics
+    /// If `j` is not below the number of points.
+    pub fn normal(&self, j: usize) -> [f32; 3] {
         *self.normals[j].get_or_init(|| normals::normal_at(&self.points, &self.index, j, NORMAL_NEIGHBOURS))
     }
 

@@ -66,6 +66,13 @@ fn normals_are_estimated_only_where_icp_needs_them_and_equal_the_eager_ones() {
     assert!(rotation_error_deg(&c.T_target_source, &truth) < 0.05, "{}", c.T_target_source);
     let used = target.normals_estimated();
     assert!(used > 0 && used < cloud.len() / 5, "{used} of {} normals estimated", cloud.len());
+    // the confidence's evidence estimates normals only where its probes' ICP and its slide (the
+    // inliers') need them: its turns reach much of the target, but not every point of it
+    let source_index = IcpTarget::new(&source, false);
+    let e = arps::confidence::evidence(&target, &source_index, &source, &c.T_target_source, 0.03, IcpKind::Plane);
+    assert!(e.fitness > 0.9, "{e:?}");
+    let used = target.normals_estimated();
+    assert!(used < cloud.len() * 4 / 5, "{used} of {} normals estimated with the evidence", cloud.len());
     assert_eq!(target.normals(), normals::estimate_normals(&cloud, arps::icp::NORMAL_NEIGHBOURS));
     assert_eq!(target.normals_estimated(), cloud.len());
 }
