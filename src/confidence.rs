@@ -230,9 +230,9 @@ fn turns(
     let mut alternatives: Vec<Matrix4<f64>> = Vec::new();
     // each earlier probe's pose after each stage (4d, 2d, d; `None`: not run)
     let mut paths: Vec<[Option<Matrix4<f64>>; 3]> = Vec::with_capacity(starts.len());
+    // each stage stops the probe when it cannot come near the answer's fit at that distance
+    let stages = [(4.0, base_coarse), (2.0, base_loose), (1.0, 0.0)];
     for (start, wide) in starts {
-        // each stage stops the probe when it cannot come near the answer's fit at that distance
-        let stages = [(4.0, base_coarse), (2.0, base_loose), (1.0, 0.0)];
         // each probe's stages warm-start each other's searches
         let mut partners = Partners::default();
         let mut path = [None; 3];

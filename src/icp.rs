@@ -97,6 +97,17 @@ impl std::fmt::Debug for IcpTarget {
 #[derive(Clone, Debug, Default)]
 pub struct Partners(Vec<u32>);
 
+impl Partners {
+    /// Runs `pass` on fresh scratch buffers that start from these partners, and keeps the
+    /// partners `pass` leaves there.
+    fn lend<T>(&mut self, pass: impl FnOnce(&mut Scratch) -> T) -> T {
+        let mut scratch = Scratch { prev: std::mem::take(&mut self.0), ..Scratch::default() };
+        let out = pass(&mut scratch);
+        self.0 = scratch.prev;
+        out
+    }
+}
+
 /// Buffers reused across the iterations of one run.
 #[derive(Default)]
 struct Scratch {
@@ -206,10 +217,7 @@ impl IcpTarget {
         params: &IcpParams,
         partners: &mut Partners,
     ) -> IcpResult {
-        let mut scratch = Scratch { prev: std::mem::take(&mut partners.0), ..Scratch::default() };
-        let result = self.align_scratch(source, init, params, &mut scratch);
-        partners.0 = scratch.prev;
-        result
+        partners.lend(|scratch| self.align_scratch(source, init, params, scratch))
     }
 
     /// [`IcpTarget::align`] on the given scratch buffers.
@@ -278,10 +286,7 @@ impl IcpTarget {
         max_distance: f64,
         partners: &mut Partners,
     ) -> (f64, f64) {
-        let mut scratch = Scratch { prev: std::mem::take(&mut partners.0), ..Scratch::default() };
-        let out = self.correspond(source, t, max_distance, &mut scratch);
-        partners.0 = scratch.prev;
-        out
+        partners.lend(|scratch| self.correspond(source, t, max_distance, scratch))
     }
 
     /// One correspondence pass: fills `scratch` with the inlier pairs and returns
