@@ -82,8 +82,9 @@ def row_entropy(gamma):
 
 
 def losses(out, batch, cfg):
-    """``(total, parts)``: the weighted total (a scalar to differentiate, the batch mean) and the
-    terms' batch means as floats, named as in the CPU trainer's log."""
+    """``(total, parts, keys)``: the weighted total (a scalar to differentiate, the batch mean),
+    the terms' batch means named ``keys`` (as in the CPU trainer's log) followed by the mean step
+    per layer, in one float64 tensor left on the device (``unpack_parts`` reads its host copy)."""
     b = batch["source"].shape[0]
     dev = batch["source"].device
     t_gt = batch["t_gt"]
@@ -140,6 +141,14 @@ def losses(out, batch, cfg):
     per["gamma_entropy"] = 0.5 * (row_entropy(out["gamma_source"]) + row_entropy(out["gamma_target"]))
     total = sum((v * w for v, w in terms), zero)
     per["total"] = total
-    parts = {k: float(v.detach().mean()) for k, v in per.items()}
-    parts["steps"] = [float(s) for s in out["steps"].detach().double().mean(0)]
-    return total.mean(), parts
+    keys = list(per)
+    parts = torch.cat([torch.stack([per[k].detach().double().mean() for k in keys]),
+                       out["steps"].detach().double().mean(0)])
+    return total.mean(), parts, keys
+
+
+def unpack_parts(keys, values):
+    """The host copy of ``losses``' parts tensor as ``{term: float, "steps": [float per layer]}``."""
+    parts = dict(zip(keys, values[:len(keys)]))
+    parts["steps"] = list(values[len(keys):])
+    return parts

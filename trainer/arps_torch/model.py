@@ -24,9 +24,18 @@ class ArpsNet(nn.Module):
         self.specs = tensor_specs(self.cfg)
         self.index = {name: i for i, (name, _) in enumerate(self.specs)}
         self.tensors = nn.ParameterList([nn.Parameter(torch.zeros(shape)) for _, shape in self.specs])
+        self._by_name = self._names()
+
+    def _names(self):
+        return {name: self.tensors[i] for name, i in self.index.items()}
+
+    def _apply(self, fn, *args, **kwargs):
+        out = super()._apply(fn, *args, **kwargs)
+        self._by_name = self._names()  # ``.to(device)`` may replace the parameters
+        return out
 
     def p(self, name: str) -> torch.Tensor:
-        return self.tensors[self.index[name]]
+        return self._by_name[name]
 
     def named(self):
         """``[(engine name, parameter)]`` in the engine's order."""

@@ -21,7 +21,7 @@ import numpy as np
 import torch
 
 from . import TRAINER
-from .losses import losses
+from .losses import losses, unpack_parts
 from .model import ArpsNet, gmr
 from .stream import Generators, read_val, to_batch
 from .weights import read_checkpoint, save_checkpoint, weights_bytes, write_atomic
@@ -59,17 +59,27 @@ class Adam:
 
     @torch.no_grad()
     def update(self, params):
+        """One step over all tensors at once (``torch._foreach_*``: the same float32 arithmetic,
+        element by element, as one op per tensor, in a handful of launches)."""
         self.t += 1
         c1 = 1.0 - self.beta1 ** self.t
         c2 = 1.0 - self.beta2 ** self.t
         step = self.lr / c1
         inv_c2 = 1.0 / c2
-        for n, p in params:
-            g = p.grad
-            m, v = self.m[n], self.v[n]
-            m.mul_(self.beta1).add_(g, alpha=1 - self.beta1)
-            v.mul_(self.beta2).addcmul_(g, g, value=1 - self.beta2)
-            p.sub_(step * m / ((v * inv_c2).sqrt() + self.eps))
+        ps = [p for _, p in params]
+        gs = [p.grad for p in ps]
+        ms = [self.m[n] for n, _ in params]
+        vs = [self.v[n] for n, _ in params]
+        torch._foreach_mul_(ms, self.beta1)
+        torch._foreach_add_(ms, gs, alpha=1 - self.beta1)
+        torch._foreach_mul_(vs, self.beta2)
+        torch._foreach_addcmul_(vs, gs, gs, value=1 - self.beta2)
+        den = torch._foreach_mul(vs, inv_c2)
+        torch._foreach_sqrt_(den)
+        torch._foreach_add_(den, self.eps)
+        upd = torch._foreach_mul(ms, step)
+        torch._foreach_div_(upd, den)
+        torch._foreach_sub_(ps, upd)
 
     def meta(self):
         return {"lr": self.lr, "beta1": self.beta1, "beta2": self.beta2, "eps": self.eps, "t": self.t}
@@ -275,33 +285,35 @@ def main(argv=None):
             net = {k: v.float() for k, v in net.items()}
             net["t12"] = gmr(net["gamma_source"], net["gamma_target"], b["source"], b["target"])
             net["t21"] = gmr(net["gamma_target"], net["gamma_source"], b["target"], b["source"])
-            total, parts = losses(net, b, cfg["loss"])
+            total, parts_t, keys = losses(net, b, cfg["loss"])
             total.backward()
             for _, p in params:
                 if p.grad is None:
                     p.grad = torch.zeros_like(p)
-            # one device sync for the global norm (float64, as the CPU trainer sums it)
-            gn = float(torch.stack([(p.grad.double() ** 2).sum() for _, p in params]).sum().sqrt())
+            grads = [p.grad for _, p in params]
+            # the global norm in float64, as the CPU trainer sums it; it and the loss terms reach
+            # the host in one transfer, the step's only device sync
+            gn_t = torch.stack([(g.double() ** 2).sum() for g in grads]).sum().sqrt()
+            host = torch.cat([gn_t.view(1), parts_t]).cpu().tolist()
+            gn, parts = host[0], unpack_parts(keys, host[1:])
             skipped = not (math.isfinite(gn) and all(math.isfinite(v) for k, v in parts.items() if k != "steps"))
             clipped = False
             if not skipped:
                 if clip and gn > clip:
-                    for _, p in params:
-                        p.grad.mul_(clip / gn)
+                    torch._foreach_mul_(grads, clip / gn)
                     clipped = True
                 adam.update(params)
                 if ema is not None:
                     with torch.no_grad():
-                        for n, p in params:
-                            ema[n].mul_(ema_decay).add_(p, alpha=1 - ema_decay)
+                        emas = [ema[n] for n, _ in params]
+                        torch._foreach_mul_(emas, ema_decay)
+                        torch._foreach_add_(emas, [p for _, p in params], alpha=1 - ema_decay)
             else:
                 st["skipped_steps"] += 1
             st["step"] += 1
             st["adam_t"] = adam.t
             st["pairs_seen"] += cfg["batch"]
             st["elapsed"] = elapsed0 + time.time() - session
-            if dev.type == "cuda":
-                torch.cuda.synchronize()
             dt = time.time() - ts
             if not skipped:
                 window.append(parts)

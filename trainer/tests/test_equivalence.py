@@ -41,7 +41,7 @@ def test_torch_fixture_is_current():
     io = load_file(os.path.join(FIX, "torch_io.safetensors"))
     got = fixture.outputs(m, io["source"], io["target"])
     for k in KEYS:
-        assert np.abs(got[k] - io[k]).max() <= 1e-5, f"{k}: rerun python -m arps_torch.fixture"
+        assert np.abs(got[k] - io[k]).max() <= 1e-4, f"{k}: rerun python -m arps_torch.fixture"
 
 
 def test_gmr_recovers_a_known_transform():
