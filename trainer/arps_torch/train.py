@@ -175,6 +175,8 @@ def main(argv=None):
     ap.add_argument("--val-every-steps", type=int, help="override: validate every S steps")
     ap.add_argument("--batch", type=int, help="override the run's pairs per step")
     ap.add_argument("--lr", type=float, help="replace the run's current lr")
+    ap.add_argument("--compile", action="store_true",
+                    help="torch.compile the network's forward and backward (static shapes; the first step compiles)")
     ap.add_argument("--quiet", action="store_true")
     a = ap.parse_args(argv)
     torch.backends.cuda.matmul.allow_tf32 = a.tf32
@@ -202,6 +204,7 @@ def main(argv=None):
     model = ArpsNet(cfg["model"]).to(dev)
     model.load({n: ck["params"][n] for n, _ in model.specs})
     params = model.named()
+    network = torch.compile(model.network, dynamic=False) if a.compile else model.network
     adam = Adam(ck["adam"], params, ck["adam_m"], ck["adam_v"], dev)
     ema_decay = cfg.get("ema_decay")
     ema = None
@@ -219,7 +222,7 @@ def main(argv=None):
         f"{len(val)} validation pairs in {time.time() - t0:.1f} s, device {dev}")
     logf.write({"kind": "start", "session": st["sessions"], "step": st["step"], "pairs_seen": st["pairs_seen"],
                 "elapsed": st["elapsed"], "lr": st["lr"], "threads": a.generators, "config": cfg,
-                "trainer": TRAINER, "device": str(dev), "amp": a.amp})
+                "trainer": TRAINER, "device": str(dev), "amp": a.amp, "compile": a.compile})
     gens = Generators(a.arps_train, stream_cfg, st["pairs_seen"], a.generators, bank=None)
     if gens.header["batch"] != cfg["batch"]:
         raise RuntimeError("generator batch differs from the run's")
@@ -281,7 +284,7 @@ def main(argv=None):
             for _, p in params:
                 p.grad = None
             with autocast:
-                net = model.network(b["source"], b["target"])
+                net = network(b["source"], b["target"])
             net = {k: v.float() for k, v in net.items()}
             net["t12"] = gmr(net["gamma_source"], net["gamma_target"], b["source"], b["target"])
             net["t21"] = gmr(net["gamma_target"], net["gamma_source"], b["target"], b["source"])

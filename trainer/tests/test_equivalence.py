@@ -91,3 +91,30 @@ def test_checkpoint_round_trip(tmp_path):
     for k in params:
         assert np.array_equal(ck["params"][k], params[k]) and np.array_equal(ck["adam_v"][k], v[k])
     assert os.path.exists(str(tmp_path / "checkpoint.json"))
+
+
+def test_compiled_network_matches_eager():
+    """``train --compile``: the compiled network (forward and its gradients) computes what the
+    eager one does, to float32 rounding (about 40 s on a CPU, most of it compiling)."""
+    m = model_of(os.path.join(FIX, "torch_tiny.safetensors"))
+    io = load_file(os.path.join(FIX, "torch_io.safetensors"))
+    src = torch.as_tensor(io["source"]).unsqueeze(0).repeat(2, 1, 1)
+    tgt = torch.as_tensor(io["target"]).unsqueeze(0).repeat(2, 1, 1)
+    src[1] = src[1].flip(0)
+
+    def run(fn):
+        for _, p in m.named():
+            p.grad = None
+        out = fn(src, tgt)
+        sum(v.double().sin().sum() for v in out.values()).backward()
+        return {k: v.detach() for k, v in out.items()}, {n: p.grad.clone() for n, p in m.named() if p.grad is not None}
+
+    eager, g_eager = run(m.network)
+    compiled, g_comp = run(torch.compile(m.network, dynamic=False))
+    for k in eager:
+        assert torch.isfinite(compiled[k]).all()
+        assert (compiled[k] - eager[k]).abs().max() <= 1e-5, k
+    assert g_eager.keys() == g_comp.keys() and len(g_eager) > 10
+    for n in g_eager:
+        scale = max(1.0, g_eager[n].abs().max().item())
+        assert (g_comp[n] - g_eager[n]).abs().max() <= 1e-4 * scale, n
