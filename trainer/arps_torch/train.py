@@ -284,7 +284,15 @@ def main(argv=None):
             for _, p in params:
                 p.grad = None
             with autocast:
-                net = network(b["source"], b["target"])
+                try:
+                    net = network(b["source"], b["target"])
+                except Exception as e:  # a compiler that fails here must not end a GPU session
+                    if network is model.network:
+                        raise
+                    say(f"--compile failed ({type(e).__name__}: {e}); training uncompiled")
+                    logf.write({"kind": "note", "step": st["step"], "pairs_seen": st["pairs_seen"], "elapsed": st["elapsed"], "compile_failed": f"{type(e).__name__}: {e}"})
+                    network = model.network
+                    net = network(b["source"], b["target"])
             net = {k: v.float() for k, v in net.items()}
             net["t12"] = gmr(net["gamma_source"], net["gamma_target"], b["source"], b["target"])
             net["t21"] = gmr(net["gamma_target"], net["gamma_source"], b["target"], b["source"])

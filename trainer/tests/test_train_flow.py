@@ -95,3 +95,21 @@ def test_first_step_losses_equal_the_cpu_trainers(tmp_path):
     vc = [x for x in lines(c) if x["kind"] == "val"][0]["val"]
     for k in ("net_recall", "net_mre", "net_mte"):
         assert abs(va[k] - vc[k]) <= 1e-3 * max(1.0, abs(vc[k])), f"{k}: torch {va[k]} vs arps-train {vc[k]}"
+
+
+def test_a_failing_compile_falls_back_to_eager(tmp_path, monkeypatch):
+    """``--compile`` on a machine whose compiler breaks: the session notes it and trains on."""
+    d = init(tmp_path / "r")
+
+    def broken(fn, **_):
+        def call(*args, **kwargs):
+            raise RuntimeError("no compiler here")
+        return call
+
+    monkeypatch.setattr(torch, "compile", broken)
+    train.main(["--run", str(d), "--arps-train", BIN, "--generators", "2", "--steps", "3", "--device", "cpu",
+                "--quiet", "--compile"])
+    log = lines(d)
+    notes = [x for x in log if x["kind"] == "note"]
+    assert len(notes) == 1 and "no compiler here" in notes[0]["compile_failed"]
+    assert [x["kind"] for x in log].count("step") == 3

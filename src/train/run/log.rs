@@ -1,6 +1,7 @@
 //! The JSONL run log (`runs/NAME/log.jsonl`): one object per line, `"kind": "start" | "step" |
-//! "val" | "checkpoint" | "end"`, each with `time` (Unix seconds), `elapsed` (training seconds over
-//! all sessions), `step` and `pairs_seen`. A finished run's log may be stored gzipped next to
+//! "val" | "checkpoint" | "end"` (the PyTorch trainer may add `"note"` lines, which readers skip),
+//! each with `time` (Unix seconds), `elapsed` (training seconds over all sessions), `step` and
+//! `pairs_seen`. A finished run's log may be stored gzipped next to
 //! where the plain one would be (`log.jsonl.gz`); the readers here take either.
 
 use std::io::{Read, Write};
