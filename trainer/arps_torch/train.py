@@ -204,7 +204,8 @@ def main(argv=None):
     model = ArpsNet(cfg["model"]).to(dev)
     model.load({n: ck["params"][n] for n, _ in model.specs})
     params = model.named()
-    network = torch.compile(model.network, dynamic=False) if a.compile else model.network
+    compiled = a.compile
+    network = torch.compile(model.network, dynamic=False) if compiled else model.network
     adam = Adam(ck["adam"], params, ck["adam_m"], ck["adam_v"], dev)
     ema_decay = cfg.get("ema_decay")
     ema = None
@@ -287,11 +288,12 @@ def main(argv=None):
                 try:
                     net = network(b["source"], b["target"])
                 except Exception as e:  # a compiler that fails here must not end a GPU session
-                    if network is model.network:
+                    if not compiled:
                         raise
                     say(f"--compile failed ({type(e).__name__}: {e}); training uncompiled")
-                    logf.write({"kind": "note", "step": st["step"], "pairs_seen": st["pairs_seen"], "elapsed": st["elapsed"], "compile_failed": f"{type(e).__name__}: {e}"})
-                    network = model.network
+                    logf.write({"kind": "note", "step": st["step"], "pairs_seen": st["pairs_seen"],
+                                "elapsed": st["elapsed"], "compile_failed": f"{type(e).__name__}: {e}"})
+                    compiled, network = False, model.network
                     net = network(b["source"], b["target"])
             net = {k: v.float() for k, v in net.items()}
             net["t12"] = gmr(net["gamma_source"], net["gamma_target"], b["source"], b["target"])

@@ -113,3 +113,21 @@ def test_a_failing_compile_falls_back_to_eager(tmp_path, monkeypatch):
     notes = [x for x in log if x["kind"] == "note"]
     assert len(notes) == 1 and "no compiler here" in notes[0]["compile_failed"]
     assert [x["kind"] for x in log].count("step") == 3
+
+
+def test_an_error_in_the_eager_network_is_raised_not_noted(tmp_path, monkeypatch):
+    """Without ``--compile`` there is nothing to fall back to: the error ends the session."""
+    d = init(tmp_path / "r")
+
+    eager = train.ArpsNet.network
+
+    def broken(self, source, target):  # validation (no gradients) runs; a training step fails
+        if torch.is_grad_enabled():
+            raise RuntimeError("broken network")
+        return eager(self, source, target)
+
+    monkeypatch.setattr(train.ArpsNet, "network", broken)
+    with pytest.raises(RuntimeError, match="broken network"):
+        train.main(["--run", str(d), "--arps-train", BIN, "--generators", "2", "--steps", "3", "--device", "cpu",
+                    "--quiet"])
+    assert not [x for x in lines(d) if x["kind"] == "note"]
