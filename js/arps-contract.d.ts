@@ -41,7 +41,10 @@ export type RegisterOptions = {
    */
   maxCorrespondenceDistance?: number | null,
   /**
-   * Iteration cap of each of the three ICP stages. Default 30; at most 10000.
+   * Iteration cap of each of the three ICP stages. Default 30; at most 10000. The answer's
+   * final stage, when it has not converged within the cap, runs on for up to three more
+   * rounds of as many while it still moves (a slow fit is not judged where the cap cut it;
+   * `icpConverged` says whether it converged).
    */
   icpMaxIterations?: number,
   /**

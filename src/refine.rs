@@ -180,6 +180,8 @@ pub const REFINE_POINTS: usize = 8192;
 /// distance only (the sample's run has been through the coarse stages); its figures are those of
 /// that run (its `iterations` count both runs). So each start costs an ICP run on at most
 /// [`SCREEN_POINTS`] points, and the answer one final stage on at most [`REFINE_POINTS`].
+/// Either way, the winner's final stage runs on past the cap when it has not converged
+/// ([`CONVERGE_ROUNDS`]).
 pub fn refine_best(
     target: &IcpTarget,
     source: &[[f32; 3]],
@@ -195,10 +197,42 @@ pub fn refine_best(
         // the sample left it converged at the final distance: only the final stage runs again
         let last = &SCHEDULE[SCHEDULE.len() - 1..];
         let full = refine_stages(target, source, &[(w.start, w.T_target_source)], how, last);
-        return full.first().map(|c| Candidate { iterations: w.iterations + c.iterations, ..*c });
+        return full
+            .first()
+            .map(|c| converge(target, source, Candidate { iterations: w.iterations + c.iterations, ..*c }, how));
     }
     let all = refine_starts(target, source, starts, how);
-    choose(&all).map(|i| all[i])
+    choose(&all).map(|i| converge(target, source, all[i], how))
+}
+
+/// The answer's final stage, when it has not converged within the cap, runs on in rounds of
+/// `max_iterations` for at most this many rounds more ([`converge`]).
+pub const CONVERGE_ROUNDS: u32 = 3;
+
+/// A round of [`converge`] that moved no source point farther than this fraction of the final
+/// distance has settled: the fit is oscillating between near-equal correspondences, not moving.
+pub const SETTLED_FRACTION: f64 = 0.1;
+
+/// `c` itself when its final stage converged; otherwise that stage continued from where it
+/// stopped, in rounds of `how.max_iterations` iterations, until it converges, a round moves no
+/// point farther than [`SETTLED_FRACTION`] of the final distance, or after [`CONVERGE_ROUNDS`]
+/// rounds. A slow ICP (a long scene whose fit pins one motion only weakly) would otherwise be
+/// judged where the cap cut it, degrees short of its minimum.
+fn converge(target: &IcpTarget, source: &[[f32; 3]], c: Candidate, how: &Refinement) -> Candidate {
+    let last = &SCHEDULE[SCHEDULE.len() - 1..];
+    let mut c = c;
+    for _ in 0..CONVERGE_ROUNDS {
+        if how.kind == IcpKind::Off || c.converged {
+            break;
+        }
+        let next = refine_stages(target, source, &[(c.start, c.T_target_source)], how, last)[0];
+        let moved = max_displacement(&c.T_target_source, &next.T_target_source, source);
+        c = Candidate { iterations: c.iterations + next.iterations, ..next };
+        if moved <= SETTLED_FRACTION * how.d_final {
+            break;
+        }
+    }
+    c
 }
 
 /// `n` points of `points` (all of them if there are not more), evenly spaced in its order; the

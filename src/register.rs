@@ -48,7 +48,10 @@ pub struct Options {
     /// clouds' shared half-extent. ICP runs coarse to fine at 4x, 2x and 1x this distance;
     /// `fitness` and `inlierRmse` are measured at 1x. Must be > 0.
     pub max_correspondence_distance: Option<f64>,
-    /// Iteration cap of each of the three ICP stages. Default 30; at most 10000.
+    /// Iteration cap of each of the three ICP stages. Default 30; at most 10000. The answer's
+    /// final stage, when it has not converged within the cap, runs on for up to three more
+    /// rounds of as many while it still moves (a slow fit is not judged where the cap cut it;
+    /// `icpConverged` says whether it converged).
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub icp_max_iterations: u32,
     /// Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max

@@ -71,8 +71,10 @@ fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
     std::fs::write(&tiny, b"0 0 0\n1 0 0\n0 1 0\n").unwrap();
     let broken = broken.to_str().unwrap();
     let tiny = tiny.to_str().unwrap();
-    let cases: [(&[&str], &str); 5] = [
+    let (src, tgt) = ("fixtures/wasm/source.ply", "fixtures/wasm/target.ply");
+    let cases: [(&[&str], &str); 6] = [
         (&["register", "does-not-exist.ply", "fixtures/wasm/target.ply"], "does-not-exist.ply"),
+        (&["register", src, tgt, "--icp-max-iterations", "20000"], "icpMaxIterations = 20000 is more than 10000"),
         (&["register", broken, "fixtures/wasm/target.ply", "--json"], "PLY parse error"),
         (&["register", tiny, "fixtures/wasm/target.ply"], "at least 16"),
         (&["register", "fixtures/wasm/source.ply", "fixtures/wasm/target.ply", "--weights", broken], "weights"),
@@ -117,6 +119,13 @@ fn register_defaults_to_the_engines_starts() {
     assert_eq!(v["start"], serde_json::to_value(lib.start).unwrap(), "{v}");
     // (serde_json's default float parsing may be off by an ulp)
     assert!((v["fitness"].as_f64().unwrap() - lib.fitness).abs() < 1e-12, "{v} vs {}", lib.fitness);
+
+    // the iteration cap reaches the engine: at 1 a stage, three stages and at most three more
+    let one = arps(&["register", src, tgt, "--json", "--starts", "network", "--icp-max-iterations", "1"]);
+    assert!(one.status.success(), "{}", String::from_utf8_lossy(&one.stderr));
+    let o: serde_json::Value = serde_json::from_slice(&one.stdout).unwrap();
+    let iterations = o["icpIterations"].as_u64().unwrap();
+    assert!((1..=6).contains(&iterations), "{o}");
 
     let three = arps(&["register", src, tgt, "--json", "--starts", "network,centroids,initial"]);
     let t: serde_json::Value = serde_json::from_slice(&three.stdout).unwrap();

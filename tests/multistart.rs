@@ -336,3 +336,28 @@ fn large_sources_are_screened_on_a_sample_and_the_winner_refined_on_all_points()
     assert!(rotation_error_deg(&full.T_target_source, &best.T_target_source) < 0.01);
     assert_eq!(refine::refine_best(&target, &source, &[], &how(IcpKind::Plane, d)), None);
 }
+
+/// The answer's final stage runs on past the iteration cap until it converges (up to
+/// `CONVERGE_ROUNDS` more rounds of the cap): a slow ICP (point-to-point here, capped at a few iterations
+/// a stage) is not judged where the cap cut it. The other candidates keep the cap.
+#[test]
+fn the_answer_runs_on_past_the_cap_until_it_converges() {
+    let cloud = bumpy_surface(1500, 0.0).points;
+    let target = IcpTarget::new(&cloud, true);
+    let truth = motion([3.0, -2.0, 1.0], [0.05, 0.0, -0.03]);
+    let source = PointCloud::new(cloud.clone()).transformed(&arps::transform::rigid_inverse(&truth)).points;
+    let d = 0.05;
+    let start = motion([12.0, -6.0, 4.0], [0.06, 0.03, 0.0]) * truth;
+    let capped = Refinement { kind: IcpKind::Point, d_final: d, max_iterations: 3 };
+    let cut = refine::refine_starts(&target, &source, &[(Start::Network, start)], &capped)[0];
+    assert!(!cut.converged, "precondition: the cap cuts the plain schedule short: {cut:?}");
+    let best = refine::refine_best(&target, &source, &[(Start::Network, start)], &capped).unwrap();
+    assert!(best.converged, "{best:?}");
+    assert!(best.iterations > cut.iterations, "{} vs {}", best.iterations, cut.iterations);
+    let cap = (refine::SCHEDULE.len() as u32 + refine::CONVERGE_ROUNDS) * 3;
+    assert!(best.iterations <= cap, "{} iterations, at most {cap}", best.iterations);
+    let (e_cut, e_best) =
+        (rotation_error_deg(&cut.T_target_source, &truth), rotation_error_deg(&best.T_target_source, &truth));
+    assert!(e_best < e_cut, "{e_best:.4} deg after converging vs {e_cut:.4} deg cut");
+    assert_eq!((best.fitness, best.inlier_rmse), target.evaluate(&source, &best.T_target_source, d));
+}

@@ -59,6 +59,9 @@ enum Command {
         /// Final ICP max correspondence distance, in the clouds' units (default: 2.5% of their half-extent).
         #[arg(long)]
         max_correspondence_distance: Option<f64>,
+        /// Iteration cap of each ICP stage [default: the engine's `Options::icp_max_iterations`].
+        #[arg(long)]
+        icp_max_iterations: Option<u32>,
         /// Points per cloud fed to the network (default: the model's N).
         #[arg(long)]
         network_points: Option<usize>,
@@ -165,6 +168,7 @@ fn run(command: Command) -> Result<(), String> {
             weights,
             icp,
             max_correspondence_distance,
+            icp_max_iterations,
             network_points,
             seed,
             starts,
@@ -183,6 +187,7 @@ fn run(command: Command) -> Result<(), String> {
                     IcpArg::Off => IcpKind::Off,
                 },
                 max_correspondence_distance,
+                icp_max_iterations: icp_max_iterations.unwrap_or(Options::default().icp_max_iterations),
                 network_points,
                 seed,
                 non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
