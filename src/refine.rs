@@ -125,6 +125,10 @@ pub fn turned(base: &Matrix4<f64>, pivot: [f64; 3], degrees: f64) -> [Matrix4<f6
 /// ICP runs coarse to fine at these multiples of the final max correspondence distance.
 pub const SCHEDULE: [f64; 3] = [4.0, 2.0, 1.0];
 
+/// The last stage of [`SCHEDULE`] alone: what runs again on a screened winner's full points, and
+/// what `converge` continues.
+const FINAL_STAGE: &[f64] = &[SCHEDULE[SCHEDULE.len() - 1]];
+
 /// How every start is refined: the ICP kind, the final max correspondence distance (the stages of
 /// [`SCHEDULE`] are multiples of it; candidates are scored at it) and each stage's iteration cap.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -195,8 +199,7 @@ pub fn refine_best(
         let screened = refine_starts(target, &sample, starts, how);
         let w = screened[choose(&screened)?];
         // the sample left it converged at the final distance: only the final stage runs again
-        let last = &SCHEDULE[SCHEDULE.len() - 1..];
-        let full = refine_stages(target, source, &[(w.start, w.T_target_source)], how, last);
+        let full = refine_stages(target, source, &[(w.start, w.T_target_source)], how, FINAL_STAGE);
         return full
             .first()
             .map(|c| converge(target, source, Candidate { iterations: w.iterations + c.iterations, ..*c }, how));
@@ -206,10 +209,10 @@ pub fn refine_best(
 }
 
 /// The answer's final stage, when it has not converged within the cap, runs on in rounds of
-/// `max_iterations` for at most this many rounds more ([`converge`]).
+/// `max_iterations` for at most this many rounds more ([`refine_best`]).
 pub const CONVERGE_ROUNDS: u32 = 3;
 
-/// A round of [`converge`] that moved no source point farther than this fraction of the final
+/// A round past the cap ([`CONVERGE_ROUNDS`]) that moved no source point farther than this fraction of the final
 /// distance has settled: the fit is oscillating between near-equal correspondences, not moving.
 pub const SETTLED_FRACTION: f64 = 0.1;
 
@@ -218,14 +221,12 @@ pub const SETTLED_FRACTION: f64 = 0.1;
 /// point farther than [`SETTLED_FRACTION`] of the final distance, or after [`CONVERGE_ROUNDS`]
 /// rounds. A slow ICP (a long scene whose fit pins one motion only weakly) would otherwise be
 /// judged where the cap cut it, degrees short of its minimum.
-fn converge(target: &IcpTarget, source: &[[f32; 3]], c: Candidate, how: &Refinement) -> Candidate {
-    let last = &SCHEDULE[SCHEDULE.len() - 1..];
-    let mut c = c;
+fn converge(target: &IcpTarget, source: &[[f32; 3]], mut c: Candidate, how: &Refinement) -> Candidate {
     for _ in 0..CONVERGE_ROUNDS {
         if how.kind == IcpKind::Off || c.converged {
             break;
         }
-        let next = refine_stages(target, source, &[(c.start, c.T_target_source)], how, last)[0];
+        let next = refine_stages(target, source, &[(c.start, c.T_target_source)], how, FINAL_STAGE)[0];
         let moved = max_displacement(&c.T_target_source, &next.T_target_source, source);
         c = Candidate { iterations: c.iterations + next.iterations, ..next };
         if moved <= SETTLED_FRACTION * how.d_final {
