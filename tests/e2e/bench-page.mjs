@@ -5,33 +5,22 @@
 // headless Chromium with software WebGL, 1400x860), for loading the two files, "Fit view" and
 // aligning: the wall time, the longest main-thread long task, and their total (ms); then medians.
 // The pair is that of tests/e2e/demo.test.mjs (the Velodyne fixture's crops, densified).
-import { mkdtempSync, readFileSync, rmSync, writeFileSync } from "node:fs";
+import { mkdtempSync, rmSync, writeFileSync } from "node:fs";
 import { tmpdir } from "node:os";
 import { dirname, join, resolve } from "node:path";
 import { fileURLToPath, pathToFileURL } from "node:url";
 import { parseArgs } from "node:util";
 import { chromium } from "playwright-core";
-import { crop, random, rigid, transformPoints, writePly } from "../../www/lib.js";
+import { streetPair } from "./street-pair.mjs";
 
 const HERE = resolve(dirname(fileURLToPath(import.meta.url)), "../..");
 const { values: args } = parseArgs({ options: { runs: { type: "string", default: "3" }, root: { type: "string", default: HERE }, points: { type: "string", default: "1000000" } } });
 const N = Number(args.points);
 
-function densify(points, n, sigma, seed) {
-  const rand = random(seed);
-  const m = points.length / 3;
-  const out = new Float32Array(n * 3);
-  for (let i = 0; i < n; i++) for (let d = 0; d < 3; d++) out[i * 3 + d] = points[(i % m) * 3 + d] + (rand() + rand() + rand() - 1.5) * 2 * sigma;
-  return out;
-}
-const buf = readFileSync(join(HERE, "fixtures/scans/velodyne-small.ply"));
-const head = buf.indexOf("end_header\n") + 11;
-const n0 = Number(buf.subarray(0, head).toString("latin1").match(/element vertex (\d+)/)[1]);
-const scan = new Float32Array(buf.buffer.slice(buf.byteOffset + head, buf.byteOffset + head + n0 * 12));
 const dir = mkdtempSync(join(tmpdir(), "arps-bench-page-"));
-writeFileSync(join(dir, "source.ply"), writePly(densify(crop(scan, [1, 0.2, 0], 0.85).points, N, 0.08, 11)));
-const truth = rigid([0.1, 0.15, 1], 15, [1.0, -0.6, 0.2]);
-writeFileSync(join(dir, "target.ply"), writePly(transformPoints(densify(crop(scan, [-1, 0.3, 0], 0.85).points, N, 0.08, 12), truth)));
+const pair = streetPair(N);
+writeFileSync(join(dir, "source.ply"), pair.source);
+writeFileSync(join(dir, "target.ply"), pair.target);
 
 const { serve } = await import(pathToFileURL(join(resolve(args.root), "scripts/serve.mjs")).href);
 const { server, url } = await serve({ port: 0 });

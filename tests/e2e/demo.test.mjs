@@ -10,7 +10,8 @@
 //
 // The 1M-point pair: the same crops densified to 1,000,000 points each (every fixture point
 // repeated with independent jitter, about 0.08 m, different seeds for source and target), written
-// as binary PLY and uploaded like the small pair. The main thread's long tasks (Chromium's
+// as binary PLY and uploaded like the small pair. Both pairs come from ./street-pair.mjs, which
+// also writes them to disk for `arps register` (`node tests/e2e/street-pair.mjs DIR 1000000`). The main thread's long tasks (Chromium's
 // `longtask` performance entries, > 50 ms) are recorded while loading, fitting and aligning it.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
@@ -24,43 +25,27 @@ import { serve } from "../../scripts/serve.mjs";
 import {
   bounds,
   confidenceWords,
-  crop,
   decimate,
   invertRigid,
   modelSummary,
   multiply,
   parameterCount,
-  random,
   rigid,
   rotationAngleDeg,
   transformBounds,
-  transformPoints,
-  writePly,
 } from "../../www/lib.js";
+import { readFloatPly, streetCrops, streetPair, TRUTH } from "./street-pair.mjs";
 
 const ROOT = resolve(dirname(fileURLToPath(import.meta.url)), "../..");
 const CHROMIUM = process.env.ARPS_CHROMIUM ?? "/usr/bin/chromium";
 const OUT = resolve(ROOT, process.env.ARPS_E2E_OUT ?? "target/e2e");
 const TIMEOUT = 120_000;
 
-const TRUTH = rigid([0.1, 0.15, 1], 15, [1.0, -0.6, 0.2]);
 const BIG = 1_000_000;
 /** The longest main-thread task allowed while loading, fitting or aligning the 1M-point pair. */
 const LONGEST_TASK_MS = 200;
 const DESKTOP = { width: 1400, height: 860 };
 const PHONE = { width: 390, height: 844 };
-
-/** `n` points: the given ones in turn, each moved by a seeded jitter of about `sigma` per axis. */
-function densify(points, n, sigma, seed) {
-  const rand = random(seed);
-  const m = points.length / 3;
-  const out = new Float32Array(n * 3);
-  for (let i = 0; i < n; i++) {
-    const j = i % m;
-    for (let d = 0; d < 3; d++) out[i * 3 + d] = points[j * 3 + d] + (rand() + rand() + rand() - 1.5) * 2 * sigma;
-  }
-  return out;
-}
 
 let server;
 let url;
@@ -69,25 +54,14 @@ let page;
 let dir;
 const consoleLines = [];
 
-function readFloatPly(path) {
-  const buf = readFileSync(path);
-  const head = buf.indexOf("end_header\n") + "end_header\n".length;
-  const header = buf.subarray(0, head).toString("latin1");
-  assert.match(header, /format binary_little_endian 1\.0/);
-  const n = Number(header.match(/element vertex (\d+)/)[1]);
-  const body = buf.subarray(head, head + n * 12);
-  return new Float32Array(body.buffer.slice(body.byteOffset, body.byteOffset + body.length));
-}
-
 before(async () => {
   dir = mkdtempSync(join(tmpdir(), "arps-e2e-"));
-  const scan = readFloatPly(join(ROOT, "fixtures/scans/velodyne-small.ply"));
-  const source = crop(scan, [1, 0.2, 0], 0.85).points;
-  const target = transformPoints(crop(scan, [-1, 0.3, 0], 0.85).points, TRUTH);
-  writeFileSync(join(dir, "source.ply"), writePly(source, "e2e source"));
-  writeFileSync(join(dir, "target.ply"), writePly(target, "e2e target: source frame moved by a known transform"));
-  writeFileSync(join(dir, "big-source.ply"), writePly(densify(source, BIG, 0.08, 11), "e2e 1M source"));
-  writeFileSync(join(dir, "big-target.ply"), writePly(transformPoints(densify(crop(scan, [-1, 0.3, 0], 0.85).points, BIG, 0.08, 12), TRUTH), "e2e 1M target"));
+  const small = streetPair();
+  writeFileSync(join(dir, "source.ply"), small.source);
+  writeFileSync(join(dir, "target.ply"), small.target);
+  const big = streetPair(BIG);
+  writeFileSync(join(dir, "big-source.ply"), big.source);
+  writeFileSync(join(dir, "big-target.ply"), big.target);
   writeFileSync(join(dir, "broken.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\nnot numbers\n");
 
   ({ server, url } = await serve({ port: 0 }));
@@ -269,7 +243,7 @@ test("download the aligned source as PLY; copy the matrix as JSON", async () => 
   const file = join(dir, "aligned.ply");
   await download.saveAs(file);
   const aligned = readFloatPly(file);
-  const source = crop(readFloatPly(join(ROOT, "fixtures/scans/velodyne-small.ply")), [1, 0.2, 0], 0.85).points;
+  const source = streetCrops().source;
   assert.equal(aligned.length, source.length);
   // The file holds the source mapped through the result (row-major rows in #result).
   const [r0, r1, r2] = result.T_target_source;
