@@ -104,7 +104,7 @@ export type RegisterOptions = {
   starts?: Array<RegistrationStart>,
   /**
    * How `starts` are searched. Default `"adaptive"`: in stages, stopping as soon as the best
-   * answer's `confidence` reaches 0.9 (`STOP_CONFIDENCE`): the first start alone; then the
+   * answer's `confidence` reaches 0.95 (`STOP_CONFIDENCE`): the first start alone; then the
    * others in order, each run of local starts or of global ones (`"global"`,
    * `"globalNetwork"`) one stage (with the default starts: the global ones, then the other
    * local ones).

@@ -182,7 +182,7 @@ fn global_stage_times() {
             confidence: 0.999,
             inlier_distance: 1.5 * v,
             edge_ratio: 0.9,
-            hypotheses: 5,
+            hypotheses: global::GlobalParams::default().hypotheses,
             seed: 0,
         };
         let h = ransac::ransac(&a.points, &b.points, &m, &p);
