@@ -246,12 +246,18 @@ fn choose_prefers_fitness_then_rmse_then_order() {
     assert_eq!(refine::choose(&c), Some(0), "a full tie: the earlier start");
 }
 
-#[test]
-fn starts_that_meet_are_merged_into_the_earlier_one() {
+/// A 1,500-point bumpy surface as the prepared target, the same points moved by the inverse of
+/// `truth` as the source, and `truth` (`T_target_source`).
+fn surface_pair() -> (IcpTarget, Vec<[f32; 3]>, Matrix4<f64>) {
     let cloud = bumpy_surface(1500, 0.0).points;
-    let target = IcpTarget::new(&cloud, true);
     let truth = motion([3.0, -2.0, 1.0], [0.05, 0.0, -0.03]);
     let source = PointCloud::new(cloud.clone()).transformed(&arps::transform::rigid_inverse(&truth)).points;
+    (IcpTarget::new(&cloud, true), source, truth)
+}
+
+#[test]
+fn starts_that_meet_are_merged_into_the_earlier_one() {
+    let (target, source, truth) = surface_pair();
     let d = 0.05;
     let nudge = Matrix4::new_translation(&nalgebra::Vector3::new(0.01 * d, 0.0, 0.0));
     // the same start twice (a hair apart), and a distinct one
@@ -272,10 +278,7 @@ fn starts_that_meet_are_merged_into_the_earlier_one() {
 /// fitness at that stage's distance) is dropped; starts that fit about as well all go on.
 #[test]
 fn starts_far_behind_after_a_coarse_stage_are_dropped() {
-    let cloud = bumpy_surface(1500, 0.0).points;
-    let target = IcpTarget::new(&cloud, true);
-    let truth = motion([3.0, -2.0, 1.0], [0.05, 0.0, -0.03]);
-    let source = PointCloud::new(cloud.clone()).transformed(&arps::transform::rigid_inverse(&truth)).points;
+    let (target, source, truth) = surface_pair();
     let d = 0.05;
     // three extents away: no point within reach at any stage
     let away = Matrix4::new_translation(&nalgebra::Vector3::new(6.0, 0.0, 0.0)) * truth;
@@ -338,14 +341,11 @@ fn large_sources_are_screened_on_a_sample_and_the_winner_refined_on_all_points()
 }
 
 /// The answer's final stage runs on past the iteration cap until it converges (up to
-/// `CONVERGE_ROUNDS` more rounds of the cap): a slow ICP (point-to-point here, capped at a few iterations
-/// a stage) is not judged where the cap cut it. The other candidates keep the cap.
+/// `CONVERGE_ROUNDS` more rounds of the cap): a slow ICP (point-to-point here, capped at a few
+/// iterations a stage) is not judged where the cap cut it.
 #[test]
 fn the_answer_runs_on_past_the_cap_until_it_converges() {
-    let cloud = bumpy_surface(1500, 0.0).points;
-    let target = IcpTarget::new(&cloud, true);
-    let truth = motion([3.0, -2.0, 1.0], [0.05, 0.0, -0.03]);
-    let source = PointCloud::new(cloud.clone()).transformed(&arps::transform::rigid_inverse(&truth)).points;
+    let (target, source, truth) = surface_pair();
     let d = 0.05;
     let start = motion([12.0, -6.0, 4.0], [0.06, 0.03, 0.0]) * truth;
     let capped = Refinement { kind: IcpKind::Point, d_final: d, max_iterations: 3 };
