@@ -212,8 +212,9 @@ pub fn refine_best(
 /// `max_iterations` for at most this many rounds more ([`refine_best`]).
 pub const CONVERGE_ROUNDS: u32 = 3;
 
-/// A round past the cap ([`CONVERGE_ROUNDS`]) that moved no source point farther than this fraction of the final
-/// distance has settled: the fit is oscillating between near-equal correspondences, not moving.
+/// A round past the cap ([`CONVERGE_ROUNDS`]) that moved no source point farther than this
+/// fraction of the final distance has settled: the fit oscillates between near-equal
+/// correspondences rather than moving.
 pub const SETTLED_FRACTION: f64 = 0.1;
 
 /// `c` itself when its final stage converged; otherwise that stage continued from where it

@@ -129,10 +129,9 @@ pub enum Search {
     Exhaustive,
 }
 
-/// [`Search::Adaptive`] stops once the best answer's confidence reaches this. At 0.95 rather than
-/// 0.9 the search goes on past more of the network start's confidently wrong answers (13 pairs
-/// gained and none lost on 2,100 held-out pairs, 0.873 -> 0.893 recall on pairs in any pose;
-/// `BENCHMARK.md`).
+/// [`Search::Adaptive`] stops once the best answer's confidence reaches this: high enough that a
+/// confidently wrong answer of the first start rarely ends the search (`BENCHMARK.md` has the
+/// measurements behind the value).
 pub const STOP_CONFIDENCE: f64 = 0.95;
 
 impl Default for Options {
