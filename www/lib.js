@@ -188,7 +188,8 @@ export function makeExample({ positions, cells }, count = 6000, seed = 1) {
 /**
  * A result's `confidence` (the engine's estimate, in [0, 1], that the answer is right) in words:
  * `{ words, level }`, `level` one of `"right"` (>= 0.8), `"uncertain"` (>= 0.5) and `"wrong"`
- * (below 0.5, where the engine also warns), e.g. `"likely right (confidence 0.93)"`.
+ * (below 0.5, where the engine also warns; it warns at 0.5 too when another pose fits about as
+ * well), e.g. `"likely right (confidence 0.93)"`.
  */
 export function confidenceWords(confidence) {
   if (!Number.isFinite(confidence)) return { words: "unknown confidence", level: "uncertain" };

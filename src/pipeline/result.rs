@@ -3,17 +3,20 @@
 //! Takes the [`Prepared`] clouds, the network's estimate and the search's [`Chosen`] answer
 //! (normalised units); gives the [`Registration`] in the caller's frame and units: the
 //! normalisation, the initial guess's rotation and the clouds' origins undone, both transforms
-//! checked finite, a warning added when the confidence is low. The timings are the caller's.
+//! checked finite, a warning added when the confidence is low or another pose fits as well
+//! ([`verdict_warning`]). The timings are the caller's.
 
 use super::prepare::Prepared;
 use super::search::Chosen;
+use crate::confidence::Evidence;
 use crate::origin;
 use crate::refine::Candidate;
 use crate::register::{Registration, Timings};
 use crate::{checks, Result};
 use nalgebra::Matrix4;
 
-/// Confidence below which a warning says the alignment may be wrong.
+/// Confidence below which a warning says the alignment may be wrong (as it does whenever another
+/// pose fits about as well, which caps the confidence at 0.5).
 const LOW_CONFIDENCE: f64 = 0.5;
 
 /// Maps the chosen answer back to the caller (see the module docs).
@@ -37,19 +40,7 @@ pub(crate) fn finish(
     let T_target_source_network = to_caller(t_net_n);
     checks::finite_transform(&T_target_source, "the result")?;
     checks::finite_transform(&T_target_source_network, "the network's estimate")?;
-    if confidence < LOW_CONFIDENCE {
-        // the evidence of another pose fitting as well, when there is some
-        let others = match evidence.alternatives as usize {
-            0 => String::new(),
-            1 => "; another pose fits about as well (a symmetric shape?)".to_string(),
-            k => format!("; {k} other poses fit about as well (a symmetric shape?)"),
-        };
-        warnings.push(format!(
-            "low confidence {confidence:.2}: the alignment may be wrong (fitness {fitness:.2} within {:.3}, reverse overlap {:.2}{others})",
-            d_final * s,
-            evidence.overlap_reverse
-        ));
-    }
+    warnings.extend(verdict_warning(confidence, &evidence, fitness, d_final * s));
     Ok(Registration {
         T_target_source,
         T_target_source_network,
@@ -65,4 +56,45 @@ pub(crate) fn finish(
         evidence,
         starts_refined,
     })
+}
+
+/// The warning of a doubtful answer: its confidence is below [`LOW_CONFIDENCE`], or another pose
+/// fits about as well (`alternatives`, which caps the confidence at 0.5: a coin flip between two
+/// poses at best). `fitness` is the answer's within `distance` (the caller's units).
+fn verdict_warning(confidence: f64, evidence: &Evidence, fitness: f64, distance: f64) -> Option<String> {
+    if confidence >= LOW_CONFIDENCE && evidence.alternatives < 1.0 {
+        return None;
+    }
+    // the evidence of another pose fitting as well, when there is some
+    let others = match evidence.alternatives as usize {
+        0 => String::new(),
+        1 => "; another pose fits about as well (a symmetric shape?)".to_string(),
+        k => format!("; {k} other poses fit about as well (a symmetric shape?)"),
+    };
+    Some(format!(
+        "low confidence {confidence:.2}: the alignment may be wrong (fitness {fitness:.2} within {distance:.3}, reverse overlap {:.2}{others})",
+        evidence.overlap_reverse
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn evidence(alternatives: f64) -> Evidence {
+        Evidence { fitness: 0.4, overlap_reverse: 0.3, alternatives, ..Evidence::default() }
+    }
+
+    #[test]
+    fn doubtful_answers_are_warned_and_confident_ones_are_not() {
+        assert_eq!(verdict_warning(0.93, &evidence(0.0), 0.4, 0.05), None);
+        assert_eq!(verdict_warning(0.5, &evidence(0.0), 0.4, 0.05), None);
+        let low = verdict_warning(0.3, &evidence(0.0), 0.4, 0.05).unwrap();
+        assert!(low.starts_with("low confidence 0.30") && !low.contains("fits about as well"), "{low}");
+        // one alternative caps the confidence at exactly 0.5: a coin flip, warned
+        let flip = verdict_warning(0.5, &evidence(1.0), 0.4, 0.05).unwrap();
+        assert!(flip.contains("another pose fits about as well"), "{flip}");
+        let many = verdict_warning(0.25, &evidence(3.0), 0.4, 0.05).unwrap();
+        assert!(many.contains("3 other poses fit about as well"), "{many}");
+    }
 }
