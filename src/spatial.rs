@@ -19,8 +19,9 @@
 //! a hinted nearest search starts at the hint's leaf and climbs (`KdIndex::nearest_within`).
 //! Distances are squared Euclidean in `f32`.
 
-/// Most points in a leaf.
-pub const LEAF: usize = 12;
+/// Most points in a leaf. 16 registers small pairs faster than 12 or 8, natively and in wasm, and
+/// as fast as 24 (`BENCHMARK.md`, "Kernels").
+pub const LEAF: usize = 16;
 
 /// Traversal stack size: the tree depth is at most `log2(u32::MAX) + 1 < 40`.
 const STACK: usize = 48;
