@@ -405,7 +405,8 @@ const WEIGHTS: [f64; 11] = [1.977, 0.5273, 1.661, -0.2899, 2.178, -0.334, 0.7324
 /// with a probability of about `1 / k` at best. So it is low when the clouds overlap poorly under
 /// the answer, and also when other poses fit about as well (a symmetric or featureless shape):
 /// then the answer may be right, but nothing in the clouds says so. Below 0.5, or with an
-/// alternative (at most 0.5), the result carries a warning. No overlap at all (fitness 0) and non-finite evidence give 0.
+/// alternative (at most 0.5), the result carries a warning. No overlap at all (fitness 0) and
+/// non-finite evidence give 0.
 pub fn confidence(e: &Evidence) -> f64 {
     // no source point near the target: nothing in the clouds supports the answer
     if e.fitness.is_nan() || e.fitness <= 0.0 {

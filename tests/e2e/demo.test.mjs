@@ -11,8 +11,9 @@
 // The 1M-point pair: the same crops densified to 1,000,000 points each (every fixture point
 // repeated with independent jitter, about 0.08 m, different seeds for source and target), written
 // as binary PLY and uploaded like the small pair. Both pairs come from ./street-pair.mjs, which
-// also writes them to disk for `arps register` (`node tests/e2e/street-pair.mjs DIR 1000000`). The main thread's long tasks (Chromium's
-// `longtask` performance entries, > 50 ms) are recorded while loading, fitting and aligning it.
+// also writes them to disk for `arps register` (`node tests/e2e/street-pair.mjs DIR 1000000`).
+// The main thread's long tasks (Chromium's `longtask` performance entries, > 50 ms) are recorded
+// while loading, fitting and aligning it.
 import { test, before, after } from "node:test";
 import assert from "node:assert/strict";
 import { mkdirSync, mkdtempSync, readFileSync, rmSync, writeFileSync } from "node:fs";
