@@ -75,6 +75,8 @@ pub const PLANE_RANK_TOL: f64 = 1e-9;
 /// per sampled source point) ever need one, so their cost follows the source sample, not the
 /// target's size. A normal's value does not depend on when it is estimated.
 pub struct IcpTarget {
+    /// Unique per target built: what [`Partners`]' floors are about (never 0).
+    id: u64,
     points: Vec<[f32; 3]>,
     index: KdIndex,
     normals: Vec<OnceLock<[f32; 3]>>,
@@ -94,19 +96,54 @@ impl std::fmt::Debug for IcpTarget {
 /// the same source points starts its searches there. It is only a hint: a pass finds the same
 /// partners with or without it (among points at exactly equal distance, possibly another), and
 /// one made for other source points is ignored where its length differs.
+///
+/// It also keeps each point's [`Floor`]: how far the other target points were from it. A later
+/// pass skips the search of a point that has not moved far enough since to change its answer
+/// (the same partner, or still none), with the same result; the floors are forgotten when the
+/// partners are used with another target.
 #[derive(Clone, Debug, Default)]
-pub struct Partners(Vec<u32>);
+pub struct Partners {
+    prev: Vec<u32>,
+    floors: Vec<Floor>,
+    /// The [`IcpTarget::id`] the floors are about.
+    floors_of: u64,
+}
 
 impl Partners {
     /// Runs `pass` on fresh scratch buffers that start from these partners, and keeps the
     /// partners `pass` leaves there.
     fn lend<T>(&mut self, pass: impl FnOnce(&mut Scratch) -> T) -> T {
-        let mut scratch = Scratch { prev: std::mem::take(&mut self.0), ..Scratch::default() };
+        let mut scratch = Scratch {
+            prev: std::mem::take(&mut self.prev),
+            floors: std::mem::take(&mut self.floors),
+            floors_of: self.floors_of,
+            ..Scratch::default()
+        };
         let out = pass(&mut scratch);
-        self.0 = scratch.prev;
+        (self.prev, self.floors, self.floors_of) = (scratch.prev, scratch.floors, scratch.floors_of);
         out
     }
 }
+
+/// What a search told about a source point's surroundings
+/// ([`crate::spatial::KdIndex::nearest_within_and_floor`]): no target point other than its
+/// partner (every target point, when it had none) is within `reach` of `at`, the moved point
+/// then. Until the point moves farther than the gap between its partner and `reach`, its search
+/// would give the same answer, and is skipped: in late ICP iterations points move by a small
+/// fraction of the point spacing, and the many points of a partial scan without a partner stay
+/// far from the target.
+#[derive(Clone, Copy, Debug, Default)]
+struct Floor {
+    /// The distance, already lowered by [`FLOOR_MARGIN`] (0: nothing known).
+    reach: f64,
+    at: [f32; 3],
+}
+
+/// Relative margin by which a [`Floor`] is lowered, and the partner's distance and the search
+/// radius raised, before a search is skipped: the tree computes its bounds in `f32` (a few units
+/// in the last place, about 1e-7), so a skipped search is always one that would have given the
+/// same answer.
+const FLOOR_MARGIN: f64 = 1e-5;
 
 /// Buffers reused across the iterations of one run.
 #[derive(Default)]
@@ -117,9 +154,15 @@ struct Scratch {
     /// Per source point, its partner in the previous pass (`u32::MAX`: none): warm-starts the
     /// nearest-neighbour search.
     prev: Vec<u32>,
+    /// Per source point, its [`Floor`] (about the target `floors_of`).
+    floors: Vec<Floor>,
+    floors_of: u64,
     /// Contiguous copies for [`rigid::kabsch`].
     target_xyz: Vec<[f64; 3]>,
 }
+
+/// Where the [`IcpTarget::id`]s come from.
+static NEXT_TARGET_ID: std::sync::atomic::AtomicU64 = std::sync::atomic::AtomicU64::new(1);
 
 impl IcpTarget {
     /// Builds the kd-tree of the target; with `with_normals`, every normal too.
@@ -128,6 +171,7 @@ impl IcpTarget {
     /// value either way: [`normals::normal_at`] with [`NORMAL_NEIGHBOURS`] neighbours).
     pub fn new(points: &[[f32; 3]], with_normals: bool) -> Self {
         let target = Self {
+            id: NEXT_TARGET_ID.fetch_add(1, std::sync::atomic::Ordering::Relaxed),
             points: points.to_vec(),
             index: KdIndex::new(points),
             normals: (0..points.len()).map(|_| OnceLock::new()).collect(),
@@ -313,12 +357,54 @@ impl IcpTarget {
             scratch.prev.clear();
             scratch.prev.resize(source.len(), u32::MAX);
         }
+        if scratch.floors.len() != source.len() || scratch.floors_of != self.id {
+            scratch.floors.clear();
+            scratch.floors.resize(source.len(), Floor::default());
+            scratch.floors_of = self.id;
+        }
+        // a point whose floor lies beyond this distance would find no partner
+        let skip_beyond = (search2 as f64).sqrt() * (1.0 + FLOOR_MARGIN);
         let mut sum2 = 0.0f64;
-        for (s, prev) in source.iter().zip(scratch.prev.iter_mut()) {
+        for ((s, prev), floor) in source.iter().zip(scratch.prev.iter_mut()).zip(scratch.floors.iter_mut()) {
             let p = r * Vector3::new(s[0] as f64, s[1] as f64, s[2] as f64) + tr;
             let q32 = [p.x as f32, p.y as f32, p.z as f32];
+            if floor.reach > 0.0 {
+                // how far the point has moved since its floor (the other target points are at
+                // least `reach - moved` away)
+                let moved: f64 = (0..3).map(|a| (q32[a] as f64 - floor.at[a] as f64).powi(2)).sum::<f64>().sqrt();
+                let others = floor.reach - moved;
+                if *prev == u32::MAX {
+                    if others > skip_beyond {
+                        continue;
+                    }
+                } else {
+                    let partner = self.points[*prev as usize];
+                    let near: f64 = (0..3).map(|a| (q32[a] as f64 - partner[a] as f64).powi(2)).sum::<f64>().sqrt();
+                    if near * (1.0 + FLOOR_MARGIN) < others {
+                        // still the strictly nearest: the search would find it, if within bound
+                        if crate::spatial::dist2(&partner, &q32) < search2 {
+                            let j = *prev as usize;
+                            let d2 = (p.x - partner[0] as f64).powi(2)
+                                + (p.y - partner[1] as f64).powi(2)
+                                + (p.z - partner[2] as f64).powi(2);
+                            if d2 < max2 {
+                                sum2 += d2;
+                                scratch.moved.push([p.x, p.y, p.z]);
+                                scratch.target.push(j);
+                            }
+                            continue;
+                        }
+                        // no partner now, and no floor kept for it
+                        *prev = u32::MAX;
+                        *floor = Floor::default();
+                        continue;
+                    }
+                }
+            }
             let hint = (*prev != u32::MAX).then_some(*prev as usize);
-            let Some((j, _)) = self.index.nearest_within(&q32, search2, hint) else {
+            let (found, f) = self.index.nearest_within_and_floor(&q32, search2, hint);
+            *floor = Floor { reach: (f as f64).sqrt() * (1.0 - FLOOR_MARGIN), at: q32 };
+            let Some((j, _)) = found else {
                 *prev = u32::MAX;
                 continue;
             };

@@ -54,6 +54,33 @@ impl Pending {
     const ROOT: Pending = Pending { node: 0, rd: 0.0, off: [0.0; 3] };
 }
 
+/// The two least of the squared distances and bounds a search recorded
+/// ([`KdIndex::nearest_within_and_floor`]): every indexed point is at least the least away, and
+/// every point but the one found at least the second.
+#[derive(Clone, Copy)]
+struct Floors {
+    least: f32,
+    second: f32,
+}
+
+impl Floors {
+    /// Nothing recorded yet (and all that the searches without `FLOOR` record).
+    const NONE: Floors = Floors { least: f32::INFINITY, second: f32::INFINITY };
+
+    /// Records the distance or bound `v` (only with `FLOOR`).
+    #[inline(always)]
+    fn record<const FLOOR: bool>(&mut self, v: f32) {
+        if FLOOR {
+            if v < self.least {
+                self.second = self.least;
+                self.least = v;
+            } else if v < self.second {
+                self.second = v;
+            }
+        }
+    }
+}
+
 /// The traversal stack of one query, not initialised: zeroing its `STACK` entries cost more than
 /// a whole bounded ICP query's descent (a measurable share of ICP time).
 struct Stack {
@@ -181,6 +208,52 @@ impl KdIndex {
     /// the hint's leaf or one level up, without descending from the root.
     #[inline]
     pub fn nearest_within(&self, q: &[f32; 3], max_d2: f32, hint: Option<usize>) -> Option<(usize, f32)> {
+        let mut none = Floors::NONE;
+        self.search::<false>(q, max_d2, hint, &mut none)
+    }
+
+    /// [`KdIndex::nearest_within`], and a *floor*: a lower bound of the squared distance from `q`
+    /// to every indexed point other than the one found (to every point when none is found; then
+    /// it is at least `max_d2`). It is the least of the bounds by which the search left subtrees
+    /// out and of the distances it scanned, so for a query far from every point but the one
+    /// found it is near the true distance of the second nearest. Computed in `f32`, it may
+    /// exceed the true bound by a few units in the last place (a relative 1e-5 is ample).
+    /// Without points or with a NaN coordinate in `q`: `(None, 0.0)`.
+    ///
+    /// ICP uses it to skip searches ([`crate::icp::Partners`]): a query that has moved by `m`
+    /// since a search gave it the floor `f` is still at least `sqrt(f) - m` from every point but
+    /// the one found; when that one is nearer, it is still the nearest.
+    #[inline]
+    pub fn nearest_within_and_floor(
+        &self,
+        q: &[f32; 3],
+        max_d2: f32,
+        hint: Option<usize>,
+    ) -> (Option<(usize, f32)>, f32) {
+        if self.nodes.is_empty() || q.iter().any(|v| v.is_nan()) {
+            return (None, 0.0);
+        }
+        let mut floors = Floors::NONE;
+        let found = self.search::<true>(q, max_d2, hint, &mut floors);
+        // the point found is the least distance recorded (every bound that left a subtree out
+        // was at least the best distance then); the others are at least the second
+        match found {
+            Some(f) => (Some(f), floors.second),
+            None => (None, floors.least.max(max_d2)),
+        }
+    }
+
+    /// The bounded nearest search of [`KdIndex::nearest_within`]; with `FLOOR`, every distance
+    /// it scans and every bound by which it leaves out a subtree, or (climbing from a hint) all
+    /// outside a cell, is recorded in `floors`.
+    #[inline(always)]
+    fn search<const FLOOR: bool>(
+        &self,
+        q: &[f32; 3],
+        max_d2: f32,
+        hint: Option<usize>,
+        floors: &mut Floors,
+    ) -> Option<(usize, f32)> {
         if self.nodes.is_empty() || q.iter().any(|v| v.is_nan()) {
             return None;
         }
@@ -189,14 +262,16 @@ impl KdIndex {
         let start = hint.and_then(|h| self.pos.get(h)).copied().filter(|&p| p != u32::MAX);
         match start {
             Some(p) => {
+                // (not recorded: the leaf's scan records it)
                 let d2 = dist2(&self.pts[p as usize], q);
                 if d2 < best.1 {
                     best = (p, d2);
                 }
                 let mut node = self.leaf_of[p as usize];
-                self.scan_leaf(node, q, &mut best);
+                self.scan_leaf::<FLOOR>(node, q, &mut best, floors);
                 loop {
-                    if self.ball_inside(node, q, best.1) {
+                    if let Some(outside) = self.ball_inside(node, q, best.1) {
+                        floors.record::<FLOOR>(outside);
                         break;
                     }
                     let up = self.parent[node as usize];
@@ -208,19 +283,22 @@ impl KdIndex {
                     let off = self.offsets(other, q);
                     let rd = off[0] * off[0] + off[1] * off[1] + off[2] * off[2];
                     if rd < best.1 {
-                        self.nearest_from(Pending { node: other, rd, off }, q, &mut best);
+                        self.nearest_from::<FLOOR>(Pending { node: other, rd, off }, q, &mut best, floors);
+                    } else {
+                        floors.record::<FLOOR>(rd);
                     }
                     node = up;
                 }
             }
-            None => self.nearest_from(Pending::ROOT, q, &mut best),
+            None => self.nearest_from::<FLOOR>(Pending::ROOT, q, &mut best, floors),
         }
         (best.0 != u32::MAX).then(|| (self.ids[best.0 as usize] as usize, best.1))
     }
 
-    /// Scans leaf `node` for points nearer than `best` (strictly).
+    /// Scans leaf `node` for points nearer than `best` (strictly); with `FLOOR`, records each
+    /// distance in `floors`.
     #[inline(always)]
-    fn scan_leaf(&self, node: u32, q: &[f32; 3], best: &mut (u32, f32)) {
+    fn scan_leaf<const FLOOR: bool>(&self, node: u32, q: &[f32; 3], best: &mut (u32, f32), floors: &mut Floors) {
         let n = self.nodes[node as usize];
         let leaf = &self.pts[n.a as usize..n.b as usize];
         for (i, p) in (n.a..).zip(leaf) {
@@ -228,18 +306,26 @@ impl KdIndex {
             if d2 < best.1 {
                 *best = (i, d2);
             }
+            floors.record::<FLOOR>(d2);
         }
     }
 
-    /// True when every point outside node `node`'s subtree is at squared distance `>= d2` from
-    /// `q`: `q` is inside the node's cell, at least `sqrt(d2)` from each of its faces.
+    /// When every point outside node `node`'s subtree is at squared distance `>= d2` from `q`
+    /// (`q` is inside the node's cell, at least `sqrt(d2)` from each of its faces), the squared
+    /// distance to its nearest face, a lower bound of theirs; else `None`.
     #[inline(always)]
-    fn ball_inside(&self, node: u32, q: &[f32; 3], d2: f32) -> bool {
+    fn ball_inside(&self, node: u32, q: &[f32; 3], d2: f32) -> Option<f32> {
         let [lo, hi] = self.cell[node as usize];
-        (0..3).all(|a| {
+        let mut nearest = f32::INFINITY;
+        for a in 0..3 {
             let (l, h) = (q[a] - lo[a], hi[a] - q[a]);
-            l >= 0.0 && h >= 0.0 && l * l >= d2 && h * h >= d2
-        })
+            if !(l >= 0.0 && h >= 0.0 && l * l >= d2 && h * h >= d2) {
+                return None;
+            }
+            let face = if l < h { l * l } else { h * h };
+            nearest = if face < nearest { face } else { nearest };
+        }
+        Some(nearest)
     }
 
     /// Squared distance from `q` to node `node`'s bounding box (a lower bound of its points').
@@ -279,25 +365,30 @@ impl KdIndex {
         })
     }
 
-    /// The top-down bounded nearest search of the subtree `from`, updating `best`.
+    /// The top-down bounded nearest search of the subtree `from`, updating `best`; with `FLOOR`,
+    /// records in `floors` every bound by which it leaves a subtree out and every distance it
+    /// scans.
     #[inline(always)]
-    fn nearest_from(&self, from: Pending, q: &[f32; 3], best: &mut (u32, f32)) {
+    fn nearest_from<const FLOOR: bool>(&self, from: Pending, q: &[f32; 3], best: &mut (u32, f32), floors: &mut Floors) {
         let mut stack = Stack::root();
         stack.items[0].write(from);
         while let Some(Pending { node, rd, off }) = stack.pop() {
             if rd >= best.1 {
+                floors.record::<FLOOR>(rd);
                 continue;
             }
             let mut ni = node;
             loop {
                 // the points' own box: prunes queries beyond the cloud's edge, which the
                 // (unbounded) border cells do not
-                if self.box_d2(ni, q) >= best.1 {
+                let box_d2 = self.box_d2(ni, q);
+                if box_d2 >= best.1 {
+                    floors.record::<FLOOR>(box_d2);
                     break;
                 }
                 let n = self.nodes[ni as usize];
                 if n.dim == IS_LEAF {
-                    self.scan_leaf(ni, q, best);
+                    self.scan_leaf::<FLOOR>(ni, q, best, floors);
                     break;
                 }
                 let d = n.dim as usize;
@@ -308,6 +399,8 @@ impl KdIndex {
                     let mut far_off = off;
                     far_off[d] = diff;
                     stack.push(Pending { node: far, rd: far_rd, off: far_off });
+                } else {
+                    floors.record::<FLOOR>(far_rd);
                 }
                 ni = near;
             }
@@ -420,7 +513,7 @@ impl KdIndex {
 }
 
 #[inline(always)]
-fn dist2(p: &[f32; 3], q: &[f32; 3]) -> f32 {
+pub(crate) fn dist2(p: &[f32; 3], q: &[f32; 3]) -> f32 {
     let dx = p[0] - q[0];
     let dy = p[1] - q[1];
     let dz = p[2] - q[2];
@@ -555,6 +648,47 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn searches_give_floors_below_every_other_point() {
+        let mut pts = cloud(2500);
+        pts.extend([[0.5, 0.5, 0.5]; 30]);
+        let idx = KdIndex::new(&pts);
+        let (mut tight, mut count) = (0, 0);
+        for k in 0..400 {
+            let f = k as f32;
+            // queries near the points, beyond their box, and far away; hinted or not
+            let q = [(f * 0.71).sin() * 4.0, (f * 0.13).cos() * 3.0 + (k % 3) as f32, (f * 0.29).sin() * 2.5];
+            let all = brute(&pts, &q);
+            let (nearest, second) = (all[0], all[1]);
+            for hint in [None, Some(k), Some(k * 7 % 2530)] {
+                // nothing within the bound: the floor bounds every point
+                for bound in [nearest * 0.99, nearest * 0.5, 1e-6] {
+                    let (found, floor) = idx.nearest_within_and_floor(&q, bound, hint);
+                    assert_eq!(found, None);
+                    assert!(
+                        floor >= bound && floor <= nearest * (1.0 + 1e-5),
+                        "{q:?}: floor {floor}, nearest {nearest}"
+                    );
+                }
+                // found: the floor bounds every other point
+                for bound in [f32::INFINITY, nearest * 1.01 + 1e-6, second * 2.0 + 1e-6] {
+                    let (found, floor) = idx.nearest_within_and_floor(&q, bound, hint);
+                    assert_eq!(found.map(|r| r.1), Some(nearest));
+                    assert!(
+                        floor >= nearest && floor <= second * (1.0 + 1e-5),
+                        "{q:?}: floor {floor}, second {second}"
+                    );
+                    tight += (floor >= 0.5 * second) as usize;
+                    count += 1;
+                }
+            }
+        }
+        // a floor is mostly close to the true distance, not merely the bound
+        assert!(tight * 10 > count * 8, "{tight} of {count} floors within half the second distance");
+        assert_eq!(KdIndex::new(&[]).nearest_within_and_floor(&[0.0; 3], 1.0, None), (None, 0.0));
+        assert_eq!(idx.nearest_within_and_floor(&[f32::NAN, 0.0, 0.0], 1.0, None), (None, 0.0));
     }
 
     #[test]
