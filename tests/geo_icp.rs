@@ -99,14 +99,21 @@ fn off_returns_init_with_its_fitness() {
     assert!(rmse < 1e-6, "{rmse}");
 }
 
-#[test]
-fn partial_overlap_converges_close() {
-    // Source keeps x < 0.3, target keeps x > -0.3 (before the motion): about half overlaps.
+/// A partial overlap of the fixture: the source keeps x < 0.3, the target x > -0.3 (before
+/// [`ten_degrees`] moves it), so about half overlaps. Gives the source, the target's points
+/// before the motion, and the target.
+fn partial_overlap() -> (Vec<[f32; 3]>, Vec<[f32; 3]>, IcpTarget) {
     let all = fixture();
-    let t_gt = ten_degrees();
     let source: Vec<[f32; 3]> = all.iter().copied().filter(|p| p[0] < 0.3).collect();
     let target_pts: Vec<[f32; 3]> = all.iter().copied().filter(|p| p[0] > -0.3).collect();
-    let target = IcpTarget::new(&moved(&t_gt, &target_pts), true);
+    let target = IcpTarget::new(&moved(&ten_degrees(), &target_pts), true);
+    (source, target_pts, target)
+}
+
+#[test]
+fn partial_overlap_converges_close() {
+    let t_gt = ten_degrees();
+    let (source, _, target) = partial_overlap();
     for kind in [IcpKind::Point, IcpKind::Plane] {
         let (r, _) = run(kind, &target, &source);
         let er = rotation_error_deg(&r.T_target_source, &t_gt);
@@ -184,11 +191,8 @@ fn warm_starts_change_no_result() {
 /// distance; partners brought from another target change nothing either.
 #[test]
 fn skipped_searches_change_no_result() {
-    let all = fixture();
     let t_gt = ten_degrees();
-    let source: Vec<[f32; 3]> = all.iter().copied().filter(|p| p[0] < 0.3).collect();
-    let target_pts: Vec<[f32; 3]> = all.iter().copied().filter(|p| p[0] > -0.3).collect();
-    let target = IcpTarget::new(&moved(&t_gt, &target_pts), true);
+    let (source, target_pts, target) = partial_overlap();
     let step = |k: usize| {
         let f = k as f64;
         let axis = Unit::new_normalize(Vector3::new(0.2 + (f * 0.7).sin(), 1.0, (f * 0.3).cos()));
