@@ -139,6 +139,44 @@ struct Floor {
     at: [f32; 3],
 }
 
+impl Floor {
+    /// The search's answer for the point now at `q` (target frame), when this floor shows that
+    /// it cannot have changed since: `Some(prev)` when the point had no partner (`prev` is
+    /// `None`) and is still beyond `skip_beyond` of every target point, or when its partner
+    /// `prev` (an index into `points`) is still strictly the nearest and within `search2` (the
+    /// tree's squared bound); `Some(None)` when that partner is the nearest but now beyond the
+    /// bound (the floor is then forgotten); `None` when the point must be searched.
+    fn answer(
+        &mut self,
+        q: &[f32; 3],
+        prev: Option<usize>,
+        points: &[[f32; 3]],
+        search2: f32,
+        skip_beyond: f64,
+    ) -> Option<Option<usize>> {
+        if self.reach <= 0.0 {
+            return None;
+        }
+        let distance = |p: &[f32; 3]| (0..3).map(|a| (q[a] as f64 - p[a] as f64).powi(2)).sum::<f64>().sqrt();
+        // every target point but the partner is at least this far from `q`
+        let others = self.reach - distance(&self.at);
+        let Some(j) = prev else {
+            return (others > skip_beyond).then_some(None);
+        };
+        let partner = points[j];
+        if distance(&partner) * (1.0 + FLOOR_MARGIN) >= others {
+            return None;
+        }
+        // still strictly the nearest: the search finds it when within its bound
+        if crate::spatial::dist2(&partner, q) < search2 {
+            Some(Some(j))
+        } else {
+            *self = Floor::default();
+            Some(None)
+        }
+    }
+}
+
 /// Relative margin by which a [`Floor`] is lowered, and the partner's distance and the search
 /// radius raised, before a search is skipped: the tree computes its bounds in `f32` (a few units
 /// in the last place, about 1e-7), so a skipped search is always one that would have given the
@@ -368,43 +406,16 @@ impl IcpTarget {
         for ((s, prev), floor) in source.iter().zip(scratch.prev.iter_mut()).zip(scratch.floors.iter_mut()) {
             let p = r * Vector3::new(s[0] as f64, s[1] as f64, s[2] as f64) + tr;
             let q32 = [p.x as f32, p.y as f32, p.z as f32];
-            if floor.reach > 0.0 {
-                // how far the point has moved since its floor (the other target points are at
-                // least `reach - moved` away)
-                let moved: f64 = (0..3).map(|a| (q32[a] as f64 - floor.at[a] as f64).powi(2)).sum::<f64>().sqrt();
-                let others = floor.reach - moved;
-                if *prev == u32::MAX {
-                    if others > skip_beyond {
-                        continue;
-                    }
-                } else {
-                    let partner = self.points[*prev as usize];
-                    let near: f64 = (0..3).map(|a| (q32[a] as f64 - partner[a] as f64).powi(2)).sum::<f64>().sqrt();
-                    if near * (1.0 + FLOOR_MARGIN) < others {
-                        // still the strictly nearest: the search would find it, if within bound
-                        if crate::spatial::dist2(&partner, &q32) < search2 {
-                            let j = *prev as usize;
-                            let d2 = (p.x - partner[0] as f64).powi(2)
-                                + (p.y - partner[1] as f64).powi(2)
-                                + (p.z - partner[2] as f64).powi(2);
-                            if d2 < max2 {
-                                sum2 += d2;
-                                scratch.moved.push([p.x, p.y, p.z]);
-                                scratch.target.push(j);
-                            }
-                            continue;
-                        }
-                        // no partner now, and no floor kept for it
-                        *prev = u32::MAX;
-                        *floor = Floor::default();
-                        continue;
-                    }
+            let prev_partner = (*prev != u32::MAX).then_some(*prev as usize);
+            let partner = match floor.answer(&q32, prev_partner, &self.points, search2, skip_beyond) {
+                Some(unchanged) => unchanged,
+                None => {
+                    let (found, f) = self.index.nearest_within_and_floor(&q32, search2, prev_partner);
+                    *floor = Floor { reach: (f as f64).sqrt() * (1.0 - FLOOR_MARGIN), at: q32 };
+                    found.map(|(j, _)| j)
                 }
-            }
-            let hint = (*prev != u32::MAX).then_some(*prev as usize);
-            let (found, f) = self.index.nearest_within_and_floor(&q32, search2, hint);
-            *floor = Floor { reach: (f as f64).sqrt() * (1.0 - FLOOR_MARGIN), at: q32 };
-            let Some((j, _)) = found else {
+            };
+            let Some(j) = partner else {
                 *prev = u32::MAX;
                 continue;
             };
