@@ -10,6 +10,7 @@
 //! [`SCREEN_POINTS`] points, only the winner being refined on more (at most [`REFINE_POINTS`]).
 
 use crate::icp::{IcpKind, IcpParams, IcpTarget, Partners};
+use crate::transform::rotation_angle_deg;
 use nalgebra::Matrix4;
 use serde::{Deserialize, Serialize};
 
@@ -359,23 +360,52 @@ fn max_displacement(a: &Matrix4<f64>, b: &Matrix4<f64>, points: &[[f32; 3]]) -> 
         .fold(0.0, f64::max)
 }
 
-/// The index of the best candidate: the highest fitness; among equal fitness (the same number of
-/// inliers), the lowest inlier RMSE; then the first in the list. `None` for no candidates.
+/// Fitnesses within this fraction of each other are a near tie for [`better`]: the clouds
+/// cannot tell such poses apart (a half turn of a near-symmetric shape fits within a few percent
+/// of the truth, either way).
+pub const TIE_FITNESS: f64 = 0.10;
+
+/// Near ties ([`TIE_FITNESS`]) between poses whose turns away from the initial guess
+/// ([`turn_deg`]) differ by more than this many degrees go to the smaller turn ([`better`]).
+pub const TIE_TURN_DEG: f64 = 60.0;
+
+/// How far `T_target_source` turns away from the initial guess, in degrees: the angle of its
+/// rotation (the pipeline's frames turn the source by the guess's rotation first, so there the
+/// identity rotation is the guess; with no guess, the clouds as given).
+#[allow(non_snake_case)]
+pub fn turn_deg(T_target_source: &Matrix4<f64>) -> f64 {
+    rotation_angle_deg(T_target_source)
+}
+
+/// True when `c` is a better answer than `b`. Normally the higher fitness at the final distance;
+/// among equal fitness (the same number of inliers), the lower inlier RMSE. But when the two
+/// fit within [`TIE_FITNESS`] of each other and turn away from the initial guess by amounts
+/// more than [`TIE_TURN_DEG`] apart, the one that turns less: the poses fit alike, and a motion
+/// no larger than needed is the likelier one (scans of one object from one device, a guess
+/// that was roughly right). On pairs in arbitrary poses the rule favours neither the truth nor
+/// its look-alike; on pairs turned by at most 45 degrees per axis it picks the truth over a
+/// flip of a near-symmetric shape (`BENCHMARK.md`, "Near ties go to the smaller turn").
+pub fn better(c: &Candidate, b: &Candidate) -> bool {
+    let near_tie = c.fitness <= b.fitness * (1.0 + TIE_FITNESS) && b.fitness <= c.fitness * (1.0 + TIE_FITNESS);
+    if near_tie {
+        let (turn_c, turn_b) = (turn_deg(&c.T_target_source), turn_deg(&b.T_target_source));
+        if (turn_c - turn_b).abs() > TIE_TURN_DEG {
+            return turn_c < turn_b;
+        }
+    }
+    c.fitness > b.fitness || (c.fitness == b.fitness && c.inlier_rmse < b.inlier_rmse)
+}
+
+/// The index of the best candidate by [`better`], each compared with the best so far in list
+/// order (so among equals, the first). `None` for no candidates.
 ///
-/// Measured on 1000 validation pairs (`arps eval`, README): this plain order chose as well as or
+/// Measured on 1000 validation pairs (`arps eval`, README): the fitness order chose as well as or
 /// better than treating near-equal fitness (within 0.5% to 5%) as a tie decided by RMSE, than a
 /// truncated-quadratic (MSAC) score, and than scoring at a coarser distance; RMSE alone chose worst.
 pub fn choose(candidates: &[Candidate]) -> Option<usize> {
     let mut chosen: Option<usize> = None;
     for (i, c) in candidates.iter().enumerate() {
-        let better = match chosen {
-            None => true,
-            Some(j) => {
-                let b = &candidates[j];
-                c.fitness > b.fitness || (c.fitness == b.fitness && c.inlier_rmse < b.inlier_rmse)
-            }
-        };
-        if better {
+        if chosen.is_none_or(|j| better(c, &candidates[j])) {
             chosen = Some(i);
         }
     }

@@ -58,8 +58,9 @@ pub struct Options {
     /// correspondence distance. `0` uses the full clouds. Must be >= 0.
     pub voxel_size: Option<f64>,
     /// An initial guess of `T_target_source` (rigid, the clouds' units); the network then
-    /// estimates the remaining motion from there. Default: the identity. Either 16 numbers in
-    /// **column-major** order (a previous result's `T_target_source`, a three.js
+    /// estimates the remaining motion from there, and of two answers that fit about as well, the
+    /// one nearer the guess's rotation wins (see `starts`). Default: the identity. Either 16
+    /// numbers in **column-major** order (a previous result's `T_target_source`, a three.js
     /// `Matrix4.elements`; in JS also a `Float32Array` or `Float64Array`), or four **row-major**
     /// rows `[[r00, r01, r02, tx], [r10, r11, r12, ty], [r20, r21, r22, tz], [0, 0, 0, 1]]`. A
     /// non-rigid or non-finite matrix is an error. (In Rust: four row-major rows.)
@@ -73,13 +74,17 @@ pub struct Options {
     /// The transforms ICP starts from, in order of preference. Each is refined coarse to fine
     /// against the same prepared target and the best is returned (the result's `start` says
     /// which): the highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier
-    /// start. Starts that meet during refinement are refined once, as the earlier; on large clouds
-    /// the starts are compared on 2048 of the source points and only the winner is refined on
-    /// 8192 of them. Which starts are refined at all depends on `search`. Default
-    /// `["network", "global", "centroids", "initial", "turned", "turnedInitial"]`; each extra
-    /// start costs one ICP run on at most 2048 points (`"turned"` and `"turnedInitial"` are six
-    /// each, `"global"` and `"globalNetwork"` up to five each, plus the descriptor matching), so
-    /// `["network"]` is the fastest. Must be non-empty, without repeats.
+    /// start; but of two answers whose fitness is within 10% and whose turns away from
+    /// `initialTransform` (the identity if unset) differ by more than 60 degrees, the one that
+    /// turns less (a near-symmetric shape's half turn fits about as well as the truth; the
+    /// smaller motion is the likelier). Starts that meet during refinement are refined once, as
+    /// the earlier; on large clouds the starts are compared on 2048 of the source points and only
+    /// the winner is refined on 8192 of them. Which starts are refined at all depends on
+    /// `search`. Default `["network", "global", "centroids", "initial", "turned",
+    /// "turnedInitial"]`; each extra start costs one ICP run on at most 2048 points (`"turned"`
+    /// and `"turnedInitial"` are six each, `"global"` and `"globalNetwork"` up to five each, plus
+    /// the descriptor matching), so `["network"]` is the fastest. Must be non-empty, without
+    /// repeats.
     /// - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
     ///   reported as `"initial"`);
     /// - `"centroids"`: `initialTransform`'s rotation (none if unset) with the translation that

@@ -49,12 +49,11 @@ pub(crate) fn search(
     let source_index = IcpTarget::new(&p.icp_src.points, false);
     let judge =
         |t: &Matrix4<f64>| confidence::probe(&target_index, &source_index, &p.icp_src.points, t, d_final, options.icp);
-    // `c` is a better answer than `b`: it fits better (`refine::choose`) and is another pose. A
+    // `c` is a better answer than `b`: it fits better (`refine::better`) and is another pose. A
     // start that only found the answer again (a hair better, perhaps) leaves it as it was judged:
     // probing the same pose again would say the same.
     let improves = |b: &Candidate, c: &Candidate| {
-        refine::choose(&[*b, *c]) == Some(1)
-            && !refine::coincide(&b.T_target_source, &c.T_target_source, &p.icp_src.points, d_final)
+        refine::better(c, b) && !refine::coincide(&b.T_target_source, &c.T_target_source, &p.icp_src.points, d_final)
     };
     let mut best: Option<(Candidate, Evidence, f64)> = None;
     let mut starts_refined = 0usize;
