@@ -295,8 +295,10 @@ export type RegistrationEvidence = {
    */
   ambiguity: number,
   /**
-   * How many distinct poses among those probes fit at least 0.9 as well as the answer: with
-   * `k` alternatives the answer is one of `k + 1` about equally good poses.
+   * How many distinct poses (more than 15 degrees apart) fit at least 0.9 as well as the
+   * answer, among those probes or, when more, among the other answers the search refined (its
+   * stages' best answers and the probes' better poses): with `k` alternatives the answer is one
+   * of `k + 1` about equally good poses.
    */
   alternatives: number,
   /**

@@ -54,8 +54,10 @@ pub struct Evidence {
     /// every one fell back onto the answer (within 15 degrees). Near 1 or above: the answer may
     /// fit and still not be unique.
     pub ambiguity: f64,
-    /// How many distinct poses among those probes fit at least 0.9 as well as the answer: with
-    /// `k` alternatives the answer is one of `k + 1` about equally good poses.
+    /// How many distinct poses (more than 15 degrees apart) fit at least 0.9 as well as the
+    /// answer, among those probes or, when more, among the other answers the search refined (its
+    /// stages' best answers and the probes' better poses): with `k` alternatives the answer is one
+    /// of `k + 1` about equally good poses.
     pub alternatives: f64,
     /// Fitness after sliding the answer along the motion its point-to-plane fit constrains
     /// least (the weakest eigenvector of the fit's 6x6 information matrix, scaled to move the
@@ -269,6 +271,30 @@ fn turns(
     }
     out.alternatives = alternatives.len();
     out
+}
+
+/// Raises `e.alternatives` to the number of poses among `others` (refined answers of a search,
+/// each `T_target_source` with its fitness) that fit at least [`ALTERNATIVE_FIT`] as well as the
+/// answer `T_target_source` (fitness `fitness`, measured like theirs) and turn more than
+/// [`SAME_POSE_DEGREES`] away from it and from each other, when that number is higher. The
+/// probes turn the answer about a few axes; a search that refined starts from unrelated poses
+/// (global hypotheses, turned starts) finds look-alikes about other axes too.
+#[allow(non_snake_case)]
+pub fn count_search_alternatives(
+    e: &mut Evidence,
+    T_target_source: &Matrix4<f64>,
+    fitness: f64,
+    others: &[(Matrix4<f64>, f64)],
+) {
+    let mut distinct: Vec<&Matrix4<f64>> = Vec::new();
+    for (t, f) in others {
+        let new_pose = rotation_error_deg(t, T_target_source) > SAME_POSE_DEGREES
+            && distinct.iter().all(|o| rotation_error_deg(o, t) > SAME_POSE_DEGREES);
+        if *f >= ALTERNATIVE_FIT * fitness && new_pose {
+            distinct.push(t);
+        }
+    }
+    e.alternatives = e.alternatives.max(distinct.len() as f64);
 }
 
 /// The principal axes (columns) of the target points within `radius` of the sample moved by

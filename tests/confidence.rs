@@ -200,6 +200,45 @@ fn an_answer_on_a_surface_of_revolution_is_doubted() {
     assert!(r.confidence < 0.5, "{} {:?}", r.confidence, r.evidence);
 }
 
+/// The search's other refined answers count as alternatives when they fit at least 0.9 as well
+/// as the answer and are other poses (more than 15 degrees from the answer and from each other);
+/// the count only ever rises, and it caps the confidence.
+#[test]
+fn the_searchs_other_answers_that_fit_as_well_are_alternatives() {
+    let answer = turn_about(Vector3::z(), 30.0, Vector3::zeros());
+    let flip_x = turn_about(Vector3::x(), 180.0, Vector3::zeros()) * answer;
+    let flip_y = turn_about(Vector3::y(), 180.0, Vector3::zeros()) * answer;
+    let e0 = Evidence {
+        fitness: 0.6,
+        fitness_tight: 0.4,
+        fitness_loose: 0.8,
+        fitness_coarse: 0.9,
+        overlap_reverse: 0.6,
+        rmse_ratio: 0.4,
+        ambiguity: 0.5,
+        alternatives: 0.0,
+        slide: 0.2,
+    };
+    let count = |others: &[(Matrix4<f64>, f64)], start: f64| {
+        let mut e = Evidence { alternatives: start, ..e0 };
+        confidence::count_search_alternatives(&mut e, &answer, 0.6, others);
+        e.alternatives
+    };
+    let near = turn_about(Vector3::z(), 10.0, Vector3::zeros()) * answer;
+    let flip_x_again = turn_about(Vector3::x(), 5.0, Vector3::zeros()) * flip_x;
+    assert_eq!(count(&[], 0.0), 0.0);
+    assert_eq!(count(&[(near, 0.7)], 0.0), 0.0, "the answer again, 10 degrees off");
+    assert_eq!(count(&[(flip_x, 0.55)], 0.0), 1.0, "a half turn fitting 0.92 as well");
+    assert_eq!(count(&[(flip_x, 0.5)], 0.0), 0.0, "fitting 0.83 as well");
+    assert_eq!(count(&[(flip_x, 0.55), (flip_x_again, 0.58)], 0.0), 1.0, "the same half turn twice");
+    assert_eq!(count(&[(flip_x, 0.55), (flip_y, 0.65)], 0.0), 2.0);
+    assert_eq!(count(&[(flip_x, 0.55)], 2.0), 2.0, "the probes' count, when higher, stays");
+    let mut e = e0;
+    let before = confidence::confidence(&e);
+    confidence::count_search_alternatives(&mut e, &answer, 0.6, &[(flip_x, 0.55), (flip_y, 0.65)]);
+    assert!(before > 0.5 && confidence::confidence(&e) <= 1.0 / 3.0, "{before} {}", confidence::confidence(&e));
+}
+
 /// CPU time of the evidence next to one ICP refinement of the same pair (`--ignored
 /// --nocapture` to see them; `BENCHMARK.md` quotes them).
 #[test]

@@ -5,8 +5,9 @@
 //! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
 //! first stage whose best reaches [`STOP_CONFIDENCE`]. Each stage's best, when it is better than
 //! the answer so far and another pose ([`refine::coincide`]), is judged by the confidence probe,
-//! and a probe pose that fits better is refined as one more start ([`settle`]).
-//! With no start refined at all, the network's estimate (the initial transform with the network
+//! and a probe pose that fits better is refined as one more start ([`settle`]). The answer's
+//! final verdict also counts, as alternatives, the other refined answers that fit about as well
+//! ([`confidence::count_search_alternatives`]). With no start refined at all, the network's estimate (the initial transform with the network
 //! off), unrefined, and a warning.
 
 use super::prepare::Prepared;
@@ -56,6 +57,9 @@ pub(crate) fn search(
         refine::better(c, b) && !refine::coincide(&b.T_target_source, &c.T_target_source, &p.icp_src.points, d_final)
     };
     let mut best: Option<(Candidate, Evidence, f64)> = None;
+    // every stage's best and every refined probe pose: the final verdict counts those that fit
+    // about as well as the answer as its alternatives
+    let mut refined: Vec<(Matrix4<f64>, f64)> = Vec::new();
     let mut starts_refined = 0usize;
     for stage in stages {
         let mut starts = starts.build(stage, model, workspace)?;
@@ -68,6 +72,7 @@ pub(crate) fn search(
         }
         starts_refined += starts.len();
         let Some(c) = refine::refine_best(&target_index, &p.icp_src.points, &starts, &how) else { continue };
+        refined.push((c.T_target_source, c.fitness));
         let better = match &best {
             None => true,
             Some((b, _, _)) => improves(b, &c),
@@ -77,7 +82,11 @@ pub(crate) fn search(
             let (c, e, extra) = if options.icp == IcpKind::Off {
                 (c, judge(&c.T_target_source).evidence, 0)
             } else {
-                let refine = |t| refine::refine_best(&target_index, &p.icp_src.points, &[(c.start, t)], &how);
+                let refine = |t| {
+                    let r = refine::refine_best(&target_index, &p.icp_src.points, &[(c.start, t)], &how);
+                    refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
+                    r
+                };
                 settle(c, &judge, refine, &improves)
             };
             starts_refined += extra;
@@ -89,8 +98,8 @@ pub(crate) fn search(
     }
     // no start at all (only global ones, and the descriptors matched too little): the first
     // start the options name, unrefined
-    let (candidate, evidence, confidence) = match best {
-        Some(b) => b,
+    let (candidate, mut evidence) = match best {
+        Some((c, e, _)) => (c, e),
         None => {
             let t = if options.network { starts.t_net_n() } else { p.t_initial };
             let start = if options.network { Start::Network } else { Start::Initial };
@@ -104,9 +113,12 @@ pub(crate) fn search(
                 iterations: 0,
                 converged: false,
             };
-            (c, e, confidence::confidence(&e))
+            (c, e)
         }
     };
+    // the verdict also counts the other answers the search refined that fit about as well
+    confidence::count_search_alternatives(&mut evidence, &candidate.T_target_source, candidate.fitness, &refined);
+    let confidence = confidence::confidence(&evidence);
     Ok(Chosen { candidate, evidence, confidence, starts_refined })
 }
 
@@ -121,7 +133,7 @@ const MAX_PROBE_STARTS: usize = 4;
 fn settle(
     c: Candidate,
     judge: &impl Fn(&Matrix4<f64>) -> confidence::Probed,
-    refine: impl Fn(Matrix4<f64>) -> Option<Candidate>,
+    mut refine: impl FnMut(Matrix4<f64>) -> Option<Candidate>,
     improves: &impl Fn(&Candidate, &Candidate) -> bool,
 ) -> (Candidate, Evidence, usize) {
     let (mut c, mut probed, mut refined) = (c, judge(&c.T_target_source), 0);
