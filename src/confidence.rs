@@ -274,11 +274,11 @@ fn turns(
 }
 
 /// Raises `e.alternatives` to the number of poses among `others` (refined answers of a search,
-/// each `T_target_source` with its fitness) that fit at least [`ALTERNATIVE_FIT`] as well as the
-/// answer `T_target_source` (fitness `fitness`, measured like theirs) and turn more than
-/// [`SAME_POSE_DEGREES`] away from it and from each other, when that number is higher. The
-/// probes turn the answer about a few axes; a search that refined starts from unrelated poses
-/// (global hypotheses, turned starts) finds look-alikes about other axes too.
+/// each `T_target_source` with its fitness) that fit at least 0.9 (`ALTERNATIVE_FIT`) as well as
+/// the answer `T_target_source` (fitness `fitness`, measured like theirs) and turn more than 15
+/// degrees (`SAME_POSE_DEGREES`) away from it and from each other, when that number is higher.
+/// The probes turn the answer about a few axes; a search that refined starts from unrelated
+/// poses (global hypotheses, turned starts) finds look-alikes about other axes too.
 #[allow(non_snake_case)]
 pub fn count_search_alternatives(
     e: &mut Evidence,

@@ -97,8 +97,8 @@ impl std::fmt::Debug for IcpTarget {
 /// partners with or without it (among points at exactly equal distance, possibly another), and
 /// one made for other source points is ignored where its length differs.
 ///
-/// It also keeps each point's [`Floor`]: how far the other target points were from it. A later
-/// pass skips the search of a point that has not moved far enough since to change its answer
+/// It also keeps each point's floor (`Floor`): how far the other target points were from it. A
+/// later pass skips the search of a point that has not moved far enough since to change its answer
 /// (the same partner, or still none), with the same result; the floors are forgotten when the
 /// partners are used with another target.
 #[derive(Clone, Debug, Default)]
