@@ -265,8 +265,8 @@ fn turns(
             out.best_ratio = ratio;
             out.best = Some(alt);
         }
-        if ratio >= ALTERNATIVE_FIT && !alternatives.iter().any(|a| rotation_error_deg(a, &alt) <= SAME_POSE_DEGREES) {
-            alternatives.push(alt);
+        if ratio >= ALTERNATIVE_FIT {
+            count_if_new(&mut alternatives, t, alt);
         }
     }
     out.alternatives = alternatives.len();
@@ -286,15 +286,23 @@ pub fn count_search_alternatives(
     fitness: f64,
     others: &[(Matrix4<f64>, f64)],
 ) {
-    let mut distinct: Vec<&Matrix4<f64>> = Vec::new();
+    let mut distinct: Vec<Matrix4<f64>> = Vec::new();
     for (t, f) in others {
-        let new_pose = rotation_error_deg(t, T_target_source) > SAME_POSE_DEGREES
-            && distinct.iter().all(|o| rotation_error_deg(o, t) > SAME_POSE_DEGREES);
-        if *f >= ALTERNATIVE_FIT * fitness && new_pose {
-            distinct.push(t);
+        if *f >= ALTERNATIVE_FIT * fitness {
+            count_if_new(&mut distinct, T_target_source, *t);
         }
     }
     e.alternatives = e.alternatives.max(distinct.len() as f64);
+}
+
+/// Adds `pose` to the alternatives `counted` of the answer `T_target_source` when it is another
+/// pose: more than [`SAME_POSE_DEGREES`] from the answer and from each pose counted already.
+#[allow(non_snake_case)]
+fn count_if_new(counted: &mut Vec<Matrix4<f64>>, T_target_source: &Matrix4<f64>, pose: Matrix4<f64>) {
+    let other = |a: &Matrix4<f64>| rotation_error_deg(a, &pose) > SAME_POSE_DEGREES;
+    if other(T_target_source) && counted.iter().all(other) {
+        counted.push(pose);
+    }
 }
 
 /// The principal axes (columns) of the target points within `radius` of the sample moved by
