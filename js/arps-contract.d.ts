@@ -112,8 +112,12 @@ export type RegisterOptions = {
    * answer's `confidence` reaches 0.95 (`STOP_CONFIDENCE`): the first start alone; then the
    * others in order, each run of local starts or of global ones (`"global"`,
    * `"globalNetwork"`) one stage (with the default starts: the global ones, then the other
-   * local ones).
-   * `"exhaustive"` refines every start. The result's `startsRefined` says how many were refined.
+   * local ones). When every stage has run and the answer is still unsure (`confidence` at
+   * most 0.5, `MORE_BELOW_CONFIDENCE`) and `starts` has a global kind, a last stage refines up
+   * to ten more global hypotheses (the next best of a second, larger RANSAC draw on the same
+   * descriptor matches), so only the hard pairs pay for them.
+   * `"exhaustive"` refines every start, without that last stage. The result's `startsRefined`
+   * says how many were refined.
    */
   search?: RegistrationSearch,
 };

@@ -4,12 +4,12 @@
 
 mod common;
 
-use common::fixture_pair;
+use common::{fixture_pair, fixture_pair_in};
 
 use arps::icp::{IcpKind, IcpTarget};
 use arps::refine::{self, Candidate, Refinement, Start};
 use arps::transform::{rotation_error_deg, translation_error};
-use arps::{ModelConfig, Options, PointCloud, Registrar, Weights};
+use arps::{ModelConfig, Options, PointCloud, Registrar, Search, Weights};
 use common::{bumpy_surface, crop, motion};
 use nalgebra::Matrix4;
 
@@ -399,4 +399,28 @@ fn a_half_turn_that_fits_a_hair_better_loses_to_the_smaller_turn() {
     let err = rotation_error_deg(&r.T_target_source, &truth);
     assert!(err < 15.0, "rotation error {err:.1} degrees: the half turn was chosen");
     assert!(r.confidence <= 0.5, "another pose fits about as well: confidence {}", r.confidence);
+}
+
+/// The two `fixtures/any` pairs (a cone and a bookshelf, in arbitrary relative poses): the first
+/// five global hypotheses and every local start end in poses that fit clearly worse than the
+/// truth, so every stage leaves the answer unsure; the adaptive search's last stage draws more
+/// global hypotheses from the same matches and finds the truth, confidently. The exhaustive
+/// search, which refines every named start but has no such stage, misses it.
+#[test]
+fn an_answer_still_unsure_after_every_stage_gets_more_global_hypotheses() {
+    let mut reg = Registrar::with_default_model().unwrap();
+    for index in 0..2 {
+        let (source, target, truth) = fixture_pair_in("fixtures/any", index);
+        let r = reg.register(&source, &target, &Options::default()).unwrap();
+        let err = rotation_error_deg(&r.T_target_source, &truth);
+        assert!(err < 15.0, "pair {index}: rotation error {err:.1} degrees");
+        assert_eq!(r.start, Start::Global, "pair {index}");
+        assert!(r.confidence > 0.5, "pair {index}: confidence {}", r.confidence);
+        let exhaustive = Options { search: Search::Exhaustive, ..Options::default() };
+        let all = reg.register(&source, &target, &exhaustive).unwrap();
+        let err = rotation_error_deg(&all.T_target_source, &truth);
+        assert!(err > 15.0, "pair {index}: the named starts alone found the truth ({err:.1} degrees)");
+        assert!(all.confidence <= 0.5, "pair {index}: the miss is not flagged ({})", all.confidence);
+        assert!(r.starts_refined > all.starts_refined, "pair {index}: {} starts", r.starts_refined);
+    }
 }

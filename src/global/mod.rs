@@ -81,20 +81,57 @@ pub fn describe(cloud: &PointCloud, voxel: f64) -> Described {
     Described { points, descriptors }
 }
 
+/// Both clouds voxelised and described at one feature voxel ([`feature_voxel`]), and their
+/// mutual descriptor matches: what RANSAC draws from. Built once per pair; [`Matched::hypotheses`]
+/// can then draw more than once (the adaptive search asks for more hypotheses when the first
+/// ones were not enough) without describing the clouds again.
+#[derive(Clone, Debug)]
+pub struct Matched {
+    source: Described,
+    target: Described,
+    matches: Vec<(u32, u32)>,
+    voxel: f64,
+}
+
+impl Matched {
+    /// Describes `source` and `target` (both in one unit, any relative pose) at the feature voxel
+    /// of `voxel_fraction` and matches their descriptors.
+    pub fn new(source: &PointCloud, target: &PointCloud, voxel_fraction: f64) -> Self {
+        let voxel = feature_voxel(source, target, voxel_fraction);
+        let (source, target) = (describe(source, voxel), describe(target, voxel));
+        let matches = matching::mutual_matches(&source.descriptors, &target.descriptors, 30);
+        Self { source, target, matches, voxel }
+    }
+
+    /// The feature voxel the clouds were described at.
+    pub fn voxel(&self) -> f64 {
+        self.voxel
+    }
+
+    /// How many mutual matches RANSAC draws from.
+    pub fn matches(&self) -> usize {
+        self.matches.len()
+    }
+
+    /// Ranked rigid motions taking the source onto the target, best first (`params.hypotheses` at
+    /// most; `params.voxel_fraction` is the one given to [`Matched::new`]); empty when the
+    /// descriptors gave fewer than three correspondences. Deterministic for `params.seed`.
+    pub fn hypotheses(&self, params: &GlobalParams) -> Vec<Hypothesis> {
+        let rp = RansacParams {
+            max_iterations: params.max_iterations,
+            confidence: 0.999,
+            inlier_distance: 1.5 * self.voxel,
+            edge_ratio: 0.9,
+            hypotheses: params.hypotheses,
+            seed: params.seed,
+        };
+        ransac::ransac(&self.source.points, &self.target.points, &self.matches, &rp)
+    }
+}
+
 /// Ranked rigid motions taking `source` onto `target` (both in one unit, any relative pose), best
 /// first; empty when the descriptors give fewer than three correspondences. Deterministic for
-/// `params.seed`.
+/// `params.seed`. ([`Matched::new`], then [`Matched::hypotheses`].)
 pub fn hypotheses(source: &PointCloud, target: &PointCloud, params: &GlobalParams) -> Vec<Hypothesis> {
-    let v = feature_voxel(source, target, params.voxel_fraction);
-    let (s, t) = (describe(source, v), describe(target, v));
-    let matches = matching::mutual_matches(&s.descriptors, &t.descriptors, 30);
-    let rp = RansacParams {
-        max_iterations: params.max_iterations,
-        confidence: 0.999,
-        inlier_distance: 1.5 * v,
-        edge_ratio: 0.9,
-        hypotheses: params.hypotheses,
-        seed: params.seed,
-    };
-    ransac::ransac(&s.points, &t.points, &matches, &rp)
+    Matched::new(source, target, params.voxel_fraction).hypotheses(params)
 }

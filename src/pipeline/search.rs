@@ -16,7 +16,7 @@ use crate::confidence::{self, Evidence};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Candidate, Refinement, Start};
-use crate::register::{Options, Search, STOP_CONFIDENCE};
+use crate::register::{Options, Search, MORE_BELOW_CONFIDENCE, STOP_CONFIDENCE};
 use crate::Result;
 use nalgebra::Matrix4;
 
@@ -61,8 +61,20 @@ pub(crate) fn search(
     // about as well as the answer as its alternatives
     let mut refined: Vec<(Matrix4<f64>, f64)> = Vec::new();
     let mut starts_refined = 0usize;
-    for stage in stages {
-        let mut starts = starts.build(stage, model, workspace)?;
+    let adaptive = options.search == Search::Adaptive;
+    let kinds: Vec<Start> = stages.iter().flatten().copied().collect();
+    // the stages, then, while the answer is still unsure, the last one: more global hypotheses
+    for stage in stages.iter().map(Some).chain([None]) {
+        let mut starts = match stage {
+            Some(stage) => starts.build(stage, model, workspace)?,
+            None if adaptive
+                && options.icp != IcpKind::Off
+                && best.as_ref().is_some_and(|b| b.2 <= MORE_BELOW_CONFIDENCE) =>
+            {
+                starts.more(&kinds, model, workspace)?
+            }
+            None => break,
+        };
         if options.icp == IcpKind::Off {
             // nothing is refined or compared: the first start is the answer
             starts.truncate(1);
@@ -92,7 +104,7 @@ pub(crate) fn search(
             starts_refined += extra;
             best = Some((c, e, confidence::confidence(&e)));
         }
-        if options.search == Search::Adaptive && best.as_ref().is_some_and(|b| b.2 >= STOP_CONFIDENCE) {
+        if adaptive && best.as_ref().is_some_and(|b| b.2 >= STOP_CONFIDENCE) {
             break;
         }
     }

@@ -58,14 +58,16 @@ pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Vec<Start>> {
     }
 }
 
-/// Builds the start transforms of each stage; computes the global hypotheses once, when a
-/// global start first needs them.
+/// Builds the start transforms of each stage; describes and matches the clouds once, when a
+/// global start first needs it, and draws the global hypotheses from those matches: the first
+/// ones for the global starts, more for the adaptive search's last stage ([`Starts::more`]).
 pub(crate) struct Starts<'a> {
     prepared: &'a Prepared,
     /// The network's estimate (the initial transform with the network off).
     t_net_n: Matrix4<f64>,
     seed: u64,
     clock: Option<Clock>,
+    matched: Option<global::Matched>,
     hypotheses: Option<Vec<Matrix4<f64>>>,
     /// Milliseconds spent on the global hypotheses so far.
     pub global_ms: f64,
@@ -74,7 +76,7 @@ pub(crate) struct Starts<'a> {
 impl<'a> Starts<'a> {
     /// Starts for `prepared`, with the network's estimate `t_net_n` (normalised units).
     pub(crate) fn new(prepared: &'a Prepared, t_net_n: Matrix4<f64>, seed: u64, clock: Option<Clock>) -> Self {
-        Self { prepared, t_net_n, seed, clock, hypotheses: None, global_ms: 0.0 }
+        Self { prepared, t_net_n, seed, clock, matched: None, hypotheses: None, global_ms: 0.0 }
     }
 
     /// The network's estimate these starts were built from (normalised units).
@@ -110,31 +112,88 @@ impl<'a> Starts<'a> {
                     starts.extend(turns(&base).map(|t| (start, t)));
                 }
                 Start::Global | Start::GlobalNetwork => {
-                    let (clock, seed, global_ms) = (self.clock, self.seed, &mut self.global_ms);
-                    let hyps = self.hypotheses.get_or_insert_with(|| {
-                        let mut w = Stopwatch::start(clock);
-                        let params = global::GlobalParams { seed, ..Default::default() };
-                        let h = global::hypotheses(&p.src_n, &p.tgt_n, &params);
-                        *global_ms += w.lap();
-                        h.iter().map(|h| h.T_target_source).collect()
-                    });
-                    if start == Start::Global {
-                        starts.extend(hyps.iter().map(|&t| (start, t)));
-                    } else {
-                        for &h in hyps.iter() {
-                            // the network estimates the motion left after the hypothesis
-                            let moved: Vec<[f32; 3]> =
-                                p.net_src.points.iter().map(|&q| transform::apply(&h, q)).collect();
-                            let t = network::estimate(model, workspace, &moved, &p.net_tgt.points)?;
-                            starts.push((start, t * h));
-                        }
-                    }
+                    let hypotheses = match &self.hypotheses {
+                        Some(h) => h.clone(),
+                        None => self.draw(global::GlobalParams::default().hypotheses),
+                    };
+                    self.hypotheses = Some(hypotheses.clone());
+                    starts.extend(self.global(start, &hypotheses, model, workspace)?);
                 }
             }
         }
         Ok(starts)
     }
+
+    /// The adaptive search's last stage: [`MORE_HYPOTHESES`] global hypotheses drawn from the same
+    /// matches, less those within [`SAME_HYPOTHESIS_DEGREES`] and [`SAME_HYPOTHESIS_SHIFT`] of one
+    /// a global start already used, as starts of each global kind in `kinds` (none when `kinds`
+    /// has none, or no global start ran before).
+    pub(crate) fn more(
+        &mut self,
+        kinds: &[Start],
+        model: &Model,
+        workspace: &mut ModelWorkspace,
+    ) -> Result<Vec<(Start, Matrix4<f64>)>> {
+        let Some(used) = self.hypotheses.clone() else { return Ok(Vec::new()) };
+        let same = |a: &Matrix4<f64>, b: &Matrix4<f64>| {
+            transform::rotation_error_deg(a, b) < SAME_HYPOTHESIS_DEGREES
+                && (transform::translation(a) - transform::translation(b)).norm() < SAME_HYPOTHESIS_SHIFT
+        };
+        let mut more = self.draw(MORE_HYPOTHESES);
+        more.retain(|h| !used.iter().any(|u| same(u, h)));
+        let mut starts = Vec::new();
+        for &start in kinds.iter().filter(|k| k.is_global()) {
+            starts.extend(self.global(start, &more, model, workspace)?);
+        }
+        Ok(starts)
+    }
+
+    /// Up to `count` global hypotheses, best first (describing and matching the clouds on first
+    /// use; the time goes to `global_ms`).
+    fn draw(&mut self, count: usize) -> Vec<Matrix4<f64>> {
+        let p = self.prepared;
+        let mut w = Stopwatch::start(self.clock);
+        let params = global::GlobalParams { seed: self.seed, hypotheses: count, ..Default::default() };
+        let matched =
+            self.matched.get_or_insert_with(|| global::Matched::new(&p.src_n, &p.tgt_n, params.voxel_fraction));
+        let hypotheses = matched.hypotheses(&params).iter().map(|h| h.T_target_source).collect();
+        self.global_ms += w.lap();
+        hypotheses
+    }
+
+    /// The starts of the global kind `start` from `hypotheses`: each as it is
+    /// ([`Start::Global`]) or refined by the network first ([`Start::GlobalNetwork`]).
+    fn global(
+        &self,
+        start: Start,
+        hypotheses: &[Matrix4<f64>],
+        model: &Model,
+        workspace: &mut ModelWorkspace,
+    ) -> Result<Vec<(Start, Matrix4<f64>)>> {
+        if start != Start::GlobalNetwork {
+            return Ok(hypotheses.iter().map(|&t| (start, t)).collect());
+        }
+        let p = self.prepared;
+        let mut starts = Vec::with_capacity(hypotheses.len());
+        for &h in hypotheses {
+            // the network estimates the motion left after the hypothesis
+            let moved: Vec<[f32; 3]> = p.net_src.points.iter().map(|&q| transform::apply(&h, q)).collect();
+            let t = network::estimate(model, workspace, &moved, &p.net_tgt.points)?;
+            starts.push((start, t * h));
+        }
+        Ok(starts)
+    }
 }
+
+/// Global hypotheses that the adaptive search's last stage draws: the matches' best motions
+/// after the first five, when the answer is still unsure (`BENCHMARK.md`, "More hypotheses
+/// for unsure answers", has the sweep).
+pub(crate) const MORE_HYPOTHESES: usize = 15;
+/// A hypothesis of the last stage closer than this (degrees) and [`SAME_HYPOTHESIS_SHIFT`] to
+/// one a global start already used is not refined again.
+const SAME_HYPOTHESIS_DEGREES: f64 = 10.0;
+/// See [`SAME_HYPOTHESIS_DEGREES`]: translations this close (normalised units).
+const SAME_HYPOTHESIS_SHIFT: f64 = 0.1;
 
 /// The [`Start::Centroids`] transform between two clouds in one frame: no rotation, the
 /// translation taking the source's centroid onto the target's.

@@ -50,7 +50,13 @@ pub fn crop(cloud: &PointCloud, dir: [f32; 3], keep: f64) -> PointCloud {
 
 /// A committed fixture pair (`fixtures/pairs`, paper protocol, normalised units) and its ground truth.
 pub fn fixture_pair(index: usize) -> (PointCloud, PointCloud, Matrix4<f64>) {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs");
+    fixture_pair_in("fixtures/pairs", index)
+}
+
+/// Pair `index` of the committed fixture set in `dir` (relative to the crate root: `fixtures/pairs`,
+/// `fixtures/any`) and its ground truth.
+pub fn fixture_pair_in(dir: &str, index: usize) -> (PointCloud, PointCloud, Matrix4<f64>) {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join(dir);
     let text = std::fs::read_to_string(dir.join("pairs.tsv")).unwrap();
     // name, source, target, overlap_threshold, note, 16 numbers (row-major)
     let line = text.lines().nth(1 + index).unwrap();
