@@ -43,11 +43,17 @@ pub enum Start {
     /// motion left after the hypothesis, which is what it is trained for); with `network: false`
     /// it is [`Start::Global`].
     GlobalNetwork,
+    /// Twenty-four starts: the source's centroid moved onto the target's, turned by each of the
+    /// 24 rotations of a cube onto itself ([`CUBE_ROTATIONS`]), in the frame of the initial
+    /// transform. A blind search over every orientation, for pairs in unrelated frames whose
+    /// descriptors match poorly (repetitive, smooth or symmetric shapes). The adaptive search
+    /// adds them to its last stage (see `search`).
+    Rotations,
 }
 
 impl Start {
     /// Every start, in declaration order.
-    pub const ALL: [Start; 7] = [
+    pub const ALL: [Start; 8] = [
         Start::Network,
         Start::Centroids,
         Start::Initial,
@@ -55,10 +61,11 @@ impl Start {
         Start::TurnedInitial,
         Start::Global,
         Start::GlobalNetwork,
+        Start::Rotations,
     ];
 
     /// The name used in options and results (`"network"`, `"centroids"`, `"initial"`, `"turned"`,
-    /// `"turnedInitial"`, `"global"`, `"globalNetwork"`).
+    /// `"turnedInitial"`, `"global"`, `"globalNetwork"`, `"rotations"`).
     pub fn name(self) -> &'static str {
         match self {
             Start::Network => "network",
@@ -68,11 +75,12 @@ impl Start {
             Start::TurnedInitial => "turnedInitial",
             Start::Global => "global",
             Start::GlobalNetwork => "globalNetwork",
+            Start::Rotations => "rotations",
         }
     }
 
     /// True for the starts from global registration ([`Start::Global`], [`Start::GlobalNetwork`]):
-    /// the last stage of the adaptive search.
+    /// each run of them is one stage of the adaptive search.
     pub fn is_global(self) -> bool {
         matches!(self, Start::Global | Start::GlobalNetwork)
     }
@@ -121,6 +129,28 @@ pub fn turned(base: &Matrix4<f64>, pivot: [f64; 3], degrees: f64) -> [Matrix4<f6
         // x -> R (x - c) + c
         crate::transform::from_rotation_translation(&r, &(c - r * c)) * base
     })
+}
+
+/// The 24 rotations that map a cube onto itself (the signed permutation matrices of determinant
+/// 1), the identity first: [`Start::Rotations`] turns the centroid alignment by each. Every
+/// rotation lies within about 63 degrees of one of them; ICP's coarse stage at four times the
+/// final distance covers the rest on most shapes.
+pub fn cube_rotations() -> [nalgebra::Matrix3<f64>; 24] {
+    let mut out = [nalgebra::Matrix3::identity(); 24];
+    let mut k = 0;
+    for perm in [[0, 1, 2], [0, 2, 1], [1, 0, 2], [1, 2, 0], [2, 0, 1], [2, 1, 0]] {
+        for signs in 0..8u32 {
+            let mut r = nalgebra::Matrix3::zeros();
+            for (row, &col) in perm.iter().enumerate() {
+                r[(row, col)] = if signs & (1 << row) != 0 { -1.0 } else { 1.0 };
+            }
+            if r.determinant() > 0.0 {
+                out[k] = r;
+                k += 1;
+            }
+        }
+    }
+    out
 }
 
 /// ICP runs coarse to fine at these multiples of the final max correspondence distance.
@@ -394,6 +424,11 @@ pub fn better(c: &Candidate, b: &Candidate) -> bool {
         }
     }
     c.fitness > b.fitness || (c.fitness == b.fitness && c.inlier_rmse < b.inlier_rmse)
+}
+
+/// True when `c` fits more than [`TIE_FITNESS`] better than `b`: better beyond a near tie.
+pub fn clearly_better(c: &Candidate, b: &Candidate) -> bool {
+    c.fitness > b.fitness * (1.0 + TIE_FITNESS)
 }
 
 /// The index of the best candidate by [`better`], each compared with the best so far in list

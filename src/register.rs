@@ -83,7 +83,7 @@ pub struct Options {
     /// `search`. Default `["network", "global", "centroids", "initial", "turned",
     /// "turnedInitial"]`; each extra start costs one ICP run on at most 2048 points (`"turned"`
     /// and `"turnedInitial"` are six each, `"global"` and `"globalNetwork"` up to five each, plus
-    /// the descriptor matching), so `["network"]` is the fastest. Must be non-empty, without
+    /// the descriptor matching, `"rotations"` 24), so `["network"]` is the fastest. Must be non-empty, without
     /// repeats.
     /// - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
     ///   reported as `"initial"`);
@@ -100,7 +100,12 @@ pub struct Options {
     ///   matches, a seeded RANSAC), for motions of any size, e.g. scans in unrelated frames; none
     ///   when the descriptors match too little;
     /// - `"globalNetwork"`: the `"global"` hypotheses, each refined by the network first (with
-    ///   `network: false`, the same starts as `"global"`, reported as `"global"`).
+    ///   `network: false`, the same starts as `"global"`, reported as `"global"`);
+    /// - `"rotations"`: 24 starts, the source's centroid moved onto the target's and turned by
+    ///   each rotation of a cube onto itself (after `initialTransform`'s rotation): a blind
+    ///   search over every orientation, for shapes whose descriptors match poorly (repetitive,
+    ///   smooth or symmetric ones). Not in the default list; the adaptive search adds them to its
+    ///   last stage (see `search`).
     ///
     /// The refined answer is then probed for poses that fit about as well (the `confidence`'s
     /// turns, `evidence.ambiguity`); when one fits better (typically the answer flipped about an
@@ -117,7 +122,9 @@ pub struct Options {
     /// local ones). When every stage has run and the answer is still unsure (`confidence` at
     /// most 0.5, `MORE_BELOW_CONFIDENCE`) and `starts` has a global kind, a last stage refines up
     /// to ten more global hypotheses (the next best of a second, larger RANSAC draw on the same
-    /// descriptor matches), so only the hard pairs pay for them.
+    /// descriptor matches) and the 24 `"rotations"` starts (unless `starts` names them), so only
+    /// the hard pairs pay for them. Its starts are blind, so its best replaces the answer only
+    /// when it fits more than 10% better.
     /// `"exhaustive"` refines every start, without that last stage. The result's `startsRefined`
     /// says how many were refined.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]

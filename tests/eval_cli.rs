@@ -78,7 +78,7 @@ fn eval_json_and_perturbation() {
     let first = &v["per_pair"][0]["results"];
     assert_eq!(first[1]["start"], "network");
     assert!(
-        ["network", "centroids", "initial", "turned", "turnedInitial", "global"]
+        ["network", "centroids", "initial", "turned", "turnedInitial", "global", "rotations"]
             .contains(&first[2]["start"].as_str().unwrap()),
         "{first}"
     );

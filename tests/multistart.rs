@@ -271,6 +271,10 @@ fn near_ties_go_to_the_pose_that_turns_less() {
     let c = [turned(Network, 0.6, 20.0), turned(Global, 0.6 * (1.0 + tie / 2.0), 20.0 + gap / 2.0)];
     assert_eq!(refine::choose(&c), Some(1));
     assert!((refine::turn_deg(&c[1].T_target_source) - (20.0 + gap / 2.0)).abs() < 1e-9);
+    // the adaptive search's last stage asks more: better beyond the near-tie margin
+    assert!(refine::better(&c[1], &c[0]) && !refine::clearly_better(&c[1], &c[0]));
+    let far = turned(Global, 0.6 * (1.0 + 1.5 * tie), 20.0);
+    assert!(refine::clearly_better(&far, &c[0]) && !refine::clearly_better(&c[0], &far));
 }
 
 /// A 1,500-point bumpy surface as the prepared target, the same points moved by the inverse of
@@ -401,20 +405,21 @@ fn a_half_turn_that_fits_a_hair_better_loses_to_the_smaller_turn() {
     assert!(r.confidence <= 0.5, "another pose fits about as well: confidence {}", r.confidence);
 }
 
-/// The two `fixtures/any` pairs (a cone and a bookshelf, in arbitrary relative poses): the first
+/// The `fixtures/any` pairs (a cone and two bookshelves, in arbitrary relative poses): the first
 /// five global hypotheses and every local start end in poses that fit clearly worse than the
-/// truth, so every stage leaves the answer unsure; the adaptive search's last stage draws more
-/// global hypotheses from the same matches and finds the truth, confidently. The exhaustive
-/// search, which refines every named start but has no such stage, misses it.
+/// truth, so every stage leaves the answer unsure; the adaptive search's last stage finds the
+/// truth, confidently: among more global hypotheses drawn from the same matches (pairs 0 and 1)
+/// or among the 24 rotations (pair 2). The exhaustive search, which refines every named start but
+/// has no such stage, misses it.
 #[test]
-fn an_answer_still_unsure_after_every_stage_gets_more_global_hypotheses() {
+fn an_answer_still_unsure_after_every_stage_gets_a_last_stage() {
     let mut reg = Registrar::with_default_model().unwrap();
-    for index in 0..2 {
+    for (index, found_by) in [(0, Start::Global), (1, Start::Global), (2, Start::Rotations)] {
         let (source, target, truth) = fixture_pair_in("fixtures/any", index);
         let r = reg.register(&source, &target, &Options::default()).unwrap();
         let err = rotation_error_deg(&r.T_target_source, &truth);
         assert!(err < 15.0, "pair {index}: rotation error {err:.1} degrees");
-        assert_eq!(r.start, Start::Global, "pair {index}");
+        assert_eq!(r.start, found_by, "pair {index}");
         assert!(r.confidence > 0.5, "pair {index}: confidence {}", r.confidence);
         let exhaustive = Options { search: Search::Exhaustive, ..Options::default() };
         let all = reg.register(&source, &target, &exhaustive).unwrap();
@@ -423,4 +428,30 @@ fn an_answer_still_unsure_after_every_stage_gets_more_global_hypotheses() {
         assert!(all.confidence <= 0.5, "pair {index}: the miss is not flagged ({})", all.confidence);
         assert!(r.starts_refined > all.starts_refined, "pair {index}: {} starts", r.starts_refined);
     }
+}
+
+/// `rotations`: the 24 rotations of a cube onto itself, each once, the identity first, closed
+/// under composition; named alone, they recover a half turn from the centroids.
+#[test]
+fn the_rotation_starts_are_the_cube_group() {
+    let r = refine::cube_rotations();
+    assert_eq!(r[0], nalgebra::Matrix3::identity());
+    for (i, a) in r.iter().enumerate() {
+        assert!(
+            (a.determinant() - 1.0).abs() < 1e-12 && (a * a.transpose() - nalgebra::Matrix3::identity()).norm() < 1e-12
+        );
+        assert!(r[..i].iter().all(|b| (a - b).norm() > 0.5), "rotation {i} repeats");
+        for b in &r {
+            assert!(r.iter().any(|c| (a * b - c).norm() < 1e-12), "not closed");
+        }
+    }
+    let (source, target, truth) = fixture_pair(3);
+    // half a turn about an axis, on top of the pair's own motion: beyond every local start
+    let flip = motion([180.0, 0.0, 0.0], [0.0, 0.0, 0.0]);
+    let source = source.transformed(&arps::transform::rigid_inverse(&flip));
+    let truth = truth * flip;
+    let r = untrained().register(&source, &target, &starts(&[Start::Rotations])).unwrap();
+    let err = rotation_error_deg(&r.T_target_source, &truth);
+    assert!(err < 15.0, "rotation error {err:.1} degrees");
+    assert_eq!(r.start, Start::Rotations);
 }

@@ -87,6 +87,8 @@ pub(crate) fn search(
         refined.push((c.T_target_source, c.fitness));
         let better = match &best {
             None => true,
+            // the last stage's starts are blind: a near tie stays with the answer
+            Some((b, _, _)) if stage.is_none() => refine::clearly_better(&c, b) && improves(b, &c),
             Some((b, _, _)) => improves(b, &c),
         };
         if better {

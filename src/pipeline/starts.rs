@@ -106,6 +106,7 @@ impl<'a> Starts<'a> {
                 Start::Network => starts.push((start, t_net_n)),
                 Start::Initial => starts.push((start, t_initial)),
                 Start::Centroids => starts.push((start, centroid_alignment(&p.src_n, &p.tgt_n))),
+                Start::Rotations => starts.extend(rotations(&p.src_n, &p.tgt_n).map(|t| (start, t))),
                 Start::Turned | Start::TurnedInitial => {
                     // t_net_n is the initial transform when the network is off
                     let base = if start == Start::Turned { t_net_n } else { t_initial };
@@ -126,8 +127,9 @@ impl<'a> Starts<'a> {
 
     /// The adaptive search's last stage: [`MORE_HYPOTHESES`] global hypotheses drawn from the same
     /// matches, less those within [`SAME_HYPOTHESIS_DEGREES`] and [`SAME_HYPOTHESIS_SHIFT`] of one
-    /// a global start already used, as starts of each global kind in `kinds` (none when `kinds`
-    /// has none, or no global start ran before).
+    /// a global start already used, as starts of each global kind in `kinds`; then the
+    /// [`Start::Rotations`] starts, unless `kinds` has them already. None when `kinds` has no
+    /// global kind, or no global start ran before.
     pub(crate) fn more(
         &mut self,
         kinds: &[Start],
@@ -144,6 +146,10 @@ impl<'a> Starts<'a> {
         let mut starts = Vec::new();
         for &start in kinds.iter().filter(|k| k.is_global()) {
             starts.extend(self.global(start, &more, model, workspace)?);
+        }
+        if !kinds.contains(&Start::Rotations) {
+            let p = self.prepared;
+            starts.extend(rotations(&p.src_n, &p.tgt_n).map(|t| (Start::Rotations, t)));
         }
         Ok(starts)
     }
@@ -194,6 +200,14 @@ pub(crate) const MORE_HYPOTHESES: usize = 15;
 const SAME_HYPOTHESIS_DEGREES: f64 = 10.0;
 /// See [`SAME_HYPOTHESIS_DEGREES`]: translations this close (normalised units).
 const SAME_HYPOTHESIS_SHIFT: f64 = 0.1;
+
+/// The [`Start::Rotations`] transforms between two clouds in one frame: each of the
+/// [`refine::cube_rotations`] about the source's centroid, which moves onto the target's.
+fn rotations(source: &PointCloud, target: &PointCloud) -> [Matrix4<f64>; 24] {
+    let (cs, ct) = (source.centroid(), target.centroid());
+    let (cs, ct) = (nalgebra::Vector3::from(cs), nalgebra::Vector3::from(ct));
+    refine::cube_rotations().map(|r| transform::from_rotation_translation(&r, &(ct - r * cs)))
+}
 
 /// The [`Start::Centroids`] transform between two clouds in one frame: no rotation, the
 /// translation taking the source's centroid onto the target's.
