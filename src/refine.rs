@@ -153,6 +153,36 @@ pub fn cube_rotations() -> [nalgebra::Matrix3<f64>; 24] {
     out
 }
 
+/// Points of the short ICP runs of [`shortlist`].
+pub const SHORTLIST_POINTS: usize = 256;
+/// Iterations of each short ICP run of [`shortlist`], at the first distance of [`SCHEDULE`].
+pub const SHORTLIST_ITERATIONS: u32 = 5;
+
+/// The `keep` of `starts` that fit best after a short ICP run each ([`SHORTLIST_ITERATIONS`] at
+/// the coarsest distance of [`SCHEDULE`], on [`SHORTLIST_POINTS`] of the `source` points, evenly
+/// spread), in their original order; all of them when there are no more than `keep`. Ties keep
+/// the earlier start. A cheap first cut of many blind starts, most of which land nowhere.
+pub fn shortlist(
+    target: &IcpTarget,
+    source: &[[f32; 3]],
+    starts: Vec<(Start, Matrix4<f64>)>,
+    how: &Refinement,
+    keep: usize,
+) -> Vec<(Start, Matrix4<f64>)> {
+    if starts.len() <= keep {
+        return starts;
+    }
+    let sample = even_sample(source, SHORTLIST_POINTS);
+    let kind = if how.kind == IcpKind::Off { IcpKind::Point } else { how.kind };
+    let params = IcpParams { max_iterations: SHORTLIST_ITERATIONS, ..IcpParams::new(kind, SCHEDULE[0] * how.d_final) };
+    let mut scored: Vec<(f64, usize)> =
+        starts.iter().enumerate().map(|(i, (_, t))| (target.align(&sample, t, &params).fitness, i)).collect();
+    scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    let mut kept: Vec<usize> = scored.into_iter().take(keep).map(|(_, i)| i).collect();
+    kept.sort_unstable();
+    kept.into_iter().map(|i| starts[i]).collect()
+}
+
 /// ICP runs coarse to fine at these multiples of the final max correspondence distance.
 pub const SCHEDULE: [f64; 3] = [4.0, 2.0, 1.0];
 

@@ -455,3 +455,23 @@ fn the_rotation_starts_are_the_cube_group() {
     assert!(err < 15.0, "rotation error {err:.1} degrees");
     assert_eq!(r.start, Start::Rotations);
 }
+
+/// `shortlist` keeps the starts that fit best after a short run, in their original order, and
+/// all of them when there are no more than asked for.
+#[test]
+fn a_shortlist_keeps_the_starts_that_fit_best_in_their_order() {
+    let (target, source, truth) = surface_pair();
+    let d = 0.05;
+    let away = |x: f64| Matrix4::new_translation(&nalgebra::Vector3::new(x, 0.0, 0.0)) * truth;
+    let near = motion([2.0, 0.0, 0.0], [0.0, 0.0, 0.0]) * truth;
+    let list = vec![
+        (Start::Rotations, away(6.0)),
+        (Start::Rotations, near),
+        (Start::Global, away(9.0)),
+        (Start::Rotations, truth),
+    ];
+    let kept = refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 2);
+    assert_eq!(kept, vec![list[1], list[3]]);
+    assert_eq!(refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4), list);
+    assert!(refine::shortlist(&target, &source, list, &how(IcpKind::Plane, d), 0).is_empty());
+}

@@ -71,7 +71,9 @@ pub(crate) fn search(
                 && options.icp != IcpKind::Off
                 && best.as_ref().is_some_and(|b| b.2 <= MORE_BELOW_CONFIDENCE) =>
             {
-                starts.more(&kinds, model, workspace)?
+                // blind starts, most of which land nowhere: a short run each picks those refined
+                let more = starts.more(&kinds, model, workspace)?;
+                refine::shortlist(&target_index, &p.icp_src.points, more, &how, LAST_STAGE_STARTS)
             }
             None => break,
         };
@@ -135,6 +137,12 @@ pub(crate) fn search(
     let confidence = confidence::confidence(&evidence);
     Ok(Chosen { candidate, evidence, confidence, starts_refined })
 }
+
+/// Most starts of the adaptive search's last stage that are refined: the best after a short run
+/// each ([`refine::shortlist`]; of 34 with the default starts). 12 keeps 17 of the 19 any-pose
+/// pairs that refining all 34 gains, at about half the stage's time (`BENCHMARK.md`, "A last
+/// stage for unsure answers").
+const LAST_STAGE_STARTS: usize = 12;
 
 /// Most better poses of the confidence probe that [`settle`] refines in a row.
 const MAX_PROBE_STARTS: usize = 4;
