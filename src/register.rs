@@ -154,7 +154,8 @@ pub const STOP_CONFIDENCE: f64 = 0.95;
 
 /// When every stage of [`Search::Adaptive`] has run and the best answer's confidence is still at
 /// most this (the answer would carry the low-confidence warning), a last stage refines more
-/// global hypotheses (`BENCHMARK.md`, "More hypotheses for unsure answers").
+/// global hypotheses and blind rotations, shortlisted (`BENCHMARK.md`, "A last stage for unsure
+/// answers").
 pub const MORE_BELOW_CONFIDENCE: f64 = 0.5;
 
 impl Default for Options {

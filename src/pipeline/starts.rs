@@ -191,9 +191,9 @@ impl<'a> Starts<'a> {
     }
 }
 
-/// Global hypotheses that the adaptive search's last stage draws: the matches' best motions
-/// after the first five, when the answer is still unsure (`BENCHMARK.md`, "More hypotheses
-/// for unsure answers", has the sweep).
+/// How many global hypotheses the adaptive search's last stage draws from the matches; those
+/// the global stage did not use already (up to ten) become its starts (`BENCHMARK.md`, "A last
+/// stage for unsure answers", has the sweep).
 pub(crate) const MORE_HYPOTHESES: usize = 15;
 /// A hypothesis of the last stage closer than this (degrees) and [`SAME_HYPOTHESIS_SHIFT`] to
 /// one a global start already used is not refined again.
