@@ -44,7 +44,7 @@ pub enum Start {
     /// it is [`Start::Global`].
     GlobalNetwork,
     /// Twenty-four starts: the source's centroid moved onto the target's, turned by each of the
-    /// 24 rotations of a cube onto itself ([`CUBE_ROTATIONS`]), in the frame of the initial
+    /// 24 rotations of a cube onto itself ([`cube_rotations`]), in the frame of the initial
     /// transform. A blind search over every orientation, for pairs in unrelated frames whose
     /// descriptors match poorly (repetitive, smooth or symmetric shapes). The adaptive search
     /// adds them to its last stage (see `search`).

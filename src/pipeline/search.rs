@@ -3,9 +3,13 @@
 //! Takes the [`Prepared`] clouds, the stages of [`super::starts`] and the options; gives
 //! [`Chosen`]: the best refined start ([`refine::refine_best`], compared across stages by
 //! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
-//! first stage whose best reaches [`STOP_CONFIDENCE`]. Each stage's best, when it is better than
-//! the answer so far and another pose ([`refine::coincide`]), is judged by the confidence probe,
-//! and a probe pose that fits better is refined as one more start ([`settle`]). The answer's
+//! first stage whose best reaches [`STOP_CONFIDENCE`]; when none does and the answer is at most
+//! [`MORE_BELOW_CONFIDENCE`], it runs a last stage of blind starts ([`Starts::more`]: more global
+//! hypotheses and the rotations), shortlisted to [`LAST_STAGE_STARTS`] ([`refine::shortlist`]),
+//! whose best must fit clearly better ([`refine::clearly_better`]). Each stage's best, when it
+//! is better than the answer so far and another pose ([`refine::coincide`]), is judged by the
+//! confidence probe, and a probe pose that fits better is refined as one more start ([`settle`]).
+//! The answer's
 //! final verdict also counts, as alternatives, the other refined answers that fit about as well
 //! ([`confidence::count_search_alternatives`]). With no start refined at all, the network's
 //! estimate (the initial transform with the network off), unrefined, and a warning.
@@ -63,7 +67,7 @@ pub(crate) fn search(
     let mut starts_refined = 0usize;
     let adaptive = options.search == Search::Adaptive;
     let kinds: Vec<Start> = stages.iter().flatten().copied().collect();
-    // the stages, then, while the answer is still unsure, the last one: more global hypotheses
+    // the stages, then, while the answer is still unsure, the last one: blind starts
     for stage in stages.iter().map(Some).chain([None]) {
         let mut starts = match stage {
             Some(stage) => starts.build(stage, model, workspace)?,
