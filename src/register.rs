@@ -83,8 +83,8 @@ pub struct Options {
     /// `search`. Default `["network", "global", "centroids", "initial", "turned",
     /// "turnedInitial"]`; each extra start costs one ICP run on at most 2048 points (`"turned"`
     /// and `"turnedInitial"` are six each, `"global"` and `"globalNetwork"` up to five each, plus
-    /// the descriptor matching, `"rotations"` 24), so `["network"]` is the fastest. Must be non-empty, without
-    /// repeats.
+    /// the descriptor matching, `"rotations"` 24), so `["network"]` is the fastest. Must be
+    /// non-empty, without repeats.
     /// - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
     ///   reported as `"initial"`);
     /// - `"centroids"`: `initialTransform`'s rotation (none if unset) with the translation that

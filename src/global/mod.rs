@@ -103,16 +103,6 @@ impl Matched {
         Self { source, target, matches, voxel }
     }
 
-    /// The feature voxel the clouds were described at.
-    pub fn voxel(&self) -> f64 {
-        self.voxel
-    }
-
-    /// How many mutual matches RANSAC draws from.
-    pub fn matches(&self) -> usize {
-        self.matches.len()
-    }
-
     /// Ranked rigid motions taking the source onto the target, best first (`params.hypotheses` at
     /// most; `params.voxel_fraction` is the one given to [`Matched::new`]); empty when the
     /// descriptors gave fewer than three correspondences. Deterministic for `params.seed`.

@@ -113,11 +113,10 @@ impl<'a> Starts<'a> {
                     starts.extend(turns(&base).map(|t| (start, t)));
                 }
                 Start::Global | Start::GlobalNetwork => {
-                    let hypotheses = match &self.hypotheses {
-                        Some(h) => h.clone(),
-                        None => self.draw(global::GlobalParams::default().hypotheses),
-                    };
-                    self.hypotheses = Some(hypotheses.clone());
+                    if self.hypotheses.is_none() {
+                        self.hypotheses = Some(self.draw(global::GlobalParams::default().hypotheses));
+                    }
+                    let hypotheses = self.hypotheses.clone().unwrap_or_default();
                     starts.extend(self.global(start, &hypotheses, model, workspace)?);
                 }
             }
