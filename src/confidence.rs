@@ -432,6 +432,12 @@ fn features(e: &Evidence) -> [f64; 10] {
 /// "Confidence", where the cross-validated figures are).
 const WEIGHTS: [f64; 11] = [1.977, 0.5273, 1.661, -0.2899, 2.178, -0.334, 0.7324, -4.187, -0.5047, -1.748, 4.049];
 
+/// The coarse fitness ([`Evidence::fitness_coarse`], within 4 `d`) from which the logistic model
+/// is trusted: the right answers it was fitted and checked on all lie above it (the lowest of
+/// about 6,000 on the validation sets was 0.39; on the real scans 0.54). Below it the
+/// confidence is capped in proportion.
+pub const SUPPORTED_COARSE_FITNESS: f64 = 0.4;
+
 /// The probability that the answer is right (within the evaluation's recall thresholds: rotation
 /// error below 15 degrees and translation error below 0.2 of the normalised half-extent), in
 /// [0, 1]: a logistic model over the [`Evidence`], calibrated on validation pairs, and at most
@@ -439,8 +445,11 @@ const WEIGHTS: [f64; 11] = [1.977, 0.5273, 1.661, -0.2899, 2.178, -0.334, 0.7324
 /// with a probability of about `1 / k` at best. So it is low when the clouds overlap poorly under
 /// the answer, and also when other poses fit about as well (a symmetric or featureless shape):
 /// then the answer may be right, but nothing in the clouds says so. Below 0.5, or with an
-/// alternative (at most 0.5), the result carries a warning. No overlap at all (fitness 0) and
-/// non-finite evidence give 0.
+/// alternative (at most 0.5), the result carries a warning. It is also at most
+/// `fitness_coarse /` [`SUPPORTED_COARSE_FITNESS`]: an answer under which few source points come
+/// near the target at all has nothing in the clouds behind it, whatever the probes say (they
+/// find nothing better, so `ambiguity` and `slide` are 0, values the model reads as a unique
+/// fit). No overlap at all (fitness 0) and non-finite evidence give 0.
 pub fn confidence(e: &Evidence) -> f64 {
     // no source point near the target: nothing in the clouds supports the answer
     if e.fitness.is_nan() || e.fitness <= 0.0 {
@@ -448,7 +457,8 @@ pub fn confidence(e: &Evidence) -> f64 {
     }
     let x = features(e);
     let z: f64 = x.iter().zip(WEIGHTS.iter()).map(|(a, w)| a * w).sum::<f64>() + WEIGHTS[x.len()];
-    let cap = 1.0 / (1.0 + e.alternatives.max(0.0));
+    let support = (e.fitness_coarse / SUPPORTED_COARSE_FITNESS).min(1.0);
+    let cap = (1.0 / (1.0 + e.alternatives.max(0.0))).min(support);
     if z.is_finite() && cap.is_finite() {
         (1.0 / (1.0 + (-z).exp())).min(cap)
     } else {

@@ -239,6 +239,32 @@ fn the_searchs_other_answers_that_fit_as_well_are_alternatives() {
     assert!(before > 0.5 && confidence::confidence(&e) <= 1.0 / 3.0, "{before} {}", confidence::confidence(&e));
 }
 
+/// An answer that moved the source almost off the target: the probes find nothing that fits
+/// better, so `ambiguity` and `slide` are 0, which the logistic model alone reads as a unique
+/// fit (0.98 for these figures, measured on a bowl pair answered 142 degrees off). Few source
+/// points near the target at all caps it.
+#[test]
+fn an_answer_with_almost_no_overlap_is_not_confident() {
+    let off = Evidence {
+        fitness: 0.00098,
+        fitness_tight: 0.0,
+        fitness_loose: 0.0069,
+        fitness_coarse: 0.0196,
+        overlap_reverse: 0.00098,
+        rmse_ratio: 0.874,
+        ambiguity: 0.0,
+        alternatives: 0.0,
+        slide: 0.0,
+    };
+    let c = confidence::confidence(&off);
+    assert!(c <= off.fitness_coarse / confidence::SUPPORTED_COARSE_FITNESS && c < 0.1, "{c}");
+    // the cap is in proportion: it leaves a well supported answer alone
+    let supported = Evidence { fitness_coarse: confidence::SUPPORTED_COARSE_FITNESS, ..off };
+    assert!(confidence::confidence(&supported) > 0.9, "{}", confidence::confidence(&supported));
+    let half = Evidence { fitness_coarse: confidence::SUPPORTED_COARSE_FITNESS / 2.0, ..off };
+    assert!((confidence::confidence(&half) - 0.5).abs() < 1e-12);
+}
+
 /// CPU time of the evidence next to one ICP refinement of the same pair (`--ignored
 /// --nocapture` to see them; `BENCHMARK.md` quotes them).
 #[test]

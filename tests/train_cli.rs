@@ -178,9 +178,15 @@ fn resume_can_fork_with_other_losses_and_lr() {
     assert_eq!(st.config.pose_angle_deg, 0.0);
     let a =
         ["--resume", "--steps", "25", "--quiet", "--network-points", "24", "--patience", "7", "--pose-angle", "180"];
+    let (batch, seen) = (st.config.batch, st.pairs_seen);
+    let mut a = a.to_vec();
+    a.extend(["--batch", "3"]);
     train(&run, &a);
     let st = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap().state;
     assert_eq!((st.step, st.config.model.n_points, st.config.plateau_patience), (25, 24, 7));
+    // another batch size from here on: the pair stream goes on where it was
+    assert_ne!(batch, 3);
+    assert_eq!((st.config.batch, st.pairs_seen), (3, seen + 3 * (25 - 20)));
     assert_eq!(st.config.pose_angle_deg, 180.0);
     let w = export_latest(&run);
     assert_eq!(w.config.n_points, 24);
@@ -189,7 +195,7 @@ fn resume_can_fork_with_other_losses_and_lr() {
         .output()
         .unwrap();
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stderr).contains("--points 2"));
-    for bad in [["--network-points", "8"], ["--pose-angle", "400"]] {
+    for bad in [["--network-points", "8"], ["--pose-angle", "400"], ["--batch", "0"]] {
         let mut a = vec!["train", "--run", run.to_str().unwrap(), "--resume", "--steps", "26"];
         a.extend(bad);
         let out = Command::new(env!("CARGO_BIN_EXE_arps-train")).args(&a).output().unwrap();

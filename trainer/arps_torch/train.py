@@ -175,6 +175,8 @@ def main(argv=None):
     ap.add_argument("--val-every-steps", type=int, help="override: validate every S steps")
     ap.add_argument("--batch", type=int, help="override the run's pairs per step")
     ap.add_argument("--lr", type=float, help="replace the run's current lr")
+    ap.add_argument("--network-points", type=int,
+                    help="replace the run's network N (a fork that fine-tunes at another N; the weights do not depend on it)")
     ap.add_argument("--compile", action="store_true",
                     help="torch.compile the network's forward and backward (static shapes; the first step compiles)")
     ap.add_argument("--quiet", action="store_true")
@@ -188,6 +190,10 @@ def main(argv=None):
     cfg = st["config"]
     if a.batch:
         cfg["batch"] = a.batch
+    if a.network_points is not None:
+        if a.network_points < 1:
+            ap.error(f"--network-points {a.network_points} must be positive")
+        cfg["model"]["n_points"] = a.network_points
     if a.checkpoint_every_minutes is not None:
         cfg["checkpoint_every_minutes"] = a.checkpoint_every_minutes
         cfg["checkpoint_every_steps"] = None

@@ -13,7 +13,7 @@ import pytest
 torch = pytest.importorskip("torch", reason="torch is not installed (pip install -r trainer/requirements.txt)")
 
 from arps_torch import stream, train  # noqa: E402
-from arps_torch.weights import read_checkpoint  # noqa: E402
+from arps_torch.weights import read_checkpoint, read_weights  # noqa: E402
 from conftest import REPO  # noqa: E402
 
 BIN = os.environ.get("ARPS_TRAIN_BIN", os.path.join(REPO, "target", "release", "arps-train"))
@@ -75,6 +75,19 @@ def test_train_resume_export_curves(tmp_path):
     run("export", "--run", str(a), "--latest", "--f16", "--out", str(out))
     run("curves", "--run", str(a), "--out", str(tmp_path / "c.svg"))
     assert (tmp_path / "c.svg").read_text().startswith("<svg")
+
+
+def test_a_fork_at_another_network_n_and_batch(tmp_path):
+    d = init(tmp_path / "r")
+    pytrain(d, 2)
+    train.main(["--run", str(d), "--arps-train", BIN, "--generators", "2", "--steps", "3", "--device", "cpu",
+                "--quiet", "--network-points", "24", "--batch", "3"])
+    st = read_checkpoint(os.path.join(d, "checkpoint.safetensors"))["state"]
+    assert st["config"]["model"]["n_points"] == 24 and st["config"]["batch"] == 3
+    assert st["step"] == 3 and st["pairs_seen"] == 2 * 2 + 3
+    out = tmp_path / "w.safetensors"
+    run("export", "--run", str(d), "--latest", "--out", str(out))
+    assert read_weights(str(out))[0]["n_points"] == 24
 
 
 def test_first_step_losses_equal_the_cpu_trainers(tmp_path):

@@ -119,9 +119,10 @@ struct TrainArgs {
     /// Train until the run's step count reaches this (total over all sessions).
     #[arg(long)]
     steps: Option<u64>,
-    /// Pairs per step.
-    #[arg(long, default_value_t = 8)]
-    batch: usize,
+    /// Pairs per step (default 8). On --resume, replaces the stored value (the pair stream goes
+    /// on where it was: a CPU fork of a run trained at a GPU's batch size).
+    #[arg(long)]
+    batch: Option<usize>,
     /// Peak learning rate (Adam; default 1e-3). On --resume, replaces the run's current lr
     /// (logged in the session's start line).
     #[arg(long)]
@@ -308,6 +309,8 @@ const DEFAULT_LOSS: &str = "sup,ctr";
 const DEFAULT_PATIENCE: u32 = 3;
 /// `--lr` when it is not given.
 const DEFAULT_LR: f32 = 1e-3;
+/// Pairs per step of a new run.
+const DEFAULT_BATCH: usize = 8;
 
 fn parse_loss(a: &TrainArgs) -> Result<LossConfig, String> {
     let mut l = LossConfig { sup: 0.0, ctr: 0.0, aff: 0.0, reg: 0.0, consistency: 0.0, ..LossConfig::default() };
@@ -388,6 +391,7 @@ fn session(a: TrainArgs) -> Result<Session, String> {
             ema_decay: ema_decay(&a)?,
             loss: a.loss.is_some().then(|| parse_loss(&a)).transpose()?,
             lr: a.lr,
+            batch: a.batch,
         }))
     } else {
         Start::New(Box::new(run_config(&a)?))
@@ -434,7 +438,7 @@ fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
     Ok(RunConfig {
         model,
         loss: parse_loss(a)?,
-        batch: a.batch.max(1),
+        batch: a.batch.unwrap_or(DEFAULT_BATCH).max(1),
         lr: a.lr.unwrap_or(DEFAULT_LR),
         warmup_steps: a.warmup_steps,
         clip_norm: (a.clip > 0.0).then_some(a.clip),

@@ -90,6 +90,8 @@ pub struct ResumeChanges {
     pub loss: Option<LossConfig>,
     /// The current base lr (resets the plateau counter).
     pub lr: Option<f32>,
+    /// [`RunConfig::batch`] (a CPU fork of a run trained at a GPU's batch size).
+    pub batch: Option<usize>,
 }
 
 /// One training session of a run.
@@ -152,6 +154,12 @@ fn apply_changes(st: &mut RunState, c: &ResumeChanges) -> Result<(), String> {
         }
         st.lr = lr;
         st.bad_validations = 0;
+    }
+    if let Some(b) = c.batch {
+        if b == 0 {
+            return Err("--batch 0: a step needs at least one pair".into());
+        }
+        st.config.batch = b;
     }
     Ok(())
 }
