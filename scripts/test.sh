@@ -17,6 +17,8 @@ fi
 step "format and lints"
 cargo fmt --check
 cargo clippy --quiet --all-targets --features train,ts -- -D warnings
+# the API docs, trainer and binaries included: no broken links
+RUSTDOCFLAGS="-D warnings" cargo doc --quiet --no-deps --features train,cli,ts
 
 # `ts` adds the TypeScript generation of the JS/JSON contract: tests/contract.rs fails when the
 # committed js/arps-contract.d.ts differs from what the Rust types generate (scripts/gen-types.sh).

@@ -7,7 +7,7 @@
 //! progress stages) and [`ModelConfig`]. They are serde types: the wasm binding converts them
 //! with serde-wasm-bindgen and the CLI with serde_json, so JS and JSON see the same objects, field
 //! for field. The TypeScript declarations of the package (`js/arps-contract.d.ts`, part of
-//! `pkg/arps.d.ts`) are generated from the same types ([`typescript`], cargo feature `ts`;
+//! `pkg/arps.d.ts`) are generated from the same types (`typescript`, cargo feature `ts`;
 //! `scripts/gen-types.sh` writes the file, `tests/contract.rs` fails when it is stale).
 //!
 //! # Naming and layout (JS and JSON alike)

@@ -27,7 +27,7 @@
 //! Numerics: everything is `f32` with the engine's kernels ([`crate::nn::matmul::gemm`] for every
 //! product, forward and backward), except the trainer's softmax (a polynomial `exp`, see
 //! [`simd`]) and the GMM + Procrustes solve, which runs in `f64` from the memberships to `T`
-//! (one fused op, [`ops::gmr`]). The forward pass matches the engine's memberships, steps,
+//! (one fused op, [`ops::gmr()`]). The forward pass matches the engine's memberships, steps,
 //! shifts and transforms to 1e-4 (tests/train_model.rs).
 //!
 //! Speed (web config, N = 512, batch 8, 2 threads): 0.21-0.23 CPU-seconds per pair, i.e.

@@ -1,5 +1,5 @@
 //! Printing to stdout for the command-line tools. `println!` panics when the reader has gone
-//! (`arps info model.safetensors | head -1`); [`out!`] ends the process quietly with status 0
+//! (`arps info model.safetensors | head -1`); `out!` ends the process quietly with status 0
 //! instead, like other Unix tools, and reports any other write error on stderr with status 1.
 
 /// `println!` for the CLI: on a closed pipe the process exits quietly (status 0).

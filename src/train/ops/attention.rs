@@ -1,5 +1,5 @@
 //! Multi-head scaled dot-product attention on projected queries, keys and values (the core of
-//! the engine's [`crate::nn::MultiHeadAttention`]; the Q/K/V/O projections are [`super::linear`]
+//! the engine's [`crate::nn::MultiHeadAttention`]; the Q/K/V/O projections are [`super::linear()`]
 //! ops). The per-head probabilities are kept for the backward pass.
 
 use crate::nn::matmul::gemm;

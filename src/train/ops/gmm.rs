@@ -3,7 +3,7 @@
 //! `var_j = max(sum_i g_ij |x_i - mu_j|^2 / (N pi_j + eps), 1e-8)`, accumulated in `f64`.
 //! The points are constants (raw input coordinates); the gradient goes to the memberships.
 //!
-//! [`Gmm64`] is the `f64` math (used by the fused [`super::gmr`] op); [`gmm_params`] is a tape
+//! [`Gmm64`] is the `f64` math (used by the fused [`super::gmr()`] op); [`gmm_params`] is a tape
 //! op exposing the parameters as an `f32` node.
 
 use crate::train::tape::{Backward, Id, Op, Tape};

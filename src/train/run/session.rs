@@ -1,5 +1,5 @@
 //! What the `arps-train` subcommands do, behind the binary's argument parsing: one training
-//! session of a run ([`train`] of a [`Session`]), the export of a run's weights ([`export`]),
+//! session of a run ([`train()`] of a [`Session`]), the export of a run's weights ([`export`]),
 //! a new run's configuration and step-0 checkpoint without training ([`init`], for the data
 //! stream and the PyTorch trainer), and reading a run configuration back ([`read_config`]).
 

@@ -15,9 +15,9 @@
 //! | `index` | u64 | [] | stream index of the pair (training: pair `i` of the run's stream; validation: pair `i` of the held-out split) |
 //! | `source`, `target` | f32 | [N, 3] | the network's input clouds, engine-normalised units (the engine's network sample) |
 //! | `t_gt` | f64 | [4, 4] | ground-truth `T_target_source` between those frames, row-major |
-//! | `v_gt_source`, `v_gt_target` | f32 | [3] | the shape's centroid, pre-centred on each cloud's mean (the `ctr` target) |
+//! | `v_gt_source`, `v_gt_target` | f32 | `[3]` | the shape's centroid, pre-centred on each cloud's mean (the `ctr` target) |
 //! | `seg_source`, `seg_target` | f32 | [N, J] | the canonical partition (the `seg` target, the run's `seg_kappa`) |
-//! | `corr` | i32 | [N] | the consistency correspondences: for source point `i`, its nearest target point under `t_gt` when within the run's `consistency_radius`, else -1 |
+//! | `corr` | i32 | `[N]` | the consistency correspondences: for source point `i`, its nearest target point under `t_gt` when within the run's `consistency_radius`, else -1 |
 //! | `norm_source`, `norm_target` | f64 | [4, 4] | the engine's normalisations, pair units to network frames |
 //! | `t_gt_pair` | f64 | [4, 4] | the ground truth in the pair's own units (validation errors) |
 //!
