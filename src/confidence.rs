@@ -225,8 +225,8 @@ fn turns(
     // do, since their axes are only estimates of the true one
     let starts: Vec<(Matrix4<f64>, bool)> =
         probes.into_iter().map(|p| (turn(p), p.0 == 180.0)).chain(extra.iter().map(|&m| (m, true))).collect();
-    let kind = if kind == IcpKind::Off { IcpKind::Point } else { kind };
-    let params = |factor: f64| IcpParams { max_iterations: PROBE_ITERATIONS, ..IcpParams::new(kind, factor * d) };
+    let params =
+        |factor: f64| IcpParams { max_iterations: PROBE_ITERATIONS, ..IcpParams::new(kind.or_point(), factor * d) };
     let base_coarse = target.evaluate_warm(sample, t, 4.0 * d, &mut partners).0;
     let mut alternatives: Vec<Matrix4<f64>> = Vec::new();
     // each earlier probe's pose after each stage (4d, 2d, d; `None`: not run)

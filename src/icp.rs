@@ -19,6 +19,18 @@ pub enum IcpKind {
     Plane,
 }
 
+impl IcpKind {
+    /// The kind of a short search run (a probe, a screen of starts): this one, or point-to-point
+    /// when refinement is off, since a search run that does not move finds nothing.
+    pub fn or_point(self) -> IcpKind {
+        if self == IcpKind::Off {
+            IcpKind::Point
+        } else {
+            self
+        }
+    }
+}
+
 /// Parameters of one ICP run.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct IcpParams {

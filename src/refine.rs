@@ -173,8 +173,10 @@ pub fn shortlist(
         return starts;
     }
     let sample = even_sample(source, SHORTLIST_POINTS);
-    let kind = if how.kind == IcpKind::Off { IcpKind::Point } else { how.kind };
-    let params = IcpParams { max_iterations: SHORTLIST_ITERATIONS, ..IcpParams::new(kind, SCHEDULE[0] * how.d_final) };
+    let params = IcpParams {
+        max_iterations: SHORTLIST_ITERATIONS,
+        ..IcpParams::new(how.kind.or_point(), SCHEDULE[0] * how.d_final)
+    };
     let mut scored: Vec<(f64, usize)> =
         starts.iter().enumerate().map(|(i, (_, t))| (target.align(&sample, t, &params).fitness, i)).collect();
     scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));

@@ -173,14 +173,24 @@ fn resume_can_fork_with_other_losses_and_lr() {
         let err = String::from_utf8_lossy(&out.stderr);
         assert!(err.contains("nope") || err.contains("--lr"), "{err}");
     }
-    // a fork that fine-tunes at another N, with another plateau patience; the export carries the N
-    // (and training pairs in any pose)
+    // a fork that fine-tunes at another N and batch size, with another plateau patience; the
+    // export carries the N (and training pairs in any pose)
     assert_eq!(st.config.pose_angle_deg, 0.0);
-    let a =
-        ["--resume", "--steps", "25", "--quiet", "--network-points", "24", "--patience", "7", "--pose-angle", "180"];
     let (batch, seen) = (st.config.batch, st.pairs_seen);
-    let mut a = a.to_vec();
-    a.extend(["--batch", "3"]);
+    let a = [
+        "--resume",
+        "--steps",
+        "25",
+        "--quiet",
+        "--network-points",
+        "24",
+        "--patience",
+        "7",
+        "--pose-angle",
+        "180",
+        "--batch",
+        "3",
+    ];
     train(&run, &a);
     let st = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap().state;
     assert_eq!((st.step, st.config.model.n_points, st.config.plateau_patience), (25, 24, 7));
