@@ -216,6 +216,18 @@ fn resume_can_fork_with_other_losses_and_lr() {
 }
 
 #[test]
+fn a_new_run_refuses_a_batch_of_zero() {
+    let run = dir("batch0");
+    let out = Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args(["train", "--run", run.to_str().unwrap(), "--preset", "tiny", "--steps", "1", "--batch", "0"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--batch 0"), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(!run.join("checkpoint.safetensors").exists());
+}
+
+#[test]
 fn new_runs_take_model_sizes_and_resumed_runs_keep_theirs() {
     let run = dir("sizes");
     let mut args = COMMON.to_vec();

@@ -188,7 +188,9 @@ def main(argv=None):
     ck = read_checkpoint(ckpt_path)
     st = ck["state"]
     cfg = st["config"]
-    if a.batch:
+    if a.batch is not None:
+        if a.batch < 1:
+            ap.error(f"--batch {a.batch}: a step needs at least one pair")
         cfg["batch"] = a.batch
     if a.network_points is not None:
         if a.network_points < 1:

@@ -90,6 +90,14 @@ def test_a_fork_at_another_network_n_and_batch(tmp_path):
     assert read_weights(str(out))[0]["n_points"] == 24
 
 
+def test_a_batch_of_zero_is_refused(tmp_path):
+    d = init(tmp_path / "r")
+    with pytest.raises(SystemExit):
+        train.main(["--run", str(d), "--arps-train", BIN, "--generators", "1", "--steps", "1", "--device", "cpu",
+                    "--quiet", "--batch", "0"])
+    assert read_checkpoint(os.path.join(d, "checkpoint.safetensors"))["state"]["step"] == 0
+
+
 def test_first_step_losses_equal_the_cpu_trainers(tmp_path):
     a = init(tmp_path / "a")
     c = tmp_path / "c"

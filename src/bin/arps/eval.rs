@@ -41,7 +41,7 @@ use arps::confidence::Evidence;
 use arps::data::manifest;
 use arps::data::metrics::{ambiguous_miss, pair_error, recall_svg, recalled, summarize, PairError, Summary};
 use arps::transform::{euler_xyz, from_rotation_translation, rigid_inverse, to_rows};
-use arps::{io, ModelConfig, Options, PointCloud, Registrar, Search, Start, Weights};
+use arps::{io, ModelConfig, Options, PointCloud, Registrar, Search, Start, Timings, Weights};
 use clap::{Args, ValueEnum};
 use nalgebra::{Matrix4, Vector3};
 use rand::Rng;
@@ -213,6 +213,8 @@ struct PairResult {
     gt_fitness: f64,
     /// Each method's confidence and its evidence (`None` when it failed).
     confidence: Vec<Option<(f64, Evidence)>>,
+    /// Each method's stage timings and starts refined (`None` when it failed).
+    work: Vec<Option<(Timings, usize)>>,
 }
 
 impl PairResult {
@@ -305,6 +307,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             fitness: Vec::new(),
             gt_fitness,
             confidence: Vec::new(),
+            work: Vec::new(),
         };
         for &m in &methods {
             let options = m.options(&source, &target, &starts);
@@ -313,11 +316,19 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             let out = reg.register(&source, &target, &options);
             r.ms.push(t0.elapsed().as_secs_f64() * 1e3);
             // a failed registration counts as the identity (no estimate), and is reported
-            let (pred, fail, start, fitness, conf) = match out {
-                Ok(x) => (x.T_target_source, None, Some(x.start), Some(x.fitness), Some((x.confidence, x.evidence))),
-                Err(err) => (Matrix4::identity(), Some(err.to_string()), None, None, None),
+            let (pred, fail, start, fitness, conf, work) = match out {
+                Ok(x) => (
+                    x.T_target_source,
+                    None,
+                    Some(x.start),
+                    Some(x.fitness),
+                    Some((x.confidence, x.evidence)),
+                    Some((x.timings, x.starts_refined)),
+                ),
+                Err(err) => (Matrix4::identity(), Some(err.to_string()), None, None, None, None),
             };
             r.confidence.push(conf);
+            r.work.push(work);
             r.errors.push(pair_error(&pred, &gt, scale));
             r.failed.push(fail);
             r.start.push(start);
@@ -400,6 +411,8 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
                     "fitness": r.fitness[i],
                     "confidence": r.confidence[i].map(|c| c.0),
                     "evidence": r.confidence[i].map(|c| c.1),
+                    "timings": r.work[i].map(|w| w.0),
+                    "starts_refined": r.work[i].map(|w| w.1),
                     "error": r.failed[i],
                 })).collect::<Vec<_>>(),
             })).collect::<Vec<_>>(),
