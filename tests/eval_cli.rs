@@ -313,10 +313,15 @@ fn eval_runs_the_chosen_methods_with_the_given_starts() {
     for p in v["per_pair"].as_array().unwrap() {
         let r = &p["results"][1];
         assert!(["network", "turnedInitial"].contains(&r["start"].as_str().unwrap()), "{r}");
+        // each answer says where its time went and how many starts it refined
+        let total = r["timings"]["totalMs"].as_f64().unwrap();
+        assert!(total > 0.0 && r["timings"]["icpMs"].as_f64().unwrap() <= total, "{r}");
+        assert!(r["starts_refined"].as_u64().unwrap() >= 1, "{r}");
     }
     let (ok, out, _) = arps(&args);
     assert!(ok);
     assert!(out.contains("network + multi-start ICP starts: network, turnedInitial"), "{out}");
+    assert!(out.contains("network + multi-start ICP: median ms network "), "{out}");
     assert_eq!(out.lines().filter(|l| l.starts_with("network")).count(), 2, "two rows:\n{out}");
 
     // unknown names are usage errors that list the known ones

@@ -491,6 +491,25 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             .collect();
         out!("  {}: chosen start {}", m.name(), counts.join(", "));
     }
+    for (i, m) in methods.iter().enumerate() {
+        let work: Vec<(Timings, usize)> = results.iter().filter_map(|r| r.work[i]).collect();
+        if work.is_empty() {
+            continue;
+        }
+        let median = |f: &dyn Fn(&(Timings, usize)) -> f64| {
+            let mut v: Vec<f64> = work.iter().map(f).collect();
+            v.sort_by(f64::total_cmp);
+            v[v.len() / 2]
+        };
+        out!(
+            "  {}: median ms network {}, ICP and confidence {}, global hypotheses {}; starts refined {}",
+            m.name(),
+            num(median(&|w| w.0.network_ms + w.0.gmr_ms), 1),
+            num(median(&|w| w.0.icp_ms), 1),
+            num(median(&|w| w.0.global_ms), 1),
+            median(&|w| w.1 as f64)
+        );
+    }
     for r in &results {
         for (i, f) in r.failed.iter().enumerate() {
             if let Some(f) = f {
