@@ -438,10 +438,7 @@ fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
     Ok(RunConfig {
         model,
         loss: parse_loss(a)?,
-        batch: match a.batch {
-            Some(0) => return Err("--batch 0: a step needs at least one pair".into()),
-            b => b.unwrap_or(DEFAULT_BATCH),
-        },
+        batch: a.batch.unwrap_or(DEFAULT_BATCH),
         lr: a.lr.unwrap_or(DEFAULT_LR),
         warmup_steps: a.warmup_steps,
         clip_norm: (a.clip > 0.0).then_some(a.clip),

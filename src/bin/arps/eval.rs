@@ -496,11 +496,8 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         if work.is_empty() {
             continue;
         }
-        let median = |f: &dyn Fn(&(Timings, usize)) -> f64| {
-            let mut v: Vec<f64> = work.iter().map(f).collect();
-            v.sort_by(f64::total_cmp);
-            v[v.len() / 2]
-        };
+        let median =
+            |f: &dyn Fn(&(Timings, usize)) -> f64| crate::bench::median(&mut work.iter().map(f).collect::<Vec<_>>());
         out!(
             "  {}: median ms network {}, ICP and confidence {}, global hypotheses {}; starts refined {}",
             m.name(),

@@ -156,9 +156,6 @@ fn apply_changes(st: &mut RunState, c: &ResumeChanges) -> Result<(), String> {
         st.bad_validations = 0;
     }
     if let Some(b) = c.batch {
-        if b == 0 {
-            return Err("--batch 0: a step needs at least one pair".into());
-        }
         st.config.batch = b;
     }
     Ok(())
@@ -187,6 +184,10 @@ pub fn train(a: &Session) -> Result<(), String> {
             (RunState::new(cfg), params, train::Adam::new(lr), None)
         }
     };
+    // a new run's configuration or a resumed run's changes: only `--batch 0` can give this
+    if st.config.batch == 0 {
+        return Err("--batch 0: a step needs at least one pair".into());
+    }
     st.sessions += 1;
     let cfg = st.config.clone();
     let threads = cfg.threads;
