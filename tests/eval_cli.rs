@@ -317,6 +317,18 @@ fn eval_runs_the_chosen_methods_with_the_given_starts() {
         let total = r["timings"]["totalMs"].as_f64().unwrap();
         assert!(total > 0.0 && r["timings"]["icpMs"].as_f64().unwrap() <= total, "{r}");
         assert!(r["starts_refined"].as_u64().unwrap() >= 1, "{r}");
+        // and gives its transform: rigid, rows of four
+        for r in p["results"].as_array().unwrap() {
+            let t: Vec<Vec<f64>> = serde_json::from_value(r["T_target_source"].clone()).unwrap();
+            assert_eq!(t.len(), 4, "{r}");
+            assert_eq!(t[3], [0.0, 0.0, 0.0, 1.0], "{r}");
+            for i in 0..3 {
+                for j in 0..3 {
+                    let dot: f64 = (0..3).map(|k| t[i][k] * t[j][k]).sum();
+                    assert!((dot - if i == j { 1.0 } else { 0.0 }).abs() < 1e-6, "{r}");
+                }
+            }
+        }
     }
     let (ok, out, _) = arps(&args);
     assert!(ok);

@@ -215,6 +215,8 @@ struct PairResult {
     confidence: Vec<Option<(f64, Evidence)>>,
     /// Each method's stage timings and starts refined (`None` when it failed).
     work: Vec<Option<(Timings, usize)>>,
+    /// Each method's answer, `T_target_source` (`None` when it failed).
+    answer: Vec<Option<Matrix4<f64>>>,
 }
 
 impl PairResult {
@@ -308,6 +310,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             gt_fitness,
             confidence: Vec::new(),
             work: Vec::new(),
+            answer: Vec::new(),
         };
         for &m in &methods {
             let options = m.options(&source, &target, &starts);
@@ -330,6 +333,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             r.confidence.push(conf);
             r.work.push(work);
             r.errors.push(pair_error(&pred, &gt, scale));
+            r.answer.push(fail.is_none().then_some(pred));
             r.failed.push(fail);
             r.start.push(start);
             r.fitness.push(fitness);
@@ -413,6 +417,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
                     "evidence": r.confidence[i].map(|c| c.1),
                     "timings": r.work[i].map(|w| w.0),
                     "starts_refined": r.work[i].map(|w| w.1),
+                    "T_target_source": r.answer[i].map(|t| to_rows(&t)),
                     "error": r.failed[i],
                 })).collect::<Vec<_>>(),
             })).collect::<Vec<_>>(),
