@@ -21,7 +21,7 @@
  * Points per cloud accepted at the boundary: the core's `limits::MAX_POINTS_PER_CLOUD`, checked
  * here too because the glue would copy the whole buffer into wasm memory before the core sees it.
  */
-export const MAX_POINTS = 8_000_000;
+export const MAX_POINTS = 16_000_000;
 /** Bytes of a file accepted by `parsePointCloud` and of a weights file (larger throw). */
 export const MAX_FILE_BYTES = 1 << 30;
 /** Longest accepted file name, in UTF-16 code units. */
@@ -180,7 +180,7 @@ function checkLength(len, what) {
   if (len > 3 * MAX_POINTS) {
     fail(
       `${what} has ${Math.floor(len / 3)} points, more than the ${MAX_POINTS} a registration accepts per cloud ` +
-        "(about 128 bytes per point, for WebAssembly's 4 GiB memory): downsample it first, e.g. on a voxel grid",
+        "(about 56 bytes per point, for WebAssembly's 4 GiB memory): downsample it first, e.g. on a voxel grid",
     );
   }
   return len;

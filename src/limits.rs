@@ -9,9 +9,11 @@
 //! | budget | value | what it bounds |
 //! | --- | --- | --- |
 //! | [`MAX_CALL_BYTES`] | 2 GiB | memory one call may use (half of wasm32's 4 GiB: the rest is for the model, the caller's copies, and fragmentation) |
-//! | [`REGISTER_BYTES_PER_POINT`] | 128 B | peak memory of a registration per input point (measured natively, see below) |
-//! | [`MAX_POINTS_PER_CLOUD`] | 8,000,000 | points per cloud given to a registration: `MAX_CALL_BYTES / (2 x REGISTER_BYTES_PER_POINT)`, rounded down |
-//! | [`MAX_FILE_POINTS`] | 8,000,000 | points (vertices) a file may hold for the readers (the same figure: a cloud that cannot be registered is not worth decoding) |
+//! | [`INPUT_BYTES_PER_POINT`] | 56 B | peak memory of a registration per input point, before ICP's copy (measured in wasm, see below) |
+//! | [`ICP_BYTES_PER_POINT`] | 72 B | peak memory per point of the (voxelised) cloud ICP works on: its copy, k-d tree and normals |
+//! | [`MAX_POINTS_PER_CLOUD`] | 16,000,000 | points per cloud given to a registration: `MAX_CALL_BYTES / (2 x INPUT_BYTES_PER_POINT)` (19.2M), rounded down |
+//! | ICP's cloud ([`check_icp_points`]) | `input x 56 B + icp x 72 B <= 1 GiB` per cloud | points each cloud keeps for ICP after voxelisation: 8,388,608 when nothing is thinned (`voxelSize: 0`), fewer the more input points there are |
+//! | [`MAX_FILE_POINTS`] | 16,000,000 | points (vertices) a file may hold for the readers (the same figure: a cloud that cannot be registered is not worth decoding) |
 //! | [`MAX_DECODED_BYTES`] | 1 GiB | bytes a compressed body (PCD `binary_compressed`) may decompress to |
 //! | [`MAX_MODEL_DIM`] | 4,096 | every size in a model config (N, C, heads, hidden widths, H, J) |
 //! | [`MAX_MODEL_LIST`] | 16 | entries of a config's hidden-width lists (`pos_hidden`, `head_hidden`) |
@@ -19,32 +21,39 @@
 //! | [`MAX_MODEL_PARAMETERS`] | 33,554,432 | parameters of a model (128 MiB as f32; the paper-size model has 13.8M) |
 //! | [`MAX_MODEL_CONFIG_BYTES`] | 65,536 | bytes of a weights file's `config` JSON |
 //!
-//! **Where 128 bytes per point comes from.** A registration holds, per input point, the caller's
-//! cloud (12 B), the validated copy (12 B), the turned copy when an initial rotation is given
-//! (12 B), the normalised copy (12 B), the voxel grid's sort keys while it runs (32 B natively,
-//! 28 B on wasm32), and the ICP cloud and its kd-tree and normals when voxelisation is off
-//! (up to 40 B): 120 B, rounded up to 128 B. Measured natively (peak RSS of `arps register` on
-//! synthetic binary PLY pairs with default options, reading included; `BENCHMARK.md`, "Memory"),
-//! the peak grows by 53 B per input point; in WebAssembly the binding's copies of the caller's
-//! arrays add 24 B, and `voxelSize: 0` (ICP on the full clouds) adds the kd-tree and normals.
-//! The issue that set these budgets saw 2 GB of wasm memory at 10M points per cloud (100 B per
-//! point) and a trap at 20M.
+//! **Where the bytes per point come from.** Measured as the growth of the WebAssembly memory of one
+//! `register()` in Node (the package's Node build, default model) on two synthetic surface clouds of
+//! N points each (`BENCHMARK.md`, "Memory"): with the default voxelisation (which keeps a small
+//! fraction of the points for ICP) it grows by 49 bytes per input point from 1M to 4M points per
+//! cloud; with `voxelSize: 0` (ICP on every point) by 114, so ICP's copy, k-d tree and normals take
+//! about 65 bytes per point they keep. Per input point a registration holds the binding's copy of
+//! the caller's array (12 B), the validated copy (12 B), the turned copy when an initial rotation is
+//! given (12 B), the normalised copy (12 B) and the voxel grid's sort keys while it runs (28 B on
+//! wasm32), not all at once. The budgets round the measured figures up (56 and 72 bytes) for the
+//! allocator's slack.
 //!
 //! A cloud over the limit should be downsampled before it is registered, e.g. on a voxel grid
 //! ([`crate::sampling::voxel_downsample`]); the `voxelSize` option thins only the clouds ICP
-//! uses, after the inputs are loaded, so it does not lift this limit.
+//! uses, after the inputs are loaded, so it does not lift the input limit (a larger one lowers
+//! what ICP keeps).
 
 use crate::{Error, Result};
 
 /// Memory one call may use, in bytes: half of wasm32's 4 GiB.
 pub const MAX_CALL_BYTES: u64 = 2 << 30;
 
-/// Peak memory of a registration per input point, in bytes (see the module docs).
-pub const REGISTER_BYTES_PER_POINT: u64 = 128;
+/// Peak memory of a registration per input point, before ICP's copy, in bytes (see the module
+/// docs).
+pub const INPUT_BYTES_PER_POINT: u64 = 56;
 
-/// Most points per cloud a registration accepts: `MAX_CALL_BYTES / (2 * REGISTER_BYTES_PER_POINT)`
-/// (8,388,608), rounded down to 8,000,000.
-pub const MAX_POINTS_PER_CLOUD: usize = 8_000_000;
+/// Peak memory per point of the cloud ICP works on (the voxelised copy, its k-d tree and
+/// normals), in bytes (see the module docs).
+pub const ICP_BYTES_PER_POINT: u64 = 72;
+
+/// Most points per cloud a registration accepts: `MAX_CALL_BYTES / (2 * INPUT_BYTES_PER_POINT)`
+/// (19,173,961), rounded down to 16,000,000 (what ICP keeps of them is bounded separately,
+/// [`check_icp_points`]).
+pub const MAX_POINTS_PER_CLOUD: usize = 16_000_000;
 
 /// Most points (vertices) the readers decode from one file.
 pub const MAX_FILE_POINTS: usize = MAX_POINTS_PER_CLOUD;
@@ -68,7 +77,7 @@ pub const MAX_MODEL_PARAMETERS: u64 = 32 << 20;
 pub const MAX_MODEL_CONFIG_BYTES: usize = 64 << 10;
 
 // The per-cloud limit must fit the call budget with both clouds.
-const _: () = assert!(2 * MAX_POINTS_PER_CLOUD as u64 * REGISTER_BYTES_PER_POINT <= MAX_CALL_BYTES);
+const _: () = assert!(2 * MAX_POINTS_PER_CLOUD as u64 * INPUT_BYTES_PER_POINT <= MAX_CALL_BYTES);
 
 /// Fails with [`Error::TooLarge`] when a cloud given to a registration has more than
 /// [`MAX_POINTS_PER_CLOUD`] points; `what` names it (`"source"`, `"target"`).
@@ -78,11 +87,38 @@ pub fn check_cloud_points(what: &str, n: usize) -> Result<()> {
     }
     Err(Error::TooLarge(format!(
         "{what} has {n} points, more than the {MAX_POINTS_PER_CLOUD} a registration accepts per cloud \
-         (about {REGISTER_BYTES_PER_POINT} bytes per point, within {} MiB per call, for WebAssembly's 4 GiB memory): \
+         (about {INPUT_BYTES_PER_POINT} bytes per point, within {} MiB per call, for WebAssembly's 4 GiB memory): \
          downsample it first, e.g. on a voxel grid (a voxel about {:.2}x the mean point spacing keeps about \
          {MAX_POINTS_PER_CLOUD} points); the voxelSize option thins only ICP's copy and does not lift this limit",
         MAX_CALL_BYTES >> 20,
         voxel_factor(n),
+    )))
+}
+
+/// Most points a cloud of `input` points may keep for ICP: what fits its half of
+/// [`MAX_CALL_BYTES`] next to the input ([`INPUT_BYTES_PER_POINT`] each), at
+/// [`ICP_BYTES_PER_POINT`] each.
+pub fn max_icp_points(input: usize) -> usize {
+    let left = (MAX_CALL_BYTES / 2).saturating_sub((input as u64).saturating_mul(INPUT_BYTES_PER_POINT));
+    (left / ICP_BYTES_PER_POINT) as usize
+}
+
+/// Fails with [`Error::TooLarge`] when a cloud of `input` points keeps `icp` points for ICP after
+/// voxelisation (`voxel`, in the caller's units; 0 for none) and the two do not fit its half of
+/// the call's budget ([`max_icp_points`]); `what` names it. Checked before ICP builds anything
+/// on those points.
+pub fn check_icp_points(what: &str, input: usize, icp: usize, voxel: f64) -> Result<()> {
+    let max = max_icp_points(input);
+    if icp <= max {
+        return Ok(());
+    }
+    let how = if voxel > 0.0 { format!("voxelSize {voxel}") } else { "voxelSize 0 (every point)".to_string() };
+    Err(Error::TooLarge(format!(
+        "{what} keeps {icp} of its {input} points for ICP at {how}, more than the {max} that fit next to them \
+         (about {ICP_BYTES_PER_POINT} bytes per ICP point and {INPUT_BYTES_PER_POINT} per input point, within {} MiB \
+         per call, for WebAssembly's 4 GiB memory): set a larger voxelSize (or leave it unset for the default), or \
+         downsample the cloud first",
+        MAX_CALL_BYTES >> 20,
     )))
 }
 
@@ -114,8 +150,30 @@ mod tests {
     fn limits_accept_up_to_and_refuse_beyond() {
         assert!(check_cloud_points("source", MAX_POINTS_PER_CLOUD).is_ok());
         let e = check_cloud_points("source", 20_000_000).unwrap_err().to_string();
-        assert!(e.contains("20000000") && e.contains("8000000") && e.contains("voxel"), "{e}");
+        assert!(e.contains("20000000") && e.contains("16000000") && e.contains("voxel"), "{e}");
         assert!(check_file_points("PLY", MAX_FILE_POINTS as u64 + 1).is_err());
         assert!(check_file_points("PLY", 10).is_ok());
+    }
+
+    #[test]
+    fn icp_points_share_the_budget_with_the_input() {
+        // nothing thinned: the old full-cloud limit (128 bytes a point) still fits
+        assert!(check_icp_points("source", 8_000_000, 8_000_000, 0.0).is_ok());
+        assert_eq!(max_icp_points(0), (1 << 30) / ICP_BYTES_PER_POINT as usize);
+        // the most input points leave room for a few million ICP points, not for all of them
+        let max = max_icp_points(MAX_POINTS_PER_CLOUD);
+        assert!(max > 1_000_000 && max < MAX_POINTS_PER_CLOUD, "{max}");
+        assert!(check_icp_points("target", MAX_POINTS_PER_CLOUD, max, 0.001).is_ok());
+        let e = check_icp_points("target", MAX_POINTS_PER_CLOUD, MAX_POINTS_PER_CLOUD, 0.0).unwrap_err().to_string();
+        assert!(
+            e.contains("target keeps 16000000 of its 16000000")
+                && e.contains("voxelSize 0")
+                && e.contains(&max.to_string()),
+            "{e}"
+        );
+        let e = check_icp_points("source", 12_000_000, 9_000_000, 0.25).unwrap_err().to_string();
+        assert!(e.contains("voxelSize 0.25") && e.contains("larger voxelSize"), "{e}");
+        // an input past every budget leaves room for none
+        assert_eq!(max_icp_points(usize::MAX / 64), 0);
     }
 }

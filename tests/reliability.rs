@@ -40,6 +40,30 @@ fn clouds_over_the_point_budget_are_refused_up_front() {
     still_works(&mut reg);
 }
 
+/// A cloud under the input budget may still keep too many points for ICP (`voxelSize: 0` keeps
+/// them all): refused before ICP builds its k-d tree and normals on them, with what to change.
+#[test]
+fn icp_on_too_many_points_is_refused_before_it_is_built() {
+    let mut reg = registrar();
+    use arps::limits::{ICP_BYTES_PER_POINT, INPUT_BYTES_PER_POINT, MAX_CALL_BYTES};
+    // just over what fits with voxelSize 0 (8,388,608 points)
+    let n = (MAX_CALL_BYTES / 2 / (INPUT_BYTES_PER_POINT + ICP_BYTES_PER_POINT)) as usize + 1000;
+    assert!(n < MAX_POINTS_PER_CLOUD && n > arps::limits::max_icp_points(n));
+    // a square of n points, 1/4096 apart
+    let side = (n as f64).sqrt().ceil() as usize;
+    let points: Vec<[f32; 3]> =
+        (0..n).map(|i| [(i % side) as f32 / 4096.0, (i / side) as f32 / 4096.0, ((i % 7) as f32) * 1e-4]).collect();
+    let big = PointCloud::new(points);
+    let small = bumpy_surface(500, 0.0);
+    let full = Options { voxel_size: Some(0.0), ..Options::default() };
+    let e = reg.register(&big, &small, &full).unwrap_err();
+    assert!(matches!(e, Error::TooLarge(_)), "{e}");
+    let e = e.to_string();
+    assert!(e.contains(&format!("source keeps {n} of its {n} points for ICP at voxelSize 0")), "{e}");
+    assert!(e.contains("larger voxelSize") && e.contains(&arps::limits::max_icp_points(n).to_string()), "{e}");
+    still_works(&mut reg);
+}
+
 /// Defect 6: an initial transform with translation 1e39 returned an all-NaN matrix.
 #[test]
 fn out_of_range_initial_transforms_are_errors_not_nan() {

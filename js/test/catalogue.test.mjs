@@ -79,7 +79,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
         Object.defineProperty(a, 4, { get() { throw new Error("boom"); } });
         return r.register(a, t);
       }, /^source: reading element 4 threw: Error: boom/],
-      ["over the points limit", () => r.register(new Float32Array(3 * MAX_POINTS + 3), t), /^source has 8000001 points, more than the 8000000 a registration accepts per cloud .*downsample it first/],
+      ["over the points limit", () => r.register(new Float32Array(3 * MAX_POINTS + 3), t), /^source has 16000001 points, more than the 16000000 a registration accepts per cloud .*downsample it first/],
     ];
     for (const [label, fn, re] of cases) rejects(r, label, fn, re);
     // The array-like that leaked 482 MB per call and trapped on the 9th: rejected every time.

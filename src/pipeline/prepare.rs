@@ -99,6 +99,10 @@ pub(crate) fn prepare(
     let net_tgt = sampling::network_sample(&tgt_n, n_net, options.seed ^ sampling::TARGET_SEED_XOR);
     let icp_src = sampling::voxel_downsample(&src_n, voxel as f32);
     let icp_tgt = sampling::voxel_downsample(&tgt_n, voxel as f32);
+    // what ICP keeps must fit next to the inputs before its k-d trees and normals are built
+    let voxel_user = voxel * norm.scale;
+    limits::check_icp_points("source", src_n.len(), icp_src.len(), voxel_user)?;
+    limits::check_icp_points("target", tgt_n.len(), icp_tgt.len(), voxel_user)?;
     Ok(Prepared {
         origin_source,
         origin_target,
