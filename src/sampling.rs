@@ -67,8 +67,22 @@ pub const TARGET_SEED_XOR: u64 = 0x5EED_7A26_E7C0_FFEE;
 /// * The grid is laid on the cloud's offsets (relative to its origin), and the result keeps the
 ///   origin.
 pub fn voxel_downsample(cloud: &PointCloud, voxel: f32) -> PointCloud {
+    // without a cap on the voxels there is always an answer
+    grid::<false>(cloud, voxel, usize::MAX).unwrap_or_default()
+}
+
+/// [`voxel_downsample`] when it gives at most `max` points (the same cloud, bit for bit); `None`
+/// as soon as the points met so far occupy more than `max` voxels, without reading the rest (for
+/// a search of the voxel size that fits a budget, `crate::global::feature_voxel`).
+pub fn voxel_downsample_at_most(cloud: &PointCloud, voxel: f32, max: usize) -> Option<PointCloud> {
+    grid::<true>(cloud, voxel, max)
+}
+
+/// [`voxel_downsample`], giving up past `max` voxels only when `CAPPED` (the uncapped loop has no
+/// check at all).
+fn grid<const CAPPED: bool>(cloud: &PointCloud, voxel: f32, max: usize) -> Option<PointCloud> {
     if !(voxel.is_finite() && voxel > 0.0) {
-        return cloud.clone();
+        return (cloud.len() <= max).then(|| cloud.clone());
     }
     let inv = 1.0 / voxel as f64;
     // One accumulator per occupied voxel, in the order first met; then sorted by key. Only the
@@ -82,6 +96,9 @@ pub fn voxel_downsample(cloud: &PointCloud, voxel: f32) -> PointCloud {
             voxels.push((key, [0.0; 3], 0));
             (voxels.len() - 1) as u32
         });
+        if CAPPED && voxels.len() > max {
+            return None;
+        }
         let v = &mut voxels[slot as usize];
         for (sum, &x) in v.1.iter_mut().zip(p) {
             *sum += x as f64;
@@ -97,7 +114,7 @@ pub fn voxel_downsample(cloud: &PointCloud, voxel: f32) -> PointCloud {
             [(s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32]
         })
         .collect();
-    PointCloud::with_origin(out, cloud.origin)
+    Some(PointCloud::with_origin(out, cloud.origin))
 }
 
 /// Draws exactly `n` points for the network, deterministically for a seed.

@@ -2,7 +2,7 @@
 //! normals (planes, spheres, degenerate input).
 
 use arps::normals::{estimate_normals, DEFAULT_NORMAL};
-use arps::sampling::{network_sample, rng, voxel_downsample};
+use arps::sampling::{network_sample, rng, voxel_downsample, voxel_downsample_at_most};
 use arps::PointCloud;
 use rand::seq::SliceRandom;
 use rand::Rng;
@@ -64,6 +64,21 @@ fn voxel_is_deterministic_and_order_independent() {
     assert!(v.points.iter().flatten().all(|x| x.is_finite()));
     // empty in, empty out
     assert!(voxel_downsample(&PointCloud::default(), 0.1).is_empty());
+}
+
+#[test]
+fn voxel_grid_with_a_budget_is_the_same_grid_or_none() {
+    let c = random_cloud(5000, 3);
+    let full = voxel_downsample(&c, 0.1);
+    let n = full.len();
+    // within the budget: the same cloud, bit for bit
+    let within = voxel_downsample_at_most(&c, 0.1, n).unwrap();
+    assert_eq!(within.points.iter().map(bits).collect::<Vec<_>>(), full.points.iter().map(bits).collect::<Vec<_>>());
+    assert!(voxel_downsample_at_most(&c, 0.1, n - 1).is_none());
+    assert!(voxel_downsample_at_most(&c, 0.1, 0).is_none());
+    // no voxel: a copy, when it fits
+    assert_eq!(voxel_downsample_at_most(&c, 0.0, 5000).unwrap(), c);
+    assert!(voxel_downsample_at_most(&c, 0.0, 4999).is_none());
 }
 
 #[test]

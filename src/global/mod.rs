@@ -14,7 +14,7 @@ pub mod matching;
 pub mod ransac;
 
 use crate::cloud::PointCloud;
-use crate::sampling::voxel_downsample;
+use crate::sampling::{voxel_downsample, voxel_downsample_at_most};
 use crate::spatial::KdIndex;
 pub use ransac::{Hypothesis, RansacParams};
 
@@ -49,17 +49,37 @@ impl Default for GlobalParams {
 /// The feature voxel for a pair: `fraction` of the larger largest half-extent, grown by 25% at a
 /// time until both voxelised clouds have at most [`MAX_FEATURE_POINTS`] points.
 pub fn feature_voxel(source: &PointCloud, target: &PointCloud, fraction: f64) -> f64 {
+    feature_grid(source, target, fraction).0
+}
+
+/// [`feature_voxel`], and each cloud voxelised at it when the search had to voxelise it to see
+/// that it fits (`None` for a cloud of at most [`MAX_FEATURE_POINTS`] points, which fits as it
+/// is, or when no size fitted within the search's steps). A size that does not fit stops
+/// voxelising a cloud as soon as it has more voxels than the budget.
+fn feature_grid(
+    source: &PointCloud,
+    target: &PointCloud,
+    fraction: f64,
+) -> (f64, Option<PointCloud>, Option<PointCloud>) {
     let extent = source.half_extent().max(target.half_extent());
     let mut v = (fraction * extent).max(f64::MIN_POSITIVE);
+    // Some(None): fits as it is; Some(Some(c)): fits voxelised as c; None: does not fit
+    let fit = |c: &PointCloud, v: f64| {
+        if c.len() <= MAX_FEATURE_POINTS {
+            Some(None)
+        } else {
+            voxel_downsample_at_most(c, v as f32, MAX_FEATURE_POINTS).map(Some)
+        }
+    };
     for _ in 0..60 {
-        let fits =
-            |c: &PointCloud| c.len() <= MAX_FEATURE_POINTS || voxel_downsample(c, v as f32).len() <= MAX_FEATURE_POINTS;
-        if fits(source) && fits(target) {
-            break;
+        if let Some(s) = fit(source, v) {
+            if let Some(t) = fit(target, v) {
+                return (v, s, t);
+            }
         }
         v *= 1.25;
     }
-    v
+    (v, None, None)
 }
 
 /// A voxelised cloud with its FPFH descriptors.
@@ -73,7 +93,11 @@ pub struct Described {
 
 /// Voxelises `cloud` at `voxel` and describes every point ([`fpfh::FpfhParams::for_voxel`]).
 pub fn describe(cloud: &PointCloud, voxel: f64) -> Described {
-    let points = voxel_downsample(cloud, voxel as f32).points;
+    describe_voxelised(voxel_downsample(cloud, voxel as f32).points, voxel)
+}
+
+/// [`describe`] of points already voxelised at `voxel`.
+fn describe_voxelised(points: Vec<[f32; 3]>, voxel: f64) -> Described {
     let index = KdIndex::new(&points);
     let p = fpfh::FpfhParams::for_voxel(voxel);
     let normals = fpfh::oriented_normals(&points, &index, p.normal_radius, p.normal_max);
@@ -97,8 +121,13 @@ impl Matched {
     /// Describes `source` and `target` (both in one unit, any relative pose) at the feature voxel
     /// of `voxel_fraction` and matches their descriptors.
     pub fn new(source: &PointCloud, target: &PointCloud, voxel_fraction: f64) -> Self {
-        let voxel = feature_voxel(source, target, voxel_fraction);
-        let (source, target) = (describe(source, voxel), describe(target, voxel));
+        let (voxel, source_v, target_v) = feature_grid(source, target, voxel_fraction);
+        // the search's voxelised clouds where it made them (the same as describing anew)
+        let described = |c: &PointCloud, v: Option<PointCloud>| match v {
+            Some(v) => describe_voxelised(v.points, voxel),
+            None => describe(c, voxel),
+        };
+        let (source, target) = (described(source, source_v), described(target, target_v));
         let matches = matching::mutual_matches(&source.descriptors, &target.descriptors, 30);
         Self { source, target, matches, voxel }
     }
