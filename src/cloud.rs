@@ -182,8 +182,14 @@ impl PointCloud {
         let mut hi = [f32::NEG_INFINITY; 3];
         for p in &self.points {
             for a in 0..3 {
-                lo[a] = lo[a].min(p[a]);
-                hi[a] = hi[a].max(p[a]);
+                // comparisons, not f32::min/max: those ignore NaN, which wasm's f32.min does not,
+                // so in wasm they are calls (a NaN coordinate is skipped either way)
+                if p[a] < lo[a] {
+                    lo[a] = p[a];
+                }
+                if p[a] > hi[a] {
+                    hi[a] = p[a];
+                }
             }
         }
         (lo, hi)
@@ -243,8 +249,13 @@ fn choose_origin(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
     // the points that are finite as f32 (a coordinate beyond f32's range is infinite either way)
     for p in points.filter(|p| p.iter().all(|v| v.abs() <= f32::MAX as f64)) {
         for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
+            // comparisons, as in `PointCloud::bounds`
+            if p[a] < lo[a] {
+                lo[a] = p[a];
+            }
+            if p[a] > hi[a] {
+                hi[a] = p[a];
+            }
         }
     }
     if !lo[0].is_finite() {

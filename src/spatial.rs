@@ -537,8 +537,13 @@ fn build(
     for &i in idx.iter() {
         let p = points[i as usize];
         for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
+            // comparisons, not f32::min/max (calls in wasm, see `box_d2`)
+            if p[a] < lo[a] {
+                lo[a] = p[a];
+            }
+            if p[a] > hi[a] {
+                hi[a] = p[a];
+            }
         }
     }
     bbox.push([lo, hi]);
