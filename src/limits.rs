@@ -28,8 +28,8 @@
 //! cloud; with `voxelSize: 0` (ICP on every point) by 114, so ICP's copy, k-d tree and normals take
 //! about 65 bytes per point they keep. Per input point a registration holds the binding's copy of
 //! the caller's array (12 B), the validated copy (12 B), the turned copy when an initial rotation is
-//! given (12 B), the normalised copy (12 B) and the voxel grid's sort keys while it runs (28 B on
-//! wasm32), not all at once. The budgets round the measured figures up (56 and 72 bytes) for the
+//! given (12 B), the normalised copy (12 B) and the voxel grid's table while it runs (at most 16 B),
+//! not all at once. The budgets round the measured figures up (56 and 72 bytes) for the
 //! allocator's slack.
 //!
 //! A cloud over the limit should be downsampled before it is registered, e.g. on a voxel grid

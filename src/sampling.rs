@@ -85,14 +85,15 @@ fn grid<const CAPPED: bool>(cloud: &PointCloud, voxel: f32, max: usize) -> Optio
         return (cloud.len() <= max).then(|| cloud.clone());
     }
     let inv = 1.0 / voxel as f64;
+    // `as i64` saturates (and a finite f64 floor is never NaN).
+    let key_of = |p: &[f32; 3]| p.map(|v| (v as f64 * inv).floor() as i64);
     // One accumulator per occupied voxel, in the order first met; then sorted by key. Only the
     // occupied voxels are sorted (not every point), and each voxel's sum runs in input order.
-    let mut slot_of: HashMap<[i64; 3], u32, BuildHasherDefault<VoxelKeyHasher>> = HashMap::default();
+    let mut slots = Slots::new(cloud, &key_of);
     let mut voxels: Vec<([i64; 3], [f64; 3], u32)> = Vec::new();
     for p in cloud.points.iter().filter(|p| p.iter().all(|v| v.is_finite())) {
-        // `as i64` saturates (and a finite f64 floor is never NaN).
-        let key = p.map(|v| (v as f64 * inv).floor() as i64);
-        let slot = *slot_of.entry(key).or_insert_with(|| {
+        let key = key_of(p);
+        let slot = slots.slot(key, || {
             voxels.push((key, [0.0; 3], 0));
             (voxels.len() - 1) as u32
         });
@@ -115,6 +116,61 @@ fn grid<const CAPPED: bool>(cloud: &PointCloud, voxel: f32, max: usize) -> Optio
         })
         .collect();
     Some(PointCloud::with_origin(out, cloud.origin))
+}
+
+/// Most cells of a dense voxel table ([`Slots`]): 16 MiB of slots.
+const DENSE_MAX_CELLS: usize = 1 << 22;
+
+/// A dense table may have at most this many cells per point of the cloud (plus a few thousand),
+/// so that its memory follows the cloud's, like the hashed table's.
+const DENSE_CELLS_PER_POINT: usize = 4;
+
+/// Where each voxel's accumulator is: a dense table over the box of the cloud's voxel keys when
+/// that box is small enough ([`DENSE_MAX_CELLS`], [`DENSE_CELLS_PER_POINT`]; a normalised cloud
+/// at ICP's voxel), a direct index instead of a hash per point; else a hash map. Either gives
+/// the same slots in the same order, so the same output.
+enum Slots {
+    Dense { lo: [i64; 3], dims: [usize; 3], slot: Vec<u32> },
+    Hashed(HashMap<[i64; 3], u32, BuildHasherDefault<VoxelKeyHasher>>),
+}
+
+impl Slots {
+    /// Slots for `cloud`'s voxel keys (`key_of`): the key of every point lies in the box of the
+    /// keys of the cloud's bounds, as the key grows with each coordinate.
+    fn new(cloud: &PointCloud, key_of: &impl Fn(&[f32; 3]) -> [i64; 3]) -> Self {
+        let (lo, hi) = cloud.bounds();
+        let (klo, khi) = (key_of(&lo), key_of(&hi));
+        let cap = DENSE_MAX_CELLS.min(cloud.len().saturating_mul(DENSE_CELLS_PER_POINT).saturating_add(4096));
+        let mut dims = [0usize; 3];
+        let mut cells = 1usize;
+        for a in 0..3 {
+            let n = khi[a].checked_sub(klo[a]).and_then(|d| d.checked_add(1)).and_then(|d| usize::try_from(d).ok());
+            match n.and_then(|n| cells.checked_mul(n)) {
+                Some(c) if c <= cap && lo[a].is_finite() && hi[a].is_finite() => {
+                    dims[a] = n.unwrap_or(0);
+                    cells = c;
+                }
+                _ => return Slots::Hashed(HashMap::default()),
+            }
+        }
+        Slots::Dense { lo: klo, dims, slot: vec![u32::MAX; cells] }
+    }
+
+    /// The slot of `key`, made by `new_slot` on its first use.
+    #[inline(always)]
+    fn slot(&mut self, key: [i64; 3], new_slot: impl FnOnce() -> u32) -> u32 {
+        match self {
+            Slots::Dense { lo, dims, slot } => {
+                let at = |a: usize| (key[a] - lo[a]) as usize;
+                let s = &mut slot[(at(0) * dims[1] + at(1)) * dims[2] + at(2)];
+                if *s == u32::MAX {
+                    *s = new_slot();
+                }
+                *s
+            }
+            Slots::Hashed(map) => *map.entry(key).or_insert_with(new_slot),
+        }
+    }
 }
 
 /// Draws exactly `n` points for the network, deterministically for a seed.

@@ -82,6 +82,33 @@ fn voxel_grid_with_a_budget_is_the_same_grid_or_none() {
 }
 
 #[test]
+fn voxel_grid_indexes_a_compact_cloud_and_hashes_a_spread_one_alike() {
+    // a compact cloud's voxels are indexed in a table over its box; one far point makes the box
+    // too large for a table, so the same points are hashed: the same voxels, bit for bit, plus
+    // the far one (the largest key, so last)
+    let c = random_cloud(20_000, 4);
+    let compact = voxel_downsample(&c, 0.1);
+    let mut spread = c.points.clone();
+    spread.push([1e6, 1e6, 1e6]);
+    let spread = voxel_downsample(&PointCloud::new(spread), 0.1);
+    assert_eq!(spread.len(), compact.len() + 1);
+    assert!(compact.len() > 5000);
+    assert_eq!(
+        spread.points[..compact.len()].iter().map(bits).collect::<Vec<_>>(),
+        compact.points.iter().map(bits).collect::<Vec<_>>()
+    );
+    assert_eq!(spread.points[compact.len()], [1e6, 1e6, 1e6]);
+    // the points in another order: the same voxels (sums in another order: within rounding)
+    let mut shuffled = c.points.clone();
+    shuffled.shuffle(&mut rng(5));
+    let other = voxel_downsample(&PointCloud::new(shuffled), 0.1);
+    assert_eq!(other.len(), compact.len());
+    for (p, q) in compact.points.iter().zip(&other.points) {
+        assert!((0..3).all(|k| (p[k] - q[k]).abs() < 1e-6), "{p:?} {q:?}");
+    }
+}
+
+#[test]
 fn network_sample_exact_count_distinct_and_deterministic() {
     let c = random_cloud(3000, 3);
     for n in [1, 16, 512, 2999, 3000] {
