@@ -181,16 +181,7 @@ impl PointCloud {
         let mut lo = [f32::INFINITY; 3];
         let mut hi = [f32::NEG_INFINITY; 3];
         for p in &self.points {
-            for a in 0..3 {
-                // comparisons, not f32::min/max: those ignore NaN, which wasm's f32.min does not,
-                // so in wasm they are calls (a NaN coordinate is skipped either way)
-                if p[a] < lo[a] {
-                    lo[a] = p[a];
-                }
-                if p[a] > hi[a] {
-                    hi[a] = p[a];
-                }
-            }
+            grow_box(&mut lo, &mut hi, p);
         }
         (lo, hi)
     }
@@ -234,6 +225,21 @@ impl PointCloud {
     }
 }
 
+/// Widens the box `[lo, hi]` to hold `p`, axis by axis; a NaN coordinate leaves that axis as it
+/// was. Comparisons, not `f32::min`/`max`: those ignore NaN, which wasm's `f32.min` does not, so
+/// in wasm they are a call per coordinate.
+#[inline(always)]
+pub(crate) fn grow_box<T: PartialOrd + Copy>(lo: &mut [T; 3], hi: &mut [T; 3], p: &[T; 3]) {
+    for a in 0..3 {
+        if p[a] < lo[a] {
+            lo[a] = p[a];
+        }
+        if p[a] > hi[a] {
+            hi[a] = p[a];
+        }
+    }
+}
+
 /// Largest half-extent for which [`PointCloud::from_points_f64`] recentres: beyond it the
 /// offsets would not fit `f32` (whose largest value is 3.4e38) and finite points would become
 /// infinite, so such a cloud keeps origin zero (its points beyond `f32`'s range are infinite as
@@ -248,15 +254,7 @@ fn choose_origin(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
     let mut hi = [f64::NEG_INFINITY; 3];
     // the points that are finite as f32 (a coordinate beyond f32's range is infinite either way)
     for p in points.filter(|p| p.iter().all(|v| v.abs() <= f32::MAX as f64)) {
-        for a in 0..3 {
-            // comparisons, as in `PointCloud::bounds`
-            if p[a] < lo[a] {
-                lo[a] = p[a];
-            }
-            if p[a] > hi[a] {
-                hi[a] = p[a];
-            }
-        }
+        grow_box(&mut lo, &mut hi, &p);
     }
     if !lo[0].is_finite() {
         return [0.0; 3];

@@ -145,11 +145,8 @@ impl Slots {
         let mut cells = 1usize;
         for a in 0..3 {
             let n = khi[a].checked_sub(klo[a]).and_then(|d| d.checked_add(1)).and_then(|d| usize::try_from(d).ok());
-            match n.and_then(|n| cells.checked_mul(n)) {
-                Some(c) if c <= cap && lo[a].is_finite() && hi[a].is_finite() => {
-                    dims[a] = n.unwrap_or(0);
-                    cells = c;
-                }
+            match n.and_then(|n| Some((n, cells.checked_mul(n)?))) {
+                Some((n, c)) if c <= cap && lo[a].is_finite() && hi[a].is_finite() => (dims[a], cells) = (n, c),
                 _ => return Slots::Hashed(HashMap::default()),
             }
         }

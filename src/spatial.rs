@@ -535,16 +535,7 @@ fn build(
     let mut lo = [f32::INFINITY; 3];
     let mut hi = [f32::NEG_INFINITY; 3];
     for &i in idx.iter() {
-        let p = points[i as usize];
-        for a in 0..3 {
-            // comparisons, not f32::min/max (calls in wasm, see `box_d2`)
-            if p[a] < lo[a] {
-                lo[a] = p[a];
-            }
-            if p[a] > hi[a] {
-                hi[a] = p[a];
-            }
-        }
+        crate::cloud::grow_box(&mut lo, &mut hi, &points[i as usize]);
     }
     bbox.push([lo, hi]);
     if idx.len() <= LEAF {
