@@ -190,10 +190,15 @@ fn resume_can_fork_with_other_losses_and_lr() {
         "180",
         "--batch",
         "3",
+        "--val-every-steps",
+        "5",
     ];
+    let best_before = st.best_score.expect("validated before the fork");
     train(&run, &a);
     let st = checkpoint::load(&run.join("checkpoint.safetensors")).unwrap().state;
     assert_eq!((st.step, st.config.model.n_points, st.config.plateau_patience), (25, 24, 7));
+    // the best so far was measured at the old N: the fork's first validation is its best
+    assert_eq!(st.best_step, 25, "best {:?} before {best_before}", st.best_score);
     // another batch size from here on: the pair stream goes on where it was
     assert_ne!(batch, 3);
     assert_eq!((st.config.batch, st.pairs_seen), (3, seen + 3 * (25 - 20)));

@@ -195,7 +195,10 @@ def main(argv=None):
     if a.network_points is not None:
         if a.network_points < 1:
             ap.error(f"--network-points {a.network_points} must be positive")
-        cfg["model"]["n_points"] = a.network_points
+        if a.network_points != cfg["model"]["n_points"]:
+            # a fork at another N: the best so far was measured at the old N
+            cfg["model"]["n_points"] = a.network_points
+            st.update(best_score=None, best_val=None, bad_validations=0)
     if a.checkpoint_every_minutes is not None:
         cfg["checkpoint_every_minutes"] = a.checkpoint_every_minutes
         cfg["checkpoint_every_steps"] = None

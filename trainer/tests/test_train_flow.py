@@ -81,9 +81,11 @@ def test_a_fork_at_another_network_n_and_batch(tmp_path):
     d = init(tmp_path / "r")
     pytrain(d, 2)
     train.main(["--run", str(d), "--arps-train", BIN, "--generators", "2", "--steps", "3", "--device", "cpu",
-                "--quiet", "--network-points", "24", "--batch", "3"])
+                "--quiet", "--network-points", "24", "--batch", "3", "--val-every-steps", "1"])
     st = read_checkpoint(os.path.join(d, "checkpoint.safetensors"))["state"]
     assert st["config"]["model"]["n_points"] == 24 and st["config"]["batch"] == 3
+    # the best so far was measured at the old N: the fork's first validation is its best
+    assert st["best_step"] == 3
     assert st["step"] == 3 and st["pairs_seen"] == 2 * 2 + 3
     out = tmp_path / "w.safetensors"
     run("export", "--run", str(d), "--latest", "--out", str(out))

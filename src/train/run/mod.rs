@@ -214,6 +214,24 @@ impl RunState {
         }
     }
 
+    /// Forks the run to another network N: the best validation so far was measured at the old N,
+    /// so it is forgotten (the plateau rule and the best weights then compare like with like).
+    pub fn set_network_points(&mut self, n: usize) -> Result<(), String> {
+        if n == self.config.model.n_points {
+            return Ok(());
+        }
+        let old = self.config.model.n_points;
+        self.config.model.n_points = n;
+        if let Err(e) = self.config.model.validate() {
+            self.config.model.n_points = old;
+            return Err(format!("--network-points {n}: {e}"));
+        }
+        self.best_score = None;
+        self.best_val = None;
+        self.bad_validations = 0;
+        Ok(())
+    }
+
     /// Records a validation: updates the best score (returns true when it improved) and the
     /// plateau counter, halving the lr after `plateau_patience` validations without improvement.
     pub fn record_validation(&mut self, v: &ValMetrics) -> bool {

@@ -136,8 +136,7 @@ fn apply_changes(st: &mut RunState, c: &ResumeChanges) -> Result<(), String> {
         st.bad_validations = 0;
     }
     if let Some(n) = c.network_points {
-        st.config.model.n_points = n;
-        st.config.model.validate().map_err(|e| format!("--network-points {n}: {e}"))?;
+        st.set_network_points(n)?;
     }
     if let Some(v) = c.pose_angle_deg {
         st.config.pose_angle_deg = v;
