@@ -121,7 +121,19 @@ fn resume_continues_exactly() {
         .output()
         .unwrap();
     assert!(!again.status.success());
+    // stored as the tree stores a run, its log gzipped: the resumed run's log goes on from it
+    let plain = b.join("log.jsonl");
+    let mut gz = flate2::write::GzEncoder::new(
+        std::fs::File::create(log::gz_path(&plain)).unwrap(),
+        flate2::Compression::default(),
+    );
+    std::io::Write::write_all(&mut gz, &std::fs::read(&plain).unwrap()).unwrap();
+    gz.finish().unwrap();
+    std::fs::remove_file(&plain).unwrap();
     train(&b, &["--resume", "--steps", "30", "--quiet"]);
+    assert!(plain.exists() && !log::gz_path(&plain).exists());
+    let lines = log::read(&plain).unwrap();
+    assert_eq!(lines.iter().filter(|l| l["kind"] == "start").count(), 2, "the first session's lines were lost");
     let checkpoint::Checkpoint { state: sa, params: pa, adam: aa, ema: ea } =
         checkpoint::load(&a.join("checkpoint.safetensors")).unwrap();
     let checkpoint::Checkpoint { state: sb, params: pb, adam: ab, ema: eb } =

@@ -10,10 +10,12 @@ clipping, the plateau schedule, the moving average and validation follow ``arps-
 """
 
 import argparse
+import gzip
 import json
 import math
 import os
 import resource
+import shutil
 import sys
 import time
 
@@ -37,6 +39,13 @@ def cpu_seconds():
 
 class JsonlLog:
     def __init__(self, path):
+        # a run stored with its log gzipped gets it back as the plain file, so the log goes on
+        gz = path + ".gz"
+        if not os.path.exists(path) and os.path.exists(gz):
+            with gzip.open(gz, "rb") as src, open(path + ".part", "wb") as dst:
+                shutil.copyfileobj(src, dst)
+            os.replace(path + ".part", path)
+            os.remove(gz)
         self.f = open(path, "a")
 
     def write(self, obj):

@@ -2,6 +2,7 @@
 not built: cargo build --release --features train): init -> stream -> train -> checkpoint ->
 exact resume; its first step's losses equal the CPU trainer's; export, curves."""
 
+import gzip
 import json
 import os
 import shutil
@@ -80,12 +81,19 @@ def test_train_resume_export_curves(tmp_path):
 def test_a_fork_at_another_network_n_and_batch(tmp_path):
     d = init(tmp_path / "r")
     pytrain(d, 2)
+    # stored as the tree stores a run, its log gzipped: the resumed run's log goes on from it
+    log = os.path.join(d, "log.jsonl")
+    with open(log, "rb") as src, gzip.open(log + ".gz", "wb") as dst:
+        dst.write(src.read())
+    os.remove(log)
     train.main(["--run", str(d), "--arps-train", BIN, "--generators", "2", "--steps", "3", "--device", "cpu",
                 "--quiet", "--network-points", "24", "--batch", "3", "--val-every-steps", "1"])
     st = read_checkpoint(os.path.join(d, "checkpoint.safetensors"))["state"]
     assert st["config"]["model"]["n_points"] == 24 and st["config"]["batch"] == 3
     # the best so far was measured at the old N: the fork's first validation is its best
     assert st["best_step"] == 3
+    assert not os.path.exists(log + ".gz")
+    assert [x["kind"] for x in lines(d)].count("start") == 2
     assert st["step"] == 3 and st["pairs_seen"] == 2 * 2 + 3
     out = tmp_path / "w.safetensors"
     run("export", "--run", str(d), "--latest", "--out", str(out))

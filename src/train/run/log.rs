@@ -13,8 +13,18 @@ pub struct JsonlLog {
 }
 
 impl JsonlLog {
-    /// Opens `path` for appending (creating it).
+    /// Opens `path` for appending (creating it). A run stored with its log gzipped
+    /// (`log.jsonl.gz` and no `log.jsonl`) gets it back as the plain file first, so a resumed
+    /// run's log goes on from its history rather than beside it.
     pub fn open(path: &Path) -> std::io::Result<Self> {
+        let gz = gz_path(path);
+        if !path.exists() && gz.exists() {
+            let text = read_text(path)?;
+            let tmp = path.with_extension("jsonl.part");
+            std::fs::write(&tmp, text)?;
+            std::fs::rename(&tmp, path)?;
+            std::fs::remove_file(&gz)?;
+        }
         Ok(Self { file: std::fs::OpenOptions::new().create(true).append(true).open(path)? })
     }
 
