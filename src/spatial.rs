@@ -72,7 +72,7 @@ impl Floors {
     fn record<const FLOOR: bool>(&mut self, v: f32) {
         if FLOOR {
             // selects, not branches: whether a scanned distance is among the two least is
-            // unpredictable (natively the branches cost a fifth of an any-pose pair's time)
+            // unpredictable (natively the branches cost about a sixth of an any-pose pair's time)
             let below_least = v < self.least;
             let second = if v < self.second { v } else { self.second };
             self.second = if below_least { self.least } else { second };
