@@ -68,19 +68,36 @@ pub const TARGET_SEED_XOR: u64 = 0x5EED_7A26_E7C0_FFEE;
 ///   origin.
 pub fn voxel_downsample(cloud: &PointCloud, voxel: f32) -> PointCloud {
     // without a cap on the voxels there is always an answer
-    grid::<false>(cloud, voxel, usize::MAX).unwrap_or_default()
+    grid::<false>(cloud, &cloud.bounds(), voxel, usize::MAX).unwrap_or_default()
 }
 
 /// [`voxel_downsample`] when it gives at most `max` points (the same cloud, bit for bit); `None`
 /// as soon as the points met so far occupy more than `max` voxels, without reading the rest (for
 /// a search of the voxel size that fits a budget, `crate::global::feature_voxel`).
 pub fn voxel_downsample_at_most(cloud: &PointCloud, voxel: f32, max: usize) -> Option<PointCloud> {
-    grid::<true>(cloud, voxel, max)
+    voxel_downsample_at_most_in(cloud, &cloud.bounds(), voxel, max)
 }
 
-/// [`voxel_downsample`], giving up past `max` voxels only when `CAPPED` (the uncapped loop has no
-/// check at all).
-fn grid<const CAPPED: bool>(cloud: &PointCloud, voxel: f32, max: usize) -> Option<PointCloud> {
+/// [`voxel_downsample_at_most`] with the cloud's [`PointCloud::bounds`] given, for a caller that
+/// tries several voxel sizes on one cloud (the bounds are a pass over every point, where a size
+/// that does not fit may stop after a few).
+pub(crate) fn voxel_downsample_at_most_in(
+    cloud: &PointCloud,
+    bounds: &([f32; 3], [f32; 3]),
+    voxel: f32,
+    max: usize,
+) -> Option<PointCloud> {
+    grid::<true>(cloud, bounds, voxel, max)
+}
+
+/// [`voxel_downsample`] of `cloud`, whose [`PointCloud::bounds`] are `bounds`, giving up past
+/// `max` voxels only when `CAPPED` (the uncapped loop has no check at all).
+fn grid<const CAPPED: bool>(
+    cloud: &PointCloud,
+    bounds: &([f32; 3], [f32; 3]),
+    voxel: f32,
+    max: usize,
+) -> Option<PointCloud> {
     if !(voxel.is_finite() && voxel > 0.0) {
         return (cloud.len() <= max).then(|| cloud.clone());
     }
@@ -89,7 +106,7 @@ fn grid<const CAPPED: bool>(cloud: &PointCloud, voxel: f32, max: usize) -> Optio
     let key_of = |p: &[f32; 3]| p.map(|v| (v as f64 * inv).floor() as i64);
     // One accumulator per occupied voxel, in the order first met; then sorted by key. Only the
     // occupied voxels are sorted (not every point), and each voxel's sum runs in input order.
-    let mut slots = Slots::new(cloud, &key_of);
+    let mut slots = Slots::new(cloud.len(), bounds, &key_of);
     let mut voxels: Vec<([i64; 3], [f64; 3], u32)> = Vec::new();
     for p in cloud.points.iter().filter(|p| p.iter().all(|v| v.is_finite())) {
         let key = key_of(p);
@@ -135,12 +152,13 @@ enum Slots {
 }
 
 impl Slots {
-    /// Slots for `cloud`'s voxel keys (`key_of`): the key of every point lies in the box of the
-    /// keys of the cloud's bounds, as the key grows with each coordinate.
-    fn new(cloud: &PointCloud, key_of: &impl Fn(&[f32; 3]) -> [i64; 3]) -> Self {
-        let (lo, hi) = cloud.bounds();
+    /// Slots for the voxel keys (`key_of`) of a cloud of `points` points within `bounds`: the key
+    /// of every point lies in the box of the keys of the bounds, as the key grows with each
+    /// coordinate.
+    fn new(points: usize, bounds: &([f32; 3], [f32; 3]), key_of: &impl Fn(&[f32; 3]) -> [i64; 3]) -> Self {
+        let (lo, hi) = *bounds;
         let (klo, khi) = (key_of(&lo), key_of(&hi));
-        let cap = DENSE_MAX_CELLS.min(cloud.len().saturating_mul(DENSE_CELLS_PER_POINT).saturating_add(4096));
+        let cap = DENSE_MAX_CELLS.min(points.saturating_mul(DENSE_CELLS_PER_POINT).saturating_add(4096));
         let mut dims = [0usize; 3];
         let mut cells = 1usize;
         for a in 0..3 {

@@ -14,7 +14,7 @@ pub mod matching;
 pub mod ransac;
 
 use crate::cloud::PointCloud;
-use crate::sampling::{voxel_downsample, voxel_downsample_at_most};
+use crate::sampling::{voxel_downsample, voxel_downsample_at_most_in};
 use crate::spatial::KdIndex;
 pub use ransac::{Hypothesis, RansacParams};
 
@@ -63,17 +63,17 @@ fn feature_grid(
 ) -> (f64, Option<PointCloud>, Option<PointCloud>) {
     let extent = source.half_extent().max(target.half_extent());
     let mut v = (fraction * extent).max(f64::MIN_POSITIVE);
+    // each cloud's bounds once for every try (a try that does not fit stops early)
+    let bounds = |c: &PointCloud| if c.len() <= MAX_FEATURE_POINTS { None } else { Some(c.bounds()) };
+    let (source_bounds, target_bounds) = (bounds(source), bounds(target));
     // Some(None): fits as it is; Some(Some(c)): fits voxelised as c; None: does not fit
-    let fit = |c: &PointCloud, v: f64| {
-        if c.len() <= MAX_FEATURE_POINTS {
-            Some(None)
-        } else {
-            voxel_downsample_at_most(c, v as f32, MAX_FEATURE_POINTS).map(Some)
-        }
+    let fit = |c: &PointCloud, bounds: &Option<([f32; 3], [f32; 3])>, v: f64| match bounds {
+        None => Some(None),
+        Some(b) => voxel_downsample_at_most_in(c, b, v as f32, MAX_FEATURE_POINTS).map(Some),
     };
     for _ in 0..60 {
-        if let Some(s) = fit(source, v) {
-            if let Some(t) = fit(target, v) {
+        if let Some(s) = fit(source, &source_bounds, v) {
+            if let Some(t) = fit(target, &target_bounds, v) {
                 return (v, s, t);
             }
         }
