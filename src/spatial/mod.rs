@@ -11,7 +11,9 @@
 //! dependencies, and is deterministic (same points, same tree, same answers); its only `unsafe` is
 //! the traversal stack's, left uninitialised (`Stack`).
 //!
-//! Layout: points are reordered so that every leaf is a contiguous run; nodes split the widest
+//! Layout: points are reordered so that every leaf is a contiguous run of positions starting at a
+//! multiple of four, stored four points to a [`chunk::Chunk`] coordinate by coordinate (a leaf's
+//! scan computes four distances at once, in WebAssembly's 128-bit SIMD); nodes split the widest
 //! axis of their points' bounding box at the median (`select_nth_unstable`), so the depth is at
 //! most `log2(n / LEAF) + 1`; leaves hold at most [`LEAF`] points. Queries descend
 //! iteratively with a fixed-size stack, pruning subtrees by the incremental query-to-cell
@@ -23,6 +25,10 @@
 /// as fast as 24 (`BENCHMARK.md`, "Kernels").
 pub const LEAF: usize = 16;
 
+mod chunk;
+
+use chunk::Chunk;
+
 /// Traversal stack size: the tree depth is at most `log2(u32::MAX) + 1 < 40`.
 const STACK: usize = 48;
 
@@ -32,9 +38,9 @@ struct Node {
     dim: u32,
     /// Points with coordinate `<= split` are on the left, `>= split` on the right.
     split: f32,
-    /// Inner node: left child index. Leaf: first point.
+    /// Inner node: left child index. Leaf: its first position (a multiple of four).
     a: u32,
-    /// Inner node: right child index. Leaf: one past the last point.
+    /// Inner node: right child index. Leaf: one past its last point's position.
     b: u32,
 }
 
@@ -61,11 +67,13 @@ impl Pending {
 struct Floors {
     least: f32,
     second: f32,
+    /// What the leaves' scans recorded, per lane of their chunks.
+    lanes: chunk::LaneFloors,
 }
 
 impl Floors {
     /// Nothing recorded yet (and all that the searches without `FLOOR` record).
-    const NONE: Floors = Floors { least: f32::INFINITY, second: f32::INFINITY };
+    const NONE: Floors = Floors { least: f32::INFINITY, second: f32::INFINITY, lanes: chunk::LaneFloors::NONE };
 
     /// Records the distance or bound `v` (only with `FLOOR`).
     #[inline(always)]
@@ -78,6 +86,17 @@ impl Floors {
             self.second = if below_least { self.least } else { second };
             self.least = if below_least { v } else { self.least };
         }
+    }
+
+    /// The two least of everything recorded, the lanes' included.
+    fn merged(mut self) -> Floors {
+        let lanes = self.lanes;
+        for l in 0..4 {
+            self.record::<true>(lanes.least[l]);
+            self.record::<true>(lanes.second[l]);
+        }
+        self.lanes = chunk::LaneFloors::NONE;
+        self
     }
 }
 
@@ -118,11 +137,14 @@ impl Stack {
 /// A static k-d tree; the item of a point is its index in the slice the index was built from.
 #[derive(Clone, Debug, Default)]
 pub struct KdIndex {
-    /// The points, reordered so that each leaf is contiguous.
-    pts: Vec<[f32; 3]>,
-    /// `ids[i]`: original index of `pts[i]`.
+    /// The points by position, four to a chunk: each leaf is a contiguous run of positions from
+    /// a multiple of four, the rest of its last chunk padding (NaN, never found).
+    chunks: Vec<Chunk>,
+    /// Number of indexed points.
+    count: usize,
+    /// `ids[i]`: original index of the point at position `i` (`u32::MAX` for padding).
     ids: Vec<u32>,
-    /// `pos[j]`: position in `pts` of original point `j` (`u32::MAX` if not indexed).
+    /// `pos[j]`: position of original point `j` (`u32::MAX` if not indexed).
     pos: Vec<u32>,
     nodes: Vec<Node>,
     /// `parent[n]`: the parent of node `n` (the root's is `u32::MAX`).
@@ -130,7 +152,7 @@ pub struct KdIndex {
     /// `cell[n]`: the region node `n` splits, `[lo, hi]` per axis (infinite at the root): every
     /// indexed point outside the subtree lies outside it or on its boundary.
     cell: Vec<[[f32; 3]; 2]>,
-    /// `leaf_of[i]`: the leaf holding position `i` of `pts`.
+    /// `leaf_of[i]`: the leaf holding position `i`.
     leaf_of: Vec<u32>,
     /// `bbox[n]`: the bounding box `[lo, hi]` of node `n`'s points (tighter than its cell).
     bbox: Vec<[[f32; 3]; 2]>,
@@ -151,18 +173,30 @@ impl KdIndex {
         if !order.is_empty() {
             build(points, &mut order, 0, &mut nodes, &mut bbox);
         }
-        let pts = order.iter().map(|&i| points[i as usize]).collect();
+        // positions: each leaf's run (in `order`'s order) from the next multiple of four
+        let slots: usize =
+            nodes.iter().filter(|n| n.dim == IS_LEAF).map(|n| (n.b - n.a).next_multiple_of(4) as usize).sum();
+        assert!(slots < u32::MAX as usize, "KdIndex holds fewer than u32::MAX points");
+        let mut chunks = vec![Chunk::PADDING; slots / 4];
+        let mut ids = vec![u32::MAX; slots];
+        let mut leaf_of = vec![0u32; slots];
         let mut pos = vec![u32::MAX; points.len()];
-        for (p, &i) in order.iter().enumerate() {
-            pos[i as usize] = p as u32;
-        }
         let mut parent = vec![u32::MAX; nodes.len()];
         let mut cell = vec![[[f32::NEG_INFINITY; 3], [f32::INFINITY; 3]]; nodes.len()];
-        let mut leaf_of = vec![0u32; order.len()];
-        // children come after their parent in `nodes` (pre-order)
-        for (i, n) in nodes.iter().enumerate() {
+        let mut next = 0u32;
+        // children come after their parent in `nodes` (pre-order), and leaves come in the order
+        // of their runs in `order`
+        for (i, n) in nodes.iter_mut().enumerate() {
             if n.dim == IS_LEAF {
+                let run = &order[n.a as usize..n.b as usize];
+                (n.a, n.b) = (next, next + run.len() as u32);
+                for (p, &j) in (n.a..).zip(run) {
+                    chunks[p as usize / 4].set(p as usize % 4, &points[j as usize]);
+                    ids[p as usize] = j;
+                    pos[j as usize] = p;
+                }
                 leaf_of[n.a as usize..n.b as usize].fill(i as u32);
+                next = n.b.next_multiple_of(4);
                 continue;
             }
             let d = n.dim as usize;
@@ -176,17 +210,29 @@ impl KdIndex {
             cell[n.a as usize] = [lo, left_hi];
             cell[n.b as usize] = [right_lo, hi];
         }
-        Self { pts, ids: order, pos, nodes, parent, cell, leaf_of, bbox }
+        Self { chunks, count: order.len(), ids, pos, nodes, parent, cell, leaf_of, bbox }
     }
 
     /// Number of indexed (finite) points.
     pub fn len(&self) -> usize {
-        self.pts.len()
+        self.count
     }
 
     /// True when the index holds no points.
     pub fn is_empty(&self) -> bool {
-        self.pts.is_empty()
+        self.count == 0
+    }
+
+    /// The chunks of leaf `n` (its first position is a multiple of four).
+    #[inline(always)]
+    fn leaf_chunks(&self, n: &Node) -> &[Chunk] {
+        &self.chunks[n.a as usize / 4..(n.b as usize).div_ceil(4)]
+    }
+
+    /// The point at position `p`.
+    #[inline(always)]
+    fn point(&self, p: u32) -> [f32; 3] {
+        self.chunks[p as usize / 4].get(p as usize % 4)
     }
 
     /// The nearest indexed point to `q`: `(index, squared distance)`, or `None` when the index
@@ -235,6 +281,7 @@ impl KdIndex {
         }
         let mut floors = Floors::NONE;
         let found = self.search::<true>(q, max_d2, hint, &mut floors);
+        let floors = floors.merged();
         // the point found is the least distance recorded (every bound that left a subtree out
         // was at least the best distance then); the others are at least the second
         match found {
@@ -263,7 +310,7 @@ impl KdIndex {
         match start {
             Some(p) => {
                 // (not recorded: the leaf's scan records it)
-                let d2 = dist2(&self.pts[p as usize], q);
+                let d2 = dist2(&self.point(p), q);
                 if d2 < best.1 {
                     best = (p, d2);
                 }
@@ -300,13 +347,11 @@ impl KdIndex {
     #[inline(always)]
     fn scan_leaf<const FLOOR: bool>(&self, node: u32, q: &[f32; 3], best: &mut (u32, f32), floors: &mut Floors) {
         let n = self.nodes[node as usize];
-        let leaf = &self.pts[n.a as usize..n.b as usize];
-        for (i, p) in (n.a..).zip(leaf) {
-            let d2 = dist2(p, q);
-            if d2 < best.1 {
-                *best = (i, d2);
+        let (least, at) = chunk::nearest::<FLOOR>(self.leaf_chunks(&n), n.a, q, best.1, &mut floors.lanes);
+        for l in 0..4 {
+            if least[l] < best.1 || (least[l] == best.1 && at[l] < best.0) {
+                *best = (at[l], least[l]);
             }
-            floors.record::<FLOOR>(d2);
         }
     }
 
@@ -412,7 +457,7 @@ impl KdIndex {
     /// `out` has capacity `k + 1`.
     pub fn knn_into(&self, q: &[f32; 3], k: usize, out: &mut Vec<(usize, f32)>) {
         out.clear();
-        let k = k.min(self.pts.len());
+        let k = k.min(self.count);
         if k == 0 {
             return;
         }
@@ -427,17 +472,18 @@ impl KdIndex {
             loop {
                 let n = self.nodes[ni as usize];
                 if n.dim == IS_LEAF {
-                    let leaf = &self.pts[n.a as usize..n.b as usize];
-                    for (i, p) in (n.a as usize..).zip(leaf) {
-                        let d2 = dist2(p, q);
-                        if d2 < worst {
-                            let at = out.partition_point(|e| e.1 <= d2);
-                            out.insert(at, (i, d2));
-                            if out.len() > k {
-                                out.pop();
-                            }
-                            if out.len() == k {
-                                worst = out[k - 1].1;
+                    for (c, p) in self.leaf_chunks(&n).iter().zip((n.a as usize..).step_by(4)) {
+                        // padding's distance is NaN: below no bound
+                        for (i, d2) in (p..p + 4).zip(chunk::distances(c, q)) {
+                            if d2 < worst {
+                                let at = out.partition_point(|e| e.1 <= d2);
+                                out.insert(at, (i, d2));
+                                if out.len() > k {
+                                    out.pop();
+                                }
+                                if out.len() == k {
+                                    worst = out[k - 1].1;
+                                }
                             }
                         }
                     }
@@ -478,11 +524,12 @@ impl KdIndex {
             loop {
                 let n = self.nodes[ni as usize];
                 if n.dim == IS_LEAF {
-                    let leaf = &self.pts[n.a as usize..n.b as usize];
-                    for (i, p) in (n.a as usize..).zip(leaf) {
-                        let d2 = dist2(p, q);
-                        if d2 <= max_d2 {
-                            out.push((i, d2));
+                    for (c, p) in self.leaf_chunks(&n).iter().zip((n.a as usize..).step_by(4)) {
+                        // padding's distance is NaN: within no bound
+                        for (i, d2) in (p..p + 4).zip(chunk::distances(c, q)) {
+                            if d2 <= max_d2 {
+                                out.push((i, d2));
+                            }
                         }
                     }
                     break;
@@ -621,6 +668,18 @@ mod tests {
         }
         idx.knn_into(&[0.0; 3], 5000, &mut out);
         assert_eq!(out.len(), 2040);
+        // within a radius: every point within it, nearest first, ties by position
+        for q in [[0.1f32, 0.2, 0.3], [0.5, 0.5, 0.5], [3.0, -2.0, 1.0]] {
+            let all = brute(&pts, &q);
+            for r2 in [0.0, all[3], all[40], all[200] * 1.001] {
+                idx.within_into(&q, r2, usize::MAX, &mut out);
+                let want: Vec<f32> = all.iter().copied().filter(|&d| d <= r2).collect();
+                assert_eq!(out.iter().map(|e| e.1).collect::<Vec<_>>(), want);
+                assert!(out.iter().all(|&(i, d)| dist2(&pts[i], &q) == d));
+                idx.within_into(&q, r2, 5, &mut out);
+                assert_eq!(out.iter().map(|e| e.1).collect::<Vec<_>>(), want[..want.len().min(5)].to_vec());
+            }
+        }
         assert!(idx.nearest(&[f32::NAN, 0.0, 0.0]).is_none());
     }
 
@@ -685,6 +744,34 @@ mod tests {
         assert!(tight * 10 > count * 8, "{tight} of {count} floors within half the second distance");
         assert_eq!(KdIndex::new(&[]).nearest_within_and_floor(&[0.0; 3], 1.0, None), (None, 0.0));
         assert_eq!(idx.nearest_within_and_floor(&[f32::NAN, 0.0, 0.0], 1.0, None), (None, 0.0));
+    }
+
+    #[test]
+    fn leaves_of_every_length_modulo_four() {
+        // leaves are runs from a multiple of four: clouds whose leaves end on every lane, and
+        // one point
+        for n in [1, 2, 3, 5, 17, 18, 19, 33, 34, 35, 61, 62, 63, 100, 129] {
+            let pts = cloud(n);
+            let idx = KdIndex::new(&pts);
+            assert_eq!(idx.len(), n);
+            let mut out = Vec::new();
+            for (k, q) in pts.iter().enumerate() {
+                let q = [q[0] + 0.01, q[1] - 0.02, q[2] + 0.015];
+                let all = brute(&pts, &q);
+                let (i, d) = idx.nearest(&q).unwrap();
+                assert_eq!((d, dist2(&pts[i], &q)), (all[0], all[0]), "{n} points");
+                assert_eq!(idx.nearest_within(&q, f32::INFINITY, Some(k)).unwrap().1, all[0]);
+                let (found, floor) = idx.nearest_within_and_floor(&q, f32::INFINITY, Some((k * 7) % n));
+                assert_eq!(found.map(|f| f.1), Some(all[0]));
+                let second = all.get(1).copied().unwrap_or(f32::INFINITY);
+                assert!(floor >= all[0] && floor <= second * (1.0 + 1e-5), "{n} points: floor {floor}");
+                idx.knn_into(&q, n, &mut out);
+                assert_eq!(out.iter().map(|e| e.1).collect::<Vec<_>>(), all);
+                let mut ids: Vec<usize> = out.iter().map(|e| e.0).collect();
+                ids.sort();
+                assert_eq!(ids, (0..n).collect::<Vec<_>>());
+            }
+        }
     }
 
     #[test]
