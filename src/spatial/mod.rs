@@ -12,7 +12,7 @@
 //! the traversal stack's, left uninitialised (`Stack`).
 //!
 //! Layout: points are reordered so that every leaf is a contiguous run of positions starting at a
-//! multiple of four, stored four points to a [`chunk::Chunk`] coordinate by coordinate (a leaf's
+//! multiple of four, stored four points to a chunk, coordinate by coordinate (`chunk.rs`: a leaf's
 //! scan computes four distances at once, in WebAssembly's 128-bit SIMD); nodes split the widest
 //! axis of their points' bounding box at the median (`select_nth_unstable`), so the depth is at
 //! most `log2(n / LEAF) + 1`; leaves hold at most [`LEAF`] points. Queries descend
