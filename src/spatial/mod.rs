@@ -229,6 +229,17 @@ impl KdIndex {
         &self.chunks[n.a as usize / 4..(n.b as usize).div_ceil(4)]
     }
 
+    /// Calls `f` with the position and squared distance to `q` of each slot of leaf `n`, in
+    /// order; a padding slot's distance is NaN (below and within no bound).
+    #[inline(always)]
+    fn each_in_leaf(&self, n: &Node, q: &[f32; 3], mut f: impl FnMut(usize, f32)) {
+        for (c, p) in self.leaf_chunks(n).iter().zip((n.a as usize..).step_by(4)) {
+            for (i, d2) in (p..p + 4).zip(chunk::distances(c, q)) {
+                f(i, d2);
+            }
+        }
+    }
+
     /// The point at position `p`.
     #[inline(always)]
     fn point(&self, p: u32) -> [f32; 3] {
@@ -461,7 +472,7 @@ impl KdIndex {
         if k == 0 {
             return;
         }
-        // `out` holds (position in `pts`, d2), sorted ascending by d2, during the search.
+        // `out` holds (position, d2), sorted ascending by d2, during the search.
         let mut worst = f32::INFINITY;
         let mut stack = Stack::root();
         while let Some(Pending { node, rd, off }) = stack.pop() {
@@ -472,21 +483,18 @@ impl KdIndex {
             loop {
                 let n = self.nodes[ni as usize];
                 if n.dim == IS_LEAF {
-                    for (c, p) in self.leaf_chunks(&n).iter().zip((n.a as usize..).step_by(4)) {
-                        // padding's distance is NaN: below no bound
-                        for (i, d2) in (p..p + 4).zip(chunk::distances(c, q)) {
-                            if d2 < worst {
-                                let at = out.partition_point(|e| e.1 <= d2);
-                                out.insert(at, (i, d2));
-                                if out.len() > k {
-                                    out.pop();
-                                }
-                                if out.len() == k {
-                                    worst = out[k - 1].1;
-                                }
+                    self.each_in_leaf(&n, q, |i, d2| {
+                        if d2 < worst {
+                            let at = out.partition_point(|e| e.1 <= d2);
+                            out.insert(at, (i, d2));
+                            if out.len() > k {
+                                out.pop();
+                            }
+                            if out.len() == k {
+                                worst = out[k - 1].1;
                             }
                         }
-                    }
+                    });
                     break;
                 }
                 let d = n.dim as usize;
@@ -524,14 +532,11 @@ impl KdIndex {
             loop {
                 let n = self.nodes[ni as usize];
                 if n.dim == IS_LEAF {
-                    for (c, p) in self.leaf_chunks(&n).iter().zip((n.a as usize..).step_by(4)) {
-                        // padding's distance is NaN: within no bound
-                        for (i, d2) in (p..p + 4).zip(chunk::distances(c, q)) {
-                            if d2 <= max_d2 {
-                                out.push((i, d2));
-                            }
+                    self.each_in_leaf(&n, q, |i, d2| {
+                        if d2 <= max_d2 {
+                            out.push((i, d2));
                         }
-                    }
+                    });
                     break;
                 }
                 let d = n.dim as usize;
