@@ -46,12 +46,23 @@ impl LaneFloors {
 }
 
 /// The squared distances from `q` to the chunk's four points.
+#[cfg(not(all(target_arch = "wasm32", target_feature = "simd128")))]
 #[inline(always)]
 pub(super) fn distances(c: &Chunk, q: &[f32; 3]) -> [f32; 4] {
     std::array::from_fn(|l| {
         let (dx, dy, dz) = (c.x[l] - q[0], c.y[l] - q[1], c.z[l] - q[2]);
         dx * dx + dy * dy + dz * dz
     })
+}
+
+/// [`distances`] in WebAssembly's SIMD (the compiler's own vectors of the plain loop build each
+/// lane apart, slower than scalar code).
+#[cfg(all(target_arch = "wasm32", target_feature = "simd128"))]
+#[inline(always)]
+pub(super) fn distances(c: &Chunk, q: &[f32; 3]) -> [f32; 4] {
+    use core::arch::wasm32::*;
+    let d2 = simd::distances(c, f32x4_splat(q[0]), f32x4_splat(q[1]), f32x4_splat(q[2]));
+    simd::lanes(d2)
 }
 
 /// Scans `chunks` (positions `first..`) for points strictly nearer to `q` than `bound`: per lane,
@@ -99,17 +110,14 @@ pub(super) fn nearest<const FLOOR: bool>(
     floors: &mut LaneFloors,
 ) -> ([f32; 4], [u32; 4]) {
     use core::arch::wasm32::*;
-    let load = |v: &[f32; 4]| f32x4(v[0], v[1], v[2], v[3]);
+    use simd::load;
     let (qx, qy, qz) = (f32x4_splat(q[0]), f32x4_splat(q[1]), f32x4_splat(q[2]));
     let mut least = f32x4_splat(bound);
     let mut at = u32x4_splat(u32::MAX);
     let mut position = u32x4(first, first + 1, first + 2, first + 3);
     let (mut floor_least, mut floor_second) = (load(&floors.least), load(&floors.second));
     for c in chunks {
-        let dx = f32x4_sub(load(&c.x), qx);
-        let dy = f32x4_sub(load(&c.y), qy);
-        let dz = f32x4_sub(load(&c.z), qz);
-        let d2 = f32x4_add(f32x4_add(f32x4_mul(dx, dx), f32x4_mul(dy, dy)), f32x4_mul(dz, dz));
+        let d2 = simd::distances(c, qx, qy, qz);
         let below = f32x4_lt(d2, least);
         least = v128_bitselect(d2, least, below);
         at = v128_bitselect(position, at, below);
@@ -121,9 +129,7 @@ pub(super) fn nearest<const FLOOR: bool>(
             floor_least = f32x4_pmin(floor_least, d2);
         }
     }
-    let lanes = |v: v128| {
-        [f32x4_extract_lane::<0>(v), f32x4_extract_lane::<1>(v), f32x4_extract_lane::<2>(v), f32x4_extract_lane::<3>(v)]
-    };
+    let lanes = simd::lanes;
     if FLOOR {
         (floors.least, floors.second) = (lanes(floor_least), lanes(floor_second));
     }
@@ -134,4 +140,33 @@ pub(super) fn nearest<const FLOOR: bool>(
         u32x4_extract_lane::<3>(at),
     ];
     (lanes(least), at)
+}
+
+/// The SIMD pieces the scans share.
+#[cfg(all(target_arch = "wasm32", target_feature = "simd128"))]
+mod simd {
+    use super::Chunk;
+    use core::arch::wasm32::*;
+
+    /// Four floats as a vector.
+    #[inline(always)]
+    pub(super) fn load(v: &[f32; 4]) -> v128 {
+        f32x4(v[0], v[1], v[2], v[3])
+    }
+
+    /// The vector's four floats.
+    #[inline(always)]
+    pub(super) fn lanes(v: v128) -> [f32; 4] {
+        [f32x4_extract_lane::<0>(v), f32x4_extract_lane::<1>(v), f32x4_extract_lane::<2>(v), f32x4_extract_lane::<3>(v)]
+    }
+
+    /// The squared distances from `(qx, qy, qz)` (each splat) to the chunk's points:
+    /// `dx * dx + dy * dy + dz * dz`, as the plain code computes them.
+    #[inline(always)]
+    pub(super) fn distances(c: &Chunk, qx: v128, qy: v128, qz: v128) -> v128 {
+        let dx = f32x4_sub(load(&c.x), qx);
+        let dy = f32x4_sub(load(&c.y), qy);
+        let dz = f32x4_sub(load(&c.z), qz);
+        f32x4_add(f32x4_add(f32x4_mul(dx, dx), f32x4_mul(dy, dy)), f32x4_mul(dz, dz))
+    }
 }
