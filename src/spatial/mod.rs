@@ -21,9 +21,9 @@
 //! a hinted nearest search starts at the hint's leaf and climbs (`KdIndex::nearest_within`).
 //! Distances are squared Euclidean in `f32`.
 
-/// Most points in a leaf. 16 registers small pairs faster than 12 or 8, natively and in wasm, and
-/// as fast as 24 (`BENCHMARK.md`, "Kernels").
-pub const LEAF: usize = 16;
+/// Most points in a leaf. With leaves scanned four points at a time, 64 registers pairs faster
+/// in wasm than 32 or 16 (`BENCHMARK.md`, "The leaf scan, four distances at a time").
+pub const LEAF: usize = 64;
 
 mod chunk;
 
