@@ -129,17 +129,10 @@ pub(super) fn nearest<const FLOOR: bool>(
             floor_least = f32x4_pmin(floor_least, d2);
         }
     }
-    let lanes = simd::lanes;
     if FLOOR {
-        (floors.least, floors.second) = (lanes(floor_least), lanes(floor_second));
+        (floors.least, floors.second) = (simd::lanes(floor_least), simd::lanes(floor_second));
     }
-    let at = [
-        u32x4_extract_lane::<0>(at),
-        u32x4_extract_lane::<1>(at),
-        u32x4_extract_lane::<2>(at),
-        u32x4_extract_lane::<3>(at),
-    ];
-    (lanes(least), at)
+    (simd::lanes(least), simd::u32_lanes(at))
 }
 
 /// The SIMD pieces the scans share.
@@ -158,6 +151,12 @@ mod simd {
     #[inline(always)]
     pub(super) fn lanes(v: v128) -> [f32; 4] {
         [f32x4_extract_lane::<0>(v), f32x4_extract_lane::<1>(v), f32x4_extract_lane::<2>(v), f32x4_extract_lane::<3>(v)]
+    }
+
+    /// The vector's four `u32`s.
+    #[inline(always)]
+    pub(super) fn u32_lanes(v: v128) -> [u32; 4] {
+        [u32x4_extract_lane::<0>(v), u32x4_extract_lane::<1>(v), u32x4_extract_lane::<2>(v), u32x4_extract_lane::<3>(v)]
     }
 
     /// The squared distances from `(qx, qy, qz)` (each splat) to the chunk's points:

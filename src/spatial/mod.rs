@@ -95,7 +95,6 @@ impl Floors {
             self.record::<true>(lanes.least[l]);
             self.record::<true>(lanes.second[l]);
         }
-        self.lanes = chunk::LaneFloors::NONE;
         self
     }
 }
@@ -463,6 +462,38 @@ impl KdIndex {
         }
     }
 
+    /// Calls `leaf` on every leaf that may hold a point within the squared distance `bound` of
+    /// `q` (`<= bound` with `INCLUSIVE`, else `< bound`), nearest side first; `leaf` returns the
+    /// bound from then on (a k-nearest search's shrinks as it fills). The index must not be empty.
+    #[inline(always)]
+    fn leaves_within<const INCLUSIVE: bool>(&self, q: &[f32; 3], mut bound: f32, mut leaf: impl FnMut(&Node) -> f32) {
+        let within = |d2: f32, bound: f32| if INCLUSIVE { d2 <= bound } else { d2 < bound };
+        let mut stack = Stack::root();
+        while let Some(Pending { node, rd, off }) = stack.pop() {
+            if !within(rd, bound) {
+                continue;
+            }
+            let mut ni = node;
+            loop {
+                let n = self.nodes[ni as usize];
+                if n.dim == IS_LEAF {
+                    bound = leaf(&n);
+                    break;
+                }
+                let d = n.dim as usize;
+                let diff = q[d] - n.split;
+                let (near, far) = if diff < 0.0 { (n.a, n.b) } else { (n.b, n.a) };
+                let far_rd = rd - off[d] * off[d] + diff * diff;
+                if within(far_rd, bound) {
+                    let mut far_off = off;
+                    far_off[d] = diff;
+                    stack.push(Pending { node: far, rd: far_rd, off: far_off });
+                }
+                ni = near;
+            }
+        }
+    }
+
     /// The `k` nearest indexed points to `q` (fewer if the index is smaller), nearest first,
     /// written into `out` (cleared first) as `(index, squared distance)`. Allocation-free once
     /// `out` has capacity `k + 1`.
@@ -474,41 +505,21 @@ impl KdIndex {
         }
         // `out` holds (position, d2), sorted ascending by d2, during the search.
         let mut worst = f32::INFINITY;
-        let mut stack = Stack::root();
-        while let Some(Pending { node, rd, off }) = stack.pop() {
-            if rd >= worst {
-                continue;
-            }
-            let mut ni = node;
-            loop {
-                let n = self.nodes[ni as usize];
-                if n.dim == IS_LEAF {
-                    self.each_in_leaf(&n, q, |i, d2| {
-                        if d2 < worst {
-                            let at = out.partition_point(|e| e.1 <= d2);
-                            out.insert(at, (i, d2));
-                            if out.len() > k {
-                                out.pop();
-                            }
-                            if out.len() == k {
-                                worst = out[k - 1].1;
-                            }
-                        }
-                    });
-                    break;
+        self.leaves_within::<false>(q, worst, |n| {
+            self.each_in_leaf(n, q, |i, d2| {
+                if d2 < worst {
+                    let at = out.partition_point(|e| e.1 <= d2);
+                    out.insert(at, (i, d2));
+                    if out.len() > k {
+                        out.pop();
+                    }
+                    if out.len() == k {
+                        worst = out[k - 1].1;
+                    }
                 }
-                let d = n.dim as usize;
-                let diff = q[d] - n.split;
-                let (near, far) = if diff < 0.0 { (n.a, n.b) } else { (n.b, n.a) };
-                let far_rd = rd - off[d] * off[d] + diff * diff;
-                if far_rd < worst {
-                    let mut far_off = off;
-                    far_off[d] = diff;
-                    stack.push(Pending { node: far, rd: far_rd, off: far_off });
-                }
-                ni = near;
-            }
-        }
+            });
+            worst
+        });
         for e in out.iter_mut() {
             e.0 = self.ids[e.0] as usize;
         }
@@ -523,34 +534,14 @@ impl KdIndex {
         if self.nodes.is_empty() || max == 0 || max_d2.is_nan() {
             return;
         }
-        let mut stack = Stack::root();
-        while let Some(Pending { node, rd, off }) = stack.pop() {
-            if rd > max_d2 {
-                continue;
-            }
-            let mut ni = node;
-            loop {
-                let n = self.nodes[ni as usize];
-                if n.dim == IS_LEAF {
-                    self.each_in_leaf(&n, q, |i, d2| {
-                        if d2 <= max_d2 {
-                            out.push((i, d2));
-                        }
-                    });
-                    break;
+        self.leaves_within::<true>(q, max_d2, |n| {
+            self.each_in_leaf(n, q, |i, d2| {
+                if d2 <= max_d2 {
+                    out.push((i, d2));
                 }
-                let d = n.dim as usize;
-                let diff = q[d] - n.split;
-                let (near, far) = if diff < 0.0 { (n.a, n.b) } else { (n.b, n.a) };
-                let far_rd = rd - off[d] * off[d] + diff * diff;
-                if far_rd <= max_d2 {
-                    let mut far_off = off;
-                    far_off[d] = diff;
-                    stack.push(Pending { node: far, rd: far_rd, off: far_off });
-                }
-                ni = near;
-            }
-        }
+            });
+            max_d2
+        });
         // nearest first, ties by index: the same neighbourhood whatever the traversal order
         let by = |a: &(usize, f32), b: &(usize, f32)| a.1.total_cmp(&b.1).then(a.0.cmp(&b.0));
         if out.len() > max {
