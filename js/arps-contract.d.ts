@@ -117,10 +117,9 @@ export type RegisterOptions = {
    * answer's `confidence` reaches 0.95 (`STOP_CONFIDENCE`): the first start alone; then the
    * others in order, each run of local starts or of global ones (`"global"`,
    * `"globalNetwork"`) one stage (with the default starts: the global ones, then the other
-   * local ones). When every stage has run and the answer is still unsure (`confidence` at
-   * most 0.5, `MORE_BELOW_CONFIDENCE`) and `starts` has a global kind, a last stage refines up
-   * to ten more global hypotheses (the next best of a second, larger RANSAC draw on the same
-   * descriptor matches) and the 24 `"rotations"` starts (unless `starts` names them), of
+   * local ones). When every stage has run without reaching 0.95 and `starts` has a global
+   * kind, a last stage refines up to ten more global hypotheses (the next best of a second,
+   * larger RANSAC draw on the same descriptor matches) and the 24 `"rotations"` starts (unless `starts` names them), of
    * which the 12 that fit best after a short ICP run each are refined; so only the hard pairs
    * pay for them. Its starts are blind, so its best replaces the answer only when it fits
    * more than 10% better.

@@ -119,10 +119,9 @@ pub struct Options {
     /// answer's `confidence` reaches 0.95 (`STOP_CONFIDENCE`): the first start alone; then the
     /// others in order, each run of local starts or of global ones (`"global"`,
     /// `"globalNetwork"`) one stage (with the default starts: the global ones, then the other
-    /// local ones). When every stage has run and the answer is still unsure (`confidence` at
-    /// most 0.5, `MORE_BELOW_CONFIDENCE`) and `starts` has a global kind, a last stage refines up
-    /// to ten more global hypotheses (the next best of a second, larger RANSAC draw on the same
-    /// descriptor matches) and the 24 `"rotations"` starts (unless `starts` names them), of
+    /// local ones). When every stage has run without reaching 0.95 and `starts` has a global
+    /// kind, a last stage refines up to ten more global hypotheses (the next best of a second,
+    /// larger RANSAC draw on the same descriptor matches) and the 24 `"rotations"` starts (unless `starts` names them), of
     /// which the 12 that fit best after a short ICP run each are refined; so only the hard pairs
     /// pay for them. Its starts are blind, so its best replaces the answer only when it fits
     /// more than 10% better.
@@ -138,8 +137,8 @@ pub struct Options {
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationSearch"))]
 pub enum Search {
     /// In stages, stopping at a confident answer: the first start; then the others in order, each
-    /// run of local or of global starts a stage; then, while the answer is still unsure, more
-    /// global hypotheses. The best of everything refined is returned. Easy pairs cost one start;
+    /// run of local or of global starts a stage; then, while the answer is still below
+    /// [`STOP_CONFIDENCE`], more global hypotheses and blind rotations. The best of everything refined is returned. Easy pairs cost one start;
     /// hard ones get every start and more.
     #[default]
     Adaptive,
@@ -151,12 +150,6 @@ pub enum Search {
 /// confidently wrong answer of the first start rarely ends the search (`BENCHMARK.md` has the
 /// measurements behind the value).
 pub const STOP_CONFIDENCE: f64 = 0.95;
-
-/// When every stage of [`Search::Adaptive`] has run and the best answer's confidence is still at
-/// most this (the answer would carry the low-confidence warning), a last stage refines more
-/// global hypotheses and blind rotations, shortlisted (`BENCHMARK.md`, "A last stage for unsure
-/// answers").
-pub const MORE_BELOW_CONFIDENCE: f64 = 0.5;
 
 impl Default for Options {
     fn default() -> Self {

@@ -3,8 +3,8 @@
 //! Takes the [`Prepared`] clouds, the stages of [`super::starts`] and the options; gives
 //! [`Chosen`]: the best refined start ([`refine::refine_best`], compared across stages by
 //! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
-//! first stage whose best reaches [`STOP_CONFIDENCE`]; when none does and the answer is at most
-//! [`MORE_BELOW_CONFIDENCE`], it runs a last stage of blind starts ([`Starts::more`]: more global
+//! first stage whose best reaches [`STOP_CONFIDENCE`]; when none does, it runs a last stage of
+//! blind starts ([`Starts::more`]: more global
 //! hypotheses and the rotations), shortlisted to [`LAST_STAGE_STARTS`] ([`refine::shortlist`]),
 //! whose best must fit clearly better ([`refine::clearly_better`]). Each stage's best, when it
 //! is better than the answer so far and another pose ([`refine::coincide`]), is judged by the
@@ -19,7 +19,7 @@ use crate::confidence::{self, Evidence};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Candidate, Refinement, Start};
-use crate::register::{Options, Search, MORE_BELOW_CONFIDENCE, STOP_CONFIDENCE};
+use crate::register::{Options, Search, STOP_CONFIDENCE};
 use crate::Result;
 use nalgebra::Matrix4;
 
@@ -66,14 +66,12 @@ pub(crate) fn search(
     let mut starts_refined = 0usize;
     let adaptive = options.search == Search::Adaptive;
     let kinds: Vec<Start> = stages.iter().flatten().copied().collect();
-    // the stages, then, while the answer is still unsure, the last one: blind starts
+    // the stages, then, while the answer is still below the stop, the last one: blind starts
     for stage in stages.iter().map(Some).chain([None]) {
         let mut starts = match stage {
             Some(stage) => starts.build(stage, model, workspace)?,
-            None if adaptive
-                && options.icp != IcpKind::Off
-                && best.as_ref().is_some_and(|b| b.2 <= MORE_BELOW_CONFIDENCE) =>
-            {
+            // no stage stopped the search (the loop breaks at STOP_CONFIDENCE)
+            None if adaptive && options.icp != IcpKind::Off && best.is_some() => {
                 // blind starts, most of which land nowhere: a short run each picks those refined
                 let more = starts.more(&kinds, model, workspace)?;
                 refine::shortlist(&target_index, &p.icp_src.points, more, &how, LAST_STAGE_STARTS)
