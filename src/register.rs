@@ -121,9 +121,9 @@ pub struct Options {
     /// `"globalNetwork"`) one stage (with the default starts: the global ones, then the other
     /// local ones). When every stage has run without reaching 0.95 and `starts` has a global
     /// kind, a last stage refines up to ten more global hypotheses (the next best of a second,
-    /// larger RANSAC draw on the same descriptor matches) and the 24 `"rotations"` starts (unless `starts` names them), of
-    /// which the 12 that fit best after a short ICP run each are refined; so only the hard pairs
-    /// pay for them. Its starts are blind, so its best replaces the answer only when it fits
+    /// larger RANSAC draw on the same descriptor matches) and the 24 `"rotations"` starts
+    /// (unless `starts` names them), of which the 12 that fit best after a short ICP run each
+    /// are refined; so only the pairs no stage settled pay for them. Its starts are blind, so its best replaces the answer only when it fits
     /// more than 10% better.
     /// `"exhaustive"` refines every start, without that last stage. The result's `startsRefined`
     /// says how many were refined.
@@ -137,9 +137,9 @@ pub struct Options {
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationSearch"))]
 pub enum Search {
     /// In stages, stopping at a confident answer: the first start; then the others in order, each
-    /// run of local or of global starts a stage; then, while the answer is still below
-    /// [`STOP_CONFIDENCE`], more global hypotheses and blind rotations. The best of everything refined is returned. Easy pairs cost one start;
-    /// hard ones get every start and more.
+    /// run of local or of global starts a stage; then, while the answer is still below the stop
+    /// (0.95), more global hypotheses and blind rotations. The best of everything refined is
+    /// returned. Easy pairs cost one start; hard ones get every start and more.
     #[default]
     Adaptive,
     /// Every start is refined and the best returned (slower, never stops early).
