@@ -121,8 +121,8 @@ export type RegisterOptions = {
    * kind, a last stage refines up to ten more global hypotheses (the next best of a second,
    * larger RANSAC draw on the same descriptor matches) and the 24 `"rotations"` starts
    * (unless `starts` names them), of which the 12 that fit best after a short ICP run each
-   * are refined; so only the pairs no stage settled pay for them. Its starts are blind, so its best replaces the answer only when it fits
-   * more than 10% better.
+   * are refined; so only the pairs no stage settled pay for them. Its starts are blind, so its
+   * best replaces the answer only when it fits more than 10% better.
    * `"exhaustive"` refines every start, without that last stage. The result's `startsRefined`
    * says how many were refined.
    */

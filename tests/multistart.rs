@@ -9,7 +9,7 @@ use common::{fixture_pair, fixture_pair_in};
 use arps::icp::{IcpKind, IcpTarget};
 use arps::refine::{self, Candidate, Refinement, Start};
 use arps::transform::{rotation_error_deg, translation_error};
-use arps::{ModelConfig, Options, PointCloud, Registrar, Search, Weights};
+use arps::{ModelConfig, Options, PointCloud, Registrar, Registration, Search, Weights};
 use common::{bumpy_surface, crop, motion};
 use nalgebra::Matrix4;
 
@@ -405,56 +405,55 @@ fn a_half_turn_that_fits_a_hair_better_loses_to_the_smaller_turn() {
     assert!(r.confidence <= 0.5, "another pose fits about as well: confidence {}", r.confidence);
 }
 
-/// The `fixtures/any` pairs (a cone and two bookshelves, in arbitrary relative poses), searched
-/// without the network (the test is about the search, not about the embedded model's estimate,
-/// which since `n128-5` solves pair 2 from its first start): the first five global hypotheses and
-/// every local start end in poses that fit clearly worse than the truth, so every stage leaves the
-/// answer unsure; the adaptive search's last stage finds the truth, confidently: among more global
-/// hypotheses drawn from the same matches (pairs 0 and 1) or among the 24 rotations (pair 2). The
-/// exhaustive search, which refines every named start but has no such stage, misses it.
+/// `fixtures/any` pair `index` searched adaptively and exhaustively, without the network (the
+/// tests are about the search, not about the embedded model's estimate): the adaptive search's
+/// answer is right and came from `found_by`; the exhaustive search, which refines every named
+/// start but has no last stage, misses. Gives both results, adaptive first.
+fn last_stage_pair(reg: &mut Registrar, index: usize, found_by: Start) -> (Registration, Registration) {
+    let (source, target, truth) = fixture_pair_in("fixtures/any", index);
+    let adaptive = Options { network: false, ..Options::default() };
+    let r = reg.register(&source, &target, &adaptive).unwrap();
+    let err = rotation_error_deg(&r.T_target_source, &truth);
+    assert!(err < 15.0, "pair {index}: rotation error {err:.1} degrees");
+    assert_eq!(r.start, found_by, "pair {index}");
+    let exhaustive = Options { search: Search::Exhaustive, ..adaptive };
+    let all = reg.register(&source, &target, &exhaustive).unwrap();
+    let err = rotation_error_deg(&all.T_target_source, &truth);
+    assert!(err > 15.0, "pair {index}: the named starts alone found the truth ({err:.1} degrees)");
+    (r, all)
+}
+
+/// `fixtures/any` pairs 0-2 (a cone and two bookshelves, in arbitrary relative poses; pair 2 the
+/// embedded model solves from its first start since `n128-5`, hence no network): the first five
+/// global hypotheses and every local start end in poses that fit clearly worse than the truth, so
+/// every stage leaves the answer unsure; the adaptive search's last stage finds the truth,
+/// confidently: among more global hypotheses drawn from the same matches (pairs 0 and 1) or among
+/// the 24 rotations (pair 2).
 #[test]
 fn an_answer_still_unsure_after_every_stage_gets_a_last_stage() {
     let mut reg = Registrar::with_default_model().unwrap();
-    let adaptive = Options { network: false, ..Options::default() };
     for (index, found_by) in [(0, Start::Global), (1, Start::Global), (2, Start::Rotations)] {
-        let (source, target, truth) = fixture_pair_in("fixtures/any", index);
-        let r = reg.register(&source, &target, &adaptive).unwrap();
-        let err = rotation_error_deg(&r.T_target_source, &truth);
-        assert!(err < 15.0, "pair {index}: rotation error {err:.1} degrees");
-        assert_eq!(r.start, found_by, "pair {index}");
+        let (r, all) = last_stage_pair(&mut reg, index, found_by);
         assert!(r.confidence > 0.5, "pair {index}: confidence {}", r.confidence);
-        let exhaustive = Options { search: Search::Exhaustive, ..adaptive.clone() };
-        let all = reg.register(&source, &target, &exhaustive).unwrap();
-        let err = rotation_error_deg(&all.T_target_source, &truth);
-        assert!(err > 15.0, "pair {index}: the named starts alone found the truth ({err:.1} degrees)");
         assert!(all.confidence <= 0.5, "pair {index}: the miss is not flagged ({})", all.confidence);
         assert!(r.starts_refined > all.starts_refined, "pair {index}: {} starts", r.starts_refined);
     }
 }
 
-/// `fixtures/any` pairs 3 and 4 (a bowl and a cone, without the network as above): every named
-/// start ends in a wrong pose that the verdict does not doubt (confidence above 0.5, below the
-/// stop), as the exhaustive search shows; the adaptive search's last stage, which runs whenever
-/// no stage reached the stop, finds the truth among more global hypotheses.
+/// `fixtures/any` pairs 3 and 4 (a bowl and a cone): every named start ends in a wrong pose that
+/// the verdict does not doubt (confidence above 0.5, below the stop), as the exhaustive search
+/// shows; the adaptive search's last stage, which runs whenever no stage reached the stop, finds
+/// the truth among more global hypotheses.
 #[test]
 fn an_answer_below_the_stop_after_every_stage_gets_a_last_stage_too() {
     let mut reg = Registrar::with_default_model().unwrap();
-    let adaptive = Options { network: false, ..Options::default() };
     for index in [3, 4] {
-        let (source, target, truth) = fixture_pair_in("fixtures/any", index);
-        let exhaustive = Options { search: Search::Exhaustive, ..adaptive.clone() };
-        let all = reg.register(&source, &target, &exhaustive).unwrap();
-        let err = rotation_error_deg(&all.T_target_source, &truth);
-        assert!(err > 15.0, "pair {index}: the named starts alone found the truth ({err:.1} degrees)");
+        let (r, all) = last_stage_pair(&mut reg, index, Start::Global);
         assert!(
             all.confidence > 0.5 && all.confidence < arps::register::STOP_CONFIDENCE,
             "pair {index}: confidence {}",
             all.confidence
         );
-        let r = reg.register(&source, &target, &adaptive).unwrap();
-        let err = rotation_error_deg(&r.T_target_source, &truth);
-        assert!(err < 15.0, "pair {index}: rotation error {err:.1} degrees");
-        assert_eq!(r.start, Start::Global, "pair {index}");
         assert!(r.confidence > all.confidence, "pair {index}: confidence {}", r.confidence);
     }
 }
