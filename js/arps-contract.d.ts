@@ -232,6 +232,17 @@ export type RegistrationResult = {
    * probe poses refined as starts (see the options' `starts`); see the options' `search`.
    */
   startsRefined: number,
+  /**
+   * Other poses that fit about as well as `T_target_source` (at least 0.9 of its fitness when
+   * found, by the confidence's probes or by the search, more than 15 degrees from it and from
+   * each other), each refined like the answer, the best fitting first; empty when the fit is
+   * unique. On a symmetric shape the right pose is often one of these rather than the answer,
+   * and nothing in the clouds tells them apart: an application can offer them to its user.
+   * `evidence.alternatives` counts those of the probes or of the search, whichever found more
+   * (the confidence's input), so this list can be longer; a refinement that brings a pose back
+   * onto the answer or onto another drops it, so it can also be shorter.
+   */
+  alternatives: Array<RegistrationAlternative>,
 };
 
 /**
@@ -320,6 +331,26 @@ export type RegistrationEvidence = {
    * along that motion (a surface of revolution, a plane, a cylinder).
    */
   slide: number,
+};
+
+/**
+ * Another pose that fits about as well as the answer (one of the result's `alternatives`):
+ * frames, units and layout as the answer's.
+ */
+export type RegistrationAlternative = {
+  /**
+   * The pose, `T_target_source`, in the clouds' units; in JS and JSON 16 numbers in
+   * column-major order, like the answer's.
+   */
+  T_target_source: number[],
+  /**
+   * Its fitness, measured like the answer's `fitness`.
+   */
+  fitness: number,
+  /**
+   * Its inlier RMSE, measured like the answer's `inlierRmse`, in the clouds' units.
+   */
+  inlierRmse: number,
 };
 
 /**

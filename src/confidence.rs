@@ -86,9 +86,9 @@ pub fn evidence(
     probe(target, source_index, source, T_target_source, d, kind).evidence
 }
 
-/// [`evidence`] together with the best different pose its turned probes found, when that pose
-/// fits the probe points better than the answer does.
-#[derive(Clone, Copy, Debug)]
+/// [`evidence`] together with the poses its turned probes found: the best different one, when it
+/// fits the probe points better than the answer does, and those that fit about as well.
+#[derive(Clone, Debug)]
 pub struct Probed {
     /// The evidence of the answer.
     pub evidence: Evidence,
@@ -96,6 +96,10 @@ pub struct Probed {
     /// ([`Evidence::ambiguity`] above 1): the answer is then not the best fit, and a search
     /// refines this pose as one more start.
     pub better: Option<Matrix4<f64>>,
+    /// The distinct poses the probes found that fit at least 0.9 as well as the answer, as many
+    /// as [`Evidence::alternatives`] counts (`T_target_source`, briefly refined on the probe
+    /// points).
+    pub alternatives: Vec<Matrix4<f64>>,
 }
 
 /// [`evidence`], and the better pose its probes found, if any ([`Probed`]).
@@ -124,7 +128,7 @@ pub fn probe(
     // turns along the least constrained motion only where sliding along it keeps much of the fit
     let screw = screw.filter(|_| slide >= SCREW_MIN_SLIDE);
     let turned = turns(target, &probe, T_target_source, d, answer, kind, &screw_turns(screw, T_target_source));
-    let (ambiguity, alternatives) = (turned.best_ratio.min(2.0), turned.alternatives as f64);
+    let (ambiguity, alternatives) = (turned.best_ratio.min(2.0), turned.alternatives.len() as f64);
     let (fitness_tight, fitness_loose, fitness_coarse) = (f(0.5), f(2.0), f(4.0));
     let evidence = Evidence {
         fitness,
@@ -138,7 +142,7 @@ pub fn probe(
         slide,
     };
     let better = turned.best.filter(|_| turned.best_ratio > 1.0);
-    Probed { evidence, better }
+    Probed { evidence, better, alternatives: turned.alternatives }
 }
 
 /// Points of the probes ([`Evidence::ambiguity`], [`Evidence::slide`]).
@@ -175,7 +179,7 @@ struct Turned {
     /// That pose.
     best: Option<Matrix4<f64>>,
     /// Distinct poses fitting at least [`ALTERNATIVE_FIT`] as well as the answer.
-    alternatives: usize,
+    alternatives: Vec<Matrix4<f64>>,
 }
 
 /// The turned probes of `t` on the probe points `sample` ([`Evidence::ambiguity`],
@@ -198,7 +202,7 @@ fn turns(
     extra: &[Matrix4<f64>],
 ) -> Turned {
     let AnswerOnProbe { fitness: base, mut partners } = answer;
-    let mut out = Turned { best_ratio: 0.0, best: None, alternatives: 0 };
+    let mut out = Turned { best_ratio: 0.0, best: None, alternatives: Vec::new() };
     let base_loose = target.evaluate_warm(sample, t, 2.0 * d, &mut partners).0;
     if base <= 0.0 || sample.len() < 3 {
         return out;
@@ -228,7 +232,6 @@ fn turns(
     let params =
         |factor: f64| IcpParams { max_iterations: PROBE_ITERATIONS, ..IcpParams::new(kind.or_point(), factor * d) };
     let base_coarse = target.evaluate_warm(sample, t, 4.0 * d, &mut partners).0;
-    let mut alternatives: Vec<Matrix4<f64>> = Vec::new();
     // each earlier probe's pose after each stage (4d, 2d, d; `None`: not run)
     let mut paths: Vec<[Option<Matrix4<f64>>; 3]> = Vec::with_capacity(starts.len());
     // each stage stops the probe when it cannot come near the answer's fit at that distance
@@ -266,22 +269,25 @@ fn turns(
             out.best = Some(alt);
         }
         if ratio >= ALTERNATIVE_FIT {
-            count_if_new(&mut alternatives, t, alt);
+            count_if_new(&mut out.alternatives, t, alt);
         }
     }
-    out.alternatives = alternatives.len();
     out
 }
 
 /// Raises `e.alternatives` to the number of poses among `others` (refined answers of a search,
 /// each `T_target_source` with its fitness) that fit at least 0.9 (`ALTERNATIVE_FIT`) as well as
 /// the answer `T_target_source` (fitness `fitness`, measured like theirs) and turn more than 15
-/// degrees (`SAME_POSE_DEGREES`) away from it and from each other, when that number is higher.
-/// The probes turn the answer about a few axes; a search that refined starts from unrelated
-/// poses (global hypotheses, turned starts) finds look-alikes about other axes too.
+/// degrees (`SAME_POSE_DEGREES`) away from it and from each other, when that number is higher,
+/// and adds those poses to `poses` (the probes' alternatives, [`Probed::alternatives`]) where
+/// they are more than 15 degrees from every pose there. The probes turn the answer about a few
+/// axes; a search that refined starts from unrelated poses (global hypotheses, turned starts)
+/// finds look-alikes about other axes too. The count stays the larger of the two sets' (what the
+/// confidence was calibrated with); `poses` gathers every look-alike found.
 #[allow(non_snake_case)]
 pub fn count_search_alternatives(
     e: &mut Evidence,
+    poses: &mut Vec<Matrix4<f64>>,
     T_target_source: &Matrix4<f64>,
     fitness: f64,
     others: &[(Matrix4<f64>, f64)],
@@ -293,13 +299,22 @@ pub fn count_search_alternatives(
         }
     }
     e.alternatives = e.alternatives.max(distinct.len() as f64);
+    for t in distinct {
+        count_if_new(poses, T_target_source, t);
+    }
+}
+
+/// Whether the poses `a` and `b` (`T_target_source`) are one as alternatives count them: at most
+/// 15 degrees (`SAME_POSE_DEGREES`) apart.
+pub fn same_pose(a: &Matrix4<f64>, b: &Matrix4<f64>) -> bool {
+    rotation_error_deg(a, b) <= SAME_POSE_DEGREES
 }
 
 /// Adds `pose` to the alternatives `counted` of the answer `T_target_source` when it is another
 /// pose: more than [`SAME_POSE_DEGREES`] from the answer and from each pose counted already.
 #[allow(non_snake_case)]
 fn count_if_new(counted: &mut Vec<Matrix4<f64>>, T_target_source: &Matrix4<f64>, pose: Matrix4<f64>) {
-    let other = |a: &Matrix4<f64>| rotation_error_deg(a, &pose) > SAME_POSE_DEGREES;
+    let other = |a: &Matrix4<f64>| !same_pose(a, &pose);
     if other(T_target_source) && counted.iter().all(other) {
         counted.push(pose);
     }

@@ -3,7 +3,7 @@
 //!
 //! # One set of types
 //! The options are [`Options`], the result is [`Registration`]; their nested types are
-//! [`Evidence`], [`Timings`], [`Start`], [`Search`], [`IcpKind`], [`NonFinite`], [`Stage`] (the
+//! [`Evidence`], [`Alternative`], [`Timings`], [`Start`], [`Search`], [`IcpKind`], [`NonFinite`], [`Stage`] (the
 //! progress stages) and [`ModelConfig`]. They are serde types: the wasm binding converts them
 //! with serde-wasm-bindgen and the CLI with serde_json, so JS and JSON see the same objects, field
 //! for field. The TypeScript declarations of the package (`js/arps-contract.d.ts`, part of
@@ -24,6 +24,7 @@
 //!
 //! [`Options`]: crate::Options
 //! [`Registration`]: crate::Registration
+//! [`Alternative`]: crate::Alternative
 //! [`Evidence`]: crate::confidence::Evidence
 //! [`Timings`]: crate::Timings
 //! [`Start`]: crate::Start
@@ -163,7 +164,7 @@ fn camel_case(key: &str) -> String {
 pub fn typescript() -> String {
     use crate::confidence::Evidence;
     use crate::model::config::Reference;
-    use crate::{IcpKind, NonFinite, Options, Registration, Search, Stage, Start, Timings};
+    use crate::{Alternative, IcpKind, NonFinite, Options, Registration, Search, Stage, Start, Timings};
     use ts_rs::{Config, TS};
 
     fn decl<T: TS>(cfg: &Config) -> String {
@@ -184,6 +185,7 @@ pub fn typescript() -> String {
         decl::<Registration>(&cfg),
         decl::<Timings>(&cfg),
         decl::<Evidence>(&cfg),
+        decl::<Alternative>(&cfg),
         decl::<ModelConfig>(&cfg),
         decl::<Reference>(&cfg),
     ] {

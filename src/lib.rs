@@ -57,5 +57,5 @@ pub use error::{Error, Result};
 pub use icp::IcpKind;
 pub use model::{Model, ModelConfig};
 pub use refine::Start;
-pub use register::{Options, Registrar, Registration, Search, Stage, Timings};
+pub use register::{Alternative, Options, Registrar, Registration, Search, Stage, Timings};
 pub use weights::{StoreAs, Weights};

@@ -271,6 +271,22 @@ pub fn refine_best(
     choose(&all).map(|i| converge(target, source, all[i], how))
 }
 
+/// The pose `T_target_source` (already near a fit: a probe pose, a refined answer) refined like
+/// [`refine_best`]'s winner: at the final distance only, on at most [`REFINE_POINTS`] evenly
+/// spread source points, run on until it converges. Reported as coming from `start`.
+#[allow(non_snake_case)]
+pub fn refine_final(
+    target: &IcpTarget,
+    source: &[[f32; 3]],
+    start: Start,
+    T_target_source: &Matrix4<f64>,
+    how: &Refinement,
+) -> Candidate {
+    let capped = even_sample(source, REFINE_POINTS);
+    let c = refine_stages(target, &capped, &[(start, *T_target_source)], how, FINAL_STAGE)[0];
+    converge(target, &capped, c, how)
+}
+
 /// The answer's final stage, when it has not converged within the cap, runs on in rounds of
 /// `max_iterations` for at most this many rounds more ([`refine_best`]).
 pub const CONVERGE_ROUNDS: u32 = 3;

@@ -268,6 +268,34 @@ pub struct Registration {
     /// How many distinct starts were refined (after merging those that met), counting the
     /// probe poses refined as starts (see the options' `starts`); see the options' `search`.
     pub starts_refined: usize,
+    /// Other poses that fit about as well as `T_target_source` (at least 0.9 of its fitness when
+    /// found, by the confidence's probes or by the search, more than 15 degrees from it and from
+    /// each other), each refined like the answer, the best fitting first; empty when the fit is
+    /// unique. On a symmetric shape the right pose is often one of these rather than the answer,
+    /// and nothing in the clouds tells them apart: an application can offer them to its user.
+    /// `evidence.alternatives` counts those of the probes or of the search, whichever found more
+    /// (the confidence's input), so this list can be longer; a refinement that brings a pose back
+    /// onto the answer or onto another drops it, so it can also be shorter.
+    #[serde(default)]
+    pub alternatives: Vec<Alternative>,
+}
+
+/// Another pose that fits about as well as the answer (one of the result's `alternatives`):
+/// frames, units and layout as the answer's.
+#[allow(non_snake_case)]
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationAlternative"))]
+pub struct Alternative {
+    /// The pose, `T_target_source`, in the clouds' units; in JS and JSON 16 numbers in
+    /// column-major order, like the answer's.
+    #[serde(rename = "T_target_source", with = "crate::contract::column_major")]
+    #[cfg_attr(feature = "ts", ts(type = "number[]"))]
+    pub T_target_source: Matrix4<f64>,
+    /// Its fitness, measured like the answer's `fitness`.
+    pub fitness: f64,
+    /// Its inlier RMSE, measured like the answer's `inlierRmse`, in the clouds' units.
+    pub inlier_rmse: f64,
 }
 
 /// Holds a loaded model and reusable buffers; registers pairs of clouds.

@@ -2,6 +2,8 @@
 //! line on stderr and exits non-zero, `info` describes a weights file.
 #![cfg(feature = "cli")]
 
+mod common;
+
 use std::process::Command;
 
 fn arps(args: &[&str]) -> std::process::Output {
@@ -59,6 +61,39 @@ fn icp_kinds_and_human_output() {
         let text = String::from_utf8(out.stdout).unwrap();
         assert!(text.contains("T_target_source") && text.contains("fitness"), "{text}");
     }
+}
+
+/// A box pair (the target turned 30 degrees about z and moved): the answer is one of four poses
+/// that fit as well, so the human output lists the others under "alternative k" with their
+/// matrices, with the warning, and the JSON carries them as objects with a column-major
+/// `T_target_source`.
+#[test]
+fn register_lists_the_poses_that_fit_as_well() {
+    let dir = std::env::temp_dir().join(format!("arps-cli-box-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let gt = common::motion([0.0, 0.0, 30.0], [0.4, -0.2, 0.1]);
+    let source = arps::PointCloud::new(common::box_grid::box_grid(0.05, 0.0));
+    let target = arps::PointCloud::new(common::box_grid::box_grid(0.05, 0.01)).transformed(&gt);
+    let (src, tgt) = (dir.join("box-source.ply"), dir.join("box-target.ply"));
+    std::fs::write(&src, arps::io::write_ply_binary(&source)).unwrap();
+    std::fs::write(&tgt, arps::io::write_ply_binary(&target)).unwrap();
+    let (src, tgt) = (src.to_str().unwrap(), tgt.to_str().unwrap());
+    let out = arps(&["register", src, tgt]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("alternative 1 (fits about as well): fitness"), "{text}");
+    assert!(text.contains("fit about as well (a symmetric shape?)"), "{text}");
+    let out = arps(&["register", src, tgt, "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let alternatives = v["alternatives"].as_array().unwrap();
+    assert_eq!(text.matches("alternative ").count(), alternatives.len(), "{text}");
+    for a in alternatives {
+        let m: Vec<f64> = a["T_target_source"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+        assert_eq!((m.len(), [m[3], m[7], m[11], m[15]]), (16, [0.0, 0.0, 0.0, 1.0]), "column-major: {a}");
+        assert!(a["fitness"].as_f64().unwrap() > 0.5 && a["inlierRmse"].as_f64().is_some(), "{a}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
 }
 
 #[test]

@@ -170,6 +170,43 @@ fn any_answer_on_a_symmetric_box_is_doubted() {
     }
 }
 
+/// A box answered in one of its look-alike poses (turned 180 degrees about an axis): the result
+/// offers the other poses that fit as well, each refined like the answer, more than 15 degrees
+/// from it and from each other, the best fitting first; the truth is one of them, in the
+/// caller's frame, and the same call gives the same poses.
+#[test]
+fn a_symmetric_box_offers_the_poses_that_fit_as_well_and_the_truth_is_one() {
+    let mut reg = untrained();
+    let h = [1.0, 0.6, 0.35];
+    let source = box_surface(1500, h, 1);
+    let gt = common::motion([20.0, -35.0, 10.0], [0.3, -0.2, 0.4]);
+    let target = box_surface(1500, h, 2).transformed(&gt);
+    let c = Vector3::from(arps::transform::apply(&gt, [0.0; 3]).map(|v| v as f64));
+    let turned = turn_about(arps::transform::rotation(&gt) * Vector3::y(), 180.0, c) * gt;
+    let options = Options {
+        network: false,
+        initial_transform: Some(arps::transform::to_rows(&turned)),
+        starts: vec![Start::Initial],
+        ..Options::default()
+    };
+    let r = reg.register(&source, &target, &options).unwrap();
+    let degrees = |a: &Matrix4<f64>, b: &Matrix4<f64>| arps::transform::rotation_error_deg(a, b);
+    assert!(degrees(&r.T_target_source, &turned) < 3.0, "the answer stays the turned pose");
+    let poses: Vec<Matrix4<f64>> = r.alternatives.iter().map(|a| a.T_target_source).collect();
+    assert!(!poses.is_empty() && r.evidence.alternatives >= 1.0, "{:?}", r.evidence);
+    assert!(poses.iter().any(|t| degrees(t, &gt) < 2.0 && (t.column(3) - gt.column(3)).norm() < 0.02), "{poses:?}");
+    for (k, a) in r.alternatives.iter().enumerate() {
+        let rot = arps::transform::rotation(&a.T_target_source);
+        assert!((rot.transpose() * rot - nalgebra::Matrix3::identity()).norm() < 1e-9, "rigid");
+        assert!(degrees(&a.T_target_source, &r.T_target_source) > 15.0, "another pose than the answer");
+        assert!(poses[..k].iter().all(|t| degrees(t, &a.T_target_source) > 15.0), "distinct");
+        assert!(a.fitness >= 0.8 * r.fitness && a.inlier_rmse > 0.0, "{} against {}", a.fitness, r.fitness);
+        assert!(k == 0 || r.alternatives[k - 1].fitness >= a.fitness, "the best fitting first");
+    }
+    let again = reg.register(&source, &target, &options).unwrap();
+    assert_eq!(again.alternatives, r.alternatives);
+}
+
 /// `n` points on an open cylinder (radius `r`, half-length `h`, axis z), uniform by area, from
 /// `seed`.
 fn cylinder_surface(n: usize, r: f64, h: f64, seed: u64) -> PointCloud {
@@ -202,7 +239,7 @@ fn an_answer_on_a_surface_of_revolution_is_doubted() {
 
 /// The search's other refined answers count as alternatives when they fit at least 0.9 as well
 /// as the answer and are other poses (more than 15 degrees from the answer and from each other);
-/// the count only ever rises, and it caps the confidence.
+/// the count only ever rises, and it caps the confidence; the poses gather every look-alike found.
 #[test]
 fn the_searchs_other_answers_that_fit_as_well_are_alternatives() {
     let answer = turn_about(Vector3::z(), 30.0, Vector3::zeros());
@@ -221,7 +258,9 @@ fn the_searchs_other_answers_that_fit_as_well_are_alternatives() {
     };
     let count = |others: &[(Matrix4<f64>, f64)], start: f64| {
         let mut e = Evidence { alternatives: start, ..e0 };
-        confidence::count_search_alternatives(&mut e, &answer, 0.6, others);
+        let mut poses = Vec::new();
+        confidence::count_search_alternatives(&mut e, &mut poses, &answer, 0.6, others);
+        assert!(poses.len() as f64 <= e.alternatives.max(others.len() as f64));
         e.alternatives
     };
     let near = turn_about(Vector3::z(), 10.0, Vector3::zeros()) * answer;
@@ -235,8 +274,17 @@ fn the_searchs_other_answers_that_fit_as_well_are_alternatives() {
     assert_eq!(count(&[(flip_x, 0.55)], 2.0), 2.0, "the probes' count, when higher, stays");
     let mut e = e0;
     let before = confidence::confidence(&e);
-    confidence::count_search_alternatives(&mut e, &answer, 0.6, &[(flip_x, 0.55), (flip_y, 0.65)]);
+    let mut poses = Vec::new();
+    confidence::count_search_alternatives(&mut e, &mut poses, &answer, 0.6, &[(flip_x, 0.55), (flip_y, 0.65)]);
+    assert_eq!(poses, [flip_x, flip_y]);
     assert!(before > 0.5 && confidence::confidence(&e) <= 1.0 / 3.0, "{before} {}", confidence::confidence(&e));
+    // the probes found two (the half turn about x, a hair off, and one about z): the search's
+    // half turn about y joins them, its x does not; the count stays the larger set's
+    let flip_z = turn_about(Vector3::z(), 180.0, Vector3::zeros()) * answer;
+    let mut e = Evidence { alternatives: 2.0, ..e0 };
+    let mut poses = vec![flip_x_again, flip_z];
+    confidence::count_search_alternatives(&mut e, &mut poses, &answer, 0.6, &[(flip_x, 0.55), (flip_y, 0.65)]);
+    assert_eq!((e.alternatives, poses), (2.0, vec![flip_x_again, flip_z, flip_y]), "every look-alike, once");
 }
 
 /// An answer that moved the source almost off the target: the probes find nothing that fits

@@ -98,6 +98,45 @@ fn the_js_result_is_the_core_result() {
     assert_eq!(names(&js_keys), names(&core_keys));
 }
 
+/// On a symmetric shape the result offers the poses that fit about as well (`alternatives`):
+/// objects with a column-major `T_target_source`, a `fitness` and an `inlierRmse`; a box answered
+/// turned 180 degrees has the truth among them, ready for a three.js matrix.
+#[wasm_bindgen_test]
+fn a_symmetric_shape_offers_its_look_alike_poses() {
+    let mut r = Registrar::with_default_model().map_err(message).unwrap();
+    let flat = |points: Vec<[f32; 3]>| points.concat();
+    let (source, target) = (flat(box_grid::box_grid(0.05, 0.0)), flat(box_grid::box_grid(0.05, 0.01)));
+    // the truth is the identity; a half turn about y fits as well
+    #[rustfmt::skip]
+    let turned = nalgebra::Matrix4::new(
+        -1.0, 0.0, 0.0, 0.0,
+        0.0, 1.0, 0.0, 0.0,
+        0.0, 0.0, -1.0, 0.0,
+        0.0, 0.0, 0.0, 1.0,
+    );
+    let opts = options(r#"{"network": false, "starts": ["initial"]}"#);
+    js_sys::Reflect::set(&opts, &"initialTransform".into(), &column_major_js(&turned)).unwrap();
+    let res = match r.register(&source, &target, Some(opts), None) {
+        Ok(v) => v,
+        Err(e) => panic!("register failed: {}", message(e)),
+    };
+    assert!(rotation_error_deg(&matrix(&res, "T_target_source"), &turned) < 3.0, "the answer stays turned");
+    let alternatives = get(&res, "alternatives");
+    assert!(Array::is_array(&alternatives), "alternatives is an Array");
+    let alternatives: Vec<JsValue> = Array::from(&alternatives).iter().collect();
+    assert!(!alternatives.is_empty() && num(&get(&res, "evidence"), "alternatives") >= 1.0);
+    let identity = nalgebra::Matrix4::identity();
+    let mut truth_found = false;
+    for a in &alternatives {
+        let m = matrix(a, "T_target_source");
+        assert!(arps::transform::check_rigid(&m, 1e-6).is_ok(), "rigid: {m}");
+        assert!((0.0..=1.0).contains(&num(a, "fitness")) && num(a, "inlierRmse") >= 0.0);
+        truth_found |= rotation_error_deg(&m, &identity) < 2.0 && translation_error(&m, &identity) < 0.02;
+    }
+    assert!(truth_found, "the truth is among the alternatives");
+    assert!(strings(&get(&res, "warnings")).iter().any(|w| w.contains("fit")), "the result says it is not unique");
+}
+
 /// The result's `evidence`: exactly the core's fields, camelCase, each in its range.
 fn assert_evidence_is_sane(evidence: &JsValue) {
     let fractions = ["fitness", "fitnessTight", "fitnessLoose", "fitnessCoarse", "overlapReverse"];

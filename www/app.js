@@ -1,9 +1,10 @@
 // The arps demo page: load two scans (parsed in the engine's worker, readied for drawing in the
 // page's worker), align them in the engine's worker, show the result in three.js. The main thread
 // never walks a whole scan. Test hooks: #source-file, #target-file, #align, #result (the result
-// as JSON), #verdict (the confidence in words), #error (the message).
+// as JSON), #verdict (the confidence in words), #alternatives (buttons for the other poses that fit
+// about as well, when there are some), #error (the message).
 import { createWorkerRegistrar, STAGES } from "../pkg/worker-client.js";
-import { confidenceWords, makeExample, modelSummary, multiply, invertRigid, parseBunny, rotationAngleDeg, rowMajor } from "./lib.js";
+import { confidenceWords, makeExample, modelSummary, multiply, invertRigid, parseBunny, posesOf, rotationAngleDeg, rowMajor } from "./lib.js";
 import { alignedPly, copyCloud, dropCloud, storeCloud } from "./prep.js";
 import { MAX_DRAWN, createView } from "./view.js";
 
@@ -18,6 +19,7 @@ const state = {
   target: null,
   truth: null, // the example's known T_target_source (column-major), if the example is loaded
   result: null, // the last RegistrationResult
+  pose: 0, // the pose of the result shown: 0 its answer, k its alternative k (posesOf)
   busy: false,
   view: "before",
 };
@@ -249,6 +251,7 @@ async function align() {
       transfer: true,
     });
     state.result = result;
+    state.pose = 0;
     showResult(result, truth);
     view.setAligned(result.T_target_source);
     setView("after");
@@ -267,13 +270,21 @@ async function align() {
 
 const fmt = (x, digits = 4) => (Number.isFinite(x) ? Number(x.toPrecision(digits)).toString() : String(x));
 
+/** The pose of the result shown (`posesOf`): its answer unless the user picked an alternative. */
+function shownPose(r = state.result) {
+  const poses = posesOf(r);
+  return poses[Math.min(state.pose, poses.length - 1)];
+}
+
 function resultJson(r, truth) {
-  const m = r.T_target_source;
+  const pose = shownPose(r);
+  const m = pose.T_target_source;
   const out = {
+    shown: pose.label,
     T_target_source: rowMajor(m),
     confidence: r.confidence,
-    fitness: r.fitness,
-    inlierRmse: r.inlierRmse,
+    fitness: pose.fitness,
+    inlierRmse: pose.inlierRmse,
     evidence: r.evidence,
     rotationDeg: rotationAngleDeg(m),
     translation: [m[12], m[13], m[14]],
@@ -285,6 +296,11 @@ function resultJson(r, truth) {
     T_target_source_network: rowMajor(r.T_target_source_network),
     start: r.start,
     startsRefined: r.startsRefined,
+    alternatives: (r.alternatives ?? []).map((a) => ({
+      T_target_source: rowMajor(a.T_target_source),
+      fitness: a.fitness,
+      inlierRmse: a.inlierRmse,
+    })),
   };
   if (truth) {
     const err = multiply(invertRigid(truth), m);
@@ -298,9 +314,12 @@ function showResult(r, truth = null) {
   $("results-empty").hidden = !!r;
   if (!r) {
     $("result").textContent = "";
+    $("alternatives").hidden = true;
     return;
   }
   const json = resultJson(r, truth);
+  const pose = shownPose(r);
+  showPoses(r);
   $("matrix").replaceChildren(
     ...json.T_target_source.map((row) => {
       const tr = document.createElement("tr");
@@ -327,12 +346,12 @@ function showResult(r, truth = null) {
     ],
     [
       "Fitness",
-      `${(r.fitness * 100).toFixed(1)}% of source points within ${d} units`,
+      `${(pose.fitness * 100).toFixed(1)}% of source points within ${d} units`,
       `The share of the moved source's points with a target point within ${d} units (the max correspondence distance). Partial overlap caps it below 100%.`,
     ],
     [
       "Inlier RMSE",
-      `${fmt(r.inlierRmse)} units`,
+      `${fmt(pose.inlierRmse)} units`,
       `The typical (root mean square) distance between those matched points: the misfit left. Good alignments come near the scanner's noise, well under ${d}.`,
     ],
     [
@@ -375,9 +394,34 @@ function showResult(r, truth = null) {
   $("result").textContent = JSON.stringify(json, null, 2);
 }
 
+/** The buttons that pick the pose shown (#alternatives), when the result offers more than one. */
+function showPoses(r) {
+  const poses = posesOf(r);
+  $("alternatives").hidden = poses.length < 2;
+  $("alternatives-poses").replaceChildren(
+    ...(poses.length < 2 ? [] : poses).map((p, k) => {
+      const b = document.createElement("button");
+      b.type = "button";
+      b.textContent = `${k === 0 ? "Answer" : `Alternative ${k}`} · fitness ${(p.fitness * 100).toFixed(1)}%`;
+      b.classList.toggle("on", k === Math.min(state.pose, poses.length - 1));
+      b.addEventListener("click", () => showPose(k));
+      return b;
+    }),
+  );
+}
+
+/** Shows pose `k` of the result (0 its answer, k its alternative k): view, matrix and figures. */
+function showPose(k) {
+  if (!state.result) return;
+  state.pose = k;
+  showResult(state.result, state.truth);
+  view.setAligned(shownPose().T_target_source);
+  setView("after");
+}
+
 async function copyMatrix() {
   if (!state.result) return;
-  const text = JSON.stringify({ T_target_source: rowMajor(state.result.T_target_source) });
+  const text = JSON.stringify({ T_target_source: rowMajor(shownPose().T_target_source) });
   const button = $("copy-matrix");
   try {
     await navigator.clipboard.writeText(text);
@@ -401,7 +445,7 @@ async function downloadAligned() {
   button.disabled = true;
   try {
     // The transform and the PLY writing run in the page's store, where the points are.
-    const bytes = await alignedPly(source.key, result.T_target_source, `arps: ${source.name} aligned onto ${target.name}`);
+    const bytes = await alignedPly(source.key, shownPose(result).T_target_source, `arps: ${source.name} aligned onto ${target.name}`);
     const a = document.createElement("a");
     a.href = URL.createObjectURL(new Blob([bytes], { type: "application/octet-stream" }));
     a.download = `${source.name.replace(/\.[^.]*$/, "").replace(/[^\w.-]+/g, "_") || "source"}-aligned.ply`;

@@ -186,6 +186,22 @@ export function makeExample({ positions, cells }, count = 6000, seed = 1) {
 }
 
 /**
+ * The poses a result offers: its answer, then its `alternatives` (other poses that fit about as
+ * well, best fitting first), each `{ label, T_target_source, fitness, inlierRmse }` with the
+ * transform column-major as in the result; `label` is `"answer"` or `"alternative k"` (from 1).
+ */
+export function posesOf(result) {
+  const answer = { label: "answer", T_target_source: result.T_target_source, fitness: result.fitness, inlierRmse: result.inlierRmse };
+  const others = (result.alternatives ?? []).map((a, i) => ({
+    label: `alternative ${i + 1}`,
+    T_target_source: a.T_target_source,
+    fitness: a.fitness,
+    inlierRmse: a.inlierRmse,
+  }));
+  return [answer, ...others];
+}
+
+/**
  * A result's `confidence` (the engine's estimate, in [0, 1], that the answer is right) in words:
  * `{ words, level }`, `level` one of `"right"` (>= 0.8), `"uncertain"` (>= 0.5) and `"wrong"`
  * (below 0.5, where the engine also warns; it warns at 0.5 too when another pose fits about as

@@ -6,10 +6,10 @@
 //!    network and voxelised for ICP ([`prepare::Prepared`]).
 //! 3. [`network`]: the network + GMR estimate in normalised units.
 //! 4. [`starts`]: the stages of the search and the candidate starts of each ([`starts::Starts`]).
-//! 5. [`search`]: the adaptive or exhaustive refinement of the starts, with the confidence stop
-//!    ([`search::Chosen`]).
-//! 6. [`result`]: the chosen answer mapped back to the caller's frame and units, checked, with
-//!    its warnings ([`crate::Registration`]).
+//! 5. [`search`]: the adaptive or exhaustive refinement of the starts, with the confidence stop,
+//!    and the other poses that fit about as well ([`search::Chosen`]).
+//! 6. [`result`]: the chosen answer and its alternatives mapped back to the caller's frame and
+//!    units, checked, with its warnings ([`crate::Registration`]).
 
 pub(crate) mod network;
 pub(crate) mod options;

@@ -2,16 +2,17 @@
 //!
 //! Takes the [`Prepared`] clouds, the network's estimate and the search's [`Chosen`] answer
 //! (normalised units); gives the [`Registration`] in the caller's frame and units: the
-//! normalisation, the initial guess's rotation and the clouds' origins undone, both transforms
-//! checked finite, a warning added when the confidence is low or another pose fits as well
-//! ([`verdict_warning`]). The timings are the caller's.
+//! normalisation, the initial guess's rotation and the clouds' origins undone (for the answer,
+//! the network's estimate and the alternative poses), every transform checked finite, a warning
+//! added when the confidence is low or another pose fits as well ([`verdict_warning`]). The
+//! timings are the caller's.
 
 use super::prepare::Prepared;
 use super::search::Chosen;
 use crate::confidence::Evidence;
 use crate::origin;
 use crate::refine::Candidate;
-use crate::register::{Registration, Timings};
+use crate::register::{Alternative, Registration, Timings};
 use crate::{checks, Result};
 use nalgebra::Matrix4;
 
@@ -31,7 +32,7 @@ pub(crate) fn finish(
     let p = prepared;
     let s = p.norm.scale;
     let d_final = p.d_final;
-    let Chosen { candidate, evidence, confidence, starts_refined } = chosen;
+    let Chosen { candidate, evidence, confidence, starts_refined, alternatives } = chosen;
     let Candidate { start, T_target_source: t_n, fitness, inlier_rmse: rmse_n, iterations, converged } = candidate;
     let to_caller = |t: &Matrix4<f64>| {
         origin::to_caller(&(p.norm.denormalize(t) * p.rotate_init), p.origin_source, p.origin_target)
@@ -41,6 +42,12 @@ pub(crate) fn finish(
     checks::finite_transform(&T_target_source, "the result")?;
     checks::finite_transform(&T_target_source_network, "the network's estimate")?;
     warnings.extend(verdict_warning(confidence, &evidence, fitness, d_final * s));
+    let mut others = Vec::with_capacity(alternatives.len());
+    for a in alternatives {
+        let t = to_caller(&a.T_target_source);
+        checks::finite_transform(&t, "an alternative pose")?;
+        others.push(Alternative { T_target_source: t, fitness: a.fitness, inlier_rmse: a.inlier_rmse * s });
+    }
     Ok(Registration {
         T_target_source,
         T_target_source_network,
@@ -55,6 +62,7 @@ pub(crate) fn finish(
         confidence,
         evidence,
         starts_refined,
+        alternatives: others,
     })
 }
 

@@ -10,12 +10,13 @@
 //! another pose ([`refine::coincide`]), is judged by the confidence probe, and a probe pose that
 //! fits better is refined as one more start ([`settle`]). The answer's final verdict also counts,
 //! as alternatives, the other refined answers that fit about as well
-//! ([`confidence::count_search_alternatives`]). With no start refined at all, the network's
-//! estimate (the initial transform with the network off), unrefined, and a warning.
+//! ([`confidence::count_search_alternatives`]); those alternative poses are refined like the
+//! answer and handed on with it ([`refine_alternatives`]). With no start refined at all, the
+//! network's estimate (the initial transform with the network off), unrefined, and a warning.
 
 use super::prepare::Prepared;
 use super::starts::Starts;
-use crate::confidence::{self, Evidence};
+use crate::confidence::{self, Evidence, Probed};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Candidate, Refinement, Start};
@@ -33,6 +34,9 @@ pub(crate) struct Chosen {
     pub confidence: f64,
     /// How many starts were refined.
     pub starts_refined: usize,
+    /// Other poses that fit about as well ([`Evidence::alternatives`]), refined like the answer,
+    /// the best fitting first.
+    pub alternatives: Vec<Candidate>,
 }
 
 /// Refines the starts of each stage in turn (see the module docs).
@@ -59,7 +63,7 @@ pub(crate) fn search(
     let improves = |b: &Candidate, c: &Candidate| {
         refine::better(c, b) && !refine::coincide(&b.T_target_source, &c.T_target_source, &p.icp_src.points, d_final)
     };
-    let mut best: Option<(Candidate, Evidence, f64)> = None;
+    let mut best: Option<(Candidate, Probed, f64)> = None;
     // every stage's best and every refined probe pose: the final verdict counts those that fit
     // about as well as the answer as its alternatives
     let mut refined: Vec<(Matrix4<f64>, f64)> = Vec::new();
@@ -96,8 +100,8 @@ pub(crate) fn search(
         };
         if better {
             // with ICP off the first start is the answer, unrefined: the probe only judges it
-            let (c, e, extra) = if options.icp == IcpKind::Off {
-                (c, judge(&c.T_target_source).evidence, 0)
+            let (c, probed, extra) = if options.icp == IcpKind::Off {
+                (c, judge(&c.T_target_source), 0)
             } else {
                 let refine = |t| {
                     let r = refine::refine_best(&target_index, &p.icp_src.points, &[(c.start, t)], &how);
@@ -107,7 +111,8 @@ pub(crate) fn search(
                 settle(c, &judge, refine, &improves)
             };
             starts_refined += extra;
-            best = Some((c, e, confidence::confidence(&e)));
+            let confidence = confidence::confidence(&probed.evidence);
+            best = Some((c, probed, confidence));
         }
         if adaptive && best.as_ref().is_some_and(|b| b.2 >= STOP_CONFIDENCE) {
             break;
@@ -115,12 +120,13 @@ pub(crate) fn search(
     }
     // no start at all (only global ones, and the descriptors matched too little): the first
     // start the options name, unrefined
-    let (candidate, mut evidence) = match best {
-        Some((c, e, _)) => (c, e),
+    let (candidate, probed) = match best {
+        Some((c, probed, _)) => (c, probed),
         None => {
             let t = if options.network { starts.t_net_n() } else { p.t_initial };
             let start = if options.network { Start::Network } else { Start::Initial };
-            let e = judge(&t).evidence;
+            let probed = judge(&t);
+            let e = probed.evidence;
             warnings.push("no start could be refined (the global descriptors matched too little): the answer is the network's estimate".into());
             let c = Candidate {
                 start,
@@ -130,13 +136,39 @@ pub(crate) fn search(
                 iterations: 0,
                 converged: false,
             };
-            (c, e)
+            (c, probed)
         }
     };
     // the verdict also counts the other answers the search refined that fit about as well
-    confidence::count_search_alternatives(&mut evidence, &candidate.T_target_source, candidate.fitness, &refined);
+    let Probed { mut evidence, alternatives: mut poses, .. } = probed;
+    let answer = &candidate.T_target_source;
+    confidence::count_search_alternatives(&mut evidence, &mut poses, answer, candidate.fitness, &refined);
     let confidence = confidence::confidence(&evidence);
-    Ok(Chosen { candidate, evidence, confidence, starts_refined })
+    let alternatives = refine_alternatives(&target_index, &p.icp_src.points, &candidate, &poses, &how);
+    Ok(Chosen { candidate, evidence, confidence, starts_refined, alternatives })
+}
+
+/// The alternative `poses` of the answer refined like it ([`refine::refine_final`], reported
+/// under its start), the best fitting first; one that the refinement brings back onto the answer
+/// or onto an alternative kept already ([`confidence::same_pose`]) is dropped.
+fn refine_alternatives(
+    target: &IcpTarget,
+    source: &[[f32; 3]],
+    answer: &Candidate,
+    poses: &[Matrix4<f64>],
+    how: &Refinement,
+) -> Vec<Candidate> {
+    let mut kept: Vec<Candidate> = Vec::with_capacity(poses.len());
+    for t in poses {
+        let c = refine::refine_final(target, source, answer.start, t, how);
+        let t = &c.T_target_source;
+        let new = |o: &Candidate| !confidence::same_pose(&o.T_target_source, t);
+        if new(answer) && kept.iter().all(new) {
+            kept.push(c);
+        }
+    }
+    kept.sort_by(|a, b| b.fitness.total_cmp(&a.fitness));
+    kept
 }
 
 /// Most starts of the adaptive search's last stage that are refined: the best after a short run
@@ -155,10 +187,10 @@ const MAX_PROBE_STARTS: usize = 4;
 /// candidate, its evidence and how many probe poses were refined.
 fn settle(
     c: Candidate,
-    judge: &impl Fn(&Matrix4<f64>) -> confidence::Probed,
+    judge: &impl Fn(&Matrix4<f64>) -> Probed,
     mut refine: impl FnMut(Matrix4<f64>) -> Option<Candidate>,
     improves: &impl Fn(&Candidate, &Candidate) -> bool,
-) -> (Candidate, Evidence, usize) {
+) -> (Candidate, Probed, usize) {
     let (mut c, mut probed, mut refined) = (c, judge(&c.T_target_source), 0);
     while let Some(t) = probed.better.filter(|_| refined < MAX_PROBE_STARTS) {
         refined += 1;
@@ -170,5 +202,5 @@ fn settle(
             _ => break,
         }
     }
-    (c, probed.evidence, refined)
+    (c, probed, refined)
 }

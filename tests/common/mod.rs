@@ -5,6 +5,8 @@ use arps::transform::{euler_xyz, from_rotation_translation};
 use arps::PointCloud;
 use nalgebra::{Matrix4, Vector3};
 
+pub mod box_grid;
+
 /// `n` points on a bumpy, asymmetric closed surface (about 2 units across), from a low-discrepancy
 /// sequence: deterministic, no RNG.
 pub fn bumpy_surface(n: usize, phase: f64) -> PointCloud {

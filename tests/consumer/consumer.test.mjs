@@ -192,6 +192,8 @@ test("TypeScript and Node, ESM: bundler and NodeNext resolution type-check; the 
   assert.equal(out.version, manifest.version);
   console.log("ESM main thread:", JSON.stringify(assertRecovered(out.matrix, "ESM main thread")));
   console.log("ESM worker client:", JSON.stringify(assertRecovered(out.worker.matrix, "ESM worker client")));
+  assert.ok(Array.isArray(out.alternatives), "result.alternatives is an array");
+  for (const a of out.alternatives) assert.ok(a.matrix.length === 16 && a.fitness >= 0 && a.inlierRmse >= 0, JSON.stringify(a));
   assert.deepEqual(out.worker.stages.at(-1), "done");
   assert.ok(out.worker.stages.every((s) => out.worker.knownStages.includes(s)), `unknown stages ${out.worker.stages}`);
   // Clear errors for misuse.

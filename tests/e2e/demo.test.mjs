@@ -1,7 +1,8 @@
 // End-to-end test of the demo page (www/) in Debian's Chromium, headless, through playwright-core.
 // Needs the built package (scripts/build-pkg.sh) and the npm dev dependencies; run it with
 // scripts/test-e2e.sh. Screenshots go to $ARPS_E2E_OUT (default target/e2e/): demo.png,
-// example.png, big-1400x860.png and big-390x844.png (the 1M-point pair's result, desktop and phone).
+// example.png, box-alternative.png (a box pair's first alternative pose shown), big-1400x860.png and
+// big-390x844.png (the 1M-point pair's result, desktop and phone).
 //
 // The known-transform pair: two half-space crops (85% each) of the committed Velodyne fixture
 // (fixtures/scans/velodyne-small.ply, MIT), the target moved by 15 degrees about a near-vertical
@@ -48,6 +49,37 @@ const LONGEST_TASK_MS = 200;
 const DESKTOP = { width: 1400, height: 860 };
 const PHONE = { width: 390, height: 844 };
 
+/** The box pair's truth (column-major): 30 degrees about z, then (0.4, -0.2, 0.1). */
+const BOX_TRUTH = (() => {
+  const a = (30 * Math.PI) / 180;
+  return [Math.cos(a), Math.sin(a), 0, 0, -Math.sin(a), Math.cos(a), 0, 0, 0, 0, 1, 0, 0.4, -0.2, 0.1, 1];
+})();
+
+/**
+ * An ASCII PLY of points on a box with half-extents 1, 0.6 and 0.35 (its half turns about its axes
+ * fit it as well as the truth), on a grid of `step` shifted by `offset`, moved by `m` (column-major)
+ * unless null.
+ */
+function boxPly(step, offset, m) {
+  const h = [1, 0.6, 0.35];
+  const lines = [];
+  for (let k = 0; k < 3; k++) {
+    const [a, b] = [(k + 1) % 3, (k + 2) % 3];
+    for (const side of [-1, 1]) {
+      for (let u = -h[a] + offset; u <= h[a]; u += step) {
+        for (let v = -h[b] + offset; v <= h[b]; v += step) {
+          const p = [0, 0, 0];
+          [p[k], p[a], p[b]] = [side * h[k], u, v];
+          const q = m ? [0, 1, 2].map((r) => m[r] * p[0] + m[4 + r] * p[1] + m[8 + r] * p[2] + m[12 + r]) : p;
+          lines.push(q.map((x) => x.toFixed(6)).join(" "));
+        }
+      }
+    }
+  }
+  const header = ["ply", "format ascii 1.0", `element vertex ${lines.length}`, "property float x", "property float y", "property float z", "end_header"];
+  return [...header, ...lines, ""].join("\n");
+}
+
 let server;
 let url;
 let browser;
@@ -63,6 +95,8 @@ before(async () => {
   const big = streetPair(BIG);
   writeFileSync(join(dir, "big-source.ply"), big.source);
   writeFileSync(join(dir, "big-target.ply"), big.target);
+  writeFileSync(join(dir, "box-source.ply"), boxPly(0.05, 0, null));
+  writeFileSync(join(dir, "box-target.ply"), boxPly(0.05, 0.01, BOX_TRUTH));
   writeFileSync(join(dir, "broken.ply"), "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\nnot numbers\n");
 
   ({ server, url } = await serve({ port: 0 }));
@@ -126,12 +160,12 @@ async function uploadPair() {
   await page.waitForFunction(() => /points/.test(document.getElementById("target-info").textContent), null, { timeout: TIMEOUT });
 }
 
-function errorsAgainstTruth(result) {
+function errorsAgainstTruth(result, truth = TRUTH) {
   const rows = result.T_target_source;
   assert.equal(rows.length, 4);
   const m = new Float64Array(16);
   for (let r = 0; r < 4; r++) for (let c = 0; c < 4; c++) m[c * 4 + r] = rows[r][c];
-  const err = multiply(invertRigid(TRUTH), m);
+  const err = multiply(invertRigid(truth), m);
   return { rotationDeg: rotationAngleDeg(err), translation: Math.hypot(err[12], err[13], err[14]) };
 }
 
@@ -163,6 +197,8 @@ test("aligns two uploaded scans with a known transform", { timeout: TIMEOUT * 2 
   const rmse = figures.find(([k]) => k === "Inlier RMSE")[1];
   assert.match(fitness, /% of source points within [\d.]+ units.*max correspondence distance/);
   assert.match(rmse, /^[\d.e-]+ units.*root mean square/);
+  // The pose buttons show only when the result offers other poses.
+  assert.equal(await page.isHidden("#alternatives"), result.alternatives.length === 0);
 });
 
 test("confidence in words: thresholds at 0.8 and 0.5", () => {
@@ -384,6 +420,43 @@ async function measured(action) {
 function inViewport(box, viewport) {
   return box && box.x >= 0 && box.y >= 0 && box.x + box.width <= viewport.width && box.y + box.height <= viewport.height;
 }
+
+test("a symmetric box: the other poses that fit as well are offered, and picking one shows it", { timeout: TIMEOUT * 2 }, async () => {
+  await page.setInputFiles("#source-file", join(dir, "box-source.ply"));
+  await page.waitForFunction(() => /box-source/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
+  await page.setInputFiles("#target-file", join(dir, "box-target.ply"));
+  await page.waitForFunction(() => /box-target/.test(document.getElementById("target-info").textContent), null, { timeout: TIMEOUT });
+  const { result, error } = await alignAndWait();
+  assert.equal(error, "", `unexpected #error: ${error}`);
+  assert.equal(result.shown, "answer");
+  assert.ok(result.alternatives.length >= 1, "a box fits itself turned: the result offers other poses");
+  assert.ok(await page.isVisible("#alternatives"));
+  const buttons = page.locator("#alternatives-poses button");
+  assert.equal(await buttons.count(), 1 + result.alternatives.length);
+  assert.match(await buttons.nth(0).textContent(), /^Answer · fitness [\d.]+%$/);
+  // Each pose in turn: the matrix and the result JSON follow it, the pressed button with it.
+  const poses = [{ T_target_source: result.T_target_source }, ...result.alternatives];
+  const near = [];
+  for (let k = poses.length - 1; k >= 0; k--) {
+    await buttons.nth(k).click();
+    const shown = JSON.parse(await page.textContent("#result"));
+    assert.equal(shown.shown, k === 0 ? "answer" : `alternative ${k}`);
+    assert.deepEqual(shown.T_target_source, poses[k].T_target_source);
+    const cells = await page.$$eval("#matrix td", (tds) => tds.map((td) => Number(td.textContent)));
+    assert.deepEqual(cells, poses[k].T_target_source.flat().map((v) => Number(v.toFixed(4))));
+    assert.equal(await buttons.nth(k).getAttribute("class"), "on");
+    const e = errorsAgainstTruth(shown, BOX_TRUTH);
+    near.push(e.rotationDeg < 2 && e.translation < 0.02);
+  }
+  assert.ok(near.some(Boolean), "the truth is the answer or one of the alternatives");
+  // The copy follows the pose shown.
+  await buttons.nth(1).click();
+  await page.screenshot({ path: join(OUT, "box-alternative.png") });
+  await page.click("#copy-matrix");
+  await page.waitForFunction(() => /Copied/.test(document.getElementById("copy-matrix").textContent));
+  const copied = JSON.parse(await page.evaluate(() => navigator.clipboard.readText()));
+  assert.deepEqual(copied, { T_target_source: poses[1].T_target_source });
+});
 
 test("a 1M-point pair: loaded, fitted and aligned without blocking the main thread", { timeout: TIMEOUT * 3 }, async () => {
   const infoDone = (which) =>

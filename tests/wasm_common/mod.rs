@@ -8,6 +8,9 @@ use nalgebra::Matrix4;
 use wasm_bindgen::prelude::*;
 use wasm_bindgen::JsCast;
 
+#[path = "../common/box_grid.rs"]
+pub mod box_grid;
+
 pub const SOURCE_PLY: &[u8] = include_bytes!("../../fixtures/wasm/source.ply");
 pub const TARGET_PLY: &[u8] = include_bytes!("../../fixtures/wasm/target.ply");
 pub const PAIR_JSON: &str = include_str!("../../fixtures/wasm/pair.json");

@@ -25,6 +25,12 @@
 //! `confidence` is below 0.5 and the share of right answers whose is; the JSON carries each
 //! answer's confidence and evidence.
 //!
+//! Alternatives: for every method whose answers came with other poses that fit about as well
+//! (`Registration::alternatives`), the share of pairs whose answer *or* one of those poses is
+//! right (what an application that offers the alternatives to its user can reach), and how many
+//! wrong answers came with the right pose among their alternatives; the JSON carries each
+//! alternative's errors and fitness.
+//!
 //! Failures that fit as well as the truth: for every pair the truth is refined too (ICP started
 //! at the ground truth, same settings), and a failed estimate whose fitness is at least that
 //! fitness − [`AMBIGUITY_MARGIN`] is counted in the `fit>=GT` column. Such failures are
@@ -217,6 +223,8 @@ struct PairResult {
     work: Vec<Option<(Timings, usize)>>,
     /// Each method's answer, `T_target_source` (`None` when it failed).
     answer: Vec<Option<Matrix4<f64>>>,
+    /// Each method's alternative poses: their errors and fitness (empty when it failed).
+    alternatives: Vec<Vec<(PairError, f64)>>,
 }
 
 impl PairResult {
@@ -228,6 +236,12 @@ impl PairResult {
             self.gt_fitness,
             AMBIGUITY_MARGIN,
         )
+    }
+
+    /// Method `i`'s answer or one of its alternatives is right.
+    fn right_among_alternatives(&self, i: usize, rot_thr: f64, trans_thr: f64) -> bool {
+        recalled(&self.errors[i], rot_thr, trans_thr)
+            || self.alternatives[i].iter().any(|(e, _)| recalled(e, rot_thr, trans_thr))
     }
 }
 
@@ -244,6 +258,12 @@ struct MethodSummary {
     wrong_doubted: f64,
     /// Share of the recalled pairs whose confidence is below 0.5 (`NaN` when none was recalled).
     right_doubted: f64,
+    /// Pairs whose answer came with alternatives.
+    with_alternatives: usize,
+    /// Share of the pairs whose answer or one of its alternatives is right.
+    recall_with_alternatives: f64,
+    /// Missed pairs with the right pose among the answer's alternatives.
+    wrong_right_alternative: usize,
 }
 
 pub fn run(a: EvalArgs) -> Result<(), String> {
@@ -311,6 +331,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             confidence: Vec::new(),
             work: Vec::new(),
             answer: Vec::new(),
+            alternatives: Vec::new(),
         };
         for &m in &methods {
             let options = m.options(&source, &target, &starts);
@@ -319,6 +340,10 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             let out = reg.register(&source, &target, &options);
             r.ms.push(t0.elapsed().as_secs_f64() * 1e3);
             // a failed registration counts as the identity (no estimate), and is reported
+            let others = out.as_ref().map_or(Vec::new(), |x| {
+                x.alternatives.iter().map(|o| (pair_error(&o.T_target_source, &gt, scale), o.fitness)).collect()
+            });
+            r.alternatives.push(others);
             let (pred, fail, start, fitness, conf, work) = match out {
                 Ok(x) => (
                     x.T_target_source,
@@ -361,6 +386,19 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
                 ambiguous: results.iter().filter(|r| r.ambiguous(i, a.rot_threshold, a.trans_threshold)).count(),
                 wrong_doubted: doubted(&results, i, false, a.rot_threshold, a.trans_threshold),
                 right_doubted: doubted(&results, i, true, a.rot_threshold, a.trans_threshold),
+                with_alternatives: results.iter().filter(|r| !r.alternatives[i].is_empty()).count(),
+                recall_with_alternatives: results
+                    .iter()
+                    .filter(|r| r.right_among_alternatives(i, a.rot_threshold, a.trans_threshold))
+                    .count() as f64
+                    / results.len() as f64,
+                wrong_right_alternative: results
+                    .iter()
+                    .filter(|r| {
+                        !recalled(&r.errors[i], a.rot_threshold, a.trans_threshold)
+                            && r.right_among_alternatives(i, a.rot_threshold, a.trans_threshold)
+                    })
+                    .count(),
             }
         })
         .collect();
@@ -401,6 +439,9 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "methods": per_method.iter().map(|m| serde_json::json!({
                 "name": m.name, "summary": m.summary, "failed": m.failed, "fit_ge_gt": m.ambiguous,
                 "wrong_below_half": m.wrong_doubted, "right_below_half": m.right_doubted,
+                "with_alternatives": m.with_alternatives,
+                "recall_with_alternatives": m.recall_with_alternatives,
+                "wrong_right_alternative": m.wrong_right_alternative,
             })).collect::<Vec<_>>(),
             "per_pair": results.iter().map(|r| serde_json::json!({
                 "name": r.name,
@@ -418,6 +459,9 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
                     "timings": r.work[i].map(|w| w.0),
                     "starts_refined": r.work[i].map(|w| w.1),
                     "T_target_source": r.answer[i].map(|t| to_rows(&t)),
+                    "alternatives": r.alternatives[i].iter().map(|(e, f)| serde_json::json!({
+                        "rot_deg": e.rot_deg, "trans": e.trans, "fitness": f,
+                    })).collect::<Vec<_>>(),
                     "error": r.failed[i],
                 })).collect::<Vec<_>>(),
             })).collect::<Vec<_>>(),
@@ -484,6 +528,15 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             m.name,
             num(m.wrong_doubted, 3),
             num(m.right_doubted, 3)
+        );
+    }
+    for m in per_method.iter().filter(|m| m.with_alternatives > 0) {
+        out!(
+            "  {}: alternatives on {} pairs; the answer or an alternative right on {:.4} of pairs ({} wrong answers had the right pose among their alternatives)",
+            m.name,
+            m.with_alternatives,
+            m.recall_with_alternatives,
+            m.wrong_right_alternative
         );
     }
     let wins = |i: usize, start: Start| results.iter().filter(|r| r.start[i] == Some(start)).count();

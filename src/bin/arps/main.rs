@@ -224,6 +224,17 @@ fn run(command: Command) -> Result<(), String> {
                     if r.icp_converged { "converged" } else { "not converged" }
                 );
                 out!("confidence {:.3}", r.confidence);
+                for (k, a) in r.alternatives.iter().enumerate() {
+                    out!(
+                        "alternative {} (fits about as well): fitness {:.4}, inlier RMSE {:.6}",
+                        k + 1,
+                        a.fitness,
+                        a.inlier_rmse
+                    );
+                    for row in transform::to_rows(&a.T_target_source) {
+                        out!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
+                    }
+                }
                 let t = r.timings;
                 out!(
                     "time {time_ms:.1} ms (read+all); preprocess {:.1}, network {:.1}, GMR {:.2}, ICP {:.1} ms",

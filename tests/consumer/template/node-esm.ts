@@ -5,6 +5,7 @@ import { readFileSync } from "node:fs";
 import { basename } from "node:path";
 import init, { Registrar, parsePointCloud, readPointCloud, version } from "arps";
 import * as arps from "arps";
+import type { RegistrationAlternative } from "arps";
 import { createWorkerRegistrar, STAGES } from "arps/worker-client";
 import * as workerClient from "arps/worker-client";
 
@@ -28,6 +29,8 @@ const registrar = Registrar.withDefaultModel();
 const source: Float32Array = parsePointCloud(sourceBytes, basename(sourcePath));
 const target = readPointCloud(targetBytes, basename(targetPath));
 const result = registrar.register(source, target, { seed: 1 });
+// the other poses that fit about as well (none expected on this distinct pair), typed
+const lookAlikes: RegistrationAlternative[] = result.alternatives;
 
 const errors = {
   // @ts-expect-error a cloud is packed xyz, not an array of [x, y, z] arrays
@@ -52,6 +55,7 @@ console.log(
     version: version(),
     matrix: Array.from(result.T_target_source),
     confidence: result.confidence,
+    alternatives: lookAlikes.map((a) => ({ matrix: Array.from(a.T_target_source), fitness: a.fitness, inlierRmse: a.inlierRmse })),
     worker: { matrix: Array.from(fromWorker.T_target_source), stages, knownStages: STAGES },
     errors,
     keys: { init: initKeys, arps: Object.keys(arps), "arps/worker-client": Object.keys(workerClient) },
