@@ -27,17 +27,21 @@ fn fixture_pair(index: usize) -> (PointCloud, PointCloud, Matrix4<f64>) {
     (source, target, from_rotation_translation(&r, &arps::transform::translation(&gt)))
 }
 
-/// The registration's verdict on `T_target_source` itself: ICP off, the answer is that pose.
+/// Options that refine `T_target_source` alone: the network off, the one start `initial`.
 #[allow(non_snake_case)]
-fn judge(reg: &mut Registrar, s: &PointCloud, t: &PointCloud, T_target_source: &Matrix4<f64>) -> arps::Registration {
-    let options = Options {
+fn from_pose(T_target_source: &Matrix4<f64>) -> Options {
+    Options {
         network: false,
-        icp: IcpKind::Off,
         initial_transform: Some(arps::transform::to_rows(T_target_source)),
         starts: vec![Start::Initial],
         ..Options::default()
-    };
-    reg.register(s, t, &options).unwrap()
+    }
+}
+
+/// The registration's verdict on `T_target_source` itself: ICP off, the answer is that pose.
+#[allow(non_snake_case)]
+fn judge(reg: &mut Registrar, s: &PointCloud, t: &PointCloud, T_target_source: &Matrix4<f64>) -> arps::Registration {
+    reg.register(s, t, &Options { icp: IcpKind::Off, ..from_pose(T_target_source) }).unwrap()
 }
 
 /// `n` points on the surface of a box with half-extents `h` (all different: its only rigid
@@ -131,12 +135,7 @@ fn a_flipped_answer_is_corrected_by_the_probe() {
         let c = Vector3::from(arps::transform::apply(&gt, s.centroid().map(|v| v as f32)).map(|v| v as f64));
         for axis in [Vector3::x(), Vector3::y(), Vector3::z()] {
             let flipped = turn_about(axis, 180.0, c) * gt;
-            let options = Options {
-                network: false,
-                initial_transform: Some(arps::transform::to_rows(&flipped)),
-                starts: vec![Start::Initial],
-                ..Options::default()
-            };
+            let options = from_pose(&flipped);
             let r = reg.register(&s, &t, &options).unwrap();
             let err = arps::transform::rotation_error_deg(&r.T_target_source, &gt);
             assert!(err < 3.0, "pair {i}, flipped about {axis:?}: {err} deg off, {:?}", r.evidence);
@@ -149,17 +148,22 @@ fn a_flipped_answer_is_corrected_by_the_probe() {
     }
 }
 
+/// The box pair of the symmetric-box tests: the box sampled twice, the target moved by the
+/// truth; with the truth and the box's centre in the target frame (the pivot of its half turns).
+fn box_pair() -> (PointCloud, PointCloud, Matrix4<f64>, Vector3<f64>) {
+    let h = [1.0, 0.6, 0.35];
+    let gt = common::motion([20.0, -35.0, 10.0], [0.3, -0.2, 0.4]);
+    let c = Vector3::from(arps::transform::apply(&gt, [0.0; 3]).map(|v| v as f64));
+    (box_surface(1500, h, 1), box_surface(1500, h, 2).transformed(&gt), gt, c)
+}
+
 /// A box fits itself turned 180 degrees about any of its axes: the answer is one of four that
 /// fit as well, so the confidence is low whether it is the right one or a turned one, and the
 /// evidence counts the alternatives.
 #[test]
 fn any_answer_on_a_symmetric_box_is_doubted() {
     let mut reg = untrained();
-    let h = [1.0, 0.6, 0.35];
-    let source = box_surface(1500, h, 1);
-    let gt = common::motion([20.0, -35.0, 10.0], [0.3, -0.2, 0.4]);
-    let target = box_surface(1500, h, 2).transformed(&gt);
-    let c = Vector3::from(arps::transform::apply(&gt, [0.0; 3]).map(|v| v as f64));
+    let (source, target, gt, c) = box_pair();
     let axis = arps::transform::rotation(&gt) * Vector3::x();
     for (what, m) in [("right", gt), ("turned", turn_about(axis, 180.0, c) * gt)] {
         let r = judge(&mut reg, &source, &target, &m);
@@ -177,18 +181,9 @@ fn any_answer_on_a_symmetric_box_is_doubted() {
 #[test]
 fn a_symmetric_box_offers_the_poses_that_fit_as_well_and_the_truth_is_one() {
     let mut reg = untrained();
-    let h = [1.0, 0.6, 0.35];
-    let source = box_surface(1500, h, 1);
-    let gt = common::motion([20.0, -35.0, 10.0], [0.3, -0.2, 0.4]);
-    let target = box_surface(1500, h, 2).transformed(&gt);
-    let c = Vector3::from(arps::transform::apply(&gt, [0.0; 3]).map(|v| v as f64));
+    let (source, target, gt, c) = box_pair();
     let turned = turn_about(arps::transform::rotation(&gt) * Vector3::y(), 180.0, c) * gt;
-    let options = Options {
-        network: false,
-        initial_transform: Some(arps::transform::to_rows(&turned)),
-        starts: vec![Start::Initial],
-        ..Options::default()
-    };
+    let options = from_pose(&turned);
     let r = reg.register(&source, &target, &options).unwrap();
     let degrees = |a: &Matrix4<f64>, b: &Matrix4<f64>| arps::transform::rotation_error_deg(a, b);
     assert!(degrees(&r.T_target_source, &turned) < 3.0, "the answer stays the turned pose");
