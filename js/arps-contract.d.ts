@@ -354,6 +354,26 @@ export type RegistrationAlternative = {
 };
 
 /**
+ * How `read_point_cloud_with` turns a file into points. In JS (`parsePointCloud`,
+ * `readPointCloud`) a plain object with these fields in camelCase, each optional.
+ */
+export type ReadOptions = {
+  /**
+   * For a file with faces (OBJ, OFF, STL, PLY with a `face` element): this many points drawn
+   * uniformly over its surface instead of its vertices. A CAD model's vertices sit on its
+   * edges and corners, and its flat faces have none, so a scan registers against its surface,
+   * not its vertices. From 16 to 16,000,000; files without faces are read as they are. Unset
+   * (the default): the vertices.
+   */
+  surfacePoints?: number | null,
+  /**
+   * Seed of the surface sampling: the same file, count and seed give the same points on every
+   * platform. Default 0. A non-negative integer (in JS a `bigint` for values above 2^53).
+   */
+  seed?: number | bigint,
+};
+
+/**
  * Every size of the network. Stored as JSON in the weights file's metadata, with snake_case
  * keys; in JS (`Registrar.modelConfig`) the keys are camelCase (`arps::contract`).
  */

@@ -654,18 +654,20 @@ export function makeApi(glue, isReady, env = {}) {
     return checkedBytes(bytes, "the default model");
   }
 
-  /** Reads a point cloud from a file's bytes; see arps.d.ts. */
-  function parsePointCloud(bytes, fileName) {
+  /** Reads a point cloud from a file's bytes (`options`: `ReadOptions`); see arps.d.ts. */
+  function parsePointCloud(bytes, fileName, options) {
     const b = bytesArg(bytes, "bytes");
     const name = fileNameArg(fileName);
-    return guarded("parsePointCloud", () => glue.parsePointCloud(b, name));
+    const o = optionsArg(options);
+    return guarded("parsePointCloud", () => glue.parsePointCloud(b, name, o));
   }
 
   /** Reads a point cloud as `{ points, origin }` (large coordinates kept); see arps.d.ts. */
-  function readPointCloud(bytes, fileName) {
+  function readPointCloud(bytes, fileName, options) {
     const b = bytesArg(bytes, "bytes");
     const name = fileNameArg(fileName);
-    return guarded("readPointCloud", () => glue.readPointCloud(b, name));
+    const o = optionsArg(options);
+    return guarded("readPointCloud", () => glue.readPointCloud(b, name, o));
   }
 
   /** The crate version. */

@@ -1,4 +1,13 @@
-import type { CloudInput, CloudWithOrigin, ModelConfig, ModelProvenance, RegisterOptions, RegistrationResult, RegistrationStage } from "./arps.js";
+import type {
+  CloudInput,
+  CloudWithOrigin,
+  ModelConfig,
+  ModelProvenance,
+  ReadOptions,
+  RegisterOptions,
+  RegistrationResult,
+  RegistrationStage,
+} from "./arps.js";
 
 /**
  * Progress of a request, in order: `"loading"` (fetching and compiling the engine and the
@@ -95,20 +104,24 @@ export interface WorkerRegistrar {
   ): Promise<RegistrationResult>;
   /**
    * Reads a point cloud from a file's bytes in the worker (format from the file name's
-   * extension, else sniffed). Resolves to packed xyz.
+   * extension, else sniffed; `readOptions.surfacePoints` samples a mesh's surface, see
+   * `ReadOptions`). Resolves to packed xyz.
    */
   parsePointCloud(
     bytes: Uint8Array | ArrayBuffer,
     fileName: string,
+    readOptions?: ReadOptions | null,
     request?: { transfer?: boolean; signal?: AbortSignal },
   ): Promise<Float32Array>;
   /**
    * Reads a point cloud in the worker as `{ points, origin }`, keeping large coordinates'
-   * precision (see `readPointCloud` in arps.d.ts); `register` takes the object as is.
+   * precision (see `readPointCloud` in arps.d.ts; `readOptions` as for `parsePointCloud`);
+   * `register` takes the object as is.
    */
   readPointCloud(
     bytes: Uint8Array | ArrayBuffer,
     fileName: string,
+    readOptions?: ReadOptions | null,
     request?: { transfer?: boolean; signal?: AbortSignal },
   ): Promise<CloudWithOrigin>;
   /** Stops the worker; pending and later requests reject. */

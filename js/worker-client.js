@@ -212,14 +212,14 @@ export async function createWorkerRegistrar(options = {}) {
       );
       return reply.result;
     },
-    async parsePointCloud(bytes, fileName, { transfer = false, signal } = {}) {
+    async parsePointCloud(bytes, fileName, readOptions, { transfer = false, signal } = {}) {
       const buffers = transfer ? uniqueBuffers([bytes]) : [];
-      const reply = await request({ type: "parse", bytes, fileName }, { transfer: buffers, signal });
+      const reply = await request({ type: "parse", bytes, fileName, options: readOptions }, { transfer: buffers, signal });
       return reply.points;
     },
-    async readPointCloud(bytes, fileName, { transfer = false, signal } = {}) {
+    async readPointCloud(bytes, fileName, readOptions, { transfer = false, signal } = {}) {
       const buffers = transfer ? uniqueBuffers([bytes]) : [];
-      const reply = await request({ type: "read", bytes, fileName }, { transfer: buffers, signal });
+      const reply = await request({ type: "read", bytes, fileName, options: readOptions }, { transfer: buffers, signal });
       return reply.cloud;
     },
     terminate() {

@@ -7,8 +7,8 @@
 //                                           the default model (init's option), `weights` a custom
 //                                           one instead (bytes, or a URL string: fetched)
 //   { id, type: "register", source, target, options? }
-//   { id, type: "parse", bytes, fileName }
-//   { id, type: "read", bytes, fileName }   readPointCloud: { points, origin }
+//   { id, type: "parse", bytes, fileName, options? }
+//   { id, type: "read", bytes, fileName, options? }   readPointCloud: { points, origin }
 // Replies (worker -> main), with the request's `id`:
 //   { id, type: "progress", stage }         stage: "loading" | "preparing" | "network" | "refining" | "done"
 //   { id, type: "ready", provenance, modelConfig }
@@ -66,13 +66,13 @@ async function handle(msg) {
     }
     case "parse": {
       await load(id);
-      const points = parsePointCloud(msg.bytes, msg.fileName);
+      const points = parsePointCloud(msg.bytes, msg.fileName, msg.options ?? undefined);
       post({ id, type: "parsed", points }, [points.buffer]);
       return;
     }
     case "read": {
       await load(id);
-      const cloud = readPointCloud(msg.bytes, msg.fileName);
+      const cloud = readPointCloud(msg.bytes, msg.fileName, msg.options ?? undefined);
       post({ id, type: "read", cloud }, [cloud.points.buffer]);
       return;
     }

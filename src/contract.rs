@@ -3,8 +3,9 @@
 //!
 //! # One set of types
 //! The options are [`Options`], the result is [`Registration`]; their nested types are
-//! [`Evidence`], [`Alternative`], [`Timings`], [`Start`], [`Search`], [`IcpKind`], [`NonFinite`], [`Stage`] (the
-//! progress stages) and [`ModelConfig`]. They are serde types: the wasm binding converts them
+//! [`Evidence`], [`Alternative`], [`Timings`], [`Start`], [`Search`], [`IcpKind`], [`NonFinite`],
+//! [`Stage`] (the progress stages) and [`ModelConfig`]; the readers take [`ReadOptions`]. They
+//! are serde types: the wasm binding converts them
 //! with serde-wasm-bindgen and the CLI with serde_json, so JS and JSON see the same objects, field
 //! for field. The TypeScript declarations of the package (`js/arps-contract.d.ts`, part of
 //! `pkg/arps.d.ts`) are generated from the same types (`typescript`, cargo feature `ts`;
@@ -25,6 +26,7 @@
 //! [`Options`]: crate::Options
 //! [`Registration`]: crate::Registration
 //! [`Alternative`]: crate::Alternative
+//! [`ReadOptions`]: crate::io::ReadOptions
 //! [`Evidence`]: crate::confidence::Evidence
 //! [`Timings`]: crate::Timings
 //! [`Start`]: crate::Start
@@ -186,6 +188,7 @@ pub fn typescript() -> String {
         decl::<Timings>(&cfg),
         decl::<Evidence>(&cfg),
         decl::<Alternative>(&cfg),
+        decl::<crate::io::ReadOptions>(&cfg),
         decl::<ModelConfig>(&cfg),
         decl::<Reference>(&cfg),
     ] {

@@ -104,13 +104,17 @@ pub fn version() -> String {
 
 /// Reads a point cloud from a file's bytes with the core readers. The format comes from the
 /// file name's extension, else it is sniffed from the content; mesh formats give their
-/// vertices. Returns packed xyz (`[x0, y0, z0, x1, ...]`). Throws on unreadable input.
+/// vertices, or with `options.surfacePoints` that many points drawn uniformly over their surface
+/// (`ReadOptions`: what a CAD model should be read as). Returns packed xyz (`[x0, y0, z0, x1,
+/// ...]`). Throws on unreadable input and invalid options.
 #[wasm_bindgen(js_name = parsePointCloud)]
 pub fn parse_point_cloud(
     #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
     #[wasm_bindgen(js_name = "fileName")] file_name: &str,
+    #[wasm_bindgen(unchecked_optional_param_type = "ReadOptions | null")] options: Option<JsValue>,
 ) -> Result<Vec<f32>, JsError> {
-    let cloud = crate::io::read_point_cloud(bytes, file_name).map_err(js_err)?;
+    let options = parse_object(options.unwrap_or(JsValue::UNDEFINED), "read options")?;
+    let cloud = crate::io::read_point_cloud_with(bytes, file_name, &options).map_err(js_err)?;
     Ok(cloud.to_xyz())
 }
 
@@ -118,13 +122,16 @@ pub fn parse_point_cloud(
 /// large coordinates: returns `{ points, origin }`, `points` a `Float32Array` of offsets from
 /// `origin` (`[x, y, z]`, f64: zero unless the file's coordinates are far from zero relative to
 /// the cloud's size, then near the points). Point `i` is `origin + points[i]`; the object is a
-/// cloud `register` accepts as is. Throws on unreadable input.
+/// cloud `register` accepts as is. `options` as for [`parse_point_cloud`]. Throws on unreadable
+/// input and invalid options.
 #[wasm_bindgen(js_name = readPointCloud, unchecked_return_type = "CloudWithOrigin")]
 pub fn read_point_cloud(
     #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
     #[wasm_bindgen(js_name = "fileName")] file_name: &str,
+    #[wasm_bindgen(unchecked_optional_param_type = "ReadOptions | null")] options: Option<JsValue>,
 ) -> Result<JsValue, JsError> {
-    let cloud = crate::io::read_point_cloud(bytes, file_name).map_err(js_err)?;
+    let options = parse_object(options.unwrap_or(JsValue::UNDEFINED), "read options")?;
+    let cloud = crate::io::read_point_cloud_with(bytes, file_name, &options).map_err(js_err)?;
     let out = Object::new();
     let points: Vec<f32> = cloud.points.iter().flatten().copied().collect();
     set(&out, "points", &Float32Array::from(&points[..]))?;
@@ -238,16 +245,21 @@ fn to_js<T: serde::Serialize + ?Sized>(value: &T) -> Result<JsValue, JsError> {
     value.serialize(&ser).map_err(|e| JsError::new(&format!("internal: {e}")))
 }
 
-/// JS options object -> core [`Options`]. `undefined`/`null` give the defaults; missing fields
-/// take their defaults; unknown fields and wrong types throw. Values are read by the core's serde
-/// types (`initialTransform`: [`crate::contract::initial_transform`]; typed arrays are copied to
-/// plain arrays first).
+/// JS options object -> core [`Options`] ([`parse_object`]).
 fn parse_options(options: JsValue) -> Result<Options, JsError> {
+    parse_object(options, "options")
+}
+
+/// JS options object -> a core serde struct `T` (`what` names it in errors: "invalid {what}: ...").
+/// `undefined`/`null` give the defaults; missing fields take their defaults; unknown fields and
+/// wrong types throw. Values are read by the core's serde types (`initialTransform`:
+/// [`crate::contract::initial_transform`]; typed arrays are copied to plain arrays first).
+fn parse_object<T: serde::de::DeserializeOwned + Default>(options: JsValue, what: &str) -> Result<T, JsError> {
     if options.is_undefined() || options.is_null() {
-        return Ok(Options::default());
+        return Ok(T::default());
     }
     if !options.is_object() || Array::is_array(&options) {
-        return Err(JsError::new("invalid options: expected a plain object (or undefined)"));
+        return Err(JsError::new(&format!("invalid {what}: expected a plain object (or undefined)")));
     }
     // A clean copy (the caller's object is never modified) holding only the fields that are
     // given: `undefined` and `null` mean "not given", so the default applies (serde-wasm-bindgen
@@ -255,22 +267,22 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
     // field, so it never sees unknown ones and `deny_unknown_fields` has no effect: unknown keys
     // are rejected here, against the core's own field list (taken from its `Deserialize` impl,
     // so it cannot drift).
-    let fields = struct_fields::<Options>();
+    let fields = struct_fields::<T>();
     let clean = Object::new();
     // Every read of the caller's object may run a getter or a Proxy trap: each goes through a
     // `catch` import, so a throw becomes this call's error instead of unwinding through wasm.
     let keys = object_keys(&options)
-        .map_err(|e| JsError::new(&format!("invalid options: listing them threw: {}", js_message(&e))))?;
+        .map_err(|e| JsError::new(&format!("invalid {what}: listing them threw: {}", js_message(&e))))?;
     for key in keys.iter() {
         let name = key.as_string().unwrap_or_default();
         let value = Reflect::get(&options, &key)
-            .map_err(|e| JsError::new(&format!("invalid options: reading `{name}` threw: {}", js_message(&e))))?;
+            .map_err(|e| JsError::new(&format!("invalid {what}: reading `{name}` threw: {}", js_message(&e))))?;
         if value.is_undefined() || value.is_null() {
             continue;
         }
         if !fields.contains(&name.as_str()) {
             return Err(JsError::new(&format!(
-                "invalid options: unknown field `{name}`, expected one of {}",
+                "invalid {what}: unknown field `{name}`, expected one of {}",
                 fields.iter().map(|f| format!("`{f}`")).collect::<Vec<_>>().join(", ")
             )));
         }
@@ -284,7 +296,7 @@ fn parse_options(options: JsValue) -> Result<Options, JsError> {
         Reflect::set(&clean, &key, &value)
             .map_err(|_| JsError::new(&format!("internal: could not copy option {name}")))?;
     }
-    serde_wasm_bindgen::from_value::<Options>(clean.into()).map_err(|e| JsError::new(&format!("invalid options: {e}")))
+    serde_wasm_bindgen::from_value::<T>(clean.into()).map_err(|e| JsError::new(&format!("invalid {what}: {e}")))
 }
 
 /// The (renamed) field names of a `Deserialize` struct: serde's derive passes them to

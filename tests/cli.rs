@@ -96,6 +96,35 @@ fn register_lists_the_poses_that_fit_as_well() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `--surface-points N` reads a mesh file as its surface: a scan of a CAD part (an STL) registers
+/// onto it with a far better fit than onto its vertices.
+#[test]
+fn register_reads_a_mesh_as_its_surface() {
+    let dir = std::env::temp_dir().join(format!("arps-cli-mesh-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = "fixtures/formats/angle_block_binary_solid.stl";
+    let bytes = std::fs::read(model).unwrap();
+    let gt = common::motion([10.0, -20.0, 30.0], [0.5, 0.2, -0.3]);
+    let scan = arps::io::read_mesh(&bytes, "block.stl").unwrap().sample_surface(8000, 7).unwrap();
+    let scan_path = dir.join("scan.ply");
+    std::fs::write(&scan_path, arps::io::write_ply_binary(&scan.transformed(&arps::transform::rigid_inverse(&gt))))
+        .unwrap();
+    let fit = |extra: &[&str]| {
+        let out = arps(&[&["register", scan_path.to_str().unwrap(), model, "--json"], extra].concat());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        serde_json::from_slice::<arps::Registration>(&out.stdout).unwrap()
+    };
+    let surface = fit(&["--surface-points", "20000"]);
+    let vertices = fit(&[]);
+    assert!(arps::transform::rotation_error_deg(&surface.T_target_source, &gt) < 1.0, "{}", surface.T_target_source);
+    assert!(surface.fitness > 0.8 && vertices.fitness < 0.2, "{} against {}", surface.fitness, vertices.fitness);
+    let bad = arps(&["register", scan_path.to_str().unwrap(), model, "--surface-points", "3"]);
+    assert!(
+        !bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("surfacePoints = 3 is fewer than 16")
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
     let dir = std::env::temp_dir().join(format!("arps-cli-{}", std::process::id()));

@@ -1,6 +1,6 @@
 //! Every reader on its committed real fixture (fixtures/formats, see LICENSES.md there).
 
-use arps::io::{detect_format, read_mesh, read_point_cloud, Format};
+use arps::io::{detect_format, read_mesh, read_point_cloud, read_point_cloud_with, Format, ReadOptions};
 use arps::PointCloud;
 
 fn fixture(name: &str) -> Vec<u8> {
@@ -182,4 +182,33 @@ fn read_path_uses_the_file_name() {
     assert_eq!(arps::io::read_path(&p).unwrap().len(), 1900);
     let err = arps::io::read_path(std::path::Path::new("/nonexistent/x.ply")).unwrap_err().to_string();
     assert!(err.contains("/nonexistent/x.ply"), "{err}");
+}
+
+/// A mesh read as its surface (`ReadOptions::surface_points`): that many points, drawn by the
+/// mesh sampler (the same points as `Mesh::sample_surface` for the seed, other points for another
+/// seed); a PLY with faces sampled too, one without and point files read as they are; counts out
+/// of range are clear errors.
+#[test]
+fn a_mesh_read_as_its_sampled_surface() {
+    let surface = |name: &str, n: usize, seed: u64| {
+        read_point_cloud_with(&fixture(name), name, &ReadOptions { surface_points: Some(n), seed })
+    };
+    let stl = "angle_block_binary_solid.stl";
+    let s = surface(stl, 5000, 0).unwrap();
+    assert_eq!(s.len(), 5000);
+    let mesh = read_mesh(&fixture(stl), stl).unwrap();
+    assert_eq!(s.points, mesh.sample_surface(5000, 0).unwrap().points, "the mesh sampler's points");
+    assert_eq!(s.points, surface(stl, 5000, 0).unwrap().points, "deterministic");
+    assert_ne!(s.points, surface(stl, 5000, 1).unwrap().points, "another seed, other points");
+    assert_eq!(surface("fuze_binary.ply", 3000, 0).unwrap().len(), 3000, "a PLY with faces");
+    for points_only in ["velodyne_2000_binary.pcd", "eth_car_1000.csv"] {
+        assert_eq!(surface(points_only, 3000, 0).unwrap().points, read(points_only).points, "{points_only}");
+    }
+    let ply = std::fs::read(format!("{}/fixtures/wasm/source.ply", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let as_surface = read_point_cloud_with(&ply, "s.ply", &ReadOptions { surface_points: Some(3000), seed: 0 });
+    assert_eq!(as_surface.unwrap().points, read_point_cloud(&ply, "s.ply").unwrap().points, "a PLY without faces");
+    let few = surface(stl, 3, 0).unwrap_err().to_string();
+    assert!(few.contains("surfacePoints = 3 is fewer than 16"), "{few}");
+    let many = surface(stl, 20_000_000, 0).unwrap_err().to_string();
+    assert!(many.starts_with("too large") && many.contains("16000000"), "{many}");
 }

@@ -383,7 +383,7 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     expect_err(&mut r, &src, &tgt, get, "invalid options: reading `icp` threw: no get");
     still_works(&mut r);
     // Reader and weights errors do not touch the registrar; it still works after them too.
-    assert!(parse_point_cloud(b"\x00\x01garbage", "cloud.unknownext").is_err());
+    assert!(parse_point_cloud(b"\x00\x01garbage", "cloud.unknownext", None).is_err());
     assert!(Registrar::from_bytes(b"not weights").is_err());
     still_works(&mut r);
 }
@@ -444,15 +444,15 @@ fn custom_weights_from_bytes_match_the_default_model() {
 #[wasm_bindgen_test]
 fn parse_point_cloud_reads_real_bytes() {
     let want = source();
-    let got = parse_point_cloud(SOURCE_PLY, "source.ply").map_err(message).unwrap();
+    let got = parse_point_cloud(SOURCE_PLY, "source.ply", None).map_err(message).unwrap();
     assert_eq!(got, want, "PLY by extension");
-    let got = parse_point_cloud(SOURCE_PLY, "no-extension").map_err(message).unwrap();
+    let got = parse_point_cloud(SOURCE_PLY, "no-extension", None).map_err(message).unwrap();
     assert_eq!(got, want, "PLY sniffed from the content");
-    let got = parse_point_cloud(SOURCE_PLY, "SOURCE.PLY").map_err(message).unwrap();
+    let got = parse_point_cloud(SOURCE_PLY, "SOURCE.PLY", None).map_err(message).unwrap();
     assert_eq!(got, want, "upper-case extension");
     // The readers' output registers as is.
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
-    let tgt = parse_point_cloud(TARGET_PLY, "target.ply").map_err(message).unwrap();
+    let tgt = parse_point_cloud(TARGET_PLY, "target.ply", None).map_err(message).unwrap();
     let res = r.register(&got, &tgt, None, None).map_err(message).unwrap();
     let (rot, tr) = errors(&res);
     assert!(rot < 1.0 && tr < 0.02, "{rot:.3} deg, {tr:.4}");
@@ -460,16 +460,17 @@ fn parse_point_cloud_reads_real_bytes() {
 
 #[wasm_bindgen_test]
 fn parse_point_cloud_errors_are_thrown() {
-    let e = parse_point_cloud(b"\x00\x01\x02 certainly not a point cloud", "cloud.unknownext").err().map(message);
+    let e = parse_point_cloud(b"\x00\x01\x02 certainly not a point cloud", "cloud.unknownext", None).err().map(message);
     assert!(e.is_some(), "unknown format throws");
-    let e = parse_point_cloud(b"\x00\x01\x02 certainly not a point cloud", "cloud").err().map(message);
+    let e = parse_point_cloud(b"\x00\x01\x02 certainly not a point cloud", "cloud", None).err().map(message);
     assert!(e.is_some(), "unsniffable content throws");
     let truncated = &SOURCE_PLY[..SOURCE_PLY.len() / 2 - 7];
-    let e = parse_point_cloud(truncated, "source.ply").err().map(message).expect("truncated PLY throws");
+    let e = parse_point_cloud(truncated, "source.ply", None).err().map(message).expect("truncated PLY throws");
     assert!(e.contains("PLY"), "{e}");
-    let e = parse_point_cloud(b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n", "x.ply")
-        .err()
-        .map(message);
+    let e =
+        parse_point_cloud(b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n", "x.ply", None)
+            .err()
+            .map(message);
     assert!(e.is_some(), "PLY without y/z throws");
 }
 

@@ -44,14 +44,14 @@ fn close(a: &[f32], b: [f32; 3]) -> bool {
 #[wasm_bindgen_test]
 fn every_format_by_extension_and_by_sniffing() {
     for &(name, bytes, n, first) in FILES {
-        let xyz = parse_point_cloud(bytes, name).map_err(message).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let xyz = parse_point_cloud(bytes, name, None).map_err(message).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert_eq!(xyz.len(), 3 * n, "{name}: point count");
         if !first[0].is_nan() {
             assert!(close(&xyz[..3], first), "{name}: first point {:?}", &xyz[..3]);
         }
         // No extension: the content decides (CSV has no magic; skip it).
         if !name.ends_with(".csv") {
-            let sniffed = parse_point_cloud(bytes, "upload").map_err(message);
+            let sniffed = parse_point_cloud(bytes, "upload", None).map_err(message);
             assert_eq!(sniffed.as_deref().ok(), Some(&xyz[..]), "{name}: sniffed without an extension");
         }
     }
@@ -59,18 +59,18 @@ fn every_format_by_extension_and_by_sniffing() {
 
 #[wasm_bindgen_test]
 fn ascii_and_binary_agree_and_meshes_give_vertices() {
-    let bin = parse_point_cloud(FILES[1].1, FILES[1].0).map_err(message).unwrap();
-    let asc = parse_point_cloud(FILES[2].1, FILES[2].0).map_err(message).unwrap();
+    let bin = parse_point_cloud(FILES[1].1, FILES[1].0, None).map_err(message).unwrap();
+    let asc = parse_point_cloud(FILES[2].1, FILES[2].0, None).map_err(message).unwrap();
     assert_eq!(bin, asc, "velodyne ascii and binary PCD");
-    let ply = parse_point_cloud(FILES[7].1, FILES[7].0).map_err(message).unwrap();
-    let obj = parse_point_cloud(FILES[9].1, FILES[9].0).map_err(message).unwrap();
+    let ply = parse_point_cloud(FILES[7].1, FILES[7].0, None).map_err(message).unwrap();
+    let obj = parse_point_cloud(FILES[9].1, FILES[9].0, None).map_err(message).unwrap();
     assert_eq!(ply, obj, "fuze PLY and OBJ vertices");
     for (name, bytes) in [
         fixture!("angle_block_binary_solid.stl"),
         fixture!("cylinder_binary.stl"),
         fixture!("tray_bottom_150_ascii.stl"),
     ] {
-        let xyz = parse_point_cloud(bytes, name).map_err(message).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let xyz = parse_point_cloud(bytes, name, None).map_err(message).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(xyz.len() >= 9 && xyz.len().is_multiple_of(3), "{name}: {} values", xyz.len());
     }
 }
@@ -78,7 +78,7 @@ fn ascii_and_binary_agree_and_meshes_give_vertices() {
 #[wasm_bindgen_test]
 fn organised_pcd_keeps_nan_and_drop_option_registers_it() {
     let (name, bytes) = fixture!("table_scene_80x60_compressed.pcd");
-    let xyz = parse_point_cloud(bytes, name).map_err(message).unwrap();
+    let xyz = parse_point_cloud(bytes, name, None).map_err(message).unwrap();
     assert_eq!(xyz.len(), 3 * 80 * 60);
     let nan = xyz.chunks(3).filter(|p| p.iter().any(|v| v.is_nan())).count();
     assert_eq!(nan, 1577, "no-return points stay NaN in the Float32Array");
@@ -93,7 +93,7 @@ fn organised_pcd_keeps_nan_and_drop_option_registers_it() {
 #[wasm_bindgen_test]
 fn real_scan_recovers_a_known_motion() {
     let bytes = include_bytes!("../fixtures/scans/velodyne-small.ply");
-    let src = parse_point_cloud(bytes, "velodyne-small.ply").map_err(message).unwrap();
+    let src = parse_point_cloud(bytes, "velodyne-small.ply", None).map_err(message).unwrap();
     let gt = from_rotation_translation(&euler_xyz(0.08, -0.12, 0.18), &Vector3::new(0.4, -0.3, 0.1));
     let tgt: Vec<f32> = src.chunks(3).flat_map(|p| arps::transform::apply(&gt, [p[0], p[1], p[2]])).collect();
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
@@ -121,7 +121,7 @@ fn read_point_cloud_keeps_large_coordinates() {
     }
     let header = "ply\nformat binary_little_endian 1.0\nelement vertex 200\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
     let bytes = [header.as_bytes(), &body].concat();
-    let cloud = arps::wasm::read_point_cloud(&bytes, "far.ply").map_err(message).unwrap();
+    let cloud = arps::wasm::read_point_cloud(&bytes, "far.ply", None).map_err(message).unwrap();
     let get = |k: &str| js_sys::Reflect::get(&cloud, &k.into()).unwrap();
     let points = js_sys::Float32Array::from(get("points")).to_vec();
     let origin: Vec<f64> = js_sys::Array::from(&get("origin")).iter().map(|v| v.as_f64().unwrap()).collect();
@@ -130,6 +130,22 @@ fn read_point_cloud_keeps_large_coordinates() {
     let worst =
         expected.iter().enumerate().map(|(i, v)| (origin[i % 3] + points[i] as f64 - v).abs()).fold(0.0, f64::max);
     assert!(worst < 1e-6, "read back to {worst}");
-    let rounded = parse_point_cloud(&bytes, "far.ply").map_err(message).unwrap();
+    let rounded = parse_point_cloud(&bytes, "far.ply", None).map_err(message).unwrap();
     assert!((rounded[1] as f64 - expected[1]).abs() < 0.5);
+}
+
+/// `options.surfacePoints` reads a mesh as that many points over its surface (the core's
+/// sampler: the same points as `read_point_cloud_with`); a misspelled or out-of-range option
+/// throws a clear error.
+#[wasm_bindgen_test]
+fn a_mesh_read_as_its_surface() {
+    let (name, bytes) = fixture!("angle_block_binary_solid.stl");
+    let xyz = parse_point_cloud(bytes, name, Some(options(r#"{"surfacePoints": 1000, "seed": 3}"#))).map_err(message);
+    let core =
+        arps::io::read_point_cloud_with(bytes, name, &arps::io::ReadOptions { surface_points: Some(1000), seed: 3 });
+    assert_eq!(xyz.unwrap(), core.unwrap().to_xyz());
+    let e = parse_point_cloud(bytes, name, Some(options(r#"{"surfacePoint": 1000}"#))).err().map(message);
+    assert!(e.as_deref().is_some_and(|e| e.contains("invalid read options: unknown field `surfacePoint`")), "{e:?}");
+    let e = parse_point_cloud(bytes, name, Some(options(r#"{"surfacePoints": 3}"#))).err().map(message);
+    assert!(e.as_deref().is_some_and(|e| e.contains("surfacePoints = 3 is fewer than 16")), "{e:?}");
 }

@@ -10,6 +10,9 @@ import { MAX_DRAWN, createView } from "./view.js";
 
 const $ = (id) => document.getElementById(id);
 
+/** Points drawn over the surface of a mesh file (OBJ, OFF, STL, PLY with faces). */
+const MESH_SURFACE_POINTS = 200_000;
+
 // ---- state --------------------------------------------------------------------------------
 
 const state = {
@@ -131,7 +134,9 @@ async function loadFile(which, file) {
   try {
     const bytes = new Uint8Array(await file.arrayBuffer());
     const arps = await getEngine();
-    const parsed = await arps.parsePointCloud(bytes, file.name, { transfer: true });
+    // A mesh (a CAD model, say) is read as points spread over its surface, not its vertices,
+    // which sit on its edges and corners; a point file is read as it is.
+    const parsed = await arps.parsePointCloud(bytes, file.name, { surfacePoints: MESH_SURFACE_POINTS }, { transfer: true });
     if (token !== loads[which]) return;
     $(`${which}-info`).textContent = `${file.name}: preparing ${count(parsed.length / 3)} points…`;
     const cloud = await readyCloud(parsed, file.name, which, token);

@@ -9,7 +9,7 @@ import { createRequire } from "node:module";
 import os from "node:os";
 import path from "node:path";
 import { pathToFileURL } from "node:url";
-import { pkg, source, target, sourcePly, errors } from "./common.mjs";
+import { pkg, root, source, target, sourcePly, errors } from "./common.mjs";
 
 const nodeBuild = await import(pathToFileURL(path.join(pkg, "node", "index.mjs")).href);
 const webBuild = await import(pathToFileURL(path.join(pkg, "arps.js")).href);
@@ -84,6 +84,24 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     // The readers' output registers as is.
     check(r.register(arps.parsePointCloud(sourcePly, "source.ply"), target()));
     r.free();
+  });
+
+  test(`${name}: a mesh file read as its sampled surface (ReadOptions)`, () => {
+    const stl = readFileSync(path.join(root, "fixtures", "formats", "angle_block_binary_solid.stl"));
+    // The vertices by default; with surfacePoints, that many points over the surface, the same
+    // for the same seed, others for another; a point file is read as it is.
+    assert.equal(arps.parsePointCloud(stl, "block.stl").length, 398 * 3);
+    const surface = arps.parsePointCloud(stl, "block.stl", { surfacePoints: 5000 });
+    assert.equal(surface.length, 5000 * 3);
+    assert.deepEqual([...arps.parsePointCloud(stl, "block.stl", { surfacePoints: 5000 })], [...surface]);
+    assert.notDeepEqual([...arps.parsePointCloud(stl, "block.stl", { surfacePoints: 5000, seed: 1 })], [...surface]);
+    const read = arps.readPointCloud(stl, "block.stl", { surfacePoints: 2000 });
+    assert.equal(read.points.length, 2000 * 3);
+    assert.deepEqual([...arps.parsePointCloud(sourcePly, "source.ply", { surfacePoints: 5000 })], [...source()]);
+    assert.throws(() => arps.parsePointCloud(stl, "block.stl", { surfacePoint: 5000 }), /invalid read options: unknown field `surfacePoint`/);
+    assert.throws(() => arps.parsePointCloud(stl, "block.stl", { surfacePoints: 3 }), /surfacePoints = 3 is fewer than 16/);
+    assert.throws(() => arps.parsePointCloud(stl, "block.stl", { surfacePoints: 2e7 }), /more than the 16000000/);
+    assert.throws(() => arps.parsePointCloud(stl, "block.stl", { surfacePoints: "many" }), /invalid read options/);
   });
 }
 

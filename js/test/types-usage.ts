@@ -68,6 +68,10 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   r.register(new Float64Array(source), { points: target, origin: [5e5, 4e6, 0] }).T_target_source.length;
   const read = readPointCloud(new Uint8Array(), "far.ply");
   r.register(read, read.points);
+  // A mesh read as its sampled surface; the read options are checked like the register options.
+  r.register(parsePointCloud(new Uint8Array(), "model.stl", { surfacePoints: 100_000, seed: 2 }), readPointCloud(new Uint8Array(), "m.obj", {}));
+  // @ts-expect-error misspelled read option
+  parsePointCloud(new Uint8Array(), "model.stl", { surfacePoint: 100_000 });
   // @ts-expect-error a cloud is not a string
   r.register("1 2 3", target);
   r.free();
@@ -80,9 +84,12 @@ export async function inAWorker(source: Float32Array, target: Float32Array): Pro
   const result = await arps.register(source, target, { icp: "point" }, { onProgress: (s) => void s, transfer: true, signal: controller.signal });
   await createWorkerRegistrar({ createWorker: () => new Worker(new URL("./worker.js", import.meta.url), { type: "module" }) });
   const points: Float32Array = await arps.parsePointCloud(new Uint8Array(), "cloud.pcd");
+  const surface: Float32Array = await arps.parsePointCloud(new Uint8Array(), "model.stl", { surfacePoints: 50_000 }, { transfer: true });
+  // @ts-expect-error the request comes after the read options
+  await arps.parsePointCloud(new Uint8Array(), "model.stl", { surfacePoints: 50_000, transfer: true });
   const cloud = await arps.readPointCloud(new Uint8Array(), "cloud.pcd");
   const fromWorker = await arps.register(cloud, points, { search: "exhaustive" });
   if (fromWorker.confidence < 0.5) console.warn(fromWorker.warnings, fromWorker.evidence.ambiguity);
   arps.terminate();
-  return points.length ? result.T_target_source : result.T_target_source_network;
+  return points.length + surface.length ? result.T_target_source : result.T_target_source_network;
 }

@@ -7,7 +7,7 @@ import { readFileSync } from "node:fs";
 import { Worker } from "node:worker_threads";
 import path from "node:path";
 import { pathToFileURL } from "node:url";
-import { pkg, source, target, sourcePly, errors } from "./common.mjs";
+import { pkg, root, source, target, sourcePly, errors } from "./common.mjs";
 
 const { createWorkerRegistrar, STAGES } = await import(pathToFileURL(path.join(pkg, "worker-client.js")).href);
 const wasm = readFileSync(path.join(pkg, "arps_bg.wasm"));
@@ -83,6 +83,13 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
 
     const points = await arps.parsePointCloud(sourcePly, "source.ply");
     assert.deepEqual([...points], [...source()]);
+    // Read options pass through the worker: a mesh's surface sampled there.
+    const stl = readFileSync(path.join(root, "fixtures", "formats", "angle_block_binary_solid.stl"));
+    const surface = await arps.parsePointCloud(stl, "block.stl", { surfacePoints: 1000 }, { transfer: false });
+    assert.equal(surface.length, 3000);
+    const cloud = await arps.readPointCloud(stl, "block.stl", { surfacePoints: 1000 });
+    assert.deepEqual([...cloud.points], [...surface], "no origin needed near zero: the same points");
+    await assert.rejects(arps.parsePointCloud(stl, "block.stl", { surfacePoints: 3 }), /surfacePoints = 3 is fewer than 16/);
   } finally {
     arps.terminate();
   }

@@ -14,6 +14,10 @@
 //! sized by a header count beyond what the remaining bytes could hold. Points are read
 //! faithfully (NaN stays NaN); [`PointCloud::validated`] is where they are checked.
 //!
+//! A mesh file gives its vertices ([`read_point_cloud`]), its triangles too ([`read_mesh`]), or
+//! points drawn uniformly over its surface ([`read_point_cloud_with`], [`ReadOptions`]): a CAD
+//! model's vertices sit on its edges and corners, so a scan registers against its surface.
+//!
 //! Coordinates are read as precisely as the file holds them (`double` properties and text in
 //! `f64`), and a cloud far from zero gets an origin near its points before anything becomes `f32`
 //! ([`PointCloud::from_points_f64`]), so map-grid coordinates (5e6) keep their shape.
@@ -38,6 +42,17 @@ pub struct Mesh {
     pub vertices: Vec<[f32; 3]>,
     /// Triangles as vertex indices (polygons are fan-triangulated).
     pub triangles: Vec<[u32; 3]>,
+}
+
+/// What a PLY reader does with a `face` element (the other mesh formats are parsed whole).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Faces {
+    /// Stop after the vertices.
+    Skip,
+    /// Read the faces; a file without them is an error.
+    Required,
+    /// Read the faces when the file has them.
+    IfAny,
 }
 
 /// What a reader returns: vertices in `f64` (as precise as the file), and triangles.
@@ -168,9 +183,9 @@ fn sniff(bytes: &[u8]) -> Option<Format> {
     None
 }
 
-fn read_format(bytes: &[u8], format: Format, mesh: bool) -> Result<Raw> {
+fn read_format(bytes: &[u8], format: Format, faces: Faces) -> Result<Raw> {
     match format {
-        Format::Ply => ply::read(bytes, mesh),
+        Format::Ply => ply::read(bytes, faces),
         Format::Pcd => pcd::read(bytes),
         Format::Xyz => text::read(bytes).map(|vertices| Raw { vertices, triangles: Vec::new() }),
         Format::Obj => obj::read(bytes),
@@ -183,15 +198,59 @@ fn read_format(bytes: &[u8], format: Format, mesh: bool) -> Result<Raw> {
 /// else it is sniffed from the content (see [`detect_format`]). Mesh formats give their
 /// vertices (STL corners merged by position); OBJ, OFF and STL files are parsed whole, so a bad
 /// face is an error here too, while a PLY file is read only up to its `vertex` element.
-/// Non-finite coordinates are kept as they are.
+/// Non-finite coordinates are kept as they are. [`read_point_cloud_with`] can sample a mesh's
+/// surface instead.
 pub fn read_point_cloud(bytes: &[u8], file_name: &str) -> Result<PointCloud> {
+    read_point_cloud_with(bytes, file_name, &ReadOptions::default())
+}
+
+/// How [`read_point_cloud_with`] turns a file into points. In JS (`parsePointCloud`,
+/// `readPointCloud`) a plain object with these fields in camelCase, each optional.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "camelCase", default, deny_unknown_fields)]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "ReadOptions"))]
+pub struct ReadOptions {
+    /// For a file with faces (OBJ, OFF, STL, PLY with a `face` element): this many points drawn
+    /// uniformly over its surface instead of its vertices. A CAD model's vertices sit on its
+    /// edges and corners, and its flat faces have none, so a scan registers against its surface,
+    /// not its vertices. From 16 to 16,000,000; files without faces are read as they are. Unset
+    /// (the default): the vertices.
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
+    pub surface_points: Option<usize>,
+    /// Seed of the surface sampling: the same file, count and seed give the same points on every
+    /// platform. Default 0. A non-negative integer (in JS a `bigint` for values above 2^53).
+    #[cfg_attr(feature = "ts", ts(type = "number | bigint", optional = nullable))]
+    pub seed: u64,
+}
+
+/// [`read_point_cloud`], with a mesh's surface sampled when `options.surface_points` is set
+/// ([`ReadOptions`]): the points are drawn in `f64` from the file's own vertices, so large
+/// coordinates keep their shape as the vertices do. Fails with a clear error for a count out of
+/// range, and for a mesh with no triangle of positive area.
+pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOptions) -> Result<PointCloud> {
     let format = detect_format(bytes, file_name)?;
-    let raw = read_format(bytes, format, false)?;
+    if let Some(n) = options.surface_points {
+        if n < crate::cloud::MIN_POINTS {
+            return Err(Error::InvalidOption(format!(
+                "surfacePoints = {n} is fewer than {} (the fewest points a registration takes)",
+                crate::cloud::MIN_POINTS
+            )));
+        }
+        crate::limits::check_file_points(format.name(), n as u64)?;
+    }
+    let faces = if options.surface_points.is_some() { Faces::IfAny } else { Faces::Skip };
+    let raw = read_format(bytes, format, faces)?;
     crate::limits::check_file_points(format.name(), raw.vertices.len() as u64)?;
     if raw.vertices.is_empty() {
         return Err(Error::parse(format.name(), "the file holds no points"));
     }
-    Ok(raw.into_cloud())
+    match options.surface_points {
+        Some(n) if !raw.triangles.is_empty() => {
+            let points = mesh::sample_triangles(&raw.vertices, &raw.triangles, n, options.seed)?;
+            Ok(PointCloud::from_points_f64(&points))
+        }
+        _ => Ok(raw.into_cloud()),
+    }
 }
 
 /// Reads a triangle mesh (OBJ, OFF, STL, or PLY with a `face` element) from a file's bytes;
@@ -202,7 +261,7 @@ pub fn read_mesh(bytes: &[u8], file_name: &str) -> Result<Mesh> {
     if !format.has_faces() {
         return Err(Error::parse(format.name(), "this format holds points only, not a mesh (use read_point_cloud)"));
     }
-    Ok(read_format(bytes, format, true)?.into_mesh())
+    Ok(read_format(bytes, format, Faces::Required)?.into_mesh())
 }
 
 /// Writes a cloud as binary little-endian PLY, in the caller's frame: `float x y z` per vertex
@@ -215,8 +274,14 @@ pub fn write_ply_binary(cloud: &PointCloud) -> Vec<u8> {
 /// Reads a point cloud from a file (native only); the format comes from the file name.
 #[cfg(not(target_arch = "wasm32"))]
 pub fn read_path(path: &std::path::Path) -> Result<PointCloud> {
+    read_path_with(path, &ReadOptions::default())
+}
+
+/// [`read_path`] with [`ReadOptions`] ([`read_point_cloud_with`]; native only).
+#[cfg(not(target_arch = "wasm32"))]
+pub fn read_path_with(path: &std::path::Path, options: &ReadOptions) -> Result<PointCloud> {
     let bytes = std::fs::read(path)
         .map_err(|e| Error::Io(std::io::Error::new(e.kind(), format!("{}: {e}", path.display()))))?;
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    read_point_cloud(&bytes, &name)
+    read_point_cloud_with(&bytes, &name, options)
 }

@@ -7,7 +7,7 @@
 //! to do directly, with every count checked against the bytes that remain.
 
 use super::util::{bounded_capacity, check_index, fan, parse_count, parse_f64, parse_int, show, utf8_line, Lines};
-use super::Raw;
+use super::{Faces, Raw};
 use crate::cloud::PointCloud;
 use crate::{Error, Result};
 
@@ -289,8 +289,8 @@ fn face_want(el: &Element, n_vertices: usize) -> Result<Want> {
     }
 }
 
-/// Reads the vertices (and, when `mesh`, the faces) of a PLY file.
-pub(crate) fn read(bytes: &[u8], mesh: bool) -> Result<Raw> {
+/// Reads the vertices (and the faces, as `faces` says) of a PLY file.
+pub(crate) fn read(bytes: &[u8], faces: Faces) -> Result<Raw> {
     let h = parse_header(bytes)?;
     let vi = h
         .elements
@@ -299,15 +299,13 @@ pub(crate) fn read(bytes: &[u8], mesh: bool) -> Result<Raw> {
         .ok_or_else(|| Error::parse(F, "the file has no 'vertex' element"))?;
     crate::limits::check_file_points(F, h.elements[vi].count)?;
     let n_vertices = usize::try_from(h.elements[vi].count).unwrap_or(usize::MAX);
-    let fi = if mesh {
-        Some(
-            h.elements
-                .iter()
-                .position(|e| e.name == "face")
-                .ok_or_else(|| Error::parse(F, "the file has no 'face' element (a point cloud, not a mesh)"))?,
-        )
-    } else {
-        None
+    let face = h.elements.iter().position(|e| e.name == "face");
+    let fi = match faces {
+        Faces::Skip => None,
+        Faces::IfAny => face,
+        Faces::Required => {
+            Some(face.ok_or_else(|| Error::parse(F, "the file has no 'face' element (a point cloud, not a mesh)"))?)
+        }
     };
     let mut wants = vec![Want::Skip; h.elements.len()];
     wants[vi] = vertex_want(&h.elements[vi])?;

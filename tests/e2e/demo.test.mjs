@@ -458,6 +458,14 @@ test("a symmetric box: the other poses that fit as well are offered, and picking
   assert.deepEqual(copied, { T_target_source: poses[1].T_target_source });
 });
 
+test("a mesh file is read as points over its surface", { timeout: TIMEOUT * 2 }, async () => {
+  // A CAD part's STL (398 vertices, on its edges): the page reads 200,000 points over its faces.
+  await page.setInputFiles("#target-file", join(ROOT, "fixtures", "formats", "angle_block_binary_solid.stl"));
+  await page.waitForFunction(() => /angle_block/.test(document.getElementById("target-info").textContent), null, { timeout: TIMEOUT });
+  await page.waitForFunction(() => /points/.test(document.getElementById("target-info").textContent), null, { timeout: TIMEOUT });
+  assert.match(await page.textContent("#target-info"), /200,000 points/);
+});
+
 test("a 1M-point pair: loaded, fitted and aligned without blocking the main thread", { timeout: TIMEOUT * 3 }, async () => {
   const infoDone = (which) =>
     page.waitForFunction((id) => /[\d,]+ points( ·|$)/.test(document.getElementById(id).textContent), `${which}-info`, { timeout: TIMEOUT });

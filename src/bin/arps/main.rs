@@ -80,6 +80,11 @@ enum Command {
         /// Drop NaN/Inf points instead of failing.
         #[arg(long)]
         drop_non_finite: bool,
+        /// Read a mesh file (OBJ, OFF, STL, PLY with faces) as this many points drawn uniformly
+        /// over its surface instead of its vertices (a CAD model's vertices sit on its edges);
+        /// point files are read as they are.
+        #[arg(long)]
+        surface_points: Option<usize>,
         /// Print exactly one JSON object on stdout: the engine's result (`arps::Registration`), fields
         /// camelCase, transforms as 16 column-major numbers, like the JS API's result; plus
         /// `wallMs`, the milliseconds of reading both files and registering.
@@ -145,8 +150,8 @@ fn main() -> ExitCode {
     }
 }
 
-fn read_cloud(path: &Path) -> Result<arps::PointCloud, String> {
-    io::read_path(path).map_err(|e| format!("{}: {e}", path.display()))
+fn read_cloud(path: &Path, options: &io::ReadOptions) -> Result<arps::PointCloud, String> {
+    io::read_path_with(path, options).map_err(|e| format!("{}: {e}", path.display()))
 }
 
 /// The weights at `path`, or the embedded default model.
@@ -174,12 +179,14 @@ fn run(command: Command) -> Result<(), String> {
             starts,
             search,
             drop_non_finite,
+            surface_points,
             json,
         } => {
             let mut registrar = load_registrar(weights.as_deref())?;
             let t0 = std::time::Instant::now();
-            let src = read_cloud(&source)?;
-            let tgt = read_cloud(&target)?;
+            let reading = io::ReadOptions { surface_points, seed };
+            let src = read_cloud(&source, &reading)?;
+            let tgt = read_cloud(&target, &reading)?;
             let options = Options {
                 icp: match icp {
                     IcpArg::Point => IcpKind::Point,
