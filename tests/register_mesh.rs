@@ -42,6 +42,8 @@ fn a_partial_scan_registers_onto_a_cad_model_read_as_its_surface() {
 #[test]
 #[ignore]
 fn mesh_targets_read_as_vertices_and_as_surfaces() {
+    /// Right answers, confidences and milliseconds of one reading on one group of meshes.
+    type Tally = (usize, Vec<f64>, Vec<f64>);
     use rand::Rng;
     let dir = std::env::var("ARPS_MESH_DIR").unwrap_or_else(|_| "../shared/data/meshes".into());
     let mut files = Vec::new();
@@ -64,8 +66,8 @@ fn mesh_targets_read_as_vertices_and_as_surfaces() {
         return;
     }
     let mut registrar = Registrar::with_default_model().unwrap();
-    // per group (all, fewer than 5,000 vertices) and reading: (right, confidences, milliseconds)
-    let mut tally: [[(usize, Vec<f64>, Vec<f64>); 2]; 2] = Default::default();
+    // per group (all, fewer than 5,000 vertices) and reading
+    let mut tally: [[Tally; 2]; 2] = Default::default();
     let mut used = [0; 2];
     for (k, path) in files.iter().enumerate() {
         let bytes = std::fs::read(path).unwrap();
