@@ -42,8 +42,9 @@ fn a_partial_scan_registers_onto_a_cad_model_read_as_its_surface() {
 #[test]
 #[ignore]
 fn mesh_targets_read_as_vertices_and_as_surfaces() {
-    /// Right answers, confidences and milliseconds of one reading on one group of meshes.
-    type Tally = (usize, Vec<f64>, Vec<f64>);
+    /// Right answers, confidences, milliseconds and the wrong answers' confidences of one reading
+    /// on one group of meshes.
+    type Tally = (usize, Vec<f64>, Vec<f64>, Vec<f64>);
     use rand::Rng;
     let dir = std::env::var("ARPS_MESH_DIR").unwrap_or_else(|_| "../shared/data/meshes".into());
     let mut files = Vec::new();
@@ -126,6 +127,9 @@ fn mesh_targets_read_as_vertices_and_as_surfaces() {
                 slot.0 += usize::from(right);
                 slot.1.push(confidence);
                 slot.2.push(ms);
+                if !right {
+                    slot.3.push(confidence);
+                }
             }
         }
         for &g in groups {
@@ -140,12 +144,15 @@ fn mesh_targets_read_as_vertices_and_as_surfaces() {
         ["all meshes", "meshes of fewer than 5,000 vertices"].iter().zip(used.iter().zip(tally.iter_mut()))
     {
         println!("{group} under {dir}: {n}");
-        for (what, (right, conf, ms)) in ["vertices", "surface, 50,000 points"].iter().zip(readings.iter_mut()) {
+        for (what, (right, conf, ms, wrong)) in ["vertices", "surface, 50,000 points"].iter().zip(readings.iter_mut()) {
+            let doubted = wrong.iter().filter(|&&c| c < 0.5).count();
             println!(
-                "  target read as its {what}: recall {:.3} ({right} of {n}), median confidence {:.2}, median {:.1} ms",
+                "  target read as its {what}: recall {:.3} ({right} of {n}), median confidence {:.2}, median {:.1} ms; \
+                 wrong answers with confidence below 0.5: {doubted} of {}",
                 *right as f64 / *n as f64,
                 median(conf),
-                median(ms)
+                median(ms),
+                wrong.len()
             );
         }
     }
