@@ -213,11 +213,13 @@ export async function createWorkerRegistrar(options = {}) {
       return reply.result;
     },
     async parsePointCloud(bytes, fileName, readOptions, { transfer = false, signal } = {}) {
+      misplacedRequest("parsePointCloud", readOptions);
       const buffers = transfer ? uniqueBuffers([bytes]) : [];
       const reply = await request({ type: "parse", bytes, fileName, options: readOptions }, { transfer: buffers, signal });
       return reply.points;
     },
     async readPointCloud(bytes, fileName, readOptions, { transfer = false, signal } = {}) {
+      misplacedRequest("readPointCloud", readOptions);
       const buffers = transfer ? uniqueBuffers([bytes]) : [];
       const reply = await request({ type: "read", bytes, fileName, options: readOptions }, { transfer: buffers, signal });
       return reply.cloud;
@@ -227,6 +229,16 @@ export async function createWorkerRegistrar(options = {}) {
       if (current) retire(current, new Error("arps worker: terminated"));
     },
   };
+}
+
+/**
+ * Throws when the request options (`transfer`, `signal`) were passed where the read options go
+ * (the third argument; they come fourth, as for `register`).
+ */
+function misplacedRequest(what, readOptions) {
+  if (readOptions && typeof readOptions === "object" && ("transfer" in readOptions || "signal" in readOptions)) {
+    throw new Error(`${what}: the request options (transfer, signal) come fourth, after the read options (e.g. { surfacePoints })`);
+  }
 }
 
 /** The rejection of an aborted request: a `DOMException` named `AbortError`. */

@@ -90,6 +90,7 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     const cloud = await arps.readPointCloud(stl, "block.stl", { surfacePoints: 1000 });
     assert.deepEqual([...cloud.points], [...surface], "no origin needed near zero: the same points");
     await assert.rejects(arps.parsePointCloud(stl, "block.stl", { surfacePoints: 3 }), /surfacePoints = 3 is fewer than 16/);
+    await assert.rejects(arps.parsePointCloud(stl, "block.stl", { transfer: true }), /request options \(transfer, signal\) come fourth/);
   } finally {
     arps.terminate();
   }
