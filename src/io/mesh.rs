@@ -34,8 +34,10 @@ pub(crate) fn sample_triangles(
     n: usize,
     seed: u64,
 ) -> Result<Vec<[f64; 3]>> {
+    // the triangles of positive area (their indices, 4 bytes each, not their corners: a 1 GiB STL
+    // holds 21 million) and the running sum of their areas
     let mut cumulative = Vec::with_capacity(triangles.len());
-    let mut chosen: Vec<[[f64; 3]; 3]> = Vec::with_capacity(triangles.len());
+    let mut chosen: Vec<u32> = Vec::with_capacity(triangles.len());
     let mut total = 0.0f64;
     for (ti, t) in triangles.iter().enumerate() {
         let c = corners(vertices, t).ok_or_else(|| {
@@ -48,7 +50,7 @@ pub(crate) fn sample_triangles(
         if a > 0.0 && a.is_finite() && (total + a).is_finite() {
             total += a;
             cumulative.push(total);
-            chosen.push(c);
+            chosen.push(ti as u32);
         }
     }
     if chosen.is_empty() {
@@ -62,7 +64,8 @@ pub(crate) fn sample_triangles(
     for _ in 0..n {
         let u = rng.random::<f64>() * total;
         let k = cumulative.partition_point(|&c| c <= u).min(chosen.len() - 1);
-        let [a, b, c] = chosen[k];
+        // checked above: every index is in range
+        let Some([a, b, c]) = corners(vertices, &triangles[chosen[k] as usize]) else { continue };
         let s = rng.random::<f64>().sqrt();
         let r2 = rng.random::<f64>();
         let (wb, wc) = (s * (1.0 - r2), s * r2);
