@@ -262,10 +262,8 @@ pub fn refine_best(
         let screened = refine_starts(target, &sample, starts, how);
         let w = screened[choose(&screened)?];
         // the sample left it converged at the final distance: only the final stage runs again
-        let full = refine_stages(target, source, &[(w.start, w.T_target_source)], how, FINAL_STAGE);
-        return full
-            .first()
-            .map(|c| converge(target, source, Candidate { iterations: w.iterations + c.iterations, ..*c }, how));
+        let c = final_stage(target, source, w.start, &w.T_target_source, how);
+        return Some(Candidate { iterations: w.iterations + c.iterations, ..c });
     }
     let all = refine_starts(target, source, starts, how);
     choose(&all).map(|i| converge(target, source, all[i], how))
@@ -282,9 +280,21 @@ pub fn refine_final(
     T_target_source: &Matrix4<f64>,
     how: &Refinement,
 ) -> Candidate {
-    let capped = even_sample(source, REFINE_POINTS);
-    let c = refine_stages(target, &capped, &[(start, *T_target_source)], how, FINAL_STAGE)[0];
-    converge(target, &capped, c, how)
+    final_stage(target, &even_sample(source, REFINE_POINTS), start, T_target_source, how)
+}
+
+/// `T_target_source` refined on `source` at the final distance only, run on until it converges
+/// ([`converge`]): the last step of [`refine_best`] on large clouds and of [`refine_final`].
+#[allow(non_snake_case)]
+fn final_stage(
+    target: &IcpTarget,
+    source: &[[f32; 3]],
+    start: Start,
+    T_target_source: &Matrix4<f64>,
+    how: &Refinement,
+) -> Candidate {
+    let c = refine_stages(target, source, &[(start, *T_target_source)], how, FINAL_STAGE)[0];
+    converge(target, source, c, how)
 }
 
 /// The answer's final stage, when it has not converged within the cap, runs on in rounds of

@@ -275,10 +275,14 @@ async function align() {
 
 const fmt = (x, digits = 4) => (Number.isFinite(x) ? Number(x.toPrecision(digits)).toString() : String(x));
 
-/** The pose of the result shown (`posesOf`): its answer unless the user picked an alternative. */
+/** The index in `posesOf(r)` of the pose shown: 0 (the answer) unless the user picked another. */
+function shownIndex(r = state.result) {
+  return Math.min(state.pose, posesOf(r).length - 1);
+}
+
+/** The pose of the result shown (`posesOf`). */
 function shownPose(r = state.result) {
-  const poses = posesOf(r);
-  return poses[Math.min(state.pose, poses.length - 1)];
+  return posesOf(r)[shownIndex(r)];
 }
 
 function resultJson(r, truth) {
@@ -408,7 +412,7 @@ function showPoses(r) {
       const b = document.createElement("button");
       b.type = "button";
       b.textContent = `${k === 0 ? "Answer" : `Alternative ${k}`} · fitness ${(p.fitness * 100).toFixed(1)}%`;
-      b.classList.toggle("on", k === Math.min(state.pose, poses.length - 1));
+      b.classList.toggle("on", k === shownIndex(r));
       b.addEventListener("click", () => showPose(k));
       return b;
     }),
