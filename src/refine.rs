@@ -262,7 +262,7 @@ pub fn refine_best(
         let screened = refine_starts(target, &sample, starts, how);
         let w = screened[choose(&screened)?];
         // the sample left it converged at the final distance: only the final stage runs again
-        let c = final_stage(target, source, w.start, &w.T_target_source, how);
+        let c = refine_final(target, source, w.start, &w.T_target_source, how);
         return Some(Candidate { iterations: w.iterations + c.iterations, ..c });
     }
     let all = refine_starts(target, source, starts, how);
@@ -270,23 +270,11 @@ pub fn refine_best(
 }
 
 /// The pose `T_target_source` (already near a fit: a probe pose, a refined answer) refined like
-/// [`refine_best`]'s winner: at the final distance only, on at most [`REFINE_POINTS`] evenly
-/// spread source points, run on until it converges. Reported as coming from `start`.
+/// [`refine_best`]'s winner on large clouds: at the final distance only, run on until it
+/// converges ([`CONVERGE_ROUNDS`]). Reported as coming from `start`. `source` should already be capped
+/// like [`refine_best`]'s (at most [`REFINE_POINTS`] evenly spread points, [`even_sample`]).
 #[allow(non_snake_case)]
 pub fn refine_final(
-    target: &IcpTarget,
-    source: &[[f32; 3]],
-    start: Start,
-    T_target_source: &Matrix4<f64>,
-    how: &Refinement,
-) -> Candidate {
-    final_stage(target, &even_sample(source, REFINE_POINTS), start, T_target_source, how)
-}
-
-/// `T_target_source` refined on `source` at the final distance only, run on until it converges
-/// ([`converge`]): the last step of [`refine_best`] on large clouds and of [`refine_final`].
-#[allow(non_snake_case)]
-fn final_stage(
     target: &IcpTarget,
     source: &[[f32; 3]],
     start: Start,

@@ -148,8 +148,8 @@ pub(crate) fn search(
     Ok(Chosen { candidate, evidence, confidence, starts_refined, alternatives })
 }
 
-/// The alternative `poses` of the answer refined like it ([`refine::refine_final`], reported
-/// under its start), the best fitting first; one that the refinement brings back onto the answer
+/// The alternative `poses` of the answer refined like it ([`refine::refine_final`] on the source
+/// capped as for the answer, reported under its start), the best fitting first; one that the refinement brings back onto the answer
 /// or onto an alternative kept already ([`confidence::same_pose`]) is dropped.
 fn refine_alternatives(
     target: &IcpTarget,
@@ -158,9 +158,10 @@ fn refine_alternatives(
     poses: &[Matrix4<f64>],
     how: &Refinement,
 ) -> Vec<Candidate> {
+    let source = refine::even_sample(source, refine::REFINE_POINTS);
     let mut kept: Vec<Candidate> = Vec::with_capacity(poses.len());
     for t in poses {
-        let c = refine::refine_final(target, source, answer.start, t, how);
+        let c = refine::refine_final(target, &source, answer.start, t, how);
         let t = &c.T_target_source;
         let new = |o: &Candidate| !confidence::same_pose(&o.T_target_source, t);
         if new(answer) && kept.iter().all(new) {
