@@ -296,13 +296,20 @@ impl JointNormalization {
     /// Computes the normalisation of a (validated) pair, from their `points` (the offsets from
     /// their origins: the pipeline normalises each cloud's local frame).
     pub fn of_pair(source: &PointCloud, target: &PointCloud) -> Self {
-        let box_of = |c: &PointCloud| {
-            let (lo, hi) = c.bounds();
-            let center = [0, 1, 2].map(|a| (lo[a] as f64 + hi[a] as f64) * 0.5);
-            (center, half_extent_of(lo, hi))
-        };
-        let (source_center, hs) = box_of(source);
-        let (target_center, ht) = box_of(target);
+        Self::of_boxes(Self::box_of(source), Self::box_of(target))
+    }
+
+    /// A cloud's bounding-box centre and largest half-extent (relative to its origin): what
+    /// [`JointNormalization::of_pair`] takes of each cloud.
+    pub fn box_of(cloud: &PointCloud) -> ([f64; 3], f64) {
+        let (lo, hi) = cloud.bounds();
+        let center = [0, 1, 2].map(|a| (lo[a] as f64 + hi[a] as f64) * 0.5);
+        (center, half_extent_of(lo, hi))
+    }
+
+    /// [`JointNormalization::of_pair`] from each cloud's [`JointNormalization::box_of`].
+    pub fn of_boxes(source: ([f64; 3], f64), target: ([f64; 3], f64)) -> Self {
+        let ((source_center, hs), (target_center, ht)) = (source, target);
         let scale = hs.max(ht);
         let scale = if scale > 0.0 && scale.is_finite() { scale } else { 1.0 };
         Self { source_center, target_center, scale }

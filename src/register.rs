@@ -6,6 +6,7 @@ use crate::confidence::Evidence;
 use crate::icp::IcpKind;
 use crate::model::{Model, ModelWorkspace};
 use crate::pipeline::starts::{self, Starts};
+use crate::pipeline::target::PreparedTarget;
 use crate::pipeline::{network, options, prepare, result, search};
 use crate::refine::Start;
 use crate::timing::{default_clock, Clock, Stopwatch};
@@ -299,11 +300,20 @@ pub struct Alternative {
 }
 
 /// Holds a loaded model and reusable buffers; registers pairs of clouds.
+///
+/// It keeps the last target it prepared (normalised, voxelised, with its k-d tree and the normals
+/// and descriptors found so far): a registration onto the same target (the same points and
+/// origin) reuses it, with the same result, so that many scans registered onto one model prepare
+/// the model once. It holds the normalised target (12 bytes a point) and ICP's voxelised copy
+/// with its k-d tree and normals until the next registration onto another target, or
+/// [`Registrar::forget_target`].
 pub struct Registrar {
     model: Model,
     weights_provenance: serde_json::Value,
     workspace: ModelWorkspace,
     clock: Option<Clock>,
+    /// The last target prepared ([`crate::pipeline::target`]).
+    target: Option<Box<PreparedTarget>>,
 }
 
 /// Most points per cloud the network may be given: attention costs grow with its square
@@ -318,6 +328,7 @@ impl Registrar {
             weights_provenance: weights.provenance.clone(),
             workspace: ModelWorkspace::default(),
             clock: default_clock(),
+            target: None,
         })
     }
 
@@ -336,6 +347,12 @@ impl Registrar {
     /// Replaces the clock used for [`Timings`] (the wasm binding passes `performance.now`).
     pub fn set_clock(&mut self, clock: Option<Clock>) {
         self.clock = clock;
+    }
+
+    /// Drops the target kept from the last registration (see [`Registrar`]), giving its memory
+    /// back; the next registration prepares its target anew.
+    pub fn forget_target(&mut self) {
+        self.target = None;
     }
 
     /// The network.
@@ -370,12 +387,15 @@ impl Registrar {
         let mut total = Stopwatch::start(self.clock);
         let mut warnings = Vec::new();
         let resolved = options::resolve(options, &self.model)?;
-        let prepared = prepare::prepare(source, target, options, &resolved, &mut warnings)?;
+        // the target kept from the last call is reused when it is this one (and dropped first
+        // otherwise, before this one is prepared)
+        let kept = self.target.take();
+        let prepared = prepare::prepare(source, target, options, &resolved, kept, &mut warnings)?;
         let preprocess_ms = watch.lap();
 
         let (t_net_n, network_ms, gmr_ms) = if options.network {
             progress(Stage::Network);
-            let (src, tgt) = (&prepared.net_src.points, &prepared.net_tgt.points);
+            let (src, tgt) = (&prepared.net_src.points, &prepared.target.net.points);
             let out = self.model.forward(src, tgt, &mut self.workspace)?;
             let network_ms = watch.lap();
             let t = network::solve(&self.model, src, tgt, &out);
@@ -395,6 +415,8 @@ impl Registrar {
 
         let timings =
             Timings { preprocess_ms, network_ms, gmr_ms, icp_ms: icp_ms - global_ms, global_ms, total_ms: total.lap() };
-        result::finish(&prepared, &t_net_n, chosen, warnings, timings)
+        let registration = result::finish(&prepared, &t_net_n, chosen, warnings, timings);
+        self.target = Some(prepared.target);
+        registration
     }
 }

@@ -278,3 +278,35 @@ fn confidence_is_high_for_the_truth_and_low_for_a_wrong_pose() {
         assert!(right.evidence.fitness > wrong.evidence.fitness);
     }
 }
+
+#[test]
+fn a_target_described_once_gives_every_source_the_hypotheses_of_a_fresh_description() {
+    // one target (8,000 points: voxelised to fit the budget), sources that need other voxel sizes:
+    // one small enough to fit as it is, one like the target, and a volume (a 24^3 lattice through
+    // the shape's box), which needs far larger voxels than a surface
+    let target = common::bumpy_surface(8_000, 0.1);
+    let lattice: Vec<[f32; 3]> =
+        (0..24 * 24 * 24).map(|i| [i % 24, (i / 24) % 24, i / 576].map(|k| (k as f32 / 23.0 - 0.5) * 1.8)).collect();
+    let sources = [
+        common::bumpy_surface(1_200, 0.5),
+        common::crop(&common::bumpy_surface(20_000, 0.2), [0.3, 1.0, -0.2], 0.8),
+        PointCloud::new(lattice),
+    ]
+    .map(|s| s.transformed(&turn(Vector3::new(1.0, -2.0, 0.5), 150.0, [0.2, 0.0, -0.1])));
+    let memo = global::TargetFeatures::default();
+    let params = GlobalParams { seed: 5, ..GlobalParams::default() };
+    let mut voxels = Vec::new();
+    for round in 0..2 {
+        for (k, s) in sources.iter().enumerate() {
+            let kept = global::Matched::onto(s, &target, &memo, params.voxel_fraction).hypotheses(&params);
+            let fresh = global::hypotheses(s, &target, &params);
+            assert!(k == 2 || !fresh.is_empty(), "source {k}");
+            assert_eq!(kept, fresh, "round {round}, source {k}");
+            voxels.push(global::feature_voxel(s, &target, params.voxel_fraction));
+        }
+    }
+    // the sources did need different feature voxels (so the memo held several sizes)
+    voxels.sort_by(f64::total_cmp);
+    voxels.dedup();
+    assert!(voxels.len() >= 2, "{voxels:?}");
+}

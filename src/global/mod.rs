@@ -17,6 +17,7 @@ use crate::cloud::PointCloud;
 use crate::sampling::{voxel_downsample, voxel_downsample_at_most_in};
 use crate::spatial::KdIndex;
 pub use ransac::{Hypothesis, RansacParams};
+use std::sync::{Mutex, OnceLock};
 
 /// Most points per voxelised cloud given to the descriptors: the voxel grows until both clouds
 /// fit (matching is brute force, `n_s * n_t` descriptor distances).
@@ -49,37 +50,106 @@ impl Default for GlobalParams {
 /// The feature voxel for a pair: `fraction` of the larger largest half-extent, grown by 25% at a
 /// time until both voxelised clouds have at most [`MAX_FEATURE_POINTS`] points.
 pub fn feature_voxel(source: &PointCloud, target: &PointCloud, fraction: f64) -> f64 {
-    feature_grid(source, target, fraction).0
+    feature_grid(source, target, &TargetFeatures::default(), fraction).0
 }
 
-/// [`feature_voxel`], and each cloud voxelised at it when the search had to voxelise it to see
-/// that it fits (`None` for a cloud of at most [`MAX_FEATURE_POINTS`] points, which fits as it
-/// is, or when no size fitted within the search's steps). A size that does not fit stops
-/// voxelising a cloud as soon as it has more voxels than the budget.
+/// How a cloud fits the feature budget at one voxel size.
+#[derive(Clone, Debug)]
+enum Fit {
+    /// It has at most [`MAX_FEATURE_POINTS`] points: it fits as it is.
+    AsIs,
+    /// Voxelised at that size it fits, as this cloud.
+    Voxelised(PointCloud),
+    /// It has more voxels than the budget at that size.
+    No,
+}
+
+/// The search of [`feature_voxel`], and each cloud voxelised at the size found when the search had
+/// to voxelise it to see that it fits (`None` for a cloud of at most [`MAX_FEATURE_POINTS`]
+/// points, which fits as it is, or when no size fitted within the search's steps). A size that
+/// does not fit stops voxelising a cloud as soon as it has more voxels than the budget. The
+/// target's side goes through `memo` ([`TargetFeatures`]).
 fn feature_grid(
     source: &PointCloud,
     target: &PointCloud,
+    memo: &TargetFeatures,
     fraction: f64,
 ) -> (f64, Option<PointCloud>, Option<PointCloud>) {
-    let extent = source.half_extent().max(target.half_extent());
+    let extent = source.half_extent().max(memo.half_extent(target));
     let mut v = (fraction * extent).max(f64::MIN_POSITIVE);
-    // each cloud's bounds once for every try (a try that does not fit stops early)
-    let bounds = |c: &PointCloud| if c.len() <= MAX_FEATURE_POINTS { None } else { Some(c.bounds()) };
-    let (source_bounds, target_bounds) = (bounds(source), bounds(target));
-    // Some(None): fits as it is; Some(Some(c)): fits voxelised as c; None: does not fit
-    let fit = |c: &PointCloud, bounds: &Option<([f32; 3], [f32; 3])>, v: f64| match bounds {
-        None => Some(None),
-        Some(b) => voxel_downsample_at_most_in(c, b, v as f32, MAX_FEATURE_POINTS).map(Some),
-    };
+    // the source's bounds once for every try (a try that does not fit stops early)
+    let source_bounds = (source.len() > MAX_FEATURE_POINTS).then(|| source.bounds());
     for _ in 0..60 {
-        if let Some(s) = fit(source, &source_bounds, v) {
-            if let Some(t) = fit(target, &target_bounds, v) {
-                return (v, s, t);
+        let fits_source = match &source_bounds {
+            None => Some(None),
+            Some(b) => voxel_downsample_at_most_in(source, b, v as f32, MAX_FEATURE_POINTS).map(Some),
+        };
+        if let Some(s) = fits_source {
+            match memo.fit(target, v) {
+                Fit::AsIs => return (v, s, None),
+                Fit::Voxelised(t) => return (v, s, Some(t)),
+                Fit::No => {}
             }
         }
         v *= 1.25;
     }
     (v, None, None)
+}
+
+/// The target's side of the global hypotheses ([`Matched::onto`]), remembered so that
+/// registrations onto the same target describe it once: its largest half-extent, which feature
+/// voxel sizes it fits (a pass over every point each), and its descriptors at the size last used.
+/// Only ever use one with the same target cloud.
+#[derive(Debug, Default)]
+pub struct TargetFeatures {
+    half_extent: OnceLock<f64>,
+    bounds: OnceLock<([f32; 3], [f32; 3])>,
+    /// Per voxel size tried (its bits), how the target fits it.
+    fits: Mutex<Vec<(u64, Fit)>>,
+    /// The target described at a voxel size (its bits).
+    described: Mutex<Option<(u64, Described)>>,
+}
+
+impl TargetFeatures {
+    fn half_extent(&self, target: &PointCloud) -> f64 {
+        *self.half_extent.get_or_init(|| target.half_extent())
+    }
+
+    /// How `target` fits the budget at voxel size `v` (computed once per size).
+    fn fit(&self, target: &PointCloud, v: f64) -> Fit {
+        let mut fits = self.fits.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, fit)) = fits.iter().find(|(bits, _)| *bits == v.to_bits()) {
+            return fit.clone();
+        }
+        let fit = if target.len() <= MAX_FEATURE_POINTS {
+            Fit::AsIs
+        } else {
+            let bounds = self.bounds.get_or_init(|| target.bounds());
+            match voxel_downsample_at_most_in(target, bounds, v as f32, MAX_FEATURE_POINTS) {
+                Some(c) => Fit::Voxelised(c),
+                None => Fit::No,
+            }
+        };
+        fits.push((v.to_bits(), fit.clone()));
+        fit
+    }
+
+    /// `target` described at `voxel` from its voxelised copy `voxelised` (`None`: from `target`
+    /// itself), computed once per size.
+    fn described(&self, target: &PointCloud, voxel: f64, voxelised: Option<PointCloud>) -> Described {
+        let mut described = self.described.lock().unwrap_or_else(|e| e.into_inner());
+        match &*described {
+            Some((bits, d)) if *bits == voxel.to_bits() => d.clone(),
+            _ => {
+                let d = match voxelised {
+                    Some(v) => describe_voxelised(v.points, voxel),
+                    None => describe(target, voxel),
+                };
+                *described = Some((voxel.to_bits(), d.clone()));
+                d
+            }
+        }
+    }
 }
 
 /// A voxelised cloud with its FPFH descriptors.
@@ -121,13 +191,19 @@ impl Matched {
     /// Describes `source` and `target` (both in one unit, any relative pose) at the feature voxel
     /// of `voxel_fraction` and matches their descriptors.
     pub fn new(source: &PointCloud, target: &PointCloud, voxel_fraction: f64) -> Self {
-        let (voxel, source_v, target_v) = feature_grid(source, target, voxel_fraction);
+        Self::onto(source, target, &TargetFeatures::default(), voxel_fraction)
+    }
+
+    /// [`Matched::new`], with the target's side taken from `memo` where an earlier pair onto the
+    /// same `target` left it (the same result either way).
+    pub fn onto(source: &PointCloud, target: &PointCloud, memo: &TargetFeatures, voxel_fraction: f64) -> Self {
+        let (voxel, source_v, target_v) = feature_grid(source, target, memo, voxel_fraction);
         // the search's voxelised clouds where it made them (the same as describing anew)
-        let described = |c: &PointCloud, v: Option<PointCloud>| match v {
+        let source = match source_v {
             Some(v) => describe_voxelised(v.points, voxel),
-            None => describe(c, voxel),
+            None => describe(source, voxel),
         };
-        let (source, target) = (described(source, source_v), described(target, target_v));
+        let target = memo.described(target, voxel, target_v);
         let matches = matching::mutual_matches(&source.descriptors, &target.descriptors, 30);
         Self { source, target, matches, voxel }
     }

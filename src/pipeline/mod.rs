@@ -3,7 +3,8 @@
 //!
 //! 1. [`options`]: the caller's [`crate::Options`] checked and resolved ([`options::Resolved`]).
 //! 2. [`prepare`]: the validated clouds in their local, jointly normalised frames, sampled for the
-//!    network and voxelised for ICP ([`prepare::Prepared`]).
+//!    network and voxelised for ICP ([`prepare::Prepared`]); the target's share
+//!    ([`target::PreparedTarget`]) is kept by the registrar and reused for the same target.
 //! 3. [`network`]: the network + GMR estimate in normalised units.
 //! 4. [`starts`]: the stages of the search and the candidate starts of each ([`starts::Starts`]).
 //! 5. [`search`]: the adaptive or exhaustive refinement of the starts, with the confidence stop,
@@ -17,3 +18,4 @@ pub(crate) mod prepare;
 pub(crate) mod result;
 pub(crate) mod search;
 pub(crate) mod starts;
+pub(crate) mod target;

@@ -3,10 +3,13 @@
 //! Takes the caller's clouds, the [`Options`] and [`Resolved`]; gives [`Prepared`]: the
 //! validated clouds in their local frames (f32 offsets from f64 origins), turned by the initial
 //! guess's rotation, jointly normalised, sampled for the network and voxelised for ICP, with the
-//! initial guess and the ICP distances in normalised units. Warnings (collinear or flat clouds,
-//! unit mismatch, too few points for the network) go to `warnings`.
+//! initial guess and the ICP distances in normalised units. The target's share is a
+//! [`PreparedTarget`] ([`super::target`]), taken over from the previous call when it is the same
+//! target with the same sizes. Warnings (collinear or flat clouds, unit mismatch, too few points
+//! for the network) go to `warnings`.
 
 use super::options::{self, Resolved};
+use super::target::{self, InputKey, PreparedTarget, Sizes};
 use crate::cloud::{JointNormalization, PointCloud, MIN_POINTS};
 use crate::register::Options;
 use crate::{checks, limits, origin, sampling, transform, Result};
@@ -21,8 +24,6 @@ const SIZE_RATIO_WARNING: f64 = 10.0;
 pub(crate) struct Prepared {
     /// The source's f64 origin (caller's frame).
     pub origin_source: [f64; 3],
-    /// The target's f64 origin (caller's frame).
-    pub origin_target: [f64; 3],
     /// The initial guess's rotation, applied to the local source before normalising.
     pub rotate_init: Matrix4<f64>,
     /// The joint normalisation of the turned source and the target.
@@ -31,47 +32,61 @@ pub(crate) struct Prepared {
     pub t_initial: Matrix4<f64>,
     /// The normalised, turned source.
     pub src_n: PointCloud,
-    /// The normalised target.
-    pub tgt_n: PointCloud,
     /// The final ICP max correspondence distance.
     pub d_final: f64,
     /// The source points fed to the network.
     pub net_src: PointCloud,
-    /// The target points fed to the network.
-    pub net_tgt: PointCloud,
     /// The voxelised source for ICP.
     pub icp_src: PointCloud,
-    /// The voxelised target for ICP.
-    pub icp_tgt: PointCloud,
+    /// The target: normalised, sampled, voxelised (its origin in its summary).
+    pub target: Box<PreparedTarget>,
 }
 
-/// Validates, normalises and samples the pair (see the module docs).
+/// The target as [`prepare`] receives it: prepared by an earlier call from the same input, or
+/// validated now.
+enum Given {
+    Kept(Box<PreparedTarget>),
+    Validated(PointCloud),
+}
+
+/// Validates, normalises and samples the pair (see the module docs); `kept` is a target prepared
+/// by an earlier call, reused where it is the same target with the same sizes.
 pub(crate) fn prepare(
     source: &PointCloud,
     target: &PointCloud,
     options: &Options,
     resolved: &Resolved,
+    kept: Option<Box<PreparedTarget>>,
     warnings: &mut Vec<String>,
 ) -> Result<Prepared> {
     let n_net = resolved.n_net;
     limits::check_cloud_points("source", source.len())?;
     limits::check_cloud_points("target", target.len())?;
     let source = source.validated("source", MIN_POINTS, options.non_finite)?;
-    let target = target.validated("target", MIN_POINTS, options.non_finite)?;
+    // the target given again: its checks passed already, and what it holds is reused below
+    let input = InputKey::of(target, options.non_finite);
+    let given = match kept.filter(|k| k.input == input) {
+        Some(k) => Given::Kept(k),
+        None => Given::Validated(target.validated("target", MIN_POINTS, options.non_finite)?),
+    };
     let spreads_source = checks::not_collinear("source", &source.points, warnings)?;
-    let spreads_target = checks::not_collinear("target", &target.points, warnings)?;
-    checks::flat_pair(spreads_source, spreads_target, warnings);
+    let summary = match &given {
+        Given::Kept(k) => k.summary.clone(),
+        Given::Validated(t) => target::summary(t)?,
+    };
+    warnings.extend(summary.warnings.iter().cloned());
+    checks::flat_pair(spreads_source, summary.spreads, warnings);
     let init = options::initial_transform(options)?;
     // From here the pipeline works on each cloud's f32 offsets from its f64 origin (the local
     // frames); the caller's initial guess moves into them in f64: `Tr(-o_t) * init * Tr(o_s)`.
     // Its rotation is applied to the source's points, its translation kept in f64 (`shift`),
     // so a guess that moves the source far keeps the source's shape.
-    let (origin_source, origin_target) = (source.origin, target.origin);
-    let (source, target) = (source.into_local(), target.into_local());
+    let (origin_source, origin_target) = (source.origin, summary.origin);
+    let source = source.into_local();
     let init_local = origin::to_local(&init, origin_source, origin_target);
     let rotate_init = transform::from_rotation_translation(&transform::rotation(&init_local), &Vector3::zeros());
     let shift = Matrix4::new_translation(&transform::translation(&init_local));
-    let (size_source, size_target) = (source.half_extent(), target.half_extent());
+    let (size_source, size_target) = (source.half_extent(), summary.bounding.1);
     let size_ratio = size_source.max(size_target) / size_source.min(size_target);
     if size_ratio > SIZE_RATIO_WARNING {
         warnings.push(format!(
@@ -82,39 +97,33 @@ pub(crate) fn prepare(
     // the source's centre, which the normalisation removes).
     let source_init =
         if transform::rotation(&init_local) == Matrix3::identity() { source } else { source.transformed(&rotate_init) };
-    let norm = JointNormalization::of_pair(&source_init, &target);
+    let norm = JointNormalization::of_boxes(JointNormalization::box_of(&source_init), summary.bounding);
     // the initial guess (identity with no initialTransform), from the turned source to the target
     let t_initial = norm.normalize_transform(&shift);
     checks::initial_distance(&t_initial)?;
     let src_n = source_init.transformed(&norm.source_to_normalized());
-    let tgt_n = target.transformed(&norm.target_to_normalized());
     let (d_final, voxel) = options::distances(options, norm.scale)?;
-    for (what, c) in [("source", &src_n), ("target", &tgt_n)] {
-        if c.len() < n_net {
-            warnings
-                .push(format!("{what} has {} points, fewer than the network's {n_net}: some were used twice", c.len()));
+    let sizes = Sizes { scale: norm.scale.to_bits(), voxel: voxel.to_bits(), n_net, seed: options.seed };
+    let target = match given {
+        Given::Kept(k) if k.sizes == sizes => k,
+        // the same target at another scale or voxel (a larger source, other options)
+        Given::Kept(old) => {
+            drop(old);
+            let local = target::local(target, options.non_finite)?;
+            Box::new(PreparedTarget::new(input, summary, sizes, &local, &norm))
+        }
+        Given::Validated(t) => Box::new(PreparedTarget::new(input, summary, sizes, &t.into_local(), &norm)),
+    };
+    for (what, len) in [("source", src_n.len()), ("target", target.cloud.len())] {
+        if len < n_net {
+            warnings.push(format!("{what} has {len} points, fewer than the network's {n_net}: some were used twice"));
         }
     }
     let net_src = sampling::network_sample(&src_n, n_net, options.seed);
-    let net_tgt = sampling::network_sample(&tgt_n, n_net, options.seed ^ sampling::TARGET_SEED_XOR);
     let icp_src = sampling::voxel_downsample(&src_n, voxel as f32);
-    let icp_tgt = sampling::voxel_downsample(&tgt_n, voxel as f32);
     // what ICP keeps must fit next to the inputs before its k-d trees and normals are built
     let voxel_user = voxel * norm.scale;
     limits::check_icp_points("source", src_n.len(), icp_src.len(), voxel_user)?;
-    limits::check_icp_points("target", tgt_n.len(), icp_tgt.len(), voxel_user)?;
-    Ok(Prepared {
-        origin_source,
-        origin_target,
-        rotate_init,
-        norm,
-        t_initial,
-        src_n,
-        tgt_n,
-        d_final,
-        net_src,
-        net_tgt,
-        icp_src,
-        icp_tgt,
-    })
+    limits::check_icp_points("target", target.cloud.len(), target.icp.len(), voxel_user)?;
+    Ok(Prepared { origin_source, rotate_init, norm, t_initial, src_n, d_final, net_src, icp_src, target })
 }

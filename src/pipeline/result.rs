@@ -35,7 +35,7 @@ pub(crate) fn finish(
     let Chosen { candidate, evidence, confidence, starts_refined, alternatives } = chosen;
     let Candidate { start, T_target_source: t_n, fitness, inlier_rmse: rmse_n, iterations, converged } = candidate;
     let to_caller = |t: &Matrix4<f64>| {
-        origin::to_caller(&(p.norm.denormalize(t) * p.rotate_init), p.origin_source, p.origin_target)
+        origin::to_caller(&(p.norm.denormalize(t) * p.rotate_init), p.origin_source, p.target.summary.origin)
     };
     let T_target_source = to_caller(&t_n);
     let T_target_source_network = to_caller(t_net_n);

@@ -52,11 +52,11 @@ pub(crate) fn search(
     let p = prepared;
     let d_final = p.d_final;
     // normals are estimated as ICP first needs them (only near the source's sampled points)
-    let target_index = IcpTarget::new(&p.icp_tgt.points, false);
+    let target_index = p.target.index();
     let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations };
     let source_index = IcpTarget::new(&p.icp_src.points, false);
     let judge =
-        |t: &Matrix4<f64>| confidence::probe(&target_index, &source_index, &p.icp_src.points, t, d_final, options.icp);
+        |t: &Matrix4<f64>| confidence::probe(target_index, &source_index, &p.icp_src.points, t, d_final, options.icp);
     // `c` is a better answer than `b`: it fits better (`refine::better`) and is another pose. A
     // start that only found the answer again (a hair better, perhaps) leaves it as it was judged:
     // probing the same pose again would say the same.
@@ -78,7 +78,7 @@ pub(crate) fn search(
             None if adaptive && options.icp != IcpKind::Off && best.is_some() => {
                 // blind starts, most of which land nowhere: a short run each picks those refined
                 let more = starts.more(&kinds, model, workspace)?;
-                refine::shortlist(&target_index, &p.icp_src.points, more, &how, LAST_STAGE_STARTS)
+                refine::shortlist(target_index, &p.icp_src.points, more, &how, LAST_STAGE_STARTS)
             }
             None => break,
         };
@@ -90,7 +90,7 @@ pub(crate) fn search(
             continue;
         }
         starts_refined += starts.len();
-        let Some(c) = refine::refine_best(&target_index, &p.icp_src.points, &starts, &how) else { continue };
+        let Some(c) = refine::refine_best(target_index, &p.icp_src.points, &starts, &how) else { continue };
         refined.push((c.T_target_source, c.fitness));
         let better = match &best {
             None => true,
@@ -104,7 +104,7 @@ pub(crate) fn search(
                 (c, judge(&c.T_target_source), 0)
             } else {
                 let refine = |t| {
-                    let r = refine::refine_best(&target_index, &p.icp_src.points, &[(c.start, t)], &how);
+                    let r = refine::refine_best(target_index, &p.icp_src.points, &[(c.start, t)], &how);
                     refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
                     r
                 };
@@ -144,7 +144,7 @@ pub(crate) fn search(
     let answer = &candidate.T_target_source;
     confidence::count_search_alternatives(&mut evidence, &mut poses, answer, candidate.fitness, &refined);
     let confidence = confidence::confidence(&evidence);
-    let alternatives = refine_alternatives(&target_index, &p.icp_src.points, &candidate, &poses, &how);
+    let alternatives = refine_alternatives(target_index, &p.icp_src.points, &candidate, &poses, &how);
     Ok(Chosen { candidate, evidence, confidence, starts_refined, alternatives })
 }
 

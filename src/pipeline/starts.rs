@@ -7,7 +7,6 @@
 
 use super::network;
 use super::prepare::Prepared;
-use crate::cloud::PointCloud;
 use crate::icp::IcpKind;
 use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Start};
@@ -105,8 +104,10 @@ impl<'a> Starts<'a> {
             match start {
                 Start::Network => starts.push((start, t_net_n)),
                 Start::Initial => starts.push((start, t_initial)),
-                Start::Centroids => starts.push((start, centroid_alignment(&p.src_n, &p.tgt_n))),
-                Start::Rotations => starts.extend(rotations(&p.src_n, &p.tgt_n).map(|t| (start, t))),
+                Start::Centroids => starts.push((start, centroid_alignment(p.src_n.centroid(), p.target.centroid()))),
+                Start::Rotations => {
+                    starts.extend(rotations(p.src_n.centroid(), p.target.centroid()).map(|t| (start, t)))
+                }
                 Start::Turned | Start::TurnedInitial => {
                     // t_net_n is the initial transform when the network is off
                     let base = if start == Start::Turned { t_net_n } else { t_initial };
@@ -148,7 +149,7 @@ impl<'a> Starts<'a> {
         }
         if !kinds.contains(&Start::Rotations) {
             let p = self.prepared;
-            starts.extend(rotations(&p.src_n, &p.tgt_n).map(|t| (Start::Rotations, t)));
+            starts.extend(rotations(p.src_n.centroid(), p.target.centroid()).map(|t| (Start::Rotations, t)));
         }
         Ok(starts)
     }
@@ -159,8 +160,9 @@ impl<'a> Starts<'a> {
         let p = self.prepared;
         let mut w = Stopwatch::start(self.clock);
         let params = global::GlobalParams { seed: self.seed, hypotheses: count, ..Default::default() };
-        let matched =
-            self.matched.get_or_insert_with(|| global::Matched::new(&p.src_n, &p.tgt_n, params.voxel_fraction));
+        let matched = self.matched.get_or_insert_with(|| {
+            global::Matched::onto(&p.src_n, &p.target.cloud, &p.target.features, params.voxel_fraction)
+        });
         let hypotheses = matched.hypotheses(&params).iter().map(|h| h.T_target_source).collect();
         self.global_ms += w.lap();
         hypotheses
@@ -183,7 +185,7 @@ impl<'a> Starts<'a> {
         for &h in hypotheses {
             // the network estimates the motion left after the hypothesis
             let moved: Vec<[f32; 3]> = p.net_src.points.iter().map(|&q| transform::apply(&h, q)).collect();
-            let t = network::estimate(model, workspace, &moved, &p.net_tgt.points)?;
+            let t = network::estimate(model, workspace, &moved, &p.target.net.points)?;
             starts.push((start, t * h));
         }
         Ok(starts)
@@ -200,18 +202,17 @@ const SAME_HYPOTHESIS_DEGREES: f64 = 10.0;
 /// See [`SAME_HYPOTHESIS_DEGREES`]: translations this close (normalised units).
 const SAME_HYPOTHESIS_SHIFT: f64 = 0.1;
 
-/// The [`Start::Rotations`] transforms between two clouds in one frame: each of the
-/// [`refine::cube_rotations`] about the source's centroid, which moves onto the target's.
-fn rotations(source: &PointCloud, target: &PointCloud) -> [Matrix4<f64>; 24] {
-    let (cs, ct) = (source.centroid(), target.centroid());
+/// The [`Start::Rotations`] transforms between two clouds in one frame, given their centroids:
+/// each of the [`refine::cube_rotations`] about the source's centroid, which moves onto the
+/// target's.
+fn rotations(cs: [f64; 3], ct: [f64; 3]) -> [Matrix4<f64>; 24] {
     let (cs, ct) = (nalgebra::Vector3::from(cs), nalgebra::Vector3::from(ct));
     refine::cube_rotations().map(|r| transform::from_rotation_translation(&r, &(ct - r * cs)))
 }
 
-/// The [`Start::Centroids`] transform between two clouds in one frame: no rotation, the
-/// translation taking the source's centroid onto the target's.
-fn centroid_alignment(source: &PointCloud, target: &PointCloud) -> Matrix4<f64> {
-    let (cs, ct) = (source.centroid(), target.centroid());
+/// The [`Start::Centroids`] transform between two clouds in one frame, given their centroids: no
+/// rotation, the translation taking the source's centroid onto the target's.
+fn centroid_alignment(cs: [f64; 3], ct: [f64; 3]) -> Matrix4<f64> {
     Matrix4::new_translation(&nalgebra::Vector3::new(ct[0] - cs[0], ct[1] - cs[1], ct[2] - cs[2]))
 }
 

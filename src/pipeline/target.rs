@@ -1,0 +1,146 @@
+//! Stage 2, the target's share: the target validated, in its local frame, normalised, sampled for
+//! the network and voxelised for ICP, with its k-d tree, normals and global descriptors made as
+//! they are first needed ([`PreparedTarget`]).
+//!
+//! A [`crate::Registrar`] keeps the last target it prepared. A registration onto the same target
+//! (the same points, origin and `nonFinite` option, recognised by [`InputKey`]'s fingerprint)
+//! reuses what depends on the target alone ([`TargetSummary`]: the validation, its box and
+//! spreads); when the normalisation's scale, the ICP voxel, the network's point count and the
+//! seed are the same too ([`Sizes`]: e.g. scans smaller than a model registered onto it with the
+//! same options), it reuses everything, normals and descriptors found so far included. Each
+//! piece is what preparing anew would make, so the result is the same either way.
+
+use crate::cloud::{JointNormalization, NonFinite, PointCloud, MIN_POINTS};
+use crate::global::TargetFeatures;
+use crate::icp::IcpTarget;
+use crate::{checks, sampling, Result};
+use std::sync::OnceLock;
+
+/// What recognises a target given again: a 128-bit fingerprint (XXH3) of its points' bytes, their
+/// count, its origin and the `nonFinite` option.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct InputKey {
+    fingerprint: u128,
+    len: usize,
+    origin: [u64; 3],
+    non_finite: NonFinite,
+}
+
+impl InputKey {
+    /// The key of `cloud` checked with `non_finite` (one pass over its points).
+    pub(crate) fn of(cloud: &PointCloud, non_finite: NonFinite) -> Self {
+        let mut hasher = xxhash_rust::xxh3::Xxh3::new();
+        // the points' little-endian bytes, a chunk at a time
+        let mut buf = [0u8; 12 * 256];
+        for chunk in cloud.points.chunks(256) {
+            for (p, out) in chunk.iter().zip(buf.chunks_exact_mut(12)) {
+                for (v, o) in p.iter().zip(out.chunks_exact_mut(4)) {
+                    o.copy_from_slice(&v.to_le_bytes());
+                }
+            }
+            hasher.update(&buf[..12 * chunk.len()]);
+        }
+        Self { fingerprint: hasher.digest128(), len: cloud.len(), origin: cloud.origin.map(f64::to_bits), non_finite }
+    }
+}
+
+/// What the pipeline needs of the target before the normalisation, from its validated points in
+/// their local frame.
+#[derive(Clone, Debug)]
+pub(crate) struct TargetSummary {
+    /// The target's f64 origin (caller's frame).
+    pub origin: [f64; 3],
+    /// Its bounding box's centre and largest half-extent (local frame; see
+    /// [`JointNormalization::box_of`]).
+    pub bounding: ([f64; 3], f64),
+    /// Its principal spreads ([`checks::not_collinear`]).
+    pub spreads: [f64; 3],
+    /// The warnings its checks gave (a nearly collinear target).
+    pub warnings: Vec<String>,
+}
+
+/// What the normalised target depends on besides the target: the normalisation's scale, the ICP
+/// voxel (normalised units), the network's point count and the seed (bits, for exact equality).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Sizes {
+    pub scale: u64,
+    pub voxel: u64,
+    pub n_net: usize,
+    pub seed: u64,
+}
+
+/// The target validated and in its local frame: its points as offsets from its origin.
+pub(crate) fn local(target: &PointCloud, non_finite: NonFinite) -> Result<PointCloud> {
+    Ok(target.validated("target", MIN_POINTS, non_finite)?.into_local())
+}
+
+/// The summary of the validated `target` (its origin not yet dropped); an error when it is
+/// collinear.
+pub(crate) fn summary(target: &PointCloud) -> Result<TargetSummary> {
+    let mut warnings = Vec::new();
+    let spreads = checks::not_collinear("target", &target.points, &mut warnings)?;
+    let bounding = JointNormalization::box_of(target);
+    Ok(TargetSummary { origin: target.origin, bounding, spreads, warnings })
+}
+
+/// The target prepared for the network, ICP and the global hypotheses (normalised units), with
+/// what identifies it.
+#[derive(Debug)]
+pub(crate) struct PreparedTarget {
+    /// The input it was made from.
+    pub input: InputKey,
+    /// What the pipeline needs of it before the normalisation.
+    pub summary: TargetSummary,
+    /// What its normalised clouds depend on besides the target.
+    pub sizes: Sizes,
+    /// The normalised target.
+    pub cloud: PointCloud,
+    /// The points fed to the network.
+    pub net: PointCloud,
+    /// The voxelised target for ICP.
+    pub icp: PointCloud,
+    /// ICP's k-d tree of [`PreparedTarget::icp`] and its normals, built on first use (after
+    /// the memory limits are checked).
+    index: OnceLock<IcpTarget>,
+    /// The centroid of [`PreparedTarget::cloud`], computed on first use.
+    centroid: OnceLock<[f64; 3]>,
+    /// Its side of the global hypotheses, filled as they need it.
+    pub features: TargetFeatures,
+}
+
+impl PreparedTarget {
+    /// Normalises the `local` target by `norm`, samples `sizes.n_net` points of it for the network
+    /// and voxelises it for ICP.
+    pub(crate) fn new(
+        input: InputKey,
+        summary: TargetSummary,
+        sizes: Sizes,
+        local: &PointCloud,
+        norm: &JointNormalization,
+    ) -> Self {
+        let cloud = local.transformed(&norm.target_to_normalized());
+        let net = sampling::network_sample(&cloud, sizes.n_net, sizes.seed ^ sampling::TARGET_SEED_XOR);
+        let icp = sampling::voxel_downsample(&cloud, f64::from_bits(sizes.voxel) as f32);
+        Self {
+            input,
+            summary,
+            sizes,
+            cloud,
+            net,
+            icp,
+            index: OnceLock::new(),
+            centroid: OnceLock::new(),
+            features: TargetFeatures::default(),
+        }
+    }
+
+    /// ICP's index of the voxelised target (normals estimated as ICP first needs them).
+    pub(crate) fn index(&self) -> &IcpTarget {
+        self.index.get_or_init(|| IcpTarget::new(&self.icp.points, false))
+    }
+
+    /// The normalised target's centroid.
+    pub(crate) fn centroid(&self) -> [f64; 3] {
+        *self.centroid.get_or_init(|| self.cloud.centroid())
+    }
+}

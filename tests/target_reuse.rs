@@ -1,0 +1,183 @@
+//! A registrar keeps the last target it prepared and reuses it for the same target: every
+//! registration gives what a fresh registrar gives, bit for bit, whatever came between (other
+//! scans of the same model, a larger source, other options, another target, the same points at
+//! another origin, a failed call, `forget_target`).
+
+mod common;
+
+use arps::io::{read_mesh, read_point_cloud_with, ReadOptions};
+use arps::transform::rigid_inverse;
+use arps::{NonFinite, Options, PointCloud, Registrar, Registration, Search, Timings};
+use common::{bumpy_surface, crop, motion};
+
+/// The CAD model (an STL read as 20,000 surface points) and `k`-th scan of it: other points of its
+/// surface, seen from one side, moved by a known motion (some far beyond the network's range).
+fn model_and_scans() -> (PointCloud, Vec<PointCloud>) {
+    let name = "angle_block_binary_solid.stl";
+    let bytes = std::fs::read(format!("{}/fixtures/formats/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let model = read_point_cloud_with(&bytes, name, &ReadOptions { surface_points: Some(20_000), seed: 0 }).unwrap();
+    let dense = read_mesh(&bytes, name).unwrap().sample_surface(6_000, 7).unwrap();
+    let scans = [
+        ([1.0, 0.2, 0.0], [10.0, -20.0, 30.0], [0.5, 0.2, -0.3]),
+        ([-0.3, 1.0, 0.2], [-5.0, 15.0, 8.0], [0.1, 0.0, 0.2]),
+        ([0.2, -0.4, 1.0], [120.0, 40.0, -70.0], [1.0, 0.0, 0.5]),
+    ]
+    .map(|(dir, degrees, shift)| crop(&dense, dir, 0.7).transformed(&rigid_inverse(&motion(degrees, shift))));
+    (model, scans.to_vec())
+}
+
+/// `r` without its timings (the only part that may differ between runs).
+fn untimed(r: Registration) -> Registration {
+    Registration { timings: Timings::default(), ..r }
+}
+
+/// What a registrar that never saw another pair answers.
+fn fresh(source: &PointCloud, target: &PointCloud, options: &Options) -> arps::Result<Registration> {
+    Registrar::with_default_model().unwrap().register(source, target, options).map(untimed)
+}
+
+#[test]
+fn registrations_onto_a_kept_target_equal_fresh_ones() {
+    let (model, scans) = model_and_scans();
+    let defaults = Options::default();
+    let seeded = Options { seed: 3, ..Options::default() };
+    let voxel = Options { voxel_size: Some(0.01), ..Options::default() };
+    let exhaustive = Options { search: Search::Exhaustive, ..Options::default() };
+    // a source larger than the model: the normalisation's scale is the source's
+    let large = PointCloud::new(bumpy_surface(3_000, 0.3).points.iter().map(|p| p.map(|v| v * 2.0)).collect());
+    // the model's points at another origin: another target
+    let moved = PointCloud::with_origin(model.points.clone(), [1000.0, -20.0, 5.0]);
+    let other = bumpy_surface(4_000, 0.7);
+    let calls: Vec<(&PointCloud, &PointCloud, &Options)> = vec![
+        (&scans[0], &model, &defaults),
+        (&scans[1], &model, &defaults),
+        (&scans[2], &model, &defaults), // any pose: the global stage describes the model
+        (&scans[0], &model, &defaults),
+        (&scans[0], &model, &seeded),
+        (&scans[1], &model, &voxel),
+        (&large, &model, &defaults),
+        (&scans[1], &model, &defaults),
+        (&scans[2], &model, &exhaustive),
+        (&scans[1], &moved, &defaults),
+        (&scans[1], &other, &defaults),
+        (&scans[2], &model, &defaults),
+    ];
+    let mut kept = Registrar::with_default_model().unwrap();
+    for (k, (source, target, options)) in calls.into_iter().enumerate() {
+        let again = untimed(kept.register(source, target, options).unwrap());
+        assert_eq!(again, fresh(source, target, options).unwrap(), "call {k}");
+    }
+}
+
+#[test]
+fn a_failed_call_or_forget_target_leaves_the_next_registration_as_a_fresh_one() {
+    let (model, scans) = model_and_scans();
+    let defaults = Options::default();
+    let mut kept = Registrar::with_default_model().unwrap();
+    let first = untimed(kept.register(&scans[0], &model, &defaults).unwrap());
+    assert_eq!(first, fresh(&scans[0], &model, &defaults).unwrap());
+    // a source with a NaN: an error, and the model's next registration is as a fresh one's
+    let mut bad = scans[1].clone();
+    bad.points[5][1] = f32::NAN;
+    let err = kept.register(&bad, &model, &defaults).unwrap_err().to_string();
+    assert!(err.contains("source point 5"), "{err}");
+    assert_eq!(
+        untimed(kept.register(&scans[1], &model, &defaults).unwrap()),
+        fresh(&scans[1], &model, &defaults).unwrap()
+    );
+    // a bad option after the model was kept
+    let bad_option = Options { max_correspondence_distance: Some(-1.0), ..Options::default() };
+    assert!(kept.register(&scans[1], &model, &bad_option).is_err());
+    assert_eq!(
+        untimed(kept.register(&scans[2], &model, &defaults).unwrap()),
+        fresh(&scans[2], &model, &defaults).unwrap()
+    );
+    kept.forget_target();
+    assert_eq!(untimed(kept.register(&scans[0], &model, &defaults).unwrap()), first);
+}
+
+#[test]
+fn the_same_points_with_a_nan_follow_the_non_finite_option_each_time() {
+    let (model, scans) = model_and_scans();
+    let mut target = model.clone();
+    target.points[11] = [f32::NAN, 0.0, 0.0];
+    let drop = Options { non_finite: NonFinite::Drop, ..Options::default() };
+    let mut kept = Registrar::with_default_model().unwrap();
+    let dropped = untimed(kept.register(&scans[0], &target, &drop).unwrap());
+    assert_eq!(dropped, fresh(&scans[0], &target, &drop).unwrap());
+    // the target kept from the call that dropped its NaN is not taken for the one that must fail
+    let err = kept.register(&scans[0], &target, &Options::default()).unwrap_err().to_string();
+    assert!(err.contains("target point 11"), "{err}");
+    assert_eq!(untimed(kept.register(&scans[0], &target, &drop).unwrap()), dropped);
+}
+
+/// The measurement behind `BENCHMARK.md`, "Many scans onto one model": the STL model read as
+/// 200,000 and as 1,000,000 surface points; six scans of it (20,000 other surface points each, the
+/// 70% on one side of a plane), moved by any rotation, and six moved by at most 30 degrees per axis;
+/// each scan registered onto the model by a registrar that kept the model from the scan before,
+/// and by one told to forget it, alternated, twice. Prints the median milliseconds per call of
+/// each (the whole call and its preparation), their ratio, and how many answers were right (under
+/// 5 degrees) with each. `cargo test --release --test target_reuse -- --ignored --nocapture`.
+#[test]
+#[ignore]
+fn many_scans_onto_one_model() {
+    use arps::transform::rotation_error_deg;
+    use rand::{Rng, SeedableRng};
+    let name = "angle_block_binary_solid.stl";
+    let bytes = std::fs::read(format!("{}/fixtures/formats/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let mesh = read_mesh(&bytes, name).unwrap();
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let mut scans = |max_degrees: f64| -> Vec<(PointCloud, nalgebra::Matrix4<f64>)> {
+        (0..6)
+            .map(|k| {
+                let dense = mesh.sample_surface(28_572, 100 + k).unwrap();
+                let dir = [0; 3].map(|_| rng.random_range(-1.0f32..1.0));
+                let degrees = [0; 3].map(|_| rng.random_range(-max_degrees..max_degrees));
+                let shift = [0; 3].map(|_| rng.random_range(-0.5..0.5));
+                let gt = motion(degrees, shift);
+                (crop(&dense, dir, 0.7).transformed(&rigid_inverse(&gt)), gt)
+            })
+            .collect()
+    };
+    let sets = [("any pose", scans(180.0)), ("up to 30 degrees", scans(30.0))];
+    let median = |v: &mut Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    for points in [200_000, 1_000_000] {
+        let model =
+            read_point_cloud_with(&bytes, name, &ReadOptions { surface_points: Some(points), seed: 0 }).unwrap();
+        for (what, scans) in &sets {
+            let (mut kept, mut forgetting) =
+                (Registrar::with_default_model().unwrap(), Registrar::with_default_model().unwrap());
+            kept.register(&scans[0].0, &model, &Options::default()).unwrap();
+            // per registrar (kept, anew): whole-call ms, preparation ms, right answers
+            let mut tally: [(Vec<f64>, Vec<f64>, usize); 2] = Default::default();
+            for round in 0..2 {
+                for (k, (scan, gt)) in scans.iter().enumerate() {
+                    let order = if (round + k) % 2 == 0 { [0, 1] } else { [1, 0] };
+                    for which in order {
+                        let t0 = std::time::Instant::now();
+                        let r = if which == 0 {
+                            kept.register(scan, &model, &Options::default()).unwrap()
+                        } else {
+                            forgetting.forget_target();
+                            forgetting.register(scan, &model, &Options::default()).unwrap()
+                        };
+                        let t = &mut tally[which];
+                        t.0.push(t0.elapsed().as_secs_f64() * 1e3);
+                        t.1.push(r.timings.preprocess_ms);
+                        t.2 += (rotation_error_deg(&r.T_target_source, gt) < 5.0) as usize;
+                    }
+                }
+            }
+            let [(mut a, mut pa, ra), (mut b, mut pb, rb)] = tally;
+            let n = a.len();
+            let (a, b, pa, pb) = (median(&mut a), median(&mut b), median(&mut pa), median(&mut pb));
+            println!(
+                "model of {points} points, {n} scans {what}: kept {a:.1} ms (preparation {pa:.1}), prepared anew {b:.1} ms ({pb:.1}); ratio {:.2}; right {ra} / {rb}",
+                a / b
+            );
+        }
+    }
+}
