@@ -111,22 +111,93 @@ fn the_same_points_with_a_nan_follow_the_non_finite_option_each_time() {
     assert_eq!(untimed(kept.register(&scans[0], &target, &drop).unwrap()), dropped);
 }
 
-/// The measurement behind `BENCHMARK.md`, "Many scans onto one model": the STL model read as
-/// 200,000 and as 1,000,000 surface points; six scans of it (20,000 other surface points each, the
-/// 70% on one side of a plane), moved by any rotation, and six moved by at most 30 degrees per axis;
-/// each scan registered onto the model by a registrar that kept the model from the scan before,
-/// and by one told to forget it, alternated, twice. Prints the median milliseconds per call of
-/// each (the whole call and its preparation), their ratio, and how many answers were right (under
-/// 5 degrees) with each. `cargo test --release --test target_reuse -- --ignored --nocapture`.
+/// Each scan registered onto `target` by a registrar that kept the target from the scan before,
+/// and by one told to forget it, alternated, twice over the scans. Prints the median milliseconds
+/// per call of each (the whole call, and its preparation), their ratio, and how many answers of
+/// each were right (under `degrees` of rotation error).
+fn time_kept_and_anew(what: &str, target: &PointCloud, scans: &[(PointCloud, nalgebra::Matrix4<f64>)], degrees: f64) {
+    use arps::transform::rotation_error_deg;
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    let (mut kept, mut forgetting) =
+        (Registrar::with_default_model().unwrap(), Registrar::with_default_model().unwrap());
+    kept.register(&scans[0].0, target, &Options::default()).unwrap();
+    // per registrar (kept, anew): whole-call ms, preparation ms, right answers
+    let mut tally: [(Vec<f64>, Vec<f64>, usize); 2] = Default::default();
+    for round in 0..2 {
+        for (k, (scan, gt)) in scans.iter().enumerate() {
+            let order = if (round + k) % 2 == 0 { [0, 1] } else { [1, 0] };
+            for which in order {
+                let t0 = std::time::Instant::now();
+                let r = if which == 0 {
+                    kept.register(scan, target, &Options::default()).unwrap()
+                } else {
+                    forgetting.forget_target();
+                    forgetting.register(scan, target, &Options::default()).unwrap()
+                };
+                let t = &mut tally[which];
+                t.0.push(t0.elapsed().as_secs_f64() * 1e3);
+                t.1.push(r.timings.preprocess_ms);
+                t.2 += (rotation_error_deg(&r.T_target_source, gt) < degrees) as usize;
+            }
+        }
+    }
+    let [(a, pa, ra), (b, pb, rb)] = tally;
+    let n = a.len();
+    let (a, b, pa, pb) = (median(a), median(b), median(pa), median(pb));
+    println!(
+        "{what} ({} target points), {n} calls: kept {a:.1} ms (preparation {pa:.1}), prepared anew {b:.1} ms ({pb:.1}); ratio {:.2}; right {ra} / {rb}",
+        target.len(),
+        a / b
+    );
+}
+
+/// The measurement behind `BENCHMARK.md`, "Many scans onto one target", through
+/// [`time_kept_and_anew`]:
+/// - local captures onto a LiDAR map: the small_gicp Velodyne target scan (69,000 points, from
+///   `../shared/data/scans`; skipped when absent) and six parts of the other scan (the points
+///   within 15 m of six of its points), each turned up to 30 degrees about the vertical and moved
+///   up to 5 m, with the pair's ground truth;
+/// - scans of a CAD model: the STL fixture read as 200,000 and 1,000,000 surface points; six scans
+///   of it (20,000 other surface points each, the 70% on one side of a plane), moved by any
+///   rotation, six by at most 30 degrees per axis, and six close-ups (the points of such a scan
+///   within 40% of the model's half-extent of one of them) moved by at most 30 degrees per axis.
+///
+/// `cargo test --release --test target_reuse -- --ignored --nocapture`.
 #[test]
 #[ignore]
-fn many_scans_onto_one_model() {
-    use arps::transform::rotation_error_deg;
+fn many_scans_onto_one_target() {
     use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+    let scans_dir = format!("{}/../shared/data/scans", env!("CARGO_MANIFEST_DIR"));
+    if let Ok(pairs) = std::fs::read_to_string(format!("{scans_dir}/pairs.tsv")) {
+        let line = pairs.lines().find(|l| l.starts_with("velodyne-outdoor")).unwrap();
+        let fields: Vec<&str> = line.split('\t').collect();
+        let v: Vec<f64> = fields[5].split_whitespace().map(|x| x.parse().unwrap()).collect();
+        let t_target_source = nalgebra::Matrix4::from_row_slice(&v);
+        let read = |name: &str| arps::io::read_path(std::path::Path::new(&format!("{scans_dir}/{name}"))).unwrap();
+        let (source, map) = (read(fields[1]), read(fields[2]));
+        let captures: Vec<(PointCloud, nalgebra::Matrix4<f64>)> = (0..6)
+            .map(|_| {
+                let c = source.points[rng.random_range(0..source.len())];
+                let near = |p: &&[f32; 3]| (p[0] - c[0]).powi(2) + (p[1] - c[1]).powi(2) < 15.0f32.powi(2);
+                let part = PointCloud::with_origin(source.points.iter().filter(near).copied().collect(), source.origin);
+                let m = motion(
+                    [0.0, 0.0, rng.random_range(-30.0..30.0)],
+                    [rng.random_range(-5.0..5.0), rng.random_range(-5.0..5.0), 0.0],
+                );
+                (part.transformed(&rigid_inverse(&m)), t_target_source * m)
+            })
+            .collect();
+        time_kept_and_anew("local captures onto a LiDAR map", &map, &captures, 2.0);
+    } else {
+        eprintln!("no {scans_dir}/pairs.tsv: the LiDAR map skipped");
+    }
     let name = "angle_block_binary_solid.stl";
     let bytes = std::fs::read(format!("{}/fixtures/formats/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
     let mesh = read_mesh(&bytes, name).unwrap();
-    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
     let mut scans = |max_degrees: f64| -> Vec<(PointCloud, nalgebra::Matrix4<f64>)> {
         (0..6)
             .map(|k| {
@@ -139,45 +210,30 @@ fn many_scans_onto_one_model() {
             })
             .collect()
     };
-    let sets = [("any pose", scans(180.0)), ("up to 30 degrees", scans(30.0))];
-    let median = |v: &mut Vec<f64>| {
-        v.sort_by(f64::total_cmp);
-        v[v.len() / 2]
-    };
+    let (any_pose, small_turns) = (scans(180.0), scans(30.0));
+    // close-ups: the points of a scan within 40% of the model's half-extent of one of them
+    let close_ups: Vec<(PointCloud, nalgebra::Matrix4<f64>)> = (0..6)
+        .map(|k| {
+            let dense = mesh.sample_surface(28_572, 200 + k).unwrap();
+            let reach = 0.4 * dense.half_extent() as f32;
+            let c = dense.points[rng.random_range(0..dense.len())];
+            let near = |p: &&[f32; 3]| (0..3).map(|a| (p[a] - c[a]).powi(2)).sum::<f32>() < reach * reach;
+            let part = PointCloud::new(dense.points.iter().filter(near).copied().collect());
+            let degrees = [0; 3].map(|_| rng.random_range(-30.0..30.0));
+            let gt = motion(degrees, [0; 3].map(|_| rng.random_range(-0.5..0.5)));
+            (part.transformed(&rigid_inverse(&gt)), gt)
+        })
+        .collect();
+    let sets = [
+        ("CAD model, scans in any pose", any_pose),
+        ("CAD model, scans up to 30 degrees", small_turns),
+        ("CAD model, close-ups up to 30 degrees", close_ups),
+    ];
     for points in [200_000, 1_000_000] {
         let model =
             read_point_cloud_with(&bytes, name, &ReadOptions { surface_points: Some(points), seed: 0 }).unwrap();
         for (what, scans) in &sets {
-            let (mut kept, mut forgetting) =
-                (Registrar::with_default_model().unwrap(), Registrar::with_default_model().unwrap());
-            kept.register(&scans[0].0, &model, &Options::default()).unwrap();
-            // per registrar (kept, anew): whole-call ms, preparation ms, right answers
-            let mut tally: [(Vec<f64>, Vec<f64>, usize); 2] = Default::default();
-            for round in 0..2 {
-                for (k, (scan, gt)) in scans.iter().enumerate() {
-                    let order = if (round + k) % 2 == 0 { [0, 1] } else { [1, 0] };
-                    for which in order {
-                        let t0 = std::time::Instant::now();
-                        let r = if which == 0 {
-                            kept.register(scan, &model, &Options::default()).unwrap()
-                        } else {
-                            forgetting.forget_target();
-                            forgetting.register(scan, &model, &Options::default()).unwrap()
-                        };
-                        let t = &mut tally[which];
-                        t.0.push(t0.elapsed().as_secs_f64() * 1e3);
-                        t.1.push(r.timings.preprocess_ms);
-                        t.2 += (rotation_error_deg(&r.T_target_source, gt) < 5.0) as usize;
-                    }
-                }
-            }
-            let [(mut a, mut pa, ra), (mut b, mut pb, rb)] = tally;
-            let n = a.len();
-            let (a, b, pa, pb) = (median(&mut a), median(&mut b), median(&mut pa), median(&mut pb));
-            println!(
-                "model of {points} points, {n} scans {what}: kept {a:.1} ms (preparation {pa:.1}), prepared anew {b:.1} ms ({pb:.1}); ratio {:.2}; right {ra} / {rb}",
-                a / b
-            );
+            time_kept_and_anew(what, &model, scans, 5.0);
         }
     }
 }

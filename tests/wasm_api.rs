@@ -534,3 +534,27 @@ fn progress_callback_sees_each_stage_and_a_throwing_callback_is_reported() {
     assert!(e.contains("onProgress threw: boom at preparing"), "{e}");
     still_works(&mut r);
 }
+
+#[wasm_bindgen_test]
+fn registrations_onto_the_same_target_equal_a_fresh_registrars() {
+    // the registrar keeps the target from one call to the next: a scan, another scan (the source
+    // cropped), the first again, and each must be what a registrar that never saw another pair
+    // answers (the JS result without its timings)
+    let full = source();
+    let half: Vec<f32> = full.chunks_exact(3).filter(|p| p[0] > 0.0).flatten().copied().collect();
+    let untimed = |v: JsValue| {
+        let text = js_sys::JSON::stringify(&v).unwrap().as_string().unwrap();
+        let mut json: serde_json::Value = serde_json::from_str(&text).unwrap();
+        json.as_object_mut().unwrap().remove("timings");
+        json
+    };
+    let fresh = |s: &[f32]| {
+        let mut r = Registrar::with_default_model().map_err(message).unwrap();
+        untimed(r.register(s, &target(), None, None).map_err(message).unwrap())
+    };
+    let mut kept = Registrar::with_default_model().map_err(message).unwrap();
+    for s in [&full[..], &half[..], &full[..]] {
+        let again = untimed(kept.register(s, &target(), None, None).map_err(message).unwrap());
+        assert_eq!(again, fresh(s));
+    }
+}

@@ -62,10 +62,12 @@ pub(crate) fn prepare(
     let n_net = resolved.n_net;
     limits::check_cloud_points("source", source.len())?;
     limits::check_cloud_points("target", target.len())?;
-    let source = source.validated("source", MIN_POINTS, options.non_finite)?;
-    // the target given again: its checks passed already, and what it holds is reused below
+    // the target given again: its checks passed already, and what it holds is reused below;
+    // another target's is dropped before anything is allocated
     let input = InputKey::of(target, options.non_finite);
-    let given = match kept.filter(|k| k.input == input) {
+    let kept = kept.filter(|k| k.input == input);
+    let source = source.validated("source", MIN_POINTS, options.non_finite)?;
+    let given = match kept {
         Some(k) => Given::Kept(k),
         None => Given::Validated(target.validated("target", MIN_POINTS, options.non_finite)?),
     };
@@ -126,4 +128,51 @@ pub(crate) fn prepare(
     limits::check_icp_points("source", src_n.len(), icp_src.len(), voxel_user)?;
     limits::check_icp_points("target", target.cloud.len(), target.icp.len(), voxel_user)?;
     Ok(Prepared { origin_source, rotate_init, norm, t_initial, src_n, d_final, net_src, icp_src, target })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `n` points on a twisted, asymmetric surface patch of about `size` across.
+    fn patch(n: usize, size: f32, phase: f32) -> PointCloud {
+        let points = (0..n)
+            .map(|i| {
+                let (u, v) = ((i % 97) as f32 / 96.0, (i / 97) as f32 / (n / 97) as f32);
+                [u * size, v * size * 0.7, (3.0 * u + phase).sin() * (2.0 * v).cos() * size * 0.2]
+            })
+            .collect();
+        PointCloud::new(points)
+    }
+
+    #[test]
+    fn a_target_given_again_is_reused_for_smaller_sources_and_prepared_anew_otherwise() {
+        let target = patch(9_700, 2.0, 0.0);
+        let resolved = Resolved { n_net: 128 };
+        let options = Options::default();
+        let prepare_onto = |source: &PointCloud, target: &PointCloud, options: &Options, kept| {
+            prepare(source, target, options, &resolved, kept, &mut Vec::new()).unwrap().target
+        };
+        let first = prepare_onto(&patch(2_000, 1.0, 0.5), &target, &options, None);
+        first.index();
+        // another source smaller than the target: the target is kept (its index built)
+        let second = prepare_onto(&patch(3_000, 1.2, 1.0), &target, &options, Some(first));
+        assert!(second.is_indexed());
+        // another seed, another voxel, a source larger than the target (another scale): anew
+        let seeded = Options { seed: 9, ..Options::default() };
+        let third = prepare_onto(&patch(3_000, 1.2, 1.0), &target, &seeded, Some(second));
+        assert!(!third.is_indexed());
+        third.index();
+        let voxel = Options { voxel_size: Some(0.05), ..Options::default() };
+        let fourth = prepare_onto(&patch(3_000, 1.2, 1.0), &target, &voxel, Some(third));
+        assert!(!fourth.is_indexed());
+        fourth.index();
+        let fifth = prepare_onto(&patch(4_000, 5.0, 2.0), &target, &options, Some(fourth));
+        assert!(!fifth.is_indexed());
+        // the same points at another origin: another target
+        let sixth = prepare_onto(&patch(3_000, 1.2, 1.0), &target, &options, None);
+        sixth.index();
+        let moved = PointCloud::with_origin(target.points.clone(), [10.0, 0.0, 0.0]);
+        assert!(!prepare_onto(&patch(3_000, 1.2, 1.0), &moved, &options, Some(sixth)).is_indexed());
+    }
 }

@@ -139,6 +139,12 @@ impl PreparedTarget {
         self.index.get_or_init(|| IcpTarget::new(&self.icp.points, false))
     }
 
+    /// Whether ICP's index was built (by this call or an earlier one).
+    #[cfg(test)]
+    pub(crate) fn is_indexed(&self) -> bool {
+        self.index.get().is_some()
+    }
+
     /// The normalised target's centroid.
     pub(crate) fn centroid(&self) -> [f64; 3] {
         *self.centroid.get_or_init(|| self.cloud.centroid())
