@@ -107,7 +107,10 @@ pub(crate) fn prepare(
     let (d_final, voxel) = options::distances(options, norm.scale)?;
     let sizes = Sizes { scale: norm.scale.to_bits(), voxel: voxel.to_bits(), n_net, seed: options.seed };
     let target = match given {
-        Given::Kept(k) if k.sizes == sizes => k,
+        Given::Kept(mut k) if k.sizes.scale == sizes.scale => {
+            k.resize(sizes);
+            k
+        }
         // the same target at another scale or voxel (a larger source, other options)
         Given::Kept(old) => {
             drop(old);
@@ -146,7 +149,7 @@ mod tests {
     }
 
     #[test]
-    fn a_target_given_again_is_reused_for_smaller_sources_and_prepared_anew_otherwise() {
+    fn a_target_given_again_is_reused_for_smaller_sources_as_far_as_the_options_allow() {
         let target = patch(9_700, 2.0, 0.0);
         let resolved = Resolved { n_net: 128 };
         let options = Options::default();
@@ -158,15 +161,20 @@ mod tests {
         // another source smaller than the target: the target is kept (its index built)
         let second = prepare_onto(&patch(3_000, 1.2, 1.0), &target, &options, Some(first));
         assert!(second.is_indexed());
-        // another seed, another voxel, a source larger than the target (another scale): anew
+        // another seed: the same ICP cloud and index, another network sample
         let seeded = Options { seed: 9, ..Options::default() };
+        let net = second.net.points.clone();
         let third = prepare_onto(&patch(3_000, 1.2, 1.0), &target, &seeded, Some(second));
-        assert!(!third.is_indexed());
-        third.index();
+        assert!(third.is_indexed());
+        assert_ne!(third.net.points, net);
+        // another voxel: ICP's cloud and index made anew
         let voxel = Options { voxel_size: Some(0.05), ..Options::default() };
+        let icp = third.icp.len();
         let fourth = prepare_onto(&patch(3_000, 1.2, 1.0), &target, &voxel, Some(third));
         assert!(!fourth.is_indexed());
+        assert_ne!(fourth.icp.len(), icp);
         fourth.index();
+        // a source larger than the target (another scale): all anew
         let fifth = prepare_onto(&patch(4_000, 5.0, 2.0), &target, &options, Some(fourth));
         assert!(!fifth.is_indexed());
         // the same points at another origin: another target

@@ -5,9 +5,10 @@
 //! A [`crate::Registrar`] keeps the last target it prepared. A registration onto the same target
 //! (the same points, origin and `nonFinite` option, recognised by [`InputKey`]'s fingerprint)
 //! reuses what depends on the target alone ([`TargetSummary`]: the validation, its box and
-//! spreads); when the normalisation's scale, the ICP voxel, the network's point count and the
-//! seed are the same too ([`Sizes`]: e.g. scans smaller than a model registered onto it with the
-//! same options), it reuses everything, normals and descriptors found so far included. Each
+//! spreads). When the normalisation's scale is the same too (a source no larger than the target),
+//! it reuses the normalised target with its centroid and the descriptors found so far, and, as
+//! far as the options leave them unchanged ([`Sizes`]), ICP's voxelised copy with its index and
+//! normals (the same ICP voxel) and the network's sample (the same point count and seed). Each
 //! piece is what preparing anew would make, so the result is the same either way.
 
 use crate::cloud::{JointNormalization, NonFinite, PointCloud, MIN_POINTS};
@@ -59,14 +60,26 @@ pub(crate) struct TargetSummary {
     pub warnings: Vec<String>,
 }
 
-/// What the normalised target depends on besides the target: the normalisation's scale, the ICP
-/// voxel (normalised units), the network's point count and the seed (bits, for exact equality).
+/// What the prepared target depends on besides the target: the normalisation's scale (the
+/// normalised cloud, its centroid and descriptors), the ICP voxel (normalised units: ICP's cloud
+/// and index), the network's point count and the seed (its sample); as bits, for exact equality.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Sizes {
     pub scale: u64,
     pub voxel: u64,
     pub n_net: usize,
     pub seed: u64,
+}
+
+/// The network's sample of the normalised target `cloud` (its seed: the options' seed `^`
+/// [`sampling::TARGET_SEED_XOR`]).
+fn net_sample(cloud: &PointCloud, sizes: &Sizes) -> PointCloud {
+    sampling::network_sample(cloud, sizes.n_net, sizes.seed ^ sampling::TARGET_SEED_XOR)
+}
+
+/// ICP's copy of the normalised target `cloud`: voxelised at `sizes.voxel`.
+fn icp_cloud(cloud: &PointCloud, sizes: &Sizes) -> PointCloud {
+    sampling::voxel_downsample(cloud, f64::from_bits(sizes.voxel) as f32)
 }
 
 /// The target validated and in its local frame: its points as offsets from its origin.
@@ -109,8 +122,8 @@ pub(crate) struct PreparedTarget {
 }
 
 impl PreparedTarget {
-    /// Normalises the `local` target by `norm`, samples `sizes.n_net` points of it for the network
-    /// and voxelises it for ICP.
+    /// Normalises the `local` target by `norm` (whose scale `sizes.scale` is), samples
+    /// `sizes.n_net` points of it for the network and voxelises it for ICP.
     pub(crate) fn new(
         input: InputKey,
         summary: TargetSummary,
@@ -119,8 +132,8 @@ impl PreparedTarget {
         norm: &JointNormalization,
     ) -> Self {
         let cloud = local.transformed(&norm.target_to_normalized());
-        let net = sampling::network_sample(&cloud, sizes.n_net, sizes.seed ^ sampling::TARGET_SEED_XOR);
-        let icp = sampling::voxel_downsample(&cloud, f64::from_bits(sizes.voxel) as f32);
+        let net = net_sample(&cloud, &sizes);
+        let icp = icp_cloud(&cloud, &sizes);
         Self {
             input,
             summary,
@@ -132,6 +145,21 @@ impl PreparedTarget {
             centroid: OnceLock::new(),
             features: TargetFeatures::default(),
         }
+    }
+
+    /// Brings the kept target to `sizes`, whose scale is its own: voxelised again for ICP (its
+    /// index and normals dropped) when the voxel differs, sampled again for the network when the
+    /// point count or the seed does; the normalised cloud, its centroid and its descriptors stay.
+    pub(crate) fn resize(&mut self, sizes: Sizes) {
+        debug_assert_eq!(self.sizes.scale, sizes.scale);
+        if self.sizes.voxel != sizes.voxel {
+            self.icp = icp_cloud(&self.cloud, &sizes);
+            self.index = OnceLock::new();
+        }
+        if (self.sizes.n_net, self.sizes.seed) != (sizes.n_net, sizes.seed) {
+            self.net = net_sample(&self.cloud, &sizes);
+        }
+        self.sizes = sizes;
     }
 
     /// ICP's index of the voxelised target (normals estimated as ICP first needs them).
