@@ -32,6 +32,12 @@
 //! not all at once. The budgets round the measured figures up (56 and 72 bytes) for the
 //! allocator's slack.
 //!
+//! Between calls a registrar keeps its last target (`pipeline::target`: the normalised copy, 12 B
+//! per input point, and ICP's copy with its k-d tree and the normals found so far), which a
+//! registration onto the same target reuses instead of allocating them again; a registration onto
+//! another target drops it before allocating anything, so a call's peak stays within the budgets
+//! above.
+//!
 //! A cloud over the limit should be downsampled before it is registered, e.g. on a voxel grid
 //! ([`crate::sampling::voxel_downsample`]); the `voxelSize` option thins only the clouds ICP
 //! uses, after the inputs are loaded, so it does not lift the input limit (a larger one lowers
