@@ -177,7 +177,9 @@ fn many_scans_onto_one_target() {
         let fields: Vec<&str> = line.split('\t').collect();
         let v: Vec<f64> = fields[5].split_whitespace().map(|x| x.parse().unwrap()).collect();
         let t_target_source = nalgebra::Matrix4::from_row_slice(&v);
-        let read = |name: &str| arps::io::read_path(std::path::Path::new(&format!("{scans_dir}/{name}"))).unwrap();
+        let read = |name: &str| {
+            arps::io::read_point_cloud(&std::fs::read(format!("{scans_dir}/{name}")).unwrap(), name).unwrap()
+        };
         let (source, map) = (read(fields[1]), read(fields[2]));
         let captures: Vec<(PointCloud, nalgebra::Matrix4<f64>)> = (0..6)
             .map(|_| {
