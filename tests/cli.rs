@@ -253,3 +253,48 @@ fn quantize_writes_each_precision_and_refuses_others() {
     assert!(String::from_utf8(out.stderr).unwrap().starts_with("arps: fixtures/wasm/source.ply: weights: "));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Several sources onto one target: one JSON line per source, in order, each naming its source and
+/// equal to registering that source alone (the target read and kept once); a source that cannot
+/// be read gets an error line, the others are still registered, and the exit status says one
+/// failed. The text report names each source.
+#[test]
+fn register_takes_several_sources_onto_one_target() {
+    let (a, b, target) = ("fixtures/wasm/source.ply", "fixtures/any/00084_source.ply", "fixtures/wasm/target.ply");
+    let untimed = |mut v: serde_json::Value| {
+        let o = v.as_object_mut().unwrap();
+        for key in ["wallMs", "timings", "source"] {
+            o.remove(key);
+        }
+        v
+    };
+    let alone = |s: &str| {
+        let out = arps(&["register", s, target, "--json"]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        untimed(serde_json::from_slice(&out.stdout).unwrap())
+    };
+    let out = arps(&["register", a, b, a, "missing.ply", target, "--json"]);
+    assert!(!out.status.success());
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("1 of 4 sources failed"),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<serde_json::Value> = stdout.lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    assert_eq!(lines.len(), 4, "{stdout}");
+    for (line, source) in lines.iter().zip([a, b, a, "missing.ply"]) {
+        assert_eq!(line["source"], source, "{line}");
+    }
+    assert!(lines[3]["error"].as_str().unwrap().contains("missing.ply"), "{}", lines[3]);
+    let (alone_a, alone_b) = (alone(a), alone(b));
+    assert_eq!(untimed(lines[0].clone()), alone_a);
+    assert_eq!(untimed(lines[1].clone()), alone_b);
+    assert_eq!(untimed(lines[2].clone()), alone_a);
+    // the text report: a "source" line before each result
+    let out = arps(&["register", a, b, target]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert_eq!(text.lines().filter(|l| l.starts_with("source ")).count(), 2, "{text}");
+    assert_eq!(text.matches("T_target_source").count(), 2, "{text}");
+}

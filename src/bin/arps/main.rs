@@ -44,10 +44,13 @@ enum IcpArg {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Register SOURCE onto TARGET and print T_target_source (maps source points into the target frame).
+    /// Register each SOURCE onto TARGET and print its T_target_source (maps source points into the
+    /// target frame). Several sources are registered in turn onto the target read once (and, where
+    /// it is at least as large as they are, prepared once).
     Register {
-        /// Source cloud (PLY, PCD, XYZ/PTS/CSV, OBJ, OFF, STL).
-        source: PathBuf,
+        /// Source cloud(s) (PLY, PCD, XYZ/PTS/CSV, OBJ, OFF, STL).
+        #[arg(required = true, num_args = 1..)]
+        sources: Vec<PathBuf>,
         /// Target cloud.
         target: PathBuf,
         /// Weights file (safetensors); default: the embedded model.
@@ -87,7 +90,9 @@ enum Command {
         surface_points: Option<usize>,
         /// Print exactly one JSON object on stdout: the engine's result (`arps::Registration`), fields
         /// camelCase, transforms as 16 column-major numbers, like the JS API's result; plus
-        /// `wallMs`, the milliseconds of reading both files and registering.
+        /// `wallMs`, the milliseconds of reading both files and registering. With several sources,
+        /// one such line per source (JSON Lines), each with its `source` path (reading the target
+        /// counts in the first's `wallMs`), or `{"source", "error"}` for one that failed.
         #[arg(long)]
         json: bool,
     },
@@ -133,6 +138,9 @@ enum Command {
 #[derive(serde::Serialize)]
 #[serde(rename_all = "camelCase")]
 struct JsonOutput<'a> {
+    /// The source's path, when several were given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    source: Option<String>,
     #[serde(flatten)]
     result: &'a arps::Registration,
     /// Reading both files and registering, in-process (model loading excluded), milliseconds.
@@ -154,6 +162,62 @@ fn read_cloud(path: &Path, options: &io::ReadOptions) -> Result<arps::PointCloud
     io::read_path_with(path, options).map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// Prints one registration of `arps register`: the text report, or one JSON line (`--json`);
+/// `source` names the source when several were given.
+fn print_registration(r: &arps::Registration, time_ms: f64, json: bool, source: Option<String>) -> Result<(), String> {
+    if let Some(source) = source.as_ref().filter(|_| !json) {
+        out!("source {source}");
+    }
+    if json {
+        let out = serde_json::to_string(&JsonOutput { source, result: r, wall_ms: time_ms })
+            .map_err(|e| format!("internal: {e}"))?;
+        out!("{out}");
+    } else {
+        out!("T_target_source (maps source points into the target frame):");
+        for row in transform::to_rows(&r.T_target_source) {
+            out!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
+        }
+        out!(
+            "rotation {:.3} deg, translation {:.6}",
+            transform::rotation_angle_deg(&r.T_target_source),
+            transform::translation(&r.T_target_source).norm()
+        );
+        out!(
+            "fitness {:.4} (within {:.4}), inlier RMSE {:.6}, ICP from the {} start, {} iterations ({})",
+            r.fitness,
+            r.max_correspondence_distance,
+            r.inlier_rmse,
+            r.start.name(),
+            r.icp_iterations,
+            if r.icp_converged { "converged" } else { "not converged" }
+        );
+        out!("confidence {:.3}", r.confidence);
+        for (k, a) in r.alternatives.iter().enumerate() {
+            out!(
+                "alternative {} (fits about as well): fitness {:.4}, inlier RMSE {:.6}",
+                k + 1,
+                a.fitness,
+                a.inlier_rmse
+            );
+            for row in transform::to_rows(&a.T_target_source) {
+                out!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
+            }
+        }
+        let t = r.timings;
+        out!(
+            "time {time_ms:.1} ms (read+all); preprocess {:.1}, network {:.1}, GMR {:.2}, ICP {:.1} ms",
+            t.preprocess_ms,
+            t.network_ms,
+            t.gmr_ms,
+            t.icp_ms
+        );
+        for w in &r.warnings {
+            out!("warning: {w}");
+        }
+    }
+    Ok(())
+}
+
 /// The weights at `path`, or the embedded default model.
 pub(crate) fn load_registrar(path: Option<&Path>) -> Result<Registrar, String> {
     match path {
@@ -168,7 +232,7 @@ pub(crate) fn load_registrar(path: Option<&Path>) -> Result<Registrar, String> {
 fn run(command: Command) -> Result<(), String> {
     match command {
         Command::Register {
-            source,
+            sources,
             target,
             weights,
             icp,
@@ -183,10 +247,8 @@ fn run(command: Command) -> Result<(), String> {
             json,
         } => {
             let mut registrar = load_registrar(weights.as_deref())?;
-            let t0 = std::time::Instant::now();
+            let mut t0 = std::time::Instant::now();
             let reading = io::ReadOptions { surface_points, seed };
-            let src = read_cloud(&source, &reading)?;
-            let tgt = read_cloud(&target, &reading)?;
             let options = Options {
                 icp: match icp {
                     IcpArg::Point => IcpKind::Point,
@@ -205,54 +267,32 @@ fn run(command: Command) -> Result<(), String> {
                 },
                 ..Options::default()
             };
-            let r = registrar.register(&src, &tgt, &options).map_err(|e| e.to_string())?;
-            let time_ms = t0.elapsed().as_secs_f64() * 1e3;
-            if json {
-                let out = serde_json::to_string(&JsonOutput { result: &r, wall_ms: time_ms })
-                    .map_err(|e| format!("internal: {e}"))?;
-                out!("{out}");
-            } else {
-                out!("T_target_source (maps source points into the target frame):");
-                for row in transform::to_rows(&r.T_target_source) {
-                    out!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
-                }
-                out!(
-                    "rotation {:.3} deg, translation {:.6}",
-                    transform::rotation_angle_deg(&r.T_target_source),
-                    transform::translation(&r.T_target_source).norm()
-                );
-                out!(
-                    "fitness {:.4} (within {:.4}), inlier RMSE {:.6}, ICP from the {} start, {} iterations ({})",
-                    r.fitness,
-                    r.max_correspondence_distance,
-                    r.inlier_rmse,
-                    r.start.name(),
-                    r.icp_iterations,
-                    if r.icp_converged { "converged" } else { "not converged" }
-                );
-                out!("confidence {:.3}", r.confidence);
-                for (k, a) in r.alternatives.iter().enumerate() {
-                    out!(
-                        "alternative {} (fits about as well): fitness {:.4}, inlier RMSE {:.6}",
-                        k + 1,
-                        a.fitness,
-                        a.inlier_rmse
-                    );
-                    for row in transform::to_rows(&a.T_target_source) {
-                        out!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
+            // the target is read once; the registrar keeps it prepared from one source to the next
+            let tgt = read_cloud(&target, &reading)?;
+            let several = sources.len() > 1;
+            let mut failed = 0usize;
+            for source in &sources {
+                let outcome = read_cloud(source, &reading)
+                    .and_then(|src| registrar.register(&src, &tgt, &options).map_err(|e| e.to_string()));
+                let time_ms = t0.elapsed().as_secs_f64() * 1e3;
+                t0 = std::time::Instant::now();
+                let named = several.then(|| source.display().to_string());
+                match outcome {
+                    Ok(r) => print_registration(&r, time_ms, json, named)?,
+                    Err(e) if !several => return Err(e),
+                    Err(e) => {
+                        failed += 1;
+                        if json {
+                            out!("{}", serde_json::json!({ "source": named, "error": e }));
+                        } else {
+                            out!("source {}", source.display());
+                            out!("error: {e}");
+                        }
                     }
                 }
-                let t = r.timings;
-                out!(
-                    "time {time_ms:.1} ms (read+all); preprocess {:.1}, network {:.1}, GMR {:.2}, ICP {:.1} ms",
-                    t.preprocess_ms,
-                    t.network_ms,
-                    t.gmr_ms,
-                    t.icp_ms
-                );
-                for w in &r.warnings {
-                    out!("warning: {w}");
-                }
+            }
+            if failed > 0 {
+                return Err(format!("{failed} of {} sources failed", sources.len()));
             }
             Ok(())
         }
