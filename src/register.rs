@@ -303,8 +303,10 @@ pub struct Alternative {
 ///
 /// It keeps the last target it prepared (normalised, voxelised, with its k-d tree and the normals
 /// and descriptors found so far): a registration onto the same target (the same points and
-/// origin) reuses it, with the same result, so that many scans registered onto one model prepare
-/// the model once. It holds the normalised target (12 bytes a point) and ICP's voxelised copy
+/// origin) reuses it when the target is at least as large as the source (largest bounding-box
+/// half-extent, each in its own frame: the normalisation's scale is then the target's), redoing
+/// only what other options change, with the same result; so many close-ups or local captures
+/// registered onto one model or map prepare it once. It holds the normalised target (12 bytes a point) and ICP's voxelised copy
 /// with its k-d tree and normals until the next registration onto another target, or
 /// [`Registrar::forget_target`].
 pub struct Registrar {

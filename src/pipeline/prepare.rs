@@ -5,7 +5,7 @@
 //! guess's rotation, jointly normalised, sampled for the network and voxelised for ICP, with the
 //! initial guess and the ICP distances in normalised units. The target's share is a
 //! [`PreparedTarget`] ([`super::target`]), taken over from the previous call when it is the same
-//! target with the same sizes. Warnings (collinear or flat clouds, unit mismatch, too few points
+//! target at the same scale (and resized for other options). Warnings (collinear or flat clouds, unit mismatch, too few points
 //! for the network) go to `warnings`.
 
 use super::options::{self, Resolved};
@@ -50,7 +50,7 @@ enum Given {
 }
 
 /// Validates, normalises and samples the pair (see the module docs); `kept` is a target prepared
-/// by an earlier call, reused where it is the same target with the same sizes.
+/// by an earlier call, reused where it is the same target at the same scale.
 pub(crate) fn prepare(
     source: &PointCloud,
     target: &PointCloud,
@@ -111,7 +111,7 @@ pub(crate) fn prepare(
             k.resize(sizes);
             k
         }
-        // the same target at another scale or voxel (a larger source, other options)
+        // the same target at another scale (a source larger than it)
         Given::Kept(old) => {
             drop(old);
             let local = target::local(target, options.non_finite)?;
