@@ -91,7 +91,7 @@ for (let k = 0; k < count; k++) {
   const angles = [0, 1, 2].map(() => (uniform(-30, 30) * Math.PI) / 180);
   scans.push(turn(Float32Array.from(near), angles, [0, 1, 2].map(() => uniform(-0.5, 0.5))));
 }
-// the small pair registrar B sees between scans: a tetrahedral grid, 64 points each
+// the small pair registrar B sees between scans: 64 scattered points each
 const small = Float32Array.from({ length: 192 }, (_, i) => ((i * 7919) % 97) / 97 + (i % 3) * 0.1);
 
 const kept = arps.Registrar.withDefaultModel();
