@@ -10,19 +10,29 @@ use arps::transform::rigid_inverse;
 use arps::{NonFinite, Options, PointCloud, Registrar, Registration, Search, Timings};
 use common::{bumpy_surface, crop, motion};
 
-/// The CAD model (an STL read as 20,000 surface points) and `k`-th scan of it: other points of its
-/// surface, seen from one side, moved by a known motion (some far beyond the network's range).
+/// The CAD model (an STL read as 20,000 surface points) and three close-ups of it: other points of
+/// its surface within 60% of its half-extent of one of them, moved by a known motion (one far
+/// beyond the network's range). In any pose a close-up is smaller than the model in its own axes
+/// (largest bounding-box half-extent), so a registrar keeps the model from one to the next.
 fn model_and_scans() -> (PointCloud, Vec<PointCloud>) {
     let name = "angle_block_binary_solid.stl";
     let bytes = std::fs::read(format!("{}/fixtures/formats/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
     let model = read_point_cloud_with(&bytes, name, &ReadOptions { surface_points: Some(20_000), seed: 0 }).unwrap();
     let dense = read_mesh(&bytes, name).unwrap().sample_surface(6_000, 7).unwrap();
+    let reach = 0.6 * model.half_extent() as f32;
+    let close_up = |c: [f32; 3]| {
+        let near = |p: &&[f32; 3]| (0..3).map(|a| (p[a] - c[a]).powi(2)).sum::<f32>() < reach * reach;
+        PointCloud::new(dense.points.iter().filter(near).copied().collect())
+    };
     let scans = [
-        ([1.0, 0.2, 0.0], [10.0, -20.0, 30.0], [0.5, 0.2, -0.3]),
-        ([-0.3, 1.0, 0.2], [-5.0, 15.0, 8.0], [0.1, 0.0, 0.2]),
-        ([0.2, -0.4, 1.0], [120.0, 40.0, -70.0], [1.0, 0.0, 0.5]),
+        (100, [10.0, -20.0, 30.0], [0.5, 0.2, -0.3]),
+        (2_000, [-5.0, 15.0, 8.0], [0.1, 0.0, 0.2]),
+        (4_000, [120.0, 40.0, -70.0], [1.0, 0.0, 0.5]),
     ]
-    .map(|(dir, degrees, shift)| crop(&dense, dir, 0.7).transformed(&rigid_inverse(&motion(degrees, shift))));
+    .map(|(at, degrees, shift)| close_up(dense.points[at]).transformed(&rigid_inverse(&motion(degrees, shift))));
+    for (k, scan) in scans.iter().enumerate() {
+        assert!(scan.half_extent() < model.half_extent(), "scan {k} is not smaller than the model");
+    }
     (model, scans.to_vec())
 }
 
@@ -43,7 +53,9 @@ fn registrations_onto_a_kept_target_equal_fresh_ones() {
     let seeded = Options { seed: 3, ..Options::default() };
     let voxel = Options { voxel_size: Some(0.01), ..Options::default() };
     let exhaustive = Options { search: Search::Exhaustive, ..Options::default() };
-    // a source larger than the model: the normalisation's scale is the source's
+    // the close-ups are smaller than the model, and the model is kept from one call to the next
+    // (reused, or resized for another seed or voxel); a source larger than the model: the
+    // normalisation's scale is the source's, and the model is prepared anew
     let large = PointCloud::new(bumpy_surface(3_000, 0.3).points.iter().map(|p| p.map(|v| v * 2.0)).collect());
     // the model's points at another origin: another target
     let moved = PointCloud::with_origin(model.points.clone(), [1000.0, -20.0, 5.0]);
@@ -52,6 +64,7 @@ fn registrations_onto_a_kept_target_equal_fresh_ones() {
         (&scans[0], &model, &defaults),
         (&scans[1], &model, &defaults),
         (&scans[2], &model, &defaults), // any pose: the global stage describes the model
+        (&scans[2], &model, &defaults), // and uses its descriptors again
         (&scans[0], &model, &defaults),
         (&scans[0], &model, &seeded),
         (&scans[1], &model, &voxel),
