@@ -588,6 +588,12 @@ export function makeApi(glue, isReady, env = {}) {
       return r;
     }
 
+    /** Drops the target kept from the last registration; see arps.d.ts. */
+    forgetTarget() {
+      const inner = this.#live("forgetTarget");
+      guarded("forgetTarget", () => inner.forgetTarget());
+    }
+
     /** How the loaded weights were made (the weights file's provenance). */
     get provenance() {
       const inner = this.#live("provenance");

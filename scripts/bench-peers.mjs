@@ -36,7 +36,6 @@ if (!existsSync(entry)) {
 const arps = await import(pathToFileURL(entry).href);
 await arps.default();
 const registrar = arps.Registrar.withDefaultModel();
-const small = Float32Array.from({ length: 192 }, (_, i) => ((i * 7919) % 97) / 97 + (i % 3) * 0.1);
 
 const out = { engine: label ?? `arps wasm (Node ${process.versions.node})`, options: "default", sets: {} };
 for (const set of sets) {
@@ -53,9 +52,9 @@ for (const set of sets) {
   const rows = [];
   for (const p of pairs) {
     const [s, t] = load(p);
-    // a registrar keeps the last target it prepared: an unrelated small pair first (untimed), so
-    // that each timed call prepares its target, as Open3D's do
-    registrar.register(small, small.map((v) => v + 0.01), {});
+    // a registrar keeps the last target it prepared: forgotten first, so that each timed call
+    // prepares its target, as Open3D's do (builds older than `forgetTarget` keep none)
+    registrar.forgetTarget?.();
     const t0 = performance.now();
     const r = registrar.register(s, t, {});
     const ms = performance.now() - t0;

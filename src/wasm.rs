@@ -212,6 +212,14 @@ impl Registrar {
         to_js(&r)
     }
 
+    /// Drops the target kept from the last registration (a registration onto the same points
+    /// reuses it; see the core's `Registrar`), so that the next one prepares its target anew.
+    /// WebAssembly memory is not given back to the page, but the engine reuses it.
+    #[wasm_bindgen(js_name = forgetTarget)]
+    pub fn forget_target(&mut self) {
+        self.inner.forget_target();
+    }
+
     /// How the loaded weights were made (the weights file's provenance JSON), e.g.
     /// `{ kind: "random", seed: 0 }` for untrained placeholder weights.
     #[wasm_bindgen(getter, unchecked_return_type = "ModelProvenance")]

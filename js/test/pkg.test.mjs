@@ -83,7 +83,13 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     check(r.register(source(), target(), { initialTransform: first.T_target_source }));
     // The readers' output registers as is.
     check(r.register(arps.parsePointCloud(sourcePly, "source.ply"), target()));
+    // The target kept from the call before, or forgotten: the same answer without the timings.
+    const untimed = ({ timings, ...rest }) => rest;
+    const kept = untimed(r.register(source(), target()));
+    r.forgetTarget();
+    assert.deepEqual(untimed(r.register(source(), target())), kept);
     r.free();
+    assert.throws(() => r.forgetTarget(), /freed/);
   });
 
   test(`${name}: a mesh file read as its sampled surface (ReadOptions)`, () => {
