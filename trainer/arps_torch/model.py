@@ -101,40 +101,42 @@ class ArpsNet(nn.Module):
 
     def network(self, source, target):
         """Memberships and per-layer steps and shifts: ``dict(gamma_source [B, Ns, J],
-        gamma_target, steps [B, L], shifts_source [B, L, 3], shifts_target)``."""
+        gamma_target, steps [B, L], shifts_source [B, L, 3], shifts_target)``. Clouds of one size
+        run as one batch of 2B (the same weights, half the operations to issue); others apart."""
         cfg = self.cfg
         c = cfg["feature_dim"]
-        x = [centred(source), centred(target)]
-        f = [x[0].new_zeros(x[0].shape[:2] + (c,)), x[1].new_zeros(x[1].shape[:2] + (c,))]
+        lay = _Joint(source.shape[0]) if source.shape == target.shape else _Apart()
+        x = lay.groups(centred(source), centred(target))
+        f = [xi.new_zeros(xi.shape[:2] + (c,)) for xi in x]
         npos = len(cfg["pos_hidden"]) + 1
         steps, shifts = [], [[], []]
         for l in range(cfg["layers"]):
             p = f"layers.{l}"
-            g = [torch.cat([f[s], self.mlp(x[s], f"{p}.pos", npos, True)], -1) for s in range(2)]
-            g1 = [self.block(g[s], g[s], f"{p}.self_attn") for s in range(2)]
-            g2 = [self.block(g1[0], g1[1], f"{p}.cross_attn"), self.block(g1[1], g1[0], f"{p}.cross_attn")]
-            mux, muf = [None, None], [None, None]
-            for s in range(2):
-                f[s] = self.linear(g2[s], f"{p}.out")
-                w = self.reference(f[s], p).unsqueeze(-1)
-                mux[s] = (w * x[s]).sum(1)
-                muf[s] = (w * f[s]).sum(1)
-            alpha = self.mlp(torch.cat([mux[0] - mux[1], muf[0] - muf[1]], -1), f"{p}.step", 2, False)
+            g = [torch.cat([fi, self.mlp(xi, f"{p}.pos", npos, True)], -1) for fi, xi in zip(f, x)]
+            g1 = [self.block(gi, gi, f"{p}.self_attn") for gi in g]
+            g2 = [self.block(gi, kv, f"{p}.cross_attn") for gi, kv in zip(g1, lay.swap(g1))]
+            f = [self.linear(gi, f"{p}.out") for gi in g2]
+            w = [self.reference(fi, p).unsqueeze(-1) for fi in f]
+            mux = [(wi * xi).sum(1) for wi, xi in zip(w, x)]
+            muf = [(wi * fi).sum(1) for wi, fi in zip(w, f)]
+            (mxs, mxt), (mfs, mft) = lay.parts(mux), lay.parts(muf)
+            alpha = self.mlp(torch.cat([mxs - mxt, mfs - mft], -1), f"{p}.step", 2, False)
             st = torch.sigmoid(alpha)
-            for s in range(2):
-                d = mux[s] * st
-                x[s] = x[s] - d.unsqueeze(1)
-                shifts[s].append(d)
+            d = [mi * si for mi, si in zip(mux, lay.both(st))]
+            x = [xi - di.unsqueeze(1) for xi, di in zip(x, d)]
+            for s, ds in enumerate(lay.parts(d)):
+                shifts[s].append(ds)
             steps.append(st.squeeze(-1))
         nhead = len(cfg["head_hidden"]) + 1
         gammas = []
-        for s in range(2):
-            colmax = f[s].max(dim=1, keepdim=True).values.expand_as(f[s])
-            logits = self.mlp(torch.cat([f[s], colmax], -1), "head", nhead, False)
+        for fi in f:
+            colmax = fi.max(dim=1, keepdim=True).values.expand_as(fi)
+            logits = self.mlp(torch.cat([fi, colmax], -1), "head", nhead, False)
             gammas.append(torch.softmax(logits.float(), dim=-1))
+        gamma_source, gamma_target = lay.parts(gammas)
         return {
-            "gamma_source": gammas[0],
-            "gamma_target": gammas[1],
+            "gamma_source": gamma_source,
+            "gamma_target": gamma_target,
             "steps": torch.stack(steps, 1).float(),
             "shifts_source": torch.stack(shifts[0], 1).float(),
             "shifts_target": torch.stack(shifts[1], 1).float(),
@@ -143,9 +145,46 @@ class ArpsNet(nn.Module):
     def forward(self, source, target):
         """``network`` plus ``t12`` (``T_target_source``) and ``t21``, ``[B, 4, 4]`` float64."""
         out = self.network(source, target)
-        out["t12"] = gmr(out["gamma_source"], out["gamma_target"], source, target)
-        out["t21"] = gmr(out["gamma_target"], out["gamma_source"], target, source)
+        out["t12"], out["t21"] = gmr_both(out["gamma_source"], out["gamma_target"], source, target)
         return out
+
+
+class _Joint:
+    """Source and target as one batch: ``[source; target]``, ``2B`` clouds of one size."""
+
+    def __init__(self, b):
+        self.b = b
+
+    def groups(self, source, target):
+        return [torch.cat([source, target])]
+
+    def swap(self, g):
+        """What each cloud attends to in cross attention: the other cloud."""
+        return [torch.cat([g[0][self.b:], g[0][:self.b]])]
+
+    def parts(self, g):
+        """``(source's, target's)``."""
+        return g[0][:self.b], g[0][self.b:]
+
+    def both(self, t):
+        """A per-pair tensor for both clouds."""
+        return [torch.cat([t, t])]
+
+
+class _Apart:
+    """Source and target as two batches (clouds of different sizes)."""
+
+    def groups(self, source, target):
+        return [source, target]
+
+    def swap(self, g):
+        return [g[1], g[0]]
+
+    def parts(self, g):
+        return g[0], g[1]
+
+    def both(self, t):
+        return [t, t]
 
 
 def centred(points):
@@ -197,3 +236,14 @@ def gmr(gamma_s, gamma_t, source, target):
     pi_s, mu_s, _ = gmm(source, gamma_s)
     _, mu_t, var_t = gmm(target, gamma_t)
     return solve(pi_s, mu_s, mu_t, var_t)
+
+
+def gmr_both(gamma_s, gamma_t, source, target):
+    """``(T_target_source, T_source_target)``: ``gmr`` both ways, as one batch of 2B when the
+    clouds have one size."""
+    if source.shape != target.shape:
+        return gmr(gamma_s, gamma_t, source, target), gmr(gamma_t, gamma_s, target, source)
+    b = source.shape[0]
+    t = gmr(torch.cat([gamma_s, gamma_t]), torch.cat([gamma_t, gamma_s]), torch.cat([source, target]),
+            torch.cat([target, source]))
+    return t[:b], t[b:]

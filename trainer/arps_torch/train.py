@@ -24,7 +24,7 @@ import torch
 
 from . import TRAINER
 from .losses import losses, unpack_parts
-from .model import ArpsNet, gmr
+from .model import ArpsNet, gmr_both
 from .stream import Generators, read_val, to_batch
 from .weights import read_checkpoint, save_checkpoint, weights_bytes, write_atomic
 
@@ -316,8 +316,7 @@ def main(argv=None):
                     compiled, network = False, model.network
                     net = network(b["source"], b["target"])
             net = {k: v.float() for k, v in net.items()}
-            net["t12"] = gmr(net["gamma_source"], net["gamma_target"], b["source"], b["target"])
-            net["t21"] = gmr(net["gamma_target"], net["gamma_source"], b["target"], b["source"])
+            net["t12"], net["t21"] = gmr_both(net["gamma_source"], net["gamma_target"], b["source"], b["target"])
             total, parts_t, keys = losses(net, b, cfg["loss"])
             total.backward()
             for _, p in params:
@@ -326,7 +325,8 @@ def main(argv=None):
             grads = [p.grad for _, p in params]
             # the global norm in float64, as the CPU trainer sums it; it and the loss terms reach
             # the host in one transfer, the step's only device sync
-            gn_t = torch.stack([(g.double() ** 2).sum() for g in grads]).sum().sqrt()
+            flat = torch.cat([g.reshape(-1) for g in grads]).double()
+            gn_t = (flat * flat).sum().sqrt()
             host = torch.cat([gn_t.view(1), parts_t]).cpu().tolist()
             gn, parts = host[0], unpack_parts(keys, host[1:])
             skipped = not (math.isfinite(gn) and all(math.isfinite(v) for k, v in parts.items() if k != "steps"))

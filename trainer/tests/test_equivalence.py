@@ -44,6 +44,27 @@ def test_torch_fixture_is_current():
         assert np.abs(got[k] - io[k]).max() <= 1e-4, f"{k}: rerun python -m arps_torch.fixture"
 
 
+def test_clouds_of_one_size_run_as_one_batch_with_the_same_outputs(monkeypatch):
+    """The trainer's clouds all have N points, so the network runs source and target as one batch
+    of 2B and ``gmr_both`` solves both ways at once; both must give what the clouds give apart
+    (the engine-fixture tests above cover clouds of different sizes, which always run apart)."""
+    import arps_torch.model as model
+    m = model_of(os.path.join(FIX, "rust_tiny.safetensors"))
+    g = torch.Generator().manual_seed(3)
+    n = m.cfg["n_points"]
+    src = torch.rand(3, n, 3, generator=g) * 2 - 1
+    tgt = torch.rand(3, n, 3, generator=g) * 2 - 1
+    together = m(src, tgt)
+    monkeypatch.setattr(model, "_Joint", lambda b: model._Apart())
+    apart = m.network(src, tgt)
+    apart["t12"] = model.gmr(apart["gamma_source"], apart["gamma_target"], src, tgt)
+    apart["t21"] = model.gmr(apart["gamma_target"], apart["gamma_source"], tgt, src)
+    assert together["gamma_source"].max() - 1 / m.cfg["gaussians"] > 0.05, "memberships nearly uniform"
+    for k in KEYS + ["t21"]:
+        d = (together[k].double() - apart[k].double()).abs().max().item()
+        assert d <= 1e-6, f"{k} differs by {d:e} when the clouds run as one batch"
+
+
 def test_gmr_recovers_a_known_transform():
     from arps_torch.model import gmr
     g = torch.Generator().manual_seed(1)
