@@ -3,7 +3,7 @@
 //! matches cheaply.
 //!
 //! Brute force: the clouds given here are voxelised to at most
-//! [`super::MAX_FEATURE_POINTS`] points, so `n_s * n_t * 33` multiply-adds bound the cost, and a
+//! [`super::MAX_FEATURE_POINTS`] points ([`super::DENSE_FEATURE_POINTS`] on dense scans), so `n_s * n_t * 33` multiply-adds bound the cost, and a
 //! k-d tree in 33 dimensions would prune little.
 
 use super::fpfh::{Descriptor, DIM};

@@ -5,7 +5,8 @@
 //! ([`crate::Start::Global`], [`crate::Start::GlobalNetwork`]).
 //!
 //! Cost grows gently with the point count: the feature voxel is chosen from the data so that each
-//! voxelised cloud has at most [`MAX_FEATURE_POINTS`] points ([`feature_voxel`]), after which
+//! voxelised cloud has at most [`MAX_FEATURE_POINTS`] points ([`DENSE_FEATURE_POINTS`] on dense
+//! scans; [`feature_voxel`]), after which
 //! descriptors, matching and RANSAC no longer depend on the input size; only the voxelisation
 //! (O(n log n)) sees every point.
 
@@ -27,11 +28,32 @@ pub const MAX_FEATURE_POINTS: usize = 1500;
 /// tutorials use 0.05 on unit-sized objects; on 100 any-pose validation pairs FPFH + RANSAC + ICP recalled 0.69 at 0.05, 0.79 at 0.08, 0.77 at 0.11 and 0.62 at 0.15).
 pub const VOXEL_FRACTION: f64 = 0.08;
 
+/// A cloud is *dense* when it has at least this many points per occupied voxel of the default
+/// feature voxel ([`VOXEL_FRACTION`] of the pair's larger half-extent): a scan rather than a
+/// sparse sample. A pair of dense clouds is described finer ([`DENSE_VOXEL_FRACTION`],
+/// [`DENSE_FEATURE_POINTS`]), and the adaptive search reaches its global stage before it stops
+/// (`BENCHMARK.md`, "Dense scans"). The synthetic 1,024-point validation clouds have 1.3-3.8
+/// points per voxel there, real scans of 15k-70k points 20-200.
+pub const DENSE_OCCUPANCY: usize = 8;
+
+/// A dense cloud has at least this many points too (twice [`MAX_FEATURE_POINTS`]): a sparse
+/// sample of an elongated shape also crowds the few voxels its extent gives it.
+pub const DENSE_MIN_POINTS: usize = 2 * MAX_FEATURE_POINTS;
+
+/// The feature voxel's starting size on a dense pair, as a fraction of the larger half-extent
+/// (with the default [`VOXEL_FRACTION`]; another fraction scales it alike).
+pub const DENSE_VOXEL_FRACTION: f64 = 0.025;
+
+/// Most points per voxelised cloud given to the descriptors on a dense pair.
+pub const DENSE_FEATURE_POINTS: usize = 2500;
+
 /// Settings of [`hypotheses`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct GlobalParams {
     /// The feature voxel's starting size as a fraction of the larger half-extent
-    /// ([`VOXEL_FRACTION`]); it grows from there until [`MAX_FEATURE_POINTS`] is met.
+    /// ([`VOXEL_FRACTION`]); it grows from there until [`MAX_FEATURE_POINTS`] is met (on a
+    /// [`dense`] pair it starts finer, [`DENSE_VOXEL_FRACTION`], and the budget is
+    /// [`DENSE_FEATURE_POINTS`]).
     pub voxel_fraction: f64,
     /// RANSAC's most draws.
     pub max_iterations: u32,
@@ -48,15 +70,33 @@ impl Default for GlobalParams {
 }
 
 /// The feature voxel for a pair: `fraction` of the larger largest half-extent, grown by 25% at a
-/// time until both voxelised clouds have at most [`MAX_FEATURE_POINTS`] points.
+/// time until both voxelised clouds have at most [`MAX_FEATURE_POINTS`] points; on a [`dense`]
+/// pair from [`DENSE_VOXEL_FRACTION`] (scaled like `fraction`) to at most
+/// [`DENSE_FEATURE_POINTS`].
 pub fn feature_voxel(source: &PointCloud, target: &PointCloud, fraction: f64) -> f64 {
     feature_grid(source, target, &TargetFeatures::default(), fraction).0
+}
+
+/// Whether both clouds are dense ([`DENSE_OCCUPANCY`]) at the feature voxel of `fraction` (of the
+/// larger largest half-extent): a pass over each cloud, which stops once it has counted too many
+/// voxels. The target's side goes through `memo` ([`TargetFeatures`]).
+pub fn dense(source: &PointCloud, target: &PointCloud, memo: &TargetFeatures, fraction: f64) -> bool {
+    let extent = source.half_extent().max(memo.half_extent(target));
+    let v = (fraction * extent).max(f64::MIN_POSITIVE);
+    dense_at(source, v, || source.bounds()) && memo.dense(target, v)
+}
+
+/// `cloud` has at least [`DENSE_MIN_POINTS`] points and [`DENSE_OCCUPANCY`] per occupied voxel of
+/// size `v` (`bounds`: its bounds, computed only when needed).
+fn dense_at(cloud: &PointCloud, v: f64, bounds: impl FnOnce() -> ([f32; 3], [f32; 3])) -> bool {
+    cloud.len() >= DENSE_MIN_POINTS
+        && voxel_downsample_at_most_in(cloud, &bounds(), v as f32, cloud.len() / DENSE_OCCUPANCY).is_some()
 }
 
 /// How a cloud fits the feature budget at one voxel size.
 #[derive(Clone, Debug)]
 enum Fit {
-    /// It has at most [`MAX_FEATURE_POINTS`] points: it fits as it is.
+    /// It has at most the budget's points: it fits as it is.
     AsIs,
     /// Voxelised at that size it fits, as this cloud.
     Voxelised(PointCloud),
@@ -65,8 +105,8 @@ enum Fit {
 }
 
 /// The search of [`feature_voxel`], and each cloud voxelised at the size found when the search had
-/// to voxelise it to see that it fits (`None` for a cloud of at most [`MAX_FEATURE_POINTS`]
-/// points, which fits as it is, or when no size fitted within the search's steps). A size that
+/// to voxelise it to see that it fits (`None` for a cloud within the point budget
+/// ([`MAX_FEATURE_POINTS`], or [`DENSE_FEATURE_POINTS`] on a [`dense`] pair), which fits as it is, or when no size fitted within the search's steps). A size that
 /// does not fit stops voxelising a cloud as soon as it has more voxels than the budget. The
 /// target's side goes through `memo` ([`TargetFeatures`]).
 fn feature_grid(
@@ -76,16 +116,21 @@ fn feature_grid(
     fraction: f64,
 ) -> (f64, Option<PointCloud>, Option<PointCloud>) {
     let extent = source.half_extent().max(memo.half_extent(target));
+    let (fraction, cap) = if dense(source, target, memo, fraction) {
+        (fraction * DENSE_VOXEL_FRACTION / VOXEL_FRACTION, DENSE_FEATURE_POINTS)
+    } else {
+        (fraction, MAX_FEATURE_POINTS)
+    };
     let mut v = (fraction * extent).max(f64::MIN_POSITIVE);
     // the source's bounds once for every try (a try that does not fit stops early)
-    let source_bounds = (source.len() > MAX_FEATURE_POINTS).then(|| source.bounds());
+    let source_bounds = (source.len() > cap).then(|| source.bounds());
     for _ in 0..60 {
         let fits_source = match &source_bounds {
             None => Some(None),
-            Some(b) => voxel_downsample_at_most_in(source, b, v as f32, MAX_FEATURE_POINTS).map(Some),
+            Some(b) => voxel_downsample_at_most_in(source, b, v as f32, cap).map(Some),
         };
         if let Some(s) = fits_source {
-            match memo.fit(target, v) {
+            match memo.fit(target, v, cap) {
                 Fit::AsIs => return (v, s, None),
                 Fit::Voxelised(t) => return (v, s, Some(t)),
                 Fit::No => {}
@@ -104,8 +149,10 @@ fn feature_grid(
 pub struct TargetFeatures {
     half_extent: OnceLock<f64>,
     bounds: OnceLock<([f32; 3], [f32; 3])>,
-    /// Per voxel size tried (its bits), how the target fits it.
-    fits: Mutex<Vec<(u64, Fit)>>,
+    /// Per voxel size tried (its bits) and point budget, how the target fits it.
+    fits: Mutex<Vec<(u64, usize, Fit)>>,
+    /// Per voxel size (its bits), whether the target is dense there ([`dense`]).
+    dense: Mutex<Vec<(u64, bool)>>,
     /// The target described at a voxel size (its bits).
     described: Mutex<Option<(u64, Described)>>,
 }
@@ -115,23 +162,34 @@ impl TargetFeatures {
         *self.half_extent.get_or_init(|| target.half_extent())
     }
 
-    /// How `target` fits the budget at voxel size `v` (computed once per size).
-    fn fit(&self, target: &PointCloud, v: f64) -> Fit {
+    /// How `target` fits the budget of `cap` points at voxel size `v` (computed once per size).
+    fn fit(&self, target: &PointCloud, v: f64, cap: usize) -> Fit {
         let mut fits = self.fits.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((_, fit)) = fits.iter().find(|(bits, _)| *bits == v.to_bits()) {
+        if let Some((_, _, fit)) = fits.iter().find(|(bits, c, _)| *bits == v.to_bits() && *c == cap) {
             return fit.clone();
         }
-        let fit = if target.len() <= MAX_FEATURE_POINTS {
+        let fit = if target.len() <= cap {
             Fit::AsIs
         } else {
             let bounds = self.bounds.get_or_init(|| target.bounds());
-            match voxel_downsample_at_most_in(target, bounds, v as f32, MAX_FEATURE_POINTS) {
+            match voxel_downsample_at_most_in(target, bounds, v as f32, cap) {
                 Some(c) => Fit::Voxelised(c),
                 None => Fit::No,
             }
         };
-        fits.push((v.to_bits(), fit.clone()));
+        fits.push((v.to_bits(), cap, fit.clone()));
         fit
+    }
+
+    /// Whether `target` is dense at voxel size `v` ([`dense`]; computed once per size).
+    fn dense(&self, target: &PointCloud, v: f64) -> bool {
+        let mut dense = self.dense.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, d)) = dense.iter().find(|(bits, _)| *bits == v.to_bits()) {
+            return *d;
+        }
+        let d = dense_at(target, v, || *self.bounds.get_or_init(|| target.bounds()));
+        dense.push((v.to_bits(), d));
+        d
     }
 
     /// `target` described at `voxel` from its voxelised copy `voxelised` (`None`: from `target`

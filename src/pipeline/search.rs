@@ -3,7 +3,8 @@
 //! Takes the [`Prepared`] clouds, the stages of [`super::starts`] and the options; gives
 //! [`Chosen`]: the best refined start ([`refine::refine_best`], compared across stages by
 //! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
-//! first stage whose best reaches [`STOP_CONFIDENCE`]; when none does, it runs a last stage of
+//! first stage whose best reaches [`STOP_CONFIDENCE`] (on dense scans, [`crate::global::dense`],
+//! not before the global stage has run); when none does, it runs a last stage of
 //! blind starts ([`Starts::more`]: more global hypotheses and the rotations), shortlisted to
 //! [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit clearly better
 //! ([`refine::clearly_better`]). Each stage's best, when it is better than the answer so far and
@@ -43,7 +44,7 @@ pub(crate) struct Chosen {
 pub(crate) fn search(
     prepared: &Prepared,
     stages: &[Vec<Start>],
-    starts: &mut Starts,
+    builder: &mut Starts,
     options: &Options,
     model: &Model,
     workspace: &mut ModelWorkspace,
@@ -70,14 +71,16 @@ pub(crate) fn search(
     let mut starts_refined = 0usize;
     let adaptive = options.search == Search::Adaptive;
     let kinds: Vec<Start> = stages.iter().flatten().copied().collect();
+    let has_global = kinds.iter().any(|k| k.is_global());
+    let mut reached_global = false;
     // the stages, then, while the answer is still below the stop, the last one: blind starts
     for stage in stages.iter().map(Some).chain([None]) {
         let mut starts = match stage {
-            Some(stage) => starts.build(stage, model, workspace)?,
+            Some(stage) => builder.build(stage, model, workspace)?,
             // no stage stopped the search (the loop breaks at STOP_CONFIDENCE)
             None if adaptive && options.icp != IcpKind::Off && best.is_some() => {
                 // blind starts, most of which land nowhere: a short run each picks those refined
-                let more = starts.more(&kinds, model, workspace)?;
+                let more = builder.more(&kinds, model, workspace)?;
                 refine::shortlist(target_index, &p.icp_src.points, more, &how, LAST_STAGE_STARTS)
             }
             None => break,
@@ -114,7 +117,14 @@ pub(crate) fn search(
             let confidence = confidence::confidence(&probed.evidence);
             best = Some((c, probed, confidence));
         }
-        if adaptive && best.as_ref().is_some_and(|b| b.2 >= STOP_CONFIDENCE) {
+        reached_global |= stage.is_some_and(|s| s.iter().any(|k| k.is_global()));
+        // on dense scans the confidence is measured to be too sure of wrong answers (it was
+        // calibrated on sparse, noisy pairs) and the global descriptors are informative: a
+        // confident answer stops the search only once the global stage has run
+        let stop = adaptive
+            && best.as_ref().is_some_and(|b| b.2 >= STOP_CONFIDENCE)
+            && (reached_global || !has_global || !builder.dense());
+        if stop {
             break;
         }
     }
@@ -123,7 +133,7 @@ pub(crate) fn search(
     let (candidate, probed) = match best {
         Some((c, probed, _)) => (c, probed),
         None => {
-            let t = if options.network { starts.t_net_n() } else { p.t_initial };
+            let t = if options.network { builder.t_net_n() } else { p.t_initial };
             let start = if options.network { Start::Network } else { Start::Initial };
             let probed = judge(&t);
             let e = probed.evidence;

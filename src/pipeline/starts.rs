@@ -68,6 +68,8 @@ pub(crate) struct Starts<'a> {
     clock: Option<Clock>,
     matched: Option<global::Matched>,
     hypotheses: Option<Vec<Matrix4<f64>>>,
+    /// Whether the clouds are dense scans ([`global::dense`]), once asked.
+    dense: Option<bool>,
     /// Milliseconds spent on the global hypotheses so far.
     pub global_ms: f64,
 }
@@ -75,7 +77,7 @@ pub(crate) struct Starts<'a> {
 impl<'a> Starts<'a> {
     /// Starts for `prepared`, with the network's estimate `t_net_n` (normalised units).
     pub(crate) fn new(prepared: &'a Prepared, t_net_n: Matrix4<f64>, seed: u64, clock: Option<Clock>) -> Self {
-        Self { prepared, t_net_n, seed, clock, matched: None, hypotheses: None, global_ms: 0.0 }
+        Self { prepared, t_net_n, seed, clock, matched: None, hypotheses: None, dense: None, global_ms: 0.0 }
     }
 
     /// The network's estimate these starts were built from (normalised units).
@@ -152,6 +154,19 @@ impl<'a> Starts<'a> {
             starts.extend(rotations(p.src_n.centroid(), p.target.centroid()).map(|t| (Start::Rotations, t)));
         }
         Ok(starts)
+    }
+
+    /// Whether both clouds are dense scans ([`global::dense`] at the default feature voxel;
+    /// computed once, its time counted in `global_ms`): the adaptive search then does not stop
+    /// before its global stage.
+    pub(crate) fn dense(&mut self) -> bool {
+        let p = self.prepared;
+        let mut w = Stopwatch::start(self.clock);
+        let dense = *self.dense.get_or_insert_with(|| {
+            global::dense(&p.src_n, &p.target.cloud, &p.target.features, global::VOXEL_FRACTION)
+        });
+        self.global_ms += w.lap();
+        dense
     }
 
     /// Up to `count` global hypotheses, best first (describing and matching the clouds on first

@@ -1,0 +1,67 @@
+//! Dense scans ([`arps::global::dense`]): the global descriptors are made finer and the adaptive
+//! search does not stop before its global stage, however sure it is of an earlier answer; sparse
+//! samples (the 1,024-point protocol) are searched as before.
+
+mod common;
+
+use arps::global::{dense, TargetFeatures, VOXEL_FRACTION};
+use arps::io::read_mesh;
+use arps::transform::{rigid_inverse, rotation_error_deg};
+use arps::{Options, PointCloud, Registrar, Start};
+use common::{crop, fixture_pair, motion};
+
+/// `n` points over the CAD part's surface (the committed STL fixture).
+fn cad_surface(n: usize) -> PointCloud {
+    let name = "angle_block_binary_solid.stl";
+    let bytes = std::fs::read(format!("{}/fixtures/formats/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    read_mesh(&bytes, name).unwrap().sample_surface(n, 3).unwrap()
+}
+
+#[test]
+fn scans_are_dense_and_sparse_samples_or_few_points_are_not() {
+    let surface = cad_surface(60_000);
+    let memo = TargetFeatures::default();
+    assert!(dense(&surface, &surface, &memo, VOXEL_FRACTION), "60,000 points over one part");
+    // asked again through the memo: the same answer
+    assert!(dense(&surface, &surface, &memo, VOXEL_FRACTION));
+    let few = cad_surface(2_000);
+    assert!(!dense(&few, &surface, &TargetFeatures::default(), VOXEL_FRACTION), "2,000 points");
+    assert!(!dense(&surface, &few, &TargetFeatures::default(), VOXEL_FRACTION), "2,000-point target");
+    let (source, target, _) = fixture_pair(0);
+    assert!(!dense(&source, &target, &TargetFeatures::default(), VOXEL_FRACTION), "a 1,024-point pair");
+}
+
+#[test]
+#[allow(non_snake_case)]
+fn a_sure_answer_on_dense_scans_still_waits_for_the_global_stage() {
+    let surface = cad_surface(60_000);
+    let T_target_source = motion([8.0, -5.0, 6.0], [0.02, 0.01, -0.01]);
+    let source = crop(&surface, [1.0, 0.2, 0.1], 0.8).transformed(&rigid_inverse(&T_target_source));
+    let target = crop(&surface, [-1.0, 0.3, 0.0], 0.8);
+    let mut registrar = Registrar::with_default_model().unwrap();
+    // the network's start alone is already sure of its answer here
+    let network = Options { starts: vec![Start::Network], ..Options::default() };
+    let alone = registrar.register(&source, &target, &network).unwrap();
+    assert!(alone.confidence >= 0.95, "precondition: a sure network answer ({})", alone.confidence);
+    // so on sparse clouds the search would stop there; on dense scans the global stage runs too
+    let both = Options { starts: vec![Start::Network, Start::Global], ..Options::default() };
+    let r = registrar.register(&source, &target, &both).unwrap();
+    assert!(
+        r.starts_refined > alone.starts_refined,
+        "the global stage did not run: {} starts refined",
+        r.starts_refined
+    );
+    assert!(rotation_error_deg(&r.T_target_source, &T_target_source) < 2.0);
+    assert!(r.confidence >= 0.95, "confidence {}", r.confidence);
+}
+
+#[test]
+#[allow(non_snake_case)]
+fn a_sure_answer_on_a_sparse_pair_stops_the_search_at_once() {
+    let (source, target, T_target_source) = fixture_pair(0);
+    let both = Options { starts: vec![Start::Network, Start::Global], ..Options::default() };
+    let r = Registrar::with_default_model().unwrap().register(&source, &target, &both).unwrap();
+    assert!(r.confidence >= 0.95, "precondition: a sure network answer ({})", r.confidence);
+    assert!(rotation_error_deg(&r.T_target_source, &T_target_source) < 5.0);
+    assert_eq!(r.starts_refined, 1, "the global stage ran");
+}
