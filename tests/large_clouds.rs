@@ -103,13 +103,25 @@ fn refinement_of_a_large_source_is_capped_and_recovers_the_motion() {
 fn the_feature_voxel_follows_the_data() {
     let cloud = bumpy_surface(40_000, 0.6);
     let other = PointCloud::new(refine::even_sample(&cloud.points, 30_000));
+    // dense scans: the finer start and the larger budget
+    assert!(global::dense(&cloud, &other, &global::TargetFeatures::default(), global::VOXEL_FRACTION));
     let v = global::feature_voxel(&cloud, &other, global::VOXEL_FRACTION);
     for c in [&cloud, &other] {
-        assert!(voxel_downsample(c, v as f32).len() <= global::MAX_FEATURE_POINTS);
+        assert!(voxel_downsample(c, v as f32).len() <= global::DENSE_FEATURE_POINTS);
     }
     // no smaller than the fraction of the extent, and not grown past one 25% step too many
-    let start = global::VOXEL_FRACTION * cloud.half_extent().max(other.half_extent());
-    assert!(v >= start && voxel_downsample(&cloud, (v / 1.25) as f32).len() > global::MAX_FEATURE_POINTS);
+    let extent = cloud.half_extent().max(other.half_extent());
+    let start = global::DENSE_VOXEL_FRACTION * extent;
+    assert!(
+        v >= start * (1.0 - 1e-12) && voxel_downsample(&cloud, (v / 1.25) as f32).len() > global::DENSE_FEATURE_POINTS
+    );
+    assert!(v < global::VOXEL_FRACTION * extent, "{v}: not finer than a sparse pair's");
+    // too few points to be a dense scan: the default start and budget
+    let fewer = PointCloud::new(refine::even_sample(&cloud.points, 2_900));
+    assert!(!global::dense(&fewer, &fewer, &global::TargetFeatures::default(), global::VOXEL_FRACTION));
+    let v_few = global::feature_voxel(&fewer, &fewer, global::VOXEL_FRACTION);
+    assert!(v_few >= global::VOXEL_FRACTION * fewer.half_extent());
+    assert!(voxel_downsample(&fewer, v_few as f32).len() <= global::MAX_FEATURE_POINTS);
     // the same shape in millimetres: the voxel in millimetres
     let mm = |c: &PointCloud| PointCloud::new(c.points.iter().map(|p| p.map(|x| x * 1000.0)).collect());
     let v_mm = global::feature_voxel(&mm(&cloud), &mm(&other), global::VOXEL_FRACTION);
