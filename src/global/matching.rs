@@ -2,9 +2,9 @@
 //! kept when they are mutual (A's nearest is B and B's nearest is A), which removes most wrong
 //! matches cheaply.
 //!
-//! Brute force: the clouds given here are voxelised to at most
-//! [`super::MAX_FEATURE_POINTS`] points ([`super::DENSE_FEATURE_POINTS`] on dense scans), so `n_s * n_t * 33` multiply-adds bound the cost, and a
-//! k-d tree in 33 dimensions would prune little.
+//! Brute force: the clouds given here are voxelised to at most [`super::MAX_FEATURE_POINTS`]
+//! points ([`super::DENSE_FEATURE_POINTS`] on dense scans), so `n_s * n_t * 33` multiply-adds
+//! bound the cost, and a k-d tree in 33 dimensions would prune little.
 
 use super::fpfh::{Descriptor, DIM};
 

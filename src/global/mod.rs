@@ -74,7 +74,8 @@ impl Default for GlobalParams {
 /// pair from [`DENSE_VOXEL_FRACTION`] (scaled like `fraction`) to at most
 /// [`DENSE_FEATURE_POINTS`].
 pub fn feature_voxel(source: &PointCloud, target: &PointCloud, fraction: f64) -> f64 {
-    feature_grid(source, target, &TargetFeatures::default(), fraction).0
+    let memo = TargetFeatures::default();
+    feature_grid(source, target, &memo, fraction, dense(source, target, &memo, fraction)).0
 }
 
 /// Whether both clouds are dense ([`DENSE_OCCUPANCY`]) at the feature voxel of `fraction` (of the
@@ -104,19 +105,21 @@ enum Fit {
     No,
 }
 
-/// The search of [`feature_voxel`], and each cloud voxelised at the size found when the search had
-/// to voxelise it to see that it fits (`None` for a cloud within the point budget
-/// ([`MAX_FEATURE_POINTS`], or [`DENSE_FEATURE_POINTS`] on a [`dense`] pair), which fits as it is, or when no size fitted within the search's steps). A size that
-/// does not fit stops voxelising a cloud as soon as it has more voxels than the budget. The
-/// target's side goes through `memo` ([`TargetFeatures`]).
+/// The search of [`feature_voxel`] (`dense`: whether the pair is [`dense`]), and each cloud
+/// voxelised at the size found when the search had to voxelise it to see that it fits (`None` for
+/// a cloud within the point budget, [`MAX_FEATURE_POINTS`] or on a dense pair
+/// [`DENSE_FEATURE_POINTS`], which fits as it is, or when no size fitted within the search's
+/// steps). A size that does not fit stops voxelising a cloud as soon as it has more voxels than
+/// the budget. The target's side goes through `memo` ([`TargetFeatures`]).
 fn feature_grid(
     source: &PointCloud,
     target: &PointCloud,
     memo: &TargetFeatures,
     fraction: f64,
+    dense: bool,
 ) -> (f64, Option<PointCloud>, Option<PointCloud>) {
     let extent = source.half_extent().max(memo.half_extent(target));
-    let (fraction, cap) = if dense(source, target, memo, fraction) {
+    let (fraction, cap) = if dense {
         (fraction * DENSE_VOXEL_FRACTION / VOXEL_FRACTION, DENSE_FEATURE_POINTS)
     } else {
         (fraction, MAX_FEATURE_POINTS)
@@ -255,7 +258,19 @@ impl Matched {
     /// [`Matched::new`], with the target's side taken from `memo` where an earlier pair onto the
     /// same `target` left it (the same result either way).
     pub fn onto(source: &PointCloud, target: &PointCloud, memo: &TargetFeatures, voxel_fraction: f64) -> Self {
-        let (voxel, source_v, target_v) = feature_grid(source, target, memo, voxel_fraction);
+        let dense = dense(source, target, memo, voxel_fraction);
+        Self::onto_dense(source, target, memo, voxel_fraction, dense)
+    }
+
+    /// [`Matched::onto`] for a pair whose [`dense`] is known already.
+    pub(crate) fn onto_dense(
+        source: &PointCloud,
+        target: &PointCloud,
+        memo: &TargetFeatures,
+        voxel_fraction: f64,
+        dense: bool,
+    ) -> Self {
+        let (voxel, source_v, target_v) = feature_grid(source, target, memo, voxel_fraction, dense);
         // the search's voxelised clouds where it made them (the same as describing anew)
         let source = match source_v {
             Some(v) => describe_voxelised(v.points, voxel),

@@ -173,10 +173,12 @@ impl<'a> Starts<'a> {
     /// use; the time goes to `global_ms`).
     fn draw(&mut self, count: usize) -> Vec<Matrix4<f64>> {
         let p = self.prepared;
+        // (timed on its own, before this draw's stopwatch starts)
+        let dense = self.dense();
         let mut w = Stopwatch::start(self.clock);
         let params = global::GlobalParams { seed: self.seed, hypotheses: count, ..Default::default() };
         let matched = self.matched.get_or_insert_with(|| {
-            global::Matched::onto(&p.src_n, &p.target.cloud, &p.target.features, params.voxel_fraction)
+            global::Matched::onto_dense(&p.src_n, &p.target.cloud, &p.target.features, params.voxel_fraction, dense)
         });
         let hypotheses = matched.hypotheses(&params).iter().map(|h| h.T_target_source).collect();
         self.global_ms += w.lap();
