@@ -308,9 +308,9 @@ pub struct Alternative {
 /// origin) reuses it when the target is at least as large as the source (largest bounding-box
 /// half-extent, each in its own frame: the normalisation's scale is then the target's), redoing
 /// only what other options change, with the same result; so many close-ups or local captures
-/// registered onto one model or map prepare it once. It holds the normalised target (12 bytes a point) and ICP's voxelised copy
-/// with its k-d tree and normals until the next registration onto another target, or
-/// [`Registrar::forget_target`].
+/// registered onto one model or map prepare it once. It holds the normalised target (12 bytes a
+/// point) and ICP's voxelised copy with its k-d tree and normals until the next registration onto
+/// another target, or [`Registrar::forget_target`].
 pub struct Registrar {
     model: Model,
     weights_provenance: serde_json::Value,

@@ -5,8 +5,8 @@
 //! guess's rotation, jointly normalised, sampled for the network and voxelised for ICP, with the
 //! initial guess and the ICP distances in normalised units. The target's share is a
 //! [`PreparedTarget`] ([`super::target`]), taken over from the previous call when it is the same
-//! target at the same scale (and resized for other options). Warnings (collinear or flat clouds, unit mismatch, too few points
-//! for the network) go to `warnings`.
+//! target at the same scale (and resized for other options). Warnings (collinear or flat clouds,
+//! unit mismatch, too few points for the network) go to `warnings`.
 
 use super::options::{self, Resolved};
 use super::target::{self, InputKey, PreparedTarget, Sizes};
