@@ -139,8 +139,8 @@ pub struct Options {
 pub enum Search {
     /// In stages, stopping at a confident answer: the first start; then the others in order, each
     /// run of local or of global starts a stage; then, while the answer is still below the stop
-    /// (0.95), more global hypotheses and blind rotations. On dense scans (both clouds at least
-    /// 3,000 points, finely sampled for their size) it does not stop before the global stage.
+    /// (0.95), more global hypotheses and blind rotations. On scans of many points (both clouds at
+    /// least 3,000 points, [`GLOBAL_BEFORE_STOP_POINTS`]) it does not stop before the global stage.
     /// The best of everything refined is returned. Easy pairs cost one start; hard ones get every
     /// start and more.
     #[default]
@@ -153,6 +153,13 @@ pub enum Search {
 /// confidently wrong answer of the first start rarely ends the search (`BENCHMARK.md` has the
 /// measurements behind the value).
 pub const STOP_CONFIDENCE: f64 = 0.95;
+
+/// When both clouds have at least this many points, [`Search::Adaptive`] does not stop before its
+/// global stage has run, however sure an earlier answer is: the confidence is calibrated on
+/// sparse, noisy samples (1,024 points per cloud) and is measured to be too sure of wrong answers
+/// on denser, cleaner clouds, where the global descriptors are also the more informative
+/// (`BENCHMARK.md`, "Dense scans").
+pub const GLOBAL_BEFORE_STOP_POINTS: usize = 3_000;
 
 impl Default for Options {
     fn default() -> Self {

@@ -1,11 +1,13 @@
-//! Dense scans ([`arps::global::dense`]): the global descriptors are made finer and the adaptive
-//! search does not stop before its global stage, however sure it is of an earlier answer; sparse
-//! samples (the 1,024-point protocol) are searched as before.
+//! Dense scans ([`arps::global::dense`]): the global descriptors are made finer; and on clouds
+//! of at least [`GLOBAL_BEFORE_STOP_POINTS`] points the adaptive search does not stop before its
+//! global stage, however sure it is of an earlier answer; sparse samples (the 1,024-point
+//! protocol) are searched as before.
 
 mod common;
 
 use arps::global::{dense, TargetFeatures, VOXEL_FRACTION};
 use arps::io::read_mesh;
+use arps::register::GLOBAL_BEFORE_STOP_POINTS;
 use arps::transform::{rigid_inverse, rotation_error_deg};
 use arps::{Options, PointCloud, Registrar, Start};
 use common::{crop, fixture_pair, motion};
@@ -31,10 +33,12 @@ fn scans_are_dense_and_sparse_samples_or_few_points_are_not() {
     assert!(!dense(&source, &target, &TargetFeatures::default(), VOXEL_FRACTION), "a 1,024-point pair");
 }
 
-#[test]
+/// A pair cropped from `n` points over the CAD part (each crop keeps 80%) and registered with
+/// the network's start, then the global one: the number of points per cloud, the starts refined
+/// by the network's start alone and by both, and whether the answer is right and sure.
 #[allow(non_snake_case)]
-fn a_sure_answer_on_dense_scans_still_waits_for_the_global_stage() {
-    let surface = cad_surface(60_000);
+fn network_then_global(n: usize) -> (usize, usize, usize) {
+    let surface = cad_surface(n);
     let T_target_source = motion([8.0, -5.0, 6.0], [0.02, 0.01, -0.01]);
     let source = crop(&surface, [1.0, 0.2, 0.1], 0.8).transformed(&rigid_inverse(&T_target_source));
     let target = crop(&surface, [-1.0, 0.3, 0.0], 0.8);
@@ -43,16 +47,34 @@ fn a_sure_answer_on_dense_scans_still_waits_for_the_global_stage() {
     let network = Options { starts: vec![Start::Network], ..Options::default() };
     let alone = registrar.register(&source, &target, &network).unwrap();
     assert!(alone.confidence >= 0.95, "precondition: a sure network answer ({})", alone.confidence);
-    // so on sparse clouds the search would stop there; on dense scans the global stage runs too
     let both = Options { starts: vec![Start::Network, Start::Global], ..Options::default() };
     let r = registrar.register(&source, &target, &both).unwrap();
-    assert!(
-        r.starts_refined > alone.starts_refined,
-        "the global stage did not run: {} starts refined",
-        r.starts_refined
-    );
     assert!(rotation_error_deg(&r.T_target_source, &T_target_source) < 2.0);
     assert!(r.confidence >= 0.95, "confidence {}", r.confidence);
+    (source.len().min(target.len()), alone.starts_refined, r.starts_refined)
+}
+
+#[test]
+fn a_sure_answer_on_dense_scans_still_waits_for_the_global_stage() {
+    // on sparse clouds the search would stop at the network's answer; here the global stage runs
+    let (points, alone, both) = network_then_global(60_000);
+    assert!(points >= GLOBAL_BEFORE_STOP_POINTS);
+    assert!(both > alone, "the global stage did not run: {both} starts refined");
+}
+
+#[test]
+fn so_does_one_on_clouds_of_a_few_thousand_points() {
+    // not dense scans (few points per feature voxel), but beyond the sparse samples the
+    // confidence is calibrated on: the global stage runs too
+    let surface = cad_surface(4_096);
+    assert!(!dense(&surface, &surface, &TargetFeatures::default(), VOXEL_FRACTION), "precondition: not dense");
+    let (points, alone, both) = network_then_global(4_096);
+    assert!(points >= GLOBAL_BEFORE_STOP_POINTS, "{points} points");
+    assert!(both > alone, "the global stage did not run: {both} starts refined");
+    // just below the bound, the sure answer stops the search
+    let (points, alone, both) = network_then_global(3_600);
+    assert!(points < GLOBAL_BEFORE_STOP_POINTS, "{points} points");
+    assert_eq!(both, alone, "the global stage ran on {points} points");
 }
 
 #[test]

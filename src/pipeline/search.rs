@@ -3,8 +3,8 @@
 //! Takes the [`Prepared`] clouds, the stages of [`super::starts`] and the options; gives
 //! [`Chosen`]: the best refined start ([`refine::refine_best`], compared across stages by
 //! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
-//! first stage whose best reaches [`STOP_CONFIDENCE`] (on dense scans, [`crate::global::dense`],
-//! not before the global stage has run); when none does, it runs a last stage of
+//! first stage whose best reaches [`STOP_CONFIDENCE`] (when both clouds have at least
+//! [`GLOBAL_BEFORE_STOP_POINTS`] points, not before the global stage has run); when none does, it runs a last stage of
 //! blind starts ([`Starts::more`]: more global hypotheses and the rotations), shortlisted to
 //! [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit clearly better
 //! ([`refine::clearly_better`]). Each stage's best, when it is better than the answer so far and
@@ -21,7 +21,7 @@ use crate::confidence::{self, Evidence, Probed};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Candidate, Refinement, Start};
-use crate::register::{Options, Search, STOP_CONFIDENCE};
+use crate::register::{Options, Search, GLOBAL_BEFORE_STOP_POINTS, STOP_CONFIDENCE};
 use crate::Result;
 use nalgebra::Matrix4;
 
@@ -72,6 +72,7 @@ pub(crate) fn search(
     let adaptive = options.search == Search::Adaptive;
     let kinds: Vec<Start> = stages.iter().flatten().copied().collect();
     let has_global = kinds.iter().any(|k| k.is_global());
+    let many_points = p.src_n.len().min(p.target.cloud.len()) >= GLOBAL_BEFORE_STOP_POINTS;
     let mut reached_global = false;
     // the stages, then, while the answer is still below the stop, the last one: blind starts
     for stage in stages.iter().map(Some).chain([None]) {
@@ -118,12 +119,12 @@ pub(crate) fn search(
             best = Some((c, probed, confidence));
         }
         reached_global |= stage.is_some_and(|s| s.iter().any(|k| k.is_global()));
-        // on dense scans the confidence is measured to be too sure of wrong answers (it was
-        // calibrated on sparse, noisy pairs) and the global descriptors are informative: a
-        // confident answer stops the search only once the global stage has run
+        // on clouds of many points the confidence is measured to be too sure of wrong answers
+        // (it was calibrated on sparse, noisy pairs): a confident answer stops the search only
+        // once the global stage has run
         let stop = adaptive
             && best.as_ref().is_some_and(|b| b.2 >= STOP_CONFIDENCE)
-            && (reached_global || !has_global || !builder.dense());
+            && (reached_global || !has_global || !many_points);
         if stop {
             break;
         }

@@ -157,9 +157,8 @@ impl<'a> Starts<'a> {
     }
 
     /// Whether both clouds are dense scans ([`global::dense`] at the default feature voxel;
-    /// computed once, its time counted in `global_ms`): the adaptive search then does not stop
-    /// before its global stage.
-    pub(crate) fn dense(&mut self) -> bool {
+    /// computed once, its time counted in `global_ms`): their global descriptors are finer.
+    fn dense(&mut self) -> bool {
         let p = self.prepared;
         let mut w = Stopwatch::start(self.clock);
         let dense = *self.dense.get_or_insert_with(|| {
