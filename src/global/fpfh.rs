@@ -169,10 +169,17 @@ pub fn describe(points: &[[f32; 3]], normals: &[[f32; 3]], index: &KdIndex, para
                 }
                 let inv = 1.0 / d2;
                 let h = &spfh[j as usize];
-                for (k, (acc, &v)) in f.iter_mut().zip(h.iter()).enumerate() {
-                    let v = v * inv;
-                    *acc += v;
-                    sum[k / BINS] += v;
+                // feature by feature, each block's sum in a local (the same additions, in the
+                // same order, as one pass over the 33 bins; but no store-to-load chain)
+                for (block, s) in sum.iter_mut().enumerate() {
+                    let bins = block * BINS..(block + 1) * BINS;
+                    let mut acc_sum = *s;
+                    for (acc, &v) in f[bins.clone()].iter_mut().zip(&h[bins]) {
+                        let v = v * inv;
+                        *acc += v;
+                        acc_sum += v;
+                    }
+                    *s = acc_sum;
                 }
             }
             let mut out = [0.0f32; DIM];
