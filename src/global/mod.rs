@@ -31,8 +31,8 @@ pub const VOXEL_FRACTION: f64 = 0.08;
 /// A cloud is *dense* when it has at least this many points per occupied voxel of the default
 /// feature voxel ([`VOXEL_FRACTION`] of the pair's larger half-extent): a scan rather than a
 /// sparse sample. A pair of dense clouds is described finer ([`DENSE_VOXEL_FRACTION`],
-/// [`DENSE_FEATURE_POINTS`]; `BENCHMARK.md`, "Dense scans"). The synthetic 1,024-point validation clouds have 1.3-3.8
-/// points per voxel there, real scans of 15k-70k points 20-200.
+/// [`DENSE_FEATURE_POINTS`]; `BENCHMARK.md`, "Dense scans"). The synthetic 1,024-point
+/// validation clouds have 1.3-3.8 points per voxel there, real scans of 15k-70k points 20-200.
 pub const DENSE_OCCUPANCY: usize = 8;
 
 /// A dense cloud has at least this many points too (twice [`MAX_FEATURE_POINTS`]): a sparse

@@ -4,13 +4,13 @@
 //! [`Chosen`]: the best refined start ([`refine::refine_best`], compared across stages by
 //! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
 //! first stage whose best reaches [`STOP_CONFIDENCE`] (when both clouds have at least
-//! [`GLOBAL_BEFORE_STOP_POINTS`] points, not before the global stage has run); when none does, it runs a last stage of
-//! blind starts ([`Starts::more`]: more global hypotheses and the rotations), shortlisted to
-//! [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit clearly better
-//! ([`refine::clearly_better`]). Each stage's best, when it is better than the answer so far and
-//! another pose ([`refine::coincide`]), is judged by the confidence probe, and a probe pose that
-//! fits better is refined as one more start ([`settle`]). The answer's final verdict also counts,
-//! as alternatives, the other refined answers that fit about as well
+//! [`GLOBAL_BEFORE_STOP_POINTS`] points, not before the global stage has run); when none does,
+//! it runs a last stage of blind starts ([`Starts::more`]: more global hypotheses and the
+//! rotations), shortlisted to [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit
+//! clearly better ([`refine::clearly_better`]). Each stage's best, when it is better than the
+//! answer so far and another pose ([`refine::coincide`]), is judged by the confidence probe, and
+//! a probe pose that fits better is refined as one more start ([`settle`]). The answer's final
+//! verdict also counts, as alternatives, the other refined answers that fit about as well
 //! ([`confidence::count_search_alternatives`]); those alternative poses are refined like the
 //! answer and handed on with it ([`refine_alternatives`]). With no start refined at all, the
 //! network's estimate (the initial transform with the network off), unrefined, and a warning.
