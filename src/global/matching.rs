@@ -33,9 +33,9 @@ pub fn nearest_each(a: &[Descriptor], b: &[Descriptor]) -> Vec<u32> {
 /// weak matching beats none). One pass over the distance matrix finds both directions' nearest
 /// (ties to the lower index, as [`nearest_each`]).
 ///
-/// The target descriptors are read [`GROUP`] at a time, transposed, so that one source
-/// descriptor's distances to a group are computed lane by lane in vector registers: each
-/// distance with the same operations in the same order as [`dist2`], so the same value.
+/// The target descriptors are read four at a time, transposed, so that one source descriptor's
+/// distances to them are computed lane by lane in vector registers: each distance with the same
+/// operations in the same order as one computed alone, so the same value.
 pub fn mutual_matches(source: &[Descriptor], target: &[Descriptor], min_mutual: usize) -> Vec<(u32, u32)> {
     if source.is_empty() || target.is_empty() {
         return Vec::new();
