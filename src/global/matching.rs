@@ -41,7 +41,6 @@ pub fn mutual_matches(source: &[Descriptor], target: &[Descriptor], min_mutual: 
         return Vec::new();
     }
     let groups = transpose(target);
-    let n_t = target.len();
     let mut row = vec![(0u32, f32::INFINITY); source.len()];
     // each target's nearest source so far, distance and index apart (the update vectorises)
     let mut col_d = vec![f32::INFINITY; groups.len() * GROUP];
@@ -73,10 +72,16 @@ pub fn mutual_matches(source: &[Descriptor], target: &[Descriptor], min_mutual: 
             }
         }
     }
+    keep_mutual(&row, |j| col_i[j as usize], min_mutual)
+}
+
+/// The pairs `(i, row[i])` whose target's nearest source (`nearest_source`) is `i` again, or
+/// every pair when fewer than `min_mutual` are.
+fn keep_mutual(row: &[(u32, f32)], nearest_source: impl Fn(u32) -> u32, min_mutual: usize) -> Vec<(u32, u32)> {
     let mutual: Vec<(u32, u32)> = row
         .iter()
         .enumerate()
-        .filter(|&(i, &(j, _))| (j as usize) < n_t && col_i[j as usize] == i as u32)
+        .filter(|&(i, &(j, _))| nearest_source(j) == i as u32)
         .map(|(i, &(j, _))| (i as u32, j))
         .collect();
     if mutual.len() >= min_mutual {
@@ -176,17 +181,7 @@ mod tests {
                 }
             }
         }
-        let mutual: Vec<(u32, u32)> = row
-            .iter()
-            .enumerate()
-            .filter(|&(i, &(j, _))| col[j as usize].0 == i as u32)
-            .map(|(i, &(j, _))| (i as u32, j))
-            .collect();
-        if mutual.len() >= min_mutual {
-            mutual
-        } else {
-            row.iter().enumerate().map(|(i, &(j, _))| (i as u32, j)).collect()
-        }
+        keep_mutual(&row, |j| col[j as usize].0, min_mutual)
     }
 
     /// `n` descriptors with bins drawn from a few values (so that distances tie often).
