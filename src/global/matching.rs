@@ -94,6 +94,10 @@ fn keep_mutual(row: &[(u32, f32)], nearest_source: impl Fn(u32) -> u32, min_mutu
 /// How many target descriptors [`mutual_matches`] compares with a source descriptor at once.
 const GROUP: usize = 4;
 
+/// The partial sums of a descriptor distance (one per lane of eight bins; [`dist2`] and
+/// [`group_dist2`] add the same ones in the same order).
+const LANES: usize = 8;
+
 /// Descriptors `GROUP` at a time, transposed (`[bin][lane]`); the last group padded with
 /// infinite descriptors, whose distances are infinite and so never nearest.
 fn transpose(descriptors: &[Descriptor]) -> Vec<[[f32; GROUP]; DIM]> {
@@ -115,7 +119,6 @@ fn transpose(descriptors: &[Descriptor]) -> Vec<[[f32; GROUP]; DIM]> {
 /// sums, added in the same order.
 #[inline(always)]
 fn group_dist2(x: &Descriptor, group: &[[f32; GROUP]; DIM]) -> [f32; GROUP] {
-    const LANES: usize = 8;
     let mut acc = [[0.0f32; GROUP]; LANES];
     for k in 0..DIM / LANES {
         for (l, a) in acc.iter_mut().enumerate() {
@@ -146,7 +149,6 @@ fn group_dist2(x: &Descriptor, group: &[[f32; GROUP]; DIM]) -> [f32; GROUP] {
 /// Squared Euclidean distance of two descriptors, in eight independent lanes (so it vectorises).
 #[inline(always)]
 fn dist2(x: &Descriptor, y: &Descriptor) -> f32 {
-    const LANES: usize = 8;
     let mut acc = [0.0f32; LANES];
     for k in 0..DIM / LANES {
         for l in 0..LANES {

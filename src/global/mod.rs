@@ -258,17 +258,6 @@ impl Matched {
     /// same `target` left it (the same result either way).
     pub fn onto(source: &PointCloud, target: &PointCloud, memo: &TargetFeatures, voxel_fraction: f64) -> Self {
         let dense = dense(source, target, memo, voxel_fraction);
-        Self::onto_dense(source, target, memo, voxel_fraction, dense)
-    }
-
-    /// [`Matched::onto`] for a pair whose [`dense`] is known already.
-    pub(crate) fn onto_dense(
-        source: &PointCloud,
-        target: &PointCloud,
-        memo: &TargetFeatures,
-        voxel_fraction: f64,
-        dense: bool,
-    ) -> Self {
         let (voxel, source_v, target_v) = feature_grid(source, target, memo, voxel_fraction, dense);
         // the search's voxelised clouds where it made them (the same as describing anew)
         let source = match source_v {

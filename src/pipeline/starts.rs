@@ -68,8 +68,6 @@ pub(crate) struct Starts<'a> {
     clock: Option<Clock>,
     matched: Option<global::Matched>,
     hypotheses: Option<Vec<Matrix4<f64>>>,
-    /// Whether the clouds are dense scans ([`global::dense`]), once asked.
-    dense: Option<bool>,
     /// Milliseconds spent on the global hypotheses so far.
     pub global_ms: f64,
 }
@@ -77,7 +75,7 @@ pub(crate) struct Starts<'a> {
 impl<'a> Starts<'a> {
     /// Starts for `prepared`, with the network's estimate `t_net_n` (normalised units).
     pub(crate) fn new(prepared: &'a Prepared, t_net_n: Matrix4<f64>, seed: u64, clock: Option<Clock>) -> Self {
-        Self { prepared, t_net_n, seed, clock, matched: None, hypotheses: None, dense: None, global_ms: 0.0 }
+        Self { prepared, t_net_n, seed, clock, matched: None, hypotheses: None, global_ms: 0.0 }
     }
 
     /// The network's estimate these starts were built from (normalised units).
@@ -156,28 +154,14 @@ impl<'a> Starts<'a> {
         Ok(starts)
     }
 
-    /// Whether both clouds are dense scans ([`global::dense`] at the default feature voxel;
-    /// computed once, its time counted in `global_ms`): their global descriptors are finer.
-    fn dense(&mut self) -> bool {
-        let p = self.prepared;
-        let mut w = Stopwatch::start(self.clock);
-        let dense = *self.dense.get_or_insert_with(|| {
-            global::dense(&p.src_n, &p.target.cloud, &p.target.features, global::VOXEL_FRACTION)
-        });
-        self.global_ms += w.lap();
-        dense
-    }
-
     /// Up to `count` global hypotheses, best first (describing and matching the clouds on first
     /// use; the time goes to `global_ms`).
     fn draw(&mut self, count: usize) -> Vec<Matrix4<f64>> {
         let p = self.prepared;
-        // (timed on its own, before this draw's stopwatch starts)
-        let dense = self.dense();
         let mut w = Stopwatch::start(self.clock);
         let params = global::GlobalParams { seed: self.seed, hypotheses: count, ..Default::default() };
         let matched = self.matched.get_or_insert_with(|| {
-            global::Matched::onto_dense(&p.src_n, &p.target.cloud, &p.target.features, params.voxel_fraction, dense)
+            global::Matched::onto(&p.src_n, &p.target.cloud, &p.target.features, params.voxel_fraction)
         });
         let hypotheses = matched.hypotheses(&params).iter().map(|h| h.T_target_source).collect();
         self.global_ms += w.lap();
