@@ -170,11 +170,18 @@ fn half_space(points: &[[f32; 3]], c: &Vector3<f64>, u: &Vector3<f64>, k: usize)
             (v.dot(u), i as u32)
         })
         .collect();
-    // descending by distance along u, ties by index (deterministic)
-    d.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-    let mut idx: Vec<u32> = d[..k.min(d.len())].iter().map(|x| x.1).collect();
-    idx.sort_unstable();
-    idx
+    // the first k by distance along u, descending, ties by index: a strict total order, so the
+    // k it selects are the same as a full sort's (and the same on every platform), in O(n)
+    let k = k.min(d.len());
+    if k > 0 && k < d.len() {
+        d.select_nth_unstable_by(k - 1, |a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
+    }
+    // ascending: mark the chosen and read the marks in order (O(n), no second sort)
+    let mut chosen = vec![false; points.len()];
+    for &(_, i) in &d[..k] {
+        chosen[i as usize] = true;
+    }
+    (0..points.len() as u32).filter(|&i| chosen[i as usize]).collect()
 }
 
 fn overlap_of(a: &[u32], b: &[u32]) -> f64 {

@@ -21,6 +21,44 @@ fn area_of(c: &[[f64; 3]; 3]) -> f64 {
     0.5 * (x[0] * x[0] + x[1] * x[1] + x[2] * x[2]).sqrt()
 }
 
+/// A running sum of areas with a guide table: `first_above(u)` is the first index whose sum
+/// exceeds `u` (`partition_point(|c| c <= u)`, the same answer), found in the few entries of
+/// `u`'s bucket instead of a binary search over the whole table, whose scattered reads cost
+/// most of a large mesh's sampling.
+struct AreaTable {
+    cumulative: Vec<f64>,
+    total: f64,
+    /// `guide[b]`: how many sums are at most the `b`-th of `buckets` equal steps of `total`.
+    guide: Vec<usize>,
+}
+
+impl AreaTable {
+    /// `cumulative` non-decreasing, ending at `total`; about `draws` lookups to come.
+    fn new(cumulative: Vec<f64>, total: f64, draws: usize) -> Self {
+        let buckets = draws.min(cumulative.len()).max(1);
+        let mut guide = Vec::with_capacity(buckets + 1);
+        let mut k = 0;
+        for b in 0..=buckets {
+            let edge = total * (b as f64 / buckets as f64);
+            while k < cumulative.len() && cumulative[k] <= edge {
+                k += 1;
+            }
+            guide.push(k);
+        }
+        Self { cumulative, total, guide }
+    }
+
+    fn first_above(&self, u: f64) -> usize {
+        let buckets = self.guide.len() - 1;
+        let b = ((u / self.total * buckets as f64) as usize).min(buckets - 1);
+        // one bucket of slack each side covers the rounding of `b` and of the edges: every sum
+        // before `lo` is at most `u`, every sum from `hi` on exceeds it
+        let lo = self.guide[b.saturating_sub(1)];
+        let hi = self.guide[(b + 2).min(buckets)];
+        lo + self.cumulative[lo..hi].partition_point(|&c| c <= u)
+    }
+}
+
 /// Draws `n` points uniformly over the surface of the triangles `triangles` of `vertices`: a
 /// triangle is chosen with probability proportional to its area (binary search in a cumulative
 /// area table), then a point uniformly inside it (`A + s(1-r2)(B-A) + s r2 (C-A)` with
@@ -59,11 +97,12 @@ pub(crate) fn sample_triangles(
             triangles.len()
         )));
     }
+    let table = AreaTable::new(cumulative, total, n);
     let mut rng = crate::sampling::rng(seed);
     let mut points = Vec::with_capacity(n.min(1 << 20));
     for _ in 0..n {
         let u = rng.random::<f64>() * total;
-        let k = cumulative.partition_point(|&c| c <= u).min(chosen.len() - 1);
+        let k = table.first_above(u).min(chosen.len() - 1);
         // checked above: every index is in range
         let Some([a, b, c]) = corners(vertices, &triangles[chosen[k] as usize]) else { continue };
         let s = rng.random::<f64>().sqrt();
@@ -98,5 +137,37 @@ impl Mesh {
         let vertices: Vec<[f64; 3]> = self.vertices.iter().map(|v| v.map(|x| x as f64)).collect();
         let points = sample_triangles(&vertices, &self.triangles, n, seed)?;
         Ok(PointCloud::new(points.into_iter().map(|p| p.map(|x| x as f32)).collect()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::AreaTable;
+    use rand::{Rng, SeedableRng};
+
+    /// The guided search answers exactly as a binary search over the whole table, on tables with
+    /// repeated sums and lookups at, between and beyond the sums.
+    #[test]
+    fn area_table_matches_binary_search() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for (len, draws) in [(1, 10), (7, 3), (1000, 64), (5000, 4096), (300, 10_000)] {
+            let mut total = 0.0;
+            let cumulative: Vec<f64> = (0..len)
+                .map(|i| {
+                    // some zero-width steps (repeated sums) and widths over six decades
+                    if i % 11 != 3 {
+                        total += 10f64.powf(rng.random::<f64>() * 6.0 - 3.0);
+                    }
+                    total
+                })
+                .collect();
+            let table = AreaTable::new(cumulative.clone(), total, draws);
+            let mut probes: Vec<f64> = (0..20_000).map(|_| rng.random::<f64>() * total).collect();
+            probes.extend(cumulative.iter().copied());
+            probes.extend([0.0, total, total * (1.0 - 1e-16), -1.0, total * 2.0]);
+            for u in probes {
+                assert_eq!(table.first_above(u), cumulative.partition_point(|&c| c <= u), "u = {u}");
+            }
+        }
     }
 }
