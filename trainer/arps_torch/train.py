@@ -184,6 +184,9 @@ def main(argv=None):
     ap.add_argument("--val-every-steps", type=int, help="override: validate every S steps")
     ap.add_argument("--batch", type=int, help="override the run's pairs per step")
     ap.add_argument("--lr", type=float, help="replace the run's current lr")
+    ap.add_argument("--val-pairs", type=int,
+                    help="validate on this many held-out pairs from now on (the best so far, measured on the old "
+                         "set, is forgotten)")
     ap.add_argument("--network-points", type=int,
                     help="replace the run's network N (a fork that fine-tunes at another N; the weights do not depend on it)")
     ap.add_argument("--compile", action="store_true",
@@ -207,6 +210,13 @@ def main(argv=None):
         if a.network_points != cfg["model"]["n_points"]:
             # a fork at another N: the best so far was measured at the old N
             cfg["model"]["n_points"] = a.network_points
+            st.update(best_score=None, best_val=None, bad_validations=0)
+    if a.val_pairs is not None:
+        if a.val_pairs < 1:
+            ap.error(f"--val-pairs {a.val_pairs}: validation needs at least one pair")
+        if a.val_pairs != cfg["val_pairs"]:
+            # another validation set: scores on the old one do not compare with it
+            cfg["val_pairs"] = a.val_pairs
             st.update(best_score=None, best_val=None, bad_validations=0)
     if a.checkpoint_every_minutes is not None:
         cfg["checkpoint_every_minutes"] = a.checkpoint_every_minutes

@@ -14,7 +14,7 @@ import pytest
 torch = pytest.importorskip("torch", reason="torch is not installed (pip install -r trainer/requirements.txt)")
 
 from arps_torch import stream, train  # noqa: E402
-from arps_torch.weights import read_checkpoint, read_weights  # noqa: E402
+from arps_torch.weights import read_checkpoint, read_weights, save_checkpoint  # noqa: E402
 from conftest import REPO  # noqa: E402
 
 BIN = os.environ.get("ARPS_TRAIN_BIN", os.path.join(REPO, "target", "release", "arps-train"))
@@ -98,6 +98,24 @@ def test_a_fork_at_another_network_n_and_batch(tmp_path):
     out = tmp_path / "w.safetensors"
     run("export", "--run", str(d), "--latest", "--out", str(out))
     assert read_weights(str(out))[0]["n_points"] == 24
+
+
+def test_a_larger_validation_set_starts_a_new_best(tmp_path):
+    d = init(tmp_path / "r")
+    pytrain(d, 3)
+    path = os.path.join(d, "checkpoint.safetensors")
+    ck = read_checkpoint(path)
+    assert ck["state"]["best_step"] == 3 and ck["state"]["best_val"]["pairs"] == 4
+    # a best no validation could beat: only forgetting it lets the new set's first one be the best
+    ck["state"]["best_score"] = 1e9
+    save_checkpoint(path, ck["state"], ck["adam"], ck["params"], ck["adam_m"], ck["adam_v"], ck["ema"])
+    train.main(["--run", str(d), "--arps-train", BIN, "--generators", "2", "--steps", "4", "--device", "cpu",
+                "--quiet", "--val-pairs", "6", "--val-every-steps", "1"])
+    st = read_checkpoint(os.path.join(d, "checkpoint.safetensors"))["state"]
+    assert st["config"]["val_pairs"] == 6 and st["best_step"] == 4 and st["best_val"]["pairs"] == 6
+    with pytest.raises(SystemExit):
+        train.main(["--run", str(d), "--arps-train", BIN, "--generators", "1", "--steps", "5", "--device", "cpu",
+                    "--quiet", "--val-pairs", "0"])
 
 
 def test_a_batch_of_zero_is_refused(tmp_path):

@@ -217,6 +217,8 @@ struct PairResult {
     fitness: Vec<Option<f64>>,
     /// The fitness of the truth, refined by ICP from the ground-truth pose.
     gt_fitness: f64,
+    /// The error of that refined truth: where ICP from a perfect start ends.
+    gt_refined: PairError,
     /// Each method's confidence and its evidence (`None` when it failed).
     confidence: Vec<Option<(f64, Evidence)>>,
     /// Each method's stage timings and starts refined (`None` when it failed).
@@ -315,10 +317,11 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             starts: vec![Start::Initial],
             ..Options::default()
         };
-        let gt_fitness = trained
+        let refined_truth = trained
             .register(&source, &target, &truth)
-            .map_err(|err| format!("{}: refining the ground truth: {err}", e.name))?
-            .fitness;
+            .map_err(|err| format!("{}: refining the ground truth: {err}", e.name))?;
+        let gt_fitness = refined_truth.fitness;
+        let gt_refined = pair_error(&refined_truth.T_target_source, &gt, scale);
         let mut r = PairResult {
             name: e.name.clone(),
             scale,
@@ -328,6 +331,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             start: Vec::new(),
             fitness: Vec::new(),
             gt_fitness,
+            gt_refined,
             confidence: Vec::new(),
             work: Vec::new(),
             answer: Vec::new(),
@@ -405,6 +409,10 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         })
         .collect();
 
+    // ICP from the truth: the most ICP from any one start (a perfect network's) could recall
+    let truth_recall = results.iter().filter(|r| recalled(&r.gt_refined, a.rot_threshold, a.trans_threshold)).count()
+        as f64
+        / results.len().max(1) as f64;
     let units = if divide {
         "TE divided by each pair's shared scale (largest bounding-box half-extent of the two clouds)"
     } else {
@@ -438,6 +446,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "rot_threshold_deg": a.rot_threshold,
             "trans_threshold": a.trans_threshold,
             "ambiguity_margin": AMBIGUITY_MARGIN,
+            "truth_refined_recall": truth_recall,
             "methods": per_method.iter().map(|m| serde_json::json!({
                 "name": m.name, "summary": m.summary, "failed": m.failed, "fit_ge_gt": m.ambiguous,
                 "wrong_below_half": m.wrong_doubted, "right_below_half": m.right_doubted,
@@ -449,6 +458,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
                 "name": r.name,
                 "te_scale": r.scale,
                 "gt_fitness": r.gt_fitness,
+                "gt_refined": { "rot_deg": r.gt_refined.rot_deg, "trans": r.gt_refined.trans },
                 "results": methods.iter().enumerate().map(|(i, m)| serde_json::json!({
                     "method": m.name(),
                     "rot_deg": r.errors[i].rot_deg,
@@ -524,6 +534,9 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             m.ambiguous
         );
     }
+    out!(
+        "  ICP from the ground truth (the refinement of a perfect start, the most any one start can give): recall {truth_recall:.4}"
+    );
     for m in &per_method {
         out!(
             "  {}: confidence < 0.5 on {} of wrong answers, {} of right answers",
