@@ -53,9 +53,17 @@ def read_records(f, h, count):
     return np.frombuffer(data, dtype=dt)
 
 
-def to_batch(recs, device="cpu"):
-    """Records -> the tensors the model and losses take."""
-    t = lambda k, dt=None: torch.from_numpy(np.ascontiguousarray(recs[k])).to(device=device, dtype=dt)
+def to_batch(recs, device="cpu", pin=False):
+    """Records -> the tensors the model and losses take (with ``pin``, on the CPU in page-locked
+    memory, ready for an asynchronous copy to a GPU: see ``to_device``)."""
+    def t(k, dt=None):
+        x = torch.from_numpy(np.ascontiguousarray(recs[k])).to(device=device, dtype=dt)
+        if pin:
+            try:
+                return x.pin_memory()
+            except RuntimeError:  # no page-locked memory to be had: an ordinary copy still works
+                return x
+        return x
     return {
         "index": torch.from_numpy(recs["index"].astype(np.int64)),
         "source": t("source", torch.float32),
@@ -70,6 +78,12 @@ def to_batch(recs, device="cpu"):
         "norm_target": t("norm_target", torch.float64),
         "t_gt_pair": t("t_gt_pair", torch.float64),
     }
+
+
+def to_device(batch, device):
+    """A ``to_batch`` of CPU tensors moved to ``device`` (asynchronously from pinned memory; the
+    stream orders the copies before the step's kernels). ``index`` stays on the CPU."""
+    return {k: v if k == "index" else v.to(device, non_blocking=True) for k, v in batch.items()}
 
 
 def stream_command(binary, config, first_pair=0, worker=0, workers=1, count=None, val=False, threads=1, bank=None):
@@ -98,10 +112,12 @@ def read_val(binary, config, count=None, bank=None, threads=1):
 
 class Generators:
     """``workers`` generator processes from stream index ``first_pair``; ``next()`` gives the
-    training batches (structured record arrays) in order. Each process gets a reader thread and
-    a bounded queue (``prefetch`` batches), so generation overlaps training."""
+    training batches (structured record arrays, or ``convert`` of them) in order. Each process
+    gets a reader thread and a bounded queue (``prefetch`` batches), so generation, and the
+    conversion, overlap training."""
 
-    def __init__(self, binary, config, first_pair, workers, prefetch=8, bank=None):
+    def __init__(self, binary, config, first_pair, workers, prefetch=8, bank=None, convert=None):
+        self.convert = convert
         self.procs = [subprocess.Popen(stream_command(binary, config, first_pair, k, workers, bank=bank),
                                        stdout=subprocess.PIPE) for k in range(workers)]
         self.headers = [read_header(p.stdout) for p in self.procs]
@@ -122,7 +138,7 @@ class Generators:
                 if len(recs) < h["batch"]:
                     q.put(RuntimeError(f"generator {k} ended (exit {self.procs[k].poll()})"))
                     return
-                q.put(recs)
+                q.put(self.convert(recs) if self.convert else recs)
         except Exception as e:  # surfaced to the training loop
             q.put(e)
 

@@ -25,7 +25,7 @@ import torch
 from . import TRAINER
 from .losses import losses, unpack_parts
 from .model import ArpsNet, gmr_both
-from .stream import Generators, read_val, to_batch
+from .stream import Generators, read_val, to_batch, to_device
 from .weights import read_checkpoint, save_checkpoint, weights_bytes, write_atomic
 
 ROT_THRESHOLD = 15.0
@@ -254,7 +254,10 @@ def main(argv=None):
     logf.write({"kind": "start", "session": st["sessions"], "step": st["step"], "pairs_seen": st["pairs_seen"],
                 "elapsed": st["elapsed"], "lr": st["lr"], "threads": a.generators, "config": cfg,
                 "trainer": TRAINER, "device": str(dev), "amp": a.amp, "compile": a.compile})
-    gens = Generators(a.arps_train, stream_cfg, st["pairs_seen"], a.generators, bank=None)
+    # the readers convert each batch to (pinned) CPU tensors off the training thread
+    pin = dev.type == "cuda"
+    gens = Generators(a.arps_train, stream_cfg, st["pairs_seen"], a.generators, bank=None,
+                      convert=lambda recs: to_batch(recs, "cpu", pin=pin))
     if gens.header["batch"] != cfg["batch"]:
         raise RuntimeError("generator batch differs from the run's")
 
@@ -308,8 +311,7 @@ def main(argv=None):
                 os.remove(stop_file)
                 break
             ts = time.time()
-            recs = gens.next()
-            b = to_batch(recs, dev)
+            b = to_device(gens.next(), dev)
             data_s = time.time() - ts
             adam.lr = effective_lr(st)
             for _, p in params:
