@@ -56,6 +56,9 @@ def test_stream_header_and_records(tmp_path):
     b = stream.to_batch(batches[0])
     assert b["source"].shape == (2, 32, 3) and b["seg_source"].shape == (2, 32, 4)
     assert torch.allclose(b["seg_source"].sum(-1), torch.ones(2, 32), atol=1e-5)
+    # what the readers hand the training loop (pinned where a GPU is present), then moved: the same
+    moved = stream.to_device(stream.to_batch(batches[0], "cpu", pin=True), "cpu")
+    assert moved.keys() == b.keys() and all(torch.equal(moved[k], b[k]) for k in b)
 
 
 def test_train_resume_export_curves(tmp_path):
