@@ -156,6 +156,41 @@ fn make_pairs_makes_any_pose_pairs_and_checks_the_range() {
     }
 }
 
+/// `--dense-points` sets the surface sample both clouds are drawn from: at the protocol's 4,096
+/// many points of the two clouds are the same sample (twins), at 65,536 few are; the files hold
+/// exactly the pairs of those parameters, and sizes out of range are refused.
+#[test]
+fn make_pairs_dense_points_sets_the_shared_samples() {
+    let dir = std::env::temp_dir().join(format!("arps-dense-points-{}", std::process::id()));
+    let d = dir.to_str().unwrap();
+    let src = arps::data::ShapeSource::procedural();
+    let mut shared = Vec::new();
+    for dense in [4096usize, 65536] {
+        let _ = std::fs::remove_dir_all(&dir);
+        let n = dense.to_string();
+        let (ok, out, err) =
+            arps(&["make-pairs", "--out", d, "--count", "3", "--seed", "4", "--procedural-only", "--dense-points", &n]);
+        assert!(ok, "{out}{err}");
+        let entries = arps::data::manifest::parse(&std::fs::read_to_string(dir.join("pairs.tsv")).unwrap()).unwrap();
+        let params = arps::data::PairParams { dense_points: dense, ..Default::default() };
+        let mut twins = 0;
+        for (i, e) in entries.iter().enumerate() {
+            let pair = src.pair(arps::data::Split::Val, (4u64 << 32) + i as u64, &params).unwrap();
+            assert_eq!(arps::io::read_path(&dir.join(&e.source)).unwrap().points, pair.source);
+            let target: std::collections::HashSet<u32> = pair.target_dense_index.iter().copied().collect();
+            twins += pair.source_dense_index.iter().filter(|i| target.contains(i)).count();
+        }
+        shared.push(twins as f64 / (3.0 * 1024.0));
+    }
+    assert!(shared[0] > 0.15 && shared[1] < 0.05, "shared samples {shared:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+    for bad in ["3", "0", "9999999"] {
+        let (ok, _, err) = arps(&["make-pairs", "--out", d, "--count", "1", "--dense-points", bad]);
+        assert!(!ok && err.contains("--dense-points"), "{bad}: {err}");
+        assert!(!dir.exists(), "nothing written for {bad}");
+    }
+}
+
 /// Real manifests store the truth to a few digits (`../shared/data/scans/pairs.tsv`): a ground
 /// truth that is rigid only to 1e-3 is still evaluated, not rejected.
 #[test]

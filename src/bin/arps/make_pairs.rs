@@ -59,11 +59,20 @@ pub struct MakePairsArgs {
     /// Points per cloud.
     #[arg(long, default_value_t = 1024)]
     points: usize,
+    /// Points drawn from each shape's surface before cropping (the protocol's 4,096). Both clouds
+    /// are resampled from them, so at 4,096 about a third of the overlap's points are the same
+    /// surface sample in both (under independent noise); real scans share none. 65,536 makes
+    /// such twins rare.
+    #[arg(long, default_value_t = 4096)]
+    dense_points: usize,
     /// Turn each whole shape by Euler angles up to this many degrees before cropping (0, the
     /// paper's protocol, keeps the shape's own, usually upright, orientation; 180: any pose).
     #[arg(long, default_value_t = 0.0)]
     pose_angle: f64,
 }
+
+/// Most `--dense-points`: a shape's dense sample is held in memory whole.
+const MAX_DENSE_POINTS: usize = 1 << 22;
 
 /// The distance written as `overlap_threshold`: five noise sigmas at the default noise.
 const OVERLAP_THRESHOLD: f64 = 0.05;
@@ -71,6 +80,9 @@ const OVERLAP_THRESHOLD: f64 = 0.05;
 pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let pose_angle_deg = check_pose_angle(a.pose_angle).map_err(|e| format!("--pose-angle {e}"))?;
     let max_angle_deg = check_max_angle(a.max_angle).map_err(|e| format!("--max-angle {e}"))?;
+    if !(16..=MAX_DENSE_POINTS).contains(&a.dense_points) {
+        return Err(format!("--dense-points {}: expected 16 to {MAX_DENSE_POINTS}", a.dense_points));
+    }
     let mut source = match (&a.bank, a.procedural_only) {
         (Some(dir), false) => {
             let b = bank::load_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -92,6 +104,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
         max_translation: a.max_translation,
         noise_sigma: a.noise,
         points: a.points,
+        dense_points: a.dense_points,
         pose_angle_deg,
         ..PairParams::default()
     };
