@@ -2,7 +2,7 @@
 # arps (the wasm build in Node, default options) against Open3D's point-to-plane ICP and its
 # FPFH + RANSAC + ICP pipeline, on the same pairs in one run: median ms/pair, recall, ratios.
 #
-#   scripts/bench-peers.sh            # about 10-15 minutes on a 2-core machine
+#   scripts/bench-peers.sh            # about 15 minutes on a 2-core machine
 #
 # Not part of CI: it downloads Open3D from PyPI into a benchmark-only virtualenv (.venv-bench,
 # ignored by git; reused when present; Open3D 0.19 needs CPython 3.8-3.12 as `python3`). It builds
@@ -18,6 +18,9 @@
 #   any     any pose (--rotation-range 180)
 #   any4k   any pose, 4,096 cleaner points per cloud (--points 4096 --noise 0.002), as scans of
 #           a few thousand points are: the adaptive search reaches its global stage on them
+#   paper-nt, any-nt  paper and any with both clouds drawn from 65,536 surface points instead of
+#           the protocol's 4,096 (--dense-points 65536), so that, as between real scans, almost
+#           no point is the same surface sample in both clouds
 #   NNk/NNM the paper's protocol with N points per cloud
 #   scans   the real scans (10k-70k points), when present
 set -euo pipefail
@@ -58,6 +61,8 @@ SETS=()
 make_set paper --count "$PAIRS"
 make_set any --count "$PAIRS" --rotation-range 180
 make_set any4k --count "$PAIRS" --rotation-range 180 --points 4096 --noise 0.002
+make_set paper-nt --count "$PAIRS" --dense-points 65536
+make_set any-nt --count "$PAIRS" --rotation-range 180 --dense-points 65536
 for spec in $LARGE; do
   points=${spec%%:*}
   count=${spec##*:}
