@@ -189,6 +189,34 @@ fn make_pairs_dense_points_sets_the_shared_samples() {
         assert!(!ok && err.contains("--dense-points"), "{bad}: {err}");
         assert!(!dir.exists(), "nothing written for {bad}");
     }
+    let (ok, _, err) = arps(&["make-pairs", "--out", d, "--count", "1", "--points", "2000000"]);
+    assert!(!ok && err.contains("--points 2000000") && err.contains("--dense-points"), "{err}");
+    assert!(!dir.exists());
+}
+
+/// Clouds larger than the protocol's get a dense sample of 4x their points by default, so no
+/// cloud repeats a surface sample (at the protocol's 4,096, a 4,096-point cloud would be its
+/// crop's 2,870 samples and 1,200 noisy copies of them).
+#[test]
+fn make_pairs_large_clouds_repeat_no_sample() {
+    let dir = std::env::temp_dir().join(format!("arps-large-dense-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let d = dir.to_str().unwrap();
+    let (ok, out, err) =
+        arps(&["make-pairs", "--out", d, "--count", "2", "--seed", "6", "--procedural-only", "--points", "4096"]);
+    assert!(ok, "{out}{err}");
+    let sidecar: arps::data::manifest::Sidecar =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("pairs.json")).unwrap()).unwrap();
+    assert_eq!(sidecar.params.dense_points, 16384);
+    let src = arps::data::ShapeSource::procedural();
+    for i in 0..2u64 {
+        let pair = src.pair(arps::data::Split::Val, (6u64 << 32) + i, &sidecar.params).unwrap();
+        for idx in [&pair.source_dense_index, &pair.target_dense_index] {
+            let distinct: std::collections::HashSet<u32> = idx.iter().copied().collect();
+            assert_eq!((idx.len(), distinct.len()), (4096, 4096));
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
 }
 
 /// Real manifests store the truth to a few digits (`../shared/data/scans/pairs.tsv`): a ground

@@ -59,16 +59,24 @@ pub struct MakePairsArgs {
     /// Points per cloud.
     #[arg(long, default_value_t = 1024)]
     points: usize,
-    /// Points drawn from each shape's surface before cropping (the protocol's 4,096). Both clouds
-    /// are resampled from them, so at 4,096 about a third of the overlap's points are the same
-    /// surface sample in both (under independent noise); real scans share none. 65,536 makes
-    /// such twins rare.
-    #[arg(long, default_value_t = 4096)]
-    dense_points: usize,
+    /// Points drawn from each shape's surface before cropping (default: the protocol's 4,096, or 4x
+    /// `--points` when that is more, so that no cloud repeats a sample). Both clouds are
+    /// resampled from them, so at 4x the points about a third of the overlap's points are the same
+    /// surface sample in both (under independent noise); real scans share none. 16x makes such
+    /// twins rare (65,536 for 1,024 points).
+    #[arg(long)]
+    dense_points: Option<usize>,
     /// Turn each whole shape by Euler angles up to this many degrees before cropping (0, the
     /// paper's protocol, keeps the shape's own, usually upright, orientation; 180: any pose).
     #[arg(long, default_value_t = 0.0)]
     pose_angle: f64,
+}
+
+/// The dense sample for clouds of `points` points: the protocol's 4,096 (for its 1,024 points),
+/// or 4x the points when that is more. A crop keeps about 0.7 of it, and a cloud larger than
+/// its crop would repeat samples (each repeat a noisy copy of the same surface point).
+fn default_dense_points(points: usize) -> usize {
+    PairParams::default().dense_points.max(points.saturating_mul(4))
 }
 
 /// Most `--dense-points`: a shape's dense sample is held in memory whole.
@@ -80,9 +88,17 @@ const OVERLAP_THRESHOLD: f64 = 0.05;
 pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let pose_angle_deg = check_pose_angle(a.pose_angle).map_err(|e| format!("--pose-angle {e}"))?;
     let max_angle_deg = check_max_angle(a.max_angle).map_err(|e| format!("--max-angle {e}"))?;
-    if !(16..=MAX_DENSE_POINTS).contains(&a.dense_points) {
-        return Err(format!("--dense-points {}: expected 16 to {MAX_DENSE_POINTS}", a.dense_points));
-    }
+    let dense_points = match a.dense_points {
+        Some(n) if (16..=MAX_DENSE_POINTS).contains(&n) => n,
+        Some(n) => return Err(format!("--dense-points {n}: expected 16 to {MAX_DENSE_POINTS}")),
+        None if default_dense_points(a.points) <= MAX_DENSE_POINTS => default_dense_points(a.points),
+        None => {
+            return Err(format!(
+                "--points {}: the dense sample would be 4x that, above the most ({MAX_DENSE_POINTS}); give --dense-points (a cloud larger than 0.7x it repeats samples)",
+                a.points
+            ))
+        }
+    };
     let mut source = match (&a.bank, a.procedural_only) {
         (Some(dir), false) => {
             let b = bank::load_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -104,7 +120,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
         max_translation: a.max_translation,
         noise_sigma: a.noise,
         points: a.points,
-        dense_points: a.dense_points,
+        dense_points,
         pose_angle_deg,
         ..PairParams::default()
     };
