@@ -67,9 +67,13 @@ fn eval_json_and_perturbation() {
         assert!(m["fit_ge_gt"].as_u64().unwrap() <= missed, "{m}");
     }
     assert_eq!(v["per_pair"].as_array().unwrap().len(), 2);
+    assert_eq!(v["truth_refined_recall"], 1.0);
     for p in v["per_pair"].as_array().unwrap() {
         let gt = p["gt_fitness"].as_f64().unwrap();
         assert!(gt > 0.1 && gt <= 1.0, "the refined truth overlaps: {p}");
+        // the fixtures' truth, refined, stays where it is (perturbed sources carry the truth with them)
+        let (re, te) = (p["gt_refined"]["rot_deg"].as_f64().unwrap(), p["gt_refined"]["trans"].as_f64().unwrap());
+        assert!(re < 2.0 && te < 0.05, "ICP from the truth stays near it: {p}");
         for r in p["results"].as_array().unwrap() {
             assert!((0.0..=1.0).contains(&r["fitness"].as_f64().unwrap()), "{r}");
         }
