@@ -26,15 +26,16 @@ fn area_of(c: &[[f64; 3]; 3]) -> f64 {
 /// `u`'s bucket instead of a binary search over the whole table, whose scattered reads cost
 /// most of a large mesh's sampling.
 struct AreaTable {
+    /// Non-decreasing, its last entry the total area.
     cumulative: Vec<f64>,
-    total: f64,
     /// `guide[b]`: how many sums are at most the `b`-th of `buckets` equal steps of `total`.
     guide: Vec<usize>,
 }
 
 impl AreaTable {
-    /// `cumulative` non-decreasing, ending at `total`; about `draws` lookups to come.
-    fn new(cumulative: Vec<f64>, total: f64, draws: usize) -> Self {
+    /// `cumulative` non-decreasing; about `draws` lookups to come.
+    fn new(cumulative: Vec<f64>, draws: usize) -> Self {
+        let total = cumulative.last().copied().unwrap_or(0.0);
         let buckets = draws.min(cumulative.len()).max(1);
         let mut guide = Vec::with_capacity(buckets + 1);
         let mut k = 0;
@@ -45,12 +46,13 @@ impl AreaTable {
             }
             guide.push(k);
         }
-        Self { cumulative, total, guide }
+        Self { cumulative, guide }
     }
 
     fn first_above(&self, u: f64) -> usize {
         let buckets = self.guide.len() - 1;
-        let b = ((u / self.total * buckets as f64) as usize).min(buckets - 1);
+        let total = self.cumulative.last().copied().unwrap_or(0.0);
+        let b = ((u / total * buckets as f64) as usize).min(buckets - 1);
         // one bucket of slack each side covers the rounding of `b` and of the edges: every sum
         // before `lo` is at most `u`, every sum from `hi` on exceeds it
         let lo = self.guide[b.saturating_sub(1)];
@@ -60,8 +62,8 @@ impl AreaTable {
 }
 
 /// Draws `n` points uniformly over the surface of the triangles `triangles` of `vertices`: a
-/// triangle is chosen with probability proportional to its area (binary search in a cumulative
-/// area table), then a point uniformly inside it (`A + s(1-r2)(B-A) + s r2 (C-A)` with
+/// triangle is chosen with probability proportional to its area (a cumulative area table,
+/// searched through a guide table), then a point uniformly inside it (`A + s(1-r2)(B-A) + s r2 (C-A)` with
 /// `s = sqrt(r1)`), all in `f64`. The same seed gives the same points on every platform.
 ///
 /// Fails when a triangle has an out-of-range vertex index, or when no triangle has a positive,
@@ -97,7 +99,7 @@ pub(crate) fn sample_triangles(
             triangles.len()
         )));
     }
-    let table = AreaTable::new(cumulative, total, n);
+    let table = AreaTable::new(cumulative, n);
     let mut rng = crate::sampling::rng(seed);
     let mut points = Vec::with_capacity(n.min(1 << 20));
     for _ in 0..n {
@@ -127,7 +129,7 @@ impl Mesh {
     }
 
     /// Draws `n` points uniformly over the surface: a triangle is chosen with probability
-    /// proportional to its area (binary search in a cumulative area table), then a point
+    /// proportional to its area (a search in a cumulative area table), then a point
     /// uniformly inside it (`A + s(1-r2)(B-A) + s r2 (C-A)` with `s = sqrt(r1)`), in `f64`. The
     /// same seed gives the same points on every platform.
     ///
@@ -161,7 +163,7 @@ mod tests {
                     total
                 })
                 .collect();
-            let table = AreaTable::new(cumulative.clone(), total, draws);
+            let table = AreaTable::new(cumulative.clone(), draws);
             let mut probes: Vec<f64> = (0..20_000).map(|_| rng.random::<f64>() * total).collect();
             probes.extend(cumulative.iter().copied());
             probes.extend([0.0, total, total * (1.0 - 1e-16), -1.0, total * 2.0]);

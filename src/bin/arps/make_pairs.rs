@@ -88,17 +88,16 @@ const OVERLAP_THRESHOLD: f64 = 0.05;
 pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let pose_angle_deg = check_pose_angle(a.pose_angle).map_err(|e| format!("--pose-angle {e}"))?;
     let max_angle_deg = check_max_angle(a.max_angle).map_err(|e| format!("--max-angle {e}"))?;
-    let dense_points = match a.dense_points {
-        Some(n) if (16..=MAX_DENSE_POINTS).contains(&n) => n,
-        Some(n) => return Err(format!("--dense-points {n}: expected 16 to {MAX_DENSE_POINTS}")),
-        None if default_dense_points(a.points) <= MAX_DENSE_POINTS => default_dense_points(a.points),
-        None => {
-            return Err(format!(
+    let dense_points = a.dense_points.unwrap_or_else(|| default_dense_points(a.points));
+    if !(16..=MAX_DENSE_POINTS).contains(&dense_points) {
+        return Err(match a.dense_points {
+            Some(n) => format!("--dense-points {n}: expected 16 to {MAX_DENSE_POINTS}"),
+            None => format!(
                 "--points {}: the dense sample would be 4x that, above the most ({MAX_DENSE_POINTS}); give --dense-points (a cloud larger than 0.7x it repeats samples)",
                 a.points
-            ))
-        }
-    };
+            ),
+        });
+    }
     let mut source = match (&a.bank, a.procedural_only) {
         (Some(dir), false) => {
             let b = bank::load_dir(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
