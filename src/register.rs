@@ -125,7 +125,9 @@ pub struct Options {
     /// larger RANSAC draw on the same descriptor matches) and the 24 `"rotations"` starts
     /// (unless `starts` names them), of which the 12 that fit best after a short ICP run each
     /// are refined; so only the pairs no stage settled pay for them. Its starts are blind, so its
-    /// best replaces the answer only when it fits more than 10% better.
+    /// best replaces the answer only when it fits more than 10% better. An answer whose
+    /// confidence reaches 0.85 once the global stage has run (`NEARLY_SURE_CONFIDENCE`) skips the
+    /// stages left, and its last stage refines only the 3 best of those further hypotheses.
     /// `"exhaustive"` refines every start, without that last stage. The result's `startsRefined`
     /// says how many were refined.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
@@ -139,8 +141,10 @@ pub struct Options {
 pub enum Search {
     /// In stages, stopping at a confident answer: the first start; then the others in order, each
     /// run of local or of global starts a stage; then, while the answer is still below the stop
-    /// (0.95), more global hypotheses and blind rotations. On scans of many points (both clouds at
-    /// least 3,000 points, [`GLOBAL_BEFORE_STOP_POINTS`]) it does not stop before the global stage.
+    /// (0.95), more global hypotheses and blind rotations; an answer at 0.85 or more once the
+    /// global stage has run ([`NEARLY_SURE_CONFIDENCE`]) skips the stages left and gets only a few
+    /// more global hypotheses. On scans of many points (both clouds at least 3,000 points,
+    /// [`GLOBAL_BEFORE_STOP_POINTS`]) it does not stop before the global stage.
     /// The best of everything refined is returned. Easy pairs cost one start; hard ones get every
     /// start and more.
     #[default]
@@ -153,6 +157,14 @@ pub enum Search {
 /// confidently wrong answer of the first start rarely ends the search (`BENCHMARK.md` has the
 /// measurements behind the value).
 pub const STOP_CONFIDENCE: f64 = 0.95;
+
+/// When the best answer's confidence reaches this once a global stage (`"global"`,
+/// `"globalNetwork"`) has run, [`Search::Adaptive`] skips the stages left and the blind rotations:
+/// the answer has been weighed against independent hypotheses from the descriptors, and only a
+/// few more of those are refined in its last stage. Right answers on clouds that share no
+/// samples (every real scan pair) mostly score between this and [`STOP_CONFIDENCE`]
+/// (`BENCHMARK.md`, "Nearly sure after the global stage").
+pub const NEARLY_SURE_CONFIDENCE: f64 = 0.85;
 
 /// When both clouds have at least this many points, [`Search::Adaptive`] does not stop before its
 /// global stage has run, however sure an earlier answer is: the confidence is calibrated on

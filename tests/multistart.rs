@@ -8,6 +8,7 @@ use common::{fixture_pair, fixture_pair_in};
 
 use arps::icp::{IcpKind, IcpTarget};
 use arps::refine::{self, Candidate, Refinement, Start};
+use arps::register::{NEARLY_SURE_CONFIDENCE, STOP_CONFIDENCE};
 use arps::transform::{rotation_error_deg, translation_error};
 use arps::{ModelConfig, Options, PointCloud, Registrar, Registration, Search, Weights};
 use common::{bumpy_surface, crop, motion};
@@ -450,12 +451,33 @@ fn an_answer_below_the_stop_after_every_stage_gets_a_last_stage_too() {
     for index in [3, 4] {
         let (r, all) = last_stage_pair(&mut reg, index, Start::Global);
         assert!(
-            all.confidence > 0.5 && all.confidence < arps::register::STOP_CONFIDENCE,
+            all.confidence > 0.5 && all.confidence < STOP_CONFIDENCE,
             "pair {index}: confidence {}",
             all.confidence
         );
         assert!(r.confidence > all.confidence, "pair {index}: confidence {}", r.confidence);
     }
+}
+
+/// `fixtures/any` pair 5 (a bed in an arbitrary relative pose; its clouds share almost no
+/// sample, as real scans): a global hypothesis finds the truth with a confidence between
+/// [`NEARLY_SURE_CONFIDENCE`] and the stop, so the adaptive search skips the local starts and the
+/// rotations and refines only a few more global hypotheses: the network's start, the five global
+/// ones and at most three more. Refining every start finds the same pose.
+#[test]
+fn an_answer_nearly_sure_after_the_global_stage_skips_the_local_starts() {
+    let (source, target, truth) = fixture_pair_in("fixtures/any", 5);
+    let mut reg = Registrar::with_default_model().unwrap();
+    let r = reg.register(&source, &target, &Options::default()).unwrap();
+    let err = rotation_error_deg(&r.T_target_source, &truth);
+    assert!(err < 15.0, "rotation error {err:.1} degrees");
+    assert_eq!(r.start, Start::Global);
+    assert!((NEARLY_SURE_CONFIDENCE..STOP_CONFIDENCE).contains(&r.confidence), "confidence {}", r.confidence);
+    assert!(r.starts_refined <= 1 + 5 + 3, "{} starts refined", r.starts_refined);
+    let all = reg.register(&source, &target, &Options { search: Search::Exhaustive, ..Options::default() }).unwrap();
+    assert!(all.starts_refined > 2 * r.starts_refined, "exhaustive: {} starts", all.starts_refined);
+    let apart = rotation_error_deg(&all.T_target_source, &r.T_target_source);
+    assert!(apart < 5.0, "the exhaustive search ends {apart:.1} degrees away");
 }
 
 /// `rotations`: the 24 rotations of a cube onto itself, each once, the identity first, closed

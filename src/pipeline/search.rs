@@ -7,8 +7,10 @@
 //! [`GLOBAL_BEFORE_STOP_POINTS`] points, not before the global stage has run); when none does,
 //! it runs a last stage of blind starts ([`Starts::more`]: more global hypotheses and the
 //! rotations), shortlisted to [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit
-//! clearly better ([`refine::clearly_better`]). Each stage's best, when it is better than the
-//! answer so far and another pose ([`refine::coincide`]), is judged by the confidence probe, and
+//! clearly better ([`refine::clearly_better`]). An answer that reaches [`NEARLY_SURE_CONFIDENCE`]
+//! once the global stage has run skips the stages left and the rotations: its last stage is the
+//! best [`NEARLY_SURE_LAST_STAGE_STARTS`] of the further global hypotheses. Each stage's best,
+//! when it is better than the answer so far and another pose ([`refine::coincide`]), is judged by the confidence probe, and
 //! a probe pose that fits better is refined as one more start ([`settle`]). The answer's final
 //! verdict also counts, as alternatives, the other refined answers that fit about as well
 //! ([`confidence::count_search_alternatives`]); those alternative poses are refined like the
@@ -21,7 +23,7 @@ use crate::confidence::{self, Evidence, Probed};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Candidate, Refinement, Start};
-use crate::register::{Options, Search, GLOBAL_BEFORE_STOP_POINTS, STOP_CONFIDENCE};
+use crate::register::{Options, Search, GLOBAL_BEFORE_STOP_POINTS, NEARLY_SURE_CONFIDENCE, STOP_CONFIDENCE};
 use crate::Result;
 use nalgebra::Matrix4;
 
@@ -74,15 +76,19 @@ pub(crate) fn search(
     let has_global = kinds.iter().any(|k| k.is_global());
     let many_points = p.src_n.len().min(p.target.cloud.len()) >= GLOBAL_BEFORE_STOP_POINTS;
     let mut reached_global = false;
+    // the answer reached NEARLY_SURE_CONFIDENCE once the global stage had run
+    let mut nearly_sure = false;
     // the stages, then, while the answer is still below the stop, the last one: blind starts
     for stage in stages.iter().map(Some).chain([None]) {
         let mut starts = match stage {
+            Some(_) if nearly_sure => continue,
             Some(stage) => builder.build(stage, model, workspace)?,
             // no stage stopped the search (the loop breaks at STOP_CONFIDENCE)
             None if adaptive && options.icp != IcpKind::Off && best.is_some() => {
                 // blind starts, most of which land nowhere: a short run each picks those refined
-                let more = builder.more(&kinds, model, workspace)?;
-                refine::shortlist(target_index, &p.icp_src.points, more, &how, LAST_STAGE_STARTS)
+                let more = builder.more(&kinds, !nearly_sure, model, workspace)?;
+                let keep = if nearly_sure { NEARLY_SURE_LAST_STAGE_STARTS } else { LAST_STAGE_STARTS };
+                refine::shortlist(target_index, &p.icp_src.points, more, &how, keep)
             }
             None => break,
         };
@@ -128,6 +134,9 @@ pub(crate) fn search(
         if stop {
             break;
         }
+        // nearly sure after the global stage: the other stages are skipped, and the last one
+        // draws only a few more global hypotheses
+        nearly_sure |= adaptive && reached_global && best.as_ref().is_some_and(|b| b.2 >= NEARLY_SURE_CONFIDENCE);
     }
     // no start at all (only global ones, and the descriptors matched too little): the first
     // start the options name, unrefined
@@ -188,6 +197,11 @@ fn refine_alternatives(
 /// pairs that refining all 34 gains, at about half the stage's time (`BENCHMARK.md`, "A last
 /// stage for unsure answers").
 const LAST_STAGE_STARTS: usize = 12;
+
+/// Most starts of the last stage that are refined when the answer was nearly sure
+/// ([`NEARLY_SURE_CONFIDENCE`]) after the global stage: the best of the further global hypotheses
+/// after a short run each (`BENCHMARK.md`, "Nearly sure after the global stage").
+const NEARLY_SURE_LAST_STAGE_STARTS: usize = 3;
 
 /// Most better poses of the confidence probe that [`settle`] refines in a row.
 const MAX_PROBE_STARTS: usize = 4;

@@ -127,12 +127,13 @@ impl<'a> Starts<'a> {
 
     /// The adaptive search's last stage: [`MORE_HYPOTHESES`] global hypotheses drawn from the same
     /// matches, less those within [`SAME_HYPOTHESIS_DEGREES`] and [`SAME_HYPOTHESIS_SHIFT`] of one
-    /// a global start already used, as starts of each global kind in `kinds`; then the
-    /// [`Start::Rotations`] starts, unless `kinds` has them already. None when `kinds` has no
+    /// a global start already used, as starts of each global kind in `kinds`; then, `with_rotations`,
+    /// the [`Start::Rotations`] starts, unless `kinds` has them already. None when `kinds` has no
     /// global kind, or no global start ran before.
     pub(crate) fn more(
         &mut self,
         kinds: &[Start],
+        with_rotations: bool,
         model: &Model,
         workspace: &mut ModelWorkspace,
     ) -> Result<Vec<(Start, Matrix4<f64>)>> {
@@ -147,7 +148,7 @@ impl<'a> Starts<'a> {
         for &start in kinds.iter().filter(|k| k.is_global()) {
             starts.extend(self.global(start, &more, model, workspace)?);
         }
-        if !kinds.contains(&Start::Rotations) {
+        if with_rotations && !kinds.contains(&Start::Rotations) {
             let p = self.prepared;
             starts.extend(rotations(p.src_n.centroid(), p.target.centroid()).map(|t| (Start::Rotations, t)));
         }
