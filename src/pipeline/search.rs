@@ -10,11 +10,11 @@
 //! clearly better ([`refine::clearly_better`]). An answer that reaches [`NEARLY_SURE_CONFIDENCE`]
 //! once the global stage has run skips the stages left and the rotations: its last stage is the
 //! best [`NEARLY_SURE_LAST_STAGE_STARTS`] of the further global hypotheses. Each stage's best,
-//! when it is better than the answer so far and another pose ([`refine::coincide`]), is judged by the confidence probe, and
-//! a probe pose that fits better is refined as one more start ([`settle`]). The answer's final
-//! verdict also counts, as alternatives, the other refined answers that fit about as well
-//! ([`confidence::count_search_alternatives`]); those alternative poses are refined like the
-//! answer and handed on with it ([`refine_alternatives`]). With no start refined at all, the
+//! when it is better than the answer so far and another pose ([`refine::coincide`]), is judged
+//! by the confidence probe, and a probe pose that fits better is refined as one more start
+//! ([`settle`]). The answer's final verdict also counts, as alternatives, the other refined
+//! answers that fit about as well ([`confidence::count_search_alternatives`]); those alternative
+//! poses are refined like the answer and handed on with it ([`refine_alternatives`]). With no start refined at all, the
 //! network's estimate (the initial transform with the network off), unrefined, and a warning.
 
 use super::prepare::Prepared;
