@@ -14,8 +14,9 @@
 //! by the confidence probe, and a probe pose that fits better is refined as one more start
 //! ([`settle`]). The answer's final verdict also counts, as alternatives, the other refined
 //! answers that fit about as well ([`confidence::count_search_alternatives`]); those alternative
-//! poses are refined like the answer and handed on with it ([`refine_alternatives`]). With no start refined at all, the
-//! network's estimate (the initial transform with the network off), unrefined, and a warning.
+//! poses are refined like the answer and handed on with it ([`refine_alternatives`]). With no
+//! start refined at all, the network's estimate (the initial transform with the network off),
+//! unrefined, and a warning.
 
 use super::prepare::Prepared;
 use super::starts::Starts;

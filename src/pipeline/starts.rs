@@ -127,9 +127,9 @@ impl<'a> Starts<'a> {
 
     /// The adaptive search's last stage: [`MORE_HYPOTHESES`] global hypotheses drawn from the same
     /// matches, less those within [`SAME_HYPOTHESIS_DEGREES`] and [`SAME_HYPOTHESIS_SHIFT`] of one
-    /// a global start already used, as starts of each global kind in `kinds`; then, `with_rotations`,
-    /// the [`Start::Rotations`] starts, unless `kinds` has them already. None when `kinds` has no
-    /// global kind, or no global start ran before.
+    /// a global start already used, as starts of each global kind in `kinds`; then, when
+    /// `with_rotations`, the [`Start::Rotations`] starts, unless `kinds` has them already. None
+    /// when `kinds` has no global kind, or no global start ran before.
     pub(crate) fn more(
         &mut self,
         kinds: &[Start],
