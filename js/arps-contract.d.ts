@@ -123,8 +123,10 @@ export type RegisterOptions = {
    * (unless `starts` names them), of which the 12 that fit best after a short ICP run each
    * are refined; so only the pairs no stage settled pay for them. Its starts are blind, so its
    * best replaces the answer only when it fits more than 10% better. An answer whose
-   * confidence reaches 0.85 once the global stage has run (`NEARLY_SURE_CONFIDENCE`) skips the
-   * stages left, and its last stage refines only the 3 best of those further hypotheses.
+   * confidence reaches 0.85 once the global stage has run (`NEARLY_SURE_CONFIDENCE`), or 0.5
+   * when the global stage's best hypothesis, refined, is that same pose (`AGREED_CONFIDENCE`),
+   * skips the stages left, and its last stage refines only the 3 best of those further
+   * hypotheses.
    * `"exhaustive"` refines every start, without that last stage. The result's `startsRefined`
    * says how many were refined.
    */

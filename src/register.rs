@@ -126,8 +126,10 @@ pub struct Options {
     /// (unless `starts` names them), of which the 12 that fit best after a short ICP run each
     /// are refined; so only the pairs no stage settled pay for them. Its starts are blind, so its
     /// best replaces the answer only when it fits more than 10% better. An answer whose
-    /// confidence reaches 0.85 once the global stage has run (`NEARLY_SURE_CONFIDENCE`) skips the
-    /// stages left, and its last stage refines only the 3 best of those further hypotheses.
+    /// confidence reaches 0.85 once the global stage has run (`NEARLY_SURE_CONFIDENCE`), or 0.5
+    /// when the global stage's best hypothesis, refined, is that same pose (`AGREED_CONFIDENCE`),
+    /// skips the stages left, and its last stage refines only the 3 best of those further
+    /// hypotheses.
     /// `"exhaustive"` refines every start, without that last stage. The result's `startsRefined`
     /// says how many were refined.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
@@ -142,7 +144,8 @@ pub enum Search {
     /// In stages, stopping at a confident answer: the first start; then the others in order, each
     /// run of local or of global starts a stage; then, while the answer is still below the stop
     /// (0.95), more global hypotheses and blind rotations; an answer at 0.85 or more once the
-    /// global stage has run ([`NEARLY_SURE_CONFIDENCE`]) skips the stages left and gets only a few
+    /// global stage has run ([`NEARLY_SURE_CONFIDENCE`]), or at 0.5 or more when the global
+    /// stage found it again ([`AGREED_CONFIDENCE`]), skips the stages left and gets only a few
     /// more global hypotheses. On scans of many points (both clouds at least 3,000 points,
     /// [`GLOBAL_BEFORE_STOP_POINTS`]) it does not stop before the global stage.
     /// The best of everything refined is returned. Easy pairs cost one start; hard ones get every
@@ -165,6 +168,13 @@ pub const STOP_CONFIDENCE: f64 = 0.95;
 /// samples (every real scan pair) mostly score between this and [`STOP_CONFIDENCE`]
 /// (`BENCHMARK.md`, "Nearly sure after the global stage").
 pub const NEARLY_SURE_CONFIDENCE: f64 = 0.85;
+
+/// When the global stage of [`Search::Adaptive`] finds the answer again (its best hypothesis,
+/// refined, is the same pose as the network's or an earlier stage's answer) and that answer's
+/// confidence is at least this (not flagged), it counts as nearly sure
+/// ([`NEARLY_SURE_CONFIDENCE`]): two independent estimates agree, and the stages left would
+/// mostly only find its look-alikes (`BENCHMARK.md`, "Agreement with the global stage").
+pub const AGREED_CONFIDENCE: f64 = 0.5;
 
 /// When both clouds have at least this many points, [`Search::Adaptive`] does not stop before its
 /// global stage has run, however sure an earlier answer is: the confidence is calibrated on

@@ -8,8 +8,9 @@
 //! it runs a last stage of blind starts ([`Starts::more`]: more global hypotheses and the
 //! rotations), shortlisted to [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit
 //! clearly better ([`refine::clearly_better`]). An answer that reaches [`NEARLY_SURE_CONFIDENCE`]
-//! once the global stage has run skips the stages left and the rotations: its last stage is the
-//! best [`NEARLY_SURE_LAST_STAGE_STARTS`] of the further global hypotheses. Each stage's best,
+//! once the global stage has run, or [`AGREED_CONFIDENCE`] when the global stage's best is that
+//! same pose again, skips the stages left and the rotations: its last stage is the best
+//! [`NEARLY_SURE_LAST_STAGE_STARTS`] of the further global hypotheses. Each stage's best,
 //! when it is better than the answer so far and another pose ([`refine::coincide`]), is judged
 //! by the confidence probe, and a probe pose that fits better is refined as one more start
 //! ([`settle`]). The answer's final verdict also counts, as alternatives, the other refined
@@ -24,7 +25,9 @@ use crate::confidence::{self, Evidence, Probed};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Candidate, Refinement, Start};
-use crate::register::{Options, Search, GLOBAL_BEFORE_STOP_POINTS, NEARLY_SURE_CONFIDENCE, STOP_CONFIDENCE};
+use crate::register::{
+    Options, Search, AGREED_CONFIDENCE, GLOBAL_BEFORE_STOP_POINTS, NEARLY_SURE_CONFIDENCE, STOP_CONFIDENCE,
+};
 use crate::Result;
 use nalgebra::Matrix4;
 
@@ -103,6 +106,13 @@ pub(crate) fn search(
         starts_refined += starts.len();
         let Some(c) = refine::refine_best(target_index, &p.icp_src.points, &starts, &how) else { continue };
         refined.push((c.T_target_source, c.fitness));
+        let global_stage = stage.is_some_and(|s| s.iter().any(|k| k.is_global()));
+        // the global stage found the answer again: the descriptors' hypotheses, independent of
+        // the network and of the local starts, agree with it
+        let agrees = global_stage
+            && best.as_ref().is_some_and(|(b, _, _)| {
+                refine::coincide(&b.T_target_source, &c.T_target_source, &p.icp_src.points, d_final)
+            });
         let better = match &best {
             None => true,
             // the last stage's starts are blind: a near tie stays with the answer
@@ -125,7 +135,7 @@ pub(crate) fn search(
             let confidence = confidence::confidence(&probed.evidence);
             best = Some((c, probed, confidence));
         }
-        reached_global |= stage.is_some_and(|s| s.iter().any(|k| k.is_global()));
+        reached_global |= global_stage;
         // on clouds of many points the confidence is measured to be too sure of wrong answers
         // (it was calibrated on sparse, noisy pairs): a confident answer stops the search only
         // once the global stage has run
@@ -135,9 +145,11 @@ pub(crate) fn search(
         if stop {
             break;
         }
-        // nearly sure after the global stage: the other stages are skipped, and the last one
-        // draws only a few more global hypotheses
-        nearly_sure |= adaptive && reached_global && best.as_ref().is_some_and(|b| b.2 >= NEARLY_SURE_CONFIDENCE);
+        // nearly sure after the global stage (or not flagged, and found again by it): the other
+        // stages are skipped, and the last one draws only a few more global hypotheses
+        let sure_enough =
+            |b: &(Candidate, Probed, f64)| b.2 >= NEARLY_SURE_CONFIDENCE || (agrees && b.2 >= AGREED_CONFIDENCE);
+        nearly_sure |= adaptive && reached_global && best.as_ref().is_some_and(sure_enough);
     }
     // no start at all (only global ones, and the descriptors matched too little): the first
     // start the options name, unrefined
