@@ -459,20 +459,18 @@ fn an_answer_below_the_stop_after_every_stage_gets_a_last_stage_too() {
     }
 }
 
-/// `fixtures/any` pair 5 (a bed in an arbitrary relative pose; its clouds share almost no
-/// sample, as real scans): a global hypothesis finds the truth with a confidence between
-/// [`NEARLY_SURE_CONFIDENCE`] and the stop, so the adaptive search skips the local starts and the
-/// rotations and refines only a few more global hypotheses: the network's start, the five global
-/// ones and at most three more. Refining every start finds the same pose.
-#[test]
-fn an_answer_nearly_sure_after_the_global_stage_skips_the_local_starts() {
-    let (source, target, truth) = fixture_pair_in("fixtures/any", 5);
+/// `fixtures/any` pair `index` with the default options takes the adaptive search's shortcut:
+/// its answer is right, comes from `start` with a confidence in `confidence`, and the search
+/// refines only the network's start, the five global ones and at most three more (the local
+/// starts and the rotations skipped); refining every start finds the same pose.
+fn takes_the_shortcut(index: usize, start: Start, confidence: std::ops::Range<f64>) {
+    let (source, target, truth) = fixture_pair_in("fixtures/any", index);
     let mut reg = Registrar::with_default_model().unwrap();
     let r = reg.register(&source, &target, &Options::default()).unwrap();
     let err = rotation_error_deg(&r.T_target_source, &truth);
     assert!(err < 15.0, "rotation error {err:.1} degrees");
-    assert_eq!(r.start, Start::Global);
-    assert!((NEARLY_SURE_CONFIDENCE..STOP_CONFIDENCE).contains(&r.confidence), "confidence {}", r.confidence);
+    assert_eq!(r.start, start);
+    assert!(confidence.contains(&r.confidence), "confidence {}", r.confidence);
     assert!(r.starts_refined <= 1 + 5 + 3, "{} starts refined", r.starts_refined);
     let all = reg.register(&source, &target, &Options { search: Search::Exhaustive, ..Options::default() }).unwrap();
     assert!(all.starts_refined > 2 * r.starts_refined, "exhaustive: {} starts", all.starts_refined);
@@ -480,26 +478,23 @@ fn an_answer_nearly_sure_after_the_global_stage_skips_the_local_starts() {
     assert!(apart < 5.0, "the exhaustive search ends {apart:.1} degrees away");
 }
 
+/// `fixtures/any` pair 5 (a bed in an arbitrary relative pose; its clouds share almost no
+/// sample, as real scans): a global hypothesis finds the truth with a confidence between
+/// [`NEARLY_SURE_CONFIDENCE`] and the stop, so the adaptive search skips the local starts and the
+/// rotations and refines only a few more global hypotheses.
+#[test]
+fn an_answer_nearly_sure_after_the_global_stage_skips_the_local_starts() {
+    takes_the_shortcut(5, Start::Global, NEARLY_SURE_CONFIDENCE..STOP_CONFIDENCE);
+}
+
 /// `fixtures/any` pair 6 (a dresser, the paper's protocol, clouds that share almost no sample):
 /// the network's answer is right with a confidence between 0.5 and [`NEARLY_SURE_CONFIDENCE`],
 /// and the global stage's best hypothesis, refined, is that pose again. Two independent estimates
 /// agree on an answer the verdict does not flag ([`AGREED_CONFIDENCE`]), so the adaptive search
-/// skips the local starts and the rotations, as for a nearly sure answer; refining every start
-/// finds the same pose.
+/// skips the local starts and the rotations, as for a nearly sure answer.
 #[test]
 fn an_answer_the_global_stage_finds_again_skips_the_local_starts() {
-    let (source, target, truth) = fixture_pair_in("fixtures/any", 6);
-    let mut reg = Registrar::with_default_model().unwrap();
-    let r = reg.register(&source, &target, &Options::default()).unwrap();
-    let err = rotation_error_deg(&r.T_target_source, &truth);
-    assert!(err < 15.0, "rotation error {err:.1} degrees");
-    assert_eq!(r.start, Start::Network);
-    assert!((AGREED_CONFIDENCE..NEARLY_SURE_CONFIDENCE).contains(&r.confidence), "confidence {}", r.confidence);
-    assert!(r.starts_refined <= 1 + 5 + 3, "{} starts refined", r.starts_refined);
-    let all = reg.register(&source, &target, &Options { search: Search::Exhaustive, ..Options::default() }).unwrap();
-    assert!(all.starts_refined > 2 * r.starts_refined, "exhaustive: {} starts", all.starts_refined);
-    let apart = rotation_error_deg(&all.T_target_source, &r.T_target_source);
-    assert!(apart < 5.0, "the exhaustive search ends {apart:.1} degrees away");
+    takes_the_shortcut(6, Start::Network, AGREED_CONFIDENCE..NEARLY_SURE_CONFIDENCE);
 }
 
 /// `rotations`: the 24 rotations of a cube onto itself, each once, the identity first, closed
