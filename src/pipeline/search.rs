@@ -80,7 +80,8 @@ pub(crate) fn search(
     let has_global = kinds.iter().any(|k| k.is_global());
     let many_points = p.src_n.len().min(p.target.cloud.len()) >= GLOBAL_BEFORE_STOP_POINTS;
     let mut reached_global = false;
-    // the answer reached NEARLY_SURE_CONFIDENCE once the global stage had run
+    // once the global stage had run, the answer reached NEARLY_SURE_CONFIDENCE, or
+    // AGREED_CONFIDENCE with the global stage finding it again
     let mut nearly_sure = false;
     // the stages, then, while the answer is still below the stop, the last one: blind starts
     for stage in stages.iter().map(Some).chain([None]) {
@@ -211,9 +212,10 @@ fn refine_alternatives(
 /// stage for unsure answers").
 const LAST_STAGE_STARTS: usize = 12;
 
-/// Most starts of the last stage that are refined when the answer was nearly sure
-/// ([`NEARLY_SURE_CONFIDENCE`]) after the global stage: the best of the further global hypotheses
-/// after a short run each (`BENCHMARK.md`, "Nearly sure after the global stage").
+/// Most starts of the last stage that are refined when the answer was nearly sure after the
+/// global stage ([`NEARLY_SURE_CONFIDENCE`], or [`AGREED_CONFIDENCE`] with the global stage finding
+/// it again): the best of the further global hypotheses after a short run each (`BENCHMARK.md`,
+/// "Nearly sure after the global stage").
 const NEARLY_SURE_LAST_STAGE_STARTS: usize = 3;
 
 /// Most better poses of the confidence probe that [`settle`] refines in a row.
