@@ -68,6 +68,17 @@ export type RegisterOptions = {
    */
   nonFinite?: NonFinite,
   /**
+   * The direction that is up in both clouds' frames, when both were captured level: scans
+   * from a phone or a terrestrial scanner (gravity-aligned), survey data, a CAD model in its
+   * upright pose (`[0, 0, 1]` for z-up data, `[0, 1, 0]` for three.js's y-up). The answer then
+   * only turns the source about this axis, within `UP_TOLERANCE_DEG` of tilt for scans
+   * levelled a little differently: every start is levelled first, answers tilted further are
+   * rejected, and look-alikes tilted further do not count as alternatives. It is the same
+   * direction in both clouds' frames, whatever `initialTransform` says. Default: none (any
+   * rotation). Three finite numbers, not all zero (any length).
+   */
+  up?: [number, number, number] | null,
+  /**
    * The transforms ICP starts from, in order of preference. Each is refined coarse to fine
    * against the same prepared target and the best is returned (the result's `start` says
    * which): the highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier

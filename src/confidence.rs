@@ -21,6 +21,7 @@
 
 use crate::icp::{IcpKind, IcpParams, IcpTarget, Partners};
 use crate::refine::{coincide, even_sample, SCREEN_POINTS};
+use crate::register::UP_TOLERANCE_DEG;
 use crate::transform::rigid_inverse;
 use crate::transform::{apply, from_rotation_translation, rotation_error_deg};
 use nalgebra::Matrix4;
@@ -112,6 +113,61 @@ pub fn probe(
     d: f64,
     kind: IcpKind,
 ) -> Probed {
+    probe_within(target, source_index, source, T_target_source, d, kind, &Admissible::Any)
+}
+
+/// Which poses the probes may find: any, or only those that keep a shared up axis (the
+/// registration's `up` option).
+pub enum Admissible<'a> {
+    /// Every pose.
+    Any,
+    /// Poses that keep a shared up axis, within [`UP_TOLERANCE_DEG`].
+    Upright {
+        /// The axis (target frame) the probes also turn the answer about ([`UP_TURNS`]), since
+        /// the turns about other axes tilt it.
+        up: Vector3<f64>,
+        /// How far a pose tilts the source's up off the target's, degrees.
+        tilt_deg: &'a dyn Fn(&Matrix4<f64>) -> f64,
+    },
+}
+
+impl Admissible<'_> {
+    /// Whether the probes may count the pose `t`.
+    fn admits(&self, t: &Matrix4<f64>) -> bool {
+        match self {
+            Admissible::Any => true,
+            Admissible::Upright { tilt_deg, .. } => tilt_deg(t) <= UP_TOLERANCE_DEG,
+        }
+    }
+
+    /// Whether a probe may start from `t`: tilted so far, its ICP would not come back upright.
+    fn may_start(&self, t: &Matrix4<f64>) -> bool {
+        match self {
+            Admissible::Any => true,
+            Admissible::Upright { tilt_deg, .. } => tilt_deg(t) <= PROBE_START_TILT_DEG,
+        }
+    }
+}
+
+/// With a shared up axis, the probes' turns about it, degrees (each through the wide stage).
+const UP_TURNS: [f64; 7] = [45.0, 90.0, 135.0, 180.0, -135.0, -90.0, -45.0];
+
+/// With a shared up axis, a probe turned about another axis starts only when it tilts the answer
+/// by at most this many degrees (a principal axis near up): the others cannot end upright.
+const PROBE_START_TILT_DEG: f64 = 45.0;
+
+/// [`probe`], counting only the probe poses that `admissible` admits (in [`Evidence::ambiguity`],
+/// [`Evidence::alternatives`] and the better pose).
+#[allow(non_snake_case)]
+pub fn probe_within(
+    target: &IcpTarget,
+    source_index: &IcpTarget,
+    source: &[[f32; 3]],
+    T_target_source: &Matrix4<f64>,
+    d: f64,
+    kind: IcpKind,
+    admissible: &Admissible,
+) -> Probed {
     let source = even_sample(source, SCREEN_POINTS);
     let target_points = even_sample(target.points(), SCREEN_POINTS);
     // the evaluations of one point set warm-start each other's searches (same results)
@@ -127,7 +183,8 @@ pub fn probe(
     let answer = AnswerOnProbe { fitness: base, partners: probe_partners };
     // turns along the least constrained motion only where sliding along it keeps much of the fit
     let screw = screw.filter(|_| slide >= SCREW_MIN_SLIDE);
-    let turned = turns(target, &probe, T_target_source, d, answer, kind, &screw_turns(screw, T_target_source));
+    let turned =
+        turns(target, &probe, T_target_source, d, answer, kind, &screw_turns(screw, T_target_source), admissible);
     let (ambiguity, alternatives) = (turned.best_ratio.min(2.0), turned.alternatives.len() as f64);
     let (fitness_tight, fitness_loose, fitness_coarse) = (f(0.5), f(2.0), f(4.0));
     let evidence = Evidence {
@@ -192,6 +249,8 @@ struct Turned {
 /// `t` on `sample`. A probe that comes back onto the answer, or onto where an earlier probe was
 /// after the same stage ([`coincide`]), stops there and counts for nothing: it would end where
 /// that pose did.
+// the probe's inputs and the two kinds of extra knowledge it takes (its own turns, the shared up)
+#[allow(clippy::too_many_arguments)]
 fn turns(
     target: &IcpTarget,
     sample: &[[f32; 3]],
@@ -200,6 +259,7 @@ fn turns(
     answer: AnswerOnProbe,
     kind: IcpKind,
     extra: &[Matrix4<f64>],
+    admissible: &Admissible,
 ) -> Turned {
     let AnswerOnProbe { fitness: base, mut partners } = answer;
     let mut out = Turned { best_ratio: 0.0, best: None, alternatives: Vec::new() };
@@ -220,6 +280,11 @@ fn turns(
     if let Some(target_axes) = overlap_axes(target, sample, t, 2.0 * d) {
         probes.extend((0..3).map(|k| (180.0, target_axes.column(k).into_owned())));
     }
+    // with a shared up axis, the turns about it (the others tilt the answer, and are not counted)
+    let up_turns = match admissible {
+        Admissible::Upright { up, .. } => UP_TURNS.map(|degrees| (degrees, *up)).to_vec(),
+        Admissible::Any => Vec::new(),
+    };
     let turn = |(degrees, axis): (f64, Vector3<f64>)| {
         let axis = nalgebra::Unit::new_normalize(axis);
         let r = Rotation3::from_axis_angle(&axis, degrees.to_radians()).into_inner();
@@ -227,8 +292,12 @@ fn turns(
     };
     // (start, whether it first goes through the wide stage): the half turns and the screw turns
     // do, since their axes are only estimates of the true one
-    let starts: Vec<(Matrix4<f64>, bool)> =
-        probes.into_iter().map(|p| (turn(p), p.0 == 180.0)).chain(extra.iter().map(|&m| (m, true))).collect();
+    let starts: Vec<(Matrix4<f64>, bool)> = probes
+        .into_iter()
+        .map(|p| (turn(p), p.0 == 180.0))
+        .chain(up_turns.into_iter().map(|p| (turn(p), true)))
+        .chain(extra.iter().map(|&m| (m, true)))
+        .collect();
     let params =
         |factor: f64| IcpParams { max_iterations: PROBE_ITERATIONS, ..IcpParams::new(kind.or_point(), factor * d) };
     let base_coarse = target.evaluate_warm(sample, t, 4.0 * d, &mut partners).0;
@@ -236,7 +305,8 @@ fn turns(
     let mut paths: Vec<[Option<Matrix4<f64>>; 3]> = Vec::with_capacity(starts.len());
     // each stage stops the probe when it cannot come near the answer's fit at that distance
     let stages = [(4.0, base_coarse), (2.0, base_loose), (1.0, 0.0)];
-    for (start, wide) in starts {
+    // a start tilted far off a shared up axis would end tilted, where it cannot count
+    for (start, wide) in starts.into_iter().filter(|(s, _)| admissible.may_start(s)) {
         // each probe's stages warm-start each other's searches
         let mut partners = Partners::default();
         let mut path = [None; 3];
@@ -260,7 +330,7 @@ fn turns(
             continue;
         }
         let alt = at;
-        if rotation_error_deg(&alt, t) <= SAME_POSE_DEGREES {
+        if rotation_error_deg(&alt, t) <= SAME_POSE_DEGREES || !admissible.admits(&alt) {
             continue;
         }
         let ratio = target.evaluate_warm(sample, &alt, d, &mut partners).0 / base;

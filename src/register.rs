@@ -72,6 +72,16 @@ pub struct Options {
     /// the first bad point; the default) or `"drop"` (ignore them, e.g. PCD "no return" points).
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub non_finite: NonFinite,
+    /// The direction that is up in both clouds' frames, when both were captured level: scans
+    /// from a phone or a terrestrial scanner (gravity-aligned), survey data, a CAD model in its
+    /// upright pose (`[0, 0, 1]` for z-up data, `[0, 1, 0]` for three.js's y-up). The answer then
+    /// only turns the source about this axis, within [`UP_TOLERANCE_DEG`] of tilt for scans
+    /// levelled a little differently: every start is levelled first, answers tilted further are
+    /// rejected, and look-alikes tilted further do not count as alternatives. It is the same
+    /// direction in both clouds' frames, whatever `initialTransform` says. Default: none (any
+    /// rotation). Three finite numbers, not all zero (any length).
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
+    pub up: Option<[f64; 3]>,
     /// The transforms ICP starts from, in order of preference. Each is refined coarse to fine
     /// against the same prepared target and the best is returned (the result's `start` says
     /// which): the highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier
@@ -176,6 +186,11 @@ pub const NEARLY_SURE_CONFIDENCE: f64 = 0.85;
 /// mostly only find its look-alikes (`BENCHMARK.md`, "Agreement with the global stage").
 pub const AGREED_CONFIDENCE: f64 = 0.5;
 
+/// With [`Options::up`], the most an answer may tilt the source's up away from the target's,
+/// degrees: enough for scans levelled a little differently (a phone's gravity estimate, a tripod
+/// off level), small against the half turns about a horizontal axis that it rules out.
+pub const UP_TOLERANCE_DEG: f64 = 10.0;
+
 /// When both clouds have at least this many points, [`Search::Adaptive`] does not stop before its
 /// global stage has run, however sure an earlier answer is: the confidence is calibrated on
 /// sparse, noisy samples (1,024 points per cloud) and is measured to be too sure of wrong answers
@@ -195,6 +210,7 @@ impl Default for Options {
             voxel_size: None,
             initial_transform: None,
             non_finite: NonFinite::Error,
+            up: None,
             starts: vec![
                 Start::Network,
                 Start::Global,

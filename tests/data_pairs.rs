@@ -153,6 +153,19 @@ fn curriculum_knobs() {
         let pair = make_pair(&mesh, "desk", &p, seed).unwrap();
         assert!(euler(&rotation(&pair.T_target_source)).iter().all(|a| a.abs() <= 10.0 + 1e-9));
     }
+    // upright pairs: any turn about z, none about x and y; the rest of the pair is the same
+    let upright = PairParams { max_angle_deg: 180.0, max_tilt_deg: Some(0.0), ..quiet() };
+    let any = PairParams { max_angle_deg: 180.0, ..quiet() };
+    let mut turns = Vec::new();
+    for seed in 0..10 {
+        let (pair, other) =
+            (make_pair(&mesh, "desk", &upright, seed).unwrap(), make_pair(&mesh, "desk", &any, seed).unwrap());
+        let [ax, ay, az] = euler(&rotation(&pair.T_target_source));
+        assert!(ax.abs() < 1e-9 && ay.abs() < 1e-9, "{ax} {ay}");
+        assert_eq!(pair.source_dense_index, other.source_dense_index);
+        turns.push(az.abs());
+    }
+    assert!(turns.iter().any(|&a| a > 90.0), "{turns:?}");
 }
 
 #[test]

@@ -215,6 +215,7 @@ fn empty_and_null_options_mean_defaults_and_results_are_deterministic() {
     let b = register_ok(&mut r, JsValue::NULL);
     let c = register_ok(&mut r, empty_object());
     let d = register_ok(&mut r, options(r#"{"seed": 0, "icp": "plane", "icpMaxIterations": 30}"#));
+    register_ok(&mut r, options(r#"{"up": [0, 0, 1]}"#));
     // `undefined` and `null` fields are "not given" (JS callers spread optional settings).
     let e_opts = options(r#"{"networkPoints": null, "maxCorrespondenceDistance": null}"#);
     js_sys::Reflect::set(&e_opts, &"seed".into(), &JsValue::UNDEFINED).unwrap();
@@ -363,6 +364,8 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     expect_err(&mut r, &src, &tgt, options(r#"{"starts": ["initial", "initial"]}"#), "starts lists \"initial\" twice");
     expect_err(&mut r, &src, &tgt, options(r#"{"starts": ["identity"]}"#), "invalid options");
     expect_err(&mut r, &src, &tgt, options(r#"{"starts": "network"}"#), "invalid options");
+    expect_err(&mut r, &src, &tgt, options(r#"{"up": [0, 0, 0]}"#), "up = [0.0, 0.0, 0.0]");
+    expect_err(&mut r, &src, &tgt, options(r#"{"up": [0, 1]}"#), "invalid options");
     expect_err(&mut r, &src, &tgt, options("[1, 2]"), "expected a plain object");
     expect_err(&mut r, &src, &tgt, JsValue::from_f64(3.0), "expected a plain object");
     let scaled = r#"{"initialTransform": [[2,0,0,0],[0,2,0,0],[0,0,2,0],[0,0,0,1]]}"#;

@@ -46,6 +46,10 @@ pub struct PairParams {
     pub max_crop_tries: usize,
     /// Euler angles are drawn from `U[-max_angle_deg, max_angle_deg]`, degrees (default 45).
     pub max_angle_deg: f64,
+    /// When set, the Euler angles about x and y are drawn from `U[-max_tilt_deg, max_tilt_deg]`
+    /// instead (the one about z still from `max_angle_deg`): pairs whose clouds share the up axis
+    /// z up to this tilt, as gravity-aligned scans do (default `None`: the protocol's).
+    pub max_tilt_deg: Option<f64>,
     /// Translation length is drawn from `U[0, max_translation]`, normalised units (default 0.5).
     pub max_translation: f64,
     /// Noise standard deviation per coordinate, normalised units (default 0.01; 0 = no noise).
@@ -69,6 +73,7 @@ impl Default for PairParams {
             min_overlap: 0.7,
             max_crop_tries: 100,
             max_angle_deg: 45.0,
+            max_tilt_deg: None,
             max_translation: 0.5,
             noise_sigma: 0.01,
             noise_clip: 0.05,
@@ -105,11 +110,14 @@ pub struct Pair {
     pub target_dense_index: Vec<u32>,
 }
 
-/// `Rx·Ry·Rz` ([`euler_xyz`]) with the three angles drawn in that order from `U[-max_deg, max_deg]`.
-fn random_euler(rng: &mut ChaCha8Rng, max_deg: f64) -> Matrix3<f64> {
+/// `Rx·Ry·Rz` ([`euler_xyz`]) with the three angles drawn in that order from `U[-max_deg, max_deg]`,
+/// those about x and y from `U[-tilt, tilt]` when `max_tilt_deg` is set (the same draws either
+/// way, so the rest of a pair does not change).
+fn random_euler(rng: &mut ChaCha8Rng, max_deg: f64, max_tilt_deg: Option<f64>) -> Matrix3<f64> {
     let a = max_deg.to_radians();
-    let mut angle = || (rng.random::<f64>() * 2.0 - 1.0) * a;
-    let (ax, ay, az) = (angle(), angle(), angle());
+    let tilt = max_tilt_deg.map_or(a, f64::to_radians);
+    let mut unit = || rng.random::<f64>() * 2.0 - 1.0;
+    let (ax, ay, az) = (unit() * tilt, unit() * tilt, unit() * a);
     euler_xyz(ax, ay, az)
 }
 
@@ -235,7 +243,7 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
     let (p, _, _) = normalize_shape(dense);
     let p = if params.pose_angle_deg > 0.0 {
         let mut pose_rng = sampling::rng(super::mix(seed, 0x905E));
-        let pose = random_euler(&mut pose_rng, params.pose_angle_deg);
+        let pose = random_euler(&mut pose_rng, params.pose_angle_deg, None);
         p.transformed(&from_rotation_translation(&pose, &Vector3::zeros()))
     } else {
         p
@@ -268,7 +276,7 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
     let mut tgt_i = resample(&t_idx, params.points, &mut rng);
 
     // 5. rigid motion
-    let r = random_euler(&mut rng, params.max_angle_deg);
+    let r = random_euler(&mut rng, params.max_angle_deg, params.max_tilt_deg);
     let t = unit_vector(&mut rng) * (rng.random::<f64>() * params.max_translation);
     let gt = from_rotation_translation(&r, &t);
 

@@ -9,6 +9,8 @@
 //! 4. [`starts`]: the stages of the search and the candidate starts of each ([`starts::Starts`]).
 //! 5. [`search`]: the adaptive or exhaustive refinement of the starts, with the confidence stop,
 //!    and the other poses that fit about as well ([`search::Chosen`]).
+//!    With `up` ([`crate::Options::up`]), [`upright`] levels its starts and rules out tilted
+//!    answers and look-alikes.
 //! 6. [`result`]: the chosen answer and its alternatives mapped back to the caller's frame and
 //!    units, checked, with its warnings ([`crate::Registration`]).
 
@@ -19,3 +21,4 @@ pub(crate) mod result;
 pub(crate) mod search;
 pub(crate) mod starts;
 pub(crate) mod target;
+pub(crate) mod upright;

@@ -36,6 +36,14 @@ pub(crate) fn resolve(options: &Options, model: &Model) -> Result<Resolved> {
         )));
     }
     refine::check_starts(&options.starts)?;
+    if let Some(up) = options.up {
+        let norm = up.iter().map(|v| v * v).sum::<f64>().sqrt();
+        if !up.iter().all(|v| v.is_finite()) || norm <= 1e-12 {
+            return Err(Error::InvalidOption(format!(
+                "up = {up:?} must be three finite numbers, not all zero (the direction that is up in both clouds)"
+            )));
+        }
+    }
     Ok(Resolved { n_net })
 }
 

@@ -15,12 +15,15 @@
 //! by the confidence probe, and a probe pose that fits better is refined as one more start
 //! ([`settle`]). The answer's final verdict also counts, as alternatives, the other refined
 //! answers that fit about as well ([`confidence::count_search_alternatives`]); those alternative
-//! poses are refined like the answer and handed on with it ([`refine_alternatives`]). With no
+//! poses are refined like the answer and handed on with it ([`refine_alternatives`]). With
+//! `up` ([`Upright`]), every start is levelled first, a stage whose best ends tilted settles
+//! nothing, and the probes count only upright poses (turning the answer about up too). With no
 //! start refined at all, the network's estimate (the initial transform with the network off),
 //! unrefined, and a warning.
 
 use super::prepare::Prepared;
 use super::starts::Starts;
+use super::upright::Upright;
 use crate::confidence::{self, Evidence, Probed};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
@@ -29,7 +32,7 @@ use crate::register::{
     Options, Search, AGREED_CONFIDENCE, GLOBAL_BEFORE_STOP_POINTS, NEARLY_SURE_CONFIDENCE, STOP_CONFIDENCE,
 };
 use crate::Result;
-use nalgebra::Matrix4;
+use nalgebra::{Matrix4, Point3};
 
 /// The answer of the search, in normalised units.
 pub(crate) struct Chosen {
@@ -62,8 +65,22 @@ pub(crate) fn search(
     let target_index = p.target.index();
     let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations };
     let source_index = IcpTarget::new(&p.icp_src.points, false);
-    let judge =
-        |t: &Matrix4<f64>| confidence::probe(target_index, &source_index, &p.icp_src.points, t, d_final, options.icp);
+    // with `up`: every start levelled, and only upright answers, probe poses and alternatives
+    let upright = Upright::of(options, &p.rotate_init);
+    let admits = |t: &Matrix4<f64>| upright.is_none_or(|u| u.admits(t));
+    let tilt_deg = |t: &Matrix4<f64>| upright.map_or(0.0, |u| u.tilt_deg(t));
+    let admissible = match &upright {
+        Some(u) => confidence::Admissible::Upright { up: u.up(), tilt_deg: &tilt_deg },
+        None => confidence::Admissible::Any,
+    };
+    let centroid = p.src_n.centroid();
+    let level = |t: Matrix4<f64>| match &upright {
+        Some(u) => u.level(&t, &t.transform_point(&Point3::from(centroid)).coords),
+        None => t,
+    };
+    let judge = |t: &Matrix4<f64>| {
+        confidence::probe_within(target_index, &source_index, &p.icp_src.points, t, d_final, options.icp, &admissible)
+    };
     // `c` is a better answer than `b`: it fits better (`refine::better`) and is another pose. A
     // start that only found the answer again (a hair better, perhaps) leaves it as it was judged:
     // probing the same pose again would say the same.
@@ -101,11 +118,18 @@ pub(crate) fn search(
             // nothing is refined or compared: the first start is the answer
             starts.truncate(1);
         }
+        for (_, t) in &mut starts {
+            *t = level(*t);
+        }
         if starts.is_empty() {
             continue;
         }
         starts_refined += starts.len();
         let Some(c) = refine::refine_best(target_index, &p.icp_src.points, &starts, &how) else { continue };
+        // (with `up`, a stage whose best refined start ended tilted settles nothing)
+        if !admits(&c.T_target_source) {
+            continue;
+        }
         refined.push((c.T_target_source, c.fitness));
         let global_stage = stage.is_some_and(|s| s.iter().any(|k| k.is_global()));
         // the global stage found the answer again: the descriptors' hypotheses, independent of
@@ -126,7 +150,8 @@ pub(crate) fn search(
                 (c, judge(&c.T_target_source), 0)
             } else {
                 let refine = |t| {
-                    let r = refine::refine_best(target_index, &p.icp_src.points, &[(c.start, t)], &how);
+                    let r = refine::refine_best(target_index, &p.icp_src.points, &[(c.start, level(t))], &how)
+                        .filter(|r| admits(&r.T_target_source));
                     refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
                     r
                 };
@@ -157,7 +182,7 @@ pub(crate) fn search(
     let (candidate, probed) = match best {
         Some((c, probed, _)) => (c, probed),
         None => {
-            let t = if options.network { builder.t_net_n() } else { p.t_initial };
+            let t = level(if options.network { builder.t_net_n() } else { p.t_initial });
             let start = if options.network { Start::Network } else { Start::Initial };
             let probed = judge(&t);
             let e = probed.evidence;

@@ -97,6 +97,10 @@ pub struct EvalArgs {
     /// turned, turnedInitial, global, globalNetwork, rotations) [default: the engine's `Options::starts`].
     #[arg(long, value_delimiter = ',')]
     starts: Option<Vec<Start>>,
+    /// The direction that is up in both clouds of every pair, x,y,z (`Options::up`), for every
+    /// method but the ground truth's refinement.
+    #[arg(long, value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
+    up: Option<Vec<f64>>,
     /// Run only these methods, comma-separated [default: all seven].
     #[arg(long, value_enum, value_delimiter = ',')]
     methods: Option<Vec<Method>>,
@@ -290,6 +294,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         None => METHODS.to_vec(),
     };
     let starts = a.starts.clone().unwrap_or_else(|| Options::default().starts);
+    let up = a.up.as_deref().map(super::up_axis).transpose()?;
     arps::refine::check_starts(&starts).map_err(|e| format!("--starts: {e}"))?;
     let mut trained = super::load_registrar(a.weights.as_deref())?;
     let untrained_weights = Weights::random(&ModelConfig::web(), 0).map_err(|e| e.to_string())?;
@@ -338,7 +343,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             alternatives: Vec::new(),
         };
         for &m in &methods {
-            let options = m.options(&source, &target, &starts);
+            let options = Options { up, ..m.options(&source, &target, &starts) };
             let reg = if m == Method::UntrainedIcp { &mut untrained } else { &mut trained };
             // each method pays for preparing the target, as a call on its own would
             reg.forget_target();

@@ -80,6 +80,10 @@ enum Command {
         /// them all (exhaustive).
         #[arg(long, value_enum, default_value_t = SearchArg::Adaptive)]
         search: SearchArg,
+        /// The direction that is up in both clouds, x,y,z (e.g. 0,0,1), when both were captured
+        /// level: the answer then only turns the source about it (`Options::up`).
+        #[arg(long, value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
+        up: Option<Vec<f64>>,
         /// Drop NaN/Inf points instead of failing.
         #[arg(long)]
         drop_non_finite: bool,
@@ -242,10 +246,12 @@ fn run(command: Command) -> Result<(), String> {
             seed,
             starts,
             search,
+            up,
             drop_non_finite,
             surface_points,
             json,
         } => {
+            let up = up.map(|v| up_axis(&v)).transpose()?;
             let mut registrar = load_registrar(weights.as_deref())?;
             let mut t0 = std::time::Instant::now();
             let reading = io::ReadOptions { surface_points, seed };
@@ -260,6 +266,7 @@ fn run(command: Command) -> Result<(), String> {
                 network_points,
                 seed,
                 non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
+                up,
                 starts: starts.unwrap_or_else(|| Options::default().starts),
                 search: match search {
                     SearchArg::Adaptive => arps::Search::Adaptive,
@@ -336,5 +343,13 @@ fn run(command: Command) -> Result<(), String> {
             out!("wrote {} ({} bytes, {} parameters)", out.display(), bytes.len(), config.parameter_count());
             Ok(())
         }
+    }
+}
+
+/// `--up x,y,z` as the option's three numbers (the engine checks them further).
+pub(crate) fn up_axis(v: &[f64]) -> Result<[f64; 3], String> {
+    match v {
+        &[x, y, z] => Ok([x, y, z]),
+        _ => Err(format!("--up: expected three numbers x,y,z, got {}", v.len())),
     }
 }

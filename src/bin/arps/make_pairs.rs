@@ -50,6 +50,12 @@ pub struct MakePairsArgs {
     /// 45 is the paper's protocol; 180 gives any-pose pairs (any relative rotation).
     #[arg(long, visible_alias = "rotation-range", default_value_t = 45.0)]
     max_angle: f64,
+    /// Upright pairs: the relative rotation's Euler angles about x and y in [-t, t] degrees,
+    /// the one about z still in [-a, a] (`--max-angle`): the clouds share the up axis z within
+    /// about this tilt, as gravity-aligned scans do (`--max-angle 180 --max-tilt 0`: any turn
+    /// about z, for the `up` option)
+    #[arg(long)]
+    max_tilt: Option<f64>,
     /// Maximum translation, normalised units.
     #[arg(long, default_value_t = 0.5)]
     max_translation: f64,
@@ -88,6 +94,7 @@ const OVERLAP_THRESHOLD: f64 = 0.05;
 pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let pose_angle_deg = check_pose_angle(a.pose_angle).map_err(|e| format!("--pose-angle {e}"))?;
     let max_angle_deg = check_max_angle(a.max_angle).map_err(|e| format!("--max-angle {e}"))?;
+    let max_tilt_deg = a.max_tilt.map(check_max_angle).transpose().map_err(|e| format!("--max-tilt {e}"))?;
     let dense_points = a.dense_points.unwrap_or_else(|| default_dense_points(a.points));
     if !(16..=MAX_DENSE_POINTS).contains(&dense_points) {
         return Err(match a.dense_points {
@@ -116,6 +123,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
     };
     let params = PairParams {
         max_angle_deg,
+        max_tilt_deg,
         max_translation: a.max_translation,
         noise_sigma: a.noise,
         points: a.points,

@@ -1,0 +1,71 @@
+//! The `up` constraint ([`Options::up`]): both clouds were captured level, so an answer may only
+//! turn the source about the shared up axis (within [`UP_TOLERANCE_DEG`]).
+//!
+//! In the pipeline's frames the target's up is the caller's direction (normalising only shifts
+//! and scales), and the source's is that direction turned by the initial guess's rotation (the
+//! source is turned by it before normalising). The search levels every start ([`Upright::level`])
+//! and keeps only answers, probe poses and alternatives that [`Upright::admits`].
+
+use crate::register::{Options, UP_TOLERANCE_DEG};
+use crate::transform;
+use nalgebra::{Matrix3, Matrix4, Rotation3, Unit, Vector3};
+
+/// The shared up axis in the pipeline's frames.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Upright {
+    /// Up in the (turned, normalised) source frame.
+    source_up: Unit<Vector3<f64>>,
+    /// Up in the normalised target frame.
+    target_up: Unit<Vector3<f64>>,
+}
+
+impl Upright {
+    /// The constraint of `options.up` (already checked: finite, not zero), with the initial
+    /// guess's rotation `rotate_init` (applied to the source before normalising); `None` without
+    /// `up`.
+    pub(crate) fn of(options: &Options, rotate_init: &Matrix4<f64>) -> Option<Self> {
+        let up = Unit::try_new(Vector3::from(options.up?), 1e-12)?;
+        let source_up = Unit::new_normalize(transform::rotation(rotate_init) * up.into_inner());
+        Some(Upright { source_up, target_up: up })
+    }
+
+    /// Up in the target frame.
+    pub(crate) fn up(&self) -> Vector3<f64> {
+        self.target_up.into_inner()
+    }
+
+    /// How far `T_target_source` tilts the source's up away from the target's, degrees.
+    #[allow(non_snake_case)]
+    pub(crate) fn tilt_deg(&self, T_target_source: &Matrix4<f64>) -> f64 {
+        let moved = transform::rotation(T_target_source) * self.source_up.into_inner();
+        moved.angle(&self.target_up).to_degrees()
+    }
+
+    /// True when `T_target_source` tilts the source's up by at most [`UP_TOLERANCE_DEG`].
+    #[allow(non_snake_case)]
+    pub(crate) fn admits(&self, T_target_source: &Matrix4<f64>) -> bool {
+        self.tilt_deg(T_target_source) <= UP_TOLERANCE_DEG
+    }
+
+    /// `T_target_source` levelled: turned by the smallest rotation that brings the source's up
+    /// onto the target's, about `pivot` (where the pose puts the source's centroid, so that the
+    /// source stays where the pose put it). An upright pose is returned unchanged; a pose that
+    /// turns up exactly upside down is levelled by a half turn about an axis across up.
+    #[allow(non_snake_case)]
+    pub(crate) fn level(&self, T_target_source: &Matrix4<f64>, pivot: &Vector3<f64>) -> Matrix4<f64> {
+        let r = transform::rotation(T_target_source);
+        let moved = r * self.source_up.into_inner();
+        let up = self.target_up.into_inner();
+        let s: Matrix3<f64> = match Rotation3::rotation_between(&moved, &up) {
+            Some(s) => s.into_inner(),
+            // antiparallel: a half turn about any axis across up
+            None => {
+                let across =
+                    up.cross(&Vector3::x()).try_normalize(1e-6).unwrap_or_else(|| up.cross(&Vector3::y()).normalize());
+                Rotation3::from_axis_angle(&Unit::new_normalize(across), std::f64::consts::PI).into_inner()
+            }
+        };
+        let t = transform::translation(T_target_source);
+        transform::from_rotation_translation(&(s * r), &(s * (t - pivot) + pivot))
+    }
+}
