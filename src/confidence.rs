@@ -123,7 +123,7 @@ pub enum Admissible<'a> {
     Any,
     /// Poses that keep a shared up axis, within [`UP_TOLERANCE_DEG`].
     Upright {
-        /// The axis (target frame) the probes also turn the answer about ([`UP_TURNS`]), since
+        /// The axis (target frame) the probes also turn the answer about (every 45 degrees), since
         /// the turns about other axes tilt it.
         up: Vector3<f64>,
         /// How far a pose tilts the source's up off the target's, degrees.
