@@ -197,6 +197,8 @@ async function loadExample() {
 
 function readOptions() {
   const options = { icp: $("icp").value, search: $("search").value };
+  const up = $("up").value;
+  if (up !== "") options.up = up.split(",").map(Number);
   const dist = $("max-distance").value.trim();
   if (dist !== "") {
     const d = Number(dist);

@@ -456,6 +456,19 @@ test("a symmetric box: the other poses that fit as well are offered, and picking
   await page.waitForFunction(() => /Copied/.test(document.getElementById("copy-matrix").textContent));
   const copied = JSON.parse(await page.evaluate(() => navigator.clipboard.readText()));
   assert.deepEqual(copied, { T_target_source: poses[1].T_target_source });
+  // Both boxes stand on z: with "Up axis: z" the answer and every pose offered only turn about z
+  // (the half turns about x and y are ruled out).
+  await page.selectOption("#up", "0,0,1");
+  try {
+    const upright = await alignAndWait();
+    assert.equal(upright.error, "", `unexpected #error: ${upright.error}`);
+    const level = (rows) => rows[2][2] >= Math.cos((10 * Math.PI) / 180);
+    assert.ok(level(upright.result.T_target_source), JSON.stringify(upright.result.T_target_source));
+    for (const a of upright.result.alternatives) assert.ok(level(a.T_target_source), JSON.stringify(a.T_target_source));
+    assert.ok(upright.result.alternatives.length < result.alternatives.length, "fewer look-alikes once up is known");
+  } finally {
+    await page.selectOption("#up", "");
+  }
 });
 
 test("a mesh file is read as points over its surface", { timeout: TIMEOUT * 2 }, async () => {
