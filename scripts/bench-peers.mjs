@@ -3,10 +3,11 @@
 // the Node build of pkg/ (default options) and writes, per pair, the milliseconds `register()`
 // took (wall clock, the clouds already parsed) and the answer, as JSON on stdout.
 //
-//   node scripts/bench-peers.mjs [--pkg DIR] [--label NAME] SET_NAME=DIR [SET_NAME=DIR ...] > arps.json
+//   node scripts/bench-peers.mjs [--pkg DIR] [--label NAME] [--options JSON] SET_NAME=DIR [SET_NAME=DIR ...] > arps.json
 //
 // --pkg: the package directory whose node/index.mjs is loaded (default pkg/; e.g. a copy of an
-// older build, for before/after timings). --label: the engine's name in the output.
+// older build, for before/after timings). --label: the engine's name in the output. --options:
+// the registration options as JSON (e.g. '{"up": [0, 0, 1]}'; default: none, the defaults).
 // DIR holds pairs.tsv (name, source, target, overlap_threshold, note, T_target_source row-major)
 // and the clouds it names. Each set starts with one untimed registration of its first pair (the
 // engine's tiers compile, its memory grows to the set's size); then each pair is timed once.
@@ -22,6 +23,8 @@ const option = (name) => {
 };
 const pkgDir = path.resolve(option("--pkg") ?? path.join(root, "pkg"));
 const label = option("--label");
+const optionsJson = option("--options");
+const options = optionsJson ? JSON.parse(optionsJson) : {};
 const sets = args.map((a) => {
   const i = a.indexOf("=");
   if (i < 1) throw new Error(`bench-peers: expected SET_NAME=DIR, got ${a}`);
@@ -37,7 +40,7 @@ const arps = await import(pathToFileURL(entry).href);
 await arps.default();
 const registrar = arps.Registrar.withDefaultModel();
 
-const out = { engine: label ?? `arps wasm (Node ${process.versions.node})`, options: "default", sets: {} };
+const out = { engine: label ?? `arps wasm (Node ${process.versions.node})`, options: optionsJson ? options : "default", sets: {} };
 for (const set of sets) {
   const lines = readFileSync(path.join(set.dir, "pairs.tsv"), "utf8").trim().split("\n");
   const pairs = lines
@@ -48,7 +51,7 @@ for (const set of sets) {
     arps.parsePointCloud(readFileSync(p.source), path.basename(p.source)),
     arps.parsePointCloud(readFileSync(p.target), path.basename(p.target)),
   ];
-  if (pairs.length) registrar.register(...load(pairs[0]), {}); // warm-up, untimed
+  if (pairs.length) registrar.register(...load(pairs[0]), options); // warm-up, untimed
   const rows = [];
   for (const p of pairs) {
     const [s, t] = load(p);
@@ -56,7 +59,7 @@ for (const set of sets) {
     // prepares its target, as Open3D's do (builds older than `forgetTarget` keep none)
     registrar.forgetTarget?.();
     const t0 = performance.now();
-    const r = registrar.register(s, t, {});
+    const r = registrar.register(s, t, options);
     const ms = performance.now() - t0;
     rows.push({
       name: p.name,
