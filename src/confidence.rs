@@ -84,7 +84,7 @@ pub fn evidence(
     d: f64,
     kind: IcpKind,
 ) -> Evidence {
-    probe(target, source_index, source, T_target_source, d, kind).evidence
+    probe(target, source_index, source, T_target_source, d, kind, &Admissible::Any).evidence
 }
 
 /// [`evidence`] together with the poses its turned probes found: the best different one, when it
@@ -101,19 +101,6 @@ pub struct Probed {
     /// as [`Evidence::alternatives`] counts (`T_target_source`, briefly refined on the probe
     /// points).
     pub alternatives: Vec<Matrix4<f64>>,
-}
-
-/// [`evidence`], and the better pose its probes found, if any ([`Probed`]).
-#[allow(non_snake_case)]
-pub fn probe(
-    target: &IcpTarget,
-    source_index: &IcpTarget,
-    source: &[[f32; 3]],
-    T_target_source: &Matrix4<f64>,
-    d: f64,
-    kind: IcpKind,
-) -> Probed {
-    probe_within(target, source_index, source, T_target_source, d, kind, &Admissible::Any)
 }
 
 /// Which poses the probes may find: any, or only those that keep a shared up axis (the
@@ -156,10 +143,11 @@ const UP_TURNS: [f64; 7] = [45.0, 90.0, 135.0, 180.0, -135.0, -90.0, -45.0];
 /// by at most this many degrees (a principal axis near up): the others cannot end upright.
 const PROBE_START_TILT_DEG: f64 = 45.0;
 
-/// [`probe`], counting only the probe poses that `admissible` admits (in [`Evidence::ambiguity`],
-/// [`Evidence::alternatives`] and the better pose).
+/// [`evidence`], and the better pose its probes found, if any ([`Probed`]), counting only the
+/// probe poses that `admissible` admits (in [`Evidence::ambiguity`], [`Evidence::alternatives`] and
+/// the better pose).
 #[allow(non_snake_case)]
-pub fn probe_within(
+pub fn probe(
     target: &IcpTarget,
     source_index: &IcpTarget,
     source: &[[f32; 3]],

@@ -79,7 +79,7 @@ pub(crate) fn search(
         None => t,
     };
     let judge = |t: &Matrix4<f64>| {
-        confidence::probe_within(target_index, &source_index, &p.icp_src.points, t, d_final, options.icp, &admissible)
+        confidence::probe(target_index, &source_index, &p.icp_src.points, t, d_final, options.icp, &admissible)
     };
     // `c` is a better answer than `b`: it fits better (`refine::better`) and is another pose. A
     // start that only found the answer again (a hair better, perhaps) leaves it as it was judged:
