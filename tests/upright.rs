@@ -60,6 +60,10 @@ fn an_up_axis_that_is_not_a_direction_is_an_error() {
         let e = reg.register(&cloud, &cloud, &Options { up: Some(up), ..Options::default() }).unwrap_err();
         assert!(matches!(e, arps::Error::InvalidOption(_)) && e.to_string().contains("up ="), "{up:?}: {e}");
     }
-    // the registrar is still usable
-    assert!(reg.register(&cloud, &cloud, &Options { up: Some([0.0, 1.0, 0.0]), ..Options::default() }).is_ok());
+    // the registrar is still usable, and any finite length is a direction (no square overflows)
+    for up in [[0.0, 1.0, 0.0], [1e308, -1e308, 0.0], [0.0, 0.0, 1e-300]] {
+        let r = reg.register(&cloud, &cloud, &Options { up: Some(up), ..Options::default() }).unwrap();
+        let axis = Vector3::from(up) / Vector3::from(up).amax();
+        assert!(tilt_deg(&r.T_target_source, axis.normalize()) <= arps::register::UP_TOLERANCE_DEG, "{up:?}");
+    }
 }

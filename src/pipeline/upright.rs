@@ -24,7 +24,9 @@ impl Upright {
     /// guess's rotation `rotate_init` (applied to the source before normalising); `None` without
     /// `up`.
     pub(crate) fn of(options: &Options, rotate_init: &Matrix4<f64>) -> Option<Self> {
-        let up = Unit::try_new(Vector3::from(options.up?), 1e-12)?;
+        let up = Vector3::from(options.up?);
+        // scaled by its largest entry first: a direction of any finite length, without overflow
+        let up = Unit::try_new(up / up.amax(), 1e-12)?;
         let source_up = Unit::new_normalize(transform::rotation(rotate_init) * up.into_inner());
         Some(Upright { source_up, target_up: up })
     }
