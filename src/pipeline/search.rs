@@ -30,6 +30,7 @@ use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Candidate, Refinement, Start};
 use crate::register::{
     Options, Search, AGREED_CONFIDENCE, GLOBAL_BEFORE_STOP_POINTS, NEARLY_SURE_CONFIDENCE, STOP_CONFIDENCE,
+    UP_TOLERANCE_DEG,
 };
 use crate::Result;
 use nalgebra::{Matrix4, Point3};
@@ -186,7 +187,10 @@ pub(crate) fn search(
             let start = if options.network { Start::Network } else { Start::Initial };
             let probed = judge(&t);
             let e = probed.evidence;
-            warnings.push("no start could be refined (the global descriptors matched too little): the answer is the network's estimate".into());
+            warnings.push(match upright {
+                Some(_) => format!("no refined start ended upright (within {UP_TOLERANCE_DEG} degrees of `up`), or the global descriptors matched too little: the answer is the network's estimate, levelled"),
+                None => "no start could be refined (the global descriptors matched too little): the answer is the network's estimate".into(),
+            });
             let c = Candidate {
                 start,
                 T_target_source: t,
