@@ -119,8 +119,9 @@ pub enum Admissible<'a> {
 }
 
 impl Admissible<'_> {
-    /// Whether the probes may count the pose `t`.
-    fn admits(&self, t: &Matrix4<f64>) -> bool {
+    /// Whether the pose `t` may be counted (with a shared up axis: tilted at most
+    /// [`UP_TOLERANCE_DEG`]).
+    pub fn admits(&self, t: &Matrix4<f64>) -> bool {
         match self {
             Admissible::Any => true,
             Admissible::Upright { tilt_deg, .. } => tilt_deg(t) <= UP_TOLERANCE_DEG,

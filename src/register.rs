@@ -7,7 +7,6 @@ use crate::icp::IcpKind;
 use crate::model::{Model, ModelWorkspace};
 use crate::pipeline::starts::{self, Starts};
 use crate::pipeline::target::PreparedTarget;
-use crate::pipeline::upright::Upright;
 use crate::pipeline::{network, options, prepare, result, search};
 use crate::refine::Start;
 use crate::timing::{default_clock, Clock, Stopwatch};
@@ -457,8 +456,7 @@ impl Registrar {
 
         progress(Stage::Refining);
         let stages = starts::stages(&starts::kinds(options), options.search);
-        let up = Upright::of(options, &prepared.rotate_init).map(|u| u.up());
-        let mut builder = Starts::new(&prepared, t_net_n, options.seed, up, self.clock);
+        let mut builder = Starts::new(&prepared, t_net_n, options.seed, self.clock);
         let chosen =
             search::search(&prepared, &stages, &mut builder, options, &self.model, &mut self.workspace, &mut warnings)?;
         let global_ms = builder.global_ms;

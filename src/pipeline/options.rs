@@ -37,9 +37,8 @@ pub(crate) fn resolve(options: &Options, model: &Model) -> Result<Resolved> {
     }
     refine::check_starts(&options.starts)?;
     if let Some(up) = options.up {
-        // any length: only its direction counts (scaled by its largest entry, so no square overflows)
-        let largest = up.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        if !up.iter().all(|v| v.is_finite()) || largest == 0.0 {
+        // any length: only its direction counts (`Upright::of` scales it by its largest entry first)
+        if !up.iter().all(|v| v.is_finite()) || nalgebra::Vector3::from(up).amax() == 0.0 {
             return Err(Error::InvalidOption(format!(
                 "up = {up:?} must be three finite numbers, not all zero (the direction that is up in both clouds)"
             )));

@@ -10,6 +10,7 @@
 
 use super::options::{self, Resolved};
 use super::target::{self, InputKey, PreparedTarget, Sizes};
+use super::upright::Upright;
 use crate::cloud::{JointNormalization, PointCloud, MIN_POINTS};
 use crate::register::Options;
 use crate::{checks, limits, origin, sampling, transform, Result};
@@ -26,6 +27,8 @@ pub(crate) struct Prepared {
     pub origin_source: [f64; 3],
     /// The initial guess's rotation, applied to the local source before normalising.
     pub rotate_init: Matrix4<f64>,
+    /// The shared up axis in these frames (`Options::up`), if any.
+    pub upright: Option<Upright>,
     /// The joint normalisation of the turned source and the target.
     pub norm: JointNormalization,
     /// The initial guess (identity with no initial transform), turned source to target.
@@ -130,7 +133,8 @@ pub(crate) fn prepare(
     let voxel_user = voxel * norm.scale;
     limits::check_icp_points("source", src_n.len(), icp_src.len(), voxel_user)?;
     limits::check_icp_points("target", target.cloud.len(), target.icp.len(), voxel_user)?;
-    Ok(Prepared { origin_source, rotate_init, norm, t_initial, src_n, d_final, net_src, icp_src, target })
+    let upright = Upright::of(options, &rotate_init);
+    Ok(Prepared { origin_source, rotate_init, upright, norm, t_initial, src_n, d_final, net_src, icp_src, target })
 }
 
 #[cfg(test)]

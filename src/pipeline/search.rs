@@ -16,14 +16,13 @@
 //! ([`settle`]). The answer's final verdict also counts, as alternatives, the other refined
 //! answers that fit about as well ([`confidence::count_search_alternatives`]); those alternative
 //! poses are refined like the answer and handed on with it ([`refine_alternatives`]). With
-//! `up` ([`Upright`]), every start is levelled first, a stage whose best ends tilted settles
+//! `up` ([`Prepared::upright`]), every start is levelled first, a stage whose best ends tilted settles
 //! nothing, and the probes count only upright poses (turning the answer about up too). With no
 //! start refined at all, the network's estimate (the initial transform with the network off),
 //! unrefined, and a warning.
 
 use super::prepare::Prepared;
 use super::starts::Starts;
-use super::upright::Upright;
 use crate::confidence::{self, Evidence, Probed};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
@@ -67,13 +66,13 @@ pub(crate) fn search(
     let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations };
     let source_index = IcpTarget::new(&p.icp_src.points, false);
     // with `up`: every start levelled, and only upright answers, probe poses and alternatives
-    let upright = Upright::of(options, &p.rotate_init);
-    let admits = |t: &Matrix4<f64>| upright.is_none_or(|u| u.admits(t));
+    let upright = p.upright;
     let tilt_deg = |t: &Matrix4<f64>| upright.map_or(0.0, |u| u.tilt_deg(t));
     let admissible = match &upright {
-        Some(u) => confidence::Admissible::Upright { up: u.up(), tilt_deg: &tilt_deg },
+        Some(u) => confidence::Admissible::Upright { up: u.up().into_inner(), tilt_deg: &tilt_deg },
         None => confidence::Admissible::Any,
     };
+    let admits = |t: &Matrix4<f64>| admissible.admits(t);
     let centroid = p.src_n.centroid();
     let level = |t: Matrix4<f64>| match &upright {
         Some(u) => u.level(&t, &t.transform_point(&Point3::from(centroid)).coords),

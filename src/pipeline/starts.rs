@@ -65,8 +65,6 @@ pub(crate) struct Starts<'a> {
     /// The network's estimate (the initial transform with the network off).
     t_net_n: Matrix4<f64>,
     seed: u64,
-    /// The target's up when the clouds share one (`Options::up`): the rotations turn about it.
-    up: Option<Vector3<f64>>,
     clock: Option<Clock>,
     matched: Option<global::Matched>,
     hypotheses: Option<Vec<Matrix4<f64>>>,
@@ -76,14 +74,8 @@ pub(crate) struct Starts<'a> {
 
 impl<'a> Starts<'a> {
     /// Starts for `prepared`, with the network's estimate `t_net_n` (normalised units).
-    pub(crate) fn new(
-        prepared: &'a Prepared,
-        t_net_n: Matrix4<f64>,
-        seed: u64,
-        up: Option<Vector3<f64>>,
-        clock: Option<Clock>,
-    ) -> Self {
-        Self { prepared, t_net_n, seed, up, clock, matched: None, hypotheses: None, global_ms: 0.0 }
+    pub(crate) fn new(prepared: &'a Prepared, t_net_n: Matrix4<f64>, seed: u64, clock: Option<Clock>) -> Self {
+        Self { prepared, t_net_n, seed, clock, matched: None, hypotheses: None, global_ms: 0.0 }
     }
 
     /// The network's estimate these starts were built from (normalised units).
@@ -113,9 +105,7 @@ impl<'a> Starts<'a> {
                 Start::Network => starts.push((start, t_net_n)),
                 Start::Initial => starts.push((start, t_initial)),
                 Start::Centroids => starts.push((start, centroid_alignment(p.src_n.centroid(), p.target.centroid()))),
-                Start::Rotations => starts.extend(
-                    rotations(p.src_n.centroid(), p.target.centroid(), self.up).into_iter().map(|t| (start, t)),
-                ),
+                Start::Rotations => starts.extend(rotations(p).into_iter().map(|t| (start, t))),
                 Start::Turned | Start::TurnedInitial => {
                     // t_net_n is the initial transform when the network is off
                     let base = if start == Start::Turned { t_net_n } else { t_initial };
@@ -157,10 +147,7 @@ impl<'a> Starts<'a> {
             starts.extend(self.global(start, &more, model, workspace)?);
         }
         if with_rotations && !kinds.contains(&Start::Rotations) {
-            let p = self.prepared;
-            starts.extend(
-                rotations(p.src_n.centroid(), p.target.centroid(), self.up).into_iter().map(|t| (Start::Rotations, t)),
-            );
+            starts.extend(rotations(self.prepared).into_iter().map(|t| (Start::Rotations, t)));
         }
         Ok(starts)
     }
@@ -213,14 +200,14 @@ const SAME_HYPOTHESIS_DEGREES: f64 = 10.0;
 /// See [`SAME_HYPOTHESIS_DEGREES`]: translations this close (normalised units).
 const SAME_HYPOTHESIS_SHIFT: f64 = 0.1;
 
-/// The [`Start::Rotations`] transforms between two clouds in one frame, given their centroids:
-/// each of the [`refine::cube_rotations`] about the source's centroid, which moves onto the
-/// target's; with a shared `up` (the target's), the [`UP_ROTATIONS`] turns about it instead (the
-/// cube's other rotations tilt it).
-fn rotations(cs: [f64; 3], ct: [f64; 3], up: Option<Vector3<f64>>) -> Vec<Matrix4<f64>> {
-    let (cs, ct) = (Vector3::from(cs), Vector3::from(ct));
+/// The [`Start::Rotations`] transforms of the prepared clouds: each of the
+/// [`refine::cube_rotations`] about the source's centroid, which moves onto the target's; with a
+/// shared up axis ([`Prepared::upright`]), the [`UP_ROTATIONS`] turns about the target's up
+/// instead (the cube's other rotations tilt it).
+fn rotations(p: &Prepared) -> Vec<Matrix4<f64>> {
+    let (cs, ct) = (Vector3::from(p.src_n.centroid()), Vector3::from(p.target.centroid()));
     let place = |r: nalgebra::Matrix3<f64>| transform::from_rotation_translation(&r, &(ct - r * cs));
-    match up.and_then(|u| nalgebra::Unit::try_new(u, 1e-12)) {
+    match p.upright.map(|u| u.up()) {
         Some(axis) => (0..UP_ROTATIONS)
             .map(|k| {
                 let angle = std::f64::consts::TAU * k as f64 / UP_ROTATIONS as f64;

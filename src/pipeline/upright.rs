@@ -1,12 +1,14 @@
 //! The `up` constraint ([`Options::up`]): both clouds were captured level, so an answer may only
-//! turn the source about the shared up axis (within [`UP_TOLERANCE_DEG`]).
+//! turn the source about the shared up axis (within [`crate::register::UP_TOLERANCE_DEG`]).
 //!
 //! In the pipeline's frames the target's up is the caller's direction (normalising only shifts
 //! and scales), and the source's is that direction turned by the initial guess's rotation (the
 //! source is turned by it before normalising). The search levels every start ([`Upright::level`])
-//! and keeps only answers, probe poses and alternatives that [`Upright::admits`].
+//! and keeps only answers, probe poses and alternatives tilted at most
+//! [`crate::register::UP_TOLERANCE_DEG`]
+//! ([`Upright::tilt_deg`], judged by [`crate::confidence::Admissible::admits`]).
 
-use crate::register::{Options, UP_TOLERANCE_DEG};
+use crate::register::Options;
 use crate::transform;
 use nalgebra::{Matrix3, Matrix4, Rotation3, Unit, Vector3};
 
@@ -32,8 +34,8 @@ impl Upright {
     }
 
     /// Up in the target frame.
-    pub(crate) fn up(&self) -> Vector3<f64> {
-        self.target_up.into_inner()
+    pub(crate) fn up(&self) -> Unit<Vector3<f64>> {
+        self.target_up
     }
 
     /// How far `T_target_source` tilts the source's up away from the target's, degrees.
@@ -41,12 +43,6 @@ impl Upright {
     pub(crate) fn tilt_deg(&self, T_target_source: &Matrix4<f64>) -> f64 {
         let moved = transform::rotation(T_target_source) * self.source_up.into_inner();
         moved.angle(&self.target_up).to_degrees()
-    }
-
-    /// True when `T_target_source` tilts the source's up by at most [`UP_TOLERANCE_DEG`].
-    #[allow(non_snake_case)]
-    pub(crate) fn admits(&self, T_target_source: &Matrix4<f64>) -> bool {
-        self.tilt_deg(T_target_source) <= UP_TOLERANCE_DEG
     }
 
     /// `T_target_source` levelled: turned by the smallest rotation that brings the source's up
