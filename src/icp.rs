@@ -45,6 +45,13 @@ pub struct IcpParams {
     pub relative_fitness: f64,
     /// ... and the change of inlier RMSE is below this (likewise absolute).
     pub relative_rmse: f64,
+    /// Levenberg-Marquardt damping of the point-to-plane step, as a fraction of the largest
+    /// eigenvalue of its normal matrix: each step solves `(AᵀA + damping · λmax · I) x = Aᵀb`, so a
+    /// motion the pairs pin only weakly (eigenvalue well below `damping · λmax`) moves a small part
+    /// of the way each iteration instead of all of it, while well-pinned ones move as before.
+    /// `0` (what [`IcpParams::new`] sets) is the plain Gauss-Newton step. Point-to-point ICP
+    /// ignores it.
+    pub damping: f64,
 }
 
 /// What an ICP run returns.
@@ -66,9 +73,16 @@ pub struct IcpResult {
 impl IcpParams {
     /// Parameters for the given ICP kind and max correspondence distance, with Open3D's
     /// convergence defaults: at most 30 iterations, stopping when the changes of fitness and of
-    /// inlier RMSE between iterations both fall below 1e-6.
+    /// inlier RMSE between iterations both fall below 1e-6; undamped steps.
     pub fn new(kind: IcpKind, max_correspondence_distance: f64) -> Self {
-        Self { kind, max_correspondence_distance, max_iterations: 30, relative_fitness: 1e-6, relative_rmse: 1e-6 }
+        Self {
+            kind,
+            max_correspondence_distance,
+            max_iterations: 30,
+            relative_fitness: 1e-6,
+            relative_rmse: 1e-6,
+            damping: 0.0,
+        }
     }
 }
 
@@ -284,7 +298,8 @@ impl IcpTarget {
     /// * [`IcpKind::Plane`]: minimises `sum ((R p + t - q) . n_q)^2` linearised about the
     ///   inliers' centroid (small-angle `R ~ I + [w]x`), a 6x6 least-squares problem in `f64`
     ///   solved by a truncated eigen-decomposition (directions with eigenvalue below
-    ///   [`PLANE_RANK_TOL`] times the largest are not moved); the rotation is then built exactly
+    ///   [`PLANE_RANK_TOL`] times the largest are not moved, and each kept one is damped by
+    ///   [`IcpParams::damping`]); the rotation is then built exactly
     ///   from `w` (axis-angle), and the composed rotation re-orthonormalised every iteration.
     /// * Stops as Open3D's `ICPConvergenceCriteria` does: after an update, when the change of
     ///   fitness is below `relative_fitness` **and** the change of inlier RMSE below
@@ -332,7 +347,7 @@ impl IcpTarget {
         let mut t = *init;
         for it in 1..=params.max_iterations {
             let update = match params.kind {
-                IcpKind::Plane => self.plane_update(scratch),
+                IcpKind::Plane => self.plane_update(scratch, params.damping),
                 _ => self.point_update(scratch),
             };
             let Some(update) = update else { break };
@@ -465,8 +480,9 @@ impl IcpTarget {
         Some(rigid::kabsch(&scratch.moved, &scratch.target_xyz, None))
     }
 
-    /// Point-to-plane update on the current inlier pairs (see [`IcpTarget::align`]).
-    fn plane_update(&self, scratch: &Scratch) -> Option<Matrix4<f64>> {
+    /// Point-to-plane update on the current inlier pairs, damped by `damping` (see
+    /// [`IcpTarget::align`]).
+    fn plane_update(&self, scratch: &Scratch, damping: f64) -> Option<Matrix4<f64>> {
         let n = scratch.moved.len();
         if n == 0 {
             return None;
@@ -515,11 +531,12 @@ impl IcpTarget {
             return None;
         }
         let mut x = Vector6::<f64>::zeros();
+        let damp = damping.max(0.0) * lmax;
         for k in 0..6 {
             let l = eig.eigenvalues[k];
             if l > PLANE_RANK_TOL * lmax {
                 let v = eig.eigenvectors.column(k);
-                x += v * (v.dot(&rhs) / l);
+                x += v * (v.dot(&rhs) / (l + damp));
             }
         }
         let w = Vector3::new(x[0], x[1], x[2]);

@@ -124,6 +124,65 @@ fn partial_overlap_converges_close() {
     }
 }
 
+/// Damped point-to-plane steps (`IcpParams::damping`) reach the fit the plain steps reach, on a
+/// scan that pins every motion: damping slows weakly pinned motions, it does not move the minimum.
+#[test]
+fn damped_steps_reach_the_same_fit() {
+    let t_gt = ten_degrees();
+    let (source, _, target) = partial_overlap();
+    let mut t = Matrix4::identity();
+    for d in [0.4, 0.2, 0.1, 0.05] {
+        let p = IcpParams { max_iterations: 50, damping: 0.03, ..IcpParams::new(IcpKind::Plane, d) };
+        t = target.align(&source, &t, &p).T_target_source;
+    }
+    let er = rotation_error_deg(&t, &t_gt);
+    let et = translation_error(&t, &t_gt);
+    eprintln!("damped partial: {er:.3e} deg, {et:.2e}");
+    assert!(er < 0.5 && et < 0.01, "{er} deg, {et}");
+    // damping 0 is the plain step, bit for bit
+    let plain = IcpParams::new(IcpKind::Plane, 0.2);
+    let zero = IcpParams { damping: 0.0, ..plain };
+    assert_eq!(target.align(&source, &t_gt, &plain), target.align(&source, &t_gt, &zero));
+}
+
+/// Two partial views of a cylinder (radius 0.5, height 2, on the z axis; evenly spread points,
+/// deterministic): the target keeps the angles within ±80° of +x, the source those within 40°
+/// to 150°, so only the angles from 40° to 80° overlap. Within the overlap, point-to-plane pairs
+/// pin neither the turn about the axis nor the shift along it.
+fn cylinder_views() -> (Vec<[f32; 3]>, Vec<[f32; 3]>) {
+    let view = |from: f64, to: f64, phase: f64| -> Vec<[f32; 3]> {
+        let mut pts = Vec::new();
+        for i in 0..48 {
+            let z = -1.0 + (i as f64 + phase) * 2.0 / 48.0;
+            for k in 0..40 {
+                let a = (from + (to - from) * (k as f64 + phase) / 40.0).to_radians();
+                pts.push([(0.5 * a.cos()) as f32, (0.5 * a.sin()) as f32, z as f32]);
+            }
+        }
+        pts
+    };
+    (view(40.0, 150.0, 0.5), view(-80.0, 80.0, 0.25))
+}
+
+/// At a wide distance, the pairs beyond the overlap pull a cylinder's view about its axis, which
+/// nothing else pins: a plain step follows that pull at once, a damped one
+/// (`refine::WIDE_DAMPING`, the pipeline's wide stage for estimates) moves a small part of the
+/// way.
+#[test]
+fn damping_slows_a_motion_the_pairs_do_not_pin() {
+    let (source, target_pts) = cylinder_views();
+    let target = IcpTarget::new(&target_pts, true);
+    let step = |damping: f64| {
+        let p = IcpParams { damping, max_iterations: 1, ..IcpParams::new(IcpKind::Plane, 0.4) };
+        target.align(&source, &Matrix4::identity(), &p).T_target_source
+    };
+    let (plain, damped) = (step(0.0), step(arps::refine::WIDE_DAMPING));
+    let turn = |t: &Matrix4<f64>| rotation_error_deg(t, &Matrix4::identity());
+    eprintln!("cylinder, one step at 0.4: plain turns {:.2} deg, damped {:.2} deg", turn(&plain), turn(&damped));
+    assert!(turn(&plain) > 1.0, "the plain step turned {} deg", turn(&plain));
+    assert!(turn(&damped) < 0.5 * turn(&plain), "damped {} deg, plain {} deg", turn(&damped), turn(&plain));
+}
+
 #[test]
 fn empty_and_degenerate_inputs() {
     let source = fixture();
