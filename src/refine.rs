@@ -79,13 +79,6 @@ impl Start {
         }
     }
 
-    /// True for the starts that are estimates of the answer, not guesses: the network's (the
-    /// initial transform with the network off) and the initial transform. Their widest ICP stage
-    /// is damped ([`WIDE_DAMPING`]).
-    pub fn is_estimate(self) -> bool {
-        matches!(self, Start::Network | Start::Initial)
-    }
-
     /// True for the starts from global registration ([`Start::Global`], [`Start::GlobalNetwork`]):
     /// each run of them is one stage of the adaptive search.
     pub fn is_global(self) -> bool {
@@ -195,15 +188,18 @@ pub fn shortlist(
 /// ICP runs coarse to fine at these multiples of the final max correspondence distance.
 pub const SCHEDULE: [f64; 3] = [4.0, 2.0, 1.0];
 
-/// Damping ([`IcpParams::damping`]) of the widest ICP stage ([`SCHEDULE`]'s first) for the starts
-/// that are estimates of the answer ([`Start::is_estimate`]). At four times the final distance
-/// many pairs join points of different surface patches; on a shape that pins some motion only
-/// weakly (a bowl or a bottle turned about its axis, a door or a curtain slid along itself) their
-/// pull drags the fit along that motion, up to a half turn away from an estimate that was right,
-/// and the closer stages cannot bring it back. Damped, such motions move little in the wide stage
-/// and are settled by the closer stages' pairs; the motions the pairs pin well move as before.
-/// The other starts are guesses that must travel, and their stages are not damped.
-/// `BENCHMARK.md`, "The estimate's wide ICP stage, damped".
+/// Damping ([`IcpParams::damping`]) of a second run of the widest ICP stage ([`SCHEDULE`]'s
+/// first) for the start that is an estimate of the answer ([`Refinement::estimate`]). At four times
+/// the final distance many pairs join points of different surface patches; on a shape that pins
+/// some motion only weakly (a bowl or a bottle turned about its axis, a door or a curtain slid
+/// along itself) their pull drags the fit along that motion, up to a half turn away from an
+/// estimate that was right, and the closer stages cannot bring it back. Damped, such motions move
+/// little in the wide stage and are settled by the closer stages' pairs. But an estimate that is
+/// off along a weakly pinned motion (a room's scan shifted along its floor) needs the plain stage
+/// to travel there, so the estimate takes the wide stage both ways: the two runs go on as two
+/// candidates, merged by the next stage where they end alike, and the fit chooses between them
+/// ([`choose`]). The other starts are guesses that must travel, and take the plain stage only.
+/// `BENCHMARK.md`, "The estimate's wide ICP stage, also damped".
 pub const WIDE_DAMPING: f64 = 0.03;
 
 /// The last stage of [`SCHEDULE`] alone: what runs again on a screened winner's full points, and
@@ -220,6 +216,10 @@ pub struct Refinement {
     pub d_final: f64,
     /// Iteration cap of each ICP stage.
     pub max_iterations: u32,
+    /// The start that is an estimate of the answer, not a guess (the pipeline's: the network's, or
+    /// with the network off the initial transform), if any: it takes the widest stage both plainly
+    /// and damped ([`WIDE_DAMPING`]).
+    pub estimate: Option<Start>,
 }
 
 /// One start after refinement, scored at the final distance.
@@ -342,9 +342,9 @@ pub fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
 }
 
 /// Refines every start with coarse-to-fine ICP against one prepared target ([`SCHEDULE`] times
-/// `how.d_final`, each stage capped at `how.max_iterations`, the widest damped by
-/// [`WIDE_DAMPING`] for the estimates, [`Start::is_estimate`]) and scores each result at
-/// `how.d_final`.
+/// `how.d_final`, each stage capped at `how.max_iterations`; `how.estimate` takes the widest stage
+/// both plainly and damped, [`WIDE_DAMPING`], as two candidates) and scores
+/// each result at `how.d_final`.
 ///
 /// The starts advance stage by stage together; before each stage a start that has come within
 /// [`MERGE_FRACTION`] of `how.d_final` of an earlier one (largest displacement of a source point) is
@@ -369,7 +369,7 @@ fn refine_stages(
     how: &Refinement,
     schedule: &[f64],
 ) -> Vec<Candidate> {
-    let Refinement { kind, d_final, max_iterations } = *how;
+    let Refinement { kind, d_final, max_iterations, estimate } = *how;
     // each start with its points' partners in the previous stage (warm-starts the next)
     let mut live: Vec<(Candidate, Partners)> = starts
         .iter()
@@ -389,10 +389,12 @@ fn refine_stages(
         for &factor in schedule {
             merge_coincident(&mut live, source, MERGE_FRACTION * d_final);
             let params = IcpParams { max_iterations, ..IcpParams::new(kind, d_final * factor) };
-            let wide = factor >= SCHEDULE[0];
-            for (c, partners) in &mut live {
-                let damping = if wide && c.start.is_estimate() { WIDE_DAMPING } else { 0.0 };
-                let params = IcpParams { damping, ..params };
+            let mut damped = vec![false; live.len()];
+            if factor >= SCHEDULE[0] {
+                (live, damped) = with_damped_twins(live, estimate);
+            }
+            for ((c, partners), &damped) in live.iter_mut().zip(&damped) {
+                let params = IcpParams { damping: if damped { WIDE_DAMPING } else { 0.0 }, ..params };
                 let r = target.align_warm(source, &c.T_target_source, &params, partners);
                 c.T_target_source = r.T_target_source;
                 c.iterations += r.iterations;
@@ -411,6 +413,26 @@ fn refine_stages(
             c
         })
         .collect()
+}
+
+/// `live` with a twin after each entry of the `estimate` start, and which entries are those twins:
+/// the ones whose widest stage is damped ([`WIDE_DAMPING`]).
+fn with_damped_twins(
+    live: Vec<(Candidate, Partners)>,
+    estimate: Option<Start>,
+) -> (Vec<(Candidate, Partners)>, Vec<bool>) {
+    let mut out = Vec::with_capacity(live.len() + 1);
+    let mut damped = Vec::with_capacity(live.len() + 1);
+    for (c, partners) in live {
+        let twin = Some(c.start) == estimate;
+        if twin {
+            out.push((c, partners.clone()));
+            damped.push(false);
+        }
+        out.push((c, partners));
+        damped.push(twin);
+    }
+    (out, damped)
 }
 
 /// After a coarse stage, a start whose fitness at that stage's distance is below this fraction of

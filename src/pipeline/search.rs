@@ -63,7 +63,9 @@ pub(crate) fn search(
     let d_final = p.d_final;
     // normals are estimated as ICP first needs them (only near the source's sampled points)
     let target_index = p.target.index();
-    let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations };
+    // the network's estimate, or with the network off the initial transform (`starts::kinds`)
+    let estimate = Some(if options.network { Start::Network } else { Start::Initial });
+    let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations, estimate };
     let source_index = IcpTarget::new(&p.icp_src.points, false);
     // with `up`: every start levelled, and only upright answers, probe poses and alternatives
     let upright = p.upright;
