@@ -424,16 +424,18 @@ fn last_stage_pair(reg: &mut Registrar, index: usize, found_by: Start) -> (Regis
     (r, all)
 }
 
-/// `fixtures/any` pairs 0-2 (a cone and two bookshelves, in arbitrary relative poses; pair 2 the
+/// `fixtures/any` pairs 1 and 2 (two bookshelves, in arbitrary relative poses; pair 2 the
 /// embedded model solves from its first start since `n128-5`, hence no network): the first five
 /// global hypotheses and every local start end in poses that fit clearly worse than the truth, so
 /// every stage leaves the answer unsure; the adaptive search's last stage finds the truth,
-/// confidently: among more global hypotheses drawn from the same matches (pairs 0 and 1) or among
-/// the 24 rotations (pair 2).
+/// confidently: among more global hypotheses drawn from the same matches (pair 1) or among the 24
+/// rotations (pair 2). (Pair 0, a cone, was one too until the estimate's wide stage also ran
+/// damped: with the network off the estimate is the identity, and its damped run reaches the
+/// truth.)
 #[test]
 fn an_answer_still_unsure_after_every_stage_gets_a_last_stage() {
     let mut reg = Registrar::with_default_model().unwrap();
-    for (index, found_by) in [(0, Start::Global), (1, Start::Global), (2, Start::Rotations)] {
+    for (index, found_by) in [(1, Start::Global), (2, Start::Rotations)] {
         let (r, all) = last_stage_pair(&mut reg, index, found_by);
         assert!(r.confidence > 0.5, "pair {index}: confidence {}", r.confidence);
         assert!(all.confidence <= 0.5, "pair {index}: the miss is not flagged ({})", all.confidence);
