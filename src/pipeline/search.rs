@@ -64,8 +64,9 @@ pub(crate) fn search(
     // normals are estimated as ICP first needs them (only near the source's sampled points)
     let target_index = p.target.index();
     // the network's estimate, or with the network off the initial transform (`starts::kinds`)
-    let estimate = Some(if options.network { Start::Network } else { Start::Initial });
-    let how = Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations, estimate };
+    let estimate = if options.network { Start::Network } else { Start::Initial };
+    let how =
+        Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations, estimate: Some(estimate) };
     let source_index = IcpTarget::new(&p.icp_src.points, false);
     // with `up`: every start levelled, and only upright answers, probe poses and alternatives
     let upright = p.upright;
@@ -185,7 +186,6 @@ pub(crate) fn search(
         Some((c, probed, _)) => (c, probed),
         None => {
             let t = level(if options.network { builder.t_net_n() } else { p.t_initial });
-            let start = if options.network { Start::Network } else { Start::Initial };
             let probed = judge(&t);
             let e = probed.evidence;
             warnings.push(match upright {
@@ -193,7 +193,7 @@ pub(crate) fn search(
                 None => "no start could be refined (the global descriptors matched too little): the answer is the network's estimate".into(),
             });
             let c = Candidate {
-                start,
+                start: estimate,
                 T_target_source: t,
                 fitness: e.fitness,
                 inlier_rmse: e.rmse_ratio * d_final,
