@@ -7,7 +7,9 @@
 #   scripts/gpu-train.sh start NAME --minutes M [--from DIR] [--init "FLAGS"] [-- TRAINER FLAGS]
 #       start a background session of M minutes for run NAME, then watch it (see watch).
 #       --from DIR: resume from a carried run folder (checkpoint.safetensors or its .part-* pieces,
-#       log.jsonl or log.jsonl.gz); --init "FLAGS": a new run (`arps-train init` flags).
+#       log.jsonl or log.jsonl.gz); --init "FLAGS": a new run (`arps-train init` flags);
+#       --grow "FLAGS" with --from DIR: a wider copy of DIR's run (`arps-train grow` flags, e.g.
+#       "--ffn-dim 512"), made on this machine, since its checkpoint is too large to carry.
 #   scripts/gpu-train.sh watch NAME [SECONDS]   copy the newest state to $OUT every COLLECT_EVERY
 #       seconds until the session ends or SECONDS (default 540) pass; the session goes on.
 #   scripts/gpu-train.sh collect NAME           copy the newest state to $OUT once.
@@ -78,23 +80,30 @@ cmd=${1:-}; shift || true
 case "$cmd" in
 start)
     name=${1:?run name}; shift
-    minutes=""; from=""; init=""
+    minutes=""; from=""; init=""; grow=""
     while [ $# -gt 0 ]; do
         case "$1" in
         --minutes) minutes=$2; shift 2 ;;
         --from) from=$2; shift 2 ;;
         --init) init=$2; shift 2 ;;
+        --grow) grow=$2; shift 2 ;;
         --) shift; break ;;
         *) die "unknown option $1" ;;
         esac
     done
     [ -n "$minutes" ] || die "--minutes is required"
+    [ -z "$grow" ] || [ -n "$from" ] || die "--grow needs --from DIR"
     [ -x "$BIN" ] || die "$BIN is missing (carry .gpu/arps-train)"
     run=$RUN_ROOT/$name
     running "$name" && die "a session of $name is running"
     mkdir -p "$RUN_ROOT"
     if [ ! -f "$run/checkpoint.safetensors" ]; then
-        if [ -n "$from" ]; then
+        if [ -n "$from" ] && [ -n "$grow" ]; then
+            base=$RUN_ROOT/$name.base
+            rm -rf "$base"; mkdir -p "$base"; cp -r "$from"/. "$base"/; assemble "$base"
+            # shellcheck disable=SC2086
+            "$BIN" grow --from "$base" --run "$run" $grow
+        elif [ -n "$from" ]; then
             mkdir -p "$run"; cp -r "$from"/. "$run"/; assemble "$run"
         elif [ -n "$init" ]; then
             # shellcheck disable=SC2086
@@ -125,5 +134,5 @@ join)
     assemble "$dst"
     echo "gpu-train: $dst rebuilt"
     ;;
-*) sed -n '2,27p' "$0"; exit 2 ;;
+*) sed -n '2,23p' "$0"; exit 2 ;;
 esac

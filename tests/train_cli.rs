@@ -332,3 +332,69 @@ fn a_latest_export_records_the_bank_the_run_trained_on() {
     assert_eq!(&w.provenance["data"]["bank_meshes"], logged);
     let _ = std::fs::remove_dir_all(&run);
 }
+
+/// The network's estimate (no ICP) on a fixture pair with `w`.
+fn network_estimate(w: &arps::Weights) -> nalgebra::Matrix4<f64> {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs");
+    let s = arps::io::read_path(&root.join("00006_source.ply")).unwrap();
+    let t = arps::io::read_path(&root.join("00006_target.ply")).unwrap();
+    let mut reg = arps::Registrar::new(w).unwrap();
+    let options = arps::Options { icp: arps::IcpKind::Off, ..arps::Options::default() };
+    reg.register(&s, &t, &options).unwrap().T_target_source
+}
+
+#[test]
+fn a_grown_run_computes_what_it_grew_from_and_trains_on() {
+    let (base, grown) = (dir("grow-base"), dir("grown"));
+    let mut args = COMMON.to_vec();
+    args.extend(["--steps", "20", "--ema", "0.9"]);
+    train(&base, &args);
+    let grow = |from: &Path, to: &Path, ffn: &str| {
+        Command::new(env!("CARGO_BIN_EXE_arps-train"))
+            .args(["grow", "--from", from.to_str().unwrap(), "--run", to.to_str().unwrap(), "--ffn-dim", ffn])
+            .output()
+            .unwrap()
+    };
+    let out = grow(&base, &grown, "40");
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+
+    let old = checkpoint::load(&base.join("checkpoint.safetensors")).unwrap();
+    let new = checkpoint::load(&grown.join("checkpoint.safetensors")).unwrap();
+    let (ffn_old, d) = (old.state.config.model.ffn_dim, 2 * old.state.config.model.feature_dim);
+    assert_eq!((ffn_old, new.state.config.model.ffn_dim), (16, 40));
+    assert_eq!((new.state.step, new.state.pairs_seen, new.adam.t), (old.state.step, old.state.pairs_seen, old.adam.t));
+    assert!(new.state.best_score.is_none(), "the smaller network's best is forgotten");
+    let w2 = &new.params["layers.0.self_attn.ffn2.weight"];
+    assert_eq!(w2.len(), d * 40);
+    for r in 0..d {
+        assert_eq!(&w2[r * 40..r * 40 + 16], &old.params["layers.0.self_attn.ffn2.weight"][r * 16..(r + 1) * 16]);
+        assert!(w2[r * 40 + 16..(r + 1) * 40].iter().all(|&x| x == 0.0), "new units must not reach the output yet");
+    }
+    let w1 = &new.params["layers.1.cross_attn.ffn1.weight"];
+    assert!(w1[16 * d..].iter().any(|&x| x != 0.0), "new units get input weights");
+    assert_eq!(new.ema.as_ref().unwrap()["layers.1.cross_attn.ffn1.weight"].len(), 40 * d);
+    let v = &new.adam.v["layers.0.self_attn.ffn1.weight"];
+    assert!(v[16 * d..].iter().all(|&x| x > 0.0), "new second moments start at their tensor's mean");
+
+    // the engine's forward pass is unchanged
+    let (a, b) = (network_estimate(&export_latest(&base)), network_estimate(&export_latest(&grown)));
+    assert!((a - b).abs().max() < 1e-6, "{a} vs {b}");
+
+    // it trains on, and the new units start to count
+    train(&grown, &["--resume", "--steps", "30", "--quiet"]);
+    let trained = checkpoint::load(&grown.join("checkpoint.safetensors")).unwrap();
+    assert_eq!(trained.state.step, 30);
+    let w2 = &trained.params["layers.0.self_attn.ffn2.weight"];
+    assert!((0..d).any(|r| w2[r * 40 + 16..(r + 1) * 40].iter().any(|&x| x != 0.0)));
+    assert!(log::read(&grown.join("log.jsonl")).unwrap().iter().any(|l| l["kind"] == "note"));
+
+    // a run is never overwritten, and the width must grow
+    let again = grow(&base, &grown, "48");
+    assert!(!again.status.success() && String::from_utf8_lossy(&again.stderr).contains("exists"));
+    let narrower = grow(&base, &dir("grow-narrower"), "16");
+    assert!(!narrower.status.success());
+    assert!(String::from_utf8_lossy(&narrower.stderr).contains("must be larger"), "{narrower:?}");
+    for d in [base, grown] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}

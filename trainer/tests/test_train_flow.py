@@ -183,3 +183,33 @@ def test_an_error_in_the_eager_network_is_raised_not_noted(tmp_path, monkeypatch
         train.main(["--run", str(d), "--arps-train", BIN, "--generators", "2", "--steps", "3", "--device", "cpu",
                     "--quiet"])
     assert not [x for x in lines(d) if x["kind"] == "note"]
+
+
+def test_a_grown_run_loads_computes_the_same_and_trains(tmp_path):
+    """`arps-train grow` (wider feed-forward layers) writes a checkpoint this trainer resumes:
+    the grown network's memberships equal the original's, and it trains on."""
+    from arps_torch.model import ArpsNet
+
+    a = init(tmp_path / "a")
+    pytrain(a, 2)
+    g = tmp_path / "g"
+    run("grow", "--from", str(a), "--run", str(g), "--ffn-dim", "40")
+    ca = read_checkpoint(os.path.join(a, "checkpoint.safetensors"))
+    cg = read_checkpoint(os.path.join(g, "checkpoint.safetensors"))
+    assert cg["state"]["config"]["model"]["ffn_dim"] == 40 and cg["state"]["step"] == 2
+    nets = []
+    for c in (ca, cg):
+        m = ArpsNet(c["state"]["config"]["model"])
+        m.load(c["params"])
+        nets.append(m)
+    gen = torch.Generator().manual_seed(0)
+    src, tgt = torch.rand(2, 32, 3, generator=gen) - 0.5, torch.rand(2, 32, 3, generator=gen) - 0.5
+    with torch.no_grad():
+        oa, og = nets[0](src, tgt), nets[1](src, tgt)
+    for k in ("gamma_source", "gamma_target"):
+        assert torch.allclose(oa[k], og[k], atol=1e-6), k
+    pytrain(g, 4)
+    cg = read_checkpoint(os.path.join(g, "checkpoint.safetensors"))
+    assert cg["state"]["step"] == 4
+    w2 = cg["params"]["layers.0.self_attn.ffn2.weight"].reshape(16, 40)
+    assert np.any(w2[:, 16:] != 0), "the new units start to count"

@@ -11,6 +11,8 @@
 //! * `arps-train stream --config runs/NAME/config.json [--worker K --workers W] [--val]`: training
 //!   batches or validation pairs in the binary layout of `arps::train::run::stream`, on stdout.
 //! * `arps-train pack-bank --bank DIR --out bank.arpsbank.gz`: the shape bank in one file.
+//! * `arps-train grow --from runs/OLD --run runs/NEW --ffn-dim F`: a run whose network is wider
+//!   and computes what the old one did, to train on (`arps::train::run::grow`).
 //!
 //! The binary only parses arguments; the work is in `arps::train::run`.
 
@@ -56,6 +58,25 @@ enum Command {
     Stream(StreamArgs),
     /// Pack a shape-bank directory into one gzipped file (usable wherever a bank path is).
     PackBank(PackBankArgs),
+    /// Make a new run from a run's checkpoint with wider feed-forward layers that compute what
+    /// the old ones did (new hidden units with zero output weights), to go on training it.
+    Grow(GrowArgs),
+}
+
+#[derive(Args)]
+struct GrowArgs {
+    /// The run to grow (its checkpoint.safetensors; the run itself is not changed).
+    #[arg(long)]
+    from: PathBuf,
+    /// The new run directory (must not hold a checkpoint).
+    #[arg(long)]
+    run: PathBuf,
+    /// The attention blocks' new feed-forward width (larger than the run's).
+    #[arg(long)]
+    ffn_dim: usize,
+    /// Seed of the new hidden units' input weights.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
 }
 
 #[derive(Args)]
@@ -293,6 +314,7 @@ fn main() -> ExitCode {
         Command::Init(a) => run_config(&a).and_then(|c| session::init(&a.run, &c)),
         Command::Stream(a) => stream::stream(&a),
         Command::PackBank(a) => stream::pack_bank(&a.bank, &a.out),
+        Command::Grow(a) => arps::train::run::grow::grow(&a.from, &a.run, a.ffn_dim, a.seed),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

@@ -12,6 +12,7 @@
 //! * [`log`]: JSONL lines.
 //! * [`bank_pack`]: the shape bank packed into one gzipped file.
 //! * [`stream`]: the binary training-data stream another trainer reads.
+//! * [`grow`]: a run's network made wider without changing what it computes, to train on.
 //! * [`session`]: [`session::train`] runs one training session, [`session::export`] exports
 //!   weights, [`session::init`] starts a run without training.
 
@@ -19,6 +20,7 @@ pub mod bank_pack;
 pub mod checkpoint;
 pub mod curriculum;
 pub mod data;
+pub mod grow;
 pub mod log;
 pub mod session;
 pub mod stream;
