@@ -156,8 +156,9 @@ pub enum Search {
     /// (0.95), more global hypotheses and blind rotations; an answer at 0.85 or more once the
     /// global stage has run ([`NEARLY_SURE_CONFIDENCE`]), or at 0.5 or more when the global
     /// stage found it again ([`AGREED_CONFIDENCE`]), skips the stages left and gets only a few
-    /// more global hypotheses. On scans of many points (both clouds at least 3,000 points,
-    /// [`GLOBAL_BEFORE_STOP_POINTS`]) it does not stop before the global stage.
+    /// more global hypotheses. When either cloud has many points (at least 3,000,
+    /// [`GLOBAL_BEFORE_STOP_POINTS`]: scans, or a scan onto a model) it does not stop before the
+    /// global stage.
     /// The best of everything refined is returned. Easy pairs cost one start; hard ones get every
     /// start and more.
     #[default]
@@ -191,11 +192,12 @@ pub const AGREED_CONFIDENCE: f64 = 0.5;
 /// off level), small against the half turns about a horizontal axis that it rules out.
 pub const UP_TOLERANCE_DEG: f64 = 10.0;
 
-/// When both clouds have at least this many points, [`Search::Adaptive`] does not stop before its
-/// global stage has run, however sure an earlier answer is: the confidence is calibrated on
+/// When either cloud has at least this many points, [`Search::Adaptive`] does not stop before
+/// its global stage has run, however sure an earlier answer is: the confidence is calibrated on
 /// sparse, noisy samples (1,024 points per cloud) and is measured to be too sure of wrong answers
-/// on denser, cleaner clouds, where the global descriptors are also the more informative
-/// (`BENCHMARK.md`, "Dense scans").
+/// on denser, cleaner clouds, and of a small scan placed on the wrong part of a large model,
+/// where the global descriptors are also the more informative (`BENCHMARK.md`, "Dense scans"
+/// and "A scan onto a model").
 pub const GLOBAL_BEFORE_STOP_POINTS: usize = 3_000;
 
 impl Default for Options {

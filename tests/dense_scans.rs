@@ -1,7 +1,7 @@
-//! Dense scans ([`arps::global::dense`]): the global descriptors are made finer; and on clouds
-//! of at least [`GLOBAL_BEFORE_STOP_POINTS`] points the adaptive search does not stop before its
-//! global stage, however sure it is of an earlier answer; sparse samples (the 1,024-point
-//! protocol) are searched as before.
+//! Dense scans ([`arps::global::dense`]): the global descriptors are made finer; and when either
+//! cloud has at least [`GLOBAL_BEFORE_STOP_POINTS`] points (scans, or a small scan onto a large
+//! model) the adaptive search does not stop before its global stage, however sure it is of an
+//! earlier answer; sparse samples (the 1,024-point protocol) are searched as before.
 
 mod common;
 
@@ -86,4 +86,23 @@ fn a_sure_answer_on_a_sparse_pair_stops_the_search_at_once() {
     assert!(r.confidence >= 0.95, "precondition: a sure network answer ({})", r.confidence);
     assert!(rotation_error_deg(&r.T_target_source, &T_target_source) < 5.0);
     assert_eq!(r.starts_refined, 1, "the global stage ran");
+}
+
+#[test]
+#[allow(non_snake_case)]
+fn a_sure_answer_for_a_small_scan_onto_a_large_model_waits_for_the_global_stage() {
+    // a scan of a few thousand points of half the part onto 6,000 points over all of it: only
+    // the model has many points, and the global stage still runs
+    let model = cad_surface(6_000);
+    let T_target_source = motion([8.0, -5.0, 6.0], [0.02, 0.01, -0.01]);
+    let scan = crop(&cad_surface(4_000), [1.0, 0.2, 0.1], 0.5).transformed(&rigid_inverse(&T_target_source));
+    assert!(scan.len() < GLOBAL_BEFORE_STOP_POINTS && model.len() >= GLOBAL_BEFORE_STOP_POINTS);
+    let mut registrar = Registrar::with_default_model().unwrap();
+    let network = Options { starts: vec![Start::Network], ..Options::default() };
+    let alone = registrar.register(&scan, &model, &network).unwrap();
+    assert!(alone.confidence >= 0.95, "precondition: a sure network answer ({})", alone.confidence);
+    let both = Options { starts: vec![Start::Network, Start::Global], ..Options::default() };
+    let r = registrar.register(&scan, &model, &both).unwrap();
+    assert!(rotation_error_deg(&r.T_target_source, &T_target_source) < 2.0);
+    assert!(r.starts_refined > alone.starts_refined, "the global stage did not run: {} starts", r.starts_refined);
 }

@@ -223,6 +223,45 @@ fn make_pairs_large_clouds_repeat_no_sample() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// Scans onto a model: `--keep` sets the source's crop, `--target-keep 1` makes the target the
+/// whole shape and `--target-points` its size; the scan's samples are then all the model's.
+#[test]
+fn make_pairs_makes_scans_onto_a_model() {
+    let dir = std::env::temp_dir().join(format!("arps-scan-model-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let d = dir.to_str().unwrap();
+    let args = ["--count", "2", "--seed", "3", "--procedural-only", "--points", "512", "--target-points", "2048"];
+    let (ok, out, err) =
+        arps(&[&["make-pairs", "--out", d, "--keep", "0.4", "--target-keep", "1"][..], &args].concat());
+    assert!(ok, "{out}{err}");
+    let sidecar: arps::data::manifest::Sidecar =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("pairs.json")).unwrap()).unwrap();
+    assert_eq!((sidecar.params.keep_ratio, sidecar.params.target_keep_ratio), (0.4, Some(1.0)));
+    assert_eq!(
+        (sidecar.params.points, sidecar.params.target_points, sidecar.params.dense_points),
+        (512, Some(2048), 8192)
+    );
+    let src = arps::data::ShapeSource::procedural();
+    for (i, e) in arps::data::manifest::parse(&std::fs::read_to_string(dir.join("pairs.tsv")).unwrap())
+        .unwrap()
+        .iter()
+        .enumerate()
+    {
+        let pair = src.pair(arps::data::Split::Val, (3u64 << 32) + i as u64, &sidecar.params).unwrap();
+        assert_eq!(arps::io::read_path(&dir.join(&e.target)).unwrap().points, pair.target);
+        assert_eq!((pair.source.len(), pair.target.len(), pair.overlap), (512, 2048, 1.0));
+        // the target's samples cover the whole shape: far more distinct ones than the scan's crop
+        let distinct = |idx: &[u32]| idx.iter().copied().collect::<std::collections::HashSet<u32>>().len();
+        assert!(distinct(&pair.target_dense_index) > 3 * distinct(&pair.source_dense_index) / 2);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+    for bad in [["--keep", "0"], ["--target-keep", "1.5"], ["--target-points", "0"]] {
+        let (ok, _, err) = arps(&[&["make-pairs", "--out", d, "--count", "1"][..], &bad[..]].concat());
+        assert!(!ok && err.contains(bad[0]), "{bad:?}: {err}");
+        assert!(!dir.exists(), "nothing written for {bad:?}");
+    }
+}
+
 /// Real manifests store the truth to a few digits (`../shared/data/scans/pairs.tsv`): a ground
 /// truth that is rigid only to 1e-3 is still evaluated, not rejected.
 #[test]

@@ -11,9 +11,11 @@
 //!    uniform on S², keep the points with the largest `(p - c_full) · u`; both directions are
 //!    redrawn until the overlap `|S ∩ T| / min(|S|, |T|)` is at least `min_overlap` (at most
 //!    `max_crop_tries` draws; after that both sets are the same crop, along a fresh random
-//!    direction, overlap 1);
+//!    direction, overlap 1); with [`PairParams::target_keep_ratio`] the target's crop keeps
+//!    that fraction instead (1: the whole shape);
 //! 4. each crop is resampled independently to exactly `points` points without replacement
-//!    (padded with replacement if a crop is short);
+//!    (padded with replacement if a crop is short; the target to [`PairParams::target_points`]
+//!    when set);
 //! 5. random rigid motion applied to the target: Euler angles `U[-a, a]` each,
 //!    `R = Rx·Ry·Rz` ([`crate::transform::euler_xyz`]), translation `s·u`, `u` uniform on S²,
 //!    `s ~ U[0, max_translation]`; GT `T_target_source = (R, t)`;
@@ -38,8 +40,15 @@ pub struct PairParams {
     pub dense_points: usize,
     /// Points per set after resampling (default 1024).
     pub points: usize,
+    /// When set, the target's points after resampling instead of `points` (a model sampled
+    /// more densely than a scan of it). Default `None`: `points`.
+    pub target_points: Option<usize>,
     /// Fraction of the dense points each half-space crop keeps (default 0.7).
     pub keep_ratio: f64,
+    /// When set, the fraction of the dense points the target's crop keeps instead of
+    /// `keep_ratio` (1: the whole shape, as when a scan is registered onto a model). Default
+    /// `None`: the protocol's, both crops `keep_ratio`; the random draws are the same either way.
+    pub target_keep_ratio: Option<f64>,
     /// Minimum overlap of the two crops' dense index sets (default 0.7).
     pub min_overlap: f64,
     /// Crop redraws before giving up on `min_overlap` (default 100).
@@ -69,7 +78,9 @@ impl Default for PairParams {
         Self {
             dense_points: 4096,
             points: 1024,
+            target_points: None,
             keep_ratio: 0.7,
+            target_keep_ratio: None,
             min_overlap: 0.7,
             max_crop_tries: 100,
             max_angle_deg: 45.0,
@@ -251,14 +262,16 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
     let c = p.centroid();
     let cv = Vector3::from(c);
     let m = p.len();
-    let k = ((params.keep_ratio.clamp(0.0, 1.0) * m as f64).round() as usize).clamp(1, m.max(1));
+    let kept = |ratio: f64| ((ratio.clamp(0.0, 1.0) * m as f64).round() as usize).clamp(1, m.max(1));
+    let k = kept(params.keep_ratio);
+    let k_target = params.target_keep_ratio.map_or(k, kept);
 
     // 3. crops with rejection
     let mut best = None;
     for _ in 0..params.max_crop_tries.max(1) {
         let (u1, u2) = (unit_vector(&mut rng), unit_vector(&mut rng));
         let s = half_space(&p.points, &cv, &u1, k);
-        let t = half_space(&p.points, &cv, &u2, k);
+        let t = half_space(&p.points, &cv, &u2, k_target);
         let o = overlap_of(&s, &t);
         if o >= params.min_overlap {
             best = Some((s, t, o));
@@ -268,12 +281,14 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
     let (s_idx, t_idx, overlap) = best.unwrap_or_else(|| {
         let u = unit_vector(&mut rng);
         let s = half_space(&p.points, &cv, &u, k);
-        (s.clone(), s, 1.0)
+        let t = if k_target == k { s.clone() } else { half_space(&p.points, &cv, &u, k_target) };
+        let o = overlap_of(&s, &t);
+        (s, t, o)
     });
 
     // 4. independent resampling
     let mut src_i = resample(&s_idx, params.points, &mut rng);
-    let mut tgt_i = resample(&t_idx, params.points, &mut rng);
+    let mut tgt_i = resample(&t_idx, params.target_points.unwrap_or(params.points), &mut rng);
 
     // 5. rigid motion
     let r = random_euler(&mut rng, params.max_angle_deg, params.max_tilt_deg);

@@ -3,7 +3,7 @@
 //! Takes the [`Prepared`] clouds, the stages of [`super::starts`] and the options; gives
 //! [`Chosen`]: the best refined start ([`refine::refine_best`], compared across stages by
 //! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
-//! first stage whose best reaches [`STOP_CONFIDENCE`] (when both clouds have at least
+//! first stage whose best reaches [`STOP_CONFIDENCE`] (when either cloud has at least
 //! [`GLOBAL_BEFORE_STOP_POINTS`] points, not before the global stage has run); when none does,
 //! it runs a last stage of blind starts ([`Starts::more`]: more global hypotheses and the
 //! rotations), shortlisted to [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit
@@ -98,7 +98,7 @@ pub(crate) fn search(
     let adaptive = options.search == Search::Adaptive;
     let kinds: Vec<Start> = stages.iter().flatten().copied().collect();
     let has_global = kinds.iter().any(|k| k.is_global());
-    let many_points = p.src_n.len().min(p.target.cloud.len()) >= GLOBAL_BEFORE_STOP_POINTS;
+    let many_points = p.src_n.len().max(p.target.cloud.len()) >= GLOBAL_BEFORE_STOP_POINTS;
     let mut reached_global = false;
     // once the global stage had run, the answer reached NEARLY_SURE_CONFIDENCE, or
     // AGREED_CONFIDENCE with the global stage finding it again

@@ -76,6 +76,27 @@ pub struct MakePairsArgs {
     /// paper's protocol, keeps the shape's own, usually upright, orientation; 180: any pose).
     #[arg(long, default_value_t = 0.0)]
     pose_angle: f64,
+    /// Fraction of the shape's dense sample each crop keeps (the protocol's 0.7); with
+    /// `--target-keep`, the source's crop only.
+    #[arg(long, default_value_t = 0.7)]
+    keep: f64,
+    /// Fraction the target's crop keeps instead (1: the whole shape, as when a scan is
+    /// registered onto a model); default `--keep`.
+    #[arg(long)]
+    target_keep: Option<f64>,
+    /// Points in each target cloud instead of `--points` (a model sampled more densely than
+    /// a scan of it); default `--points`.
+    #[arg(long)]
+    target_points: Option<usize>,
+}
+
+/// A crop's fraction given by a user: in (0, 1].
+fn check_keep(flag: &str, r: f64) -> Result<f64, String> {
+    if r.is_finite() && r > 0.0 && r <= 1.0 {
+        Ok(r)
+    } else {
+        Err(format!("{flag} {r}: expected a fraction in (0, 1]"))
+    }
 }
 
 /// The dense sample for clouds of `points` points: the protocol's 4,096 (for its 1,024 points),
@@ -95,7 +116,13 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let pose_angle_deg = check_pose_angle(a.pose_angle).map_err(|e| format!("--pose-angle {e}"))?;
     let max_angle_deg = check_max_angle(a.max_angle).map_err(|e| format!("--max-angle {e}"))?;
     let max_tilt_deg = a.max_tilt.map(check_max_angle).transpose().map_err(|e| format!("--max-tilt {e}"))?;
-    let dense_points = a.dense_points.unwrap_or_else(|| default_dense_points(a.points));
+    let keep_ratio = check_keep("--keep", a.keep)?;
+    let target_keep_ratio = a.target_keep.map(|r| check_keep("--target-keep", r)).transpose()?;
+    if a.points == 0 || a.target_points == Some(0) {
+        return Err("--points and --target-points: a cloud needs at least one point".into());
+    }
+    let dense_points =
+        a.dense_points.unwrap_or_else(|| default_dense_points(a.points.max(a.target_points.unwrap_or(0))));
     if !(16..=MAX_DENSE_POINTS).contains(&dense_points) {
         return Err(match a.dense_points {
             Some(n) => format!("--dense-points {n}: expected 16 to {MAX_DENSE_POINTS}"),
@@ -129,6 +156,9 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
         points: a.points,
         dense_points,
         pose_angle_deg,
+        keep_ratio,
+        target_keep_ratio,
+        target_points: a.target_points,
         ..PairParams::default()
     };
     std::fs::create_dir_all(&a.out).map_err(|e| format!("{}: {e}", a.out.display()))?;
