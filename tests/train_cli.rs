@@ -398,3 +398,21 @@ fn a_grown_run_computes_what_it_grew_from_and_trains_on() {
         let _ = std::fs::remove_dir_all(d);
     }
 }
+
+#[test]
+fn part_whole_pairs_are_a_checked_share_of_a_run() {
+    let run = dir("part-whole");
+    let init = |share: &str| {
+        Command::new(env!("CARGO_BIN_EXE_arps-train"))
+            .args(["init", "--run", run.to_str().unwrap(), "--preset", "tiny", "--part-whole", share])
+            .output()
+            .unwrap()
+    };
+    let bad = init("1.5");
+    assert!(!bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("--part-whole 1.5"));
+    let ok = init("0.25");
+    assert!(ok.status.success(), "{}", String::from_utf8_lossy(&ok.stderr));
+    let cfg = arps::train::run::session::read_config(&run.join("config.json")).unwrap();
+    assert_eq!(cfg.part_whole, 0.25);
+    let _ = std::fs::remove_dir_all(&run);
+}

@@ -32,6 +32,7 @@ fn config() -> RunConfig {
         pair_points: 256,
         curriculum: Curriculum::default(),
         pose_angle_deg: 0.0,
+        part_whole: 0.0,
         ema_decay: None,
         val_pairs: 4,
         val_every_minutes: 5.0,
@@ -193,4 +194,37 @@ fn gzipped_logs_read_like_plain_ones() {
     let committed =
         log::read(&std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models/runs/web-1/log.jsonl")).unwrap();
     assert!(committed.iter().filter(|l| l["kind"] == "val").count() > 5);
+}
+
+#[test]
+fn a_share_of_the_pairs_can_be_a_part_against_the_whole_shape() {
+    use arps::train::run::data::{part_of_whole, PART_KEEP};
+    let distinct = |idx: &[u32]| idx.iter().copied().collect::<std::collections::HashSet<u32>>().len();
+    // as many points per cloud as the dense sample has: a crop's samples are then all its points
+    let base = RunConfig { pair_points: 4096, ..config() };
+    let protocol = TrainData::new(&base).unwrap();
+    let whole = TrainData::new(&RunConfig { part_whole: 1.0, ..base.clone() }).unwrap();
+    let quarter = TrainData::new(&RunConfig { part_whole: 0.25, ..base }).unwrap();
+    let mut parts = 0;
+    for i in [0u64, 1, 2, 3, 4, 5, 6, 7, 40_000] {
+        let (a, _) = protocol.train_protocol_pair(i).unwrap();
+        let (b, _) = whole.train_protocol_pair(i).unwrap();
+        // the protocol crops 70-85% of the shape for both; a part is 30-60% of it against all of it
+        assert!(distinct(&a.target_dense_index) < 3_500, "pair {i}");
+        let (sb, tb) = (distinct(&b.source_dense_index), distinct(&b.target_dense_index));
+        assert!(sb <= 2_458 && tb == 4_096 && b.overlap == 1.0, "pair {i}: {sb} / {tb}, overlap {}", b.overlap);
+        let (c, _) = quarter.train_protocol_pair(i).unwrap();
+        if part_of_whole(protocol.stream.wrapping_add(i), 0.25).is_some() {
+            parts += 1;
+            assert_eq!(c.target_dense_index, b.target_dense_index, "pair {i}");
+        } else {
+            assert_eq!((c.source, c.target), (a.source, a.target), "pair {i}: the protocol's pair");
+        }
+    }
+    assert!(parts > 0 && parts < 9, "{parts} of 9 pairs were parts");
+    // by the hash, about the share asked for, and the source's share within its range
+    let drawn: Vec<f64> = (0..4_000u64).filter_map(|i| part_of_whole(i, 0.25)).collect();
+    assert!((900..1_100).contains(&drawn.len()), "{} of 4,000", drawn.len());
+    assert!(drawn.iter().all(|k| (PART_KEEP.0..PART_KEEP.1).contains(k)));
+    assert!(part_of_whole(7, 0.0).is_none());
 }

@@ -187,6 +187,9 @@ def main(argv=None):
     ap.add_argument("--val-pairs", type=int,
                     help="validate on this many held-out pairs from now on (the best so far, measured on the old "
                          "set, is forgotten)")
+    ap.add_argument("--part-whole", type=float,
+                    help="replace the share of training pairs that are a part of a shape against the whole of it "
+                         "(arps-train train --part-whole; validation keeps the protocol)")
     ap.add_argument("--network-points", type=int,
                     help="replace the run's network N (a fork that fine-tunes at another N; the weights do not depend on it)")
     ap.add_argument("--compile", action="store_true",
@@ -218,6 +221,10 @@ def main(argv=None):
             # another validation set: scores on the old one do not compare with it
             cfg["val_pairs"] = a.val_pairs
             st.update(best_score=None, best_val=None, bad_validations=0)
+    if a.part_whole is not None:
+        if not 0.0 <= a.part_whole <= 1.0:
+            ap.error(f"--part-whole {a.part_whole}: expected a share in [0, 1]")
+        cfg["part_whole"] = a.part_whole
     if a.checkpoint_every_minutes is not None:
         cfg["checkpoint_every_minutes"] = a.checkpoint_every_minutes
         cfg["checkpoint_every_steps"] = None

@@ -213,3 +213,15 @@ def test_a_grown_run_loads_computes_the_same_and_trains(tmp_path):
     assert cg["state"]["step"] == 4
     w2 = cg["params"]["layers.0.self_attn.ffn2.weight"].reshape(16, 40)
     assert np.any(w2[:, 16:] != 0), "the new units start to count"
+
+
+def test_part_whole_pairs_are_set_on_resume(tmp_path):
+    """``--part-whole`` replaces the run's share of part-against-whole training pairs; the
+    generators read it from the run's config and the run trains on."""
+    a = init(tmp_path / "a")
+    train.main(["--run", str(a), "--arps-train", BIN, "--generators", "1", "--steps", "2", "--device", "cpu",
+                "--quiet", "--part-whole", "0.5"])
+    c = read_checkpoint(os.path.join(a, "checkpoint.safetensors"))
+    assert c["state"]["config"]["part_whole"] == 0.5 and c["state"]["step"] == 2
+    with pytest.raises(SystemExit):
+        train.main(["--run", str(a), "--arps-train", BIN, "--steps", "3", "--device", "cpu", "--part-whole", "2"])

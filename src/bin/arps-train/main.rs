@@ -221,6 +221,11 @@ struct TrainArgs {
     /// protocol; validation always uses it). On --resume, replaces the stored value.
     #[arg(long)]
     pose_angle: Option<f64>,
+    /// Training pairs only: this share of them is a part of a shape (30-60% of it) against the
+    /// whole shape, as a scan onto a model (default 0, the paper's protocol; validation always
+    /// uses it). On --resume, replaces the stored value.
+    #[arg(long)]
+    part_whole: Option<f64>,
     /// Keep a moving average of the parameters with this decay per step (e.g. 0.999) and
     /// validate and export it; 0 = off (the default). On --resume, replaces the stored value (an
     /// average that does not exist yet starts at the current parameters).
@@ -380,6 +385,19 @@ fn ema_decay(a: &TrainArgs) -> Result<Option<Option<f32>>, String> {
     }
 }
 
+/// `--part-whole`, checked: a share in [0, 1].
+fn part_whole(a: &TrainArgs) -> Result<Option<f64>, String> {
+    a.part_whole
+        .map(|v| {
+            if v.is_finite() && (0.0..=1.0).contains(&v) {
+                Ok(v)
+            } else {
+                Err(format!("--part-whole {v}: expected a share in [0, 1]"))
+            }
+        })
+        .transpose()
+}
+
 /// `--pose-angle`, checked ([`check_pose_angle`]).
 fn pose_angle(a: &TrainArgs) -> Result<Option<f64>, String> {
     a.pose_angle.map(|v| check_pose_angle(v).map_err(|e| format!("--pose-angle {e}"))).transpose()
@@ -410,6 +428,7 @@ fn session(a: TrainArgs) -> Result<Session, String> {
             patience: a.patience,
             network_points: a.network_points,
             pose_angle_deg: pose_angle(&a)?,
+            part_whole: part_whole(&a)?,
             ema_decay: ema_decay(&a)?,
             loss: a.loss.is_some().then(|| parse_loss(&a)).transpose()?,
             lr: a.lr,
@@ -473,6 +492,7 @@ fn run_config(a: &TrainArgs) -> Result<RunConfig, String> {
         bank_fraction: a.bank_fraction,
         pair_points: a.pair_points,
         pose_angle_deg: pose_angle(a)?.unwrap_or(0.0),
+        part_whole: part_whole(a)?.unwrap_or(0.0),
         ema_decay: ema_decay(a)?.flatten(),
         curriculum: match &a.curriculum {
             Some(c) => Curriculum::parse(c)?,

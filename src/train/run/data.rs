@@ -21,6 +21,8 @@ pub struct TrainData {
     pub n: usize,
     /// [`RunConfig::pose_angle_deg`] (training pairs only).
     pub pose_angle_deg: f64,
+    /// [`RunConfig::part_whole`] (training pairs only).
+    pub part_whole: f64,
     /// Stream offset derived from the seed.
     pub stream: u64,
     /// Bank summary for the log: (usable meshes, skipped, train meshes, val meshes).
@@ -48,6 +50,7 @@ impl TrainData {
             curriculum: cfg.curriculum.clone(),
             n: cfg.model.n_points,
             pose_angle_deg: cfg.pose_angle_deg,
+            part_whole: cfg.part_whole,
             stream: cfg.seed.wrapping_mul(1 << 40),
             bank_counts: counts,
         })
@@ -62,8 +65,12 @@ impl TrainData {
     /// Training pair number `i` in the pair's own units, with the seed of its network sample
     /// ([`Self::train_pair`] is `to_train_pair` of these).
     pub fn train_protocol_pair(&self, i: u64) -> Result<(crate::data::Pair, u64)> {
-        let params = PairParams { pose_angle_deg: self.pose_angle_deg, ..self.curriculum.params(i, &self.full) };
+        let mut params = PairParams { pose_angle_deg: self.pose_angle_deg, ..self.curriculum.params(i, &self.full) };
         let index = self.stream.wrapping_add(i);
+        if let Some(keep) = part_of_whole(index, self.part_whole) {
+            params.keep_ratio = keep;
+            params.target_keep_ratio = Some(1.0);
+        }
         let p = self.source.pair(Split::Train, index, &params)?;
         Ok((p, mix(index, 0x11E7)))
     }
@@ -73,6 +80,21 @@ impl TrainData {
     pub fn val_pair(&self, i: u64) -> Result<crate::data::Pair> {
         self.source.pair(Split::Val, i, &self.full)
     }
+}
+
+/// The range of the source's crop in a part-against-whole training pair ([`RunConfig::part_whole`]).
+pub const PART_KEEP: (f64, f64) = (0.3, 0.6);
+
+/// A uniform draw in [0, 1) from a hash of `index` and `salt`.
+fn unit_draw(index: u64, salt: u64) -> f64 {
+    (mix(index, salt) >> 11) as f64 / (1u64 << 53) as f64
+}
+
+/// When pair `index` of the stream is a part against the whole (with probability `share`), the
+/// fraction of the shape its source's crop keeps (in [`PART_KEEP`]).
+pub fn part_of_whole(index: u64, share: f64) -> Option<f64> {
+    (share > 0.0 && unit_draw(index, 0x9A27_0001) < share)
+        .then(|| PART_KEEP.0 + (PART_KEEP.1 - PART_KEEP.0) * unit_draw(index, 0x9A27_0002))
 }
 
 /// A protocol pair as the network sees it: engine frames, `n` network points per cloud drawn with

@@ -73,6 +73,12 @@ pub struct RunConfig {
     /// protocol, in which the source keeps the shape's own orientation).
     #[serde(default)]
     pub pose_angle_deg: f64,
+    /// Training pairs only: this share of them (chosen by a hash of the stream index) is a part
+    /// of a shape against the whole of it, as when a scan is registered onto a model: the
+    /// source's crop keeps a fraction in [`data::PART_KEEP`] of the shape, the target all of it
+    /// ([`crate::data::PairParams::target_keep_ratio`]). 0, the default, is the paper's protocol.
+    #[serde(default)]
+    pub part_whole: f64,
     /// Keep a moving average of the parameters with this decay per step (None = off). When set,
     /// validation, `best.safetensors` and `export --latest` use the average; the current
     /// parameters are also validated and logged (`val_raw`).

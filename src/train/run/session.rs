@@ -34,6 +34,7 @@ pub fn provenance(run: &Path, st: &RunState, bank_counts: (usize, usize, usize, 
             "val_fraction": c.val_fraction,
             "pair_points": c.pair_points,
             "pose_angle_deg": c.pose_angle_deg,
+            "part_whole": c.part_whole,
             "curriculum": c.curriculum,
             "val_pairs": c.val_pairs,
         },
@@ -84,6 +85,8 @@ pub struct ResumeChanges {
     pub network_points: Option<usize>,
     /// [`RunConfig::pose_angle_deg`].
     pub pose_angle_deg: Option<f64>,
+    /// [`RunConfig::part_whole`].
+    pub part_whole: Option<f64>,
     /// [`RunConfig::ema_decay`]: `Some(None)` turns the average off.
     pub ema_decay: Option<Option<f32>>,
     /// [`RunConfig::loss`].
@@ -140,6 +143,9 @@ fn apply_changes(st: &mut RunState, c: &ResumeChanges) -> Result<(), String> {
     }
     if let Some(v) = c.pose_angle_deg {
         st.config.pose_angle_deg = v;
+    }
+    if let Some(v) = c.part_whole {
+        st.config.part_whole = v;
     }
     if let Some(v) = c.ema_decay {
         st.config.ema_decay = v;
