@@ -137,7 +137,7 @@ pub fn load_dir(dir: &Path) -> std::io::Result<Bank> {
 /// path), scaled to [0, 1), is below `val_fraction`. Deterministic and independent of what else
 /// is in the bank.
 pub fn split_of(name: &str, val_fraction: f64) -> Split {
-    let u = (super::fnv1a(name) >> 11) as f64 / (1u64 << 53) as f64;
+    let u = super::unit_of_hash(super::fnv1a(name));
     if u < val_fraction {
         Split::Val
     } else {

@@ -34,6 +34,11 @@ pub fn mix(value: u64, tag: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// A hash's top 53 bits as a uniform draw in [0, 1) (platform-stable).
+pub fn unit_of_hash(h: u64) -> f64 {
+    (h >> 11) as f64 / (1u64 << 53) as f64
+}
+
 /// FNV-1a 64-bit hash of a string (stable across platforms and releases; used for splits).
 pub fn fnv1a(s: &str) -> u64 {
     let mut h: u64 = 0xcbf2_9ce4_8422_2325;

@@ -119,8 +119,7 @@ impl ShapeSource {
     pub fn shape(&self, split: Split, index: u64) -> Result<ShapeRef<'_>> {
         let bank = self.bank(split);
         let h = mix(index, split.tag());
-        let use_bank =
-            !bank.is_empty() && (!self.procedural || ((h >> 11) as f64 / (1u64 << 53) as f64) < self.bank_fraction);
+        let use_bank = !bank.is_empty() && (!self.procedural || super::unit_of_hash(h) < self.bank_fraction);
         if use_bank {
             let m = &bank[(mix(h, 0xBA4C) % bank.len() as u64) as usize];
             return Ok(ShapeRef { name: format!("bank/{}", m.name), mesh: Cow::Borrowed(&m.mesh) });

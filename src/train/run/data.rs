@@ -5,7 +5,7 @@
 
 use super::{Curriculum, RunConfig};
 use crate::data::source::{ShapeSource, Split};
-use crate::data::{mix, PairParams};
+use crate::data::{mix, unit_of_hash, PairParams};
 use crate::train::Pair as TrainPair;
 use crate::Result;
 
@@ -85,16 +85,11 @@ impl TrainData {
 /// The range of the source's crop in a part-against-whole training pair ([`RunConfig::part_whole`]).
 pub const PART_KEEP: (f64, f64) = (0.3, 0.6);
 
-/// A uniform draw in [0, 1) from a hash of `index` and `salt`.
-fn unit_draw(index: u64, salt: u64) -> f64 {
-    (mix(index, salt) >> 11) as f64 / (1u64 << 53) as f64
-}
-
 /// When pair `index` of the stream is a part against the whole (with probability `share`), the
 /// fraction of the shape its source's crop keeps (in [`PART_KEEP`]).
 pub fn part_of_whole(index: u64, share: f64) -> Option<f64> {
-    (share > 0.0 && unit_draw(index, 0x9A27_0001) < share)
-        .then(|| PART_KEEP.0 + (PART_KEEP.1 - PART_KEEP.0) * unit_draw(index, 0x9A27_0002))
+    (share > 0.0 && unit_of_hash(mix(index, 0x9A27_0001)) < share)
+        .then(|| PART_KEEP.0 + (PART_KEEP.1 - PART_KEEP.0) * unit_of_hash(mix(index, 0x9A27_0002)))
 }
 
 /// A protocol pair as the network sees it: engine frames, `n` network points per cloud drawn with

@@ -121,9 +121,7 @@ pub fn grow(from: &Path, run: &Path, ffn_dim: usize, seed: u64) -> Result<(), St
     let old = checkpoint::load(&from.join("checkpoint.safetensors"))?;
     let new = grow_ffn(&old, ffn_dim, seed)?;
     std::fs::create_dir_all(run).map_err(|e| format!("{}: {e}", run.display()))?;
-    let config = serde_json::to_string_pretty(&new.state.config).map_err(|e| e.to_string())?;
-    let config_path = run.join("config.json");
-    std::fs::write(&config_path, config + "\n").map_err(|e| format!("{}: {e}", config_path.display()))?;
+    super::session::write_config(run, &new.state.config)?;
     let log_path = run.join("log.jsonl");
     let history = match log::read_text(&from.join("log.jsonl")) {
         Ok(text) => text,

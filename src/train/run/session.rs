@@ -551,14 +551,21 @@ pub fn init(run: &Path, cfg: &RunConfig) -> Result<(), String> {
     if ckpt.exists() {
         return Err(format!("{} exists", ckpt.display()));
     }
-    let json = serde_json::to_string_pretty(cfg).map_err(|e| e.to_string())?;
-    let path = run.join("config.json");
-    std::fs::write(&path, json + "\n").map_err(|e| format!("{}: {e}", path.display()))?;
+    let path = write_config(run, cfg)?;
     let params = train::init_params(&cfg.model, cfg.seed).map_err(|e| e.to_string())?;
     let st = RunState::new(cfg.clone());
     checkpoint::save(&ckpt, &st, &params, &train::Adam::new(cfg.lr), None)?;
     eprintln!("arps-train: wrote {} and {}", path.display(), ckpt.display());
     Ok(())
+}
+
+/// Writes `run/config.json` (the configuration `stream` and the PyTorch trainer read); returns
+/// its path.
+pub fn write_config(run: &Path, cfg: &RunConfig) -> Result<PathBuf, String> {
+    let json = serde_json::to_string_pretty(cfg).map_err(|e| e.to_string())?;
+    let path = run.join("config.json");
+    std::fs::write(&path, json + "\n").map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(path)
 }
 
 /// Reads a run configuration: a [`RunConfig`] or any object with one under `config`.
