@@ -68,6 +68,14 @@ export type RegisterOptions = {
    */
   nonFinite?: NonFinite,
   /**
+   * What to do with points that lie far out from the rest of their cloud (stray returns,
+   * reflections: a point whose few nearest neighbours are far away, outside the box of the
+   * points that are not): `"drop"` (leave them out, with a warning that counts them; the
+   * default) or `"keep"`. A few such points would otherwise inflate the bounding box that the
+   * clouds are normalised by. A clean cloud is used exactly as given either way.
+   */
+  outliers?: Outliers,
+  /**
    * The direction that is up in both clouds' frames, when both were captured level: scans
    * from a phone or a terrestrial scanner (gravity-aligned), survey data, a CAD model in its
    * upright pose (`[0, 0, 1]` for z-up data, `[0, 1, 0]` for three.js's y-up). The answer then
@@ -163,6 +171,12 @@ export type IcpKind = "off" | "point" | "plane";
  * What to do with points that have a NaN or infinite coordinate.
  */
 export type NonFinite = "error" | "drop";
+
+/**
+ * What registration does with the points that lie far out from the rest of their cloud
+ * (`Options::outliers`).
+ */
+export type Outliers = "drop" | "keep";
 
 /**
  * A stage of a registration, reported as it starts (to `Registrar::register_with_progress`'s

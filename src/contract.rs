@@ -4,7 +4,7 @@
 //! # One set of types
 //! The options are [`Options`], the result is [`Registration`]; their nested types are
 //! [`Evidence`], [`Alternative`], [`Timings`], [`Start`], [`Search`], [`IcpKind`], [`NonFinite`],
-//! [`Stage`] (the progress stages) and [`ModelConfig`]; the readers take [`ReadOptions`]. They
+//! [`Outliers`], [`Stage`] (the progress stages) and [`ModelConfig`]; the readers take [`ReadOptions`]. They
 //! are serde types: the wasm binding converts them
 //! with serde-wasm-bindgen and the CLI with serde_json, so JS and JSON see the same objects, field
 //! for field. The TypeScript declarations of the package (`js/arps-contract.d.ts`, part of
@@ -33,6 +33,7 @@
 //! [`Search`]: crate::Search
 //! [`IcpKind`]: crate::IcpKind
 //! [`NonFinite`]: crate::NonFinite
+//! [`Outliers`]: crate::Outliers
 //! [`Stage`]: crate::Stage
 //! [`ModelConfig`]: crate::ModelConfig
 
@@ -166,7 +167,7 @@ fn camel_case(key: &str) -> String {
 pub fn typescript() -> String {
     use crate::confidence::Evidence;
     use crate::model::config::Reference;
-    use crate::{Alternative, IcpKind, NonFinite, Options, Registration, Search, Stage, Start, Timings};
+    use crate::{Alternative, IcpKind, NonFinite, Options, Outliers, Registration, Search, Stage, Start, Timings};
     use ts_rs::{Config, TS};
 
     fn decl<T: TS>(cfg: &Config) -> String {
@@ -183,6 +184,7 @@ pub fn typescript() -> String {
         decl::<Search>(&cfg),
         decl::<IcpKind>(&cfg),
         decl::<NonFinite>(&cfg),
+        decl::<Outliers>(&cfg),
         decl::<Stage>(&cfg),
         decl::<Registration>(&cfg),
         decl::<Timings>(&cfg),

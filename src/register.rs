@@ -5,6 +5,7 @@ use crate::cloud::{NonFinite, PointCloud};
 use crate::confidence::Evidence;
 use crate::icp::IcpKind;
 use crate::model::{Model, ModelWorkspace};
+use crate::outliers::Outliers;
 use crate::pipeline::starts::{self, Starts};
 use crate::pipeline::target::PreparedTarget;
 use crate::pipeline::{network, options, prepare, result, search};
@@ -72,6 +73,13 @@ pub struct Options {
     /// the first bad point; the default) or `"drop"` (ignore them, e.g. PCD "no return" points).
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub non_finite: NonFinite,
+    /// What to do with points that lie far out from the rest of their cloud (stray returns,
+    /// reflections: a point whose few nearest neighbours are far away, outside the box of the
+    /// points that are not): `"drop"` (leave them out, with a warning that counts them; the
+    /// default) or `"keep"`. A few such points would otherwise inflate the bounding box that the
+    /// clouds are normalised by. A clean cloud is used exactly as given either way.
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
+    pub outliers: Outliers,
     /// The direction that is up in both clouds' frames, when both were captured level: scans
     /// from a phone or a terrestrial scanner (gravity-aligned), survey data, a CAD model in its
     /// upright pose (`[0, 0, 1]` for z-up data, `[0, 1, 0]` for three.js's y-up). The answer then
@@ -212,6 +220,7 @@ impl Default for Options {
             voxel_size: None,
             initial_transform: None,
             non_finite: NonFinite::Error,
+            outliers: Outliers::Drop,
             up: None,
             starts: vec![
                 Start::Network,

@@ -312,6 +312,21 @@ fn nan_points_can_be_dropped() {
     assert!(rot < 1.0 && tr < 0.02, "{rot:.3} deg, {tr:.4}");
 }
 
+#[wasm_bindgen_test]
+fn stray_returns_are_left_out_unless_kept() {
+    let mut r = Registrar::with_default_model().map_err(message).unwrap();
+    // 3 of the source's points far out (ten times its size away): left out, with a warning
+    let mut src = source();
+    for (k, i) in [5usize, 400, 900].into_iter().enumerate() {
+        src[3 * i..3 * i + 3].copy_from_slice(&[20.0 + k as f32, -15.0, 12.0 - k as f32]);
+    }
+    let res = r.register(&src, &target(), None, None).map_err(message).unwrap();
+    let warnings = strings(&get(&res, "warnings"));
+    assert!(warnings.iter().any(|w| w.contains("left out 3 of the source's")), "{warnings:?}");
+    let kept = r.register(&src, &target(), Some(options(r#"{"outliers": "keep"}"#)), None).map_err(message).unwrap();
+    assert!(!strings(&get(&kept, "warnings")).iter().any(|w| w.contains("left out")));
+}
+
 /// Each error: a thrown JS `Error` with the core's message, and the same instance still works.
 #[wasm_bindgen_test]
 fn every_error_throws_and_the_registrar_keeps_working() {
@@ -359,6 +374,7 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     expect_err(&mut r, &src, &tgt, options(r#"{"maxCorrespondenceDistance": -1}"#), "maxCorrespondenceDistance");
     expect_err(&mut r, &src, &tgt, options(r#"{"voxelSize": -0.5}"#), "voxelSize");
     expect_err(&mut r, &src, &tgt, options(r#"{"nonFinite": "keep"}"#), "invalid options");
+    expect_err(&mut r, &src, &tgt, options(r#"{"outliers": "remove"}"#), "invalid options");
     expect_err(&mut r, &src, &tgt, options(r#"{"network": "yes"}"#), "invalid options");
     expect_err(&mut r, &src, &tgt, options(r#"{"starts": []}"#), "starts is empty");
     expect_err(&mut r, &src, &tgt, options(r#"{"starts": ["initial", "initial"]}"#), "starts lists \"initial\" twice");

@@ -330,6 +330,39 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
     }
 }
 
+/// Half-side of the cube (about the normalised shape's centre, which fits `[-1, 1]^3`) that
+/// [`add_strays`] scatters its points in: three times the shape's size.
+pub const STRAY_EXTENT: f64 = 3.0;
+
+/// The dense index of a stray point ([`add_strays`]): no surface sample.
+pub const STRAY_INDEX: u32 = u32::MAX;
+
+/// Adds stray returns to `pair` (not in the paper's protocol): `round(source_ratio * n)` points
+/// to its source of `n` points, drawn uniformly in the cube of half-side [`STRAY_EXTENT`] about
+/// the source frame's origin, and `round(target_ratio * m)` to its target, drawn in the same cube
+/// moved by the ground truth, appended after the surface points with the dense index
+/// [`STRAY_INDEX`]. Drawn from a random stream of their own (from the pair's seed), so the
+/// surface points are the pair's as they were. Ratios are clamped to `[0, 1]`.
+pub fn add_strays(pair: &mut Pair, source_ratio: f64, target_ratio: f64) {
+    let mut rng = sampling::rng(super::mix(pair.seed, 0x57A4));
+    let count = |ratio: f64, n: usize| (ratio.clamp(0.0, 1.0) * n as f64).round() as usize;
+    let (n_source, n_target) = (count(source_ratio, pair.source.len()), count(target_ratio, pair.target.len()));
+    let stray = |rng: &mut ChaCha8Rng| {
+        let mut v = || (rng.random::<f64>() * 2.0 - 1.0) * STRAY_EXTENT;
+        nalgebra::Point3::new(v(), v(), v())
+    };
+    for _ in 0..n_source {
+        let p = stray(&mut rng);
+        pair.source.push([p.x as f32, p.y as f32, p.z as f32]);
+        pair.source_dense_index.push(STRAY_INDEX);
+    }
+    for _ in 0..n_target {
+        let p = pair.T_target_source.transform_point(&stray(&mut rng));
+        pair.target.push([p.x as f32, p.y as f32, p.z as f32]);
+        pair.target_dense_index.push(STRAY_INDEX);
+    }
+}
+
 /// A pair in the frames the engine's network sees ([`crate::Registrar::register`]): each cloud
 /// centred on its own bounding-box centre and both divided by one shared scale
 /// ([`JointNormalization::of_pair`]); the GT and the centroids mapped accordingly.

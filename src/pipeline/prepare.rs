@@ -1,7 +1,7 @@
 //! Stage 2: the clouds prepared for the network and ICP.
 //!
 //! Takes the caller's clouds, the [`Options`] and [`Resolved`]; gives [`Prepared`]: the
-//! validated clouds in their local frames (f32 offsets from f64 origins), turned by the initial
+//! validated clouds (without their far outliers, [`crate::outliers`]) in their local frames (f32 offsets from f64 origins), turned by the initial
 //! guess's rotation, jointly normalised, sampled for the network and voxelised for ICP, with the
 //! initial guess and the ICP distances in normalised units. The target's share is a
 //! [`PreparedTarget`] ([`super::target`]), taken over from the previous call when it is the same
@@ -11,7 +11,7 @@
 use super::options::{self, Resolved};
 use super::target::{self, InputKey, PreparedTarget, Sizes};
 use super::upright::Upright;
-use crate::cloud::{JointNormalization, PointCloud, MIN_POINTS};
+use crate::cloud::{JointNormalization, PointCloud};
 use crate::register::Options;
 use crate::{checks, limits, origin, sampling, transform, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
@@ -67,17 +67,21 @@ pub(crate) fn prepare(
     limits::check_cloud_points("target", target.len())?;
     // the target given again: its checks passed already, and what it holds is reused below;
     // another target's is dropped before anything is allocated
-    let input = InputKey::of(target, options.non_finite);
+    let input = InputKey::of(target, options.non_finite, options.outliers);
     let kept = kept.filter(|k| k.input == input);
-    let source = source.validated("source", MIN_POINTS, options.non_finite)?;
-    let given = match kept {
-        Some(k) => Given::Kept(k),
-        None => Given::Validated(target.validated("target", MIN_POINTS, options.non_finite)?),
+    let (source, source_warning) = target::checked("source", source, options.non_finite, options.outliers)?;
+    warnings.extend(source_warning);
+    let (given, target_warning) = match kept {
+        Some(k) => (Given::Kept(k), None),
+        None => {
+            let (t, warning) = target::checked("target", target, options.non_finite, options.outliers)?;
+            (Given::Validated(t), warning)
+        }
     };
     let spreads_source = checks::not_collinear("source", &source.points, warnings)?;
     let summary = match &given {
         Given::Kept(k) => k.summary.clone(),
-        Given::Validated(t) => target::summary(t)?,
+        Given::Validated(t) => target::summary(t, target_warning)?,
     };
     warnings.extend(summary.warnings.iter().cloned());
     checks::flat_pair(spreads_source, summary.spreads, warnings);
@@ -117,7 +121,7 @@ pub(crate) fn prepare(
         // the same target at another scale (a source larger than it)
         Given::Kept(old) => {
             drop(old);
-            let local = target::local(target, options.non_finite)?;
+            let local = target::local(target, options.non_finite, options.outliers)?;
             Box::new(PreparedTarget::new(input, summary, sizes, &local, &norm))
         }
         Given::Validated(t) => Box::new(PreparedTarget::new(input, summary, sizes, &t.into_local(), &norm)),

@@ -14,22 +14,24 @@
 use crate::cloud::{JointNormalization, NonFinite, PointCloud, MIN_POINTS};
 use crate::global::TargetFeatures;
 use crate::icp::IcpTarget;
+use crate::outliers::{self, Outliers};
 use crate::{checks, sampling, Result};
 use std::sync::OnceLock;
 
 /// What recognises a target given again: a 128-bit fingerprint (XXH3) of its points' bytes, their
-/// count, its origin and the `nonFinite` option.
+/// count, its origin and the `nonFinite` and `outliers` options.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct InputKey {
     fingerprint: u128,
     len: usize,
     origin: [u64; 3],
     non_finite: NonFinite,
+    outliers: Outliers,
 }
 
 impl InputKey {
-    /// The key of `cloud` checked with `non_finite` (one pass over its points).
-    pub(crate) fn of(cloud: &PointCloud, non_finite: NonFinite) -> Self {
+    /// The key of `cloud` checked with `non_finite` and `outliers` (one pass over its points).
+    pub(crate) fn of(cloud: &PointCloud, non_finite: NonFinite, outliers: Outliers) -> Self {
         let mut hasher = xxhash_rust::xxh3::Xxh3::new();
         // the points' little-endian bytes, a chunk at a time
         let mut buf = [0u8; 12 * 256];
@@ -41,7 +43,13 @@ impl InputKey {
             }
             hasher.update(&buf[..12 * chunk.len()]);
         }
-        Self { fingerprint: hasher.digest128(), len: cloud.len(), origin: cloud.origin.map(f64::to_bits), non_finite }
+        Self {
+            fingerprint: hasher.digest128(),
+            len: cloud.len(),
+            origin: cloud.origin.map(f64::to_bits),
+            non_finite,
+            outliers,
+        }
     }
 }
 
@@ -82,15 +90,34 @@ fn icp_cloud(cloud: &PointCloud, sizes: &Sizes) -> PointCloud {
     sampling::voxel_downsample(cloud, f64::from_bits(sizes.voxel) as f32)
 }
 
-/// The target validated and in its local frame: its points as offsets from its origin.
-pub(crate) fn local(target: &PointCloud, non_finite: NonFinite) -> Result<PointCloud> {
-    Ok(target.validated("target", MIN_POINTS, non_finite)?.into_local())
+/// The target validated, without its far outliers when `outliers` says so ([`checked`]), and in
+/// its local frame: its points as offsets from its origin.
+pub(crate) fn local(target: &PointCloud, non_finite: NonFinite, outliers: Outliers) -> Result<PointCloud> {
+    Ok(checked("target", target, non_finite, outliers)?.0.into_local())
+}
+
+/// `cloud` validated ([`PointCloud::validated`]) and, with [`Outliers::Drop`], without its far
+/// outliers ([`outliers::drop_far`]), with the warning that counts them when there were any.
+/// `what` names the cloud in messages.
+pub(crate) fn checked(
+    what: &str,
+    cloud: &PointCloud,
+    non_finite: NonFinite,
+    outliers: Outliers,
+) -> Result<(PointCloud, Option<String>)> {
+    let cloud = cloud.validated(what, MIN_POINTS, non_finite)?;
+    if outliers == Outliers::Keep {
+        return Ok((cloud, None));
+    }
+    let total = cloud.len();
+    let (cloud, dropped) = outliers::drop_far(cloud);
+    Ok((cloud, (dropped > 0).then(|| outliers::warning(what, dropped, total))))
 }
 
 /// The summary of the validated `target` (its origin not yet dropped); an error when it is
-/// collinear.
-pub(crate) fn summary(target: &PointCloud) -> Result<TargetSummary> {
-    let mut warnings = Vec::new();
+/// collinear. `warning`: what its check said ([`checked`]), kept among its warnings.
+pub(crate) fn summary(target: &PointCloud, warning: Option<String>) -> Result<TargetSummary> {
+    let mut warnings: Vec<String> = warning.into_iter().collect();
     let spreads = checks::not_collinear("target", &target.points, &mut warnings)?;
     let bounding = JointNormalization::box_of(target);
     Ok(TargetSummary { origin: target.origin, bounding, spreads, warnings })

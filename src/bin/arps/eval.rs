@@ -47,7 +47,7 @@ use arps::confidence::Evidence;
 use arps::data::manifest;
 use arps::data::metrics::{ambiguous_miss, pair_error, recall_svg, recalled, summarize, PairError, Summary};
 use arps::transform::{euler_xyz, from_rotation_translation, rigid_inverse, to_rows};
-use arps::{io, ModelConfig, Options, PointCloud, Registrar, Search, Start, Timings, Weights};
+use arps::{io, ModelConfig, Options, Outliers, PointCloud, Registrar, Search, Start, Timings, Weights};
 use clap::{Args, ValueEnum};
 use nalgebra::{Matrix4, Vector3};
 use rand::Rng;
@@ -101,6 +101,10 @@ pub struct EvalArgs {
     /// method but the ground truth's refinement.
     #[arg(long, value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
     up: Option<Vec<f64>>,
+    /// Keep the points that lie far out from the rest of their cloud (`Options::outliers` set to
+    /// keep), for every method and the ground truth's refinement; by default they are left out.
+    #[arg(long)]
+    keep_outliers: bool,
     /// Run only these methods, comma-separated [default: all seven].
     #[arg(long, value_enum, value_delimiter = ',')]
     methods: Option<Vec<Method>>,
@@ -300,6 +304,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
     let untrained_weights = Weights::random(&ModelConfig::web(), 0).map_err(|e| e.to_string())?;
     let mut untrained = Registrar::new(&untrained_weights).map_err(|e| e.to_string())?;
 
+    let outliers = if a.keep_outliers { Outliers::Keep } else { Outliers::Drop };
     let mut results = Vec::new();
     for (k, e) in entries.iter().enumerate() {
         let read = |p: PathBuf| io::read_path(&p).map_err(|err| format!("{}: {err}", p.display()));
@@ -320,6 +325,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             network: false,
             initial_transform: Some(to_rows(&gt_rigid)),
             starts: vec![Start::Initial],
+            outliers,
             ..Options::default()
         };
         let refined_truth = trained
@@ -343,7 +349,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             alternatives: Vec::new(),
         };
         for &m in &methods {
-            let options = Options { up, ..m.options(&source, &target, &starts) };
+            let options = Options { up, outliers, ..m.options(&source, &target, &starts) };
             let reg = if m == Method::UntrainedIcp { &mut untrained } else { &mut trained };
             // each method pays for preparing the target, as a call on its own would
             reg.forget_target();

@@ -3,7 +3,7 @@
 //!
 //! Errors print one line on stderr (`arps: ...`) and exit with status 1 (2 for usage errors).
 
-use arps::{io, transform, IcpKind, ModelConfig, NonFinite, Options, Registrar, Start, StoreAs, Weights};
+use arps::{io, transform, IcpKind, ModelConfig, NonFinite, Options, Outliers, Registrar, Start, StoreAs, Weights};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -87,6 +87,10 @@ enum Command {
         /// Drop NaN/Inf points instead of failing.
         #[arg(long)]
         drop_non_finite: bool,
+        /// Keep the points that lie far out from the rest of their cloud (by default they are
+        /// left out, with a warning: `Options::outliers`).
+        #[arg(long)]
+        keep_outliers: bool,
         /// Read a mesh file (OBJ, OFF, STL, PLY with faces) as this many points drawn uniformly
         /// over its surface instead of its vertices (a CAD model's vertices sit on its edges);
         /// point files are read as they are.
@@ -248,6 +252,7 @@ fn run(command: Command) -> Result<(), String> {
             search,
             up,
             drop_non_finite,
+            keep_outliers,
             surface_points,
             json,
         } => {
@@ -266,6 +271,7 @@ fn run(command: Command) -> Result<(), String> {
                 network_points,
                 seed,
                 non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
+                outliers: if keep_outliers { Outliers::Keep } else { Outliers::Drop },
                 up,
                 starts: starts.unwrap_or_else(|| Options::default().starts),
                 search: match search {

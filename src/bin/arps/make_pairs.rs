@@ -5,7 +5,7 @@
 
 use arps::data::bank;
 use arps::data::manifest::{self, Entry, PairMeta, Sidecar};
-use arps::data::pairs::{check_max_angle, check_pose_angle};
+use arps::data::pairs::{self, check_max_angle, check_pose_angle};
 use arps::data::source::{ShapeSource, Split};
 use arps::data::PairParams;
 use arps::{io, PointCloud};
@@ -88,6 +88,23 @@ pub struct MakePairsArgs {
     /// a scan of it); default `--points`.
     #[arg(long)]
     target_points: Option<usize>,
+    /// Stray returns added to each source, as a share of its points: scattered uniformly over a
+    /// cube three times the shape's size (not in the paper's protocol; default 0). The surface
+    /// points stay the pair's.
+    #[arg(long, default_value_t = 0.0)]
+    stray: f64,
+    /// The same for each target (default 0: a clean target, as a model is).
+    #[arg(long, default_value_t = 0.0)]
+    target_stray: f64,
+}
+
+/// A share of strays given by a user: in [0, 1].
+fn check_stray(flag: &str, r: f64) -> Result<f64, String> {
+    if r.is_finite() && (0.0..=1.0).contains(&r) {
+        Ok(r)
+    } else {
+        Err(format!("{flag} {r}: expected a share in [0, 1]"))
+    }
 }
 
 /// A crop's fraction given by a user: in (0, 1].
@@ -118,6 +135,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let max_tilt_deg = a.max_tilt.map(check_max_angle).transpose().map_err(|e| format!("--max-tilt {e}"))?;
     let keep_ratio = check_keep("--keep", a.keep)?;
     let target_keep_ratio = a.target_keep.map(|r| check_keep("--target-keep", r)).transpose()?;
+    let (stray, target_stray) = (check_stray("--stray", a.stray)?, check_stray("--target-stray", a.target_stray)?);
     if a.points == 0 || a.target_points == Some(0) {
         return Err("--points and --target-points: a cloud needs at least one point".into());
     }
@@ -166,7 +184,10 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let mut metas = Vec::new();
     for i in 0..a.count {
         let index = (a.seed << 32).wrapping_add(i);
-        let pair = source.pair(split, index, &params).map_err(|e| format!("pair {i}: {e}"))?;
+        let mut pair = source.pair(split, index, &params).map_err(|e| format!("pair {i}: {e}"))?;
+        if stray > 0.0 || target_stray > 0.0 {
+            pairs::add_strays(&mut pair, stray, target_stray);
+        }
         let stem = format!("{i:05}");
         let (sf, tf) = (format!("{stem}_source.ply"), format!("{stem}_target.ply"));
         for (f, pts) in [(&sf, &pair.source), (&tf, &pair.target)] {
@@ -198,9 +219,7 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
     }
     let tsv = a.out.join("pairs.tsv");
     std::fs::write(&tsv, manifest::format(&entries)).map_err(|e| format!("{}: {e}", tsv.display()))?;
-    let sidecar = Sidecar {
-        units: "normalized".into(),
-        generator: serde_json::json!({
+    let mut generator = serde_json::json!({
             "command": "arps make-pairs",
             "version": env!("CARGO_PKG_VERSION"),
             "split": format!("{split:?}").to_lowercase(),
@@ -209,10 +228,13 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
             "bank": a.bank.as_ref().filter(|_| !a.procedural_only).map(|p| p.display().to_string()),
             "bank_fraction": a.bank_fraction,
             "val_fraction": a.val_fraction,
-        }),
-        params,
-        pairs: metas,
-    };
+    });
+    // strays are not in PairParams (they are added to a made pair): recorded here when present
+    if stray > 0.0 || target_stray > 0.0 {
+        generator["stray"] = stray.into();
+        generator["target_stray"] = target_stray.into();
+    }
+    let sidecar = Sidecar { units: "normalized".into(), generator, params, pairs: metas };
     let json = a.out.join("pairs.json");
     std::fs::write(&json, serde_json::to_string_pretty(&sidecar).map_err(|e| e.to_string())? + "\n")
         .map_err(|e| format!("{}: {e}", json.display()))?;

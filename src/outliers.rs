@@ -1,0 +1,217 @@
+//! Far outliers: points that lie far out from the rest of their cloud (a scanner's stray returns,
+//! reflections, mixed pixels at depth edges), which registration leaves out
+//! ([`Outliers::Drop`], the default).
+//!
+//! A few of them spoil every stage that looks at the cloud as a whole. The normalisation takes
+//! the clouds' bounding boxes: 5% of the points scattered three times as far out as the object
+//! make it three times too large, so the network sees a small object in a cloud of noise, and
+//! the descriptors' voxel and ICP's distances grow with the box. (On scans onto a model at the
+//! protocol's motions, `BENCHMARK.md` "Far outliers": FPFH + RANSAC + ICP recalls 0.06 instead
+//! of 0.62.)
+//!
+//! The test is local density on an even sample of the cloud (at most [`SAMPLE`] points, so the
+//! cost is one pass over the cloud plus a small k-d tree): a sample point whose [`NEIGHBOUR`]th
+//! nearest sample point is more than [`ISOLATION`] times the sample's median such distance away
+//! is isolated. The others span the *inlier box*, widened on every side by that same distance;
+//! the points outside the box are the far outliers. Isolated points inside the box stay (they
+//! do not move the box, and ICP's distance cut ignores them), and so does a cluster of stray
+//! points (another object), which is not isolated. A clean cloud has no point outside the box
+//! and is left exactly as it is.
+
+use crate::cloud::{PointCloud, MIN_POINTS};
+use crate::refine::even_sample;
+use crate::spatial::KdIndex;
+use serde::{Deserialize, Serialize};
+
+/// What registration does with the points that lie far out from the rest of their cloud
+/// (`Options::outliers`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "Outliers"))]
+pub enum Outliers {
+    /// Leave them out, with a warning that says how many (the default).
+    #[default]
+    Drop,
+    /// Keep every point.
+    Keep,
+}
+
+/// Most points of the even sample the test looks at.
+pub const SAMPLE: usize = 2048;
+
+/// The neighbour (by rank among the other sample points) whose distance measures a sample
+/// point's isolation: the 4th, so that a point on a thin line or a sparse edge of the surface,
+/// which has two or three close neighbours, is not isolated.
+pub const NEIGHBOUR: usize = 4;
+
+/// How many times the sample's median [`NEIGHBOUR`] distance a sample point's own must exceed
+/// to be isolated; also the inlier box's margin, in the same median distances.
+pub const ISOLATION: f32 = 8.0;
+
+/// Most points the box may leave out, as a share of the cloud: beyond it the box is not
+/// telling stray points from the cloud (a scan whose density falls off steeply with range, a
+/// sparse second object), and the cloud is left as it is.
+pub const MAX_SHARE: f64 = 0.2;
+
+/// The indices (ascending) of the far outliers of `points` (see the module docs); none when the
+/// test does not apply (fewer than `NEIGHBOUR + 1` sample points, a median distance of zero,
+/// more than [`MAX_SHARE`] of the points to leave out, fewer than [`MIN_POINTS`] to keep).
+pub fn far_outliers(points: &[[f32; 3]]) -> Vec<usize> {
+    let sample = even_sample(points, SAMPLE);
+    if sample.len() <= NEIGHBOUR {
+        return Vec::new();
+    }
+    let index = KdIndex::new(&sample);
+    let mut out = Vec::with_capacity(NEIGHBOUR + 2);
+    // the [`NEIGHBOUR`]th nearest *other* sample point (the nearest found is the point itself)
+    let reach: Vec<f32> = sample
+        .iter()
+        .map(|q| {
+            index.knn_into(q, NEIGHBOUR + 1, &mut out);
+            out.last().map_or(f32::INFINITY, |e| e.1.sqrt())
+        })
+        .collect();
+    let mut sorted = reach.clone();
+    sorted.sort_by(f32::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    if !(median > 0.0 && median.is_finite()) {
+        return Vec::new();
+    }
+    let limit = ISOLATION * median;
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for (p, r) in sample.iter().zip(&reach) {
+        if *r <= limit {
+            for a in 0..3 {
+                lo[a] = lo[a].min(p[a]);
+                hi[a] = hi[a].max(p[a]);
+            }
+        }
+    }
+    let (lo, hi) = (lo.map(|v| v - limit), hi.map(|v| v + limit));
+    let outside: Vec<usize> =
+        (0..points.len()).filter(|&i| (0..3).any(|a| points[i][a] < lo[a] || points[i][a] > hi[a])).collect();
+    if outside.is_empty() || outside.len() as f64 > MAX_SHARE * points.len() as f64 {
+        return Vec::new();
+    }
+    // the points outside that lie on a structure (a far wall or ring of a scan, another
+    // object): [`NEIGHBOUR`] others outside within the sample's isolation distance, brought to the whole
+    // cloud's density (a surface's spacing shrinks with the square root of its point count)
+    let radius = limit * (sample.len() as f32 / points.len() as f32).min(1.0).sqrt();
+    let candidates: Vec<[f32; 3]> = outside.iter().map(|&i| points[i]).collect();
+    let index = KdIndex::new(&candidates);
+    let far: Vec<usize> = outside
+        .iter()
+        .zip(&candidates)
+        .filter(|(_, q)| {
+            index.within_into(q, radius * radius, NEIGHBOUR + 1, &mut out);
+            out.len() <= NEIGHBOUR
+        })
+        .map(|(&i, _)| i)
+        .collect();
+    if points.len() - far.len() < MIN_POINTS {
+        return Vec::new();
+    }
+    far
+}
+
+/// `cloud` without its far outliers ([`far_outliers`], removed in place) and how many were left
+/// out.
+pub fn drop_far(mut cloud: PointCloud) -> (PointCloud, usize) {
+    let far = far_outliers(&cloud.points);
+    if far.is_empty() {
+        return (cloud, 0);
+    }
+    let mut next = far.iter().peekable();
+    let mut i = 0usize;
+    cloud.points.retain(|_| {
+        let drop = next.next_if(|&&f| f == i).is_some();
+        i += 1;
+        !drop
+    });
+    (cloud, far.len())
+}
+
+/// The warning for `dropped` far outliers of the cloud `what` of `total` points.
+pub fn warning(what: &str, dropped: usize, total: usize) -> String {
+    format!(
+        "left out {dropped} of the {what}'s {total} points ({:.1}%): they lie far out from the rest of the cloud (stray returns); the outliers option set to keep keeps them",
+        100.0 * dropped as f64 / total.max(1) as f64
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `n` points on a wavy sheet of about 2 x 1.4 (a surface, as scans are).
+    fn sheet(n: usize) -> Vec<[f32; 3]> {
+        (0..n)
+            .map(|i| {
+                let (u, v) = ((i % 61) as f32 / 60.0, (i / 61) as f32 / (n / 61) as f32);
+                [2.0 * u - 1.0, 1.4 * v - 0.7, 0.2 * (4.0 * u).sin() * (3.0 * v).cos()]
+            })
+            .collect()
+    }
+
+    /// A deterministic scatter of `n` points in the cube of half-side `half`.
+    fn scatter(n: usize, half: f32) -> Vec<[f32; 3]> {
+        let mut s = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            ((s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0) * half
+        };
+        (0..n).map(|_| [next(), next(), next()]).collect()
+    }
+
+    #[test]
+    fn a_clean_cloud_is_left_as_it_is() {
+        let cloud = PointCloud::new(sheet(3_050));
+        assert!(far_outliers(&cloud.points).is_empty());
+        let (kept, dropped) = drop_far(cloud.clone());
+        assert_eq!((kept.points, dropped), (cloud.points, 0));
+    }
+
+    #[test]
+    fn points_scattered_far_out_are_left_out_and_the_surface_kept() {
+        let surface = sheet(3_050);
+        let mut points = surface.clone();
+        // 5% scattered over a cube three times the sheet's size
+        points.extend(scatter(150, 3.0));
+        let (kept, dropped) = drop_far(PointCloud::with_origin(points.clone(), [1.0, 2.0, 3.0]));
+        assert_eq!(kept.origin, [1.0, 2.0, 3.0]);
+        // every surface point stays; most of the scatter (all of it outside the sheet's box) goes
+        for p in &surface {
+            assert!(kept.points.contains(p));
+        }
+        // most of the scatter goes; what stays lies near the sheet (within the box's margin)
+        assert!(dropped >= 130 && kept.len() == points.len() - dropped, "dropped {dropped}");
+        let (lo, hi) = kept.bounds();
+        assert!(
+            lo[0] > -1.6 && hi[0] < 1.6 && lo[1] > -1.3 && hi[1] < 1.3 && lo[2] > -0.8 && hi[2] < 0.8,
+            "{lo:?} {hi:?}"
+        );
+    }
+
+    #[test]
+    fn a_cluster_far_away_is_not_isolated() {
+        // two patches far apart (two objects): both stay
+        let mut points = sheet(3_050);
+        points.extend(sheet(1_220).iter().map(|p| [p[0] + 10.0, p[1], p[2]]));
+        assert!(far_outliers(&points).is_empty());
+    }
+
+    #[test]
+    fn a_cloud_with_much_scatter_or_too_few_points_is_left_as_it_is() {
+        // a third of the points scattered far out: more than MAX_SHARE would go
+        let mut points = sheet(2_000);
+        points.extend(scatter(1_000, 5.0));
+        assert!(far_outliers(&points).is_empty());
+        // too few points, or all of them on one spot but one
+        assert!(far_outliers(&sheet(61)[..4]).is_empty());
+        let mut spot = vec![[0.5f32; 3]; 100];
+        spot.push([9.0, 9.0, 9.0]);
+        assert!(far_outliers(&spot).is_empty());
+    }
+}
