@@ -262,6 +262,63 @@ fn make_pairs_makes_scans_onto_a_model() {
     }
 }
 
+/// Stray returns: `--stray` and `--target-stray` append that share of points scattered over three
+/// times the shape's size, the surface points and the truth staying the pair's; eval's default
+/// leaves them out, `--keep-outliers` keeps them.
+#[test]
+fn make_pairs_adds_stray_returns_that_eval_leaves_out() {
+    let dir = std::env::temp_dir().join(format!("arps-stray-{}", std::process::id()));
+    let clean = std::env::temp_dir().join(format!("arps-stray-clean-{}", std::process::id()));
+    for d in [&dir, &clean] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+    let args = ["--count", "2", "--seed", "4", "--procedural-only"];
+    let (ok, out, err) = arps(
+        &[&["make-pairs", "--out", dir.to_str().unwrap(), "--stray", "0.05", "--target-stray", "0.1"][..], &args]
+            .concat(),
+    );
+    assert!(ok, "{out}{err}");
+    let (ok, _, err) = arps(&[&["make-pairs", "--out", clean.to_str().unwrap()][..], &args].concat());
+    assert!(ok, "{err}");
+    let read = |d: &Path, f: &str| arps::io::read_path(&d.join(f)).unwrap().points;
+    let tsv = std::fs::read_to_string(dir.join("pairs.tsv")).unwrap();
+    assert_eq!(tsv, std::fs::read_to_string(clean.join("pairs.tsv")).unwrap());
+    for e in arps::data::manifest::parse(&tsv).unwrap() {
+        let (s, s0, t, t0) =
+            (read(&dir, &e.source), read(&clean, &e.source), read(&dir, &e.target), read(&clean, &e.target));
+        assert_eq!((s.len(), t.len()), (1024 + 51, 1024 + 102));
+        assert_eq!((&s[..1024], &t[..1024]), (&s0[..], &t0[..]));
+        // the strays spread over the cube of half-side 3 (the shape fits [-1, 1]^3)
+        assert!(s[1024..].iter().any(|p| p.iter().any(|v| v.abs() > 1.5)));
+        assert!(s[1024..].iter().all(|p| p.iter().all(|v| v.abs() <= 3.0)));
+    }
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("pairs.json")).unwrap()).unwrap();
+    assert_eq!(
+        (sidecar["generator"]["stray"].as_f64(), sidecar["generator"]["target_stray"].as_f64()),
+        (Some(0.05), Some(0.1))
+    );
+    let manifest = dir.join("pairs.tsv");
+    let eval = |extra: &[&str]| {
+        let (ok, out, err) =
+            arps(&[&["eval", manifest.to_str().unwrap(), "--methods", "global", "--json"][..], extra].concat());
+        assert!(ok, "{err}");
+        serde_json::from_str::<serde_json::Value>(out.trim()).unwrap()
+    };
+    let (dropped, kept) = (eval(&[]), eval(&["--keep-outliers"]));
+    let recall = |v: &serde_json::Value| v["methods"][0]["summary"]["recall"].as_f64().unwrap();
+    assert!(recall(&dropped) >= recall(&kept), "{dropped}\n{kept}");
+    assert!(dropped["per_pair"][0]["results"][0] != kept["per_pair"][0]["results"][0]);
+    for bad in [["--stray", "1.01"], ["--target-stray", "nan"]] {
+        let (ok, _, err) =
+            arps(&[&["make-pairs", "--out", dir.to_str().unwrap(), "--count", "1"][..], &bad[..]].concat());
+        assert!(!ok && err.contains(bad[0]), "{bad:?}: {err}");
+    }
+    for d in [&dir, &clean] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
 /// Real manifests store the truth to a few digits (`../shared/data/scans/pairs.tsv`): a ground
 /// truth that is rigid only to 1e-3 is still evaluated, not rejected.
 #[test]
