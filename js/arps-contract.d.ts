@@ -69,10 +69,10 @@ export type RegisterOptions = {
   nonFinite?: NonFinite,
   /**
    * What to do with points that lie far out from the rest of their cloud (stray returns,
-   * reflections: a point whose few nearest neighbours are far away, outside the box of the
-   * points that are not): `"drop"` (leave them out, with a warning that counts them; the
-   * default) or `"keep"`. A few such points would otherwise inflate the bounding box that the
-   * clouds are normalised by. A clean cloud is used exactly as given either way.
+   * reflections: outside the box of the points whose few nearest neighbours are close, and
+   * with no others around them): `"drop"` (leave them out, with a warning that counts them;
+   * the default) or `"keep"`. A few such points would otherwise inflate the bounding box that
+   * the clouds are normalised by. A cloud without them is used exactly as given either way.
    */
   outliers?: Outliers,
   /**

@@ -10,13 +10,17 @@
 //! of 0.62.)
 //!
 //! The test is local density on an even sample of the cloud (at most [`SAMPLE`] points, so the
-//! cost is one pass over the cloud plus a small k-d tree): a sample point whose [`NEIGHBOUR`]th
-//! nearest sample point is more than [`ISOLATION`] times the sample's median such distance away
-//! is isolated. The others span the *inlier box*, widened on every side by that same distance;
-//! the points outside the box are the far outliers. Isolated points inside the box stay (they
-//! do not move the box, and ICP's distance cut ignores them), and so does a cluster of stray
-//! points (another object), which is not isolated. A clean cloud has no point outside the box
-//! and is left exactly as it is.
+//! cost is one pass over the cloud plus two small k-d trees): a sample point whose
+//! [`NEIGHBOUR`]th nearest sample point is more than [`ISOLATION`] times the sample's median such
+//! distance away is isolated. The others span the *inlier box*, widened on every side by
+//! [`MARGIN`] median distances. A point outside the box is a far outlier unless [`NEIGHBOUR`]
+//! other points outside lie within [`SUPPORT`] median distances of it (scaled to the whole
+//! cloud's density): then it is part of a structure (a far wall of a scan, the tip of a thin
+//! part, another object) and stays. Isolated points inside the box stay too (they do not move
+//! the box, and ICP's distance cut ignores them). Nothing is left out when more than
+//! [`MAX_SHARE`] of the cloud would be. A cloud with no point outside the box is left exactly as
+//! it is: all but about 1% of the validation sets' clean clouds, which lose a few isolated
+//! points each.
 
 use crate::cloud::{PointCloud, MIN_POINTS};
 use crate::refine::even_sample;
@@ -40,13 +44,22 @@ pub enum Outliers {
 pub const SAMPLE: usize = 2048;
 
 /// The neighbour (by rank among the other sample points) whose distance measures a sample
-/// point's isolation: the 4th, so that a point on a thin line or a sparse edge of the surface,
-/// which has two or three close neighbours, is not isolated.
+/// point's isolation, and how many others a point outside the inlier box needs near it to stay:
+/// 4, so that two or three strays close together do not count as a structure.
 pub const NEIGHBOUR: usize = 4;
 
 /// How many times the sample's median [`NEIGHBOUR`] distance a sample point's own must exceed
-/// to be isolated; also the inlier box's margin, in the same median distances.
-pub const ISOLATION: f32 = 8.0;
+/// to be isolated.
+pub const ISOLATION: f32 = 4.0;
+
+/// The inlier box's margin on every side, in the sample's median [`NEIGHBOUR`] distances: small,
+/// since what lies within it stays and still sets the cloud's bounding box.
+pub const MARGIN: f32 = 2.0;
+
+/// The radius within which a point outside the inlier box needs [`NEIGHBOUR`] others outside
+/// it to stay (a structure, not a stray), in the sample's median [`NEIGHBOUR`] distances,
+/// brought to the whole cloud's density.
+pub const SUPPORT: f32 = 8.0;
 
 /// Most points the box may leave out, as a share of the cloud: beyond it the box is not
 /// telling stray points from the cloud (a scan whose density falls off steeply with range, a
@@ -87,16 +100,18 @@ pub fn far_outliers(points: &[[f32; 3]]) -> Vec<usize> {
             }
         }
     }
-    let (lo, hi) = (lo.map(|v| v - limit), hi.map(|v| v + limit));
+    let margin = MARGIN * median;
+    let (lo, hi) = (lo.map(|v| v - margin), hi.map(|v| v + margin));
     let outside: Vec<usize> =
         (0..points.len()).filter(|&i| (0..3).any(|a| points[i][a] < lo[a] || points[i][a] > hi[a])).collect();
     if outside.is_empty() || outside.len() as f64 > MAX_SHARE * points.len() as f64 {
         return Vec::new();
     }
     // the points outside that lie on a structure (a far wall or ring of a scan, another
-    // object): [`NEIGHBOUR`] others outside within the sample's isolation distance, brought to the whole
-    // cloud's density (a surface's spacing shrinks with the square root of its point count)
-    let radius = limit * (sample.len() as f32 / points.len() as f32).min(1.0).sqrt();
+    // object, the tip of a thin part): NEIGHBOUR others outside within SUPPORT median distances,
+    // brought to the whole cloud's density (a surface's spacing shrinks with the square root of
+    // its point count)
+    let radius = SUPPORT * median * (sample.len() as f32 / points.len() as f32).min(1.0).sqrt();
     let candidates: Vec<[f32; 3]> = outside.iter().map(|&i| points[i]).collect();
     let index = KdIndex::new(&candidates);
     let far: Vec<usize> = outside

@@ -74,10 +74,10 @@ pub struct Options {
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub non_finite: NonFinite,
     /// What to do with points that lie far out from the rest of their cloud (stray returns,
-    /// reflections: a point whose few nearest neighbours are far away, outside the box of the
-    /// points that are not): `"drop"` (leave them out, with a warning that counts them; the
-    /// default) or `"keep"`. A few such points would otherwise inflate the bounding box that the
-    /// clouds are normalised by. A clean cloud is used exactly as given either way.
+    /// reflections: outside the box of the points whose few nearest neighbours are close, and
+    /// with no others around them): `"drop"` (leave them out, with a warning that counts them;
+    /// the default) or `"keep"`. A few such points would otherwise inflate the bounding box that
+    /// the clouds are normalised by. A cloud without them is used exactly as given either way.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub outliers: Outliers,
     /// The direction that is up in both clouds' frames, when both were captured level: scans
