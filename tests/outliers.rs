@@ -76,7 +76,8 @@ fn a_real_lidar_scan_with_stray_returns_is_registered() {
     let noisy = with_strays(&source, 7);
     let r = Registrar::with_default_model().unwrap().register(&noisy, &target, &Options::default()).unwrap();
     let (re, te) = errors(&r.T_target_source, &gt);
-    assert!(re < 1.0 && te < 0.2, "{re} deg, {te}");
+    // kept, the strays set the scale: 0.11 degrees and 0.033 off (measured); left out, 0.017 and 0.004
+    assert!(re < 0.05 && te < 0.01, "{re} deg, {te}");
     assert!(r.warnings.iter().any(|w| w.contains("left out") && w.contains("source's")), "{:?}", r.warnings);
 }
 
