@@ -5,9 +5,8 @@
 //! A few of them spoil every stage that looks at the cloud as a whole. The normalisation takes
 //! the clouds' bounding boxes: 5% of the points scattered three times as far out as the object
 //! make it three times too large, so the network sees a small object in a cloud of noise, and
-//! the descriptors' voxel and ICP's distances grow with the box. (On scans onto a model at the
-//! protocol's motions, `BENCHMARK.md` "Far outliers": FPFH + RANSAC + ICP recalls 0.06 instead
-//! of 0.62.)
+//! the descriptors' voxel and ICP's distances grow with the box (`BENCHMARK.md`, "Far
+//! outliers").
 //!
 //! The test is local density on an even sample of the cloud (at most [`SAMPLE`] points, so the
 //! cost is one pass over the cloud plus two small k-d trees): a sample point whose
@@ -22,7 +21,7 @@
 //! it is: all but about 0.2% of the validation sets' clean clouds, which lose one to four
 //! isolated points each.
 
-use crate::cloud::{PointCloud, MIN_POINTS};
+use crate::cloud::{grow_box, PointCloud, MIN_POINTS};
 use crate::refine::even_sample;
 use crate::spatial::KdIndex;
 use serde::{Deserialize, Serialize};
@@ -95,13 +94,8 @@ pub fn far_outliers(points: &[[f32; 3]]) -> Vec<usize> {
     }
     let limit = ISOLATION * median;
     let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for (p, r) in sample.iter().zip(&reach) {
-        if *r <= limit {
-            for a in 0..3 {
-                lo[a] = lo[a].min(p[a]);
-                hi[a] = hi[a].max(p[a]);
-            }
-        }
+    for (p, _) in sample.iter().zip(&reach).filter(|(_, r)| **r <= limit) {
+        grow_box(&mut lo, &mut hi, p);
     }
     let margin = MARGIN * median;
     let (lo, hi) = (lo.map(|v| v - margin), hi.map(|v| v + margin));
@@ -199,7 +193,7 @@ mod tests {
         points.extend(scatter(150, 3.0));
         let (kept, dropped) = drop_far(PointCloud::with_origin(points.clone(), [1.0, 2.0, 3.0]));
         assert_eq!(kept.origin, [1.0, 2.0, 3.0]);
-        // every surface point stays; most of the scatter (all of it outside the sheet's box) goes
+        // every surface point stays
         for p in &surface {
             assert!(kept.points.contains(p));
         }

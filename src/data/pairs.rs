@@ -153,6 +153,16 @@ pub fn check_max_angle(deg: f64) -> std::result::Result<f64, String> {
     }
 }
 
+/// Checks a share given by a user (of strays, of part-against-whole pairs): a finite number in
+/// [0, 1]. The error message starts with the value (`"1.5: expected ..."`).
+pub fn check_share(share: f64) -> std::result::Result<f64, String> {
+    if share.is_finite() && (0.0..=1.0).contains(&share) {
+        Ok(share)
+    } else {
+        Err(format!("{share}: expected a share in [0, 1]"))
+    }
+}
+
 /// Normalises a cloud as the protocol does for a full shape: bounding-box centre to the origin,
 /// largest half-extent to 1. Returns the cloud and the `(centre, scale)` used.
 pub fn normalize_shape(cloud: &PointCloud) -> (PointCloud, [f64; 3], f64) {

@@ -16,7 +16,7 @@
 //!
 //! The binary only parses arguments; the work is in `arps::train::run`.
 
-use arps::data::pairs::check_pose_angle;
+use arps::data::pairs::{check_pose_angle, check_share};
 use arps::train::run::session::{self, Export, ResumeChanges, Session, Start};
 use arps::train::run::{Curriculum, RunConfig};
 use arps::train::{CentroidMode, ConsistencyKind, LossConfig};
@@ -385,17 +385,9 @@ fn ema_decay(a: &TrainArgs) -> Result<Option<Option<f32>>, String> {
     }
 }
 
-/// `--part-whole`, checked: a share in [0, 1].
+/// `--part-whole`, checked ([`check_share`]).
 fn part_whole(a: &TrainArgs) -> Result<Option<f64>, String> {
-    a.part_whole
-        .map(|v| {
-            if v.is_finite() && (0.0..=1.0).contains(&v) {
-                Ok(v)
-            } else {
-                Err(format!("--part-whole {v}: expected a share in [0, 1]"))
-            }
-        })
-        .transpose()
+    a.part_whole.map(|v| check_share(v).map_err(|e| format!("--part-whole {e}"))).transpose()
 }
 
 /// `--pose-angle`, checked ([`check_pose_angle`]).

@@ -5,7 +5,7 @@
 
 use arps::data::bank;
 use arps::data::manifest::{self, Entry, PairMeta, Sidecar};
-use arps::data::pairs::{self, check_max_angle, check_pose_angle};
+use arps::data::pairs::{self, check_max_angle, check_pose_angle, check_share};
 use arps::data::source::{ShapeSource, Split};
 use arps::data::PairParams;
 use arps::{io, PointCloud};
@@ -98,15 +98,6 @@ pub struct MakePairsArgs {
     target_stray: f64,
 }
 
-/// A share of strays given by a user: in [0, 1].
-fn check_stray(flag: &str, r: f64) -> Result<f64, String> {
-    if r.is_finite() && (0.0..=1.0).contains(&r) {
-        Ok(r)
-    } else {
-        Err(format!("{flag} {r}: expected a share in [0, 1]"))
-    }
-}
-
 /// A crop's fraction given by a user: in (0, 1].
 fn check_keep(flag: &str, r: f64) -> Result<f64, String> {
     if r.is_finite() && r > 0.0 && r <= 1.0 {
@@ -135,7 +126,8 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let max_tilt_deg = a.max_tilt.map(check_max_angle).transpose().map_err(|e| format!("--max-tilt {e}"))?;
     let keep_ratio = check_keep("--keep", a.keep)?;
     let target_keep_ratio = a.target_keep.map(|r| check_keep("--target-keep", r)).transpose()?;
-    let (stray, target_stray) = (check_stray("--stray", a.stray)?, check_stray("--target-stray", a.target_stray)?);
+    let stray = check_share(a.stray).map_err(|e| format!("--stray {e}"))?;
+    let target_stray = check_share(a.target_stray).map_err(|e| format!("--target-stray {e}"))?;
     if a.points == 0 || a.target_points == Some(0) {
         return Err("--points and --target-points: a cloud needs at least one point".into());
     }
