@@ -1,17 +1,19 @@
 //! Stage 2: the clouds prepared for the network and ICP.
 //!
 //! Takes the caller's clouds, the [`Options`] and [`Resolved`]; gives [`Prepared`]: the
-//! validated clouds (without their far outliers, [`crate::outliers`]) in their local frames (f32 offsets from f64 origins), turned by the initial
-//! guess's rotation, jointly normalised, sampled for the network and voxelised for ICP, with the
-//! initial guess and the ICP distances in normalised units. The target's share is a
-//! [`PreparedTarget`] ([`super::target`]), taken over from the previous call when it is the same
-//! target at the same scale (and resized for other options). Warnings (collinear or flat clouds,
-//! unit mismatch, too few points for the network) go to `warnings`.
+//! validated clouds ([`checked`]: without their far outliers) in their local frames (f32 offsets
+//! from f64 origins), turned by the initial guess's rotation, jointly normalised, sampled for
+//! the network and voxelised for ICP, with the initial guess and the ICP distances in normalised
+//! units. The target's share is a [`PreparedTarget`] ([`super::target`]), taken over from the
+//! previous call when it is the same target at the same scale (and resized for other options).
+//! Warnings (collinear or flat clouds, unit mismatch, too few points for the network, far
+//! outliers left out) go to `warnings`.
 
 use super::options::{self, Resolved};
 use super::target::{self, InputKey, PreparedTarget, Sizes};
 use super::upright::Upright;
-use crate::cloud::{JointNormalization, PointCloud};
+use crate::cloud::{JointNormalization, NonFinite, PointCloud, MIN_POINTS};
+use crate::outliers::{self, Outliers};
 use crate::register::Options;
 use crate::{checks, limits, origin, sampling, transform, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
@@ -69,12 +71,12 @@ pub(crate) fn prepare(
     // another target's is dropped before anything is allocated
     let input = InputKey::of(target, options.non_finite, options.outliers);
     let kept = kept.filter(|k| k.input == input);
-    let (source, source_warning) = target::checked("source", source, options.non_finite, options.outliers)?;
+    let (source, source_warning) = checked("source", source, options.non_finite, options.outliers)?;
     warnings.extend(source_warning);
     let (given, target_warning) = match kept {
         Some(k) => (Given::Kept(k), None),
         None => {
-            let (t, warning) = target::checked("target", target, options.non_finite, options.outliers)?;
+            let (t, warning) = checked("target", target, options.non_finite, options.outliers)?;
             (Given::Validated(t), warning)
         }
     };
@@ -121,7 +123,7 @@ pub(crate) fn prepare(
         // the same target at another scale (a source larger than it)
         Given::Kept(old) => {
             drop(old);
-            let local = target::local(target, options.non_finite, options.outliers)?;
+            let local = checked("target", target, options.non_finite, options.outliers)?.0.into_local();
             Box::new(PreparedTarget::new(input, summary, sizes, &local, &norm))
         }
         Given::Validated(t) => Box::new(PreparedTarget::new(input, summary, sizes, &t.into_local(), &norm)),
@@ -139,6 +141,24 @@ pub(crate) fn prepare(
     limits::check_icp_points("target", target.cloud.len(), target.icp.len(), voxel_user)?;
     let upright = Upright::of(options, &rotate_init);
     Ok(Prepared { origin_source, rotate_init, upright, norm, t_initial, src_n, d_final, net_src, icp_src, target })
+}
+
+/// `cloud` validated ([`PointCloud::validated`]) and, with [`Outliers::Drop`], without its far
+/// outliers ([`outliers::drop_far`]), with the warning that counts them when there were any.
+/// `what` names the cloud in messages.
+fn checked(
+    what: &str,
+    cloud: &PointCloud,
+    non_finite: NonFinite,
+    outliers: Outliers,
+) -> Result<(PointCloud, Option<String>)> {
+    let cloud = cloud.validated(what, MIN_POINTS, non_finite)?;
+    if outliers == Outliers::Keep {
+        return Ok((cloud, None));
+    }
+    let total = cloud.len();
+    let (cloud, dropped) = outliers::drop_far(cloud);
+    Ok((cloud, (dropped > 0).then(|| outliers::warning(what, dropped, total))))
 }
 
 #[cfg(test)]

@@ -11,10 +11,10 @@
 //! normals (the same ICP voxel) and the network's sample (the same point count and seed). Each
 //! piece is what preparing anew would make, so the result is the same either way.
 
-use crate::cloud::{JointNormalization, NonFinite, PointCloud, MIN_POINTS};
+use crate::cloud::{JointNormalization, NonFinite, PointCloud};
 use crate::global::TargetFeatures;
 use crate::icp::IcpTarget;
-use crate::outliers::{self, Outliers};
+use crate::outliers::Outliers;
 use crate::{checks, sampling, Result};
 use std::sync::OnceLock;
 
@@ -90,32 +90,8 @@ fn icp_cloud(cloud: &PointCloud, sizes: &Sizes) -> PointCloud {
     sampling::voxel_downsample(cloud, f64::from_bits(sizes.voxel) as f32)
 }
 
-/// The target validated, without its far outliers when `outliers` says so ([`checked`]), and in
-/// its local frame: its points as offsets from its origin.
-pub(crate) fn local(target: &PointCloud, non_finite: NonFinite, outliers: Outliers) -> Result<PointCloud> {
-    Ok(checked("target", target, non_finite, outliers)?.0.into_local())
-}
-
-/// `cloud` validated ([`PointCloud::validated`]) and, with [`Outliers::Drop`], without its far
-/// outliers ([`outliers::drop_far`]), with the warning that counts them when there were any.
-/// `what` names the cloud in messages.
-pub(crate) fn checked(
-    what: &str,
-    cloud: &PointCloud,
-    non_finite: NonFinite,
-    outliers: Outliers,
-) -> Result<(PointCloud, Option<String>)> {
-    let cloud = cloud.validated(what, MIN_POINTS, non_finite)?;
-    if outliers == Outliers::Keep {
-        return Ok((cloud, None));
-    }
-    let total = cloud.len();
-    let (cloud, dropped) = outliers::drop_far(cloud);
-    Ok((cloud, (dropped > 0).then(|| outliers::warning(what, dropped, total))))
-}
-
 /// The summary of the validated `target` (its origin not yet dropped); an error when it is
-/// collinear. `warning`: what its check said ([`checked`]), kept among its warnings.
+/// collinear. `warning`: what its check said (`prepare::checked`), kept among its warnings.
 pub(crate) fn summary(target: &PointCloud, warning: Option<String>) -> Result<TargetSummary> {
     let mut warnings: Vec<String> = warning.into_iter().collect();
     let spreads = checks::not_collinear("target", &target.points, &mut warnings)?;
