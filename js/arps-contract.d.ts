@@ -76,6 +76,16 @@ export type RegisterOptions = {
    */
   outliers?: Outliers,
   /**
+   * What to do with a support plane that one cloud stands on and the other shows no sign of
+   * (the table or floor under a scanned object, registered onto a model of the object alone):
+   * `"drop"` (leave it out of that cloud, with a warning that counts its points; the default)
+   * or `"keep"`. A support plane holds a tenth or more of its cloud, has nearly all the rest
+   * of the cloud on one side, and reaches out beyond what stands on it on at least three
+   * sides. A plane both clouds may stand on (the same table in two scans) stays in both. Left
+   * in, such a plane sets the clouds' scale, and the object's flat faces are drawn onto it.
+   */
+  supportPlane?: SupportPlane,
+  /**
    * The direction that is up in both clouds' frames, when both were captured level: scans
    * from a phone or a terrestrial scanner (gravity-aligned), survey data, a CAD model in its
    * upright pose (`[0, 0, 1]` for z-up data, `[0, 1, 0]` for three.js's y-up). The answer then
@@ -177,6 +187,12 @@ export type NonFinite = "error" | "drop";
  * (`Options::outliers`).
  */
 export type Outliers = "drop" | "keep";
+
+/**
+ * What registration does with a support plane (a table or floor under the object) that one
+ * cloud stands on and the other does not (`Options::support_plane`).
+ */
+export type SupportPlane = "drop" | "keep";
 
 /**
  * A stage of a registration, reported as it starts (to `Registrar::register_with_progress`'s

@@ -4,7 +4,7 @@
 //! # One set of types
 //! The options are [`Options`], the result is [`Registration`]; their nested types are
 //! [`Evidence`], [`Alternative`], [`Timings`], [`Start`], [`Search`], [`IcpKind`], [`NonFinite`],
-//! [`Outliers`], [`Stage`] (the progress stages) and [`ModelConfig`]; the readers take [`ReadOptions`]. They
+//! [`Outliers`], [`Support`], [`Stage`] (the progress stages) and [`ModelConfig`]; the readers take [`ReadOptions`]. They
 //! are serde types: the wasm binding converts them
 //! with serde-wasm-bindgen and the CLI with serde_json, so JS and JSON see the same objects, field
 //! for field. The TypeScript declarations of the package (`js/arps-contract.d.ts`, part of
@@ -34,6 +34,7 @@
 //! [`IcpKind`]: crate::IcpKind
 //! [`NonFinite`]: crate::NonFinite
 //! [`Outliers`]: crate::Outliers
+//! [`Support`]: crate::Support
 //! [`Stage`]: crate::Stage
 //! [`ModelConfig`]: crate::ModelConfig
 
@@ -167,7 +168,9 @@ fn camel_case(key: &str) -> String {
 pub fn typescript() -> String {
     use crate::confidence::Evidence;
     use crate::model::config::Reference;
-    use crate::{Alternative, IcpKind, NonFinite, Options, Outliers, Registration, Search, Stage, Start, Timings};
+    use crate::{
+        Alternative, IcpKind, NonFinite, Options, Outliers, Registration, Search, Stage, Start, Support, Timings,
+    };
     use ts_rs::{Config, TS};
 
     fn decl<T: TS>(cfg: &Config) -> String {
@@ -185,6 +188,7 @@ pub fn typescript() -> String {
         decl::<IcpKind>(&cfg),
         decl::<NonFinite>(&cfg),
         decl::<Outliers>(&cfg),
+        decl::<Support>(&cfg),
         decl::<Stage>(&cfg),
         decl::<Registration>(&cfg),
         decl::<Timings>(&cfg),

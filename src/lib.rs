@@ -45,6 +45,7 @@ pub mod register;
 pub mod rigid;
 pub mod sampling;
 pub mod spatial;
+pub mod support;
 pub mod timing;
 #[cfg(feature = "train")]
 pub mod train;
@@ -60,4 +61,5 @@ pub use model::{Model, ModelConfig};
 pub use outliers::Outliers;
 pub use refine::Start;
 pub use register::{Alternative, Options, Registrar, Registration, Search, Stage, Timings};
+pub use support::Support;
 pub use weights::{StoreAs, Weights};

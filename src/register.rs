@@ -10,6 +10,7 @@ use crate::pipeline::starts::{self, Starts};
 use crate::pipeline::target::PreparedTarget;
 use crate::pipeline::{network, options, prepare, result, search};
 use crate::refine::Start;
+use crate::support::Support;
 use crate::timing::{default_clock, Clock, Stopwatch};
 use crate::weights::Weights;
 use crate::Result;
@@ -80,6 +81,15 @@ pub struct Options {
     /// the clouds are normalised by. A cloud without them is used exactly as given either way.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub outliers: Outliers,
+    /// What to do with a support plane that one cloud stands on and the other shows no sign of
+    /// (the table or floor under a scanned object, registered onto a model of the object alone):
+    /// `"drop"` (leave it out of that cloud, with a warning that counts its points; the default)
+    /// or `"keep"`. A support plane holds a tenth or more of its cloud, has nearly all the rest
+    /// of the cloud on one side, and reaches out beyond what stands on it on at least three
+    /// sides. A plane both clouds may stand on (the same table in two scans) stays in both. Left
+    /// in, such a plane sets the clouds' scale, and the object's flat faces are drawn onto it.
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
+    pub support_plane: Support,
     /// The direction that is up in both clouds' frames, when both were captured level: scans
     /// from a phone or a terrestrial scanner (gravity-aligned), survey data, a CAD model in its
     /// upright pose (`[0, 0, 1]` for z-up data, `[0, 1, 0]` for three.js's y-up). The answer then
@@ -221,6 +231,7 @@ impl Default for Options {
             initial_transform: None,
             non_finite: NonFinite::Error,
             outliers: Outliers::Drop,
+            support_plane: Support::Drop,
             up: None,
             starts: vec![
                 Start::Network,

@@ -126,6 +126,7 @@ fn a_real_result_and_options_have_the_declared_fields() {
     assert!(ts_literals(&ts, "IcpKind").contains(opts["icp"].as_str().unwrap()));
     assert!(ts_literals(&ts, "NonFinite").contains(opts["nonFinite"].as_str().unwrap()));
     assert!(ts_literals(&ts, "Outliers").contains(opts["outliers"].as_str().unwrap()));
+    assert!(ts_literals(&ts, "SupportPlane").contains(opts["supportPlane"].as_str().unwrap()));
 
     let config = contract::model_config_json(&arps::ModelConfig::web());
     assert_eq!(keys(&config), ts_fields(&ts, "ModelConfig"));
@@ -139,7 +140,7 @@ fn names<T: serde::Serialize>(values: &[T]) -> BTreeSet<String> {
 
 #[test]
 fn every_enum_value_is_declared() {
-    use arps::{IcpKind, NonFinite, Outliers, Stage};
+    use arps::{IcpKind, NonFinite, Outliers, Stage, Support};
     let ts = generated_file();
     let starts = names(&Start::ALL);
     assert_eq!(starts, ts_literals(&ts, "RegistrationStart"));
@@ -148,6 +149,7 @@ fn every_enum_value_is_declared() {
     assert_eq!(names(&[IcpKind::Off, IcpKind::Point, IcpKind::Plane]), ts_literals(&ts, "IcpKind"));
     assert_eq!(names(&[NonFinite::Error, NonFinite::Drop]), ts_literals(&ts, "NonFinite"));
     assert_eq!(names(&[Outliers::Drop, Outliers::Keep]), ts_literals(&ts, "Outliers"));
+    assert_eq!(names(&[Support::Drop, Support::Keep]), ts_literals(&ts, "SupportPlane"));
     assert_eq!(names(&[Stage::Preparing, Stage::Network, Stage::Refining]), ts_literals(&ts, "RegistrationStage"));
 }
 

@@ -319,6 +319,79 @@ fn make_pairs_adds_stray_returns_that_eval_leaves_out() {
     }
 }
 
+/// Support planes: `--support` and `--target-support` append a level square under the object
+/// (the same plane in both frames, or with `--support-moved` the target's own), the surface
+/// points and the truth staying the pair's; eval's default leaves a plane only one cloud stands
+/// on out, `--keep-support` keeps it.
+#[test]
+fn make_pairs_adds_support_planes_that_eval_leaves_out() {
+    let dir = std::env::temp_dir().join(format!("arps-support-{}", std::process::id()));
+    let moved = std::env::temp_dir().join(format!("arps-support-moved-{}", std::process::id()));
+    let clean = std::env::temp_dir().join(format!("arps-support-clean-{}", std::process::id()));
+    for d in [&dir, &moved, &clean] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+    let args = ["--count", "2", "--seed", "5", "--procedural-only", "--max-tilt", "0"];
+    let make = |d: &Path, extra: &[&str]| {
+        let (ok, out, err) = arps(&[&["make-pairs", "--out", d.to_str().unwrap()][..], &args, extra].concat());
+        assert!(ok, "{out}{err}");
+    };
+    make(&dir, &["--support", "0.5", "--target-support", "0.25"]);
+    make(&moved, &["--support", "0.5", "--target-support", "0.25", "--support-moved"]);
+    make(&clean, &[]);
+    let read = |d: &Path, f: &str| arps::io::read_path(&d.join(f)).unwrap().points;
+    let tsv = std::fs::read_to_string(dir.join("pairs.tsv")).unwrap();
+    assert_eq!(tsv, std::fs::read_to_string(clean.join("pairs.tsv")).unwrap());
+    for e in arps::data::manifest::parse(&tsv).unwrap() {
+        let (s, s0, t, t0) =
+            (read(&dir, &e.source), read(&clean, &e.source), read(&dir, &e.target), read(&clean, &e.target));
+        assert_eq!((s.len(), t.len()), (1024 + 512, 1024 + 256));
+        assert_eq!((&s[..1024], &t[..1024]), (&s0[..], &t0[..]));
+        // the source's plane is level (z) under its surface points, reaching out beyond them
+        let (lo, hi) = arps::PointCloud::new(s0.clone()).bounds();
+        let plane = &s[1024..];
+        assert!(plane.iter().all(|p| p[2] <= lo[2] + 0.05), "a level plane under the object");
+        assert!(plane.iter().any(|p| p[0] < lo[0]) && plane.iter().any(|p| p[0] > hi[0]));
+        // the same plane in the target: the source's moved by the truth
+        let inverse = arps::transform::rigid_inverse(&e.T_target_source);
+        let back = arps::PointCloud::new(t[1024..].to_vec()).transformed(&inverse);
+        let z = |pts: &[[f32; 3]]| pts.iter().map(|p| p[2] as f64).sum::<f64>() / pts.len() as f64;
+        assert!((z(&back.points) - z(plane)).abs() < 0.01);
+        // moved: the target's plane is level in the target's own frame, under its points
+        let tm = read(&moved, &e.target);
+        assert_eq!(&tm[..1024], &t0[..]);
+        let (tlo, _) = arps::PointCloud::new(t0.clone()).bounds();
+        assert!(tm[1024..].iter().all(|p| p[2] <= tlo[2] + 0.05));
+    }
+    let sidecar: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("pairs.json")).unwrap()).unwrap();
+    assert_eq!(
+        (sidecar["generator"]["support"].as_f64(), sidecar["generator"]["target_support"].as_f64()),
+        (Some(0.5), Some(0.25))
+    );
+    // a plane in the sources only: the default leaves it out, --keep-support keeps it
+    let only = std::env::temp_dir().join(format!("arps-support-only-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&only);
+    make(&only, &["--support", "0.5"]);
+    let manifest = only.join("pairs.tsv");
+    let eval = |extra: &[&str]| {
+        let (ok, out, err) =
+            arps(&[&["eval", manifest.to_str().unwrap(), "--methods", "global", "--json"][..], extra].concat());
+        assert!(ok, "{err}");
+        serde_json::from_str::<serde_json::Value>(out.trim()).unwrap()
+    };
+    let (dropped, kept) = (eval(&[]), eval(&["--keep-support"]));
+    assert!(dropped["per_pair"][0]["results"][0] != kept["per_pair"][0]["results"][0]);
+    for bad in [["--support", "1.5"], ["--target-support", "nan"]] {
+        let (ok, _, err) =
+            arps(&[&["make-pairs", "--out", dir.to_str().unwrap(), "--count", "1"][..], &bad[..]].concat());
+        assert!(!ok && err.contains(bad[0]), "{bad:?}: {err}");
+    }
+    for d in [&dir, &moved, &clean, &only] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
 /// Real manifests store the truth to a few digits (`../shared/data/scans/pairs.tsv`): a ground
 /// truth that is rigid only to 1e-3 is still evaluated, not rejected.
 #[test]

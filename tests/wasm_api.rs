@@ -327,6 +327,38 @@ fn stray_returns_are_left_out_unless_kept() {
     assert!(!strings(&get(&kept, "warnings")).iter().any(|w| w.contains("left out")));
 }
 
+#[wasm_bindgen_test]
+fn a_support_plane_under_the_source_alone_is_left_out_unless_kept() {
+    let mut r = Registrar::with_default_model().map_err(message).unwrap();
+    // a level square under the source, reaching out beyond it on every side (a table), with as
+    // many points as the source
+    let mut src = source();
+    let n = src.len() / 3;
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in src.chunks_exact(3) {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    let side = 32;
+    for k in 0..side * side {
+        let (u, v) = ((k % side) as f32 / (side - 1) as f32, (k / side) as f32 / (side - 1) as f32);
+        let x = lo[0] - (hi[0] - lo[0]) + 3.0 * (hi[0] - lo[0]) * u;
+        let y = lo[1] - (hi[1] - lo[1]) + 3.0 * (hi[1] - lo[1]) * v;
+        src.extend([x, y, lo[2] - 0.01]);
+    }
+    let res = r.register(&src, &target(), None, None).map_err(message).unwrap();
+    let warnings = strings(&get(&res, "warnings"));
+    assert!(
+        warnings.iter().any(|w| w.contains(&format!("of the source's {} points", n + side * side))),
+        "{warnings:?}"
+    );
+    let kept =
+        r.register(&src, &target(), Some(options(r#"{"supportPlane": "keep"}"#)), None).map_err(message).unwrap();
+    assert!(!strings(&get(&kept, "warnings")).iter().any(|w| w.contains("left out a plane")));
+}
+
 /// Each error: a thrown JS `Error` with the core's message, and the same instance still works.
 #[wasm_bindgen_test]
 fn every_error_throws_and_the_registrar_keeps_working() {
@@ -375,6 +407,7 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     expect_err(&mut r, &src, &tgt, options(r#"{"voxelSize": -0.5}"#), "voxelSize");
     expect_err(&mut r, &src, &tgt, options(r#"{"nonFinite": "keep"}"#), "invalid options");
     expect_err(&mut r, &src, &tgt, options(r#"{"outliers": "remove"}"#), "invalid options");
+    expect_err(&mut r, &src, &tgt, options(r#"{"supportPlane": "remove"}"#), "invalid options");
     expect_err(&mut r, &src, &tgt, options(r#"{"network": "yes"}"#), "invalid options");
     expect_err(&mut r, &src, &tgt, options(r#"{"starts": []}"#), "starts is empty");
     expect_err(&mut r, &src, &tgt, options(r#"{"starts": ["initial", "initial"]}"#), "starts lists \"initial\" twice");

@@ -26,7 +26,7 @@ export async function modelFiles(wasm: Uint8Array, model: Uint8Array, signal: Ab
 export async function onMainThread(source: Float32Array, target: Float32Array): Promise<number> {
   await init();
   const r = Registrar.withDefaultModel();
-  const options: RegisterOptions = { icp: "plane", seed: 3, maxCorrespondenceDistance: 0.05, nonFinite: "drop", outliers: "keep" };
+  const options: RegisterOptions = { icp: "plane", seed: 3, maxCorrespondenceDistance: 0.05, nonFinite: "drop", outliers: "keep", supportPlane: "keep" };
   const result: RegistrationResult = r.register(source, target, options);
   const m: number[] = result.T_target_source;
   const again = r.register(source, target, { initialTransform: m, network: false });

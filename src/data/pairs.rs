@@ -344,7 +344,8 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
 /// [`add_strays`] scatters its points in: three times the shape's size.
 pub const STRAY_EXTENT: f64 = 3.0;
 
-/// The dense index of a stray point ([`add_strays`]): no surface sample.
+/// The dense index of a point that is no surface sample of the shape: a stray ([`add_strays`])
+/// or a support plane's ([`add_support`]).
 pub const STRAY_INDEX: u32 = u32::MAX;
 
 /// Adds stray returns to `pair` (not in the paper's protocol): `round(source_ratio * n)` points
@@ -368,6 +369,90 @@ pub fn add_strays(pair: &mut Pair, source_ratio: f64, target_ratio: f64) {
     }
     for _ in 0..n_target {
         let p = pair.T_target_source.transform_point(&stray(&mut rng));
+        pair.target.push([p.x as f32, p.y as f32, p.z as f32]);
+        pair.target_dense_index.push(STRAY_INDEX);
+    }
+}
+
+/// How far [`add_support`]'s square reaches beyond the source's footprint on each side, in the
+/// source's largest half-extents: a table reaching out about half the object's size.
+pub const SUPPORT_EXTENT: f64 = 1.0;
+
+/// The square of [`add_support`] under the object in one of `pair`'s frames (the target's
+/// with `in_target`): its centre's x and y and its half-side from that cloud's surface points
+/// (those with a dense index other than [`STRAY_INDEX`]), its height the lowest of both clouds'
+/// surface points in that frame (the object stands on it, whatever each crop kept of its bottom).
+fn support_square(pair: &Pair, in_target: bool) -> Option<(f64, f64, f64, f64)> {
+    let surface = |points: &[[f32; 3]], index: &[u32]| -> Vec<nalgebra::Point3<f64>> {
+        points
+            .iter()
+            .zip(index)
+            .filter(|(_, &i)| i != STRAY_INDEX)
+            .map(|(p, _)| nalgebra::Point3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+            .collect()
+    };
+    let (source, target) =
+        (surface(&pair.source, &pair.source_dense_index), surface(&pair.target, &pair.target_dense_index));
+    let (own, other, to_own) = if in_target {
+        (target, source, pair.T_target_source)
+    } else {
+        (source, target, crate::transform::rigid_inverse(&pair.T_target_source))
+    };
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for p in &own {
+        for a in 0..3 {
+            lo[a] = lo[a].min(p[a]);
+            hi[a] = hi[a].max(p[a]);
+        }
+    }
+    if !lo[0].is_finite() {
+        return None;
+    }
+    let floor = other.iter().map(|p| to_own.transform_point(p).z).fold(lo[2], f64::min);
+    let extent = |a: usize| (hi[a] - lo[a]) * 0.5;
+    let half = extent(0).max(extent(1)) + SUPPORT_EXTENT * extent(0).max(extent(1)).max(extent(2));
+    Some(((lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5, floor, half))
+}
+
+/// Adds a support plane to `pair` (a table or floor the scanned object stands on; not in the
+/// paper's protocol): `round(source_ratio * n)` points to its source of `n` points, drawn
+/// uniformly over a square that is level in the source frame (z up, as the bank's shapes mostly
+/// stand), at the height of the object's lowest point (of both clouds' surface points), centred
+/// under the source's footprint and
+/// reaching [`SUPPORT_EXTENT`] times the source's largest half-extent beyond it, with Gaussian
+/// noise of `sigma` (clipped at `clip`) across it; and `round(target_ratio * m)` points to its
+/// target: of the same plane moved by the ground truth (the same table in both scans, the object
+/// not moved on it), or, with `moved`, of the square that is level in the target's frame under
+/// the target's own points (the object moved on the table between the scans: the table does not
+/// follow the ground truth; pairs made with `max_tilt_deg` 0 turn the object about the table's
+/// normal only). Appended after the surface points with the dense index [`STRAY_INDEX`] (no
+/// surface sample of the shape), from a random stream of their own, so the surface points are
+/// the pair's as they were. Ratios are clamped to `[0, 1]`; a cloud without surface points gets
+/// none.
+pub fn add_support(pair: &mut Pair, source_ratio: f64, target_ratio: f64, moved: bool, sigma: f64, clip: f64) {
+    let mut rng = sampling::rng(super::mix(pair.seed, 0x5AB1E));
+    let count = |ratio: f64, n: usize| (ratio.clamp(0.0, 1.0) * n as f64).round() as usize;
+    let (n_source, n_target) = (count(source_ratio, pair.source.len()), count(target_ratio, pair.target.len()));
+    let (sigma, clip) = (sigma.max(0.0), clip.max(0.0));
+    let plane = |rng: &mut ChaCha8Rng, (cx, cy, floor, half): (f64, f64, f64, f64)| {
+        let x = cx + (rng.random::<f64>() * 2.0 - 1.0) * half;
+        let y = cy + (rng.random::<f64>() * 2.0 - 1.0) * half;
+        let z = floor + if sigma > 0.0 { (normal(rng) * sigma).clamp(-clip, clip) } else { 0.0 };
+        nalgebra::Point3::new(x, y, z)
+    };
+    let Some(under_source) = support_square(pair, false) else { return };
+    for _ in 0..n_source {
+        let p = plane(&mut rng, under_source);
+        pair.source.push([p.x as f32, p.y as f32, p.z as f32]);
+        pair.source_dense_index.push(STRAY_INDEX);
+    }
+    let under_target = if moved { support_square(pair, true) } else { None };
+    for _ in 0..n_target {
+        let p = match under_target {
+            Some(square) => plane(&mut rng, square),
+            None if moved => break,
+            None => pair.T_target_source.transform_point(&plane(&mut rng, under_source)),
+        };
         pair.target.push([p.x as f32, p.y as f32, p.z as f32]);
         pair.target_dense_index.push(STRAY_INDEX);
     }

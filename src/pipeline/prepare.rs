@@ -1,13 +1,14 @@
 //! Stage 2: the clouds prepared for the network and ICP.
 //!
 //! Takes the caller's clouds, the [`Options`] and [`Resolved`]; gives [`Prepared`]: the
-//! validated clouds ([`checked`]: without their far outliers) in their local frames (f32 offsets
+//! validated clouds ([`checked`]: without their far outliers; [`supports`]: without a support
+//! plane that only one of them stands on) in their local frames (f32 offsets
 //! from f64 origins), turned by the initial guess's rotation, jointly normalised, sampled for
 //! the network and voxelised for ICP, with the initial guess and the ICP distances in normalised
 //! units. The target's share is a [`PreparedTarget`] ([`super::target`]), taken over from the
 //! previous call when it is the same target at the same scale (and resized for other options).
 //! Warnings (collinear or flat clouds, unit mismatch, too few points for the network, far
-//! outliers left out) go to `warnings`.
+//! outliers or a support plane left out) go to `warnings`.
 
 use super::options::{self, Resolved};
 use super::target::{self, InputKey, PreparedTarget, Sizes};
@@ -15,6 +16,7 @@ use super::upright::Upright;
 use crate::cloud::{JointNormalization, NonFinite, PointCloud, MIN_POINTS};
 use crate::outliers::{self, Outliers};
 use crate::register::Options;
+use crate::support::{self, Support, Verdict};
 use crate::{checks, limits, origin, sampling, transform, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
@@ -48,10 +50,29 @@ pub(crate) struct Prepared {
 }
 
 /// The target as [`prepare`] receives it: prepared by an earlier call from the same input, or
-/// validated now.
+/// validated now (with what its check said and whether it stands on a plane).
 enum Given {
     Kept(Box<PreparedTarget>),
-    Validated(PointCloud),
+    Validated(PointCloud, Option<String>, Verdict),
+}
+
+impl Given {
+    /// Whether the target stands on a plane: `Some(true)` a support, `Some(false)` likely one.
+    fn support(&self) -> Option<bool> {
+        match self {
+            Given::Kept(k) => k.summary.support,
+            Given::Validated(_, _, verdict) => stands(verdict),
+        }
+    }
+}
+
+/// `Some(true)` for a support plane, `Some(false)` for a likely one, `None` for neither.
+fn stands(verdict: &Verdict) -> Option<bool> {
+    match verdict {
+        Verdict::Support(_) => Some(true),
+        Verdict::Likely => Some(false),
+        Verdict::None => None,
+    }
 }
 
 /// Validates, normalises and samples the pair (see the module docs); `kept` is a target prepared
@@ -69,22 +90,53 @@ pub(crate) fn prepare(
     limits::check_cloud_points("target", target.len())?;
     // the target given again: its checks passed already, and what it holds is reused below;
     // another target's is dropped before anything is allocated
-    let input = InputKey::of(target, options.non_finite, options.outliers);
+    let input = InputKey::of(target, options.non_finite, options.outliers, options.support_plane);
     let kept = kept.filter(|k| k.input == input);
     let (source, source_warning) = checked("source", source, options.non_finite, options.outliers)?;
     warnings.extend(source_warning);
-    let (given, target_warning) = match kept {
-        Some(k) => (Given::Kept(k), None),
-        None => {
-            let (t, warning) = checked("target", target, options.non_finite, options.outliers)?;
-            (Given::Validated(t), warning)
+    let validate_target = || -> Result<Given> {
+        let (t, warning) = checked("target", target, options.non_finite, options.outliers)?;
+        let verdict = find_support(&t, options.support_plane);
+        Ok(Given::Validated(t, warning, verdict))
+    };
+    let given = match kept {
+        Some(k) => Given::Kept(k),
+        None => validate_target()?,
+    };
+    // a support plane only one of the clouds stands on is left out of it
+    let source_verdict = find_support(&source, options.support_plane);
+    let (drop_source, drop_target) = supports(stands(&source_verdict), given.support());
+    let given = match given {
+        Given::Kept(k) if k.summary.support_dropped != drop_target => validate_target()?,
+        given => given,
+    };
+    let source = match source_verdict {
+        Verdict::Support(plane) if drop_source => {
+            warnings.push(support::warning("source", "target", plane.indices.len(), source.len()));
+            support::without(source, &plane.indices)
+        }
+        _ => source,
+    };
+    let (given, summary) = match given {
+        Given::Kept(k) => {
+            let summary = k.summary.clone();
+            (Given::Kept(k), summary)
+        }
+        Given::Validated(t, warning, verdict) => {
+            let stands_on = stands(&verdict);
+            let mut target_warnings: Vec<String> = warning.into_iter().collect();
+            let t = match verdict {
+                Verdict::Support(plane) if drop_target => {
+                    target_warnings.push(support::warning("target", "source", plane.indices.len(), t.len()));
+                    support::without(t, &plane.indices)
+                }
+                _ => t,
+            };
+            let summary = target::summary(&t, target_warnings, stands_on, drop_target)?;
+            (Given::Validated(t, None, Verdict::None), summary)
         }
     };
     let spreads_source = checks::not_collinear("source", &source.points, warnings)?;
-    let summary = match &given {
-        Given::Kept(k) => k.summary.clone(),
-        Given::Validated(t) => target::summary(t, target_warning)?,
-    };
     warnings.extend(summary.warnings.iter().cloned());
     checks::flat_pair(spreads_source, summary.spreads, warnings);
     let init = options::initial_transform(options)?;
@@ -123,10 +175,14 @@ pub(crate) fn prepare(
         // the same target at another scale (a source larger than it)
         Given::Kept(old) => {
             drop(old);
-            let local = checked("target", target, options.non_finite, options.outliers)?.0.into_local();
-            Box::new(PreparedTarget::new(input, summary, sizes, &local, &norm))
+            let Given::Validated(t, _, verdict) = validate_target()? else { unreachable!("validated") };
+            let t = match verdict {
+                Verdict::Support(plane) if summary.support_dropped => support::without(t, &plane.indices),
+                _ => t,
+            };
+            Box::new(PreparedTarget::new(input, summary, sizes, &t.into_local(), &norm))
         }
-        Given::Validated(t) => Box::new(PreparedTarget::new(input, summary, sizes, &t.into_local(), &norm)),
+        Given::Validated(t, _, _) => Box::new(PreparedTarget::new(input, summary, sizes, &t.into_local(), &norm)),
     };
     for (what, len) in [("source", src_n.len()), ("target", target.cloud.len())] {
         if len < n_net {
@@ -159,6 +215,23 @@ fn checked(
     let total = cloud.len();
     let (cloud, dropped) = outliers::drop_far(cloud);
     Ok((cloud, (dropped > 0).then(|| outliers::warning(what, dropped, total))))
+}
+
+/// Whether `cloud` stands on a plane ([`support::find`]); [`Verdict::None`] when `support` keeps
+/// every point.
+fn find_support(cloud: &PointCloud, support: Support) -> Verdict {
+    match support {
+        Support::Drop => support::find(&cloud.points),
+        Support::Keep => Verdict::None,
+    }
+}
+
+/// Which of the clouds lose their support plane, `(source, target)`, given whether each stands on
+/// one (`Some(true)`) or likely does (`Some(false)`): a cloud that stands on a plane the other
+/// shows no sign of (a scan of an object on a table, a model of the object alone). A plane both
+/// may stand on is the same table seen twice, and stays in both.
+fn supports(source: Option<bool>, target: Option<bool>) -> (bool, bool) {
+    (source == Some(true) && target.is_none(), target == Some(true) && source.is_none())
 }
 
 #[cfg(test)]

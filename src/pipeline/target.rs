@@ -15,11 +15,12 @@ use crate::cloud::{JointNormalization, NonFinite, PointCloud};
 use crate::global::TargetFeatures;
 use crate::icp::IcpTarget;
 use crate::outliers::Outliers;
+use crate::support::Support;
 use crate::{checks, sampling, Result};
 use std::sync::OnceLock;
 
 /// What recognises a target given again: a 128-bit fingerprint (XXH3) of its points' bytes, their
-/// count, its origin and the `nonFinite` and `outliers` options.
+/// count, its origin and the `nonFinite`, `outliers` and `supportPlane` options.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct InputKey {
     fingerprint: u128,
@@ -27,11 +28,13 @@ pub(crate) struct InputKey {
     origin: [u64; 3],
     non_finite: NonFinite,
     outliers: Outliers,
+    support: Support,
 }
 
 impl InputKey {
-    /// The key of `cloud` checked with `non_finite` and `outliers` (one pass over its points).
-    pub(crate) fn of(cloud: &PointCloud, non_finite: NonFinite, outliers: Outliers) -> Self {
+    /// The key of `cloud` checked with `non_finite`, `outliers` and `support` (one pass over its
+    /// points).
+    pub(crate) fn of(cloud: &PointCloud, non_finite: NonFinite, outliers: Outliers, support: Support) -> Self {
         let mut hasher = xxhash_rust::xxh3::Xxh3::new();
         // the points' little-endian bytes, a chunk at a time
         let mut buf = [0u8; 12 * 256];
@@ -49,6 +52,7 @@ impl InputKey {
             origin: cloud.origin.map(f64::to_bits),
             non_finite,
             outliers,
+            support,
         }
     }
 }
@@ -64,8 +68,14 @@ pub(crate) struct TargetSummary {
     pub bounding: ([f64; 3], f64),
     /// Its principal spreads ([`checks::not_collinear`]).
     pub spreads: [f64; 3],
-    /// The warnings its checks gave (a nearly collinear target).
+    /// The warnings its checks gave (a nearly collinear target, points left out).
     pub warnings: Vec<String>,
+    /// Whether the validated target stands on a plane ([`crate::support::find`]: `Some(true)`
+    /// a support, `Some(false)` likely one, `None` neither or `supportPlane` set to keep).
+    pub support: Option<bool>,
+    /// Whether that plane was left out (the source had none): the rest of the summary, and the
+    /// prepared target, are without it.
+    pub support_dropped: bool,
 }
 
 /// What the prepared target depends on besides the target: the normalisation's scale (the
@@ -90,13 +100,19 @@ fn icp_cloud(cloud: &PointCloud, sizes: &Sizes) -> PointCloud {
     sampling::voxel_downsample(cloud, f64::from_bits(sizes.voxel) as f32)
 }
 
-/// The summary of the validated `target` (its origin not yet dropped); an error when it is
-/// collinear. `warning`: what its check said (`prepare::checked`), kept among its warnings.
-pub(crate) fn summary(target: &PointCloud, warning: Option<String>) -> Result<TargetSummary> {
-    let mut warnings: Vec<String> = warning.into_iter().collect();
+/// The summary of the validated `target` (its origin not yet dropped, its support plane left out
+/// when `support_dropped`); an error when it is collinear. `warnings`: what its checks said
+/// (`prepare::checked`, the support plane), kept among its warnings.
+pub(crate) fn summary(
+    target: &PointCloud,
+    warnings: Vec<String>,
+    support: Option<bool>,
+    support_dropped: bool,
+) -> Result<TargetSummary> {
+    let mut warnings = warnings;
     let spreads = checks::not_collinear("target", &target.points, &mut warnings)?;
     let bounding = JointNormalization::box_of(target);
-    Ok(TargetSummary { origin: target.origin, bounding, spreads, warnings })
+    Ok(TargetSummary { origin: target.origin, bounding, spreads, warnings, support, support_dropped })
 }
 
 /// The target prepared for the network, ICP and the global hypotheses (normalised units), with

@@ -47,7 +47,7 @@ use arps::confidence::Evidence;
 use arps::data::manifest;
 use arps::data::metrics::{ambiguous_miss, pair_error, recall_svg, recalled, summarize, PairError, Summary};
 use arps::transform::{euler_xyz, from_rotation_translation, rigid_inverse, to_rows};
-use arps::{io, ModelConfig, Options, Outliers, PointCloud, Registrar, Search, Start, Timings, Weights};
+use arps::{io, ModelConfig, Options, Outliers, PointCloud, Registrar, Search, Start, Support, Timings, Weights};
 use clap::{Args, ValueEnum};
 use nalgebra::{Matrix4, Vector3};
 use rand::Rng;
@@ -105,6 +105,11 @@ pub struct EvalArgs {
     /// keep), for every method and the ground truth's refinement; by default they are left out.
     #[arg(long)]
     keep_outliers: bool,
+    /// Keep a support plane that only one cloud of a pair stands on (`Options::support_plane`
+    /// set to keep), for every method and the ground truth's refinement; by default it is left
+    /// out.
+    #[arg(long)]
+    keep_support: bool,
     /// Run only these methods, comma-separated [default: all seven].
     #[arg(long, value_enum, value_delimiter = ',')]
     methods: Option<Vec<Method>>,
@@ -305,6 +310,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
     let mut untrained = Registrar::new(&untrained_weights).map_err(|e| e.to_string())?;
 
     let outliers = if a.keep_outliers { Outliers::Keep } else { Outliers::Drop };
+    let support_plane = if a.keep_support { Support::Keep } else { Support::Drop };
     let mut results = Vec::new();
     for (k, e) in entries.iter().enumerate() {
         let read = |p: PathBuf| io::read_path(&p).map_err(|err| format!("{}: {err}", p.display()));
@@ -326,6 +332,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             initial_transform: Some(to_rows(&gt_rigid)),
             starts: vec![Start::Initial],
             outliers,
+            support_plane,
             ..Options::default()
         };
         let refined_truth = trained
@@ -349,7 +356,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             alternatives: Vec::new(),
         };
         for &m in &methods {
-            let options = Options { up, outliers, ..m.options(&source, &target, &starts) };
+            let options = Options { up, outliers, support_plane, ..m.options(&source, &target, &starts) };
             let reg = if m == Method::UntrainedIcp { &mut untrained } else { &mut trained };
             // each method pays for preparing the target, as a call on its own would
             reg.forget_target();

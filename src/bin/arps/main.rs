@@ -3,7 +3,9 @@
 //!
 //! Errors print one line on stderr (`arps: ...`) and exit with status 1 (2 for usage errors).
 
-use arps::{io, transform, IcpKind, ModelConfig, NonFinite, Options, Outliers, Registrar, Start, StoreAs, Weights};
+use arps::{
+    io, transform, IcpKind, ModelConfig, NonFinite, Options, Outliers, Registrar, Start, StoreAs, Support, Weights,
+};
 use clap::{Parser, Subcommand, ValueEnum};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -91,6 +93,10 @@ enum Command {
         /// left out, with a warning: `Options::outliers`).
         #[arg(long)]
         keep_outliers: bool,
+        /// Keep a support plane (a table or floor) that only one of the clouds stands on (by
+        /// default it is left out of that cloud, with a warning: `Options::support_plane`).
+        #[arg(long)]
+        keep_support: bool,
         /// Read a mesh file (OBJ, OFF, STL, PLY with faces) as this many points drawn uniformly
         /// over its surface instead of its vertices (a CAD model's vertices sit on its edges);
         /// point files are read as they are.
@@ -253,6 +259,7 @@ fn run(command: Command) -> Result<(), String> {
             up,
             drop_non_finite,
             keep_outliers,
+            keep_support,
             surface_points,
             json,
         } => {
@@ -272,6 +279,7 @@ fn run(command: Command) -> Result<(), String> {
                 seed,
                 non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
                 outliers: if keep_outliers { Outliers::Keep } else { Outliers::Drop },
+                support_plane: if keep_support { Support::Keep } else { Support::Drop },
                 up,
                 starts: starts.unwrap_or_else(|| Options::default().starts),
                 search: match search {

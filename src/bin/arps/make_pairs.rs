@@ -96,6 +96,21 @@ pub struct MakePairsArgs {
     /// The same for each target (default 0: a clean target, as a model is).
     #[arg(long, default_value_t = 0.0)]
     target_stray: f64,
+    /// A support plane added to each source, as a share of its points: a level square (z up in
+    /// the shape's frame) under the source's lowest point, reaching one footprint beyond it on
+    /// each side, as the table under a scanned object (not in the paper's protocol; default 0).
+    /// The surface points stay the pair's.
+    #[arg(long, default_value_t = 0.0)]
+    support: f64,
+    /// The same plane in each target, as a share of its points (the same table in both scans;
+    /// default 0: a target without it, as a model is).
+    #[arg(long, default_value_t = 0.0)]
+    target_support: f64,
+    /// With `--target-support`: the object was moved on the table between the two scans, so the
+    /// target's plane is level under the target's own points instead of the source's plane moved
+    /// by the ground truth (give `--max-tilt 0` for turns about the table's normal only).
+    #[arg(long)]
+    support_moved: bool,
 }
 
 /// A crop's fraction given by a user: in (0, 1].
@@ -128,6 +143,8 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
     let target_keep_ratio = a.target_keep.map(|r| check_keep("--target-keep", r)).transpose()?;
     let stray = check_share(a.stray).map_err(|e| format!("--stray {e}"))?;
     let target_stray = check_share(a.target_stray).map_err(|e| format!("--target-stray {e}"))?;
+    let support = check_share(a.support).map_err(|e| format!("--support {e}"))?;
+    let target_support = check_share(a.target_support).map_err(|e| format!("--target-support {e}"))?;
     if a.points == 0 || a.target_points == Some(0) {
         return Err("--points and --target-points: a cloud needs at least one point".into());
     }
@@ -180,6 +197,16 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
         if stray > 0.0 || target_stray > 0.0 {
             pairs::add_strays(&mut pair, stray, target_stray);
         }
+        if support > 0.0 || target_support > 0.0 {
+            pairs::add_support(
+                &mut pair,
+                support,
+                target_support,
+                a.support_moved,
+                params.noise_sigma,
+                params.noise_clip,
+            );
+        }
         let stem = format!("{i:05}");
         let (sf, tf) = (format!("{stem}_source.ply"), format!("{stem}_target.ply"));
         for (f, pts) in [(&sf, &pair.source), (&tf, &pair.target)] {
@@ -221,10 +248,16 @@ pub fn run(a: MakePairsArgs) -> Result<(), String> {
             "bank_fraction": a.bank_fraction,
             "val_fraction": a.val_fraction,
     });
-    // strays are not in PairParams (they are added to a made pair): recorded here when present
+    // strays and support planes are not in PairParams (they are added to a made pair): recorded
+    // here when present
     if stray > 0.0 || target_stray > 0.0 {
         generator["stray"] = stray.into();
         generator["target_stray"] = target_stray.into();
+    }
+    if support > 0.0 || target_support > 0.0 {
+        generator["support"] = support.into();
+        generator["target_support"] = target_support.into();
+        generator["support_moved"] = a.support_moved.into();
     }
     let sidecar = Sidecar { units: "normalized".into(), generator, params, pairs: metas };
     let json = a.out.join("pairs.json");

@@ -1,0 +1,442 @@
+//! Support planes: the table or floor a scanned object stands on, which a model of the object
+//! lacks. `Options::support_plane` (default [`Support::Drop`]) leaves such a plane out of a cloud
+//! when the other cloud shows no sign of one.
+//!
+//! A phone or depth-camera capture of an object takes in the surface under it. Registered onto a
+//! model of the object alone, that plane spoils every stage: the bounding box, and with it the
+//! normalisation the network sees, takes the table's size; the descriptors match the table to
+//! the model's flat faces; ICP pulls the model's bottom onto it (`BENCHMARK.md`, "A support plane
+//! under the scan").
+//!
+//! The test looks at an even sample of the cloud (at most [`SAMPLE`] points). Each of [`SEEDS`]
+//! sample points spread over it proposes the plane of its [`NEIGHBOURS`] nearest sample points
+//! when they are flat, and counts the sample points within a band about it ([`THICKNESS`]
+//! median neighbour distances, or more for a noisier plane). The [`MAX_PLANES`] most populous
+//! distinct planes are refitted to their points and tested, in that order, against [`STRICT`]:
+//! - enough of the sample lies on the plane, and enough off it (an object stands on it: a cloud
+//!   that is nearly all one plane is a flat object or a wall);
+//! - nearly all the points off it lie on one side (the object stands on it; a plane through the
+//!   middle of a shape is part of the shape);
+//! - enough of its points lie outside the footprint of the points off it (their bounding
+//!   rectangle in the plane), on at least three sides: it reaches out beyond what stands on it,
+//!   as a table does, and as a box's bottom face, the floor of a room between its walls or the
+//!   ground of a street do not.
+//!
+//! The first plane that passes is a [`Verdict::Support`]: the points of the whole cloud within
+//! its fitted thickness are its points. A cloud with none that passes, but one that passes the
+//! [`LOOSE`] tests, is [`Verdict::Likely`] to stand on a plane (the same table seen from another
+//! side, a flat object lying on it). Which cloud loses its plane is the pair's decision
+//! (`pipeline::prepare`): a support plane is left out of its cloud only when the other cloud is
+//! [`Verdict::None`]; a plane both may stand on is the same table seen twice, and stays.
+
+use crate::cloud::{PointCloud, MIN_POINTS};
+use crate::refine::even_sample;
+use crate::spatial::KdIndex;
+use nalgebra::{Matrix3, SymmetricEigen, Vector3};
+use serde::{Deserialize, Serialize};
+
+/// What registration does with a support plane (a table or floor under the object) that one
+/// cloud stands on and the other does not (`Options::support_plane`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "SupportPlane"))]
+pub enum Support {
+    /// Leave it out of that cloud, with a warning that says how many points it held (the
+    /// default). A plane both clouds stand on stays in both.
+    #[default]
+    Drop,
+    /// Keep every point.
+    Keep,
+}
+
+/// Most points of the even sample the test looks at.
+pub const SAMPLE: usize = 2048;
+
+/// Fewest sample points the test needs.
+pub const MIN_SAMPLE: usize = 64;
+
+/// Sample points, spread evenly over the sample, that each propose a plane.
+pub const SEEDS: usize = 128;
+
+/// The nearest sample points whose plane a seed proposes.
+pub const NEIGHBOURS: usize = 32;
+
+/// A seed proposes a plane only when its neighbours' smallest principal spread is at most this
+/// share of their middle one (they lie on a plane, not on a curve or an edge).
+pub const FLATNESS: f64 = 0.05;
+
+/// Most distinct planes tested, the most populous first.
+pub const MAX_PLANES: usize = 4;
+
+/// Two seeds' planes are the same plane when their normals are within about 10° and each
+/// point lies within twice the band of the other.
+const SAME_COS: f64 = 0.985;
+
+/// Half the plane's thickness, in the sample's median distances to the 4th nearest sample point.
+pub const THICKNESS: f32 = 0.3;
+
+/// The thresholds a plane is tested against ([`STRICT`], [`LOOSE`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Tests {
+    /// Least share of the sample on the plane.
+    pub min_share: f64,
+    /// Least share of the sample off the plane (more than twice its band away).
+    pub min_rest: f64,
+    /// Most share of the points off the plane that may lie on its other side.
+    pub other_side: f64,
+    /// Least share of the plane's points outside the footprint of the points off it.
+    pub beyond: f64,
+    /// Least share of the plane's points beyond a side of the footprint for the side to count.
+    pub side_share: f64,
+    /// Fewest of the footprint's four sides the plane must reach beyond.
+    pub sides: usize,
+}
+
+/// What makes a plane a support ([`Verdict::Support`]): a tenth of the sample on it and a tenth
+/// off it, the rest all but 3% on one side, and 30% of its points beyond the rest's footprint,
+/// on at least three sides (5% of them beyond each): a table seen around the object, not the
+/// bottom of a shape whose walls were cut on one side.
+pub const STRICT: Tests =
+    Tests { min_share: 0.1, min_rest: 0.1, other_side: 0.03, beyond: 0.3, side_share: 0.05, sides: 3 };
+
+/// What makes a cloud look as if it may stand on a plane ([`Verdict::Likely`]): a tenth of the
+/// sample on it and 2% off it (a flat object lying on a table), the rest all but 10% on one side,
+/// and 15% of its points beyond the rest's footprint on at least two sides. The same table seen
+/// from another side often passes only this; a model of an object alone passes neither, since
+/// its own faces do not reach beyond the rest of it.
+pub const LOOSE: Tests =
+    Tests { min_share: 0.1, min_rest: 0.02, other_side: 0.1, beyond: 0.15, side_share: 0.05, sides: 2 };
+
+/// What [`find`] says of a cloud.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Verdict {
+    /// It stands on this plane ([`STRICT`]).
+    Support(SupportPlane),
+    /// It may stand on a plane ([`LOOSE`], not [`STRICT`]).
+    Likely,
+    /// No plane passes either.
+    None,
+}
+
+/// A support plane found in a cloud ([`find`]).
+#[derive(Clone, Debug, PartialEq)]
+pub struct SupportPlane {
+    /// A point of the plane (the cloud's frame).
+    pub point: [f64; 3],
+    /// Its unit normal, towards the side the rest of the cloud stands on.
+    pub normal: [f64; 3],
+    /// Half its thickness: points nearer the plane are its points.
+    pub half_thickness: f64,
+    /// The indices (ascending) of the cloud's points on it.
+    pub indices: Vec<usize>,
+}
+
+/// The centroid and the principal axes (columns, by ascending spread) of `points`, with the
+/// spreads (variances).
+fn principal(points: impl Iterator<Item = [f32; 3]> + Clone) -> Option<(Vector3<f64>, Matrix3<f64>, [f64; 3])> {
+    let mut n = 0usize;
+    let mut c = Vector3::zeros();
+    for p in points.clone() {
+        c += Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+        n += 1;
+    }
+    if n < 3 {
+        return None;
+    }
+    c /= n as f64;
+    let mut cov = Matrix3::zeros();
+    for p in points {
+        let d = Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64) - c;
+        cov += d * d.transpose();
+    }
+    cov /= n as f64;
+    let scale = cov.abs().max();
+    if !(scale > 0.0 && scale.is_finite()) {
+        return None;
+    }
+    let eig = SymmetricEigen::new(cov / scale);
+    let mut order = [0usize, 1, 2];
+    order.sort_by(|&a, &b| eig.eigenvalues[a].total_cmp(&eig.eigenvalues[b]));
+    let axes = Matrix3::from_columns(&order.map(|j| eig.eigenvectors.column(j).into_owned()));
+    Some((c, axes, order.map(|j| eig.eigenvalues[j].max(0.0) * scale)))
+}
+
+/// A plane: a point on it and its unit normal.
+#[derive(Clone, Copy, Debug)]
+struct Plane {
+    point: Vector3<f64>,
+    normal: Vector3<f64>,
+}
+
+impl Plane {
+    fn distance(&self, p: &[f32; 3]) -> f64 {
+        self.distance_to(&Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+    }
+
+    fn distance_to(&self, p: &Vector3<f64>) -> f64 {
+        (p - self.point).dot(&self.normal)
+    }
+}
+
+/// The sample's median distance to the 4th nearest other sample point (0 when undefined).
+fn median_reach(sample: &[[f32; 3]], index: &KdIndex, out: &mut Vec<(usize, f32)>) -> f32 {
+    let mut reach: Vec<f32> = sample
+        .iter()
+        .map(|q| {
+            index.knn_into(q, 5, out);
+            out.last().map_or(f32::INFINITY, |e| e.1.sqrt())
+        })
+        .collect();
+    let mid = reach.len() / 2;
+    let (_, median, _) = reach.select_nth_unstable_by(mid, f32::total_cmp);
+    if median.is_finite() {
+        *median
+    } else {
+        0.0
+    }
+}
+
+/// A seed's plane and the band it was counted in.
+#[derive(Clone, Copy, Debug)]
+struct Candidate {
+    plane: Plane,
+    band: f64,
+    count: usize,
+}
+
+/// Whether `points` stand on a support plane, and which (see the module docs).
+pub fn find(points: &[[f32; 3]]) -> Verdict {
+    let sample = even_sample(points, SAMPLE);
+    if sample.len() < MIN_SAMPLE {
+        return Verdict::None;
+    }
+    let index = KdIndex::new(&sample);
+    let mut out = Vec::with_capacity(NEIGHBOURS + 1);
+    let reach = median_reach(&sample, &index, &mut out) as f64;
+    if reach <= 0.0 {
+        return Verdict::None;
+    }
+    let count = |plane: &Plane, band: f64| sample.iter().filter(|p| plane.distance(p).abs() <= band).count();
+    // the seeds' planes, each counted in a band of its own: the larger of THICKNESS times the
+    // sample's median reach and three times the spread of the seed's neighbours about it (a
+    // sparser, noisier table than the object on it)
+    let seeds = SEEDS.min(sample.len());
+    let mut candidates: Vec<Candidate> = Vec::with_capacity(seeds);
+    for s in 0..seeds {
+        let q = &sample[s * sample.len() / seeds];
+        index.knn_into(q, NEIGHBOURS, &mut out);
+        let Some((c, axes, spread)) = principal(out.iter().map(|&(i, _)| sample[i])) else { continue };
+        if spread[0] > FLATNESS * spread[1] {
+            continue;
+        }
+        let plane = Plane { point: c, normal: axes.column(0).into_owned() };
+        let band = (THICKNESS as f64 * reach).max(3.0 * spread[0].sqrt());
+        candidates.push(Candidate { plane, band, count: count(&plane, band) });
+    }
+    // the most populous first (stable: the first seed on ties), each distinct plane once
+    candidates.sort_by_key(|c| std::cmp::Reverse(c.count));
+    let mut distinct: Vec<Candidate> = Vec::with_capacity(MAX_PLANES);
+    for c in candidates {
+        if distinct.len() >= MAX_PLANES {
+            break;
+        }
+        let same = |t: &Candidate| {
+            t.plane.normal.dot(&c.plane.normal).abs() > SAME_COS
+                && t.plane.distance_to(&c.plane.point).abs() <= 2.0 * c.band
+        };
+        if !distinct.iter().any(same) {
+            distinct.push(c);
+        }
+    }
+    for c in &distinct {
+        if let Some(plane) = test(points, &sample, reach, *c, &STRICT) {
+            return Verdict::Support(plane);
+        }
+    }
+    if distinct.iter().any(|c| test(points, &sample, reach, *c, &LOOSE).is_some()) {
+        return Verdict::Likely;
+    }
+    Verdict::None
+}
+
+/// `c`'s plane refitted, if it passes `tests` as a support of `points` (see the module docs);
+/// `sample` is their even sample and `reach` its median reach.
+fn test(points: &[[f32; 3]], sample: &[[f32; 3]], reach: f64, c: Candidate, tests: &Tests) -> Option<SupportPlane> {
+    let (mut plane, band) = (c.plane, c.band);
+    // refit to the points in its band, twice
+    for _ in 0..2 {
+        let on = sample.iter().copied().filter(|p| plane.distance(p).abs() <= band);
+        let (c, axes, _) = principal(on)?;
+        plane = Plane { point: c, normal: axes.column(0).into_owned() };
+    }
+    let on: Vec<[f32; 3]> = sample.iter().copied().filter(|p| plane.distance(p).abs() <= band).collect();
+    let off: Vec<(f64, [f32; 3])> =
+        sample.iter().map(|p| (plane.distance(p), *p)).filter(|(d, _)| d.abs() > 2.0 * band).collect();
+    let n = sample.len() as f64;
+    if (on.len() as f64) < tests.min_share * n || (off.len() as f64) < tests.min_rest * n {
+        return None;
+    }
+    // the rest on one side: the normal turned towards it
+    let above = off.iter().filter(|(d, _)| *d > 0.0).count();
+    let below = off.len() - above;
+    if (above.min(below) as f64) > tests.other_side * off.len() as f64 {
+        return None;
+    }
+    if below > above {
+        plane.normal = -plane.normal;
+    }
+    // the plane's points outside the footprint of the rest: in-plane axes from the plane's points
+    let (_, axes, _) = principal(on.iter().copied())?;
+    let (u, v) = (axes.column(2).into_owned(), axes.column(1).into_owned());
+    let coords = |p: &[f32; 3]| {
+        let d = Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64) - plane.point;
+        (d.dot(&u), d.dot(&v))
+    };
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for (_, p) in &off {
+        let (a, b) = coords(p);
+        lo = [lo[0].min(a), lo[1].min(b)];
+        hi = [hi[0].max(a), hi[1].max(b)];
+    }
+    let (lo, hi) = (lo.map(|x| x - reach), hi.map(|x| x + reach));
+    // how many of the plane's points lie beyond each side of the footprint, and beyond any
+    let mut sides = [0usize; 4];
+    let mut beyond = 0usize;
+    for p in &on {
+        let (a, b) = coords(p);
+        let out = [a < lo[0], a > hi[0], b < lo[1], b > hi[1]];
+        for (s, o) in sides.iter_mut().zip(out) {
+            *s += o as usize;
+        }
+        beyond += out.iter().any(|&o| o) as usize;
+    }
+    let open_sides = sides.iter().filter(|&&s| s as f64 >= tests.side_share * on.len() as f64).count();
+    if (beyond as f64) < tests.beyond * on.len() as f64 || open_sides < tests.sides {
+        return None;
+    }
+    // the thickness from the spread of the plane's sample points about it (scanner noise), at
+    // most the band it was found in
+    let mut residual: Vec<f64> = on.iter().map(|p| plane.distance(p).abs()).collect();
+    let mid = residual.len() / 2;
+    let (_, mad, _) = residual.select_nth_unstable_by(mid, f64::total_cmp);
+    let half_thickness = (4.0 * 1.4826 * *mad).clamp(0.25 * band, band);
+    let indices: Vec<usize> =
+        (0..points.len()).filter(|&i| plane.distance(&points[i]).abs() <= half_thickness).collect();
+    if points.len() - indices.len() < MIN_POINTS {
+        return None;
+    }
+    Some(SupportPlane { point: plane.point.into(), normal: plane.normal.into(), half_thickness, indices })
+}
+
+/// `cloud` without the points at `indices` (ascending).
+pub fn without(mut cloud: PointCloud, indices: &[usize]) -> PointCloud {
+    let mut next = indices.iter().peekable();
+    let mut i = 0usize;
+    cloud.points.retain(|_| {
+        let drop = next.next_if(|&&f| f == i).is_some();
+        i += 1;
+        !drop
+    });
+    cloud
+}
+
+/// The warning for a support plane of `dropped` points left out of the cloud `what` of `total`
+/// points, which `other` does not stand on.
+pub fn warning(what: &str, other: &str, dropped: usize, total: usize) -> String {
+    format!(
+        "left out a plane of {dropped} of the {what}'s {total} points ({:.1}%) that the rest of it stands on and the {other} lacks (a table or floor under a scanned object); the supportPlane option set to keep keeps it",
+        100.0 * dropped as f64 / total.max(1) as f64
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A deterministic stream in [-1, 1).
+    fn stream(seed: u64) -> impl FnMut() -> f32 {
+        let mut s = seed.wrapping_mul(0x9e37_79b9_7f4a_7c15) | 1;
+        move || {
+            s ^= s << 13;
+            s ^= s >> 7;
+            s ^= s << 17;
+            (s >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        }
+    }
+
+    /// `n` points on the surface of a box of half-sizes `h` standing on z = 0 (its bottom face
+    /// left out when `bottom` is false), a little noisy.
+    fn block(n: usize, h: [f32; 3], bottom: bool, seed: u64) -> Vec<[f32; 3]> {
+        let mut r = stream(seed);
+        let mut out = Vec::with_capacity(n);
+        while out.len() < n {
+            let (face, u, v, e) = (((r() + 1.0) * 3.0) as usize % 6, r(), r(), 0.002 * r());
+            let p = match face {
+                0 => [h[0] + e, u * h[1], (v + 1.0) * h[2]],
+                1 => [-h[0] + e, u * h[1], (v + 1.0) * h[2]],
+                2 => [u * h[0], h[1] + e, (v + 1.0) * h[2]],
+                3 => [u * h[0], -h[1] + e, (v + 1.0) * h[2]],
+                4 => [u * h[0], v * h[1], 2.0 * h[2] + e],
+                _ if bottom => [u * h[0], v * h[1], e],
+                _ => continue,
+            };
+            out.push(p);
+        }
+        out
+    }
+
+    /// `n` points on the level square of half-side `half` about the origin at z = 0, a little
+    /// noisy.
+    fn table(n: usize, half: f32, seed: u64) -> Vec<[f32; 3]> {
+        let mut r = stream(seed);
+        (0..n).map(|_| [r() * half, r() * half, 0.002 * r()]).collect()
+    }
+
+    #[test]
+    fn a_table_under_an_object_is_found_and_the_object_kept() {
+        let object = block(3_000, [0.3, 0.2, 0.25], false, 1);
+        let mut points = object.clone();
+        points.extend(table(1_500, 1.0, 2));
+        let Verdict::Support(plane) = find(&points) else { panic!("a support plane") };
+        assert!(plane.normal[2] > 0.99, "{:?}", plane.normal);
+        // every table point, and no object point above the plane's thickness
+        assert!((3_000..4_500).all(|i| plane.indices.binary_search(&i).is_ok()));
+        assert!(plane.indices.iter().all(|&i| i >= 3_000 || points[i][2] <= plane.half_thickness as f32 + 0.005));
+        let kept = without(PointCloud::with_origin(points, [1.0, 2.0, 3.0]), &plane.indices);
+        assert_eq!(kept.origin, [1.0, 2.0, 3.0]);
+        assert!(kept.len() > 2_800 && kept.points.iter().all(|p| p[2] > 0.0));
+    }
+
+    #[test]
+    fn an_objects_own_faces_and_flat_clouds_are_not_supports() {
+        // a closed box: its bottom face does not reach beyond its walls
+        assert_eq!(find(&block(4_000, [0.3, 0.2, 0.25], true, 3)), Verdict::None);
+        // a flat cloud: nothing stands on it
+        assert_eq!(find(&table(2_000, 1.0, 4)), Verdict::None);
+        // a plane through the middle of the object, reaching beyond it: points on both sides
+        let mut points: Vec<[f32; 3]> =
+            block(3_000, [0.3, 0.2, 0.25], true, 5).into_iter().map(|p| [p[0], p[1], p[2] - 0.25]).collect();
+        points.extend(table(1_500, 1.0, 6));
+        assert_eq!(find(&points), Verdict::None);
+        // a table beside the object on one side only (the floor of a cut-open shape)
+        let mut points = block(3_000, [0.3, 0.2, 0.25], false, 7);
+        points.extend(table(1_500, 1.0, 8).into_iter().map(|p| [p[0].abs() * 0.6 + 0.3, p[1] * 0.2, p[2]]));
+        assert_eq!(find(&points), Verdict::None);
+    }
+
+    #[test]
+    fn a_small_object_on_a_large_table_is_likely_on_a_plane() {
+        // too little stands off the plane for a support (4% of the cloud), enough for a likely one
+        let mut points = block(200, [0.1, 0.08, 0.1], false, 12);
+        points.extend(table(4_800, 1.2, 13));
+        assert_eq!(find(&points), Verdict::Likely);
+    }
+
+    #[test]
+    fn too_few_points_are_left_as_they_are() {
+        let mut points = block(40, [0.3, 0.2, 0.25], false, 9);
+        points.extend(table(20, 1.0, 10));
+        assert_eq!(find(&points), Verdict::None);
+        assert_eq!(find(&[]), Verdict::None);
+    }
+}
