@@ -76,13 +76,15 @@ export type RegisterOptions = {
    */
   outliers?: Outliers,
   /**
-   * What to do with a support plane that one cloud stands on and the other shows no sign of
-   * (the table or floor under a scanned object, registered onto a model of the object alone):
-   * `"drop"` (leave it out of that cloud, with a warning that counts its points; the default)
-   * or `"keep"`. A support plane holds a tenth or more of its cloud, has nearly all the rest
-   * of the cloud on one side, and reaches out beyond what stands on it on at least three
-   * sides. A plane both clouds may stand on (the same table in two scans) stays in both. Left
-   * in, such a plane sets the clouds' scale, and the object's flat faces are drawn onto it.
+   * What to do with a support plane, the table or floor under a scanned object: `"drop"` (the
+   * default: leave it out of a cloud that stands on one when the other cloud shows no sign of
+   * one, as a scan onto a model of the object alone, with a warning that counts its points; a
+   * plane both clouds may stand on, the same table in two scans, stays in both), `"dropAll"`
+   * (leave every one out: for two scans of an object tipped or turned over on the table
+   * between them, whose tables disagree with its motion) or `"keep"`. A support plane holds a
+   * tenth or more of its cloud, has nearly all the rest of the cloud on one side, and reaches
+   * out beyond what stands on it on at least three sides. Left in a scan registered onto a
+   * model, it sets the clouds' scale, and the object's flat faces are drawn onto it.
    */
   supportPlane?: SupportPlane,
   /**
@@ -189,10 +191,10 @@ export type NonFinite = "error" | "drop";
 export type Outliers = "drop" | "keep";
 
 /**
- * What registration does with a support plane (a table or floor under the object) that one
- * cloud stands on and the other does not (`Options::support_plane`).
+ * What registration does with a support plane, the table or floor under the object
+ * (`Options::support_plane`).
  */
-export type SupportPlane = "drop" | "keep";
+export type SupportPlane = "drop" | "dropAll" | "keep";
 
 /**
  * A stage of a registration, reported as it starts (to `Registrar::register_with_progress`'s

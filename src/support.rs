@@ -1,6 +1,6 @@
 //! Support planes: the table or floor a scanned object stands on, which a model of the object
 //! lacks. `Options::support_plane` (default [`Support::Drop`]) leaves such a plane out of a cloud
-//! when the other cloud shows no sign of one.
+//! when the other cloud shows no sign of one ([`Support::DropAll`]: out of every cloud).
 //!
 //! A phone or depth-camera capture of an object takes in the surface under it. Registered onto a
 //! model of the object alone, that plane spoils every stage: the bounding box, and with it the
@@ -35,16 +35,22 @@ use crate::spatial::KdIndex;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 
-/// What registration does with a support plane (a table or floor under the object) that one
-/// cloud stands on and the other does not (`Options::support_plane`).
+/// What registration does with a support plane, the table or floor under the object
+/// (`Options::support_plane`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "SupportPlane"))]
 pub enum Support {
-    /// Leave it out of that cloud, with a warning that says how many points it held (the
-    /// default). A plane both clouds stand on stays in both.
+    /// Leave it out of a cloud that stands on one when the other cloud shows no sign of one (a
+    /// scan onto a model of the object alone), with a warning that says how many points it held
+    /// (the default). A plane both clouds may stand on is the same table seen twice, and stays
+    /// in both.
     #[default]
     Drop,
+    /// Leave every support plane out, both clouds' when both stand on one: for two scans of an
+    /// object that was tipped or turned over on the table between them, whose tables disagree
+    /// with the object's motion.
+    DropAll,
     /// Keep every point.
     Keep,
 }

@@ -82,6 +82,30 @@ fn a_plane_both_clouds_stand_on_stays() {
 }
 
 #[test]
+fn drop_all_leaves_out_the_plane_both_clouds_stand_on() {
+    // the same two captures as above; the mug turned over between them is beyond this fixture,
+    // so this checks the option's effect: both tables out, the pose still found from the mug
+    let scene = scene();
+    let (even, odd): (Vec<_>, Vec<_>) = scene.points.iter().enumerate().partition(|(i, _)| i % 2 == 0);
+    let first = PointCloud::new(even.into_iter().map(|(_, p)| *p).collect());
+    let gt = common::motion([15.0, -20.0, 35.0], [0.2, 0.1, -0.1]);
+    let second = PointCloud::new(odd.into_iter().map(|(_, p)| *p).collect()).transformed(&gt);
+    let options = Options { support_plane: Support::DropAll, ..Options::default() };
+    let r = Registrar::with_default_model().unwrap().register(&first, &second, &options).unwrap();
+    for what in ["source", "target"] {
+        let warning = format!("of the {what}'s");
+        assert!(r.warnings.iter().any(|w| w.contains("left out a plane") && w.contains(&warning)), "{:?}", r.warnings);
+    }
+    let (re, te) = errors(&r.T_target_source, &gt);
+    assert!(re < 0.5 && te < 0.005, "{re} deg, {te} m");
+    // a model without a table: the same as the default
+    let model = mug().transformed(&gt);
+    let all = Registrar::with_default_model().unwrap().register(&first, &model, &options).unwrap();
+    let default = Registrar::with_default_model().unwrap().register(&first, &model, &Options::default()).unwrap();
+    assert_eq!(all.T_target_source, default.T_target_source);
+}
+
+#[test]
 fn a_target_kept_between_calls_follows_which_source_stands_on_a_plane() {
     // the capture as the target of three calls: the mug (the table left out of the target), the
     // capture moved (the table kept in both), the mug again; each as a registrar's first call
@@ -116,6 +140,8 @@ fn a_cloud_without_a_support_plane_is_registered_as_with_every_point_kept() {
 fn the_option_is_read_from_json_and_a_bad_value_is_a_clear_error() {
     let o: Options = serde_json::from_str(r#"{"supportPlane": "keep"}"#).unwrap();
     assert_eq!(o.support_plane, Support::Keep);
+    let o: Options = serde_json::from_str(r#"{"supportPlane": "dropAll"}"#).unwrap();
+    assert_eq!(o.support_plane, Support::DropAll);
     assert_eq!(Options::default().support_plane, Support::Drop);
     let e = serde_json::from_str::<Options>(r#"{"supportPlane": "remove"}"#).unwrap_err().to_string();
     assert!(e.contains("unknown variant `remove`") && e.contains("drop") && e.contains("keep"), "{e}");

@@ -105,7 +105,7 @@ pub(crate) fn prepare(
     };
     // a support plane only one of the clouds stands on is left out of it
     let source_verdict = find_support(&source, options.support_plane);
-    let (drop_source, drop_target) = supports(stands(&source_verdict), given.support());
+    let (drop_source, drop_target) = supports(options.support_plane, stands(&source_verdict), given.support());
     let given = match given {
         Given::Kept(k) if k.summary.support_dropped != drop_target => validate_target()?,
         given => given,
@@ -221,17 +221,21 @@ fn checked(
 /// every point.
 fn find_support(cloud: &PointCloud, support: Support) -> Verdict {
     match support {
-        Support::Drop => support::find(&cloud.points),
+        Support::Drop | Support::DropAll => support::find(&cloud.points),
         Support::Keep => Verdict::None,
     }
 }
 
 /// Which of the clouds lose their support plane, `(source, target)`, given whether each stands on
-/// one (`Some(true)`) or likely does (`Some(false)`): a cloud that stands on a plane the other
-/// shows no sign of (a scan of an object on a table, a model of the object alone). A plane both
-/// may stand on is the same table seen twice, and stays in both.
-fn supports(source: Option<bool>, target: Option<bool>) -> (bool, bool) {
-    (source == Some(true) && target.is_none(), target == Some(true) && source.is_none())
+/// one (`Some(true)`) or likely does (`Some(false)`). With [`Support::Drop`], a cloud that stands
+/// on a plane the other shows no sign of (a scan of an object on a table, a model of the object
+/// alone): a plane both may stand on is the same table seen twice, and stays in both. With
+/// [`Support::DropAll`], every cloud that stands on one.
+fn supports(policy: Support, source: Option<bool>, target: Option<bool>) -> (bool, bool) {
+    match policy {
+        Support::DropAll => (source == Some(true), target == Some(true)),
+        _ => (source == Some(true) && target.is_none(), target == Some(true) && source.is_none()),
+    }
 }
 
 #[cfg(test)]
