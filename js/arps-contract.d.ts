@@ -78,10 +78,11 @@ export type RegisterOptions = {
   /**
    * What to do with a support plane, the table or floor under a scanned object: `"drop"` (the
    * default: leave it out of a cloud that stands on one when the other cloud shows no sign of
-   * one, as a scan onto a model of the object alone, with a warning that counts its points; a
-   * plane both clouds may stand on, the same table in two scans, stays in both), `"dropAll"`
-   * (leave every one out: for two scans of an object tipped or turned over on the table
-   * between them, whose tables disagree with its motion) or `"keep"`. A support plane holds a
+   * one, as a scan onto a model of the object alone, with a warning that counts its points;
+   * when both clouds stand on one, register the pair with the planes and without them, and
+   * keep the planes unless the object does not agree with their motion, as when it was
+   * turned over on the table between the scans: about twice the time), `"dropAll"` (leave
+   * every one out from the start) or `"keep"`. A support plane holds a
    * tenth or more of its cloud, has nearly all the rest of the cloud on one side, and reaches
    * out beyond what stands on it on at least three sides. Left in a scan registered onto a
    * model, it sets the clouds' scale, and the object's flat faces are drawn onto it.

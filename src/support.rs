@@ -27,7 +27,8 @@
 //! [`LOOSE`] tests, is [`Verdict::Likely`] to stand on a plane (the same table seen from another
 //! side, a flat object lying on it). Which cloud loses its plane is the pair's decision
 //! (`pipeline::prepare`): a support plane is left out of its cloud only when the other cloud is
-//! [`Verdict::None`]; a plane both may stand on is the same table seen twice, and stays.
+//! [`Verdict::None`]; a plane both may stand on is the same table seen twice, and stays, unless
+//! the object was moved on it between the scans (`pipeline::both_stand`).
 
 use crate::cloud::{PointCloud, MIN_POINTS};
 use crate::refine::even_sample;
@@ -43,8 +44,9 @@ use serde::{Deserialize, Serialize};
 pub enum Support {
     /// Leave it out of a cloud that stands on one when the other cloud shows no sign of one (a
     /// scan onto a model of the object alone), with a warning that says how many points it held
-    /// (the default). A plane both clouds may stand on is the same table seen twice, and stays
-    /// in both.
+    /// (the default). When both clouds stand on one, the pair is registered with the planes and
+    /// without them, and the planes are kept unless the object does not agree with their motion
+    /// (it was moved on the table between the scans).
     #[default]
     Drop,
     /// Leave every support plane out, both clouds' when both stand on one: for two scans of an
@@ -347,10 +349,10 @@ pub fn without(mut cloud: PointCloud, indices: &[usize]) -> PointCloud {
 }
 
 /// The warning for a support plane of `dropped` points left out of the cloud `what` of `total`
-/// points, which `other` does not stand on.
-pub fn warning(what: &str, other: &str, dropped: usize, total: usize) -> String {
+/// points.
+pub fn warning(what: &str, dropped: usize, total: usize) -> String {
     format!(
-        "left out a plane of {dropped} of the {what}'s {total} points ({:.1}%) that the rest of it stands on and the {other} lacks (a table or floor under a scanned object); the supportPlane option set to keep keeps it",
+        "left out a plane of {dropped} of the {what}'s {total} points ({:.1}%) that the rest of it stands on (a table or floor under a scanned object); the supportPlane option set to keep keeps it",
         100.0 * dropped as f64 / total.max(1) as f64
     )
 }

@@ -47,6 +47,9 @@ pub(crate) struct Prepared {
     pub icp_src: PointCloud,
     /// The target: normalised, sampled, voxelised (its origin in its summary).
     pub target: Box<PreparedTarget>,
+    /// Whether both clouds stand on a support plane that was kept ([`Support::Drop`]): the
+    /// same table seen twice, or one the object was moved on between the scans.
+    pub both_stand: bool,
 }
 
 /// The target as [`prepare`] receives it: prepared by an earlier call from the same input, or
@@ -105,14 +108,15 @@ pub(crate) fn prepare(
     };
     // a support plane only one of the clouds stands on is left out of it
     let source_verdict = find_support(&source, options.support_plane);
-    let (drop_source, drop_target) = supports(options.support_plane, stands(&source_verdict), given.support());
+    let source_stands = stands(&source_verdict);
+    let (drop_source, drop_target) = supports(options.support_plane, source_stands, given.support());
     let given = match given {
         Given::Kept(k) if k.summary.support_dropped != drop_target => validate_target()?,
         given => given,
     };
     let source = match source_verdict {
         Verdict::Support(plane) if drop_source => {
-            warnings.push(support::warning("source", "target", plane.indices.len(), source.len()));
+            warnings.push(support::warning("source", plane.indices.len(), source.len()));
             support::without(source, &plane.indices)
         }
         _ => source,
@@ -127,7 +131,7 @@ pub(crate) fn prepare(
             let mut target_warnings: Vec<String> = warning.into_iter().collect();
             let t = match verdict {
                 Verdict::Support(plane) if drop_target => {
-                    target_warnings.push(support::warning("target", "source", plane.indices.len(), t.len()));
+                    target_warnings.push(support::warning("target", plane.indices.len(), t.len()));
                     support::without(t, &plane.indices)
                 }
                 _ => t,
@@ -196,7 +200,21 @@ pub(crate) fn prepare(
     limits::check_icp_points("source", src_n.len(), icp_src.len(), voxel_user)?;
     limits::check_icp_points("target", target.cloud.len(), target.icp.len(), voxel_user)?;
     let upright = Upright::of(options, &rotate_init);
-    Ok(Prepared { origin_source, rotate_init, upright, norm, t_initial, src_n, d_final, net_src, icp_src, target })
+    let both_stand =
+        options.support_plane == Support::Drop && source_stands == Some(true) && target.summary.support == Some(true);
+    Ok(Prepared {
+        origin_source,
+        rotate_init,
+        upright,
+        norm,
+        t_initial,
+        src_n,
+        d_final,
+        net_src,
+        icp_src,
+        target,
+        both_stand,
+    })
 }
 
 /// `cloud` validated ([`PointCloud::validated`]) and, with [`Outliers::Drop`], without its far
