@@ -81,16 +81,15 @@ pub struct Options {
     /// the clouds are normalised by. A cloud without them is used exactly as given either way.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub outliers: Outliers,
-    /// What to do with a support plane, the table or floor under a scanned object: `"drop"` (the
-    /// default: leave it out of a cloud that stands on one when the other cloud shows no sign of
-    /// one, as a scan onto a model of the object alone, with a warning that counts its points;
-    /// when both clouds stand on one, register the pair with the planes and without them, and
-    /// keep the planes unless the object does not agree with their motion, as when it was
-    /// turned over on the table between the scans: about twice the time), `"dropAll"` (leave
-    /// every one out from the start) or `"keep"`. A support plane holds a
-    /// tenth or more of its cloud, has nearly all the rest of the cloud on one side, and reaches
-    /// out beyond what stands on it on at least three sides. Left in a scan registered onto a
-    /// model, it sets the clouds' scale, and the object's flat faces are drawn onto it.
+    /// What to do with a support plane, the table or floor under a scanned object: `"drop"` (leave
+    /// it out of each cloud that stands on one, with a warning that counts its points; the
+    /// default) or `"keep"`. A support plane holds a tenth or more of its cloud, has nearly all
+    /// the rest of the cloud on one side, and reaches out beyond what stands on it on at least
+    /// three sides. Left in a scan registered onto a model of the object, it sets the clouds'
+    /// scale and the object's flat faces are drawn onto it; between two scans it pulls the answer
+    /// towards the table's motion, which differs from the object's when the object was tipped or
+    /// turned over between them. Keep it for two scans of an object that stood still on its
+    /// table, where the shared table helps.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub support_plane: Support,
     /// The direction that is up in both clouds' frames, when both were captured level: scans
@@ -448,11 +447,6 @@ impl Registrar {
 
     /// [`Registrar::register`], calling `progress` as each stage starts (for progress bars and
     /// worker messages). The calls come in [`Stage`] order; stages that do not run are skipped.
-    ///
-    /// When both clouds stand on a support plane (`supportPlane: "drop"`), the pair is registered
-    /// with the planes ([`Registrar::register_once`]) and without them, and the answer with the
-    /// planes is kept unless the object alone fits clearly better without them
-    /// ([`crate::pipeline::both_stand`]).
     #[allow(non_snake_case)]
     pub fn register_with_progress(
         &mut self,
@@ -461,22 +455,6 @@ impl Registrar {
         options: &Options,
         progress: &mut dyn FnMut(Stage),
     ) -> Result<Registration> {
-        let (with_planes, both_stand) = self.register_once(source, target, options, progress)?;
-        if !both_stand {
-            return Ok(with_planes);
-        }
-        crate::pipeline::both_stand::choose(self, source, target, options, with_planes)
-    }
-
-    /// One pass of the pipeline (see the module docs of [`crate::pipeline`]), and whether both
-    /// clouds stand on a support plane that it kept.
-    pub(crate) fn register_once(
-        &mut self,
-        source: &PointCloud,
-        target: &PointCloud,
-        options: &Options,
-        progress: &mut dyn FnMut(Stage),
-    ) -> Result<(Registration, bool)> {
         progress(Stage::Preparing);
         let mut watch = Stopwatch::start(self.clock);
         let mut total = Stopwatch::start(self.clock);
@@ -510,8 +488,8 @@ impl Registrar {
 
         let timings =
             Timings { preprocess_ms, network_ms, gmr_ms, icp_ms: icp_ms - global_ms, global_ms, total_ms: total.lap() };
-        let registration = result::finish(&prepared, &t_net_n, chosen, warnings, timings)?;
+        let registration = result::finish(&prepared, &t_net_n, chosen, warnings, timings);
         self.target = Some(prepared.target);
-        Ok((registration, prepared.both_stand))
+        registration
     }
 }

@@ -1,34 +1,29 @@
-//! Support planes: the table or floor a scanned object stands on, which a model of the object
-//! lacks. `Options::support_plane` (default [`Support::Drop`]) leaves such a plane out of a cloud
-//! when the other cloud shows no sign of one ([`Support::DropAll`]: out of every cloud).
+//! Support planes: the table or floor a scanned object stands on, which registration leaves out
+//! ([`Support::Drop`], the default).
 //!
 //! A phone or depth-camera capture of an object takes in the surface under it. Registered onto a
 //! model of the object alone, that plane spoils every stage: the bounding box, and with it the
 //! normalisation the network sees, takes the table's size; the descriptors match the table to
-//! the model's flat faces; ICP pulls the model's bottom onto it (`BENCHMARK.md`, "A support plane
-//! under the scan").
+//! the model's flat faces; ICP pulls the model's bottom onto it. Between two scans of an object
+//! on a table, the tables disagree with the object's motion whenever the object was tipped or
+//! turned over between them (`BENCHMARK.md`, "A support plane under the scan").
 //!
 //! The test looks at an even sample of the cloud (at most [`SAMPLE`] points). Each of [`SEEDS`]
 //! sample points spread over it proposes the plane of its [`NEIGHBOURS`] nearest sample points
 //! when they are flat, and counts the sample points within a band about it ([`THICKNESS`]
 //! median neighbour distances, or more for a noisier plane). The [`MAX_PLANES`] most populous
-//! distinct planes are refitted to their points and tested, in that order, against [`STRICT`]:
-//! - enough of the sample lies on the plane, and enough off it (an object stands on it: a cloud
-//!   that is nearly all one plane is a flat object or a wall);
-//! - nearly all the points off it lie on one side (the object stands on it; a plane through the
-//!   middle of a shape is part of the shape);
-//! - enough of its points lie outside the footprint of the points off it (their bounding
-//!   rectangle in the plane), on at least three sides: it reaches out beyond what stands on it,
-//!   as a table does, and as a box's bottom face, the floor of a room between its walls or the
-//!   ground of a street do not.
+//! distinct planes are refitted to their points and tested in that order; the first that passes
+//! is the support:
+//! - at least [`MIN_SHARE`] of the sample lies on it and [`MIN_REST`] off it (an object stands
+//!   on it: a cloud that is nearly all one plane is a flat object or a wall);
+//! - all but [`OTHER_SIDE`] of the points off it lie on one side (the object stands on it; a
+//!   plane through the middle of a shape is part of the shape);
+//! - at least [`BEYOND`] of its points lie outside the footprint of the points off it (their
+//!   bounding rectangle in the plane), at least [`SIDE_SHARE`] of them beyond each of at least
+//!   [`SIDES`] of its sides: it reaches out beyond what stands on it, as a table does, and as a
+//!   box's bottom face, the floor of a room between its walls or the ground of a street do not.
 //!
-//! The first plane that passes is a [`Verdict::Support`]: the points of the whole cloud within
-//! its fitted thickness are its points. A cloud with none that passes, but one that passes the
-//! [`LOOSE`] tests, is [`Verdict::Likely`] to stand on a plane (the same table seen from another
-//! side, a flat object lying on it). Which cloud loses its plane is the pair's decision
-//! (`pipeline::prepare`): a support plane is left out of its cloud only when the other cloud is
-//! [`Verdict::None`]; a plane both may stand on is the same table seen twice, and stays, unless
-//! the object was moved on it between the scans (`pipeline::both_stand`).
+//! The points of the whole cloud within the plane's fitted thickness are its points.
 
 use crate::cloud::{PointCloud, MIN_POINTS};
 use crate::refine::even_sample;
@@ -36,24 +31,18 @@ use crate::spatial::KdIndex;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 
-/// What registration does with a support plane, the table or floor under the object
+/// What registration does with a support plane, the table or floor under a scanned object
 /// (`Options::support_plane`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "SupportPlane"))]
 pub enum Support {
-    /// Leave it out of a cloud that stands on one when the other cloud shows no sign of one (a
-    /// scan onto a model of the object alone), with a warning that says how many points it held
-    /// (the default). When both clouds stand on one, the pair is registered with the planes and
-    /// without them, and the planes are kept unless the object does not agree with their motion
-    /// (it was moved on the table between the scans).
+    /// Leave it out of each cloud that stands on one, with a warning that says how many points
+    /// it held (the default).
     #[default]
     Drop,
-    /// Leave every support plane out, both clouds' when both stand on one: for two scans of an
-    /// object that was tipped or turned over on the table between them, whose tables disagree
-    /// with the object's motion.
-    DropAll,
-    /// Keep every point.
+    /// Keep every point: for two scans of an object that stood still on the table between them,
+    /// where the shared table helps.
     Keep,
 }
 
@@ -83,48 +72,24 @@ const SAME_COS: f64 = 0.985;
 /// Half the plane's thickness, in the sample's median distances to the 4th nearest sample point.
 pub const THICKNESS: f32 = 0.3;
 
-/// The thresholds a plane is tested against ([`STRICT`], [`LOOSE`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Tests {
-    /// Least share of the sample on the plane.
-    pub min_share: f64,
-    /// Least share of the sample off the plane (more than twice its band away).
-    pub min_rest: f64,
-    /// Most share of the points off the plane that may lie on its other side.
-    pub other_side: f64,
-    /// Least share of the plane's points outside the footprint of the points off it.
-    pub beyond: f64,
-    /// Least share of the plane's points beyond a side of the footprint for the side to count.
-    pub side_share: f64,
-    /// Fewest of the footprint's four sides the plane must reach beyond.
-    pub sides: usize,
-}
+/// Least share of the sample on the plane.
+pub const MIN_SHARE: f64 = 0.1;
 
-/// What makes a plane a support ([`Verdict::Support`]): a tenth of the sample on it and a tenth
-/// off it, the rest all but 3% on one side, and 30% of its points beyond the rest's footprint,
-/// on at least three sides (5% of them beyond each): a table seen around the object, not the
-/// bottom of a shape whose walls were cut on one side.
-pub const STRICT: Tests =
-    Tests { min_share: 0.1, min_rest: 0.1, other_side: 0.03, beyond: 0.3, side_share: 0.05, sides: 3 };
+/// Least share of the sample off the plane (more than twice its band away).
+pub const MIN_REST: f64 = 0.1;
 
-/// What makes a cloud look as if it may stand on a plane ([`Verdict::Likely`]): a tenth of the
-/// sample on it and 2% off it (a flat object lying on a table), the rest all but 10% on one side,
-/// and 15% of its points beyond the rest's footprint on at least two sides. The same table seen
-/// from another side often passes only this; a model of an object alone passes neither, since
-/// its own faces do not reach beyond the rest of it.
-pub const LOOSE: Tests =
-    Tests { min_share: 0.1, min_rest: 0.02, other_side: 0.1, beyond: 0.15, side_share: 0.05, sides: 2 };
+/// Most share of the points off the plane that may lie on its other side.
+pub const OTHER_SIDE: f64 = 0.03;
 
-/// What [`find`] says of a cloud.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Verdict {
-    /// It stands on this plane ([`STRICT`]).
-    Support(SupportPlane),
-    /// It may stand on a plane ([`LOOSE`], not [`STRICT`]).
-    Likely,
-    /// No plane passes either.
-    None,
-}
+/// Least share of the plane's points outside the footprint of the points off it.
+pub const BEYOND: f64 = 0.3;
+
+/// Least share of the plane's points beyond a side of the footprint for the side to count.
+pub const SIDE_SHARE: f64 = 0.05;
+
+/// Fewest of the footprint's four sides the plane must reach beyond: a table seen around the
+/// object, not the bottom of a shape whose walls were cut on one side.
+pub const SIDES: usize = 3;
 
 /// A support plane found in a cloud ([`find`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -212,17 +177,17 @@ struct Candidate {
     count: usize,
 }
 
-/// Whether `points` stand on a support plane, and which (see the module docs).
-pub fn find(points: &[[f32; 3]]) -> Verdict {
+/// The support plane `points` stand on, if any (see the module docs).
+pub fn find(points: &[[f32; 3]]) -> Option<SupportPlane> {
     let sample = even_sample(points, SAMPLE);
     if sample.len() < MIN_SAMPLE {
-        return Verdict::None;
+        return None;
     }
     let index = KdIndex::new(&sample);
     let mut out = Vec::with_capacity(NEIGHBOURS + 1);
     let reach = median_reach(&sample, &index, &mut out) as f64;
     if reach <= 0.0 {
-        return Verdict::None;
+        return None;
     }
     let count = |plane: &Plane, band: f64| sample.iter().filter(|p| plane.distance(p).abs() <= band).count();
     // the seeds' planes, each counted in a band of its own: the larger of THICKNESS times the
@@ -256,20 +221,12 @@ pub fn find(points: &[[f32; 3]]) -> Verdict {
             distinct.push(c);
         }
     }
-    for c in &distinct {
-        if let Some(plane) = test(points, &sample, reach, *c, &STRICT) {
-            return Verdict::Support(plane);
-        }
-    }
-    if distinct.iter().any(|c| test(points, &sample, reach, *c, &LOOSE).is_some()) {
-        return Verdict::Likely;
-    }
-    Verdict::None
+    distinct.iter().find_map(|c| test(points, &sample, reach, *c))
 }
 
-/// `c`'s plane refitted, if it passes `tests` as a support of `points` (see the module docs);
-/// `sample` is their even sample and `reach` its median reach.
-fn test(points: &[[f32; 3]], sample: &[[f32; 3]], reach: f64, c: Candidate, tests: &Tests) -> Option<SupportPlane> {
+/// `c`'s plane refitted, if it is a support of `points` (see the module docs); `sample` is their
+/// even sample and `reach` its median reach.
+fn test(points: &[[f32; 3]], sample: &[[f32; 3]], reach: f64, c: Candidate) -> Option<SupportPlane> {
     let (mut plane, band) = (c.plane, c.band);
     // refit to the points in its band, twice
     for _ in 0..2 {
@@ -281,13 +238,13 @@ fn test(points: &[[f32; 3]], sample: &[[f32; 3]], reach: f64, c: Candidate, test
     let off: Vec<(f64, [f32; 3])> =
         sample.iter().map(|p| (plane.distance(p), *p)).filter(|(d, _)| d.abs() > 2.0 * band).collect();
     let n = sample.len() as f64;
-    if (on.len() as f64) < tests.min_share * n || (off.len() as f64) < tests.min_rest * n {
+    if (on.len() as f64) < MIN_SHARE * n || (off.len() as f64) < MIN_REST * n {
         return None;
     }
     // the rest on one side: the normal turned towards it
     let above = off.iter().filter(|(d, _)| *d > 0.0).count();
     let below = off.len() - above;
-    if (above.min(below) as f64) > tests.other_side * off.len() as f64 {
+    if (above.min(below) as f64) > OTHER_SIDE * off.len() as f64 {
         return None;
     }
     if below > above {
@@ -318,8 +275,8 @@ fn test(points: &[[f32; 3]], sample: &[[f32; 3]], reach: f64, c: Candidate, test
         }
         beyond += out.iter().any(|&o| o) as usize;
     }
-    let open_sides = sides.iter().filter(|&&s| s as f64 >= tests.side_share * on.len() as f64).count();
-    if (beyond as f64) < tests.beyond * on.len() as f64 || open_sides < tests.sides {
+    let open_sides = sides.iter().filter(|&&s| s as f64 >= SIDE_SHARE * on.len() as f64).count();
+    if (beyond as f64) < BEYOND * on.len() as f64 || open_sides < SIDES {
         return None;
     }
     // the thickness from the spread of the plane's sample points about it (scanner noise), at
@@ -405,7 +362,7 @@ mod tests {
         let object = block(3_000, [0.3, 0.2, 0.25], false, 1);
         let mut points = object.clone();
         points.extend(table(1_500, 1.0, 2));
-        let Verdict::Support(plane) = find(&points) else { panic!("a support plane") };
+        let plane = find(&points).expect("a support plane");
         assert!(plane.normal[2] > 0.99, "{:?}", plane.normal);
         // every table point, and no object point above the plane's thickness
         assert!((3_000..4_500).all(|i| plane.indices.binary_search(&i).is_ok()));
@@ -418,33 +375,33 @@ mod tests {
     #[test]
     fn an_objects_own_faces_and_flat_clouds_are_not_supports() {
         // a closed box: its bottom face does not reach beyond its walls
-        assert_eq!(find(&block(4_000, [0.3, 0.2, 0.25], true, 3)), Verdict::None);
+        assert_eq!(find(&block(4_000, [0.3, 0.2, 0.25], true, 3)), None);
         // a flat cloud: nothing stands on it
-        assert_eq!(find(&table(2_000, 1.0, 4)), Verdict::None);
+        assert_eq!(find(&table(2_000, 1.0, 4)), None);
         // a plane through the middle of the object, reaching beyond it: points on both sides
         let mut points: Vec<[f32; 3]> =
             block(3_000, [0.3, 0.2, 0.25], true, 5).into_iter().map(|p| [p[0], p[1], p[2] - 0.25]).collect();
         points.extend(table(1_500, 1.0, 6));
-        assert_eq!(find(&points), Verdict::None);
+        assert_eq!(find(&points), None);
         // a table beside the object on one side only (the floor of a cut-open shape)
         let mut points = block(3_000, [0.3, 0.2, 0.25], false, 7);
         points.extend(table(1_500, 1.0, 8).into_iter().map(|p| [p[0].abs() * 0.6 + 0.3, p[1] * 0.2, p[2]]));
-        assert_eq!(find(&points), Verdict::None);
+        assert_eq!(find(&points), None);
     }
 
     #[test]
-    fn a_small_object_on_a_large_table_is_likely_on_a_plane() {
-        // too little stands off the plane for a support (4% of the cloud), enough for a likely one
+    fn a_small_object_on_a_large_table_is_left_as_it_is() {
+        // too little stands off the plane (4% of the cloud): the object could be the plane's own
         let mut points = block(200, [0.1, 0.08, 0.1], false, 12);
         points.extend(table(4_800, 1.2, 13));
-        assert_eq!(find(&points), Verdict::Likely);
+        assert_eq!(find(&points), None);
     }
 
     #[test]
     fn too_few_points_are_left_as_they_are() {
         let mut points = block(40, [0.3, 0.2, 0.25], false, 9);
         points.extend(table(20, 1.0, 10));
-        assert_eq!(find(&points), Verdict::None);
-        assert_eq!(find(&[]), Verdict::None);
+        assert_eq!(find(&points), None);
+        assert_eq!(find(&[]), None);
     }
 }

@@ -384,11 +384,6 @@ fn make_pairs_adds_support_planes_that_eval_leaves_out() {
     let (dropped, kept) = (eval(&[]), eval(&["--keep-support"]));
     let answer = |v: &serde_json::Value| v["per_pair"][0]["results"][0]["T_target_source"].clone();
     assert_ne!(answer(&dropped), answer(&kept));
-    // with a plane in the sources only, dropping all is dropping it
-    assert_eq!(answer(&eval(&["--drop-all-support"])), answer(&dropped));
-    let (ok, _, err) =
-        arps(&["eval", manifest.to_str().unwrap(), "--methods", "global", "--keep-support", "--drop-all-support"]);
-    assert!(!ok && err.contains("cannot be used with"), "{err}");
     for bad in [["--support", "1.5"], ["--target-support", "nan"]] {
         let (ok, _, err) =
             arps(&[&["make-pairs", "--out", dir.to_str().unwrap(), "--count", "1"][..], &bad[..]].concat());

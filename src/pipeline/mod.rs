@@ -13,10 +13,7 @@
 //!    answers and look-alikes.
 //! 6. [`result`]: the chosen answer and its alternatives mapped back to the caller's frame and
 //!    units, checked, with its warnings ([`crate::Registration`]).
-//! 7. [`both_stand`]: only when both clouds stand on a support plane, the pair registered again
-//!    without the planes, and the answer that fits the object chosen.
 
-pub(crate) mod both_stand;
 pub(crate) mod network;
 pub(crate) mod options;
 pub(crate) mod prepare;

@@ -1,8 +1,8 @@
 //! Stage 2: the clouds prepared for the network and ICP.
 //!
 //! Takes the caller's clouds, the [`Options`] and [`Resolved`]; gives [`Prepared`]: the
-//! validated clouds ([`checked`]: without their far outliers; [`supports`]: without a support
-//! plane that only one of them stands on) in their local frames (f32 offsets
+//! validated clouds ([`checked`]: without their far outliers and their support plane) in their
+//! local frames (f32 offsets
 //! from f64 origins), turned by the initial guess's rotation, jointly normalised, sampled for
 //! the network and voxelised for ICP, with the initial guess and the ICP distances in normalised
 //! units. The target's share is a [`PreparedTarget`] ([`super::target`]), taken over from the
@@ -13,10 +13,10 @@
 use super::options::{self, Resolved};
 use super::target::{self, InputKey, PreparedTarget, Sizes};
 use super::upright::Upright;
-use crate::cloud::{JointNormalization, NonFinite, PointCloud, MIN_POINTS};
+use crate::cloud::{JointNormalization, PointCloud, MIN_POINTS};
 use crate::outliers::{self, Outliers};
 use crate::register::Options;
-use crate::support::{self, Support, Verdict};
+use crate::support::{self, Support};
 use crate::{checks, limits, origin, sampling, transform, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
@@ -47,35 +47,13 @@ pub(crate) struct Prepared {
     pub icp_src: PointCloud,
     /// The target: normalised, sampled, voxelised (its origin in its summary).
     pub target: Box<PreparedTarget>,
-    /// Whether both clouds stand on a support plane that was kept ([`Support::Drop`]): the
-    /// same table seen twice, or one the object was moved on between the scans.
-    pub both_stand: bool,
 }
 
 /// The target as [`prepare`] receives it: prepared by an earlier call from the same input, or
-/// validated now (with what its check said and whether it stands on a plane).
+/// validated now.
 enum Given {
     Kept(Box<PreparedTarget>),
-    Validated(PointCloud, Option<String>, Verdict),
-}
-
-impl Given {
-    /// Whether the target stands on a plane: `Some(true)` a support, `Some(false)` likely one.
-    fn support(&self) -> Option<bool> {
-        match self {
-            Given::Kept(k) => k.summary.support,
-            Given::Validated(_, _, verdict) => stands(verdict),
-        }
-    }
-}
-
-/// `Some(true)` for a support plane, `Some(false)` for a likely one, `None` for neither.
-fn stands(verdict: &Verdict) -> Option<bool> {
-    match verdict {
-        Verdict::Support(_) => Some(true),
-        Verdict::Likely => Some(false),
-        Verdict::None => None,
-    }
+    Validated(PointCloud, Vec<String>),
 }
 
 /// Validates, normalises and samples the pair (see the module docs); `kept` is a target prepared
@@ -95,52 +73,20 @@ pub(crate) fn prepare(
     // another target's is dropped before anything is allocated
     let input = InputKey::of(target, options.non_finite, options.outliers, options.support_plane);
     let kept = kept.filter(|k| k.input == input);
-    let (source, source_warning) = checked("source", source, options.non_finite, options.outliers)?;
-    warnings.extend(source_warning);
-    let validate_target = || -> Result<Given> {
-        let (t, warning) = checked("target", target, options.non_finite, options.outliers)?;
-        let verdict = find_support(&t, options.support_plane);
-        Ok(Given::Validated(t, warning, verdict))
-    };
+    let (source, source_warnings) = checked("source", source, options)?;
+    warnings.extend(source_warnings);
     let given = match kept {
         Some(k) => Given::Kept(k),
-        None => validate_target()?,
-    };
-    // a support plane only one of the clouds stands on is left out of it
-    let source_verdict = find_support(&source, options.support_plane);
-    let source_stands = stands(&source_verdict);
-    let (drop_source, drop_target) = supports(options.support_plane, source_stands, given.support());
-    let given = match given {
-        Given::Kept(k) if k.summary.support_dropped != drop_target => validate_target()?,
-        given => given,
-    };
-    let source = match source_verdict {
-        Verdict::Support(plane) if drop_source => {
-            warnings.push(support::warning("source", plane.indices.len(), source.len()));
-            support::without(source, &plane.indices)
-        }
-        _ => source,
-    };
-    let (given, summary) = match given {
-        Given::Kept(k) => {
-            let summary = k.summary.clone();
-            (Given::Kept(k), summary)
-        }
-        Given::Validated(t, warning, verdict) => {
-            let stands_on = stands(&verdict);
-            let mut target_warnings: Vec<String> = warning.into_iter().collect();
-            let t = match verdict {
-                Verdict::Support(plane) if drop_target => {
-                    target_warnings.push(support::warning("target", plane.indices.len(), t.len()));
-                    support::without(t, &plane.indices)
-                }
-                _ => t,
-            };
-            let summary = target::summary(&t, target_warnings, stands_on, drop_target)?;
-            (Given::Validated(t, None, Verdict::None), summary)
+        None => {
+            let (t, target_warnings) = checked("target", target, options)?;
+            Given::Validated(t, target_warnings)
         }
     };
     let spreads_source = checks::not_collinear("source", &source.points, warnings)?;
+    let summary = match &given {
+        Given::Kept(k) => k.summary.clone(),
+        Given::Validated(t, target_warnings) => target::summary(t, target_warnings.clone())?,
+    };
     warnings.extend(summary.warnings.iter().cloned());
     checks::flat_pair(spreads_source, summary.spreads, warnings);
     let init = options::initial_transform(options)?;
@@ -179,14 +125,10 @@ pub(crate) fn prepare(
         // the same target at another scale (a source larger than it)
         Given::Kept(old) => {
             drop(old);
-            let Given::Validated(t, _, verdict) = validate_target()? else { unreachable!("validated") };
-            let t = match verdict {
-                Verdict::Support(plane) if summary.support_dropped => support::without(t, &plane.indices),
-                _ => t,
-            };
-            Box::new(PreparedTarget::new(input, summary, sizes, &t.into_local(), &norm))
+            let local = checked("target", target, options)?.0.into_local();
+            Box::new(PreparedTarget::new(input, summary, sizes, &local, &norm))
         }
-        Given::Validated(t, _, _) => Box::new(PreparedTarget::new(input, summary, sizes, &t.into_local(), &norm)),
+        Given::Validated(t, _) => Box::new(PreparedTarget::new(input, summary, sizes, &t.into_local(), &norm)),
     };
     for (what, len) in [("source", src_n.len()), ("target", target.cloud.len())] {
         if len < n_net {
@@ -200,60 +142,31 @@ pub(crate) fn prepare(
     limits::check_icp_points("source", src_n.len(), icp_src.len(), voxel_user)?;
     limits::check_icp_points("target", target.cloud.len(), target.icp.len(), voxel_user)?;
     let upright = Upright::of(options, &rotate_init);
-    let both_stand =
-        options.support_plane == Support::Drop && source_stands == Some(true) && target.summary.support == Some(true);
-    Ok(Prepared {
-        origin_source,
-        rotate_init,
-        upright,
-        norm,
-        t_initial,
-        src_n,
-        d_final,
-        net_src,
-        icp_src,
-        target,
-        both_stand,
-    })
+    Ok(Prepared { origin_source, rotate_init, upright, norm, t_initial, src_n, d_final, net_src, icp_src, target })
 }
 
-/// `cloud` validated ([`PointCloud::validated`]) and, with [`Outliers::Drop`], without its far
-/// outliers ([`outliers::drop_far`]), with the warning that counts them when there were any.
+/// `cloud` validated ([`PointCloud::validated`], `options.non_finite`); with [`Outliers::Drop`]
+/// without its far outliers ([`outliers::drop_far`]); then with [`Support::Drop`] without the
+/// support plane it stands on ([`support::find`]); with a warning for each that left points out.
 /// `what` names the cloud in messages.
-fn checked(
-    what: &str,
-    cloud: &PointCloud,
-    non_finite: NonFinite,
-    outliers: Outliers,
-) -> Result<(PointCloud, Option<String>)> {
-    let cloud = cloud.validated(what, MIN_POINTS, non_finite)?;
-    if outliers == Outliers::Keep {
-        return Ok((cloud, None));
+fn checked(what: &str, cloud: &PointCloud, options: &Options) -> Result<(PointCloud, Vec<String>)> {
+    let mut cloud = cloud.validated(what, MIN_POINTS, options.non_finite)?;
+    let mut warnings = Vec::new();
+    if options.outliers == Outliers::Drop {
+        let total = cloud.len();
+        let (kept, dropped) = outliers::drop_far(cloud);
+        cloud = kept;
+        if dropped > 0 {
+            warnings.push(outliers::warning(what, dropped, total));
+        }
     }
-    let total = cloud.len();
-    let (cloud, dropped) = outliers::drop_far(cloud);
-    Ok((cloud, (dropped > 0).then(|| outliers::warning(what, dropped, total))))
-}
-
-/// Whether `cloud` stands on a plane ([`support::find`]); [`Verdict::None`] when `support` keeps
-/// every point.
-fn find_support(cloud: &PointCloud, support: Support) -> Verdict {
-    match support {
-        Support::Drop | Support::DropAll => support::find(&cloud.points),
-        Support::Keep => Verdict::None,
+    if options.support_plane == Support::Drop {
+        if let Some(plane) = support::find(&cloud.points) {
+            warnings.push(support::warning(what, plane.indices.len(), cloud.len()));
+            cloud = support::without(cloud, &plane.indices);
+        }
     }
-}
-
-/// Which of the clouds lose their support plane, `(source, target)`, given whether each stands on
-/// one (`Some(true)`) or likely does (`Some(false)`). With [`Support::Drop`], a cloud that stands
-/// on a plane the other shows no sign of (a scan of an object on a table, a model of the object
-/// alone): a plane both may stand on is the same table seen twice, and stays in both. With
-/// [`Support::DropAll`], every cloud that stands on one.
-fn supports(policy: Support, source: Option<bool>, target: Option<bool>) -> (bool, bool) {
-    match policy {
-        Support::DropAll => (source == Some(true), target == Some(true)),
-        _ => (source == Some(true) && target.is_none(), target == Some(true) && source.is_none()),
-    }
+    Ok((cloud, warnings))
 }
 
 #[cfg(test)]

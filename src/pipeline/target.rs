@@ -68,14 +68,8 @@ pub(crate) struct TargetSummary {
     pub bounding: ([f64; 3], f64),
     /// Its principal spreads ([`checks::not_collinear`]).
     pub spreads: [f64; 3],
-    /// The warnings its checks gave (a nearly collinear target, points left out).
+    /// The warnings its checks gave (points left out, a nearly collinear target).
     pub warnings: Vec<String>,
-    /// Whether the validated target stands on a plane ([`crate::support::find`]: `Some(true)`
-    /// a support, `Some(false)` likely one, `None` neither or `supportPlane` set to keep).
-    pub support: Option<bool>,
-    /// Whether that plane was left out (the source had none): the rest of the summary, and the
-    /// prepared target, are without it.
-    pub support_dropped: bool,
 }
 
 /// What the prepared target depends on besides the target: the normalisation's scale (the
@@ -100,19 +94,13 @@ fn icp_cloud(cloud: &PointCloud, sizes: &Sizes) -> PointCloud {
     sampling::voxel_downsample(cloud, f64::from_bits(sizes.voxel) as f32)
 }
 
-/// The summary of the validated `target` (its origin not yet dropped, its support plane left out
-/// when `support_dropped`); an error when it is collinear. `warnings`: what its checks said
-/// (`prepare::checked`, the support plane), kept among its warnings.
-pub(crate) fn summary(
-    target: &PointCloud,
-    warnings: Vec<String>,
-    support: Option<bool>,
-    support_dropped: bool,
-) -> Result<TargetSummary> {
+/// The summary of the validated `target` (its origin not yet dropped); an error when it is
+/// collinear. `warnings`: what its checks said (`prepare::checked`), kept among its warnings.
+pub(crate) fn summary(target: &PointCloud, warnings: Vec<String>) -> Result<TargetSummary> {
     let mut warnings = warnings;
     let spreads = checks::not_collinear("target", &target.points, &mut warnings)?;
     let bounding = JointNormalization::box_of(target);
-    Ok(TargetSummary { origin: target.origin, bounding, spreads, warnings, support, support_dropped })
+    Ok(TargetSummary { origin: target.origin, bounding, spreads, warnings })
 }
 
 /// The target prepared for the network, ICP and the global hypotheses (normalised units), with

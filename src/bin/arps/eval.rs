@@ -47,7 +47,7 @@ use arps::confidence::Evidence;
 use arps::data::manifest;
 use arps::data::metrics::{ambiguous_miss, pair_error, recall_svg, recalled, summarize, PairError, Summary};
 use arps::transform::{euler_xyz, from_rotation_translation, rigid_inverse, to_rows};
-use arps::{io, ModelConfig, Options, Outliers, PointCloud, Registrar, Search, Start, Timings, Weights};
+use arps::{io, ModelConfig, Options, Outliers, PointCloud, Registrar, Search, Start, Support, Timings, Weights};
 use clap::{Args, ValueEnum};
 use nalgebra::{Matrix4, Vector3};
 use rand::Rng;
@@ -105,15 +105,10 @@ pub struct EvalArgs {
     /// keep), for every method and the ground truth's refinement; by default they are left out.
     #[arg(long)]
     keep_outliers: bool,
-    /// Keep a support plane that only one cloud of a pair stands on (`Options::support_plane`
-    /// set to keep), for every method and the ground truth's refinement; by default it is left
-    /// out.
-    #[arg(long, conflicts_with = "drop_all_support")]
-    keep_support: bool,
-    /// Leave out every support plane, both clouds' when both stand on one (`Options::support_plane`
-    /// set to dropAll), for every method and the ground truth's refinement.
+    /// Keep support planes (`Options::support_plane` set to keep), for every method and the
+    /// ground truth's refinement; by default they are left out.
     #[arg(long)]
-    drop_all_support: bool,
+    keep_support: bool,
     /// Run only these methods, comma-separated [default: all seven].
     #[arg(long, value_enum, value_delimiter = ',')]
     methods: Option<Vec<Method>>,
@@ -314,7 +309,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
     let mut untrained = Registrar::new(&untrained_weights).map_err(|e| e.to_string())?;
 
     let outliers = if a.keep_outliers { Outliers::Keep } else { Outliers::Drop };
-    let support_plane = super::support_plane(a.keep_support, a.drop_all_support);
+    let support_plane = if a.keep_support { Support::Keep } else { Support::Drop };
     let mut results = Vec::new();
     for (k, e) in entries.iter().enumerate() {
         let read = |p: PathBuf| io::read_path(&p).map_err(|err| format!("{}: {err}", p.display()));

@@ -93,14 +93,10 @@ enum Command {
         /// left out, with a warning: `Options::outliers`).
         #[arg(long)]
         keep_outliers: bool,
-        /// Keep a support plane (a table or floor) that only one of the clouds stands on (by
-        /// default it is left out of that cloud, with a warning: `Options::support_plane`).
-        #[arg(long, conflicts_with = "drop_all_support")]
-        keep_support: bool,
-        /// Leave out every support plane, both clouds' when both stand on one (an object tipped
-        /// or turned over on the table between two scans: `Options::support_plane` "dropAll").
+        /// Keep a support plane (the table or floor under a scanned object; by default it is
+        /// left out, with a warning: `Options::support_plane`).
         #[arg(long)]
-        drop_all_support: bool,
+        keep_support: bool,
         /// Read a mesh file (OBJ, OFF, STL, PLY with faces) as this many points drawn uniformly
         /// over its surface instead of its vertices (a CAD model's vertices sit on its edges);
         /// point files are read as they are.
@@ -264,7 +260,6 @@ fn run(command: Command) -> Result<(), String> {
             drop_non_finite,
             keep_outliers,
             keep_support,
-            drop_all_support,
             surface_points,
             json,
         } => {
@@ -284,7 +279,7 @@ fn run(command: Command) -> Result<(), String> {
                 seed,
                 non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
                 outliers: if keep_outliers { Outliers::Keep } else { Outliers::Drop },
-                support_plane: support_plane(keep_support, drop_all_support),
+                support_plane: if keep_support { Support::Keep } else { Support::Drop },
                 up,
                 starts: starts.unwrap_or_else(|| Options::default().starts),
                 search: match search {
@@ -362,15 +357,6 @@ fn run(command: Command) -> Result<(), String> {
             out!("wrote {} ({} bytes, {} parameters)", out.display(), bytes.len(), config.parameter_count());
             Ok(())
         }
-    }
-}
-
-/// `--keep-support` and `--drop-all-support` (which clap keeps apart) as the option.
-pub(crate) fn support_plane(keep: bool, drop_all: bool) -> Support {
-    match (keep, drop_all) {
-        (true, _) => Support::Keep,
-        (_, true) => Support::DropAll,
-        _ => Support::Drop,
     }
 }
 
