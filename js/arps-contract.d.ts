@@ -76,16 +76,15 @@ export type RegisterOptions = {
    */
   outliers?: Outliers,
   /**
-   * What to do with a support plane, the table or floor under a scanned object: `"drop"` (the
-   * default: leave it out of a cloud that stands on one when the other cloud shows no sign of
-   * one, as a scan onto a model of the object alone, with a warning that counts its points;
-   * when both clouds stand on one, register the pair with the planes and without them, and
-   * keep the planes unless the object does not agree with their motion, as when it was
-   * turned over on the table between the scans: about twice the time), `"dropAll"` (leave
-   * every one out from the start) or `"keep"`. A support plane holds a
-   * tenth or more of its cloud, has nearly all the rest of the cloud on one side, and reaches
-   * out beyond what stands on it on at least three sides. Left in a scan registered onto a
-   * model, it sets the clouds' scale, and the object's flat faces are drawn onto it.
+   * What to do with a support plane, the table or floor under a scanned object: `"drop"` (leave
+   * it out of each cloud that stands on one, with a warning that counts its points; the
+   * default) or `"keep"`. A support plane holds a tenth or more of its cloud, has nearly all
+   * the rest of the cloud on one side, and reaches out beyond what stands on it on at least
+   * three sides. Left in a scan registered onto a model of the object, it sets the clouds'
+   * scale and the object's flat faces are drawn onto it; between two scans it pulls the answer
+   * towards the table's motion, which differs from the object's when the object was tipped or
+   * turned over between them. Keep it for two scans of an object that stood still on its
+   * table, where the shared table helps.
    */
   supportPlane?: SupportPlane,
   /**
@@ -192,10 +191,10 @@ export type NonFinite = "error" | "drop";
 export type Outliers = "drop" | "keep";
 
 /**
- * What registration does with a support plane, the table or floor under the object
+ * What registration does with a support plane, the table or floor under a scanned object
  * (`Options::support_plane`).
  */
-export type SupportPlane = "drop" | "dropAll" | "keep";
+export type SupportPlane = "drop" | "keep";
 
 /**
  * A stage of a registration, reported as it starts (to `Registrar::register_with_progress`'s
