@@ -51,6 +51,19 @@ pub enum NonFinite {
 }
 
 impl PointCloud {
+    /// The cloud without the points at `indices` (ascending, each at most once), its origin
+    /// kept.
+    pub fn without(mut self, indices: &[usize]) -> Self {
+        let mut next = indices.iter().peekable();
+        let mut i = 0usize;
+        self.points.retain(|_| {
+            let drop = next.next_if(|&&f| f == i).is_some();
+            i += 1;
+            !drop
+        });
+        self
+    }
+
     /// Wraps points without checking them (origin zero: the points are in the caller's frame).
     pub fn new(points: Vec<[f32; 3]>) -> Self {
         Self { points, origin: [0.0; 3] }

@@ -128,19 +128,10 @@ pub fn far_outliers(points: &[[f32; 3]]) -> Vec<usize> {
 
 /// `cloud` without its far outliers ([`far_outliers`], removed in place) and how many were left
 /// out.
-pub fn drop_far(mut cloud: PointCloud) -> (PointCloud, usize) {
+pub fn drop_far(cloud: PointCloud) -> (PointCloud, usize) {
     let far = far_outliers(&cloud.points);
-    if far.is_empty() {
-        return (cloud, 0);
-    }
-    let mut next = far.iter().peekable();
-    let mut i = 0usize;
-    cloud.points.retain(|_| {
-        let drop = next.next_if(|&&f| f == i).is_some();
-        i += 1;
-        !drop
-    });
-    (cloud, far.len())
+    let dropped = far.len();
+    (if far.is_empty() { cloud } else { cloud.without(&far) }, dropped)
 }
 
 /// The warning for `dropped` far outliers of the cloud `what` of `total` points.

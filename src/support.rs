@@ -25,7 +25,7 @@
 //!
 //! The points of the whole cloud within the plane's fitted thickness are its points.
 
-use crate::cloud::{PointCloud, MIN_POINTS};
+use crate::cloud::MIN_POINTS;
 use crate::refine::even_sample;
 use crate::spatial::KdIndex;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
@@ -293,18 +293,6 @@ fn test(points: &[[f32; 3]], sample: &[[f32; 3]], reach: f64, c: Candidate) -> O
     Some(SupportPlane { point: plane.point.into(), normal: plane.normal.into(), half_thickness, indices })
 }
 
-/// `cloud` without the points at `indices` (ascending).
-pub fn without(mut cloud: PointCloud, indices: &[usize]) -> PointCloud {
-    let mut next = indices.iter().peekable();
-    let mut i = 0usize;
-    cloud.points.retain(|_| {
-        let drop = next.next_if(|&&f| f == i).is_some();
-        i += 1;
-        !drop
-    });
-    cloud
-}
-
 /// The warning for a support plane of `dropped` points left out of the cloud `what` of `total`
 /// points.
 pub fn warning(what: &str, dropped: usize, total: usize) -> String {
@@ -317,6 +305,7 @@ pub fn warning(what: &str, dropped: usize, total: usize) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cloud::PointCloud;
 
     /// A deterministic stream in [-1, 1).
     fn stream(seed: u64) -> impl FnMut() -> f32 {
@@ -367,7 +356,7 @@ mod tests {
         // every table point, and no object point above the plane's thickness
         assert!((3_000..4_500).all(|i| plane.indices.binary_search(&i).is_ok()));
         assert!(plane.indices.iter().all(|&i| i >= 3_000 || points[i][2] <= plane.half_thickness as f32 + 0.005));
-        let kept = without(PointCloud::with_origin(points, [1.0, 2.0, 3.0]), &plane.indices);
+        let kept = PointCloud::with_origin(points, [1.0, 2.0, 3.0]).without(&plane.indices);
         assert_eq!(kept.origin, [1.0, 2.0, 3.0]);
         assert!(kept.len() > 2_800 && kept.points.iter().all(|p| p[2] > 0.0));
     }

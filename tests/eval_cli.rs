@@ -262,6 +262,37 @@ fn make_pairs_makes_scans_onto_a_model() {
     }
 }
 
+/// Pairs made into `dir` with `extra` arguments and into `clean` without (both with `args`),
+/// checked to be the same pairs with `extra_points` (source, target) appended after each cloud's
+/// 1,024: the same manifest, the same surface points. Per pair: its entry, its source and target
+/// as made with `extra`, and its target without.
+#[allow(clippy::type_complexity)]
+fn made_with_extra(
+    dir: &Path,
+    clean: &Path,
+    args: &[&str],
+    extra: &[&str],
+    extra_points: (usize, usize),
+) -> Vec<(arps::data::manifest::Entry, Vec<[f32; 3]>, Vec<[f32; 3]>, Vec<[f32; 3]>)> {
+    for (d, more) in [(dir, extra), (clean, &[][..])] {
+        let _ = std::fs::remove_dir_all(d);
+        let (ok, out, err) = arps(&[&["make-pairs", "--out", d.to_str().unwrap()][..], args, more].concat());
+        assert!(ok, "{out}{err}");
+    }
+    let read = |d: &Path, f: &str| arps::io::read_path(&d.join(f)).unwrap().points;
+    let tsv = std::fs::read_to_string(dir.join("pairs.tsv")).unwrap();
+    assert_eq!(tsv, std::fs::read_to_string(clean.join("pairs.tsv")).unwrap());
+    let mut out = Vec::new();
+    for e in arps::data::manifest::parse(&tsv).unwrap() {
+        let (s, s0, t, t0) =
+            (read(dir, &e.source), read(clean, &e.source), read(dir, &e.target), read(clean, &e.target));
+        assert_eq!((s.len(), t.len()), (1024 + extra_points.0, 1024 + extra_points.1));
+        assert_eq!((&s[..1024], &t[..1024]), (&s0[..], &t0[..]));
+        out.push((e, s, t, t0));
+    }
+    out
+}
+
 /// Stray returns: `--stray` and `--target-stray` append that share of points scattered over three
 /// times the shape's size, the surface points and the truth staying the pair's; eval's default
 /// leaves them out, `--keep-outliers` keeps them.
@@ -269,25 +300,8 @@ fn make_pairs_makes_scans_onto_a_model() {
 fn make_pairs_adds_stray_returns_that_eval_leaves_out() {
     let dir = std::env::temp_dir().join(format!("arps-stray-{}", std::process::id()));
     let clean = std::env::temp_dir().join(format!("arps-stray-clean-{}", std::process::id()));
-    for d in [&dir, &clean] {
-        let _ = std::fs::remove_dir_all(d);
-    }
     let args = ["--count", "2", "--seed", "4", "--procedural-only"];
-    let (ok, out, err) = arps(
-        &[&["make-pairs", "--out", dir.to_str().unwrap(), "--stray", "0.05", "--target-stray", "0.1"][..], &args]
-            .concat(),
-    );
-    assert!(ok, "{out}{err}");
-    let (ok, _, err) = arps(&[&["make-pairs", "--out", clean.to_str().unwrap()][..], &args].concat());
-    assert!(ok, "{err}");
-    let read = |d: &Path, f: &str| arps::io::read_path(&d.join(f)).unwrap().points;
-    let tsv = std::fs::read_to_string(dir.join("pairs.tsv")).unwrap();
-    assert_eq!(tsv, std::fs::read_to_string(clean.join("pairs.tsv")).unwrap());
-    for e in arps::data::manifest::parse(&tsv).unwrap() {
-        let (s, s0, t, t0) =
-            (read(&dir, &e.source), read(&clean, &e.source), read(&dir, &e.target), read(&clean, &e.target));
-        assert_eq!((s.len(), t.len()), (1024 + 51, 1024 + 102));
-        assert_eq!((&s[..1024], &t[..1024]), (&s0[..], &t0[..]));
+    for (_, s, _, _) in made_with_extra(&dir, &clean, &args, &["--stray", "0.05", "--target-stray", "0.1"], (51, 102)) {
         // the strays spread over the cube of half-side 3 (the shape fits [-1, 1]^3)
         assert!(s[1024..].iter().any(|p| p.iter().any(|v| v.abs() > 1.5)));
         assert!(s[1024..].iter().all(|p| p.iter().all(|v| v.abs() <= 3.0)));
@@ -329,27 +343,14 @@ fn make_pairs_adds_support_planes_that_eval_leaves_out() {
     let dir = std::env::temp_dir().join(format!("arps-support-{}", std::process::id()));
     let moved = std::env::temp_dir().join(format!("arps-support-moved-{}", std::process::id()));
     let clean = std::env::temp_dir().join(format!("arps-support-clean-{}", std::process::id()));
-    for d in [&dir, &moved, &clean] {
-        let _ = std::fs::remove_dir_all(d);
-    }
     let args = ["--count", "2", "--seed", "5", "--procedural-only", "--max-tilt", "0"];
-    let make = |d: &Path, extra: &[&str]| {
-        let (ok, out, err) = arps(&[&["make-pairs", "--out", d.to_str().unwrap()][..], &args, extra].concat());
-        assert!(ok, "{out}{err}");
-    };
-    make(&dir, &["--support", "0.5", "--target-support", "0.25"]);
-    make(&moved, &["--support", "0.5", "--target-support", "0.25", "--support-moved"]);
-    make(&clean, &[]);
-    let read = |d: &Path, f: &str| arps::io::read_path(&d.join(f)).unwrap().points;
-    let tsv = std::fs::read_to_string(dir.join("pairs.tsv")).unwrap();
-    assert_eq!(tsv, std::fs::read_to_string(clean.join("pairs.tsv")).unwrap());
-    for e in arps::data::manifest::parse(&tsv).unwrap() {
-        let (s, s0, t, t0) =
-            (read(&dir, &e.source), read(&clean, &e.source), read(&dir, &e.target), read(&clean, &e.target));
-        assert_eq!((s.len(), t.len()), (1024 + 512, 1024 + 256));
-        assert_eq!((&s[..1024], &t[..1024]), (&s0[..], &t0[..]));
+    let support = ["--support", "0.5", "--target-support", "0.25"];
+    let with_moved = made_with_extra(&moved, &clean, &args, &[&support[..], &["--support-moved"]].concat(), (512, 256));
+    for ((e, s, t, t0), (_, _, tm, _)) in
+        made_with_extra(&dir, &clean, &args, &support, (512, 256)).into_iter().zip(with_moved)
+    {
         // the source's plane is level (z) under its surface points, reaching out beyond them
-        let (lo, hi) = arps::PointCloud::new(s0.clone()).bounds();
+        let (lo, hi) = arps::PointCloud::new(s[..1024].to_vec()).bounds();
         let plane = &s[1024..];
         assert!(plane.iter().all(|p| p[2] <= lo[2] + 0.05), "a level plane under the object");
         assert!(plane.iter().any(|p| p[0] < lo[0]) && plane.iter().any(|p| p[0] > hi[0]));
@@ -359,8 +360,6 @@ fn make_pairs_adds_support_planes_that_eval_leaves_out() {
         let z = |pts: &[[f32; 3]]| pts.iter().map(|p| p[2] as f64).sum::<f64>() / pts.len() as f64;
         assert!((z(&back.points) - z(plane)).abs() < 0.01);
         // moved: the target's plane is level in the target's own frame, under its points
-        let tm = read(&moved, &e.target);
-        assert_eq!(&tm[..1024], &t0[..]);
         let (tlo, _) = arps::PointCloud::new(t0.clone()).bounds();
         assert!(tm[1024..].iter().all(|p| p[2] <= tlo[2] + 0.05));
     }
@@ -373,7 +372,9 @@ fn make_pairs_adds_support_planes_that_eval_leaves_out() {
     // a plane in the sources only: the default leaves it out, --keep-support keeps it
     let only = std::env::temp_dir().join(format!("arps-support-only-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&only);
-    make(&only, &["--support", "0.5"]);
+    let (ok, out, err) =
+        arps(&[&["make-pairs", "--out", only.to_str().unwrap(), "--support", "0.5"][..], &args].concat());
+    assert!(ok, "{out}{err}");
     let manifest = only.join("pairs.tsv");
     let eval = |extra: &[&str]| {
         let (ok, out, err) =

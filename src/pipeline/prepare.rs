@@ -163,7 +163,7 @@ fn checked(what: &str, cloud: &PointCloud, options: &Options) -> Result<(PointCl
     if options.support_plane == Support::Drop {
         if let Some(plane) = support::find(&cloud.points) {
             warnings.push(support::warning(what, plane.indices.len(), cloud.len()));
-            cloud = support::without(cloud, &plane.indices);
+            cloud = cloud.without(&plane.indices);
         }
     }
     Ok((cloud, warnings))
