@@ -2,10 +2,9 @@
 //!
 //! Takes the caller's clouds, the [`Options`] and [`Resolved`]; gives [`Prepared`]: the
 //! validated clouds ([`checked`]: without their far outliers and their support plane) in their
-//! local frames (f32 offsets
-//! from f64 origins), turned by the initial guess's rotation, jointly normalised, sampled for
-//! the network and voxelised for ICP, with the initial guess and the ICP distances in normalised
-//! units. The target's share is a [`PreparedTarget`] ([`super::target`]), taken over from the
+//! local frames (f32 offsets from f64 origins), turned by the initial guess's rotation, jointly
+//! normalised, sampled for the network and voxelised for ICP, with the initial guess and the ICP
+//! distances in normalised units. The target's share is a [`PreparedTarget`] ([`super::target`]), taken over from the
 //! previous call when it is the same target at the same scale (and resized for other options).
 //! Warnings (collinear or flat clouds, unit mismatch, too few points for the network, far
 //! outliers or a support plane left out) go to `warnings`.
