@@ -77,18 +77,7 @@ pub fn far_outliers(points: &[[f32; 3]]) -> Vec<usize> {
         return Vec::new();
     }
     let index = KdIndex::new(&sample);
-    let mut out = Vec::with_capacity(NEIGHBOUR + 2);
-    // the [`NEIGHBOUR`]th nearest *other* sample point (the nearest found is the point itself)
-    let reach: Vec<f32> = sample
-        .iter()
-        .map(|q| {
-            index.knn_into(q, NEIGHBOUR + 1, &mut out);
-            out.last().map_or(f32::INFINITY, |e| e.1.sqrt())
-        })
-        .collect();
-    let mut sorted = reach.clone();
-    sorted.sort_by(f32::total_cmp);
-    let median = sorted[sorted.len() / 2];
+    let (reach, median) = reach(&sample, &index);
     if !(median > 0.0 && median.is_finite()) {
         return Vec::new();
     }
@@ -111,6 +100,7 @@ pub fn far_outliers(points: &[[f32; 3]]) -> Vec<usize> {
     let radius = SUPPORT * median * (sample.len() as f32 / points.len() as f32).min(1.0).sqrt();
     let candidates: Vec<[f32; 3]> = outside.iter().map(|&i| points[i]).collect();
     let index = KdIndex::new(&candidates);
+    let mut out = Vec::with_capacity(NEIGHBOUR + 2);
     let far: Vec<usize> = outside
         .iter()
         .zip(&candidates)
@@ -124,6 +114,29 @@ pub fn far_outliers(points: &[[f32; 3]]) -> Vec<usize> {
         return Vec::new();
     }
     far
+}
+
+/// For each point of `sample` (indexed by `index`), its distance to its [`NEIGHBOUR`]th nearest
+/// other sample point (the farthest found when the sample has fewer); and the median of those
+/// distances, the sample's spacing (infinite for an empty sample).
+pub(crate) fn reach(sample: &[[f32; 3]], index: &KdIndex) -> (Vec<f32>, f32) {
+    let mut out = Vec::with_capacity(NEIGHBOUR + 1);
+    // the nearest found is the point itself
+    let reach: Vec<f32> = sample
+        .iter()
+        .map(|q| {
+            index.knn_into(q, NEIGHBOUR + 1, &mut out);
+            out.last().map_or(f32::INFINITY, |e| e.1.sqrt())
+        })
+        .collect();
+    let mut sorted = reach.clone();
+    let median = if sorted.is_empty() {
+        f32::INFINITY
+    } else {
+        let mid = sorted.len() / 2;
+        *sorted.select_nth_unstable_by(mid, f32::total_cmp).1
+    };
+    (reach, median)
 }
 
 /// `cloud` without its far outliers ([`far_outliers`], removed in place) and how many were left

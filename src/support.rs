@@ -69,7 +69,8 @@ pub const MAX_PLANES: usize = 4;
 /// point lies within twice the band of the other.
 const SAME_COS: f64 = 0.985;
 
-/// Half the plane's thickness, in the sample's median distances to the 4th nearest sample point.
+/// Half the plane's thickness, in the sample's median distances to the 4th nearest sample point
+/// (`outliers::reach`).
 pub const THICKNESS: f32 = 0.3;
 
 /// Least share of the sample on the plane.
@@ -151,24 +152,6 @@ impl Plane {
     }
 }
 
-/// The sample's median distance to the 4th nearest other sample point (0 when undefined).
-fn median_reach(sample: &[[f32; 3]], index: &KdIndex, out: &mut Vec<(usize, f32)>) -> f32 {
-    let mut reach: Vec<f32> = sample
-        .iter()
-        .map(|q| {
-            index.knn_into(q, 5, out);
-            out.last().map_or(f32::INFINITY, |e| e.1.sqrt())
-        })
-        .collect();
-    let mid = reach.len() / 2;
-    let (_, median, _) = reach.select_nth_unstable_by(mid, f32::total_cmp);
-    if median.is_finite() {
-        *median
-    } else {
-        0.0
-    }
-}
-
 /// A seed's plane and the band it was counted in.
 #[derive(Clone, Copy, Debug)]
 struct Candidate {
@@ -184,11 +167,11 @@ pub fn find(points: &[[f32; 3]]) -> Option<SupportPlane> {
         return None;
     }
     let index = KdIndex::new(&sample);
-    let mut out = Vec::with_capacity(NEIGHBOURS + 1);
-    let reach = median_reach(&sample, &index, &mut out) as f64;
-    if reach <= 0.0 {
+    let reach = crate::outliers::reach(&sample, &index).1 as f64;
+    if !(reach > 0.0 && reach.is_finite()) {
         return None;
     }
+    let mut out = Vec::with_capacity(NEIGHBOURS + 1);
     let count = |plane: &Plane, band: f64| sample.iter().filter(|p| plane.distance(p).abs() <= band).count();
     // the seeds' planes, each counted in a band of its own: the larger of THICKNESS times the
     // sample's median reach and three times the spread of the seed's neighbours about it (a

@@ -262,6 +262,19 @@ fn make_pairs_makes_scans_onto_a_model() {
     }
 }
 
+/// `arps eval MANIFEST --methods global --json` with `extra` arguments, its JSON.
+fn eval_global(manifest: &Path, extra: &[&str]) -> serde_json::Value {
+    let (ok, out, err) =
+        arps(&[&["eval", manifest.to_str().unwrap(), "--methods", "global", "--json"][..], extra].concat());
+    assert!(ok, "{err}");
+    serde_json::from_str(out.trim()).unwrap()
+}
+
+/// The first pair's first answer (`T_target_source`) of an `arps eval --json` result.
+fn first_answer(result: &serde_json::Value) -> serde_json::Value {
+    result["per_pair"][0]["results"][0]["T_target_source"].clone()
+}
+
 /// Pairs made into `dir` with `extra` arguments and into `clean` without (both with `args`),
 /// checked to be the same pairs with `extra_points` (source, target) appended after each cloud's
 /// 1,024: the same manifest, the same surface points. Per pair: its entry, its source and target
@@ -313,17 +326,11 @@ fn make_pairs_adds_stray_returns_that_eval_leaves_out() {
         (Some(0.05), Some(0.1))
     );
     let manifest = dir.join("pairs.tsv");
-    let eval = |extra: &[&str]| {
-        let (ok, out, err) =
-            arps(&[&["eval", manifest.to_str().unwrap(), "--methods", "global", "--json"][..], extra].concat());
-        assert!(ok, "{err}");
-        serde_json::from_str::<serde_json::Value>(out.trim()).unwrap()
-    };
+    let eval = |extra: &[&str]| eval_global(&manifest, extra);
     let (dropped, kept) = (eval(&[]), eval(&["--keep-outliers"]));
     let recall = |v: &serde_json::Value| v["methods"][0]["summary"]["recall"].as_f64().unwrap();
     assert!(recall(&dropped) >= recall(&kept), "{dropped}\n{kept}");
-    let answer = |v: &serde_json::Value| v["per_pair"][0]["results"][0]["T_target_source"].clone();
-    assert_ne!(answer(&dropped), answer(&kept));
+    assert_ne!(first_answer(&dropped), first_answer(&kept));
     for bad in [["--stray", "1.01"], ["--target-stray", "nan"]] {
         let (ok, _, err) =
             arps(&[&["make-pairs", "--out", dir.to_str().unwrap(), "--count", "1"][..], &bad[..]].concat());
@@ -376,15 +383,9 @@ fn make_pairs_adds_support_planes_that_eval_leaves_out() {
         arps(&[&["make-pairs", "--out", only.to_str().unwrap(), "--support", "0.5"][..], &args].concat());
     assert!(ok, "{out}{err}");
     let manifest = only.join("pairs.tsv");
-    let eval = |extra: &[&str]| {
-        let (ok, out, err) =
-            arps(&[&["eval", manifest.to_str().unwrap(), "--methods", "global", "--json"][..], extra].concat());
-        assert!(ok, "{err}");
-        serde_json::from_str::<serde_json::Value>(out.trim()).unwrap()
-    };
+    let eval = |extra: &[&str]| eval_global(&manifest, extra);
     let (dropped, kept) = (eval(&[]), eval(&["--keep-support"]));
-    let answer = |v: &serde_json::Value| v["per_pair"][0]["results"][0]["T_target_source"].clone();
-    assert_ne!(answer(&dropped), answer(&kept));
+    assert_ne!(first_answer(&dropped), first_answer(&kept));
     for bad in [["--support", "1.5"], ["--target-support", "nan"]] {
         let (ok, _, err) =
             arps(&[&["make-pairs", "--out", dir.to_str().unwrap(), "--count", "1"][..], &bad[..]].concat());

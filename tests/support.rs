@@ -5,7 +5,7 @@
 
 mod common;
 
-use arps::transform::{rigid_inverse, rotation_error_deg};
+use arps::transform::rigid_inverse;
 use arps::{Options, PointCloud, Registrar, Support};
 use nalgebra::Matrix4;
 
@@ -17,11 +17,6 @@ fn scene() -> PointCloud {
 /// The mug alone, from other pixels of the same capture (camera frame, metres).
 fn mug() -> PointCloud {
     arps::io::read_point_cloud(include_bytes!("../fixtures/scans/table-mug-object.ply"), "mug.ply").unwrap()
-}
-
-fn errors(t: &Matrix4<f64>, gt: &Matrix4<f64>) -> (f64, f64) {
-    let te = (t.fixed_view::<3, 1>(0, 3) - gt.fixed_view::<3, 1>(0, 3)).norm();
-    (rotation_error_deg(t, gt), te)
 }
 
 fn keep() -> Options {
@@ -50,7 +45,7 @@ fn the_table_under_a_captured_mug_is_left_out_and_the_mug_registered_onto_its_mo
             [(scene(), model.clone(), gt, "source"), (model.clone(), scene(), rigid_inverse(&gt), "target")]
         {
             let r = registrar.register(&source, &target, &Options::default()).unwrap();
-            let (re, te) = errors(&r.T_target_source, &truth);
+            let (re, te) = common::errors(&r.T_target_source, &truth);
             assert!(re < 0.3 && te < 0.003, "{deg:?} {what}: {re} deg, {te} m");
             assert!(r.confidence > 0.9, "{deg:?} {what}: confidence {}", r.confidence);
             let warning = format!("left out a plane of {} of the {what}'s", plane.indices.len());
@@ -80,11 +75,11 @@ fn two_captures_of_a_mug_that_stood_still_are_registered_with_or_without_their_t
         let warning = format!("of the {what}'s");
         assert!(r.warnings.iter().any(|w| w.contains("left out a plane") && w.contains(&warning)), "{:?}", r.warnings);
     }
-    let (re, te) = errors(&r.T_target_source, &gt);
+    let (re, te) = common::errors(&r.T_target_source, &gt);
     assert!(re < 0.5 && te < 0.005, "{re} deg, {te} m");
     let kept = registrar.register(&first, &second, &keep()).unwrap();
     assert!(kept.warnings.iter().all(|w| !w.contains("left out a plane")), "{:?}", kept.warnings);
-    let (re, te) = errors(&kept.T_target_source, &gt);
+    let (re, te) = common::errors(&kept.T_target_source, &gt);
     assert!(re < 0.3 && te < 0.003, "kept: {re} deg, {te} m");
 }
 
@@ -131,12 +126,12 @@ fn a_mug_turned_over_on_the_table_between_two_captures_is_registered_without_the
     let (first, second, truth) = tipped_over(&camera);
     let mut registrar = Registrar::with_default_model().unwrap();
     let r = registrar.register(&first, &second, &Options::default()).unwrap();
-    let (re, te) = errors(&r.T_target_source, &truth);
+    let (re, te) = common::errors(&r.T_target_source, &truth);
     assert!(re < 1.0 && te < 0.005, "{re} deg, {te} m: {:?}", r.warnings);
     assert_eq!(r.warnings.iter().filter(|w| w.contains("left out a plane")).count(), 2, "{:?}", r.warnings);
     // kept, the tables pull the mug's answer onto the table's motion
     let kept = registrar.register(&first, &second, &keep()).unwrap();
-    let (re, _) = errors(&kept.T_target_source, &truth);
+    let (re, _) = common::errors(&kept.T_target_source, &truth);
     assert!(re > 15.0, "kept: {re} deg");
 }
 
@@ -153,7 +148,7 @@ fn a_target_kept_between_calls_gives_the_answers_of_a_fresh_registrar() {
         let fresh = Registrar::with_default_model().unwrap().register(source, &target, &Options::default()).unwrap();
         assert_eq!(again.T_target_source, fresh.T_target_source);
         assert_eq!(again.warnings, fresh.warnings);
-        let (re, te) = errors(&again.T_target_source, &gt);
+        let (re, te) = common::errors(&again.T_target_source, &gt);
         assert!(re < 0.3 && te < 0.003, "{re} deg, {te} m");
     }
 }

@@ -23,7 +23,7 @@
 //! 7. Gaussian noise `σ = noise_sigma` on every coordinate of both sets, clipped to
 //!    `±noise_clip`.
 
-use crate::cloud::{JointNormalization, PointCloud};
+use crate::cloud::{grow_box, JointNormalization, PointCloud};
 use crate::io::Mesh;
 use crate::transform::{euler_xyz, from_rotation_translation};
 use crate::{sampling, Result};
@@ -314,8 +314,7 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
     let jitter = |rng: &mut ChaCha8Rng, q: Vector3<f64>| -> [f32; 3] {
         let mut out = [0.0f32; 3];
         for a in 0..3 {
-            let n = if sigma > 0.0 { (normal(rng) * sigma).clamp(-clip, clip) } else { 0.0 };
-            out[a] = (q[a] + n) as f32;
+            out[a] = (q[a] + noise(rng, sigma, clip)) as f32;
         }
         out
     };
@@ -337,6 +336,16 @@ pub fn pair_from_dense(dense: &PointCloud, shape: &str, params: &PairParams, see
         overlap,
         source_dense_index: src_i,
         target_dense_index: tgt_i,
+    }
+}
+
+/// One coordinate's noise: Gaussian of `sigma` clipped to `±clip`, nothing (and no draw) when
+/// `sigma` is 0.
+fn noise(rng: &mut ChaCha8Rng, sigma: f64, clip: f64) -> f64 {
+    if sigma > 0.0 {
+        (normal(rng) * sigma).clamp(-clip, clip)
+    } else {
+        0.0
     }
 }
 
@@ -383,14 +392,9 @@ pub const SUPPORT_EXTENT: f64 = 1.0;
 /// (those with a dense index other than [`STRAY_INDEX`]), its height the lowest of both clouds'
 /// surface points in that frame (the object stands on it, whatever each crop kept of its bottom).
 fn support_square(pair: &Pair, in_target: bool) -> Option<(f64, f64, f64, f64)> {
-    let surface = |points: &[[f32; 3]], index: &[u32]| -> Vec<nalgebra::Point3<f64>> {
-        points
-            .iter()
-            .zip(index)
-            .filter(|(_, &i)| i != STRAY_INDEX)
-            .map(|(p, _)| nalgebra::Point3::new(p[0] as f64, p[1] as f64, p[2] as f64))
-            .collect()
-    };
+    fn surface<'a>(points: &'a [[f32; 3]], index: &'a [u32]) -> impl Iterator<Item = &'a [f32; 3]> {
+        points.iter().zip(index).filter(|(_, &i)| i != STRAY_INDEX).map(|(p, _)| p)
+    }
     let (source, target) =
         (surface(&pair.source, &pair.source_dense_index), surface(&pair.target, &pair.target_dense_index));
     let (own, other, to_own) = if in_target {
@@ -398,17 +402,16 @@ fn support_square(pair: &Pair, in_target: bool) -> Option<(f64, f64, f64, f64)> 
     } else {
         (source, target, crate::transform::rigid_inverse(&pair.T_target_source))
     };
-    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for p in &own {
-        for a in 0..3 {
-            lo[a] = lo[a].min(p[a]);
-            hi[a] = hi[a].max(p[a]);
-        }
+    let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+    for p in own {
+        grow_box(&mut lo, &mut hi, p);
     }
     if !lo[0].is_finite() {
         return None;
     }
-    let floor = other.iter().map(|p| to_own.transform_point(p).z).fold(lo[2], f64::min);
+    let (lo, hi) = (lo.map(f64::from), hi.map(f64::from));
+    let floor =
+        other.map(|p| to_own.transform_point(&nalgebra::Point3::from(p.map(f64::from))).z).fold(lo[2], f64::min);
     let extent = |a: usize| (hi[a] - lo[a]) * 0.5;
     let half = extent(0).max(extent(1)) + SUPPORT_EXTENT * extent(0).max(extent(1)).max(extent(2));
     Some(((lo[0] + hi[0]) * 0.5, (lo[1] + hi[1]) * 0.5, floor, half))
@@ -418,9 +421,8 @@ fn support_square(pair: &Pair, in_target: bool) -> Option<(f64, f64, f64, f64)> 
 /// paper's protocol): `round(source_ratio * n)` points to its source of `n` points, drawn
 /// uniformly over a square that is level in the source frame (z up, as the bank's shapes mostly
 /// stand), at the height of the object's lowest point (of both clouds' surface points), centred
-/// under the source's footprint and
-/// reaching [`SUPPORT_EXTENT`] times the source's largest half-extent beyond it, with Gaussian
-/// noise of `sigma` (clipped at `clip`) across it; and `round(target_ratio * m)` points to its
+/// under the source's footprint and reaching [`SUPPORT_EXTENT`] times the source's largest
+/// half-extent beyond it, with Gaussian noise of `sigma` (clipped at `clip`) across it; and `round(target_ratio * m)` points to its
 /// target: of the same plane moved by the ground truth (the same table in both scans, the object
 /// not moved on it), or, with `moved`, of the square that is level in the target's frame under
 /// the target's own points (the object moved on the table between the scans: the table does not
@@ -437,7 +439,7 @@ pub fn add_support(pair: &mut Pair, source_ratio: f64, target_ratio: f64, moved:
     let plane = |rng: &mut ChaCha8Rng, (cx, cy, floor, half): (f64, f64, f64, f64)| {
         let x = cx + (rng.random::<f64>() * 2.0 - 1.0) * half;
         let y = cy + (rng.random::<f64>() * 2.0 - 1.0) * half;
-        let z = floor + if sigma > 0.0 { (normal(rng) * sigma).clamp(-clip, clip) } else { 0.0 };
+        let z = floor + noise(rng, sigma, clip);
         nalgebra::Point3::new(x, y, z)
     };
     let Some(under_source) = support_square(pair, false) else { return };

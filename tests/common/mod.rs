@@ -29,6 +29,11 @@ pub fn motion(deg: [f64; 3], t: [f64; 3]) -> Matrix4<f64> {
     from_rotation_translation(&euler_xyz(r[0], r[1], r[2]), &Vector3::from(t))
 }
 
+/// Rotation (degrees) and translation errors of `t` against the ground truth `gt`.
+pub fn errors(t: &Matrix4<f64>, gt: &Matrix4<f64>) -> (f64, f64) {
+    (arps::transform::rotation_error_deg(t, gt), arps::transform::translation_error(t, gt))
+}
+
 /// Keeps the points whose dot product with `dir` (about the centroid) is above the given quantile:
 /// a half-space crop, as in the training protocol.
 pub fn crop(cloud: &PointCloud, dir: [f32; 3], keep: f64) -> PointCloud {

@@ -97,9 +97,9 @@ pub struct MakePairsArgs {
     #[arg(long, default_value_t = 0.0)]
     target_stray: f64,
     /// A support plane added to each source, as a share of its points: a level square (z up in
-    /// the shape's frame) under the source's lowest point, reaching one footprint beyond it on
-    /// each side, as the table under a scanned object (not in the paper's protocol; default 0).
-    /// The surface points stay the pair's.
+    /// the shape's frame) at the object's lowest point, reaching beyond the source by its largest
+    /// half-extent on each side, as the table under a scanned object (not in the paper's
+    /// protocol; default 0). The surface points stay the pair's.
     #[arg(long, default_value_t = 0.0)]
     support: f64,
     /// The same plane in each target, as a share of its points (the same table in both scans;
