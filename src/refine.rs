@@ -196,10 +196,13 @@ pub const SCHEDULE: [f64; 3] = [4.0, 2.0, 1.0];
 /// estimate that was right, and the closer stages cannot bring it back. Damped, such motions move
 /// little in the wide stage and are settled by the closer stages' pairs. But an estimate that is
 /// off along a weakly pinned motion (a room's scan shifted along its floor) needs the plain stage
-/// to travel there, so the estimate takes the wide stage both ways: the two runs go on as two
-/// candidates, merged by the next stage where they end alike, and the fit chooses between them
-/// ([`choose`]). The other starts are guesses that must travel, and take the plain stage only.
-/// `BENCHMARK.md`, "The estimate's wide ICP stage, also damped".
+/// to travel there, so the estimate takes the wide stage both ways, and a third time not at all
+/// ([`Wide::Skipped`]): from an estimate a few degrees off, even the damped stage can leave a bowl
+/// turned about its axis into a basin that fits worse. The runs go on as candidates, merged by the
+/// next stage where they end alike, and the fit chooses between them ([`choose`]). The other
+/// starts are guesses that must travel, and take the plain stage only. `BENCHMARK.md`, "The
+/// estimate's wide ICP stage, also damped" and "ICP from a close estimate on surfaces of
+/// revolution".
 pub const WIDE_DAMPING: f64 = 0.03;
 
 /// The last stage of [`SCHEDULE`] alone: what runs again on a screened winner's full points, and
@@ -217,8 +220,8 @@ pub struct Refinement {
     /// Iteration cap of each ICP stage.
     pub max_iterations: u32,
     /// The start that is an estimate of the answer, not a guess (the pipeline's: the network's, or
-    /// with the network off the initial transform), if any: it takes the widest stage both plainly
-    /// and damped ([`WIDE_DAMPING`]).
+    /// with the network off the initial transform), if any: it takes the widest stage plainly,
+    /// damped ([`WIDE_DAMPING`]) and not at all ([`Wide::Skipped`]), as three candidates.
     pub estimate: Option<Start>,
 }
 
@@ -343,7 +346,7 @@ pub fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
 
 /// Refines every start with coarse-to-fine ICP against one prepared target ([`SCHEDULE`] times
 /// `how.d_final`, each stage capped at `how.max_iterations`; `how.estimate` takes the widest stage
-/// both plainly and damped, [`WIDE_DAMPING`], as two candidates) and scores
+/// plainly, damped ([`WIDE_DAMPING`]) and not at all, as three candidates) and scores
 /// each result at `how.d_final`.
 ///
 /// The starts advance stage by stage together; before each stage a start that has come within
@@ -389,12 +392,17 @@ fn refine_stages(
         for &factor in schedule {
             merge_coincident(&mut live, source, MERGE_FRACTION * d_final);
             let params = IcpParams { max_iterations, ..IcpParams::new(kind, d_final * factor) };
-            let mut damped = vec![false; live.len()];
+            let mut wide = vec![Wide::Plain; live.len()];
             if factor >= SCHEDULE[0] {
-                (live, damped) = with_damped_twins(live, estimate);
+                (live, wide) = with_estimate_twins(live, estimate);
             }
-            for ((c, partners), &damped) in live.iter_mut().zip(&damped) {
-                let params = IcpParams { damping: if damped { WIDE_DAMPING } else { 0.0 }, ..params };
+            for ((c, partners), &wide) in live.iter_mut().zip(&wide) {
+                if wide == Wide::Skipped {
+                    // left where it is: scored at this stage's distance for the cut below
+                    c.fitness = target.evaluate_warm(source, &c.T_target_source, d_final * factor, partners).0;
+                    continue;
+                }
+                let params = IcpParams { damping: if wide == Wide::Damped { WIDE_DAMPING } else { 0.0 }, ..params };
                 let r = target.align_warm(source, &c.T_target_source, &params, partners);
                 c.T_target_source = r.T_target_source;
                 c.iterations += r.iterations;
@@ -415,24 +423,38 @@ fn refine_stages(
         .collect()
 }
 
-/// `live` with a twin after each entry of the `estimate` start, and which entries are those twins:
-/// the ones whose widest stage is damped ([`WIDE_DAMPING`]).
-fn with_damped_twins(
+/// How a candidate takes the widest ICP stage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Wide {
+    /// Plain ICP: every start.
+    Plain,
+    /// Damped ([`WIDE_DAMPING`]): a twin of the estimate.
+    Damped,
+    /// Not at all, the closer stages only: a second twin of the estimate.
+    Skipped,
+}
+
+/// `live` with two twins after each entry of the `estimate` start, and how each entry takes the
+/// widest stage: the start itself plainly, its twins damped and not at all.
+fn with_estimate_twins(
     live: Vec<(Candidate, Partners)>,
     estimate: Option<Start>,
-) -> (Vec<(Candidate, Partners)>, Vec<bool>) {
-    let mut out = Vec::with_capacity(live.len() + 1);
-    let mut damped = Vec::with_capacity(live.len() + 1);
+) -> (Vec<(Candidate, Partners)>, Vec<Wide>) {
+    let mut out = Vec::with_capacity(live.len() + 2);
+    let mut wide = Vec::with_capacity(live.len() + 2);
     for (c, partners) in live {
-        let twin = Some(c.start) == estimate;
-        if twin {
+        if Some(c.start) == estimate {
             out.push((c, partners.clone()));
-            damped.push(false);
+            out.push((c, partners.clone()));
+            wide.extend([Wide::Plain, Wide::Damped]);
+            out.push((c, partners));
+            wide.push(Wide::Skipped);
+        } else {
+            out.push((c, partners));
+            wide.push(Wide::Plain);
         }
-        out.push((c, partners));
-        damped.push(twin);
     }
-    (out, damped)
+    (out, wide)
 }
 
 /// After a coarse stage, a start whose fitness at that stage's distance is below this fraction of
