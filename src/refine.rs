@@ -197,7 +197,7 @@ pub const SCHEDULE: [f64; 3] = [4.0, 2.0, 1.0];
 /// little in the wide stage and are settled by the closer stages' pairs. But an estimate that is
 /// off along a weakly pinned motion (a room's scan shifted along its floor) needs the plain stage
 /// to travel there, so the estimate takes the wide stage both ways, and a third time not at all
-/// ([`Wide::Skipped`]): from an estimate a few degrees off, even the damped stage can leave a bowl
+/// (only the closer stages): from an estimate a few degrees off, even the damped stage can leave a bowl
 /// turned about its axis into a basin that fits worse. The runs go on as candidates, merged by the
 /// next stage where they end alike, and the fit chooses between them ([`choose`]). The other
 /// starts are guesses that must travel, and take the plain stage only. `BENCHMARK.md`, "The
@@ -221,7 +221,7 @@ pub struct Refinement {
     pub max_iterations: u32,
     /// The start that is an estimate of the answer, not a guess (the pipeline's: the network's, or
     /// with the network off the initial transform), if any: it takes the widest stage plainly,
-    /// damped ([`WIDE_DAMPING`]) and not at all ([`Wide::Skipped`]), as three candidates.
+    /// damped ([`WIDE_DAMPING`]) and not at all (the closer stages only), as three candidates.
     pub estimate: Option<Start>,
 }
 

@@ -23,6 +23,17 @@ fn right(t: &nalgebra::Matrix4<f64>, truth: &nalgebra::Matrix4<f64>) -> Result<(
     }
 }
 
+/// The options that refine `estimate` (the caller's initial transform) alone, without the
+/// network: the estimate's start, which takes the wide stage as the network's would.
+fn refined_alone(estimate: &nalgebra::Matrix4<f64>) -> Options {
+    Options {
+        network: false,
+        starts: vec![Start::Initial],
+        initial_transform: Some(to_rows(estimate)),
+        ..Options::default()
+    }
+}
+
 #[test]
 fn icp_from_the_truth_stays_there() {
     // the truth as the caller's initial transform, refined alone (what `arps eval` reports as the
@@ -31,13 +42,7 @@ fn icp_from_the_truth_stays_there() {
     let mut reg = Registrar::with_default_model().unwrap();
     for i in 0..PAIRS {
         let (source, target, truth) = fixture_pair_in("fixtures/revolution", i);
-        let options = Options {
-            network: false,
-            starts: vec![Start::Initial],
-            initial_transform: Some(to_rows(&truth)),
-            ..Options::default()
-        };
-        let r = reg.register(&source, &target, &options).unwrap();
+        let r = reg.register(&source, &target, &refined_alone(&truth)).unwrap();
         right(&r.T_target_source, &truth).unwrap_or_else(|e| panic!("pair {i}: {e}"));
     }
 }
@@ -60,13 +65,7 @@ fn icp_from_a_close_estimate_stays_right() {
                 let turn = euler_xyz(angles[0], angles[1], angles[2]);
                 let shift = nalgebra::Vector3::repeat(0.03 / 3f64.sqrt());
                 let estimate = truth * from_rotation_translation(&turn, &(c - turn * c + shift));
-                let options = Options {
-                    network: false,
-                    starts: vec![Start::Initial],
-                    initial_transform: Some(to_rows(&estimate)),
-                    ..Options::default()
-                };
-                let r = reg.register(&source, &target, &options).unwrap();
+                let r = reg.register(&source, &target, &refined_alone(&estimate)).unwrap();
                 right(&r.T_target_source, &truth)
                     .unwrap_or_else(|e| panic!("pair {i}, {degrees} degrees about axis {axis}: {e}"));
             }
