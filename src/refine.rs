@@ -197,10 +197,10 @@ pub const SCHEDULE: [f64; 3] = [4.0, 2.0, 1.0];
 /// little in the wide stage and are settled by the closer stages' pairs. But an estimate that is
 /// off along a weakly pinned motion (a room's scan shifted along its floor) needs the plain stage
 /// to travel there, so the estimate takes the wide stage both ways, and a third time not at all
-/// (only the closer stages): from an estimate a few degrees off, even the damped stage can leave a bowl
-/// turned about its axis into a basin that fits worse. The runs go on as candidates, merged by the
-/// next stage where they end alike, and the fit chooses between them ([`choose`]). The other
-/// starts are guesses that must travel, and take the plain stage only. `BENCHMARK.md`, "The
+/// (only the closer stages): from an estimate a few degrees off, even the damped stage can leave
+/// a bowl turned about its axis in a basin that fits worse. The runs go on as candidates, merged
+/// by the next stage where they end alike, and the fit chooses between them ([`choose`]). The
+/// other starts are guesses that must travel, and take the plain stage only. `BENCHMARK.md`, "The
 /// estimate's wide ICP stage, also damped" and "ICP from a close estimate on surfaces of
 /// revolution".
 pub const WIDE_DAMPING: f64 = 0.03;
@@ -443,16 +443,11 @@ fn with_estimate_twins(
     let mut out = Vec::with_capacity(live.len() + 2);
     let mut wide = Vec::with_capacity(live.len() + 2);
     for (c, partners) in live {
-        if Some(c.start) == estimate {
-            out.push((c, partners.clone()));
-            out.push((c, partners.clone()));
-            wide.extend([Wide::Plain, Wide::Damped]);
-            out.push((c, partners));
-            wide.push(Wide::Skipped);
-        } else {
-            out.push((c, partners));
-            wide.push(Wide::Plain);
-        }
+        let ways: &[Wide] =
+            if Some(c.start) == estimate { &[Wide::Plain, Wide::Damped, Wide::Skipped] } else { &[Wide::Plain] };
+        out.extend(ways[1..].iter().map(|_| (c, partners.clone())));
+        out.push((c, partners));
+        wide.extend_from_slice(ways);
     }
     (out, wide)
 }

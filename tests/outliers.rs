@@ -109,9 +109,5 @@ fn keep_uses_every_point_and_the_kept_target_follows_the_option() {
 
 #[test]
 fn the_option_reads_from_json_and_a_bad_value_is_a_clear_error() {
-    let o: Options = serde_json::from_str(r#"{"outliers": "keep"}"#).unwrap();
-    assert_eq!(o.outliers, Outliers::Keep);
-    assert_eq!(Options::default().outliers, Outliers::Drop);
-    let e = serde_json::from_str::<Options>(r#"{"outliers": "remove"}"#).unwrap_err().to_string();
-    assert!(e.contains("unknown variant `remove`") && e.contains("drop") && e.contains("keep"), "{e}");
+    common::drop_or_keep_from_json("outliers", |o| o.outliers, Outliers::Drop, Outliers::Keep);
 }

@@ -168,9 +168,5 @@ fn a_cloud_without_a_support_plane_is_registered_as_with_every_point_kept() {
 
 #[test]
 fn the_option_is_read_from_json_and_a_bad_value_is_a_clear_error() {
-    let o: Options = serde_json::from_str(r#"{"supportPlane": "keep"}"#).unwrap();
-    assert_eq!(o.support_plane, Support::Keep);
-    assert_eq!(Options::default().support_plane, Support::Drop);
-    let e = serde_json::from_str::<Options>(r#"{"supportPlane": "remove"}"#).unwrap_err().to_string();
-    assert!(e.contains("unknown variant `remove`") && e.contains("drop") && e.contains("keep"), "{e}");
+    common::drop_or_keep_from_json("supportPlane", |o| o.support_plane, Support::Drop, Support::Keep);
 }

@@ -72,3 +72,18 @@ pub fn fixture_pair_in(dir: &str, index: usize) -> (PointCloud, PointCloud, Matr
     let v: Vec<f64> = fields[5].split_whitespace().map(|x| x.parse().unwrap()).collect();
     (read(fields[1]), read(fields[2]), Matrix4::from_row_slice(&v))
 }
+
+/// Checks a `"drop"` / `"keep"` option of `Options` read from JSON under `key`: `"keep"` reads as
+/// `keep`, the default is `drop`, and another value is an error that names the variants.
+pub fn drop_or_keep_from_json<T: PartialEq + std::fmt::Debug>(
+    key: &str,
+    field: impl Fn(&arps::Options) -> T,
+    drop: T,
+    keep: T,
+) {
+    let o: arps::Options = serde_json::from_str(&format!(r#"{{"{key}": "keep"}}"#)).unwrap();
+    assert_eq!(field(&o), keep);
+    assert_eq!(field(&arps::Options::default()), drop);
+    let e = serde_json::from_str::<arps::Options>(&format!(r#"{{"{key}": "remove"}}"#)).unwrap_err().to_string();
+    assert!(e.contains("unknown variant `remove`") && e.contains("drop") && e.contains("keep"), "{e}");
+}
