@@ -109,10 +109,11 @@ export type RegisterOptions = {
    * the earlier; on large clouds the starts are compared on 2048 of the source points and only
    * the winner is refined on 8192 of them. Which starts are refined at all depends on
    * `search`. Default `["network", "global", "centroids", "initial", "turned",
-   * "turnedInitial"]`; each extra start costs one ICP run on at most 2048 points (`"turned"`
-   * and `"turnedInitial"` are six each, `"global"` and `"globalNetwork"` up to five each, plus
-   * the descriptor matching, `"rotations"` 24), so `["network"]` is the fastest. Must be
-   * non-empty, without repeats.
+   * "turnedInitial", "rotationsNetwork"]`; each extra start costs one ICP run on at most 2048
+   * points (`"turned"` and `"turnedInitial"` are six each, `"global"` and `"globalNetwork"` up
+   * to five each, plus the descriptor matching, `"rotations"` 24, `"rotationsNetwork"` 24 and
+   * as many network passes), so `["network"]` is the fastest. Must be non-empty, without
+   * repeats.
    * - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
    *   reported as `"initial"`);
    * - `"centroids"`: `initialTransform`'s rotation (none if unset) with the translation that
@@ -133,7 +134,13 @@ export type RegisterOptions = {
    *   each rotation of a cube onto itself (after `initialTransform`'s rotation): a blind
    *   search over every orientation, for shapes whose descriptors match poorly (repetitive,
    *   smooth or symmetric ones). Not in the default list; the adaptive search adds them to its
-   *   last stage (see `search`).
+   *   last stage (see `search`);
+   * - `"rotationsNetwork"`: the `"rotations"` turns, each refined by the network first (it
+   *   estimates the motion left after the turn; every orientation is within about 63 degrees
+   *   of one of them): a search over every orientation that, unlike the blind one, lands near
+   *   the truth where ICP alone would not. The adaptive search refines them only for an answer
+   *   still unsure (confidence below 0.5) after every other stage (see `search`). With
+   *   `network: false`, the same starts as `"rotations"`, reported as `"rotations"`.
    *
    * The refined answer is then probed for poses that fit about as well (the `confidence`'s
    * turns, `evidence.ambiguity`); when one fits better (typically the answer flipped about an
@@ -157,8 +164,11 @@ export type RegisterOptions = {
    * confidence reaches 0.85 once the global stage has run (`NEARLY_SURE_CONFIDENCE`), or 0.5
    * when the global stage's best hypothesis, refined, is that same pose (`AGREED_CONFIDENCE`),
    * skips the stages left, and its last stage refines only the 3 best of those further
-   * hypotheses.
-   * `"exhaustive"` refines every start, without that last stage. The result's `startsRefined`
+   * hypotheses. Then, when `starts` has `"rotationsNetwork"` and the answer's confidence is
+   * still below 0.5 (`UNSURE_CONFIDENCE`), those starts are refined, as one more stage whose
+   * best replaces the answer when it fits better; so only the answers the engine would
+   * otherwise flag as unsure pay for their network passes.
+   * `"exhaustive"` refines every start, without those last stages. The result's `startsRefined`
    * says how many were refined.
    */
   search?: RegistrationSearch,
@@ -167,7 +177,7 @@ export type RegisterOptions = {
 /**
  * A transform ICP starts from (the options' `starts`, which describe each).
  */
-export type RegistrationStart = "network" | "centroids" | "initial" | "turned" | "turnedInitial" | "global" | "globalNetwork" | "rotations";
+export type RegistrationStart = "network" | "centroids" | "initial" | "turned" | "turnedInitial" | "global" | "globalNetwork" | "rotations" | "rotationsNetwork";
 
 /**
  * How the options' `starts` are searched (see `search`).

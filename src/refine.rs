@@ -49,11 +49,19 @@ pub enum Start {
     /// descriptors match poorly (repetitive, smooth or symmetric shapes). The adaptive search
     /// adds them to its last stage (see `search`).
     Rotations,
+    /// The [`Start::Rotations`] turns, each refined by the network first: it estimates the motion
+    /// left after the turn, and every orientation lies within about 63 degrees of one of the 24,
+    /// near the 45 degrees per axis it is trained for. Twenty-four network passes, so the adaptive
+    /// search refines them only for an answer still unsure after every other stage
+    /// ([`Start::is_for_unsure`]). It needs the network: with `network: false` it is left out
+    /// (the adaptive search's last stage still has the blind rotations), and naming it alone is
+    /// an error.
+    RotationsNetwork,
 }
 
 impl Start {
     /// Every start, in declaration order.
-    pub const ALL: [Start; 8] = [
+    pub const ALL: [Start; 9] = [
         Start::Network,
         Start::Centroids,
         Start::Initial,
@@ -62,10 +70,11 @@ impl Start {
         Start::Global,
         Start::GlobalNetwork,
         Start::Rotations,
+        Start::RotationsNetwork,
     ];
 
     /// The name used in options and results (`"network"`, `"centroids"`, `"initial"`, `"turned"`,
-    /// `"turnedInitial"`, `"global"`, `"globalNetwork"`, `"rotations"`).
+    /// `"turnedInitial"`, `"global"`, `"globalNetwork"`, `"rotations"`, `"rotationsNetwork"`).
     pub fn name(self) -> &'static str {
         match self {
             Start::Network => "network",
@@ -76,6 +85,7 @@ impl Start {
             Start::Global => "global",
             Start::GlobalNetwork => "globalNetwork",
             Start::Rotations => "rotations",
+            Start::RotationsNetwork => "rotationsNetwork",
         }
     }
 
@@ -83,6 +93,14 @@ impl Start {
     /// each run of them is one stage of the adaptive search.
     pub fn is_global(self) -> bool {
         matches!(self, Start::Global | Start::GlobalNetwork)
+    }
+
+    /// True for the starts that [`crate::Search::Adaptive`] refines only for an answer below
+    /// [`crate::register::UNSURE_CONFIDENCE`] after every other stage, as its very last stage
+    /// ([`Start::RotationsNetwork`]: costly, and needed only where the other starts found nothing
+    /// convincing).
+    pub fn is_for_unsure(self) -> bool {
+        self == Start::RotationsNetwork
     }
 }
 

@@ -112,10 +112,11 @@ pub struct Options {
     /// the earlier; on large clouds the starts are compared on 2048 of the source points and only
     /// the winner is refined on 8192 of them. Which starts are refined at all depends on
     /// `search`. Default `["network", "global", "centroids", "initial", "turned",
-    /// "turnedInitial"]`; each extra start costs one ICP run on at most 2048 points (`"turned"`
-    /// and `"turnedInitial"` are six each, `"global"` and `"globalNetwork"` up to five each, plus
-    /// the descriptor matching, `"rotations"` 24), so `["network"]` is the fastest. Must be
-    /// non-empty, without repeats.
+    /// "turnedInitial", "rotationsNetwork"]`; each extra start costs one ICP run on at most 2048
+    /// points (`"turned"` and `"turnedInitial"` are six each, `"global"` and `"globalNetwork"` up
+    /// to five each, plus the descriptor matching, `"rotations"` 24, `"rotationsNetwork"` 24 and
+    /// as many network passes), so `["network"]` is the fastest. Must be non-empty, without
+    /// repeats.
     /// - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
     ///   reported as `"initial"`);
     /// - `"centroids"`: `initialTransform`'s rotation (none if unset) with the translation that
@@ -136,7 +137,13 @@ pub struct Options {
     ///   each rotation of a cube onto itself (after `initialTransform`'s rotation): a blind
     ///   search over every orientation, for shapes whose descriptors match poorly (repetitive,
     ///   smooth or symmetric ones). Not in the default list; the adaptive search adds them to its
-    ///   last stage (see `search`).
+    ///   last stage (see `search`);
+    /// - `"rotationsNetwork"`: the `"rotations"` turns, each refined by the network first (it
+    ///   estimates the motion left after the turn; every orientation is within about 63 degrees
+    ///   of one of them): a search over every orientation that, unlike the blind one, lands near
+    ///   the truth where ICP alone would not. The adaptive search refines them only for an answer
+    ///   still unsure (confidence below 0.5) after every other stage (see `search`). It needs the
+    ///   network: with `network: false` it is left out, and naming it alone is an error.
     ///
     /// The refined answer is then probed for poses that fit about as well (the `confidence`'s
     /// turns, `evidence.ambiguity`); when one fits better (typically the answer flipped about an
@@ -159,8 +166,11 @@ pub struct Options {
     /// confidence reaches 0.85 once the global stage has run (`NEARLY_SURE_CONFIDENCE`), or 0.5
     /// when the global stage's best hypothesis, refined, is that same pose (`AGREED_CONFIDENCE`),
     /// skips the stages left, and its last stage refines only the 3 best of those further
-    /// hypotheses.
-    /// `"exhaustive"` refines every start, without that last stage. The result's `startsRefined`
+    /// hypotheses. Then, when `starts` has `"rotationsNetwork"` and the answer's confidence is
+    /// still below 0.5 (`UNSURE_CONFIDENCE`), those starts are refined, as one more stage whose
+    /// best replaces the answer when it fits better; so only the answers the engine would
+    /// otherwise flag as unsure pay for their network passes.
+    /// `"exhaustive"` refines every start, without those last stages. The result's `startsRefined`
     /// says how many were refined.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub search: Search,
@@ -176,9 +186,10 @@ pub enum Search {
     /// (0.95), more global hypotheses and blind rotations; an answer at 0.85 or more once the
     /// global stage has run ([`NEARLY_SURE_CONFIDENCE`]), or at 0.5 or more when the global
     /// stage found it again ([`AGREED_CONFIDENCE`]), skips the stages left and gets only a few
-    /// more global hypotheses. When either cloud has many points (at least 3,000,
-    /// [`GLOBAL_BEFORE_STOP_POINTS`]: scans, or a scan onto a model) it does not stop before the
-    /// global stage.
+    /// more global hypotheses; an answer still below [`UNSURE_CONFIDENCE`] (0.5) then gets the
+    /// starts for unsure answers ([`Start::RotationsNetwork`]) when the starts name them. When
+    /// either cloud has many points (at least 3,000, [`GLOBAL_BEFORE_STOP_POINTS`]: scans, or a
+    /// scan onto a model) it does not stop before the global stage.
     /// The best of everything refined is returned. Easy pairs cost one start; hard ones get every
     /// start and more.
     #[default]
@@ -191,6 +202,12 @@ pub enum Search {
 /// confidently wrong answer of the first start rarely ends the search (`BENCHMARK.md` has the
 /// measurements behind the value).
 pub const STOP_CONFIDENCE: f64 = 0.95;
+
+/// [`Search::Adaptive`] refines the starts for unsure answers ([`Start::is_for_unsure`]:
+/// `"rotationsNetwork"`) only while the answer's confidence after every other stage is below
+/// this, the confidence's own line between right and wrong (`BENCHMARK.md`, "The network from
+/// every orientation, for unsure answers").
+pub const UNSURE_CONFIDENCE: f64 = 0.5;
 
 /// When the best answer's confidence reaches this once a global stage (`"global"`,
 /// `"globalNetwork"`) has run, [`Search::Adaptive`] skips the stages left and the blind rotations:
@@ -242,6 +259,7 @@ impl Default for Options {
                 Start::Initial,
                 Start::Turned,
                 Start::TurnedInitial,
+                Start::RotationsNetwork,
             ],
             search: Search::Adaptive,
         }

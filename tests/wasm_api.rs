@@ -56,8 +56,18 @@ fn known_transform_is_recovered_with_default_options() {
     assert!(get(&res, "icpConverged").as_bool().is_some());
     let start = get(&res, "start").as_string().unwrap_or_default();
     assert!(
-        ["network", "centroids", "initial", "turned", "turnedInitial", "global", "globalNetwork", "rotations"]
-            .contains(&start.as_str()),
+        [
+            "network",
+            "centroids",
+            "initial",
+            "turned",
+            "turnedInitial",
+            "global",
+            "globalNetwork",
+            "rotations",
+            "rotationsNetwork",
+        ]
+        .contains(&start.as_str()),
         "start {start:?}"
     );
     let timings = get(&res, "timings");

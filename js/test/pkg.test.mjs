@@ -58,7 +58,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       assert.ok(Array.isArray(res.T_target_source_network) && res.T_target_source_network.length === 16);
       for (const k of ["fitness", "inlierRmse", "icpIterations", "maxCorrespondenceDistance"]) assert.equal(typeof res[k], "number", k);
       assert.equal(typeof res.icpConverged, "boolean");
-      assert.ok(["network", "centroids", "initial", "turned", "turnedInitial", "global", "globalNetwork", "rotations"].includes(res.start), `start ${res.start}`);
+      assert.ok(["network", "centroids", "initial", "turned", "turnedInitial", "global", "globalNetwork", "rotations", "rotationsNetwork"].includes(res.start), `start ${res.start}`);
       for (const k of ["preprocessMs", "networkMs", "gmrMs", "icpMs", "globalMs", "totalMs"]) assert.equal(typeof res.timings[k], "number", k);
       assert.ok(res.confidence >= 0.8 && res.confidence <= 1, `confidence ${res.confidence} on the known pair`);
       assert.ok(!res.warnings.some((w) => w.startsWith("low confidence")), String(res.warnings));

@@ -34,9 +34,9 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   r.register(source, target, null);
   const ms: number = again.timings.totalMs + result.fitness + result.inlierRmse + result.icpIterations;
   const w: string[] = result.warnings;
-  const start: "network" | "centroids" | "initial" | "turned" | "turnedInitial" | "global" | "globalNetwork" | "rotations" = result.start;
+  const start: "network" | "centroids" | "initial" | "turned" | "turnedInitial" | "global" | "globalNetwork" | "rotations" | "rotationsNetwork" = result.start;
   r.register(source, target, { starts: ["network", "initial"] });
-  r.register(source, target, { starts: ["turned", "turnedInitial", "rotations"] });
+  r.register(source, target, { starts: ["turned", "turnedInitial", "rotations", "rotationsNetwork"] });
   r.register(source, target, { starts: ["network", "global", "globalNetwork"], search: "exhaustive" });
   const search: RegistrationSearch = "adaptive";
   r.register(source, target, { search });

@@ -5,7 +5,7 @@
 //! [`crate::pipeline::prepare`] once the normalisation is known.
 
 use crate::model::Model;
-use crate::refine;
+use crate::refine::{self, Start};
 use crate::register::{Options, MAX_NETWORK_POINTS};
 use crate::{transform, Error, Result};
 use nalgebra::Matrix4;
@@ -36,6 +36,11 @@ pub(crate) fn resolve(options: &Options, model: &Model) -> Result<Resolved> {
         )));
     }
     refine::check_starts(&options.starts)?;
+    if !options.network && options.starts.iter().all(|s| *s == Start::RotationsNetwork) {
+        return Err(Error::InvalidOption(
+            "starts names only \"rotationsNetwork\", which needs the network (network: false): name \"rotations\" for the blind turns".into(),
+        ));
+    }
     if let Some(up) = options.up {
         // any length: only its direction counts (`Upright::of` scales it by its largest entry first)
         if !up.iter().all(|v| v.is_finite()) || nalgebra::Vector3::from(up).amax() == 0.0 {

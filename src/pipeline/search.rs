@@ -7,7 +7,9 @@
 //! [`GLOBAL_BEFORE_STOP_POINTS`] points, not before the global stage has run); when none does,
 //! it runs a last stage of blind starts ([`Starts::more`]: more global hypotheses and the
 //! rotations), shortlisted to [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit
-//! clearly better ([`refine::clearly_better`]). An answer that reaches [`NEARLY_SURE_CONFIDENCE`]
+//! clearly better ([`refine::clearly_better`]). An answer still below [`UNSURE_CONFIDENCE`] after
+//! that gets the stage of starts for unsure answers ([`Start::is_for_unsure`], when the options
+//! name them), whose best replaces it when it fits better. An answer that reaches [`NEARLY_SURE_CONFIDENCE`]
 //! once the global stage has run, or [`AGREED_CONFIDENCE`] when the global stage's best is that
 //! same pose again, skips the stages left and the rotations: its last stage is the best
 //! [`NEARLY_SURE_LAST_STAGE_STARTS`] of the further global hypotheses. Each stage's best,
@@ -29,7 +31,7 @@ use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Candidate, Refinement, Start};
 use crate::register::{
     Options, Search, AGREED_CONFIDENCE, GLOBAL_BEFORE_STOP_POINTS, NEARLY_SURE_CONFIDENCE, STOP_CONFIDENCE,
-    UP_TOLERANCE_DEG,
+    UNSURE_CONFIDENCE, UP_TOLERANCE_DEG,
 };
 use crate::Result;
 use nalgebra::{Matrix4, Point3};
@@ -103,19 +105,29 @@ pub(crate) fn search(
     // once the global stage had run, the answer reached NEARLY_SURE_CONFIDENCE, or
     // AGREED_CONFIDENCE with the global stage finding it again
     let mut nearly_sure = false;
-    // the stages, then, while the answer is still below the stop, the last one: blind starts
-    for stage in stages.iter().map(Some).chain([None]) {
-        let mut starts = match stage {
-            Some(_) if nearly_sure => continue,
-            Some(stage) => builder.build(stage, model, workspace)?,
+    // the stages; then, while the answer is still below the stop, the last one (blind starts);
+    // then, while it is still unsure, the starts for unsure answers
+    let (unsure, listed): (Vec<&Vec<Start>>, Vec<&Vec<Start>>) =
+        stages.iter().partition(|s| s.iter().all(|k| k.is_for_unsure()));
+    let steps = listed
+        .into_iter()
+        .map(|s| Step::Listed(s))
+        .chain([Step::Blind])
+        .chain(unsure.into_iter().map(|s| Step::Unsure(s)));
+    for step in steps {
+        let mut starts = match step {
+            Step::Listed(_) if nearly_sure => continue,
+            Step::Listed(stage) => builder.build(stage, model, workspace)?,
             // no stage stopped the search (the loop breaks at STOP_CONFIDENCE)
-            None if adaptive && options.icp != IcpKind::Off && best.is_some() => {
+            Step::Blind if adaptive && options.icp != IcpKind::Off && best.is_some() => {
                 // blind starts, most of which land nowhere: a short run each picks those refined
                 let more = builder.more(&kinds, !nearly_sure, model, workspace)?;
                 let keep = if nearly_sure { NEARLY_SURE_LAST_STAGE_STARTS } else { LAST_STAGE_STARTS };
                 refine::shortlist(target_index, &p.icp_src.points, more, &how, keep)
             }
-            None => break,
+            Step::Blind => continue,
+            Step::Unsure(_) if adaptive && best.as_ref().is_some_and(|b| b.2 >= UNSURE_CONFIDENCE) => continue,
+            Step::Unsure(stage) => builder.build(stage, model, workspace)?,
         };
         if options.icp == IcpKind::Off {
             // nothing is refined or compared: the first start is the answer
@@ -134,7 +146,7 @@ pub(crate) fn search(
             continue;
         }
         refined.push((c.T_target_source, c.fitness));
-        let global_stage = stage.is_some_and(|s| s.iter().any(|k| k.is_global()));
+        let global_stage = matches!(step, Step::Listed(s) if s.iter().any(|k| k.is_global()));
         // the global stage found the answer again: the descriptors' hypotheses, independent of
         // the network and of the local starts, agree with it
         let agrees = global_stage
@@ -144,7 +156,7 @@ pub(crate) fn search(
         let better = match &best {
             None => true,
             // the last stage's starts are blind: a near tie stays with the answer
-            Some((b, _, _)) if stage.is_none() => refine::clearly_better(&c, b) && improves(b, &c),
+            Some((b, _, _)) if matches!(step, Step::Blind) => refine::clearly_better(&c, b) && improves(b, &c),
             Some((b, _, _)) => improves(b, &c),
         };
         if better {
@@ -210,6 +222,17 @@ pub(crate) fn search(
     let confidence = confidence::confidence(&evidence);
     let alternatives = refine_alternatives(target_index, &p.icp_src.points, &candidate, &poses, &how);
     Ok(Chosen { candidate, evidence, confidence, starts_refined, alternatives })
+}
+
+/// One stage of [`search`], in the order they run.
+enum Step<'a> {
+    /// A stage of the options' starts ([`super::starts::stages`]).
+    Listed(&'a [Start]),
+    /// The adaptive search's last stage of blind starts ([`Starts::more`]).
+    Blind,
+    /// A stage of starts for unsure answers ([`Start::is_for_unsure`]): with the adaptive search,
+    /// refined only while the answer is below [`UNSURE_CONFIDENCE`].
+    Unsure(&'a [Start]),
 }
 
 /// The alternative `poses` of the answer refined like it ([`refine::refine_final`] on the source

@@ -15,15 +15,20 @@ use crate::timing::{Clock, Stopwatch};
 use crate::{global, transform, Result};
 use nalgebra::{Matrix4, Vector3};
 
-/// The starts as the options name them, with the network off mapped to what they become, without
-/// repeats; only the first with ICP off.
+/// The starts as the options name them, with the network off mapped to what they become
+/// ([`Start::RotationsNetwork`] left out: the adaptive search's last stage has the blind
+/// rotations), without repeats; only the first with ICP off.
 pub(crate) fn kinds(options: &Options) -> Vec<Start> {
     let mut kinds: Vec<Start> = Vec::with_capacity(options.starts.len());
     for &start in &options.starts {
+        if start == Start::RotationsNetwork && !options.network {
+            continue;
+        }
         let start = match start {
             Start::Network if !options.network => Start::Initial,
             Start::TurnedInitial if !options.network => Start::Turned,
             Start::GlobalNetwork if !options.network => Start::Global,
+            Start::RotationsNetwork if !options.network => Start::Rotations,
             s => s,
         };
         if !kinds.contains(&start) {
@@ -37,13 +42,16 @@ pub(crate) fn kinds(options: &Options) -> Vec<Start> {
 }
 
 /// The stages of the search: all of `kinds` at once ([`Search::Exhaustive`]), or the first
-/// start alone, then the others in their order, grouped into runs of local and of global starts
+/// start alone, then the others in their order, grouped into runs of local and of global starts,
+/// and last, in one stage of their own, the starts for unsure answers
+/// ([`Start::is_for_unsure`], which [`super::search`] refines only for an answer still unsure)
 /// ([`Search::Adaptive`]; with the default starts: the network's; the global ones; the other
-/// local ones).
+/// local ones; the network's rotations).
 pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Vec<Start>> {
     match search {
         Search::Exhaustive => vec![kinds.to_vec()],
         Search::Adaptive => {
+            let (unsure, kinds): (Vec<Start>, Vec<Start>) = kinds.iter().partition(|k| k.is_for_unsure());
             let mut stages: Vec<Vec<Start>> = kinds.iter().take(1).map(|&k| vec![k]).collect();
             for &k in kinds.iter().skip(1) {
                 let joins = stages.len() > 1 && stages.last().is_some_and(|l| l[0].is_global() == k.is_global());
@@ -51,6 +59,9 @@ pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Vec<Start>> {
                     Some(last) if joins => last.push(k),
                     _ => stages.push(vec![k]),
                 }
+            }
+            if !unsure.is_empty() {
+                stages.push(unsure);
             }
             stages
         }
@@ -106,6 +117,11 @@ impl<'a> Starts<'a> {
                 Start::Initial => starts.push((start, t_initial)),
                 Start::Centroids => starts.push((start, centroid_alignment(p.src_n.centroid(), p.target.centroid()))),
                 Start::Rotations => starts.extend(rotations(p).into_iter().map(|t| (start, t))),
+                Start::RotationsNetwork => {
+                    for turn in rotations(p) {
+                        starts.push((start, refined_by_network(p, &turn, model, workspace)?));
+                    }
+                }
                 Start::Turned | Start::TurnedInitial => {
                     // t_net_n is the initial transform when the network is off
                     let base = if start == Start::Turned { t_net_n } else { t_initial };
@@ -178,16 +194,24 @@ impl<'a> Starts<'a> {
         if start != Start::GlobalNetwork {
             return Ok(hypotheses.iter().map(|&t| (start, t)).collect());
         }
-        let p = self.prepared;
         let mut starts = Vec::with_capacity(hypotheses.len());
-        for &h in hypotheses {
-            // the network estimates the motion left after the hypothesis
-            let moved: Vec<[f32; 3]> = p.net_src.points.iter().map(|&q| transform::apply(&h, q)).collect();
-            let t = network::estimate(model, workspace, &moved, &p.target.net.points)?;
-            starts.push((start, t * h));
+        for h in hypotheses {
+            starts.push((start, refined_by_network(self.prepared, h, model, workspace)?));
         }
         Ok(starts)
     }
+}
+
+/// `t` followed by the network's estimate of the motion left after it (the network-sampled
+/// source moved by `t` against the target; normalised units).
+fn refined_by_network(
+    p: &Prepared,
+    t: &Matrix4<f64>,
+    model: &Model,
+    workspace: &mut ModelWorkspace,
+) -> Result<Matrix4<f64>> {
+    let moved: Vec<[f32; 3]> = p.net_src.points.iter().map(|&q| transform::apply(t, q)).collect();
+    Ok(network::estimate(model, workspace, &moved, &p.target.net.points)? * t)
 }
 
 /// How many global hypotheses the adaptive search's last stage draws from the matches; those
@@ -235,10 +259,10 @@ mod tests {
 
     #[test]
     fn adaptive_stages_follow_the_order_of_the_starts() {
-        let default = [Network, Global, Centroids, Initial, Turned, TurnedInitial];
+        let default = [Network, Global, Centroids, Initial, Turned, TurnedInitial, RotationsNetwork];
         assert_eq!(
             stages(&default, Search::Adaptive),
-            vec![vec![Network], vec![Global], vec![Centroids, Initial, Turned, TurnedInitial]]
+            vec![vec![Network], vec![Global], vec![Centroids, Initial, Turned, TurnedInitial], vec![RotationsNetwork]]
         );
         assert_eq!(crate::Options::default().starts, default.to_vec());
         assert_eq!(
@@ -253,6 +277,12 @@ mod tests {
             stages(&[Global, GlobalNetwork, Initial], Search::Adaptive),
             vec![vec![Global], vec![GlobalNetwork], vec![Initial]]
         );
+        // the starts for unsure answers come last, in a stage of their own, wherever named
+        assert_eq!(
+            stages(&[RotationsNetwork, Network, Rotations], Search::Adaptive),
+            vec![vec![Network], vec![Rotations], vec![RotationsNetwork]]
+        );
+        assert_eq!(stages(&[RotationsNetwork], Search::Adaptive), vec![vec![RotationsNetwork]]);
         assert_eq!(stages(&default, Search::Exhaustive), vec![default.to_vec()]);
         assert!(stages(&[], Search::Adaptive).is_empty());
     }
