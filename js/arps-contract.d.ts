@@ -139,8 +139,8 @@ export type RegisterOptions = {
    *   estimates the motion left after the turn; every orientation is within about 63 degrees
    *   of one of them): a search over every orientation that, unlike the blind one, lands near
    *   the truth where ICP alone would not. The adaptive search refines them only for an answer
-   *   still unsure (confidence below 0.5) after every other stage (see `search`). With
-   *   `network: false`, the same starts as `"rotations"`, reported as `"rotations"`.
+   *   still unsure (confidence below 0.5) after every other stage (see `search`). It needs the
+   *   network: with `network: false` it is left out, and naming it alone is an error.
    *
    * The refined answer is then probed for poses that fit about as well (the `confidence`'s
    * turns, `evidence.ambiguity`); when one fits better (typically the answer flipped about an
@@ -166,7 +166,8 @@ export type RegisterOptions = {
    * skips the stages left, and its last stage refines only the 3 best of those further
    * hypotheses. Then, when `starts` has `"rotationsNetwork"` and the answer's confidence is
    * still below 0.5 (`UNSURE_CONFIDENCE`), those starts are refined, as one more stage whose
-   * best replaces the answer when it fits better; so only the answers the engine would
+   * best replaces the answer when it fits better (more than 10% better when it turns more than
+   * 30 degrees further from the initial guess); so only the answers the engine would
    * otherwise flag as unsure pay for their network passes.
    * `"exhaustive"` refines every start, without those last stages. The result's `startsRefined`
    * says how many were refined.

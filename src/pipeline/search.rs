@@ -9,7 +9,8 @@
 //! rotations), shortlisted to [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit
 //! clearly better ([`refine::clearly_better`]). An answer still below [`UNSURE_CONFIDENCE`] after
 //! that gets the stage of starts for unsure answers ([`Start::is_for_unsure`], when the options
-//! name them), whose best replaces it when it fits better. An answer that reaches [`NEARLY_SURE_CONFIDENCE`]
+//! name them), whose best replaces it when it fits better (clearly better when it turns much
+//! further from the initial guess, [`UNSURE_TURN_SLACK_DEG`]). An answer that reaches [`NEARLY_SURE_CONFIDENCE`]
 //! once the global stage has run, or [`AGREED_CONFIDENCE`] when the global stage's best is that
 //! same pose again, skips the stages left and the rotations: its last stage is the best
 //! [`NEARLY_SURE_LAST_STAGE_STARTS`] of the further global hypotheses. Each stage's best,
