@@ -313,7 +313,9 @@ export type RegistrationTimings = {
    */
   preprocessMs: number,
   /**
-   * The network forward pass (0 with `network: false`).
+   * The network's forward passes: its estimate's, and those (with their GMR solves) of the
+   * starts it refines first, `"globalNetwork"` and `"rotationsNetwork"` (0 with
+   * `network: false`).
    */
   networkMs: number,
   /**

@@ -291,7 +291,9 @@ pub enum Stage {
 pub struct Timings {
     /// Validation, normalisation, network sampling and ICP voxel downsampling.
     pub preprocess_ms: f64,
-    /// The network forward pass (0 with `network: false`).
+    /// The network's forward passes: its estimate's, and those (with their GMR solves) of the
+    /// starts it refines first, `"globalNetwork"` and `"rotationsNetwork"` (0 with
+    /// `network: false`).
     pub network_ms: f64,
     /// GMM parameters and the weighted Procrustes solve.
     pub gmr_ms: f64,
@@ -502,11 +504,11 @@ impl Registrar {
         let mut builder = Starts::new(&prepared, t_net_n, options.seed, self.clock);
         let chosen =
             search::search(&prepared, &stages, &mut builder, options, &self.model, &mut self.workspace, &mut warnings)?;
-        let global_ms = builder.global_ms;
-        let icp_ms = watch.lap();
+        let (global_ms, starts_network_ms) = (builder.global_ms, builder.network_ms);
+        let icp_ms = watch.lap() - global_ms - starts_network_ms;
+        let network_ms = network_ms + starts_network_ms;
 
-        let timings =
-            Timings { preprocess_ms, network_ms, gmr_ms, icp_ms: icp_ms - global_ms, global_ms, total_ms: total.lap() };
+        let timings = Timings { preprocess_ms, network_ms, gmr_ms, icp_ms, global_ms, total_ms: total.lap() };
         let registration = result::finish(&prepared, &t_net_n, chosen, warnings, timings);
         self.target = Some(prepared.target);
         registration

@@ -28,7 +28,6 @@ pub(crate) fn kinds(options: &Options) -> Vec<Start> {
             Start::Network if !options.network => Start::Initial,
             Start::TurnedInitial if !options.network => Start::Turned,
             Start::GlobalNetwork if !options.network => Start::Global,
-            Start::RotationsNetwork if !options.network => Start::Rotations,
             s => s,
         };
         if !kinds.contains(&start) {
@@ -81,12 +80,15 @@ pub(crate) struct Starts<'a> {
     hypotheses: Option<Vec<Matrix4<f64>>>,
     /// Milliseconds spent on the global hypotheses so far.
     pub global_ms: f64,
+    /// Milliseconds spent on the network's passes for starts it refines first
+    /// ([`Start::GlobalNetwork`], [`Start::RotationsNetwork`]) so far.
+    pub network_ms: f64,
 }
 
 impl<'a> Starts<'a> {
     /// Starts for `prepared`, with the network's estimate `t_net_n` (normalised units).
     pub(crate) fn new(prepared: &'a Prepared, t_net_n: Matrix4<f64>, seed: u64, clock: Option<Clock>) -> Self {
-        Self { prepared, t_net_n, seed, clock, matched: None, hypotheses: None, global_ms: 0.0 }
+        Self { prepared, t_net_n, seed, clock, matched: None, hypotheses: None, global_ms: 0.0, network_ms: 0.0 }
     }
 
     /// The network's estimate these starts were built from (normalised units).
@@ -118,9 +120,8 @@ impl<'a> Starts<'a> {
                 Start::Centroids => starts.push((start, centroid_alignment(p.src_n.centroid(), p.target.centroid()))),
                 Start::Rotations => starts.extend(rotations(p).into_iter().map(|t| (start, t))),
                 Start::RotationsNetwork => {
-                    for turn in rotations(p) {
-                        starts.push((start, refined_by_network(p, &turn, model, workspace)?));
-                    }
+                    let turns = rotations(p);
+                    starts.extend(self.refined_by_network(start, &turns, model, workspace)?);
                 }
                 Start::Turned | Start::TurnedInitial => {
                     // t_net_n is the initial transform when the network is off
@@ -185,7 +186,7 @@ impl<'a> Starts<'a> {
     /// The starts of the global kind `start` from `hypotheses`: each as it is
     /// ([`Start::Global`]) or refined by the network first ([`Start::GlobalNetwork`]).
     fn global(
-        &self,
+        &mut self,
         start: Start,
         hypotheses: &[Matrix4<f64>],
         model: &Model,
@@ -194,24 +195,29 @@ impl<'a> Starts<'a> {
         if start != Start::GlobalNetwork {
             return Ok(hypotheses.iter().map(|&t| (start, t)).collect());
         }
-        let mut starts = Vec::with_capacity(hypotheses.len());
-        for h in hypotheses {
-            starts.push((start, refined_by_network(self.prepared, h, model, workspace)?));
+        self.refined_by_network(start, hypotheses, model, workspace)
+    }
+
+    /// Each of `transforms` followed by the network's estimate of the motion left after it (the
+    /// network-sampled source moved by it against the target; normalised units), as starts of
+    /// kind `start`; the time goes to `network_ms`.
+    fn refined_by_network(
+        &mut self,
+        start: Start,
+        transforms: &[Matrix4<f64>],
+        model: &Model,
+        workspace: &mut ModelWorkspace,
+    ) -> Result<Vec<(Start, Matrix4<f64>)>> {
+        let p = self.prepared;
+        let mut w = Stopwatch::start(self.clock);
+        let mut starts = Vec::with_capacity(transforms.len());
+        for t in transforms {
+            let moved: Vec<[f32; 3]> = p.net_src.points.iter().map(|&q| transform::apply(t, q)).collect();
+            starts.push((start, network::estimate(model, workspace, &moved, &p.target.net.points)? * t));
         }
+        self.network_ms += w.lap();
         Ok(starts)
     }
-}
-
-/// `t` followed by the network's estimate of the motion left after it (the network-sampled
-/// source moved by `t` against the target; normalised units).
-fn refined_by_network(
-    p: &Prepared,
-    t: &Matrix4<f64>,
-    model: &Model,
-    workspace: &mut ModelWorkspace,
-) -> Result<Matrix4<f64>> {
-    let moved: Vec<[f32; 3]> = p.net_src.points.iter().map(|&q| transform::apply(t, q)).collect();
-    Ok(network::estimate(model, workspace, &moved, &p.target.net.points)? * t)
 }
 
 /// How many global hypotheses the adaptive search's last stage draws from the matches; those
