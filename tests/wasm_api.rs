@@ -219,6 +219,24 @@ fn search_option_and_global_starts() {
 }
 
 #[wasm_bindgen_test]
+fn the_network_from_every_turn_is_a_start_that_needs_the_network() {
+    let mut r = Registrar::with_default_model().map_err(message).unwrap();
+    // named alone: the 24 turns, each refined by the network, then ICP; the known pair recovered
+    let res = register_ok(&mut r, options(r#"{"starts": ["rotationsNetwork"]}"#));
+    let (rot, tr) = errors(&res);
+    assert!(rot < 1.0 && tr < 0.02, "{rot:.3} deg, {tr:.4}");
+    assert_eq!(get(&res, "start").as_string().as_deref(), Some("rotationsNetwork"));
+    assert!(num(&res, "startsRefined") >= 24.0, "{} starts", num(&res, "startsRefined"));
+    let t = get(&res, "timings");
+    assert!(num(&t, "networkMs") > 0.0 && num(&t, "networkMs") <= num(&t, "totalMs"), "the turns' passes are timed");
+    // without the network it cannot run alone: a clear error, and the registrar still works
+    let bad = r#"{"network": false, "starts": ["rotationsNetwork"]}"#;
+    let e = r.register(&source(), &target(), Some(options(bad)), None).err().map(message).expect(bad);
+    assert!(e.contains("rotationsNetwork") && e.contains("\"rotations\""), "{e}");
+    still_works(&mut r);
+}
+
+#[wasm_bindgen_test]
 fn empty_and_null_options_mean_defaults_and_results_are_deterministic() {
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
     let a = register_ok(&mut r, JsValue::UNDEFINED);
