@@ -94,7 +94,7 @@ pub struct EvalArgs {
     #[arg(long, value_enum, default_value_t = TeScale::Auto)]
     te_scale: TeScale,
     /// The starts of `network + multi-start ICP`, comma-separated (network, centroids, initial,
-    /// turned, turnedInitial, global, globalNetwork, rotations) [default: the engine's `Options::starts`].
+    /// turned, turnedInitial, global, globalNetwork, rotations, rotationsNetwork) [default: the engine's `Options::starts`].
     #[arg(long, value_delimiter = ',')]
     starts: Option<Vec<Start>>,
     /// The direction that is up in both clouds of every pair, x,y,z (`Options::up`), for every

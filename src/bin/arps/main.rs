@@ -74,7 +74,7 @@ enum Command {
         #[arg(long, default_value_t = 0)]
         seed: u64,
         /// Where ICP starts from, comma-separated, from network, centroids, initial, turned,
-        /// turnedInitial, global, globalNetwork, rotations; the best refinement by fitness wins
+        /// turnedInitial, global, globalNetwork, rotations, rotationsNetwork; the best refinement by fitness wins
         /// [default: the engine's `Options::starts`].
         #[arg(long, value_delimiter = ',')]
         starts: Option<Vec<Start>>,
