@@ -4,8 +4,9 @@
 //! checks that need the clouds' scale (distances, voxel size) are [`distances`], called by
 //! [`crate::pipeline::prepare`] once the normalisation is known.
 
+use super::starts;
 use crate::model::Model;
-use crate::refine::{self, Start};
+use crate::refine;
 use crate::register::{Options, MAX_NETWORK_POINTS};
 use crate::{transform, Error, Result};
 use nalgebra::Matrix4;
@@ -36,7 +37,9 @@ pub(crate) fn resolve(options: &Options, model: &Model) -> Result<Resolved> {
         )));
     }
     refine::check_starts(&options.starts)?;
-    if !options.network && options.starts.iter().all(|s| *s == Start::RotationsNetwork) {
+    // the starts that run with these options (`starts::kinds`: without the network,
+    // "rotationsNetwork" is left out)
+    if starts::kinds(options).is_empty() {
         return Err(Error::InvalidOption(
             "starts names only \"rotationsNetwork\", which needs the network (network: false): name \"rotations\" for the blind turns".into(),
         ));
