@@ -54,7 +54,8 @@ pub enum Start {
     /// near the 45 degrees per axis it is trained for. Twenty-four network passes, so the adaptive
     /// search refines them only for an answer still unsure after every other stage
     /// ([`Start::is_for_unsure`]). It needs the network: with `network: false` it is left out
-    /// (the adaptive search's last stage still has the blind rotations), and naming it alone is
+    /// (the adaptive search's last stage then has the blind rotations, which it leaves out when
+    /// this start is named), and naming it alone is
     /// an error.
     RotationsNetwork,
 }

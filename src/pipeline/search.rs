@@ -5,9 +5,10 @@
 //! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
 //! first stage whose best reaches [`STOP_CONFIDENCE`] (when either cloud has at least
 //! [`GLOBAL_BEFORE_STOP_POINTS`] points, not before the global stage has run); when none does,
-//! it runs a last stage of blind starts ([`Starts::more`]: more global hypotheses and the
-//! rotations), shortlisted to [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit
-//! clearly better ([`refine::clearly_better`]). An answer still below [`UNSURE_CONFIDENCE`] after
+//! it runs a last stage of blind starts ([`Starts::more`]: more global hypotheses, and the
+//! rotations unless the options name the network's turns, [`Start::RotationsNetwork`]),
+//! shortlisted to [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit clearly
+//! better ([`refine::clearly_better`]). An answer still below [`UNSURE_CONFIDENCE`] after
 //! that gets the stage of starts for unsure answers ([`Start::is_for_unsure`], when the options
 //! name them), whose best replaces it when it fits better (clearly better when it turns much
 //! further from the initial guess, [`UNSURE_TURN_SLACK_DEG`]). An answer that reaches [`NEARLY_SURE_CONFIDENCE`]
@@ -25,7 +26,7 @@
 //! unrefined, and a warning.
 
 use super::prepare::Prepared;
-use super::starts::Starts;
+use super::starts::{Starts, Step};
 use crate::confidence::{self, Evidence, Probed};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
@@ -55,7 +56,7 @@ pub(crate) struct Chosen {
 /// Refines the starts of each stage in turn (see the module docs).
 pub(crate) fn search(
     prepared: &Prepared,
-    stages: &[Vec<Start>],
+    stages: &[Step],
     builder: &mut Starts,
     options: &Options,
     model: &Model,
@@ -99,30 +100,31 @@ pub(crate) fn search(
     let mut refined: Vec<(Matrix4<f64>, f64)> = Vec::new();
     let mut starts_refined = 0usize;
     let adaptive = options.search == Search::Adaptive;
-    let kinds: Vec<Start> = stages.iter().flatten().copied().collect();
+    let kinds: Vec<Start> = stages
+        .iter()
+        .flat_map(|s| match s {
+            Step::Listed(k) | Step::Unsure(k) => k.as_slice(),
+            Step::Blind => &[],
+        })
+        .copied()
+        .collect();
     let has_global = kinds.iter().any(|k| k.is_global());
     let many_points = p.src_n.len().max(p.target.cloud.len()) >= GLOBAL_BEFORE_STOP_POINTS;
     let mut reached_global = false;
     // once the global stage had run, the answer reached NEARLY_SURE_CONFIDENCE, or
     // AGREED_CONFIDENCE with the global stage finding it again
     let mut nearly_sure = false;
-    // the stages; then, while the answer is still below the stop, the last one (blind starts);
-    // then, while it is still unsure, the starts for unsure answers
-    let (unsure, listed): (Vec<&Vec<Start>>, Vec<&Vec<Start>>) =
-        stages.iter().partition(|s| s.iter().all(|k| k.is_for_unsure()));
-    let steps = listed
-        .into_iter()
-        .map(|s| Step::Listed(s))
-        .chain([Step::Blind])
-        .chain(unsure.into_iter().map(|s| Step::Unsure(s)));
-    for step in steps {
+    for step in stages {
         let mut starts = match step {
             Step::Listed(_) if nearly_sure => continue,
             Step::Listed(stage) => builder.build(stage, model, workspace)?,
             // no stage stopped the search (the loop breaks at STOP_CONFIDENCE)
             Step::Blind if adaptive && options.icp != IcpKind::Off && best.is_some() => {
                 // blind starts, most of which land nowhere: a short run each picks those refined
-                let more = builder.more(&kinds, !nearly_sure, model, workspace)?;
+                // the network's turns follow for an unsure answer: they search every orientation
+                // better than the blind rotations, which stay for a search without them
+                let rotations = !nearly_sure && !kinds.contains(&Start::RotationsNetwork);
+                let more = builder.more(&kinds, rotations, model, workspace)?;
                 let keep = if nearly_sure { NEARLY_SURE_LAST_STAGE_STARTS } else { LAST_STAGE_STARTS };
                 refine::shortlist(target_index, &p.icp_src.points, more, &how, keep)
             }
@@ -245,17 +247,6 @@ fn verdict(c: &Candidate, probed: &Probed, refined: &[(Matrix4<f64>, f64)]) -> (
     (evidence, poses, confidence::confidence(&evidence))
 }
 
-/// One stage of [`search`], in the order they run.
-enum Step<'a> {
-    /// A stage of the options' starts ([`super::starts::stages`]).
-    Listed(&'a [Start]),
-    /// The adaptive search's last stage of blind starts ([`Starts::more`]).
-    Blind,
-    /// A stage of starts for unsure answers ([`Start::is_for_unsure`]): with the adaptive search,
-    /// refined only while the answer is below [`UNSURE_CONFIDENCE`].
-    Unsure(&'a [Start]),
-}
-
 /// The alternative `poses` of the answer refined like it ([`refine::refine_final`] on the source
 /// capped as for the answer, reported under its start), the best fitting first; one that the refinement brings back onto the answer
 /// or onto an alternative kept already ([`confidence::same_pose`]) is dropped.
@@ -289,9 +280,10 @@ fn refine_alternatives(
 const UNSURE_TURN_SLACK_DEG: f64 = 30.0;
 
 /// Most starts of the adaptive search's last stage that are refined: the best after a short run
-/// each ([`refine::shortlist`]; of 34 with the default starts). 12 keeps 17 of the 19 any-pose
-/// pairs that refining all 34 gains, at about half the stage's time (`BENCHMARK.md`, "A last
-/// stage for unsure answers").
+/// each ([`refine::shortlist`]; of up to 15 further global hypotheses, and 24 rotations more
+/// without the network's turns). Of 34 starts, 12 kept 17 of the 19 any-pose pairs that refining
+/// all 34 gained, at about half the stage's time (`BENCHMARK.md`, "A last stage for unsure
+/// answers").
 const LAST_STAGE_STARTS: usize = 12;
 
 /// Most starts of the last stage that are refined when the answer was nearly sure after the

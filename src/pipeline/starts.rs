@@ -40,15 +40,28 @@ pub(crate) fn kinds(options: &Options) -> Vec<Start> {
     kinds
 }
 
+/// One stage of the search ([`super::search`]), in the order [`stages`] gives them.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub(crate) enum Step {
+    /// Starts the options name, refined together.
+    Listed(Vec<Start>),
+    /// The adaptive search's last stage of blind starts ([`Starts::more`]): refined only while no
+    /// stage has reached the stop.
+    Blind,
+    /// The starts for unsure answers ([`Start::is_for_unsure`]): refined only while the answer is
+    /// still unsure.
+    Unsure(Vec<Start>),
+}
+
 /// The stages of the search: all of `kinds` at once ([`Search::Exhaustive`]), or the first
 /// start alone, then the others in their order, grouped into runs of local and of global starts,
-/// and last, in one stage of their own, the starts for unsure answers
-/// ([`Start::is_for_unsure`], which [`super::search`] refines only for an answer still unsure)
-/// ([`Search::Adaptive`]; with the default starts: the network's; the global ones; the other
-/// local ones; the network's rotations).
-pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Vec<Start>> {
+/// then the last stage of blind starts, and last, in one stage of their own, the starts for
+/// unsure answers ([`Start::is_for_unsure`]) ([`Search::Adaptive`]; with the default starts: the
+/// network's; the global ones; the other local ones; the blind ones; the network's rotations).
+pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Step> {
     match search {
-        Search::Exhaustive => vec![kinds.to_vec()],
+        Search::Exhaustive if kinds.is_empty() => Vec::new(),
+        Search::Exhaustive => vec![Step::Listed(kinds.to_vec())],
         Search::Adaptive => {
             let (unsure, kinds): (Vec<Start>, Vec<Start>) = kinds.iter().partition(|k| k.is_for_unsure());
             let mut stages: Vec<Vec<Start>> = kinds.iter().take(1).map(|&k| vec![k]).collect();
@@ -59,10 +72,9 @@ pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Vec<Start>> {
                     _ => stages.push(vec![k]),
                 }
             }
-            if !unsure.is_empty() {
-                stages.push(unsure);
-            }
-            stages
+            let blind = (!stages.is_empty()).then_some(Step::Blind);
+            let unsure = (!unsure.is_empty()).then_some(Step::Unsure(unsure));
+            stages.into_iter().map(Step::Listed).chain(blind).chain(unsure).collect()
         }
     }
 }
@@ -265,31 +277,37 @@ mod tests {
 
     #[test]
     fn adaptive_stages_follow_the_order_of_the_starts() {
+        let listed = |l: &[&[Start]]| l.iter().map(|s| Step::Listed(s.to_vec())).collect::<Vec<_>>();
+        let with_blind = |l: &[&[Start]]| [listed(l), vec![Step::Blind]].concat();
         let default = [Network, Global, Centroids, Initial, Turned, TurnedInitial, RotationsNetwork];
         assert_eq!(
             stages(&default, Search::Adaptive),
-            vec![vec![Network], vec![Global], vec![Centroids, Initial, Turned, TurnedInitial], vec![RotationsNetwork]]
+            [
+                with_blind(&[&[Network], &[Global], &[Centroids, Initial, Turned, TurnedInitial]]),
+                vec![Step::Unsure(vec![RotationsNetwork])]
+            ]
+            .concat()
         );
         assert_eq!(crate::Options::default().starts, default.to_vec());
         assert_eq!(
             stages(&[Network, Centroids, Initial, Global], Search::Adaptive),
-            vec![vec![Network], vec![Centroids, Initial], vec![Global]]
+            with_blind(&[&[Network], &[Centroids, Initial], &[Global]])
         );
         assert_eq!(
             stages(&[Network, Global, Centroids, Turned], Search::Adaptive),
-            vec![vec![Network], vec![Global], vec![Centroids, Turned]]
+            with_blind(&[&[Network], &[Global], &[Centroids, Turned]])
         );
         assert_eq!(
             stages(&[Global, GlobalNetwork, Initial], Search::Adaptive),
-            vec![vec![Global], vec![GlobalNetwork], vec![Initial]]
+            with_blind(&[&[Global], &[GlobalNetwork], &[Initial]])
         );
         // the starts for unsure answers come last, in a stage of their own, wherever named
         assert_eq!(
             stages(&[RotationsNetwork, Network, Rotations], Search::Adaptive),
-            vec![vec![Network], vec![Rotations], vec![RotationsNetwork]]
+            [with_blind(&[&[Network], &[Rotations]]), vec![Step::Unsure(vec![RotationsNetwork])]].concat()
         );
-        assert_eq!(stages(&[RotationsNetwork], Search::Adaptive), vec![vec![RotationsNetwork]]);
-        assert_eq!(stages(&default, Search::Exhaustive), vec![default.to_vec()]);
+        assert_eq!(stages(&[RotationsNetwork], Search::Adaptive), vec![Step::Unsure(vec![RotationsNetwork])]);
+        assert_eq!(stages(&default, Search::Exhaustive), listed(&[&default]));
         assert!(stages(&[], Search::Adaptive).is_empty());
     }
 }
