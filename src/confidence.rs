@@ -8,8 +8,9 @@
 //! A good fit is not enough either: on a symmetric or featureless shape other poses fit as well,
 //! and an answer that is one of `k` equally good poses is right with a probability of about
 //! `1 / k`, however well it fits. So the evidence also looks for such poses: the answer turned
-//! about the principal axes of the moved source (and the diagonals between them) and of the
-//! target points it overlaps, and along
+//! about the principal axes of the moved source (and the diagonals between them), of the
+//! target points it overlaps and, for a part of the target (a scan onto a model), of the whole
+//! target through its centroid, and along
 //! the motion its point-to-plane fit constrains least, each refined by a short ICP
 //! ([`Evidence::ambiguity`], [`Evidence::alternatives`]), and the answer slid along that motion
 //! without refinement ([`Evidence::slide`]: a surface of revolution turned about its axis, a plane
@@ -50,9 +51,12 @@ pub struct Evidence {
     /// 2): the answer turned 90 degrees both ways and 180 degrees about each principal axis of
     /// the moved source, 180 degrees about the four diagonals between those axes and about each
     /// principal axis of the target points it overlaps (all through the moved source's
-    /// centroid), and 60 degrees both ways along the least constrained motion of
-    /// [`Evidence::slide`] (when that slide is at least 0.5), each refined by a short ICP; 0 when
-    /// every one fell back onto the answer (within 15 degrees). Near 1 or above: the answer may
+    /// centroid), 180 degrees about each principal axis of the whole target through its centroid
+    /// when the source covers a much smaller share of the target than the target of the source (a
+    /// scan onto a model, which may fit as well on the model's other end), and 60 degrees both
+    /// ways along the least constrained motion of [`Evidence::slide`] (when that slide is at least
+    /// 0.5), each refined by a short ICP; 0 when every one fell back onto the answer (within 15
+    /// degrees). Near 1 or above: the answer may
     /// fit and still not be unique.
     pub ambiguity: f64,
     /// How many distinct poses (more than 15 degrees apart) fit at least 0.9 as well as the
@@ -172,8 +176,11 @@ pub fn probe(
     let answer = AnswerOnProbe { fitness: base, partners: probe_partners };
     // turns along the least constrained motion only where sliding along it keeps much of the fit
     let screw = screw.filter(|_| slide >= SCREW_MIN_SLIDE);
-    let turned =
-        turns(target, &probe, T_target_source, d, answer, kind, &screw_turns(screw, T_target_source), admissible);
+    // the source covers a smaller share of the target than the target of the source: a part of
+    // it (a scan onto a model), which may fit as well on the target's other end
+    let part = overlap_reverse < PART_OVERLAP * fitness;
+    let extra = screw_turns(screw, T_target_source);
+    let turned = turns(target, &probe, T_target_source, d, answer, kind, &extra, admissible, part);
     let (ambiguity, alternatives) = (turned.best_ratio.min(2.0), turned.alternatives.len() as f64);
     let (fitness_tight, fitness_loose, fitness_coarse) = (f(0.5), f(2.0), f(4.0));
     let evidence = Evidence {
@@ -191,6 +198,12 @@ pub fn probe(
     Probed { evidence, better, alternatives: turned.alternatives }
 }
 
+/// The answer's reverse overlap ([`Evidence::overlap_reverse`]) below this fraction of its
+/// fitness: the source is a part of the target (a scan onto a model, where the ratio is about the
+/// share of the model the scan covers; between two partial views of one overlap it is near 1), and
+/// the probes also turn the answer about the target's own principal axes through its centroid
+/// ([`turns`]; `BENCHMARK.md`, "A scan on the model's other end").
+const PART_OVERLAP: f64 = 0.6;
 /// Points of the probes ([`Evidence::ambiguity`], [`Evidence::slide`]).
 pub const PROBE_POINTS: usize = 512;
 /// A probe pose that ends within this many degrees of the answer has fallen back onto it; two
@@ -233,8 +246,10 @@ struct Turned {
 /// turn about each of the four diagonals between them, and a
 /// half turn about each principal axis of the target points it overlaps (the target is another
 /// view: its axes differ from the partial source's, and a flip about one of them is a common
-/// wrong answer of elongated shapes), each through the moved sample's centroid; then the
-/// `extra` starts (the turns along the least constrained motion, [`screw_turns`]). `answer` is
+/// wrong answer of elongated shapes), each through the moved sample's centroid; when the source
+/// is a `part` of the target ([`PART_OVERLAP`]), a half turn about each principal axis of the
+/// whole target through the target's centroid (a scan of one end of a symmetric model fits as
+/// well on its other end); then the `extra` starts (the turns along the least constrained motion, [`screw_turns`]). `answer` is
 /// `t` on `sample`. A probe that comes back onto the answer, or onto where an earlier probe was
 /// after the same stage ([`coincide`]), stops there and counts for nothing: it would end where
 /// that pose did.
@@ -249,6 +264,7 @@ fn turns(
     kind: IcpKind,
     extra: &[Matrix4<f64>],
     admissible: &Admissible,
+    part: bool,
 ) -> Turned {
     let AnswerOnProbe { fitness: base, mut partners } = answer;
     let mut out = Turned { best_ratio: 0.0, best: None, alternatives: Vec::new() };
@@ -257,27 +273,32 @@ fn turns(
         return out;
     }
     let (c, axes) = principal_axes(sample, t);
-    let mut probes: Vec<(f64, Vector3<f64>)> = Vec::with_capacity(16);
+    // (degrees, axis, a point on the axis)
+    let mut probes: Vec<(f64, Vector3<f64>, Vector3<f64>)> = Vec::with_capacity(19);
     for degrees in TURNS {
-        probes.extend((0..3).map(|k| (degrees, axes.column(k).into_owned())));
+        probes.extend((0..3).map(|k| (degrees, axes.column(k).into_owned(), c)));
     }
     // a partial view's principal axes are only estimates of the shape's: half turns about the
     // four diagonals between them too (with the axes, the thirteen axes of a cube's turns)
     for signs in [[1.0, 1.0, 1.0], [1.0, 1.0, -1.0], [1.0, -1.0, 1.0], [-1.0, 1.0, 1.0]] {
-        probes.push((180.0, axes * Vector3::from(signs)));
+        probes.push((180.0, axes * Vector3::from(signs), c));
     }
     if let Some(target_axes) = overlap_axes(target, sample, t, 2.0 * d) {
-        probes.extend((0..3).map(|k| (180.0, target_axes.column(k).into_owned())));
+        probes.extend((0..3).map(|k| (180.0, target_axes.column(k).into_owned(), c)));
+    }
+    if part {
+        let (tc, target_axes) = principal_axes(&even_sample(target.points(), PROBE_POINTS), &Matrix4::identity());
+        probes.extend((0..3).map(|k| (180.0, target_axes.column(k).into_owned(), tc)));
     }
     // with a shared up axis, the turns about it (the others tilt the answer, and are not counted)
     let up_turns = match admissible {
-        Admissible::Upright { up, .. } => UP_TURNS.map(|degrees| (degrees, *up)).to_vec(),
+        Admissible::Upright { up, .. } => UP_TURNS.map(|degrees| (degrees, *up, c)).to_vec(),
         Admissible::Any => Vec::new(),
     };
-    let turn = |(degrees, axis): (f64, Vector3<f64>)| {
+    let turn = |(degrees, axis, pivot): (f64, Vector3<f64>, Vector3<f64>)| {
         let axis = nalgebra::Unit::new_normalize(axis);
         let r = Rotation3::from_axis_angle(&axis, degrees.to_radians()).into_inner();
-        from_rotation_translation(&r, &(c - r * c)) * t
+        from_rotation_translation(&r, &(pivot - r * pivot)) * t
     };
     // (start, whether it first goes through the wide stage): the half turns and the screw turns
     // do, since their axes are only estimates of the true one
