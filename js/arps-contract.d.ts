@@ -370,9 +370,12 @@ export type RegistrationEvidence = {
    * 2): the answer turned 90 degrees both ways and 180 degrees about each principal axis of
    * the moved source, 180 degrees about the four diagonals between those axes and about each
    * principal axis of the target points it overlaps (all through the moved source's
-   * centroid), and 60 degrees both ways along the least constrained motion of
-   * `Evidence::slide` (when that slide is at least 0.5), each refined by a short ICP; 0 when
-   * every one fell back onto the answer (within 15 degrees). Near 1 or above: the answer may
+   * centroid), 180 degrees about each principal axis of the whole target through its centroid
+   * when the source covers a much smaller share of the target than the target of the source (a
+   * scan onto a model, which may fit as well on the model's other end), and 60 degrees both
+   * ways along the least constrained motion of `Evidence::slide` (when that slide is at least
+   * 0.5), each refined by a short ICP; 0 when every one fell back onto the answer (within 15
+   * degrees). Near 1 or above: the answer may
    * fit and still not be unique.
    */
   ambiguity: number,
