@@ -375,8 +375,7 @@ export type RegistrationEvidence = {
    * scan onto a model, which may fit as well on the model's other end), and 60 degrees both
    * ways along the least constrained motion of `Evidence::slide` (when that slide is at least
    * 0.5), each refined by a short ICP; 0 when every one fell back onto the answer (within 15
-   * degrees). Near 1 or above: the answer may
-   * fit and still not be unique.
+   * degrees). Near 1 or above: the answer may fit and still not be unique.
    */
   ambiguity: number,
   /**

@@ -10,11 +10,11 @@
 //! `1 / k`, however well it fits. So the evidence also looks for such poses: the answer turned
 //! about the principal axes of the moved source (and the diagonals between them), of the
 //! target points it overlaps and, for a part of the target (a scan onto a model), of the whole
-//! target through its centroid, and along
-//! the motion its point-to-plane fit constrains least, each refined by a short ICP
-//! ([`Evidence::ambiguity`], [`Evidence::alternatives`]), and the answer slid along that motion
-//! without refinement ([`Evidence::slide`]: a surface of revolution turned about its axis, a plane
-//! shifted in itself). The confidence is low on such answers, right or wrong.
+//! target through its centroid, and along the motion its point-to-plane fit constrains least,
+//! each refined by a short ICP ([`Evidence::ambiguity`], [`Evidence::alternatives`]), and the
+//! answer slid along that motion without refinement ([`Evidence::slide`]: a surface of revolution
+//! turned about its axis, a plane shifted in itself). The confidence is low on such answers,
+//! right or wrong.
 //!
 //! The probes are also a search: a probe pose that fits *better* than the answer ([`probe`],
 //! [`Probed::better`]; typically the answer flipped about an axis of an elongated shape) is
@@ -56,8 +56,7 @@ pub struct Evidence {
     /// scan onto a model, which may fit as well on the model's other end), and 60 degrees both
     /// ways along the least constrained motion of [`Evidence::slide`] (when that slide is at least
     /// 0.5), each refined by a short ICP; 0 when every one fell back onto the answer (within 15
-    /// degrees). Near 1 or above: the answer may
-    /// fit and still not be unique.
+    /// degrees). Near 1 or above: the answer may fit and still not be unique.
     pub ambiguity: f64,
     /// How many distinct poses (more than 15 degrees apart) fit at least 0.9 as well as the
     /// answer, among those probes or, when more, among the other answers the search refined (its
@@ -249,11 +248,12 @@ struct Turned {
 /// wrong answer of elongated shapes), each through the moved sample's centroid; when the source
 /// is a `part` of the target ([`PART_OVERLAP`]), a half turn about each principal axis of the
 /// whole target through the target's centroid (a scan of one end of a symmetric model fits as
-/// well on its other end); then the `extra` starts (the turns along the least constrained motion, [`screw_turns`]). `answer` is
-/// `t` on `sample`. A probe that comes back onto the answer, or onto where an earlier probe was
-/// after the same stage ([`coincide`]), stops there and counts for nothing: it would end where
-/// that pose did.
-// the probe's inputs and the two kinds of extra knowledge it takes (its own turns, the shared up)
+/// well on its other end); then the `extra` starts (the turns along the least constrained motion,
+/// [`screw_turns`]). `answer` is `t` on `sample`. A probe that comes back onto the answer, or
+/// onto where an earlier probe was after the same stage ([`coincide`]), stops there and counts
+/// for nothing: it would end where that pose did.
+// the probe's inputs and the three kinds of extra knowledge it takes (its own turns, the shared
+// up, whether the source is a part of the target)
 #[allow(clippy::too_many_arguments)]
 fn turns(
     target: &IcpTarget,
