@@ -100,14 +100,7 @@ pub(crate) fn search(
     let mut refined: Vec<(Matrix4<f64>, f64)> = Vec::new();
     let mut starts_refined = 0usize;
     let adaptive = options.search == Search::Adaptive;
-    let kinds: Vec<Start> = stages
-        .iter()
-        .flat_map(|s| match s {
-            Step::Listed(k) | Step::Unsure(k) => k.as_slice(),
-            Step::Blind => &[],
-        })
-        .copied()
-        .collect();
+    let kinds = starts::kinds(options);
     let has_global = kinds.iter().any(|k| k.is_global());
     let many_points = p.src_n.len().max(p.target.cloud.len()) >= GLOBAL_BEFORE_STOP_POINTS;
     let mut reached_global = false;

@@ -60,7 +60,6 @@ pub(crate) enum Step {
 /// network's; the global ones; the other local ones; the blind ones; the network's rotations).
 pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Step> {
     match search {
-        Search::Exhaustive if kinds.is_empty() => Vec::new(),
         Search::Exhaustive => vec![Step::Listed(kinds.to_vec())],
         Search::Adaptive => {
             let (unsure, kinds): (Vec<Start>, Vec<Start>) = kinds.iter().partition(|k| k.is_for_unsure());
