@@ -145,7 +145,10 @@ export type RegisterOptions = {
    * The refined answer is then probed for poses that fit about as well (the `confidence`'s
    * turns, `evidence.ambiguity`); when one fits better (typically the answer flipped about an
    * axis of an elongated shape), it is refined like one more start, reported under the start
-   * it came from, and kept if it fits best.
+   * it came from, and kept if it fits best. While the answer's confidence is below 0.95, a
+   * stage's best that does not replace it is probed too, since its flip may. When either cloud
+   * has many points (see `search`), the stages before the global one are probed only once it
+   * has run: the better of their answer and its answer first.
    *
    * With `icp: "off"` nothing is refined or compared: the first start is the answer.
    */

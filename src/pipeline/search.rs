@@ -4,23 +4,28 @@
 //! [`Chosen`]: the best refined start ([`refine::refine_best`], compared across stages by
 //! [`refine::choose`]) with its [`Evidence`] and confidence. [`Search::Adaptive`] stops after the
 //! first stage whose best reaches [`STOP_CONFIDENCE`] (when either cloud has at least
-//! [`GLOBAL_BEFORE_STOP_POINTS`] points, not before the global stage has run); when none does,
-//! it runs a last stage of blind starts ([`Starts::more`]: more global hypotheses, and the
-//! rotations unless the options name the network's turns, [`Start::RotationsNetwork`]),
-//! shortlisted to [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit clearly
-//! better ([`refine::clearly_better`]). An answer still below [`UNSURE_CONFIDENCE`] after
-//! that gets the stage of starts for unsure answers ([`Start::is_for_unsure`], when the options
-//! name them), whose best replaces it when it fits better (clearly better when it turns much
-//! further from the initial guess, [`UNSURE_TURN_SLACK_DEG`]). An answer that reaches [`NEARLY_SURE_CONFIDENCE`]
-//! once the global stage has run, or [`AGREED_CONFIDENCE`] when the global stage's best is that
-//! same pose again, skips the stages left and the rotations: its last stage is the best
-//! [`NEARLY_SURE_LAST_STAGE_STARTS`] of the further global hypotheses. Each stage's best,
-//! when it is better than the answer so far and another pose ([`refine::coincide`]), is judged
-//! by the confidence probe, and a probe pose that fits better is refined as one more start
-//! ([`settle`]). The answer's final verdict also counts, as alternatives, the other refined
+//! [`GLOBAL_BEFORE_STOP_POINTS`] points, not before the global stage has run); when none does, it
+//! runs a last stage of blind starts ([`Starts::more`]: more global hypotheses, and the rotations
+//! unless the options name the network's turns, [`Start::RotationsNetwork`]), shortlisted to
+//! [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit clearly better
+//! ([`refine::clearly_better`]). An answer still below [`UNSURE_CONFIDENCE`] after that gets the
+//! stage of starts for unsure answers ([`Start::is_for_unsure`], when the options name them), whose
+//! best replaces it when it fits better (clearly better when it turns much further from the initial
+//! guess, [`UNSURE_TURN_SLACK_DEG`]). An answer that reaches [`NEARLY_SURE_CONFIDENCE`] once the
+//! global stage has run, or [`AGREED_CONFIDENCE`] when the global stage's best is that same pose
+//! again, skips the stages left and the rotations: its last stage is the best
+//! [`NEARLY_SURE_LAST_STAGE_STARTS`] of the further global hypotheses. Each stage's best, when it
+//! is better than the answer so far and another pose ([`refine::coincide`]), is judged by the
+//! confidence probe, and a probe pose that fits better is refined as one more start ([`settle`]);
+//! while the answer is below [`STOP_CONFIDENCE`], a stage's best that does not replace it is judged
+//! too (its probe may find a pose that does: the truth, turned over from it). On clouds of
+//! [`GLOBAL_BEFORE_STOP_POINTS`] points the search cannot stop before its global stage, so the best
+//! of the stages before it waits unjudged, and the probe judges the better of it and the global
+//! stage's best once that stage has run (the other too while the answer is below
+//! [`STOP_CONFIDENCE`]). The answer's final verdict also counts, as alternatives, the other refined
 //! answers that fit about as well ([`confidence::count_search_alternatives`]); those alternative
-//! poses are refined like the answer and handed on with it ([`refine_alternatives`]). With
-//! `up` ([`Prepared::upright`]), every start is levelled first, a stage whose best ends tilted settles
+//! poses are refined like the answer and handed on with it ([`refine_alternatives`]). With `up`
+//! ([`Prepared::upright`]), every start is levelled first, a stage whose best ends tilted settles
 //! nothing, and the probes count only upright poses (turning the answer about up too). With no
 //! start refined at all, the network's estimate (the initial transform with the network off),
 //! unrefined, and a warning.
@@ -94,10 +99,31 @@ pub(crate) fn search(
     let improves = |b: &Candidate, c: &Candidate| {
         refine::better(c, b) && !refine::coincide(&b.T_target_source, &c.T_target_source, &p.icp_src.points, d_final)
     };
-    let mut best: Option<(Candidate, Probed, f64)> = None;
     // every stage's best and every refined probe pose: the final verdict counts those that fit
     // about as well as the answer as its alternatives
     let mut refined: Vec<(Matrix4<f64>, f64)> = Vec::new();
+    // `c` judged by the probe, and the probe's better poses refined ([`settle`]): the answer with
+    // its evidence and confidence, and how many probe poses were refined
+    let judged = |c: Candidate, refined: &mut Vec<(Matrix4<f64>, f64)>| {
+        // with ICP off the first start is the answer, unrefined: the probe only judges it
+        let (c, probed, extra) = if options.icp == IcpKind::Off {
+            (c, judge(&c.T_target_source), 0)
+        } else {
+            let refine = |t| {
+                let r = refine::refine_best(target_index, &p.icp_src.points, &[(c.start, level(t))], &how)
+                    .filter(|r| admits(&r.T_target_source));
+                refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
+                r
+            };
+            settle(c, &judge, refine, &improves)
+        };
+        let confidence = confidence::confidence(&probed.evidence);
+        ((c, probed, confidence), extra)
+    };
+    // the answer so far, judged; and a better one that waits for the global stage unjudged
+    // (see `waits` below)
+    let mut best: Option<(Candidate, Probed, f64)> = None;
+    let mut waiting: Option<Candidate> = None;
     let mut starts_refined = 0usize;
     let adaptive = options.search == Search::Adaptive;
     let kinds = starts::kinds(options);
@@ -108,6 +134,24 @@ pub(crate) fn search(
     // AGREED_CONFIDENCE with the global stage finding it again
     let mut nearly_sure = false;
     for step in stages {
+        let global_stage = matches!(step, Step::Listed(s) if s.iter().any(|k| k.is_global()));
+        // on clouds of many points the search cannot stop before its global stage: the best of
+        // the stages before it waits, unjudged, and the probe judges it or the global stage's
+        // better answer once that stage has run (a wrong network start, which the probe would
+        // have turned over, is then usually beaten by a global hypothesis first)
+        let waits = adaptive
+            && many_points
+            && has_global
+            && !reached_global
+            && !global_stage
+            && options.icp != IcpKind::Off
+            && matches!(step, Step::Listed(_));
+        if !matches!(step, Step::Listed(_)) {
+            if let Some(w) = waiting.take() {
+                let (b, extra) = judged(w, &mut refined);
+                (best, starts_refined) = (Some(b), starts_refined + extra);
+            }
+        }
         let mut starts = match step {
             Step::Listed(_) if nearly_sure => continue,
             Step::Listed(stage) => builder.build(stage, model, workspace)?,
@@ -148,42 +192,58 @@ pub(crate) fn search(
             continue;
         }
         refined.push((c.T_target_source, c.fitness));
-        let global_stage = matches!(step, Step::Listed(s) if s.iter().any(|k| k.is_global()));
+        // the answer so far, judged or waiting
+        let so_far = waiting.or(best.as_ref().map(|b| b.0));
         // the global stage found the answer again: the descriptors' hypotheses, independent of
         // the network and of the local starts, agree with it
         let agrees = global_stage
-            && best.as_ref().is_some_and(|(b, _, _)| {
-                refine::coincide(&b.T_target_source, &c.T_target_source, &p.icp_src.points, d_final)
-            });
-        let better = match &best {
-            None => true,
+            && so_far
+                .is_some_and(|b| refine::coincide(&b.T_target_source, &c.T_target_source, &p.icp_src.points, d_final));
+        // `c` of this stage replaces the answer `b`
+        let beats = |b: &Candidate, c: &Candidate| match step {
             // the last stage's starts are blind: a near tie stays with the answer
-            Some((b, _, _)) if matches!(step, Step::Blind) => refine::clearly_better(&c, b) && improves(b, &c),
+            Step::Blind => refine::clearly_better(c, b) && improves(b, c),
             // the network's turns search every orientation, whatever the initial guess: one that
             // turns much further from the guess than the answer must fit clearly better
-            Some((b, _, _)) if matches!(step, Step::Unsure(_)) => {
+            Step::Unsure(_) => {
                 let further =
                     refine::turn_deg(&c.T_target_source) > refine::turn_deg(&b.T_target_source) + UNSURE_TURN_SLACK_DEG;
-                improves(b, &c) && (!further || refine::clearly_better(&c, b))
+                improves(b, c) && (!further || refine::clearly_better(c, b))
             }
-            Some((b, _, _)) => improves(b, &c),
+            Step::Listed(_) => improves(b, c),
+        };
+        let better = so_far.as_ref().is_none_or(|b| beats(b, &c));
+        // the contender this stage passes over: the waiting answer that its best beats, or the
+        // best that the answer beats
+        let passed_over = match waiting {
+            Some(w) if better => Some(w),
+            _ if better => None,
+            _ => Some(c),
         };
         if better {
-            // with ICP off the first start is the answer, unrefined: the probe only judges it
-            let (c, probed, extra) = if options.icp == IcpKind::Off {
-                (c, judge(&c.T_target_source), 0)
-            } else {
-                let refine = |t| {
-                    let r = refine::refine_best(target_index, &p.icp_src.points, &[(c.start, level(t))], &how)
-                        .filter(|r| admits(&r.T_target_source));
-                    refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
-                    r
-                };
-                settle(c, &judge, refine, &improves)
+            waiting = Some(c);
+        }
+        if !waits {
+            if let Some(w) = waiting.take() {
+                let (b, extra) = judged(w, &mut refined);
+                (best, starts_refined) = (Some(b), starts_refined + extra);
+            }
+            // an answer the search is unsure of: the contender passed over is judged too, since
+            // its probe may find a pose that beats the answer (typically the contender turned
+            // over onto the truth)
+            let unsure_of = |o: &Candidate| {
+                best.as_ref().is_some_and(|b| {
+                    b.2 < STOP_CONFIDENCE
+                        && !refine::coincide(&o.T_target_source, &b.0.T_target_source, &p.icp_src.points, d_final)
+                })
             };
-            starts_refined += extra;
-            let confidence = confidence::confidence(&probed.evidence);
-            best = Some((c, probed, confidence));
+            if let Some(o) = passed_over.filter(unsure_of) {
+                let (other, extra) = judged(o, &mut refined);
+                starts_refined += extra;
+                if best.as_ref().is_some_and(|b| beats(&b.0, &other.0)) {
+                    best = Some(other);
+                }
+            }
         }
         reached_global |= global_stage;
         // on clouds of many points the confidence is measured to be too sure of wrong answers
@@ -200,6 +260,10 @@ pub(crate) fn search(
         let sure_enough =
             |b: &(Candidate, Probed, f64)| b.2 >= NEARLY_SURE_CONFIDENCE || (agrees && b.2 >= AGREED_CONFIDENCE);
         nearly_sure |= adaptive && reached_global && best.as_ref().is_some_and(sure_enough);
+    }
+    if let Some(w) = waiting.take() {
+        let (b, extra) = judged(w, &mut refined);
+        (best, starts_refined) = (Some(b), starts_refined + extra);
     }
     // no start at all (only global ones, and the descriptors matched too little): the first
     // start the options name, unrefined
