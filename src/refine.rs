@@ -55,8 +55,7 @@ pub enum Start {
     /// search refines them only for an answer still unsure after every other stage
     /// ([`Start::is_for_unsure`]). It needs the network: with `network: false` it is left out
     /// (the adaptive search's last stage then has the blind rotations, which it leaves out when
-    /// this start is named), and naming it alone is
-    /// an error.
+    /// this start is named), and naming it alone is an error.
     RotationsNetwork,
 }
 
