@@ -44,6 +44,7 @@ pub mod refine;
 pub mod register;
 pub mod rigid;
 pub mod sampling;
+pub mod spacing;
 pub mod spatial;
 pub mod support;
 pub mod timing;

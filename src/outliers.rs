@@ -8,8 +8,9 @@
 //! the descriptors' voxel and ICP's distances grow with the box (`BENCHMARK.md`, "Far
 //! outliers").
 //!
-//! The test is local density on an even sample of the cloud (at most [`SAMPLE`] points, so the
-//! cost is one pass over the cloud plus two small k-d trees): a sample point whose
+//! The test is local density on an even sample of the cloud ([`Spacing`]: at most
+//! [`crate::spacing::SAMPLE`] points, so the cost is one pass over the cloud plus two small k-d
+//! trees): a sample point whose
 //! [`NEIGHBOUR`]th nearest sample point is more than [`ISOLATION`] times the sample's median such
 //! distance away is isolated. The others span the *inlier box*, widened on every side by
 //! [`MARGIN`] median distances. A point outside the box is a far outlier unless [`NEIGHBOUR`]
@@ -22,7 +23,7 @@
 //! isolated points each.
 
 use crate::cloud::{grow_box, PointCloud, MIN_POINTS};
-use crate::refine::even_sample;
+use crate::spacing::{self, Spacing};
 use crate::spatial::KdIndex;
 use serde::{Deserialize, Serialize};
 
@@ -39,13 +40,11 @@ pub enum Outliers {
     Keep,
 }
 
-/// Most points of the even sample the test looks at.
-pub const SAMPLE: usize = 2048;
-
 /// The neighbour (by rank among the other sample points) whose distance measures a sample
-/// point's isolation, and how many others a point outside the inlier box needs near it to stay:
-/// 4, so that two or three strays close together do not count as a structure.
-pub const NEIGHBOUR: usize = 4;
+/// point's isolation (its reach, [`Spacing`]), and how many others a point outside the inlier box
+/// needs near it to stay: 4, so that two or three strays close together do not count as a
+/// structure.
+pub const NEIGHBOUR: usize = spacing::NEIGHBOUR;
 
 /// How many times the sample's median [`NEIGHBOUR`] distance a sample point's own must exceed
 /// to be isolated.
@@ -72,18 +71,19 @@ pub const MAX_SHARE: f64 = 0.2;
 /// test does not apply (fewer than `NEIGHBOUR + 1` sample points, a median distance of zero,
 /// more than [`MAX_SHARE`] of the points to leave out, fewer than [`MIN_POINTS`] to keep).
 pub fn far_outliers(points: &[[f32; 3]]) -> Vec<usize> {
-    let sample = even_sample(points, SAMPLE);
-    if sample.len() <= NEIGHBOUR {
-        return Vec::new();
-    }
-    let index = KdIndex::new(&sample);
-    let (reach, median) = reach(&sample, &index);
-    if !(median > 0.0 && median.is_finite()) {
+    far_outliers_with(points, &Spacing::of(points))
+}
+
+/// [`far_outliers`] with the sample of `points` already made (`spacing`, [`Spacing::of`] them).
+pub fn far_outliers_with(points: &[[f32; 3]], spacing: &Spacing) -> Vec<usize> {
+    let Spacing { sample, reach, median, .. } = spacing;
+    let median = *median;
+    if sample.len() <= NEIGHBOUR || !(median > 0.0 && median.is_finite()) {
         return Vec::new();
     }
     let limit = ISOLATION * median;
     let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for (p, _) in sample.iter().zip(&reach).filter(|(_, r)| **r <= limit) {
+    for (p, _) in sample.iter().zip(reach).filter(|(_, r)| **r <= limit) {
         grow_box(&mut lo, &mut hi, p);
     }
     let margin = MARGIN * median;
@@ -114,29 +114,6 @@ pub fn far_outliers(points: &[[f32; 3]]) -> Vec<usize> {
         return Vec::new();
     }
     far
-}
-
-/// For each point of `sample` (indexed by `index`), its distance to its [`NEIGHBOUR`]th nearest
-/// other sample point (the farthest found when the sample has fewer); and the median of those
-/// distances, the sample's spacing (infinite for an empty sample).
-pub(crate) fn reach(sample: &[[f32; 3]], index: &KdIndex) -> (Vec<f32>, f32) {
-    let mut out = Vec::with_capacity(NEIGHBOUR + 1);
-    // the nearest found is the point itself
-    let reach: Vec<f32> = sample
-        .iter()
-        .map(|q| {
-            index.knn_into(q, NEIGHBOUR + 1, &mut out);
-            out.last().map_or(f32::INFINITY, |e| e.1.sqrt())
-        })
-        .collect();
-    let mut sorted = reach.clone();
-    let median = if sorted.is_empty() {
-        f32::INFINITY
-    } else {
-        let mid = sorted.len() / 2;
-        *sorted.select_nth_unstable_by(mid, f32::total_cmp).1
-    };
-    (reach, median)
 }
 
 /// `cloud` without its far outliers ([`far_outliers`], removed in place) and how many were left

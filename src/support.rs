@@ -8,7 +8,8 @@
 //! on a table, the tables disagree with the object's motion whenever the object was tipped or
 //! turned over between them (`BENCHMARK.md`, "A support plane under the scan").
 //!
-//! The test looks at an even sample of the cloud (at most [`SAMPLE`] points). Each of [`SEEDS`]
+//! The test looks at an even sample of the cloud ([`Spacing`]: at most
+//! [`crate::spacing::SAMPLE`] points). Each of [`SEEDS`]
 //! sample points spread over it proposes the plane of its [`NEIGHBOURS`] nearest sample points
 //! when they are flat, and counts the sample points within a band about it ([`THICKNESS`]
 //! median neighbour distances, or more for a noisier plane). The [`MAX_PLANES`] most populous
@@ -26,8 +27,7 @@
 //! The points of the whole cloud within the plane's fitted thickness are its points.
 
 use crate::cloud::MIN_POINTS;
-use crate::refine::even_sample;
-use crate::spatial::KdIndex;
+use crate::spacing::Spacing;
 use nalgebra::{Matrix3, SymmetricEigen, Vector3};
 use serde::{Deserialize, Serialize};
 
@@ -45,9 +45,6 @@ pub enum Support {
     /// where the shared table helps.
     Keep,
 }
-
-/// Most points of the even sample the test looks at.
-pub const SAMPLE: usize = 2048;
 
 /// Fewest sample points the test needs.
 pub const MIN_SAMPLE: usize = 64;
@@ -162,12 +159,16 @@ struct Candidate {
 
 /// The support plane `points` stand on, if any (see the module docs).
 pub fn find(points: &[[f32; 3]]) -> Option<SupportPlane> {
-    let sample = even_sample(points, SAMPLE);
+    find_with(points, &Spacing::of(points))
+}
+
+/// [`find`] with the sample of `points` already made (`spacing`, [`Spacing::of`] them).
+pub fn find_with(points: &[[f32; 3]], spacing: &Spacing) -> Option<SupportPlane> {
+    let Spacing { sample, index, .. } = spacing;
     if sample.len() < MIN_SAMPLE {
         return None;
     }
-    let index = KdIndex::new(&sample);
-    let reach = crate::outliers::reach(&sample, &index).1 as f64;
+    let reach = spacing.median as f64;
     if !(reach > 0.0 && reach.is_finite()) {
         return None;
     }
@@ -204,7 +205,7 @@ pub fn find(points: &[[f32; 3]]) -> Option<SupportPlane> {
             distinct.push(c);
         }
     }
-    distinct.iter().find_map(|c| test(points, &sample, reach, *c))
+    distinct.iter().find_map(|c| test(points, sample, reach, *c))
 }
 
 /// `c`'s plane refitted, if it is a support of `points` (see the module docs); `sample` is their

@@ -15,6 +15,7 @@ use super::upright::Upright;
 use crate::cloud::{JointNormalization, PointCloud, MIN_POINTS};
 use crate::outliers::{self, Outliers};
 use crate::register::Options;
+use crate::spacing::Spacing;
 use crate::support::{self, Support};
 use crate::{checks, limits, origin, sampling, transform, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
@@ -145,22 +146,27 @@ pub(crate) fn prepare(
 }
 
 /// `cloud` validated ([`PointCloud::validated`], `options.non_finite`); with [`Outliers::Drop`]
-/// without its far outliers ([`outliers::drop_far`]); then with [`Support::Drop`] without the
+/// without its far outliers ([`outliers::far_outliers`]); then with [`Support::Drop`] without the
 /// support plane it stands on ([`support::find`]); with a warning for each that left points out.
 /// `what` names the cloud in messages.
 fn checked(what: &str, cloud: &PointCloud, options: &Options) -> Result<(PointCloud, Vec<String>)> {
     let mut cloud = cloud.validated(what, MIN_POINTS, options.non_finite)?;
     let mut warnings = Vec::new();
+    // the two tests' sample, shared while the cloud is unchanged
+    let mut spacing = None;
     if options.outliers == Outliers::Drop {
-        let total = cloud.len();
-        let (kept, dropped) = outliers::drop_far(cloud);
-        cloud = kept;
-        if dropped > 0 {
-            warnings.push(outliers::warning(what, dropped, total));
+        let sampled = Spacing::of(&cloud.points);
+        let far = outliers::far_outliers_with(&cloud.points, &sampled);
+        if far.is_empty() {
+            spacing = Some(sampled);
+        } else {
+            warnings.push(outliers::warning(what, far.len(), cloud.len()));
+            cloud = cloud.without(&far);
         }
     }
     if options.support_plane == Support::Drop {
-        if let Some(plane) = support::find(&cloud.points) {
+        let spacing = spacing.unwrap_or_else(|| Spacing::of(&cloud.points));
+        if let Some(plane) = support::find_with(&cloud.points, &spacing) {
             warnings.push(support::warning(what, plane.indices.len(), cloud.len()));
             cloud = cloud.without(&plane.indices);
         }

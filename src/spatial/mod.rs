@@ -503,21 +503,33 @@ impl KdIndex {
         if k == 0 {
             return;
         }
-        // `out` holds (position, d2), sorted ascending by d2, during the search.
+        // `out` holds (position, d2), sorted ascending by d2 (equals in the order found), during
+        // the search; an insertion shifts the farther entries by hand (no `memmove` call)
         let mut worst = f32::INFINITY;
         self.leaves_within::<false>(q, worst, |n| {
-            self.each_in_leaf(n, q, |i, d2| {
-                if d2 < worst {
-                    let at = out.partition_point(|e| e.1 <= d2);
-                    out.insert(at, (i, d2));
-                    if out.len() > k {
-                        out.pop();
-                    }
-                    if out.len() == k {
-                        worst = out[k - 1].1;
+            for (c, p) in self.leaf_chunks(n).iter().zip((n.a as usize..).step_by(4)) {
+                let d2 = chunk::distances(c, q);
+                // one test per chunk: most chunks of a visited leaf hold no nearer point
+                if !d2.iter().any(|&d| d < worst) {
+                    continue;
+                }
+                for (l, &d) in d2.iter().enumerate() {
+                    if d < worst {
+                        if out.len() < k {
+                            out.push((0, 0.0));
+                        }
+                        let mut at = out.len() - 1;
+                        while at > 0 && out[at - 1].1 > d {
+                            out[at] = out[at - 1];
+                            at -= 1;
+                        }
+                        out[at] = (p + l, d);
+                        if out.len() == k {
+                            worst = out[k - 1].1;
+                        }
                     }
                 }
-            });
+            }
             worst
         });
         for e in out.iter_mut() {
