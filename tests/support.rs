@@ -154,6 +154,36 @@ fn a_target_kept_between_calls_gives_the_answers_of_a_fresh_registrar() {
 }
 
 #[test]
+fn a_capture_with_stray_returns_loses_them_and_then_its_table() {
+    // the capture with 40 stray returns 4-8 m out (its points span about a metre): the strays go
+    // first, then the table is found on what is left, which is the capture itself again
+    let capture = scene();
+    let mut points = capture.points.clone();
+    let (lo, hi) = capture.bounds();
+    let centre: [f32; 3] = std::array::from_fn(|a| 0.5 * (lo[a] + hi[a]));
+    for i in 0..40 {
+        let (u, v) = (i as f32 * 2.399, i as f32 * 0.7);
+        let r = 4.0 + (i % 5) as f32;
+        points.push([centre[0] + r * u.cos() * v.sin(), centre[1] + r * u.sin() * v.sin(), centre[2] + r * v.cos()]);
+    }
+    let noisy = PointCloud::with_origin(points, capture.origin);
+    assert_eq!(arps::outliers::far_outliers(&noisy.points), (capture.len()..noisy.len()).collect::<Vec<_>>());
+    let plane = arps::support::find(&capture.points).expect("the table is a support plane");
+    let gt = common::motion([20.0, -10.0, 30.0], [0.1, -0.05, 0.2]);
+    let r = Registrar::with_default_model()
+        .unwrap()
+        .register(&noisy, &mug().transformed(&gt), &Options::default())
+        .unwrap();
+    let (re, te) = common::errors(&r.T_target_source, &gt);
+    assert!(re < 0.3 && te < 0.003, "{re} deg, {te} m");
+    let strays = format!("left out 40 of the source's {} points", noisy.len());
+    let table = format!("left out a plane of {} of the source's {} points", plane.indices.len(), capture.len());
+    for warning in [strays, table] {
+        assert!(r.warnings.iter().any(|w| w.starts_with(&warning)), "{warning}: {:?}", r.warnings);
+    }
+}
+
+#[test]
 fn a_cloud_without_a_support_plane_is_registered_as_with_every_point_kept() {
     let mut registrar = Registrar::with_default_model().unwrap();
     for index in [0, 3, 8] {
