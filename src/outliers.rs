@@ -10,17 +10,16 @@
 //!
 //! The test is local density on an even sample of the cloud ([`Spacing`]: at most
 //! [`crate::spacing::SAMPLE`] points, so the cost is one pass over the cloud plus two small k-d
-//! trees): a sample point whose
-//! [`NEIGHBOUR`]th nearest sample point is more than [`ISOLATION`] times the sample's median such
-//! distance away is isolated. The others span the *inlier box*, widened on every side by
-//! [`MARGIN`] median distances. A point outside the box is a far outlier unless [`NEIGHBOUR`]
-//! other points outside lie within [`SUPPORT`] median distances of it (scaled to the whole
-//! cloud's density): then it is part of a structure (a far wall of a scan, the tip of a thin
-//! part, another object) and stays. Isolated points inside the box stay too (they do not move
-//! the box, and ICP's distance cut ignores them). Nothing is left out when more than
-//! [`MAX_SHARE`] of the cloud would be. A cloud with no point outside the box is left exactly as
-//! it is: all but about 0.2% of the validation sets' clean clouds, which lose one to four
-//! isolated points each.
+//! trees): a sample point whose [`NEIGHBOUR`]th nearest sample point is more than [`ISOLATION`]
+//! times the sample's median such distance away is isolated. The others span the *inlier box*,
+//! widened on every side by [`MARGIN`] median distances. A point outside the box is a far outlier
+//! unless [`NEIGHBOUR`] other points outside lie within [`SUPPORT`] median distances of it (scaled
+//! to the whole cloud's density): then it is part of a structure (a far wall of a scan, the tip of
+//! a thin part, another object) and stays. Isolated points inside the box stay too (they do not
+//! move the box, and ICP's distance cut ignores them). Nothing is left out when more than
+//! [`MAX_SHARE`] of the cloud would be. A cloud with no point outside the box is left exactly as it
+//! is: all but about 0.2% of the validation sets' clean clouds, which lose one to four isolated
+//! points each.
 
 use crate::cloud::{grow_box, PointCloud, MIN_POINTS};
 use crate::spacing::{self, Spacing};

@@ -8,13 +8,12 @@
 //! on a table, the tables disagree with the object's motion whenever the object was tipped or
 //! turned over between them (`BENCHMARK.md`, "A support plane under the scan").
 //!
-//! The test looks at an even sample of the cloud ([`Spacing`]: at most
-//! [`crate::spacing::SAMPLE`] points). Each of [`SEEDS`]
-//! sample points spread over it proposes the plane of its [`NEIGHBOURS`] nearest sample points
-//! when they are flat, and counts the sample points within a band about it ([`THICKNESS`]
-//! median neighbour distances, or more for a noisier plane). The [`MAX_PLANES`] most populous
-//! distinct planes are refitted to their points and tested in that order; the first that passes
-//! is the support:
+//! The test looks at an even sample of the cloud ([`Spacing`]: at most [`crate::spacing::SAMPLE`]
+//! points). Each of [`SEEDS`] sample points spread over it proposes the plane of its [`NEIGHBOURS`]
+//! nearest sample points when they are flat, and counts the sample points within a band about it
+//! ([`THICKNESS`] median neighbour distances, or more for a noisier plane). The [`MAX_PLANES`] most
+//! populous distinct planes are refitted to their points and tested in that order; the first that
+//! passes is the support:
 //! - at least [`MIN_SHARE`] of the sample lies on it and [`MIN_REST`] off it (an object stands
 //!   on it: a cloud that is nearly all one plane is a flat object or a wall);
 //! - all but [`OTHER_SIDE`] of the points off it lie on one side (the object stands on it; a

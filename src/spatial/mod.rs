@@ -496,7 +496,7 @@ impl KdIndex {
 
     /// The `k` nearest indexed points to `q` (fewer if the index is smaller), nearest first,
     /// written into `out` (cleared first) as `(index, squared distance)`. Allocation-free once
-    /// `out` has capacity `k + 1`.
+    /// `out` has capacity `k`.
     pub fn knn_into(&self, q: &[f32; 3], k: usize, out: &mut Vec<(usize, f32)>) {
         out.clear();
         let k = k.min(self.count);
