@@ -118,7 +118,14 @@ pub fn far_outliers_with(points: &[[f32; 3]], spacing: &Spacing) -> Vec<usize> {
 /// `cloud` without its far outliers ([`far_outliers`], removed in place) and how many were left
 /// out.
 pub fn drop_far(cloud: PointCloud) -> (PointCloud, usize) {
-    let far = far_outliers(&cloud.points);
+    let spacing = Spacing::of(&cloud.points);
+    drop_far_with(cloud, &spacing)
+}
+
+/// [`drop_far`] with the sample of the cloud's points already made (`spacing`, [`Spacing::of`]
+/// them).
+pub fn drop_far_with(cloud: PointCloud, spacing: &Spacing) -> (PointCloud, usize) {
+    let far = far_outliers_with(&cloud.points, spacing);
     let dropped = far.len();
     (if far.is_empty() { cloud } else { cloud.without(&far) }, dropped)
 }

@@ -146,7 +146,7 @@ pub(crate) fn prepare(
 }
 
 /// `cloud` validated ([`PointCloud::validated`], `options.non_finite`); with [`Outliers::Drop`]
-/// without its far outliers ([`outliers::far_outliers`]); then with [`Support::Drop`] without the
+/// without its far outliers ([`outliers::drop_far_with`]); then with [`Support::Drop`] without the
 /// support plane it stands on ([`support::find`]); with a warning for each that left points out.
 /// `what` names the cloud in messages.
 fn checked(what: &str, cloud: &PointCloud, options: &Options) -> Result<(PointCloud, Vec<String>)> {
@@ -155,13 +155,13 @@ fn checked(what: &str, cloud: &PointCloud, options: &Options) -> Result<(PointCl
     // the two tests' sample, shared while the cloud is unchanged
     let mut spacing = None;
     if options.outliers == Outliers::Drop {
-        let sampled = Spacing::of(&cloud.points);
-        let far = outliers::far_outliers_with(&cloud.points, &sampled);
-        if far.is_empty() {
+        let (sampled, total) = (Spacing::of(&cloud.points), cloud.len());
+        let (kept, dropped) = outliers::drop_far_with(cloud, &sampled);
+        cloud = kept;
+        if dropped == 0 {
             spacing = Some(sampled);
         } else {
-            warnings.push(outliers::warning(what, far.len(), cloud.len()));
-            cloud = cloud.without(&far);
+            warnings.push(outliers::warning(what, dropped, total));
         }
     }
     if options.support_plane == Support::Drop {
