@@ -8,8 +8,9 @@
 //!
 //! Tensors are stored as `F32`, `F16`, or `I8` with a scale per row (see [`int8`]: a 2-D tensor
 //! `NAME` of dtype `I8` comes with a tensor `NAME.scale`, `F32` or `F16`, one positive scale per
-//! row; the value is `q * scale[row]`). Every tensor is `f32` once loaded: quantised files are
-//! dequantised here, so the network computes in `f32` whatever the file stores.
+//! row; the value is `q * scale[row]`). Every tensor is `f32` once loaded; the integers of `I8`
+//! tensors are kept too ([`Weights::int8`]), and the network computes those layers in integers
+//! ([`crate::nn::QuantWeight`]: each input row quantised to 16 bits, exact 32-bit sums).
 //!
 //! Loading checks the format and version, validates the config, and checks that every tensor the
 //! config needs is present with the right shape and a supported dtype, that every `I8` tensor has
@@ -58,6 +59,10 @@ pub struct Weights {
     pub provenance: serde_json::Value,
     /// Tensors by name, row-major `f32`.
     pub tensors: BTreeMap<String, Vec<f32>>,
+    /// The tensors read from `I8` storage ([`int8`]), by name: their integers and row scales
+    /// (their values are in `tensors` too). Inference computes those layers in integers
+    /// ([`crate::nn::QuantWeight`]); empty for weights not read from such a file.
+    pub int8: BTreeMap<String, (Vec<i8>, Vec<f32>)>,
 }
 
 impl Weights {
@@ -96,6 +101,7 @@ impl Weights {
                 "note": "untrained: deterministic random initialisation, for development and tests"
             }),
             tensors,
+            int8: BTreeMap::new(),
         })
     }
 
@@ -145,6 +151,7 @@ impl Weights {
         };
         let specs = config.tensor_specs();
         let mut tensors = BTreeMap::new();
+        let mut int8s = BTreeMap::new();
         for (name, shape) in &specs {
             let view = st
                 .tensor(name)
@@ -156,7 +163,9 @@ impl Weights {
                 )));
             }
             let data = if view.dtype() == Dtype::I8 {
-                int8::dequantize(name, shape, view.data(), &st)?
+                let t = int8::read(name, shape, view.data(), &st)?;
+                int8s.insert(name.clone(), (t.q, t.scale));
+                t.values
             } else {
                 decode(name, &view)?
             };
@@ -185,7 +194,7 @@ impl Weights {
                 _ => format!("tensor '{extra}' is not part of the declared config (wrong config or wrong file)"),
             }));
         }
-        Ok(Self { config, provenance, tensors })
+        Ok(Self { config, provenance, tensors, int8: int8s })
     }
 
     /// Serialises to safetensors bytes.

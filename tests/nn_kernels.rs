@@ -38,6 +38,7 @@ fn linear(rng: &mut Rng, i: usize, o: usize, bias: bool) -> Linear {
         bias: bias.then(|| rng.vec(o, 0.2)),
         in_dim: i,
         out_dim: o,
+        quant: None,
     }
 }
 

@@ -246,3 +246,48 @@ fn requantised_default_model_registers_like_the_loaded_one() {
 }
 
 mod common;
+
+/// The matrices of every linear layer of a model, with whether each is computed in integers.
+fn matrices(m: &arps::model::Model) -> Vec<&arps::nn::Linear> {
+    let mut all: Vec<&arps::nn::Linear> = m.head.layers.iter().collect();
+    for l in &m.layers {
+        all.extend(l.pos.layers.iter().chain(&l.step.layers));
+        all.push(&l.out);
+        for b in [&l.self_attn, &l.cross_attn] {
+            all.extend([&b.attn.q, &b.attn.k, &b.attn.v, &b.attn.o, &b.ffn1, &b.ffn2]);
+        }
+    }
+    all
+}
+
+#[test]
+fn an_int8_model_computes_in_integers_and_close_to_its_f32_values() {
+    let loaded = Weights::from_bytes(arps::weights::DEFAULT_MODEL).unwrap();
+    assert!(!loaded.int8.is_empty(), "the default model is stored as int8");
+    let mut as_f32 = loaded.clone();
+    as_f32.int8.clear();
+    let ints = arps::model::Model::from_weights(&loaded).unwrap();
+    let floats = arps::model::Model::from_weights(&as_f32).unwrap();
+    assert!(matrices(&ints).iter().all(|l| l.quant.is_some()));
+    assert!(matrices(&floats).iter().all(|l| l.quant.is_none()));
+    // the network's memberships on a real pair (N points each, pre-centred by the model)
+    let (source, target, _) = common::fixture_pair(0);
+    let n = loaded.config.n_points;
+    let pick = |c: &arps::PointCloud| -> Vec<[f32; 3]> {
+        let p = &c.points;
+        (0..n).map(|i| p[i * p.len() / n]).collect()
+    };
+    let (s, t) = (pick(&source), pick(&target));
+    let mut ws = arps::model::ModelWorkspace::default();
+    let a = ints.forward(&s, &t, &mut ws).unwrap();
+    let b = floats.forward(&s, &t, &mut ws).unwrap();
+    let gap = |x: &[f32], y: &[f32]| x.iter().zip(y).fold(0.0f32, |m, (u, v)| m.max((u - v).abs()));
+    let (gs, gt) = (gap(&a.gamma_source, &b.gamma_source), gap(&a.gamma_target, &b.gamma_target));
+    assert!(gs < 2e-3 && gt < 2e-3, "memberships differ by {gs} / {gt}");
+    assert!(gs > 0.0 || gt > 0.0, "the integer path gave the f32 path's bits: was it used?");
+    // weights edited after loading no longer match their integers: those layers compute in f32
+    let mut edited = loaded.clone();
+    edited.tensors.get_mut("head.0.weight").unwrap()[0] += 0.5;
+    let m = arps::model::Model::from_weights(&edited).unwrap();
+    assert!(m.head.layers[0].quant.is_none() && m.head.layers[1].quant.is_some());
+}

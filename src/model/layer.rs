@@ -3,7 +3,7 @@
 use super::config::{ModelConfig, Reference};
 use crate::nn::{
     sigmoid, softmax_rows_inplace, workspace::take, AttentionBlock, LayerNorm, Linear, Mlp, MultiHeadAttention,
-    Workspace,
+    QuantWeight, Workspace,
 };
 use crate::weights::Weights;
 
@@ -81,10 +81,24 @@ impl LayerWorkspace {
 }
 
 pub(crate) fn linear(w: &Weights, name: &str) -> Linear {
-    let weight = w.get(&format!("{name}.weight")).to_vec();
+    let weight_name = format!("{name}.weight");
+    let weight = w.get(&weight_name).to_vec();
     let bias = w.get(&format!("{name}.bias")).to_vec();
     let out_dim = bias.len();
-    Linear { in_dim: weight.len() / out_dim, out_dim, weight, bias: Some(bias) }
+    let in_dim = weight.len() / out_dim;
+    Linear { in_dim, out_dim, quant: quant(w, &weight_name, &weight, out_dim, in_dim), weight, bias: Some(bias) }
+}
+
+/// The weight `name` as integers when it was read from int8 storage and `values` are still the
+/// values those integers stand for (otherwise the layer computes in `f32`).
+fn quant(w: &Weights, name: &str, values: &[f32], out_dim: usize, in_dim: usize) -> Option<QuantWeight> {
+    let (q, scale) = w.int8.get(name)?;
+    let same = q.len() == values.len()
+        && q.chunks(in_dim.max(1))
+            .zip(scale)
+            .zip(values.chunks(in_dim.max(1)))
+            .all(|((row, s), v)| row.iter().zip(v).all(|(qi, vi)| (f32::from(*qi) * s).to_bits() == vi.to_bits()));
+    same.then(|| QuantWeight::new(q, scale, out_dim, in_dim)).flatten()
 }
 
 pub(crate) fn mlp(w: &Weights, prefix: &str, layers: usize, relu_last: bool) -> Mlp {

@@ -1,6 +1,6 @@
 //! Fully connected layers.
 
-use super::{activation::relu_inplace, matmul::gemm, matmul::matmul_bt, workspace::take};
+use super::{activation::relu_inplace, matmul::gemm, matmul::matmul_bt, qlinear::QuantWeight, workspace::take};
 
 /// `y = x W^T + b` with `W` stored `[out, in]` row-major.
 #[derive(Clone, Debug, PartialEq)]
@@ -13,6 +13,9 @@ pub struct Linear {
     pub in_dim: usize,
     /// Output width.
     pub out_dim: usize,
+    /// The weight as integers, when it was stored as int8: the layer is then computed in
+    /// integers ([`QuantWeight`]; `weight` holds the same values as `f32`).
+    pub quant: Option<QuantWeight>,
 }
 
 impl Linear {
@@ -20,6 +23,9 @@ impl Linear {
     pub fn forward(&self, x: &[f32], rows: usize, y: &mut [f32]) {
         debug_assert_eq!(x.len(), rows * self.in_dim);
         debug_assert_eq!(y.len(), rows * self.out_dim);
+        if self.quant.as_ref().is_some_and(|q| q.forward(x, rows, y, self.bias.as_deref(), false)) {
+            return;
+        }
         matmul_bt(x, &self.weight, y, rows, self.in_dim, self.out_dim);
         if let Some(b) = &self.bias {
             for row in y.chunks_exact_mut(self.out_dim) {
@@ -35,6 +41,9 @@ impl Linear {
     pub fn forward_transposed(&self, x: &[f32], rows: usize, yt: &mut [f32]) {
         debug_assert_eq!(x.len(), rows * self.in_dim);
         debug_assert_eq!(yt.len(), rows * self.out_dim);
+        if self.quant.as_ref().is_some_and(|q| q.forward(x, rows, yt, self.bias.as_deref(), true)) {
+            return;
+        }
         let (i, r) = (self.in_dim as isize, rows as isize);
         gemm(self.out_dim, self.in_dim, rows, 1.0, &self.weight, i, 1, x, 1, i, 0.0, yt, r, 1);
         if let Some(b) = &self.bias {

@@ -15,6 +15,7 @@ pub mod gemm;
 pub mod linear;
 pub mod matmul;
 pub mod norm;
+pub mod qlinear;
 #[doc(hidden)]
 pub mod reference;
 pub mod softmax;
@@ -29,5 +30,6 @@ pub use fastmath::exp_fast;
 pub use linear::{Linear, Mlp};
 pub use matmul::{gemm, matmul, matmul_bt};
 pub use norm::LayerNorm;
+pub use qlinear::QuantWeight;
 pub use softmax::softmax_rows_inplace;
 pub use workspace::Workspace;

@@ -9,7 +9,7 @@ use crate::{Result, Weights};
 pub fn to_weights(params: &Params, config: &ModelConfig, provenance: serde_json::Value) -> Result<Weights> {
     config.validate()?;
     check_params(config, params)?;
-    Ok(Weights { config: config.clone(), provenance, tensors: params.clone() })
+    Ok(Weights { config: config.clone(), provenance, tensors: params.clone(), int8: Default::default() })
 }
 
 /// Parameters to start from: the engine's deterministic random initialisation

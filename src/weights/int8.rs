@@ -5,7 +5,8 @@
 //! `NAME.scale` of shape `[rows]`, dtype `F32` or `F16`, every scale finite and `>= 0`. Element
 //! `(r, c)` is `q[r][c] * scale[r]`. Writing picks `scale[r] = max_c |w[r][c]| / 127` and
 //! `q = round(w / scale)`, so each value is off by at most `scale[r] / 2` (half a step: 1/254 of the
-//! row's largest magnitude). Loading dequantises to `f32` once; inference never sees the integers.
+//! row's largest magnitude). Loading dequantises to `f32` once and keeps the integers: inference
+//! computes a layer with int8 weights in integers ([`crate::nn::QuantWeight`]).
 
 use crate::{Error, Result};
 use half::f16;
@@ -46,6 +47,21 @@ pub fn f32_bytes(values: &[f32]) -> Vec<u8> {
 /// its data), using its scale tensor from `file`. Errors name the tensor and what is wrong: not
 /// 2-D, the scale tensor missing, of the wrong shape or dtype, or a scale not finite or negative.
 pub fn dequantize(name: &str, shape: &[usize], q: &[u8], file: &SafeTensors<'_>) -> Result<Vec<f32>> {
+    read(name, shape, q, file).map(|t| t.values)
+}
+
+/// An `I8` tensor as read: its `f32` values, and the integers and row scales they come from.
+pub struct Int8Tensor {
+    /// `q[r][c] * scale[r]`, row-major.
+    pub values: Vec<f32>,
+    /// The stored integers, row-major.
+    pub q: Vec<i8>,
+    /// One scale per row.
+    pub scale: Vec<f32>,
+}
+
+/// [`dequantize`], keeping the integers and scales too (for [`crate::nn::QuantWeight`]).
+pub fn read(name: &str, shape: &[usize], q: &[u8], file: &SafeTensors<'_>) -> Result<Int8Tensor> {
     let [rows, cols] = *shape else {
         return Err(Error::Weights(format!(
             "tensor '{name}' has dtype I8 and shape {shape:?}; only 2-D weight matrices may be stored as I8"
@@ -84,5 +100,5 @@ pub fn dequantize(name: &str, shape: &[usize], q: &[u8], file: &SafeTensors<'_>)
     for (row, scale) in q.chunks(cols.max(1)).zip(&scales) {
         out.extend(row.iter().map(|b| f32::from(*b as i8) * scale));
     }
-    Ok(out)
+    Ok(Int8Tensor { values: out, q: q.iter().map(|b| *b as i8).collect(), scale: scales })
 }
