@@ -5,7 +5,8 @@
 //! to [`QuantWeight::input_max`]), the products are summed exactly in 32-bit integers, and each
 //! sum is scaled back once: `y[r][o] = sum_k qx[r][k] qw[o][k] * (sx[r] sw[o]) + b[o]`. Against the
 //! same weights in `f32`, each input is off by at most half a step (`1 / 65534` of its row's
-//! largest magnitude). On wasm32 a `simd128` kernel does 8 multiply-adds per instruction
+//! largest magnitude for layers of up to 512 inputs; wider ones take fewer steps, so that no sum
+//! can overflow). On wasm32 a `simd128` kernel does 8 multiply-adds per instruction
 //! (`i32x4.dot_i16x8_s`), about twice what the `f32` kernel does without fused multiply-add.
 //!
 //! Integer sums do not depend on their order, and the scaling is the same scalar arithmetic
