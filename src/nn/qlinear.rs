@@ -451,6 +451,30 @@ mod tests {
         }
     }
 
+    /// The SSE2 kernel, which machines with AVX2 never dispatch to, gives the portable kernel's
+    /// bits too.
+    #[cfg(target_arch = "x86_64")]
+    #[test]
+    fn the_sse2_kernel_matches_the_portable_one() {
+        for (rows, k, out) in [(1, 3, 1), (5, 13, 6), (7, 130, 9), (64, 256, 128)] {
+            let (q, s) = weight(out, k, 5);
+            let w = QuantWeight::new(&q, &s, out, k).unwrap();
+            let x: Vec<f32> = (0..rows * k).map(|i| ((i * 29 % 89) as f32 - 44.0) / 5.0).collect();
+            let (mut xq, mut xs) = (Vec::new(), Vec::new());
+            assert!(quantize_rows(&x, rows, k, w.in_pad, w.input_max(), &mut xq, &mut xs));
+            let (mut a, mut c) = (vec![0.0f32; rows * out], vec![0.0f32; rows * out]);
+            sse2::kernel(
+                &w,
+                &xq,
+                &xs,
+                rows,
+                &mut Output { y: &mut a, rows, out_dim: out, transposed: false, bias: None },
+            );
+            assert!(w.forward_portable(&x, rows, &mut c, None));
+            assert!(a.iter().zip(&c).all(|(u, v)| u.to_bits() == v.to_bits()), "{rows}x{k}x{out}");
+        }
+    }
+
     #[test]
     fn non_finite_inputs_are_left_to_the_caller() {
         let (q, s) = weight(4, 8, 1);
