@@ -216,6 +216,30 @@ fn portable_kernel(w: &QuantWeight, xq: &[i16], xs: &[f32], rows: usize, out: &m
     }
 }
 
+/// Walks the output in tiles of two rows (a lone last row read twice, its copy not written) by
+/// four outputs: `tile(r, two, x0, x1, o, wp)` gets the tile's first row `r`, whether it has a
+/// second, pointers to the two rows' quantised inputs and to the first of its four weight rows.
+#[allow(dead_code)] // unused where only the portable kernel runs
+#[inline(always)]
+fn tiles(
+    w: &QuantWeight,
+    xq: &[i16],
+    rows: usize,
+    mut tile: impl FnMut(usize, bool, *const i16, *const i16, usize, *const i16),
+) {
+    let kp = w.in_pad;
+    let mut r = 0;
+    while r < rows {
+        let two = r + 1 < rows;
+        let x0 = xq[r * kp..(r + 1) * kp].as_ptr();
+        let x1 = if two { xq[(r + 1) * kp..(r + 2) * kp].as_ptr() } else { x0 };
+        for o in (0..w.out_pad).step_by(TILE_OUT) {
+            tile(r, two, x0, x1, o, w.q[o * kp..(o + TILE_OUT) * kp].as_ptr());
+        }
+        r += 2;
+    }
+}
+
 #[cfg(all(target_arch = "wasm32", target_feature = "simd128"))]
 mod simd128 {
     use super::{Output, QuantWeight, STEP, TILE_OUT};
@@ -261,38 +285,26 @@ mod simd128 {
     /// eight inputs per step: two row loads, four weight loads, eight `dot_i16x8` and eight adds.
     pub(super) fn kernel(w: &QuantWeight, xq: &[i16], xs: &[f32], rows: usize, out: &mut Output) {
         let kp = w.in_pad;
-        let steps = kp / STEP;
-        let mut r = 0;
-        while r < rows {
-            let two = r + 1 < rows;
-            let x0 = xq[r * kp..].as_ptr();
-            // a lone last row is read twice; the second copy is not written
-            let x1 = if two { xq[(r + 1) * kp..].as_ptr() } else { x0 };
-            for o in (0..w.out_pad).step_by(TILE_OUT) {
-                let wp = w.q[o * kp..(o + TILE_OUT) * kp].as_ptr();
-                let z = i32x4_splat(0);
-                let mut a = [[z; TILE_OUT]; 2];
-                // SAFETY: every row of `xq` and `w.q` holds `kp = steps * STEP` values, and the
-                // tile's four weight rows lie inside `w.q` (`out_pad` is a multiple of 4).
-                unsafe {
-                    for s in 0..steps {
-                        let u0 = v128_load(x0.add(s * STEP) as *const v128);
-                        let u1 = v128_load(x1.add(s * STEP) as *const v128);
-                        let [a0, a1] = &mut a;
-                        for (j, (p0, p1)) in a0.iter_mut().zip(a1.iter_mut()).enumerate() {
-                            let v = v128_load(wp.add(j * kp + s * STEP) as *const v128);
-                            *p0 = i32x4_add(*p0, i32x4_dot_i16x8(u0, v));
-                            *p1 = i32x4_add(*p1, i32x4_dot_i16x8(u1, v));
-                        }
+        super::tiles(w, xq, rows, |r, two, x0, x1, o, wp| {
+            let mut a = [[i32x4_splat(0); TILE_OUT]; 2];
+            // SAFETY: every row of `xq` and `w.q` holds `kp` values (a multiple of STEP), and the
+            // tile's four weight rows lie inside `w.q` (`out_pad` is a multiple of 4).
+            unsafe {
+                for s in (0..kp).step_by(STEP) {
+                    let (u0, u1) = (v128_load(x0.add(s) as *const v128), v128_load(x1.add(s) as *const v128));
+                    let [a0, a1] = &mut a;
+                    for (j, (p0, p1)) in a0.iter_mut().zip(a1.iter_mut()).enumerate() {
+                        let v = v128_load(wp.add(j * kp + s) as *const v128);
+                        *p0 = i32x4_add(*p0, i32x4_dot_i16x8(u0, v));
+                        *p1 = i32x4_add(*p1, i32x4_dot_i16x8(u1, v));
                     }
                 }
-                put4(out, w, r, o, sum4(a[0][0], a[0][1], a[0][2], a[0][3]), xs[r]);
-                if two {
-                    put4(out, w, r + 1, o, sum4(a[1][0], a[1][1], a[1][2], a[1][3]), xs[r + 1]);
-                }
             }
-            r += 2;
-        }
+            put4(out, w, r, o, sum4(a[0][0], a[0][1], a[0][2], a[0][3]), xs[r]);
+            if two {
+                put4(out, w, r + 1, o, sum4(a[1][0], a[1][1], a[1][2], a[1][3]), xs[r + 1]);
+            }
+        });
     }
 }
 
@@ -317,37 +329,27 @@ mod sse2 {
     /// Two rows by four outputs per tile, as on wasm32.
     pub(super) fn kernel(w: &QuantWeight, xq: &[i16], xs: &[f32], rows: usize, out: &mut Output) {
         let kp = w.in_pad;
-        let steps = kp / STEP;
-        let mut r = 0;
-        while r < rows {
-            let two = r + 1 < rows;
-            let x0 = xq[r * kp..].as_ptr();
-            let x1 = if two { xq[(r + 1) * kp..].as_ptr() } else { x0 };
-            for o in (0..w.out_pad).step_by(TILE_OUT) {
-                let wp = w.q[o * kp..(o + TILE_OUT) * kp].as_ptr();
-                // SAFETY: SSE2 is part of x86-64; the loads stay inside the rows (as on wasm32).
-                let (s0, s1) = unsafe {
-                    let z = _mm_setzero_si128();
-                    let mut a = [[z; TILE_OUT]; 2];
-                    for s in 0..steps {
-                        let u0 = _mm_loadu_si128(x0.add(s * STEP) as *const __m128i);
-                        let u1 = _mm_loadu_si128(x1.add(s * STEP) as *const __m128i);
-                        let [a0, a1] = &mut a;
-                        for (j, (p0, p1)) in a0.iter_mut().zip(a1.iter_mut()).enumerate() {
-                            let v = _mm_loadu_si128(wp.add(j * kp + s * STEP) as *const __m128i);
-                            *p0 = _mm_add_epi32(*p0, _mm_madd_epi16(u0, v));
-                            *p1 = _mm_add_epi32(*p1, _mm_madd_epi16(u1, v));
-                        }
+        super::tiles(w, xq, rows, |r, two, x0, x1, o, wp| {
+            // SAFETY: SSE2 is part of x86-64; the loads stay inside the rows (as on wasm32).
+            let (s0, s1) = unsafe {
+                let mut a = [[_mm_setzero_si128(); TILE_OUT]; 2];
+                for s in (0..kp).step_by(STEP) {
+                    let u0 = _mm_loadu_si128(x0.add(s) as *const __m128i);
+                    let u1 = _mm_loadu_si128(x1.add(s) as *const __m128i);
+                    let [a0, a1] = &mut a;
+                    for (j, (p0, p1)) in a0.iter_mut().zip(a1.iter_mut()).enumerate() {
+                        let v = _mm_loadu_si128(wp.add(j * kp + s) as *const __m128i);
+                        *p0 = _mm_add_epi32(*p0, _mm_madd_epi16(u0, v));
+                        *p1 = _mm_add_epi32(*p1, _mm_madd_epi16(u1, v));
                     }
-                    (sum4(a[0][0], a[0][1], a[0][2], a[0][3]), sum4(a[1][0], a[1][1], a[1][2], a[1][3]))
-                };
-                out.put(w, r, o, s0, xs[r]);
-                if two {
-                    out.put(w, r + 1, o, s1, xs[r + 1]);
                 }
+                (sum4(a[0][0], a[0][1], a[0][2], a[0][3]), sum4(a[1][0], a[1][1], a[1][2], a[1][3]))
+            };
+            out.put(w, r, o, s0, xs[r]);
+            if two {
+                out.put(w, r + 1, o, s1, xs[r + 1]);
             }
-            r += 2;
-        }
+        });
     }
 }
 
@@ -361,36 +363,25 @@ mod avx2 {
     #[target_feature(enable = "avx2")]
     pub(super) unsafe fn kernel(w: &QuantWeight, xq: &[i16], xs: &[f32], rows: usize, out: &mut Output) {
         let kp = w.in_pad;
-        let steps = kp / PAD;
-        let mut r = 0;
-        while r < rows {
-            let two = r + 1 < rows;
-            let x0 = xq[r * kp..].as_ptr();
-            let x1 = if two { xq[(r + 1) * kp..].as_ptr() } else { x0 };
-            for o in (0..w.out_pad).step_by(TILE_OUT) {
-                let wp = w.q[o * kp..(o + TILE_OUT) * kp].as_ptr();
-                let z = _mm256_setzero_si256();
-                let mut a = [[z; TILE_OUT]; 2];
-                for s in 0..steps {
-                    let u0 = _mm256_loadu_si256(x0.add(s * PAD) as *const __m256i);
-                    let u1 = _mm256_loadu_si256(x1.add(s * PAD) as *const __m256i);
-                    let [a0, a1] = &mut a;
-                    for (j, (p0, p1)) in a0.iter_mut().zip(a1.iter_mut()).enumerate() {
-                        let v = _mm256_loadu_si256(wp.add(j * kp + s * PAD) as *const __m256i);
-                        *p0 = _mm256_add_epi32(*p0, _mm256_madd_epi16(u0, v));
-                        *p1 = _mm256_add_epi32(*p1, _mm256_madd_epi16(u1, v));
-                    }
-                }
-                let half = |v: __m256i| _mm_add_epi32(_mm256_castsi256_si128(v), _mm256_extracti128_si256::<1>(v));
-                let s0 = super::sse2::sum4(half(a[0][0]), half(a[0][1]), half(a[0][2]), half(a[0][3]));
-                let s1 = super::sse2::sum4(half(a[1][0]), half(a[1][1]), half(a[1][2]), half(a[1][3]));
-                out.put(w, r, o, s0, xs[r]);
-                if two {
-                    out.put(w, r + 1, o, s1, xs[r + 1]);
+        super::tiles(w, xq, rows, |r, two, x0, x1, o, wp| {
+            let mut a = [[_mm256_setzero_si256(); TILE_OUT]; 2];
+            for s in (0..kp).step_by(PAD) {
+                let u0 = _mm256_loadu_si256(x0.add(s) as *const __m256i);
+                let u1 = _mm256_loadu_si256(x1.add(s) as *const __m256i);
+                let [a0, a1] = &mut a;
+                for (j, (p0, p1)) in a0.iter_mut().zip(a1.iter_mut()).enumerate() {
+                    let v = _mm256_loadu_si256(wp.add(j * kp + s) as *const __m256i);
+                    *p0 = _mm256_add_epi32(*p0, _mm256_madd_epi16(u0, v));
+                    *p1 = _mm256_add_epi32(*p1, _mm256_madd_epi16(u1, v));
                 }
             }
-            r += 2;
-        }
+            let half = |v: __m256i| _mm_add_epi32(_mm256_castsi256_si128(v), _mm256_extracti128_si256::<1>(v));
+            out.put(w, r, o, super::sse2::sum4(half(a[0][0]), half(a[0][1]), half(a[0][2]), half(a[0][3])), xs[r]);
+            if two {
+                let s1 = super::sse2::sum4(half(a[1][0]), half(a[1][1]), half(a[1][2]), half(a[1][3]));
+                out.put(w, r + 1, o, s1, xs[r + 1]);
+            }
+        });
     }
 }
 
