@@ -77,7 +77,8 @@ impl QuantWeight {
 
     /// `y = x W^T + b` for `rows` rows of `x` (`[rows, in_dim]`), written `[rows, out_dim]`, or
     /// transposed (`[out_dim, rows]`) with `transposed`. Returns `false`, writing nothing, when an
-    /// input is not finite (the caller then computes in `f32`, which carries it on).
+    /// input is not finite or a row is too small to scale (its largest magnitude below about
+    /// 1e-34); the caller then computes in `f32`, which carries a NaN on.
     pub fn forward(&self, x: &[f32], rows: usize, y: &mut [f32], bias: Option<&[f32]>, transposed: bool) -> bool {
         debug_assert_eq!(x.len(), rows * self.in_dim);
         debug_assert_eq!(y.len(), rows * self.out_dim);
@@ -108,7 +109,8 @@ impl QuantWeight {
 }
 
 /// Quantises each row of `x` (`[rows, k]`) into `xq` (`[rows, k_pad]`, zero-padded) with its scale
-/// in `xs` (`largest magnitude / qmax`; 0 for a row of zeros). `false` if an input is not finite.
+/// in `xs` (`largest magnitude / qmax`; 0 for a row of zeros). `false` if an input is not finite
+/// or a row's largest magnitude so small that its scale overflows.
 fn quantize_rows(
     x: &[f32],
     rows: usize,
@@ -134,6 +136,10 @@ fn quantize_rows(
             continue;
         }
         let inv = qmax / max;
+        if !inv.is_finite() {
+            // a row below about 1e-34 (subnormal): its scale would overflow
+            return false;
+        }
         for (d, &v) in dst.iter_mut().zip(src) {
             // |v * inv| <= qmax < 2^22: adding 1.5 * 2^23 rounds it to the nearest integer (ties
             // to even), which the low mantissa bits then hold, offset by 2^22
@@ -475,6 +481,19 @@ mod tests {
         let mut y = vec![0.0; 8];
         assert!(!w.forward(&x, 2, &mut y, None, false));
         assert!(y.iter().all(|v| *v == 0.0));
+    }
+
+    #[test]
+    fn rows_too_small_to_scale_are_left_to_the_caller() {
+        let (q, s) = weight(4, 8, 1);
+        let w = QuantWeight::new(&q, &s, 4, 8).unwrap();
+        let mut x = vec![0.0f32; 16];
+        x[3] = 1e-40;
+        let mut y = vec![0.0; 8];
+        assert!(!w.forward(&x, 2, &mut y, None, false));
+        x[3] = 1e-30;
+        assert!(w.forward(&x, 2, &mut y, None, false));
+        assert!(y.iter().all(|v| v.is_finite()));
     }
 
     #[test]
