@@ -247,7 +247,7 @@ fn requantised_default_model_registers_like_the_loaded_one() {
 
 mod common;
 
-/// The matrices of every linear layer of a model, with whether each is computed in integers.
+/// Every linear layer of a model.
 fn matrices(m: &arps::model::Model) -> Vec<&arps::nn::Linear> {
     let mut all: Vec<&arps::nn::Linear> = m.head.layers.iter().collect();
     for l in &m.layers {
@@ -273,11 +273,7 @@ fn an_int8_model_computes_in_integers_and_close_to_its_f32_values() {
     // the network's memberships on a real pair (N points each, pre-centred by the model)
     let (source, target, _) = common::fixture_pair(0);
     let n = loaded.config.n_points;
-    let pick = |c: &arps::PointCloud| -> Vec<[f32; 3]> {
-        let p = &c.points;
-        (0..n).map(|i| p[i * p.len() / n]).collect()
-    };
-    let (s, t) = (pick(&source), pick(&target));
+    let (s, t) = (arps::refine::even_sample(&source.points, n), arps::refine::even_sample(&target.points, n));
     let mut ws = arps::model::ModelWorkspace::default();
     let a = ints.forward(&s, &t, &mut ws).unwrap();
     let b = floats.forward(&s, &t, &mut ws).unwrap();

@@ -58,16 +58,6 @@ impl QuantWeight {
         Some(Self { q: padded, scale: scale.to_vec(), in_dim, in_pad, out_dim, out_pad })
     }
 
-    /// Input width.
-    pub fn in_dim(&self) -> usize {
-        self.in_dim
-    }
-
-    /// Output width.
-    pub fn out_dim(&self) -> usize {
-        self.out_dim
-    }
-
     /// The integer an input row's largest magnitude becomes: as large as 16 bits allow while no
     /// sum of `in_dim` products with weights of magnitude up to 128 can leave 32 bits.
     pub fn input_max(&self) -> f32 {
@@ -80,31 +70,36 @@ impl QuantWeight {
     /// input is not finite or a row is too small to scale (its largest magnitude below about
     /// 1e-34); the caller then computes in `f32`, which carries a NaN on.
     pub fn forward(&self, x: &[f32], rows: usize, y: &mut [f32], bias: Option<&[f32]>, transposed: bool) -> bool {
+        self.run(x, rows, Output { y, rows, out_dim: self.out_dim, transposed, bias }, kernel)
+    }
+
+    /// [`QuantWeight::forward`] through the plain-Rust kernel (for tests: every target's kernel
+    /// must give its bits).
+    #[doc(hidden)]
+    pub fn forward_portable(&self, x: &[f32], rows: usize, y: &mut [f32], bias: Option<&[f32]>) -> bool {
+        let out = Output { y, rows, out_dim: self.out_dim, transposed: false, bias };
+        self.run(x, rows, out, |w, xq, xs, rows, mut out| portable_kernel(w, xq, xs, rows, &mut out))
+    }
+
+    /// Quantises the rows of `x` into the thread's buffers ([`quantize_rows`]) and runs `kernel` on
+    /// them; `false`, writing nothing, when they cannot be quantised.
+    fn run(
+        &self,
+        x: &[f32],
+        rows: usize,
+        out: Output,
+        kernel: impl FnOnce(&Self, &[i16], &[f32], usize, Output),
+    ) -> bool {
         debug_assert_eq!(x.len(), rows * self.in_dim);
-        debug_assert_eq!(y.len(), rows * self.out_dim);
+        debug_assert_eq!(out.y.len(), rows * self.out_dim);
         INPUT.with(|cell| {
             let (xq, xs) = &mut *cell.borrow_mut();
             if !quantize_rows(x, rows, self.in_dim, self.in_pad, self.input_max(), xq, xs) {
                 return false;
             }
-            let out = Output { y, rows, out_dim: self.out_dim, transposed, bias };
             kernel(self, xq, xs, rows, out);
             true
         })
-    }
-}
-
-impl QuantWeight {
-    /// [`QuantWeight::forward`] through the plain-Rust kernel (for tests: every target's kernel
-    /// must give its bits).
-    #[doc(hidden)]
-    pub fn forward_portable(&self, x: &[f32], rows: usize, y: &mut [f32], bias: Option<&[f32]>) -> bool {
-        let (mut xq, mut xs) = (Vec::new(), Vec::new());
-        if !quantize_rows(x, rows, self.in_dim, self.in_pad, self.input_max(), &mut xq, &mut xs) {
-            return false;
-        }
-        portable_kernel(self, &xq, &xs, rows, &mut Output { y, rows, out_dim: self.out_dim, transposed: false, bias });
-        true
     }
 }
 
