@@ -18,7 +18,8 @@
 //! most `log2(n / LEAF) + 1`; leaves hold at most [`LEAF`] points. Queries descend
 //! iteratively with a fixed-size stack, pruning subtrees by the incremental query-to-cell
 //! distance (Arya & Mount) and, in the bounded nearest search, by each node's tight bounding box;
-//! a hinted nearest search starts at the hint's leaf and climbs (`KdIndex::nearest_within`).
+//! a hinted nearest search first tries the hint's own nearest neighbours (`neighbourhood.rs`), then
+//! starts at the hint's leaf and climbs (`KdIndex::nearest_within`).
 //! Distances are squared Euclidean in `f32`.
 
 /// Most points in a leaf. With leaves scanned four points at a time, 64 registers pairs faster
@@ -26,8 +27,11 @@
 pub const LEAF: usize = 64;
 
 mod chunk;
+pub mod neighbourhood;
 
 use chunk::Chunk;
+use neighbourhood::Neighbourhood;
+use std::sync::OnceLock;
 
 /// Traversal stack size: the tree depth is at most `log2(u32::MAX) + 1 < 40`.
 const STACK: usize = 48;
@@ -155,6 +159,9 @@ pub struct KdIndex {
     leaf_of: Vec<u32>,
     /// `bbox[n]`: the bounding box `[lo, hi]` of node `n`'s points (tighter than its cell).
     bbox: Vec<[[f32; 3]; 2]>,
+    /// Per position, the neighbourhood of the point there, found when it is first a hint
+    /// (`neighbourhood.rs`); the table is allocated at the first hinted search.
+    neighbourhoods: OnceLock<Vec<OnceLock<Neighbourhood>>>,
 }
 
 impl KdIndex {
@@ -209,7 +216,18 @@ impl KdIndex {
             cell[n.a as usize] = [lo, left_hi];
             cell[n.b as usize] = [right_lo, hi];
         }
-        Self { chunks, count: order.len(), ids, pos, nodes, parent, cell, leaf_of, bbox }
+        Self {
+            chunks,
+            count: order.len(),
+            ids,
+            pos,
+            nodes,
+            parent,
+            cell,
+            leaf_of,
+            bbox,
+            neighbourhoods: OnceLock::new(),
+        }
     }
 
     /// Number of indexed (finite) points.
@@ -257,7 +275,9 @@ impl KdIndex {
     /// iteration's partner); it only speeds the search up, never changes which distance is
     /// found (among points at exactly equal distance, which one is returned may depend on it).
     ///
-    /// With a hint the search starts at the hint's leaf and climbs: at each node, once the ball
+    /// With a hint the search first looks among the hint's own nearest neighbours, which often
+    /// show that one of them (or the hint) is the nearest point of all (`neighbourhood.rs`);
+    /// otherwise it starts at the hint's leaf and climbs: at each node, once the ball
     /// of the best distance so far around `q` lies inside the node's cell, nothing outside can be
     /// nearer; else the parent's other child is searched top-down and the climb goes on. An ICP
     /// iteration's partner is usually the previous one or a neighbour, so most queries end in
@@ -319,6 +339,11 @@ impl KdIndex {
         let start = hint.and_then(|h| self.pos.get(h)).copied().filter(|&p| p != u32::MAX);
         match start {
             Some(p) => {
+                // most hinted searches end among the hint's own neighbours
+                if let Some(found) = self.nearest_from_neighbourhood::<FLOOR>(p, q, max_d2, floors) {
+                    best = found;
+                    return (best.0 != u32::MAX).then(|| (self.ids[best.0 as usize] as usize, best.1));
+                }
                 // (not recorded: the leaf's scan records it)
                 let d2 = dist2(&self.point(p), q);
                 if d2 < best.1 {
@@ -498,6 +523,14 @@ impl KdIndex {
     /// written into `out` (cleared first) as `(index, squared distance)`. Allocation-free once
     /// `out` has capacity `k`.
     pub fn knn_into(&self, q: &[f32; 3], k: usize, out: &mut Vec<(usize, f32)>) {
+        self.knn_positions(q, k, out);
+        for e in out.iter_mut() {
+            e.0 = self.ids[e.0] as usize;
+        }
+    }
+
+    /// [`KdIndex::knn_into`] with positions in the index instead of the points' indices.
+    fn knn_positions(&self, q: &[f32; 3], k: usize, out: &mut Vec<(usize, f32)>) {
         out.clear();
         let k = k.min(self.count);
         if k == 0 {
@@ -532,9 +565,6 @@ impl KdIndex {
             }
             worst
         });
-        for e in out.iter_mut() {
-            e.0 = self.ids[e.0] as usize;
-        }
     }
 
     /// The indexed points within squared distance `max_d2` of `q` (`<=`), at most `max` of them
