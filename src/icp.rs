@@ -86,8 +86,11 @@ impl IcpParams {
     }
 }
 
-/// Neighbours used for the target normals of point-to-plane ICP.
+/// Neighbours used for the target normals of point-to-plane ICP (the point itself and the
+/// neighbours its searches start from, [`crate::spatial::neighbourhood::NEIGHBOURS`]: one search
+/// finds both).
 pub const NORMAL_NEIGHBOURS: usize = 20;
+const _: () = assert!(NORMAL_NEIGHBOURS == crate::spatial::neighbourhood::NEIGHBOURS + 1);
 
 /// Eigenvalues of the point-to-plane normal matrix below this fraction of the largest are
 /// treated as zero (no motion along those directions): a planar or otherwise degenerate target

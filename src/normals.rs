@@ -1,5 +1,6 @@
 //! Normal estimation (for point-to-plane ICP).
 
+use crate::spatial::neighbourhood::NEIGHBOURS;
 use crate::spatial::KdIndex;
 use nalgebra::{Matrix3, SymmetricEigen};
 
@@ -34,12 +35,19 @@ pub fn estimate_normals(points: &[[f32; 3]], k: usize) -> Vec<[f32; 3]> {
 
 /// The normal [`estimate_normals`] gives point `j` of `points`, alone: from its `k` nearest
 /// neighbours in `index` (which must index `points`), `k` raised to 3 and capped at the cloud
-/// size; [`DEFAULT_NORMAL`] for clouds of fewer than 3 points.
+/// size; [`DEFAULT_NORMAL`] for clouds of fewer than 3 points. With `k` one more than
+/// [`NEIGHBOURS`], the index's kept neighbours of `j` ([`KdIndex::neighbours`]) are those
+/// points, found once for the normal and the searches hinted with `j`.
 pub fn normal_at(points: &[[f32; 3]], index: &KdIndex, j: usize, k: usize) -> [f32; 3] {
     if points.len() < 3 {
         return DEFAULT_NORMAL;
     }
     let k = k.clamp(3, points.len());
+    if k == NEIGHBOURS + 1 {
+        if let Some(others) = index.neighbours(j) {
+            return normal_of(points, std::iter::once(j).chain(others));
+        }
+    }
     let mut nbrs = Vec::with_capacity(k + 1);
     index.knn_into(&points[j], k, &mut nbrs);
     normal_of(points, nbrs.iter().map(|e| e.0))

@@ -20,10 +20,12 @@ use super::{dist2, Floors, KdIndex};
 use std::cmp::Ordering;
 use std::sync::OnceLock;
 
-/// Neighbours kept per point. Of the hinted searches of ICP on 4,096-point any-pose pairs, 16
-/// answered 72% (8: 52%), and an any-pose pair took 0.91x the time in wasm (`BENCHMARK.md`,
-/// "The hint's neighbourhood").
-pub const NEIGHBOURS: usize = 16;
+/// Neighbours kept per point: with the point itself, the 20 nearest points that point-to-plane
+/// ICP fits a target normal to ([`crate::icp::NORMAL_NEIGHBOURS`]), so one search serves both
+/// ([`KdIndex::neighbours`]). Of the hinted searches of ICP on 4,096-point any-pose pairs, 16
+/// neighbours answered 72% (8: 52%), and an any-pose pair took about 0.91x the time in wasm
+/// (`BENCHMARK.md`, "The hint's neighbourhood").
+pub const NEIGHBOURS: usize = 19;
 
 /// Largest index (in points) that keeps neighbourhoods; larger ones search the tree from the
 /// hint's leaf only. The default voxelisation leaves ICP's clouds of a few hundred thousand
@@ -72,6 +74,17 @@ impl KdIndex {
             };
             Neighbourhood { at, reach }
         }))
+    }
+
+    /// The [`NEIGHBOURS`] points nearest to the indexed point `j` other than itself (their
+    /// indices), nearest first in the order of [`KdIndex::knn_into`] (so `j` and these are the
+    /// `NEIGHBOURS + 1` nearest points to `j`, itself first unless it has duplicates); fewer when
+    /// the index holds fewer. Found now if they were not yet, and kept; `None` when the index
+    /// keeps no neighbourhoods ([`MAX_POINTS`]) or does not hold `j`.
+    pub fn neighbours(&self, j: usize) -> Option<impl Iterator<Item = usize> + Clone + '_> {
+        let p = *self.pos.get(j).filter(|&&p| p != u32::MAX)?;
+        let n = self.neighbourhood(p)?;
+        Some(n.at.iter().take_while(|&&o| o != u32::MAX).map(|&o| self.ids[o as usize] as usize))
     }
 
     /// The nearest point to `q` strictly within `max_d2`, when the neighbourhood of the hint at
@@ -153,6 +166,19 @@ mod tests {
                 assert!(dist2(&pts[i], &pts[j]).sqrt() >= n.reach);
             }
         }
+    }
+
+    #[test]
+    fn a_point_and_its_neighbours_are_its_nearest_points_in_knn_order() {
+        let pts = cloud(300);
+        let idx = KdIndex::new(&pts);
+        let mut knn = Vec::new();
+        for j in 0..pts.len() {
+            idx.knn_into(&pts[j], NEIGHBOURS + 1, &mut knn);
+            let with: Vec<usize> = std::iter::once(j).chain(idx.neighbours(j).unwrap()).collect();
+            assert_eq!(with, knn.iter().map(|e| e.0).collect::<Vec<_>>());
+        }
+        assert!(idx.neighbours(pts.len()).is_none());
     }
 
     #[test]
