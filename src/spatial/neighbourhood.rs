@@ -173,8 +173,8 @@ mod tests {
         let pts = cloud(300);
         let idx = KdIndex::new(&pts);
         let mut knn = Vec::new();
-        for j in 0..pts.len() {
-            idx.knn_into(&pts[j], NEIGHBOURS + 1, &mut knn);
+        for (j, p) in pts.iter().enumerate() {
+            idx.knn_into(p, NEIGHBOURS + 1, &mut knn);
             let with: Vec<usize> = std::iter::once(j).chain(idx.neighbours(j).unwrap()).collect();
             assert_eq!(with, knn.iter().map(|e| e.0).collect::<Vec<_>>());
         }
