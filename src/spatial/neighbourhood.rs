@@ -22,9 +22,8 @@ use std::sync::OnceLock;
 
 /// Neighbours kept per point: with the point itself, the 20 nearest points that point-to-plane
 /// ICP fits a target normal to ([`crate::icp::NORMAL_NEIGHBOURS`]), so one search serves both
-/// ([`KdIndex::neighbours`]). Of the hinted searches of ICP on 4,096-point any-pose pairs, 16
-/// neighbours answered 72% (8: 52%), and an any-pose pair took about 0.91x the time in wasm
-/// (`BENCHMARK.md`, "The hint's neighbourhood").
+/// ([`KdIndex::neighbours`]). They answer about three in four of ICP's hinted searches on
+/// 4,096-point any-pose pairs (`BENCHMARK.md`, "The hint's neighbourhood").
 pub const NEIGHBOURS: usize = 19;
 
 /// Largest index (in points) that keeps neighbourhoods; larger ones search the tree from the
