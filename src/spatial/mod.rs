@@ -338,43 +338,48 @@ impl KdIndex {
         let mut best = (u32::MAX, max_d2);
         let start = hint.and_then(|h| self.pos.get(h)).copied().filter(|&p| p != u32::MAX);
         match start {
-            Some(p) => {
-                // most hinted searches end among the hint's own neighbours
-                if let Some(found) = self.nearest_from_neighbourhood::<FLOOR>(p, q, max_d2, floors) {
-                    best = found;
-                    return (best.0 != u32::MAX).then(|| (self.ids[best.0 as usize] as usize, best.1));
-                }
-                // (not recorded: the leaf's scan records it)
-                let d2 = dist2(&self.point(p), q);
-                if d2 < best.1 {
-                    best = (p, d2);
-                }
-                let mut node = self.leaf_of[p as usize];
-                self.scan_leaf::<FLOOR>(node, q, &mut best, floors);
-                loop {
-                    if let Some(outside) = self.ball_inside(node, q, best.1) {
-                        floors.record::<FLOOR>(outside);
-                        break;
-                    }
-                    let up = self.parent[node as usize];
-                    if up == u32::MAX {
-                        break;
-                    }
-                    let n = self.nodes[up as usize];
-                    let other = if n.a == node { n.b } else { n.a };
-                    let off = self.offsets(other, q);
-                    let rd = off[0] * off[0] + off[1] * off[1] + off[2] * off[2];
-                    if rd < best.1 {
-                        self.nearest_from::<FLOOR>(Pending { node: other, rd, off }, q, &mut best, floors);
-                    } else {
-                        floors.record::<FLOOR>(rd);
-                    }
-                    node = up;
-                }
-            }
+            // most hinted searches end among the hint's own neighbours
+            Some(p) => match self.nearest_from_neighbourhood::<FLOOR>(p, q, max_d2, floors) {
+                Some(found) => best = found,
+                None => self.climb_from::<FLOOR>(p, q, &mut best, floors),
+            },
             None => self.nearest_from::<FLOOR>(Pending::ROOT, q, &mut best, floors),
         }
         (best.0 != u32::MAX).then(|| (self.ids[best.0 as usize] as usize, best.1))
+    }
+
+    /// The hinted search from the hint at position `p`: scans the hint's leaf, then climbs while
+    /// the ball of the best distance so far around `q` crosses the cell of the node reached,
+    /// searching each parent's other child top-down ([`KdIndex::nearest_within`]).
+    #[inline(always)]
+    fn climb_from<const FLOOR: bool>(&self, p: u32, q: &[f32; 3], best: &mut (u32, f32), floors: &mut Floors) {
+        // (not recorded: the leaf's scan records it)
+        let d2 = dist2(&self.point(p), q);
+        if d2 < best.1 {
+            *best = (p, d2);
+        }
+        let mut node = self.leaf_of[p as usize];
+        self.scan_leaf::<FLOOR>(node, q, best, floors);
+        loop {
+            if let Some(outside) = self.ball_inside(node, q, best.1) {
+                floors.record::<FLOOR>(outside);
+                break;
+            }
+            let up = self.parent[node as usize];
+            if up == u32::MAX {
+                break;
+            }
+            let n = self.nodes[up as usize];
+            let other = if n.a == node { n.b } else { n.a };
+            let off = self.offsets(other, q);
+            let rd = off[0] * off[0] + off[1] * off[1] + off[2] * off[2];
+            if rd < best.1 {
+                self.nearest_from::<FLOOR>(Pending { node: other, rd, off }, q, best, floors);
+            } else {
+                floors.record::<FLOOR>(rd);
+            }
+            node = up;
+        }
     }
 
     /// Scans leaf `node` for points nearer than `best` (strictly); with `FLOOR`, records each

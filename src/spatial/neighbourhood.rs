@@ -8,7 +8,8 @@
 //! So the index keeps, for each point that has been a hint, a [`Neighbourhood`]: its
 //! [`NEIGHBOURS`] nearest other points and `reach`, the distance of the farthest of them (every
 //! other point is at least that far from it). For a query `q` and hint `p`, the triangle
-//! inequality puts every point outside the neighbourhood at least `reach - |q - p|` from `q`. When the nearest of `p` and its neighbours is nearer than that, it is the nearest of all:
+//! inequality puts every point outside the neighbourhood at least `reach - |q - p|` from `q`.
+//! When the nearest of `p` and its neighbours is nearer than that, it is the nearest of all:
 //! found with [`NEIGHBOURS`]` + 1` distances. Otherwise the search goes on as before. The answer
 //! is the tree's either way (among points at exactly equal distance, possibly another).
 //!
