@@ -20,7 +20,7 @@
 //! [`Probed::better`]; typically the answer flipped about an axis of an elongated shape) is
 //! refined by the pipeline like one more start.
 
-use crate::icp::{IcpKind, IcpParams, IcpTarget, Partners};
+use crate::icp::{GiveUp, IcpKind, IcpParams, IcpTarget, Partners};
 use crate::refine::{coincide, even_sample, SCREEN_POINTS};
 use crate::register::UP_TOLERANCE_DEG;
 use crate::transform::rigid_inverse;
@@ -220,6 +220,13 @@ const PROBE_ITERATIONS: u32 = 10;
 /// at that distance stops there: it cannot come near the answer's fit. (The `4 d` stage lets a
 /// half turn whose axis is some degrees off the true one still reach that pose.)
 const PROBE_CUT: f64 = 0.6;
+/// Within those two stages, a probe still below this fraction of the answer's fitness (at the
+/// stage's distance) after [`PROBE_GIVE_UP_AFTER`] iterations stops at once ([`GiveUp`]): such a
+/// probe nearly always ends the stage below [`PROBE_CUT`] (`BENCHMARK.md`, "Probes that give up
+/// early").
+const PROBE_GIVE_UP: f64 = 0.4;
+/// Iterations of a probe's `4 d` or `2 d` stage before [`PROBE_GIVE_UP`] applies.
+const PROBE_GIVE_UP_AFTER: u32 = 3;
 /// How far [`Evidence::slide`] moves the points, on average (normalised units).
 const SLIDE_RMS: f64 = 0.25;
 
@@ -251,7 +258,8 @@ struct Turned {
 /// well on its other end); then the `extra` starts (the turns along the least constrained motion,
 /// [`screw_turns`]). `answer` is `t` on `sample`. A probe that comes back onto the answer, or
 /// onto where an earlier probe was after the same stage ([`coincide`]), stops there and counts
-/// for nothing: it would end where that pose did.
+/// for nothing: it would end where that pose did. A probe that fits too little after its `4 d` or
+/// `2 d` stage ([`PROBE_CUT`]), or early in it ([`PROBE_GIVE_UP`]), stops there too.
 // the probe's inputs and the three kinds of extra knowledge it takes (its own turns, the shared
 // up, whether the source is a part of the target)
 #[allow(clippy::too_many_arguments)]
@@ -326,7 +334,9 @@ fn turns(
         // skipped below anyway, and an earlier probe's end is already counted)
         let mut repeats = false;
         for (k, &(factor, base_at)) in stages.iter().enumerate().skip(if wide { 0 } else { 1 }) {
-            let r = target.align_warm(sample, &at, &params(factor), &mut partners);
+            let give_up =
+                (base_at > 0.0).then_some(GiveUp { after: PROBE_GIVE_UP_AFTER, below: PROBE_GIVE_UP * base_at });
+            let r = target.align_warm(sample, &at, &IcpParams { give_up, ..params(factor) }, &mut partners);
             at = r.T_target_source;
             repeats =
                 coincide(&at, t, sample, d) || paths.iter().any(|p| p[k].is_some_and(|q| coincide(&at, &q, sample, d)));

@@ -52,6 +52,20 @@ pub struct IcpParams {
     /// `0` (what [`IcpParams::new`] sets) is the plain Gauss-Newton step. Point-to-point ICP
     /// ignores it.
     pub damping: f64,
+    /// Stop a run that is going nowhere ([`GiveUp`]); `None` (what [`IcpParams::new`] sets)
+    /// runs to convergence or the cap.
+    pub give_up: Option<GiveUp>,
+}
+
+/// When an ICP run stops early for fitting too little: after at least `after` iterations, at the
+/// first whose fitness is below `below` (the run is then not `converged`). For a search run whose
+/// result counts only if it fits nearly as well as a known pose.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct GiveUp {
+    /// Iterations before the test applies.
+    pub after: u32,
+    /// The fitness (at the run's max correspondence distance) below which the run stops.
+    pub below: f64,
 }
 
 /// What an ICP run returns.
@@ -82,6 +96,7 @@ impl IcpParams {
             relative_fitness: 1e-6,
             relative_rmse: 1e-6,
             damping: 0.0,
+            give_up: None,
         }
     }
 }
@@ -307,7 +322,8 @@ impl IcpTarget {
     /// * Stops as Open3D's `ICPConvergenceCriteria` does: after an update, when the change of
     ///   fitness is below `relative_fitness` **and** the change of inlier RMSE below
     ///   `relative_rmse` (Open3D compares absolute differences of the two figures, and so does
-    ///   this), or after `max_iterations` updates.
+    ///   this), or after `max_iterations` updates; with [`IcpParams::give_up`], also after an
+    ///   update that leaves the fitness below its bound (not converged).
     /// * [`IcpKind::Off`], `max_iterations == 0`, or no inlier pair at `init`: returns `init`
     ///   with its fitness and RMSE, 0 iterations, `converged = false`. If a step would lose every
     ///   inlier, or is not finite, it is discarded and the run stops (`converged = false`) with
@@ -373,6 +389,9 @@ impl IcpTarget {
             result.inlier_rmse = r;
             if done {
                 result.converged = true;
+                break;
+            }
+            if params.give_up.is_some_and(|g| it >= g.after && f < g.below) {
                 break;
             }
         }

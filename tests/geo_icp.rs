@@ -145,6 +145,34 @@ fn damped_steps_reach_the_same_fit() {
     assert_eq!(target.align(&source, &t_gt, &plain), target.align(&source, &t_gt, &zero));
 }
 
+/// A run told to give up (`IcpParams::give_up`) stops after the given iterations when it fits
+/// below the bound, not converged, with the figures of the pose it stopped at; one that fits above
+/// the bound runs exactly as without it.
+#[test]
+fn a_run_gives_up_when_it_fits_too_little() {
+    use arps::icp::GiveUp;
+    let (source, _, target) = partial_overlap();
+    let plain = IcpParams::new(IcpKind::Plane, 0.1);
+    // far from the fit: a quarter turn about z
+    let turned = from_rotation_translation(
+        &UnitQuaternion::from_axis_angle(&Vector3::z_axis(), 90f64.to_radians()).to_rotation_matrix().into_inner(),
+        &Vector3::zeros(),
+    );
+    let start = target.evaluate(&source, &turned, 0.1).0;
+    let hopeless = IcpParams { give_up: Some(GiveUp { after: 3, below: 1.0 }), ..plain };
+    let r = target.align(&source, &turned, &hopeless);
+    assert_eq!(r.iterations, 3);
+    assert!(!r.converged);
+    assert_eq!(target.evaluate(&source, &r.T_target_source, 0.1), (r.fitness, r.inlier_rmse));
+    // the same three iterations as a run capped there
+    let capped = target.align(&source, &turned, &IcpParams { max_iterations: 3, ..plain });
+    assert_eq!(capped.T_target_source, r.T_target_source);
+    // a bound no fitness is below changes nothing
+    let never = IcpParams { give_up: Some(GiveUp { after: 1, below: 0.0 }), ..plain };
+    assert_eq!(target.align(&source, &turned, &never), target.align(&source, &turned, &plain));
+    eprintln!("gave up at fitness {:.3} (start {start:.3})", r.fitness);
+}
+
 /// Two partial views of a cylinder (radius 0.5, height 2, on the z axis; evenly spread points,
 /// deterministic): the target keeps the angles within ±80° of +x, the source those within 40°
 /// to 150°, so only the angles from 40° to 80° overlap. Within the overlap, point-to-plane pairs
