@@ -316,8 +316,13 @@ fn turns(
         .chain(up_turns.into_iter().map(|p| (turn(p), true)))
         .chain(extra.iter().map(|&m| (m, true)))
         .collect();
-    let params =
-        |factor: f64| IcpParams { max_iterations: PROBE_ITERATIONS, ..IcpParams::new(kind.or_point(), factor * d) };
+    // a stage's ICP at `factor * d`; where the answer's fitness there is `base_at` (> 0: the
+    // stages that cut), a probe far below it gives up early
+    let params = |factor: f64, base_at: f64| IcpParams {
+        max_iterations: PROBE_ITERATIONS,
+        give_up: (base_at > 0.0).then_some(GiveUp { after: PROBE_GIVE_UP_AFTER, below: PROBE_GIVE_UP * base_at }),
+        ..IcpParams::new(kind.or_point(), factor * d)
+    };
     let base_coarse = target.evaluate_warm(sample, t, 4.0 * d, &mut partners).0;
     // each earlier probe's pose after each stage (4d, 2d, d; `None`: not run)
     let mut paths: Vec<[Option<Matrix4<f64>>; 3]> = Vec::with_capacity(starts.len());
@@ -334,9 +339,7 @@ fn turns(
         // skipped below anyway, and an earlier probe's end is already counted)
         let mut repeats = false;
         for (k, &(factor, base_at)) in stages.iter().enumerate().skip(if wide { 0 } else { 1 }) {
-            let give_up =
-                (base_at > 0.0).then_some(GiveUp { after: PROBE_GIVE_UP_AFTER, below: PROBE_GIVE_UP * base_at });
-            let r = target.align_warm(sample, &at, &IcpParams { give_up, ..params(factor) }, &mut partners);
+            let r = target.align_warm(sample, &at, &params(factor, base_at), &mut partners);
             at = r.T_target_source;
             repeats =
                 coincide(&at, t, sample, d) || paths.iter().any(|p| p[k].is_some_and(|q| coincide(&at, &q, sample, d)));
