@@ -146,6 +146,100 @@ fn descriptors_are_invariant_to_rigid_motion() {
     assert!(close * 10 >= a.descriptors.len() * 9, "{close} of {}", a.descriptors.len());
 }
 
+/// FPFH by its definition: each point's histogram over its own neighbourhood, every pair's
+/// features computed from that point's side ([`global::fpfh::pair_features`]), then the weighted
+/// sum of the neighbours' histograms.
+fn fpfh_by_definition(
+    points: &[[f32; 3]],
+    normals: &[[f32; 3]],
+    index: &arps::spatial::KdIndex,
+    p: &global::fpfh::FpfhParams,
+) -> Vec<global::fpfh::Descriptor> {
+    use global::fpfh::{pair_features, BINS, DIM};
+    let bin = |x: f64, lo: f64, hi: f64| {
+        let i = ((x - lo) / (hi - lo) * BINS as f64).floor();
+        if i.is_nan() {
+            0
+        } else {
+            (i.max(0.0) as usize).min(BINS - 1)
+        }
+    };
+    let r2 = (p.feature_radius * p.feature_radius) as f32;
+    let mut lists = Vec::new();
+    let mut nb = Vec::new();
+    for (i, q) in points.iter().enumerate() {
+        index.within_into(q, r2, p.feature_max + 1, &mut nb);
+        lists.push(nb.iter().filter(|e| e.0 != i).copied().collect::<Vec<_>>());
+    }
+    let spfh: Vec<[f32; DIM]> = lists
+        .iter()
+        .enumerate()
+        .map(|(i, others)| {
+            let mut h = [0.0f32; DIM];
+            for &(j, _) in others {
+                let inc = 100.0 / others.len() as f32;
+                if let Some([f1, f2, f3]) = pair_features(&points[i], &normals[i], &points[j], &normals[j]) {
+                    h[bin(f1, -std::f64::consts::PI, std::f64::consts::PI)] += inc;
+                    h[BINS + bin(f2, -1.0, 1.0)] += inc;
+                    h[2 * BINS + bin(f3, -1.0, 1.0)] += inc;
+                }
+            }
+            h
+        })
+        .collect();
+    lists
+        .iter()
+        .enumerate()
+        .map(|(i, others)| {
+            let (mut f, mut sum) = ([0.0f32; DIM], [0.0f32; 3]);
+            for &(j, d2) in others.iter().filter(|e| e.1 > 0.0) {
+                for k in 0..DIM {
+                    let v = spfh[j][k] * (1.0 / d2);
+                    f[k] += v;
+                    sum[k / BINS] += v;
+                }
+            }
+            std::array::from_fn(|k| {
+                let s = if sum[k / BINS] != 0.0 { 100.0 / sum[k / BINS] } else { 0.0 };
+                f[k] * s + spfh[i][k]
+            })
+        })
+        .collect()
+}
+
+#[test]
+fn descriptors_equal_their_definition_bit_for_bit() {
+    // `describe` computes each pair of mutual neighbours once for both points; the definition
+    // computes it from each side. A flat grid (every pair's angles tie, and many neighbours lie
+    // at equal distances where a neighbourhood is cut), a bumpy one, and a fixture cloud.
+    let grid = |bump: f32| -> Vec<[f32; 3]> {
+        (0..24 * 24)
+            .map(|k| {
+                let (x, y) = ((k % 24) as f32 * 0.05, (k / 24) as f32 * 0.05);
+                [x, y, bump * (7.0 * x).sin() * (5.0 * y).cos()]
+            })
+            .collect()
+    };
+    let (fixture, _, _) = fixture_pair(0);
+    let fixture = global::describe(&fixture, 0.05).points;
+    for (points, feature_max) in
+        [(grid(0.0), 100), (grid(0.0), 6), (grid(0.1), 9), (fixture.clone(), 100), (fixture, 12)]
+    {
+        let p = global::fpfh::FpfhParams { feature_max, ..global::fpfh::FpfhParams::for_voxel(0.05) };
+        let index = arps::spatial::KdIndex::new(&points);
+        let normals = global::fpfh::oriented_normals(&points, &index, p.normal_radius, p.normal_max);
+        let fast = global::fpfh::describe(&points, &normals, &index, &p);
+        let slow = fpfh_by_definition(&points, &normals, &index, &p);
+        assert_eq!(fast.len(), points.len());
+        for (i, (a, b)) in fast.iter().zip(&slow).enumerate() {
+            assert!(
+                a.iter().zip(b).all(|(x, y)| x.to_bits() == y.to_bits()),
+                "point {i} (cap {feature_max}): {a:?} against {b:?}"
+            );
+        }
+    }
+}
+
 #[test]
 fn search_and_global_starts_parse_and_unknown_values_are_refused() {
     let o: Options =

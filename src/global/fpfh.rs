@@ -90,14 +90,23 @@ fn f64s(v: &[f32; 3]) -> [f64; 3] {
 /// with `f1` in `[-pi, pi]`, `f2` and `f3` in `[-1, 1]`; `None` for coincident points or a
 /// degenerate frame.
 pub fn pair_features(p1: &[f32; 3], n1: &[f32; 3], p2: &[f32; 3], n2: &[f32; 3]) -> Option<[f64; 3]> {
+    features_and_tie(p1, n1, p2, n2).0
+}
+
+/// [`pair_features`], and whether the pair's two angles tie (`|angle1| == |angle2|`). The
+/// features order the pair by those angles (the point whose normal is nearer the line between
+/// them first), so the pair taken the other way round gives the same features, bit for bit
+/// (the line's direction only changes sign, which negation does exactly), unless they tie.
+fn features_and_tie(p1: &[f32; 3], n1: &[f32; 3], p2: &[f32; 3], n2: &[f32; 3]) -> (Option<[f64; 3]>, bool) {
     let mut d = sub(p2, p1);
     let len = dot(&d, &d).sqrt();
     if len == 0.0 {
-        return None;
+        return (None, false);
     }
     let (mut a, mut b) = (f64s(n1), f64s(n2));
     let angle1 = dot(&a, &d) / len;
     let angle2 = dot(&b, &d) / len;
+    let tie = angle1.abs() == angle2.abs();
     // acos(|angle1|) > acos(|angle2|), acos being decreasing
     let f3 = if angle1.abs() < angle2.abs() {
         std::mem::swap(&mut a, &mut b);
@@ -109,13 +118,13 @@ pub fn pair_features(p1: &[f32; 3], n1: &[f32; 3], p2: &[f32; 3], n2: &[f32; 3])
     let v = cross(&d, &a);
     let vn = dot(&v, &v).sqrt();
     if vn == 0.0 {
-        return None;
+        return (None, tie);
     }
     let v = v.map(|x| x / vn);
     let w = cross(&a, &v);
     let f2 = dot(&v, &b);
     let f1 = dot(&w, &b).atan2(dot(&a, &b));
-    Some([f1, f2, f3])
+    (Some([f1, f2, f3]), tie)
 }
 
 fn bin(x: f64, lo: f64, hi: f64) -> usize {
@@ -131,29 +140,62 @@ fn bin(x: f64, lo: f64, hi: f64) -> usize {
 /// each point's SPFH plus the inverse-squared-distance weighted sum of its neighbours' SPFH, each
 /// feature's block of that sum scaled to 100). `normals` are unit normals, one per point.
 /// Points without neighbours get an all-zero descriptor.
+///
+/// Each pair of neighbours is computed once where both points' neighbourhoods hold the other
+/// ([`pair_features`] orders a pair by its normals' angles to the line between the points, so it
+/// gives the same features both ways, bit for bit, unless those angles tie) and
+/// counted in both histograms; every increment of one histogram is the same value, so the order
+/// they come in does not change it.
 pub fn describe(points: &[[f32; 3]], normals: &[[f32; 3]], index: &KdIndex, params: &FpfhParams) -> Vec<Descriptor> {
-    let mut nb = Vec::with_capacity(params.feature_max + 1);
-    // SPFH, and each point's neighbourhood (kept: reused by the weighting pass)
-    let mut spfh = vec![[0.0f32; DIM]; points.len()];
+    let cap = params.feature_max + 1;
+    let mut nb = Vec::with_capacity(cap);
+    // each point's neighbourhood (also reused by the weighting pass), and where a neighbourhood
+    // was cut at `cap` points, its farthest squared distance
     let mut lists: Vec<(u32, u32)> = Vec::with_capacity(points.len());
+    let mut cut: Vec<f32> = Vec::with_capacity(points.len());
     let mut flat: Vec<(u32, f32)> = Vec::new();
     for (i, q) in points.iter().enumerate() {
-        neighbours(index, q, params.feature_radius, params.feature_max + 1, &mut nb);
+        neighbours(index, q, params.feature_radius, cap, &mut nb);
         let start = flat.len() as u32;
         flat.extend(nb.iter().filter(|e| e.0 != i).map(|e| (e.0 as u32, e.1)));
         lists.push((start, flat.len() as u32));
-        let others = &flat[start as usize..];
-        if others.is_empty() {
-            continue;
+        cut.push(if nb.len() >= cap { nb.last().map_or(f32::INFINITY, |e| e.1) } else { f32::INFINITY });
+    }
+    let others = |i: usize| &flat[lists[i].0 as usize..lists[i].1 as usize];
+    // whether `a`, at squared distance `d2` from `b` (within the radius), is in `b`'s neighbourhood
+    // (the index's squared distance of a pair is the same from either side: the differences only
+    // change sign); a tie with the cut's distance is looked up
+    let holds = |b: usize, a: usize, d2: f32| {
+        if d2 != cut[b] {
+            d2 < cut[b]
+        } else {
+            others(b).iter().any(|e| e.0 as usize == a)
         }
-        let inc = 100.0 / others.len() as f32;
-        let h = &mut spfh[i];
-        for &(j, _) in others {
+    };
+    let inc = |i: usize| if others(i).is_empty() { 0.0 } else { 100.0 / others(i).len() as f32 };
+    let add = |h: &mut [f32; DIM], f: Option<[f64; 3]>, inc: f32| {
+        if let Some([f1, f2, f3]) = f {
+            h[bin(f1, -std::f64::consts::PI, std::f64::consts::PI)] += inc;
+            h[BINS + bin(f2, -1.0, 1.0)] += inc;
+            h[2 * BINS + bin(f3, -1.0, 1.0)] += inc;
+        }
+    };
+    // SPFH
+    let mut spfh = vec![[0.0f32; DIM]; points.len()];
+    for (i, q) in points.iter().enumerate() {
+        let inc_i = inc(i);
+        for &(j, d2) in others(i) {
             let j = j as usize;
-            if let Some([f1, f2, f3]) = pair_features(q, &normals[i], &points[j], &normals[j]) {
-                h[bin(f1, -std::f64::consts::PI, std::f64::consts::PI)] += inc;
-                h[BINS + bin(f2, -1.0, 1.0)] += inc;
-                h[2 * BINS + bin(f3, -1.0, 1.0)] += inc;
+            let shared = holds(j, i, d2);
+            if j < i && shared {
+                // counted when `j` took the pair
+                continue;
+            }
+            let (f, tie) = features_and_tie(q, &normals[i], &points[j], &normals[j]);
+            add(&mut spfh[i], f, inc_i);
+            if j > i && shared {
+                let f = if tie { pair_features(&points[j], &normals[j], q, &normals[i]) } else { f };
+                add(&mut spfh[j], f, inc(j));
             }
         }
     }
