@@ -222,14 +222,30 @@ impl PointCloud {
     /// the origin is mapped in `f64` and the offsets by `m`'s linear part, so large coordinates
     /// keep their shape.
     pub fn transformed(&self, m: &Matrix4<f64>) -> PointCloud {
+        let (map, origin) = self.mapping(m);
+        PointCloud::with_origin(self.points.iter().map(|&p| crate::transform::apply(&map, p)).collect(), origin)
+    }
+
+    /// [`PointCloud::transformed`], mapping the points where they are: the same cloud, bit for
+    /// bit, without a second copy of a large one.
+    pub fn into_transformed(mut self, m: &Matrix4<f64>) -> PointCloud {
+        let (map, origin) = self.mapping(m);
+        for p in &mut self.points {
+            *p = crate::transform::apply(&map, *p);
+        }
+        self.origin = origin;
+        self
+    }
+
+    /// What [`PointCloud::transformed`] maps the offsets by, and the new origin.
+    fn mapping(&self, m: &Matrix4<f64>) -> (Matrix4<f64>, [f64; 3]) {
         if self.origin_is_zero() {
-            return PointCloud::new(self.points.iter().map(|&p| crate::transform::apply(m, p)).collect());
+            return (*m, [0.0; 3]);
         }
         let o = m.transform_point(&nalgebra::Point3::from(self.origin));
         let mut linear = *m;
         linear.fixed_view_mut::<3, 1>(0, 3).fill(0.0);
-        let points = self.points.iter().map(|&p| crate::transform::apply(&linear, p)).collect();
-        PointCloud::with_origin(points, [o.x, o.y, o.z])
+        (linear, [o.x, o.y, o.z])
     }
 
     /// The same points with origin zero: the offsets, taken as points in their own frame.
@@ -404,6 +420,11 @@ mod tests {
             let want = m.transform_point(&nalgebra::Point3::from(*p));
             let got = moved.point_f64(i);
             assert!((0..3).all(|a| (got[a] - want[a]).abs() < 1e-6), "{got:?} vs {want:?}");
+        }
+        // mapped in place: the same cloud, bit for bit, near zero and far from it
+        for cloud in [c.clone(), cube(40)] {
+            let (copy, owned) = (cloud.transformed(&m), cloud.clone().into_transformed(&m));
+            assert_eq!((copy.origin, copy.points), (owned.origin, owned.points));
         }
         let mut bad = c.clone();
         bad.points[3][0] = f32::NAN;

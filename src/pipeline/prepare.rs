@@ -108,13 +108,16 @@ pub(crate) fn prepare(
     }
     // The network sees the source already turned by the initial guess (its shift only moves
     // the source's centre, which the normalisation removes).
-    let source_init =
-        if transform::rotation(&init_local) == Matrix3::identity() { source } else { source.transformed(&rotate_init) };
+    let source_init = if transform::rotation(&init_local) == Matrix3::identity() {
+        source
+    } else {
+        source.into_transformed(&rotate_init)
+    };
     let norm = JointNormalization::of_boxes(JointNormalization::box_of(&source_init), summary.bounding);
     // the initial guess (identity with no initialTransform), from the turned source to the target
     let t_initial = norm.normalize_transform(&shift);
     checks::initial_distance(&t_initial)?;
-    let src_n = source_init.transformed(&norm.source_to_normalized());
+    let src_n = source_init.into_transformed(&norm.source_to_normalized());
     let (d_final, voxel) = options::distances(options, norm.scale)?;
     let sizes = Sizes { scale: norm.scale.to_bits(), voxel: voxel.to_bits(), n_net, seed: options.seed };
     let target = match given {
@@ -126,9 +129,9 @@ pub(crate) fn prepare(
         Given::Kept(old) => {
             drop(old);
             let local = checked("target", target, options)?.0.into_local();
-            Box::new(PreparedTarget::new(input, summary, sizes, &local, &norm))
+            Box::new(PreparedTarget::new(input, summary, sizes, local, &norm))
         }
-        Given::Validated(t, _) => Box::new(PreparedTarget::new(input, summary, sizes, &t.into_local(), &norm)),
+        Given::Validated(t, _) => Box::new(PreparedTarget::new(input, summary, sizes, t.into_local(), &norm)),
     };
     for (what, len) in [("source", src_n.len()), ("target", target.cloud.len())] {
         if len < n_net {

@@ -135,10 +135,10 @@ impl PreparedTarget {
         input: InputKey,
         summary: TargetSummary,
         sizes: Sizes,
-        local: &PointCloud,
+        local: PointCloud,
         norm: &JointNormalization,
     ) -> Self {
-        let cloud = local.transformed(&norm.target_to_normalized());
+        let cloud = local.into_transformed(&norm.target_to_normalized());
         let net = net_sample(&cloud, &sizes);
         let icp = icp_cloud(&cloud, &sizes);
         Self {
