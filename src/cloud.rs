@@ -153,24 +153,23 @@ impl PointCloud {
     /// error; so is a cloud whose points all coincide. `what` names the cloud in messages
     /// (`"source"`, `"target"`).
     pub fn validated(&self, what: &str, min_points: usize, non_finite: NonFinite) -> Result<PointCloud> {
-        let bad = self.points.iter().position(|p| !(p[0].is_finite() && p[1].is_finite() && p[2].is_finite()));
-        let cloud = match (bad, non_finite) {
-            (None, _) => self.clone(),
+        self.clone().into_validated(what, min_points, non_finite)
+    }
+
+    /// [`PointCloud::validated`], keeping the cloud's own points (without a copy of a large one).
+    pub fn into_validated(self, what: &str, min_points: usize, non_finite: NonFinite) -> Result<PointCloud> {
+        let mut cloud = self;
+        let finite = |p: &[f32; 3]| p[0].is_finite() && p[1].is_finite() && p[2].is_finite();
+        match (cloud.points.iter().position(|p| !finite(p)), non_finite) {
+            (None, _) => {}
             (Some(i), NonFinite::Error) => {
                 return Err(Error::InvalidCloud(format!(
                     "{what} point {i} has a non-finite coordinate {:?} (drop such points with the non-finite option set to drop)",
-                    self.points[i]
+                    cloud.points[i]
                 )))
             }
-            (Some(_), NonFinite::Drop) => PointCloud::with_origin(
-                self.points
-                    .iter()
-                    .copied()
-                    .filter(|p| p.iter().all(|v| v.is_finite()))
-                    .collect(),
-                self.origin,
-            ),
-        };
+            (Some(_), NonFinite::Drop) => cloud.points.retain(finite),
+        }
         if cloud.len() < min_points {
             return Err(Error::InvalidCloud(format!(
                 "{what} has {} finite points; at least {min_points} are needed",

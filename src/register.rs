@@ -16,6 +16,7 @@ use crate::weights::Weights;
 use crate::Result;
 use nalgebra::Matrix4;
 use serde::{Deserialize, Serialize};
+use std::borrow::Cow;
 
 /// Options of a registration (`Registrar::register` in Rust, `Registrar.register` in JS). Every
 /// field has a default, given in its docs. In JS and JSON the fields are camelCase
@@ -477,6 +478,30 @@ impl Registrar {
         &mut self,
         source: &PointCloud,
         target: &PointCloud,
+        options: &Options,
+        progress: &mut dyn FnMut(Stage),
+    ) -> Result<Registration> {
+        self.register_cow(Cow::Borrowed(source), Cow::Borrowed(target), options, progress)
+    }
+
+    /// [`Registrar::register_with_progress`] on clouds the caller hands over: their points become
+    /// the validated clouds without a copy (the wasm binding's, which it made for the call).
+    #[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+    pub(crate) fn register_owned_with_progress(
+        &mut self,
+        source: PointCloud,
+        target: PointCloud,
+        options: &Options,
+        progress: &mut dyn FnMut(Stage),
+    ) -> Result<Registration> {
+        self.register_cow(Cow::Owned(source), Cow::Owned(target), options, progress)
+    }
+
+    #[allow(non_snake_case)]
+    fn register_cow(
+        &mut self,
+        source: Cow<'_, PointCloud>,
+        target: Cow<'_, PointCloud>,
         options: &Options,
         progress: &mut dyn FnMut(Stage),
     ) -> Result<Registration> {

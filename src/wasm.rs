@@ -205,7 +205,7 @@ impl Registrar {
                 }
             }
         };
-        let r = self.inner.register_with_progress(&source, &target, &options, &mut progress).map_err(js_err)?;
+        let r = self.inner.register_owned_with_progress(source, target, &options, &mut progress).map_err(js_err)?;
         if let Some(e) = callback_error {
             return Err(JsError::new(&format!("onProgress threw: {}", js_message(&e))));
         }

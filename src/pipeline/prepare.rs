@@ -19,6 +19,7 @@ use crate::spacing::Spacing;
 use crate::support::{self, Support};
 use crate::{checks, limits, origin, sampling, transform, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
+use std::borrow::Cow;
 
 /// Ratio of the clouds' sizes (largest half-extents) above which a warning says they may be in
 /// different units. A partial scan of an object is smaller than a model of the whole, but not by
@@ -51,16 +52,17 @@ pub(crate) struct Prepared {
 
 /// The target as [`prepare`] receives it: prepared by an earlier call from the same input, or
 /// validated now.
-enum Given {
-    Kept(Box<PreparedTarget>),
+enum Given<'a> {
+    /// With the caller's target, which a kept target at another scale is prepared from again.
+    Kept(Box<PreparedTarget>, Cow<'a, PointCloud>),
     Validated(PointCloud, Vec<String>),
 }
 
 /// Validates, normalises and samples the pair (see the module docs); `kept` is a target prepared
 /// by an earlier call, reused where it is the same target at the same scale.
 pub(crate) fn prepare(
-    source: &PointCloud,
-    target: &PointCloud,
+    source: Cow<'_, PointCloud>,
+    target: Cow<'_, PointCloud>,
     options: &Options,
     resolved: &Resolved,
     kept: Option<Box<PreparedTarget>>,
@@ -71,12 +73,12 @@ pub(crate) fn prepare(
     limits::check_cloud_points("target", target.len())?;
     // the target given again: its checks passed already, and what it holds is reused below;
     // another target's is dropped before anything is allocated
-    let input = InputKey::of(target, options.non_finite, options.outliers, options.support_plane);
+    let input = InputKey::of(&target, options.non_finite, options.outliers, options.support_plane);
     let kept = kept.filter(|k| k.input == input);
     let (source, source_warnings) = checked("source", source, options)?;
     warnings.extend(source_warnings);
     let given = match kept {
-        Some(k) => Given::Kept(k),
+        Some(k) => Given::Kept(k, target),
         None => {
             let (t, target_warnings) = checked("target", target, options)?;
             Given::Validated(t, target_warnings)
@@ -84,7 +86,7 @@ pub(crate) fn prepare(
     };
     let spreads_source = checks::not_collinear("source", &source.points, warnings)?;
     let summary = match &given {
-        Given::Kept(k) => k.summary.clone(),
+        Given::Kept(k, _) => k.summary.clone(),
         Given::Validated(t, target_warnings) => target::summary(t, target_warnings.clone())?,
     };
     warnings.extend(summary.warnings.iter().cloned());
@@ -121,12 +123,12 @@ pub(crate) fn prepare(
     let (d_final, voxel) = options::distances(options, norm.scale)?;
     let sizes = Sizes { scale: norm.scale.to_bits(), voxel: voxel.to_bits(), n_net, seed: options.seed };
     let target = match given {
-        Given::Kept(mut k) if k.sizes.scale == sizes.scale => {
+        Given::Kept(mut k, _) if k.sizes.scale == sizes.scale => {
             k.resize(sizes);
             k
         }
         // the same target at another scale (a source larger than it)
-        Given::Kept(old) => {
+        Given::Kept(old, target) => {
             drop(old);
             let local = checked("target", target, options)?.0.into_local();
             Box::new(PreparedTarget::new(input, summary, sizes, local, &norm))
@@ -152,8 +154,8 @@ pub(crate) fn prepare(
 /// without its far outliers ([`outliers::drop_far_with`]); then with [`Support::Drop`] without the
 /// support plane it stands on ([`support::find`]); with a warning for each that left points out.
 /// `what` names the cloud in messages.
-fn checked(what: &str, cloud: &PointCloud, options: &Options) -> Result<(PointCloud, Vec<String>)> {
-    let mut cloud = cloud.validated(what, MIN_POINTS, options.non_finite)?;
+fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<(PointCloud, Vec<String>)> {
+    let mut cloud = cloud.into_owned().into_validated(what, MIN_POINTS, options.non_finite)?;
     let mut warnings = Vec::new();
     // the two tests' sample, shared while the cloud is unchanged
     let mut spacing = None;
@@ -198,7 +200,9 @@ mod tests {
         let resolved = Resolved { n_net: 128 };
         let options = Options::default();
         let prepare_onto = |source: &PointCloud, target: &PointCloud, options: &Options, kept| {
-            prepare(source, target, options, &resolved, kept, &mut Vec::new()).unwrap().target
+            prepare(Cow::Borrowed(source), Cow::Borrowed(target), options, &resolved, kept, &mut Vec::new())
+                .unwrap()
+                .target
         };
         let first = prepare_onto(&patch(2_000, 1.0, 0.5), &target, &options, None);
         first.index();
