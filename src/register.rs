@@ -497,7 +497,7 @@ impl Registrar {
         self.register_cow(Cow::Owned(source), Cow::Owned(target), options, progress)
     }
 
-    #[allow(non_snake_case)]
+    /// The registration itself, on the caller's clouds or on clouds handed over.
     fn register_cow(
         &mut self,
         source: Cow<'_, PointCloud>,
