@@ -122,5 +122,46 @@ def main():
                 f.write(bytes([names.index("no_extension")]) + data)
 
 
+def clouds():
+    """Seeds of register_clouds: a header of six bytes (see the target's docs), then points."""
+    import math
+
+    def i8(v):
+        return max(-128, min(127, int(round(v)))) & 0xFF
+
+    def body(points):
+        return bytes(i8(c) for p in points for c in p)
+
+    bumpy = []
+    for i in range(300):
+        u, v = (i * 0.754877) % 1.0 * 2 * math.pi, math.acos(2 * ((i * 0.569840) % 1.0) - 1)
+        r = 90 + 12 * math.sin(3 * u) * math.cos(2 * v)
+        bumpy.append((r * math.sin(v) * math.cos(u) * 1.2, r * math.sin(v) * math.sin(u) * 0.8, r * math.cos(v)))
+    plane = [(x * 9, y * 9, 0) for x in range(-8, 9) for y in range(-8, 9)]
+    line = [(i, 2 * i, -i) for i in range(-40, 40)]
+    box = [(x, y, z) for x in (-60, 60) for y in range(-60, 61, 12) for z in range(-30, 31, 10)]
+    seeds = {
+        # a turned part of a bumpy surface onto it, adaptive and exhaustive, with determinism
+        "bumpy_turned": bytes([0b1010_0000, 0, 0, 0, 255, 0x4B]) + body(bumpy),
+        "bumpy_turned_far_up": bytes([0b1110_0001, 0, 0, 0, 255, 0xA7]) + body(bumpy),
+        "bumpy_exhaustive": bytes([0b1011_0000, 0, 0, 0, 255, 0x2F]) + body(bumpy),
+        # two different clouds, scaled apart
+        "bumpy_vs_box": bytes([0, 0, 30, 226, 150, 0]) + body(bumpy[:150] + box),
+        # many copies per point: a cloud of thousands of points (the large-cloud paths)
+        "bumpy_copies": bytes([0b1010_0000, 0x4F, 0, 0, 255, 0x39]) + body(bumpy),
+        # degenerate: a plane, a line, duplicates
+        "plane": bytes([0b0010_0000, 0, 0, 0, 255, 0x33]) + body(plane),
+        "line": bytes([0b0010_0000, 0x03, 0, 0, 255, 0x21]) + body(line),
+        "duplicates": bytes([0, 0x0F, 0, 0, 128, 0]) + body(bumpy[:20] + bumpy[:20]),
+        "plane_and_box": bytes([0b0000_0110, 0, 0, 0, 140, 0]) + body(plane + box),
+    }
+    out = os.path.join(HERE, "seeds", "register_clouds")
+    os.makedirs(out, exist_ok=True)
+    for key, data in seeds.items():
+        with open(os.path.join(out, key), "wb") as f:
+            f.write(data)
+
+
 if __name__ == "__main__":
     main()
+    clouds()

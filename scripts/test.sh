@@ -47,7 +47,7 @@ step "fuzz smoke: each target for a few seconds (only where nightly Rust and car
 if cargo +nightly --version >/dev/null 2>&1 && cargo +nightly fuzz --version >/dev/null 2>&1; then
   (
     cd fuzz
-    for target in read_point_cloud read_mesh weights_from_bytes options_json model_config; do
+    for target in read_point_cloud read_mesh weights_from_bytes options_json model_config register_clouds; do
       mkdir -p "corpus/$target"
       cargo +nightly fuzz run -O -a "$target" "corpus/$target" "seeds/$target" -- \
         -max_total_time="${FUZZ_SMOKE_SECONDS:-5}" -max_len=8192 -malloc_limit_mb=256
