@@ -102,9 +102,7 @@ export type RegisterOptions = {
    * The transforms ICP starts from, in order of preference. Each is refined coarse to fine
    * against the same prepared target and the best is returned (the result's `start` says
    * which): the highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier
-   * start; but of two answers whose fitness is within 10% (or, when the smaller turn is at
-   * most 55 degrees, within four standard errors of a fitness measured on that many points:
-   * the sampling noise of sparse or noisy clouds) and whose turns away from
+   * start; but of two answers whose fitness is within 10% and whose turns away from
    * `initialTransform` (the identity if unset) differ by more than 60 degrees, the one that
    * turns less (a near-symmetric shape's half turn fits about as well as the truth; the
    * smaller motion is the likelier). Starts that meet during refinement are refined once, as

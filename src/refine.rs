@@ -255,8 +255,6 @@ pub struct Candidate {
     pub fitness: f64,
     /// [`IcpTarget::evaluate`]'s inlier RMSE at the final distance.
     pub inlier_rmse: f64,
-    /// How many source points `fitness` was measured on (its sampling noise, for [`better`]).
-    pub fitness_points: usize,
     /// ICP iterations over the stages of [`SCHEDULE`] (0 with ICP off).
     pub iterations: u32,
     /// True when the last stage met its convergence criteria (false with ICP off).
@@ -402,7 +400,6 @@ fn refine_stages(
                 T_target_source: t,
                 fitness: 0.0,
                 inlier_rmse: 0.0,
-                fitness_points: source.len(),
                 iterations: 0,
                 converged: false,
             };
@@ -521,19 +518,6 @@ pub const TIE_FITNESS: f64 = 0.10;
 /// ([`turn_deg`]) differ by more than this many degrees go to the smaller turn ([`better`]).
 pub const TIE_TURN_DEG: f64 = 60.0;
 
-/// Fitnesses that differ by at most this many standard errors of a fitness (a share of
-/// `n` points: `sqrt(f (1 - f) / n)`) are a near tie too, when the pose that turns less turns at
-/// most [`TIE_NOISE_TURN_DEG`] ([`better`]). A fitness is a share of sampled points: on sparse or
-/// noisy clouds, where it is low and measured on a thousand points, sampling alone moves it by
-/// more than [`TIE_FITNESS`], and a look-alike's few points more say nothing.
-pub const TIE_STANDARD_ERRORS: f64 = 4.0;
-
-/// The widest turn away from the initial guess ([`turn_deg`]) for which a near tie within the
-/// fitness's sampling noise ([`TIE_STANDARD_ERRORS`]) goes to the smaller turn: about the motions
-/// a rough guess leaves and the network is trained for. Beyond it (pairs in any pose) a smaller
-/// turn is no likelier than a larger one, and the fitness, noisy as it is, decides better.
-pub const TIE_NOISE_TURN_DEG: f64 = 55.0;
-
 /// How far `T_target_source` turns away from the initial guess, in degrees: the angle of its
 /// rotation (the pipeline's frames turn the source by the guess's rotation first, so there the
 /// identity rotation is the guess; with no guess, the clouds as given).
@@ -544,35 +528,21 @@ pub fn turn_deg(T_target_source: &Matrix4<f64>) -> f64 {
 
 /// True when `c` is a better answer than `b`. Normally the higher fitness at the final distance;
 /// among equal fitness (the same number of inliers), the lower inlier RMSE. But when the two
-/// fit within [`TIE_FITNESS`] of each other (or, when the smaller turn is at most
-/// [`TIE_NOISE_TURN_DEG`], within [`TIE_STANDARD_ERRORS`] of the fitness's sampling noise) and
-/// turn away from the initial guess by amounts more than [`TIE_TURN_DEG`] apart, the one that
-/// turns less: the poses fit alike, and a motion no larger than needed is the likelier one
-/// (scans of one object from one device, a guess that was roughly right). On pairs in arbitrary
-/// poses the rule favours neither the truth nor its look-alike; on pairs turned by at most 45
-/// degrees per axis it picks the truth over a flip of a near-symmetric shape (`BENCHMARK.md`,
-/// "Near ties go to the smaller turn", "Near ties within the fitness's sampling noise").
+/// fit within [`TIE_FITNESS`] of each other and turn away from the initial guess by amounts
+/// more than [`TIE_TURN_DEG`] apart, the one that turns less: the poses fit alike, and a motion
+/// no larger than needed is the likelier one (scans of one object from one device, a guess
+/// that was roughly right). On pairs in arbitrary poses the rule favours neither the truth nor
+/// its look-alike; on pairs turned by at most 45 degrees per axis it picks the truth over a
+/// flip of a near-symmetric shape (`BENCHMARK.md`, "Near ties go to the smaller turn").
 pub fn better(c: &Candidate, b: &Candidate) -> bool {
     let near_tie = c.fitness <= b.fitness * (1.0 + TIE_FITNESS) && b.fitness <= c.fitness * (1.0 + TIE_FITNESS);
-    if near_tie || (c.fitness - b.fitness).abs() <= sampling_noise(c, b) * TIE_STANDARD_ERRORS {
+    if near_tie {
         let (turn_c, turn_b) = (turn_deg(&c.T_target_source), turn_deg(&b.T_target_source));
-        let within_noise_turn = turn_c.min(turn_b) <= TIE_NOISE_TURN_DEG;
-        if (turn_c - turn_b).abs() > TIE_TURN_DEG && (near_tie || within_noise_turn) {
+        if (turn_c - turn_b).abs() > TIE_TURN_DEG {
             return turn_c < turn_b;
         }
     }
     c.fitness > b.fitness || (c.fitness == b.fitness && c.inlier_rmse < b.inlier_rmse)
-}
-
-/// The standard error of a fitness like the better of `c` and `b`'s, measured on as many points
-/// as the fewer of theirs: `sqrt(f (1 - f) / n)` (0 when no points are known).
-fn sampling_noise(c: &Candidate, b: &Candidate) -> f64 {
-    let n = c.fitness_points.min(b.fitness_points);
-    if n == 0 {
-        return 0.0;
-    }
-    let f = c.fitness.max(b.fitness).clamp(0.0, 1.0);
-    (f * (1.0 - f) / n as f64).sqrt()
 }
 
 /// True when `c` fits more than [`TIE_FITNESS`] better than `b`: better beyond a near tie.

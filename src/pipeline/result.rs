@@ -33,7 +33,7 @@ pub(crate) fn finish(
     let s = p.norm.scale;
     let d_final = p.d_final;
     let Chosen { candidate, evidence, confidence, starts_refined, alternatives } = chosen;
-    let Candidate { start, T_target_source: t_n, fitness, inlier_rmse: rmse_n, iterations, converged, .. } = candidate;
+    let Candidate { start, T_target_source: t_n, fitness, inlier_rmse: rmse_n, iterations, converged } = candidate;
     let to_caller = |t: &Matrix4<f64>| {
         origin::to_caller(&(p.norm.denormalize(t) * p.rotate_init), p.origin_source, p.target.summary.origin)
     };

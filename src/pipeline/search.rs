@@ -282,8 +282,6 @@ pub(crate) fn search(
                 T_target_source: t,
                 fitness: e.fitness,
                 inlier_rmse: e.rmse_ratio * d_final,
-                // the probe measures on at most SCREEN_POINTS source points
-                fitness_points: p.icp_src.points.len().min(refine::SCREEN_POINTS),
                 iterations: 0,
                 converged: false,
             };
