@@ -1,5 +1,5 @@
 // The body of the `register_clouds` fuzz target (`fuzz_targets/register_clouds.rs`), included
-// there and by `tests/fuzz_register_clouds.rs`, which replays the seeds and every input found
+// there and by `tests/io_fuzz_regressions.rs`, which replays the seeds and every input found
 // crashing. See the target's docs for the input's layout.
 
 /// The points of `bytes` (three signed bytes each), each grown into `copies` points spread by

@@ -1,6 +1,9 @@
 //! Replays the fuzz seeds (which must all read) and every input the fuzzers found crashing
 //! (`fuzz/regressions/<target>/`, which must now give a result or an error without panicking),
-//! through the same code as the fuzz targets in `fuzz/fuzz_targets/`.
+//! through the same code as the fuzz targets in `fuzz/fuzz_targets/`. The `register_clouds`
+//! seeds and regressions go through that target's own body (`fuzz/register_clouds.rs`): each
+//! must register or fail cleanly, with a finite, rigid answer, a fitness and a confidence in
+//! [0, 1], the same answer twice, and a usable registrar after an error.
 
 use std::path::Path;
 
@@ -89,4 +92,29 @@ fn option_and_config_seeds_parse_and_run() {
         let config: arps::ModelConfig = serde_json::from_slice(&data).unwrap_or_else(|e| panic!("seed {name}: {e}"));
         config.validate().unwrap_or_else(|e| panic!("seed {name}: {e}"));
     }
+}
+
+include!("../fuzz/register_clouds.rs");
+
+#[test]
+fn register_clouds_seeds_and_regressions_register_or_fail_cleanly() {
+    let mut reg = arps::Registrar::new(&arps::Weights::random(&arps::ModelConfig::tiny(), 0).unwrap()).unwrap();
+    let seeds = inputs("seeds/register_clouds");
+    assert!(seeds.len() >= 9, "the seeds are committed ({} found)", seeds.len());
+    for (name, data) in seeds.iter().chain(&inputs("regressions/register_clouds")) {
+        eprintln!("{name}");
+        register_clouds_target(&mut reg, data);
+    }
+}
+
+/// The seeds reach the registration (not all rejected before it): most of them give an answer.
+#[test]
+fn most_register_clouds_seeds_give_an_answer() {
+    let mut reg = arps::Registrar::new(&arps::Weights::random(&arps::ModelConfig::tiny(), 0).unwrap()).unwrap();
+    let seeds = inputs("seeds/register_clouds");
+    let answered = seeds
+        .iter()
+        .filter(|(_, data)| pair_of(data).is_some_and(|(s, t, o, _)| reg.register(&s, &t, &o).is_ok()))
+        .count();
+    assert!(answered * 2 > seeds.len(), "{answered} of {} seeds answered", seeds.len());
 }
