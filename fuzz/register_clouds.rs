@@ -24,14 +24,10 @@ fn cloud(points: &[[f64; 3]], scale: f64, offset: f64) -> Option<arps::PointClou
     arps::PointCloud::from_xyz_f64(&flat).ok()
 }
 
-/// A rotation by `angle` radians about the axis `(1, 2, 3)`, normalised.
+/// `p` turned by the Euler angles `(angle, 2 angle, 3 angle)` ([`arps::transform::euler_xyz`]).
 fn turn(p: [f64; 3], angle: f64) -> [f64; 3] {
-    let n = 14f64.sqrt();
-    let k = [1.0 / n, 2.0 / n, 3.0 / n];
-    let (s, c) = angle.sin_cos();
-    let dot = k[0] * p[0] + k[1] * p[1] + k[2] * p[2];
-    let cross = [k[1] * p[2] - k[2] * p[1], k[2] * p[0] - k[0] * p[2], k[0] * p[1] - k[1] * p[0]];
-    [0, 1, 2].map(|a| p[a] * c + cross[a] * s + k[a] * dot * (1.0 - c))
+    let r = arps::transform::euler_xyz(angle, 2.0 * angle, 3.0 * angle);
+    [0, 1, 2].map(|i| (0..3).map(|j| r[(i, j)] * p[j]).sum())
 }
 
 fn check(r: &arps::Registration) {
@@ -73,9 +69,8 @@ fn pair_of(data: &[u8]) -> Option<(arps::PointCloud, arps::PointCloud, arps::Opt
     } else {
         grid_points(&body[split..], copies, spread)
     };
-    let same_scale = flag(5);
     let target = cloud(&target_points, target_scale, offset)?;
-    let source = cloud(&source_points, if same_scale { target_scale } else { source_scale }, offset)?;
+    let source = cloud(&source_points, if flag(5) { target_scale } else { source_scale }, offset)?;
 
     let options = arps::Options {
         up: flag(0).then_some([0.0, 0.0, 1.0]),
@@ -90,9 +85,10 @@ fn pair_of(data: &[u8]) -> Option<(arps::PointCloud, arps::PointCloud, arps::Opt
 }
 
 /// Registers the pair that `data` describes with `reg` ([`pair_of`]) and checks the answer (see
-/// the target's docs); panics when a check fails.
-fn register_clouds_target(reg: &mut arps::Registrar, data: &[u8]) {
-    let Some((source, target, options, twice)) = pair_of(data) else { return };
+/// the target's docs); panics when a check fails. True when the pair gave an answer (not an
+/// error, nor too few bytes).
+fn register_clouds_target(reg: &mut arps::Registrar, data: &[u8]) -> bool {
+    let Some((source, target, options, twice)) = pair_of(data) else { return false };
     match reg.register(&source, &target, &options) {
         Ok(r) => {
             check(&r);
@@ -101,6 +97,7 @@ fn register_clouds_target(reg: &mut arps::Registrar, data: &[u8]) {
                 assert_eq!(r.T_target_source, again.T_target_source, "same input, same output");
                 assert_eq!(r.confidence.to_bits(), again.confidence.to_bits(), "same input, same confidence");
             }
+            true
         }
         Err(_) => {
             // still usable
@@ -109,6 +106,7 @@ fn register_clouds_target(reg: &mut arps::Registrar, data: &[u8]) {
             );
             let r = reg.register(&s, &s, &arps::Options { icp_max_iterations: 5, ..arps::Options::default() });
             check(&r.expect("usable after an error"));
+            false
         }
     }
 }

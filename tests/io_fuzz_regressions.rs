@@ -96,25 +96,21 @@ fn option_and_config_seeds_parse_and_run() {
 
 include!("../fuzz/register_clouds.rs");
 
+/// The seeds must also reach the registration (not all be rejected before it): most of them give
+/// an answer.
 #[test]
 fn register_clouds_seeds_and_regressions_register_or_fail_cleanly() {
     let mut reg = arps::Registrar::new(&arps::Weights::random(&arps::ModelConfig::tiny(), 0).unwrap()).unwrap();
     let seeds = inputs("seeds/register_clouds");
     assert!(seeds.len() >= 9, "the seeds are committed ({} found)", seeds.len());
-    for (name, data) in seeds.iter().chain(&inputs("regressions/register_clouds")) {
+    let mut answered = 0;
+    for (name, data) in &seeds {
         eprintln!("{name}");
-        register_clouds_target(&mut reg, data);
+        answered += usize::from(register_clouds_target(&mut reg, data));
     }
-}
-
-/// The seeds reach the registration (not all rejected before it): most of them give an answer.
-#[test]
-fn most_register_clouds_seeds_give_an_answer() {
-    let mut reg = arps::Registrar::new(&arps::Weights::random(&arps::ModelConfig::tiny(), 0).unwrap()).unwrap();
-    let seeds = inputs("seeds/register_clouds");
-    let answered = seeds
-        .iter()
-        .filter(|(_, data)| pair_of(data).is_some_and(|(s, t, o, _)| reg.register(&s, &t, &o).is_ok()))
-        .count();
     assert!(answered * 2 > seeds.len(), "{answered} of {} seeds answered", seeds.len());
+    for (name, data) in inputs("regressions/register_clouds") {
+        eprintln!("{name}");
+        register_clouds_target(&mut reg, &data);
+    }
 }

@@ -27,4 +27,6 @@ thread_local! {
 
 include!("../register_clouds.rs");
 
-fuzz_target!(|data: &[u8]| REGISTRAR.with(|reg| register_clouds_target(&mut reg.borrow_mut(), data)));
+fuzz_target!(|data: &[u8]| {
+    REGISTRAR.with(|reg| register_clouds_target(&mut reg.borrow_mut(), data));
+});
