@@ -53,18 +53,25 @@ pub const FLAT_RATIO: f64 = 1e-3;
 /// The standard deviations of `points` along their principal axes, largest first (in `f64`).
 pub fn principal_spreads(points: &[[f32; 3]]) -> [f64; 3] {
     let n = points.len().max(1) as f64;
-    let mut mean = [0.0f64; 3];
+    // two passes (the mean, then the moments about it), each a few scalar sums per point
+    let mut sum = [0.0f64; 3];
     for p in points {
         for a in 0..3 {
-            mean[a] += p[a] as f64 / n;
+            sum[a] += p[a] as f64;
         }
     }
-    let mut cov = nalgebra::Matrix3::<f64>::zeros();
+    let mean = sum.map(|s| s / n);
+    let [mut xx, mut xy, mut xz, mut yy, mut yz, mut zz] = [0.0f64; 6];
     for p in points {
-        let d = nalgebra::Vector3::new(p[0] as f64 - mean[0], p[1] as f64 - mean[1], p[2] as f64 - mean[2]);
-        cov += d * d.transpose();
+        let (x, y, z) = (p[0] as f64 - mean[0], p[1] as f64 - mean[1], p[2] as f64 - mean[2]);
+        xx += x * x;
+        xy += x * y;
+        xz += x * z;
+        yy += y * y;
+        yz += y * z;
+        zz += z * z;
     }
-    cov /= n;
+    let cov = nalgebra::Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz) / n;
     let mut ev: Vec<f64> = cov.symmetric_eigenvalues().iter().map(|v| v.max(0.0).sqrt()).collect();
     ev.sort_by(|a, b| b.total_cmp(a));
     [ev[0], ev[1], ev[2]]

@@ -222,15 +222,17 @@ impl PointCloud {
     /// keep their shape.
     pub fn transformed(&self, m: &Matrix4<f64>) -> PointCloud {
         let (map, origin) = self.mapping(m);
-        PointCloud::with_origin(self.points.iter().map(|&p| crate::transform::apply(&map, p)).collect(), origin)
+        let apply = crate::transform::mapping(&map);
+        PointCloud::with_origin(self.points.iter().map(|&p| apply(p)).collect(), origin)
     }
 
     /// [`PointCloud::transformed`], mapping the points where they are: the same cloud, bit for
     /// bit, without a second copy of a large one.
     pub fn into_transformed(mut self, m: &Matrix4<f64>) -> PointCloud {
         let (map, origin) = self.mapping(m);
+        let apply = crate::transform::mapping(&map);
         for p in &mut self.points {
-            *p = crate::transform::apply(&map, *p);
+            *p = apply(*p);
         }
         self.origin = origin;
         self

@@ -106,33 +106,50 @@ fn grid<const CAPPED: bool>(
     let key_of = |p: &[f32; 3]| p.map(|v| (v as f64 * inv).floor() as i64);
     // One accumulator per occupied voxel, in the order first met; then sorted by key. Only the
     // occupied voxels are sorted (not every point), and each voxel's sum runs in input order.
+    // The keys live apart from the sums: the loop reads and writes a voxel's sums at random (the
+    // points are in any order), and a 32-byte, 32-aligned accumulator is one cache line where a
+    // record with its key straddled two most of the time.
     let mut slots = Slots::new(cloud.len(), bounds, &key_of);
-    let mut voxels: Vec<([i64; 3], [f64; 3], u32)> = Vec::new();
+    let mut keys: Vec<[i64; 3]> = Vec::new();
+    let mut sums: Vec<VoxelSum> = Vec::new();
     for p in cloud.points.iter().filter(|p| p.iter().all(|v| v.is_finite())) {
         let key = key_of(p);
         let slot = slots.slot(key, || {
-            voxels.push((key, [0.0; 3], 0));
-            (voxels.len() - 1) as u32
+            keys.push(key);
+            sums.push(VoxelSum::default());
+            (sums.len() - 1) as u32
         });
-        if CAPPED && voxels.len() > max {
+        if CAPPED && sums.len() > max {
             return None;
         }
-        let v = &mut voxels[slot as usize];
-        for (sum, &x) in v.1.iter_mut().zip(p) {
+        let v = &mut sums[slot as usize];
+        for (sum, &x) in v.sum.iter_mut().zip(p) {
             *sum += x as f64;
         }
-        v.2 += 1;
+        v.count += 1;
     }
+    drop(slots);
     // keys are unique, so the unstable sort is deterministic
-    voxels.sort_unstable_by_key(|v| v.0);
-    let out = voxels
+    let mut order: Vec<([i64; 3], u32)> = keys.into_iter().zip(0u32..).collect();
+    order.sort_unstable_by_key(|v| v.0);
+    let out = order
         .iter()
-        .map(|(_, s, n)| {
-            let n = *n as f64;
+        .map(|&(_, slot)| {
+            let VoxelSum { sum: s, count } = sums[slot as usize];
+            let n = count as f64;
             [(s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32]
         })
         .collect();
     Some(PointCloud::with_origin(out, cloud.origin))
+}
+
+/// One voxel's running sum of its points' coordinates and their count ([`voxel_downsample`]'s
+/// grid), aligned so that it never straddles a cache line.
+#[derive(Clone, Copy, Default)]
+#[repr(C, align(32))]
+struct VoxelSum {
+    sum: [f64; 3],
+    count: u32,
 }
 
 /// Most cells of a dense voxel table ([`Slots`]): 16 MiB of slots.

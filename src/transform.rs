@@ -39,9 +39,17 @@ pub fn rigid_inverse(m: &Matrix4<f64>) -> Matrix4<f64> {
 
 /// Applies a rigid transform to a point.
 pub fn apply(m: &Matrix4<f64>, p: [f32; 3]) -> [f32; 3] {
-    let v = Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64);
-    let q = rotation(m) * v + translation(m);
-    [q.x as f32, q.y as f32, q.z as f32]
+    mapping(m)(p)
+}
+
+/// [`apply`] with `m`'s rotation and translation taken out once, for mapping many points (the
+/// same arithmetic, so the same bits).
+pub fn mapping(m: &Matrix4<f64>) -> impl Fn([f32; 3]) -> [f32; 3] {
+    let (r, t) = (rotation(m), translation(m));
+    move |p| {
+        let q = r * Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64) + t;
+        [q.x as f32, q.y as f32, q.z as f32]
+    }
 }
 
 /// Geodesic rotation error in degrees: `acos(clip((tr(R_a^T R_b) - 1) / 2, -1, 1))`.

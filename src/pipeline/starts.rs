@@ -232,7 +232,8 @@ impl<'a> Starts<'a> {
         let mut w = Stopwatch::start(self.clock);
         let mut starts = Vec::with_capacity(transforms.len());
         for t in transforms {
-            let moved: Vec<[f32; 3]> = p.net_src.points.iter().map(|&q| transform::apply(t, q)).collect();
+            let apply = transform::mapping(t);
+            let moved: Vec<[f32; 3]> = p.net_src.points.iter().map(|&q| apply(q)).collect();
             starts.push((start, network::estimate(model, workspace, &moved, &p.target.net.points)? * t));
         }
         self.network_ms += w.lap();
