@@ -124,6 +124,33 @@ pub struct IcpTarget {
     points: Vec<[f32; 3]>,
     index: KdIndex,
     normals: Vec<OnceLock<[f32; 3]>>,
+    /// Coarser copies for runs at wide distances ([`IcpTarget::with_levels`]), if any.
+    levels: Option<Levels>,
+}
+
+/// Points a target needs before it gets coarser copies ([`IcpTarget::with_levels`]): below this
+/// the searches of the wide stages are cheap already.
+pub const LEVELS_MIN_POINTS: usize = 8192;
+
+/// Most points a target may have and still get coarser copies ([`IcpTarget::with_levels`]): the
+/// copies hold at most 3/4 as many points again, which beside the largest input fits the
+/// memory budget without a budget of its own ([`crate::limits`]).
+pub const LEVELS_MAX_POINTS: usize = crate::spatial::neighbourhood::MAX_POINTS;
+
+/// How many coarser copies a target may have: voxels of 2 and 4 times its own.
+const LEVELS: usize = 2;
+
+/// A run at max correspondence distance `D` uses the coarsest copy whose voxel is at most this
+/// fraction of `D`.
+const LEVEL_VOXEL_FRACTION: f64 = 0.5;
+
+/// The coarser copies of a target voxelised at `voxel`: copy `k` (from 1) is its points
+/// voxelised at `voxel * 2^k`, built when a run first needs it, and kept only when it has at most
+/// `1 / 2^k` of the target's points (else the coarser voxel saves nothing and the run uses the
+/// target itself).
+struct Levels {
+    voxel: f64,
+    coarser: [OnceLock<Option<Box<IcpTarget>>>; LEVELS],
 }
 
 impl std::fmt::Debug for IcpTarget {
@@ -257,6 +284,7 @@ impl IcpTarget {
             points: points.to_vec(),
             index: KdIndex::new(points),
             normals: (0..points.len()).map(|_| OnceLock::new()).collect(),
+            levels: None,
         };
         if with_normals {
             target.normals();
@@ -281,6 +309,42 @@ impl IcpTarget {
             }
         }
         target
+    }
+
+    /// A target whose points were voxelised at `voxel` (a grid's centroids, as
+    /// [`crate::sampling::voxel_downsample`] gives them), with normals estimated as runs need
+    /// them. With [`LEVELS_MIN_POINTS`] to [`LEVELS_MAX_POINTS`] points it also has coarser
+    /// copies, voxelised at 2 and 4 times `voxel`, for the runs at wide distances: a search costs
+    /// about the number of target points within the distance of its query, and a run at
+    /// `4 voxel` or more pairs its points as well with fewer target points.
+    /// [`IcpTarget::align`] and [`IcpTarget::align_warm`] run on the coarsest copy whose voxel is
+    /// at most half their max correspondence distance; the other methods always use every point.
+    pub fn with_levels(points: &[[f32; 3]], voxel: f64) -> Self {
+        let mut target = Self::new(points, false);
+        if (LEVELS_MIN_POINTS..=LEVELS_MAX_POINTS).contains(&points.len()) && voxel.is_finite() && voxel > 0.0 {
+            target.levels = Some(Levels { voxel, coarser: Default::default() });
+        }
+        target
+    }
+
+    /// The copy a run at max correspondence distance `distance` searches ([`IcpTarget::with_levels`]).
+    fn for_distance(&self, distance: f64) -> &IcpTarget {
+        let Some(levels) = &self.levels else { return self };
+        for k in (1..=LEVELS).rev() {
+            let voxel = levels.voxel * (1u32 << k) as f64;
+            if voxel > distance * LEVEL_VOXEL_FRACTION {
+                continue;
+            }
+            let coarser = levels.coarser[k - 1].get_or_init(|| {
+                let cloud = crate::cloud::PointCloud::new(self.points.clone());
+                let points = crate::sampling::voxel_downsample(&cloud, voxel as f32).points;
+                (points.len() <= self.points.len() >> k).then(|| Box::new(IcpTarget::new(&points, false)))
+            });
+            if let Some(coarser) = coarser {
+                return coarser;
+            }
+        }
+        self
     }
 
     /// The target points.
@@ -345,7 +409,8 @@ impl IcpTarget {
         params: &IcpParams,
         partners: &mut Partners,
     ) -> IcpResult {
-        partners.lend(|scratch| self.align_scratch(source, init, params, scratch))
+        let target = self.for_distance(params.max_correspondence_distance);
+        partners.lend(|scratch| target.align_scratch(source, init, params, scratch))
     }
 
     /// [`IcpTarget::align`] on the given scratch buffers.
@@ -440,7 +505,8 @@ impl IcpTarget {
         let search2 = if search2.is_finite() { search2 } else { f32::INFINITY };
         let r = transform::rotation(t);
         let tr = transform::translation(t);
-        if scratch.prev.len() != source.len() {
+        // partners found in another target (a coarser copy) say nothing about this one
+        if scratch.prev.len() != source.len() || scratch.floors_of != self.id {
             scratch.prev.clear();
             scratch.prev.resize(source.len(), u32::MAX);
         }

@@ -14,6 +14,7 @@
 //! | [`MAX_POINTS_PER_CLOUD`] | 16,000,000 | points per cloud given to a registration: `MAX_CALL_BYTES / (2 x INPUT_BYTES_PER_POINT)` (19.2M), rounded down |
 //! | ICP's cloud ([`check_icp_points`]) | `input x 56 B + icp x 72 B <= 1 GiB` per cloud | points each cloud keeps for ICP after voxelisation: 8,388,608 when nothing is thinned (`voxelSize: 0`), fewer the more input points there are |
 //! | the hints' neighbourhoods ([`crate::spatial::neighbourhood`]) | at most 262,144 points x 84 B (21 MiB) per index | kept only by ICP clouds of at most [`crate::spatial::neighbourhood::MAX_POINTS`] points, so they fit beside the input at its limit (16M x 56 B + 262,144 x (72 + 84) B < 1 GiB) and need no budget of their own |
+//! | the coarser copies of ICP's target ([`crate::icp::IcpTarget::with_levels`]) | at most 3/4 of its points again, each with its k-d tree, normals and hints | kept only by targets of [`crate::icp::LEVELS_MIN_POINTS`] to [`crate::icp::LEVELS_MAX_POINTS`] (262,144) points, so they fit beside the input at its limit with the target's own hints (16M x 56 B + 262,144 x 1.75 x (72 + 84) B < 1 GiB) and need no budget of their own |
 //! | [`MAX_FILE_POINTS`] | 16,000,000 | points (vertices) a file may hold for the readers (the same figure: a cloud that cannot be registered is not worth decoding) |
 //! | [`MAX_DECODED_BYTES`] | 1 GiB | bytes a compressed body (PCD `binary_compressed`) may decompress to |
 //! | [`MAX_MODEL_DIM`] | 4,096 | every size in a model config (N, C, heads, hidden widths, H, J) |

@@ -358,3 +358,66 @@ fn timing_full_scan() {
         }
     }
 }
+
+/// A smooth, bumpy surface patch sampled on an `n` x `n` grid over [-1, 1]^2 (shifted by `phase`
+/// of a cell, so that two samples share no point), and the grid's spacing.
+fn bumpy_patch(n: usize, phase: f32) -> (Vec<[f32; 3]>, f64) {
+    let h = 2.0 / n as f32;
+    let points = (0..n * n)
+        .map(|i| {
+            let (x, y) = (-1.0 + ((i % n) as f32 + phase) * h, -1.0 + ((i / n) as f32 + phase) * h);
+            [x, y, 0.15 * (3.0 * x).sin() * (2.0 * y + 0.5).cos() + 0.05 * x * y]
+        })
+        .collect();
+    (points, h as f64)
+}
+
+/// A target of many points gets coarser copies for the wide stages (`IcpTarget::with_levels`):
+/// coarse to fine, its runs recover the motion as the target alone does; a run at a wide distance
+/// pairs its points with a copy (so none of the target's own normals is estimated), a run at the
+/// voxel's scale with the target; partners carried between the copies and the target change
+/// nothing; and a target of few points has no copies, the same results bit for bit.
+#[test]
+fn coarser_copies_for_the_wide_stages() {
+    let t_gt = ten_degrees();
+    let (target_pts, h) = bumpy_patch(130, 0.0);
+    assert!(target_pts.len() >= arps::icp::LEVELS_MIN_POINTS);
+    let (source_all, _) = bumpy_patch(64, 0.37);
+    let source: Vec<[f32; 3]> = source_all.into_iter().filter(|p| p[0] < 0.4).collect();
+    let moved_target = moved(&t_gt, &target_pts);
+    let plain = IcpTarget::new(&moved_target, false);
+    let levels = IcpTarget::with_levels(&moved_target, h);
+    // a point-to-plane run at 16 voxels pairs with the copy at 4 voxels
+    let wide = IcpParams::new(IcpKind::Plane, 16.0 * h);
+    levels.align(&source, &Matrix4::identity(), &wide);
+    assert_eq!(levels.normals_estimated(), 0, "the wide run used the target's own points");
+    levels.align(&source, &Matrix4::identity(), &IcpParams::new(IcpKind::Plane, 1.5 * h));
+    assert!(levels.normals_estimated() > 0, "the run at the voxel's scale used a copy");
+    for kind in [IcpKind::Point, IcpKind::Plane] {
+        let (mut t_plain, mut t_levels, mut t_warm) = (Matrix4::identity(), Matrix4::identity(), Matrix4::identity());
+        let mut partners = Partners::default();
+        // fine, wide, fine again: partners of the target and of its copies in turn
+        for d in [2.0 * h, 16.0 * h, 8.0 * h, 4.0 * h, 2.0 * h] {
+            let mut p = IcpParams::new(kind, d);
+            p.max_iterations = 50;
+            t_plain = plain.align(&source, &t_plain, &p).T_target_source;
+            let cold = levels.align(&source, &t_levels, &p);
+            let warm = levels.align_warm(&source, &t_warm, &p, &mut partners);
+            assert_eq!(cold, warm, "{kind:?} at {d}: warm partners, from the target or a copy, change nothing");
+            (t_levels, t_warm) = (cold.T_target_source, warm.T_target_source);
+        }
+        // point-to-point ICP leans a little between samples that share no point
+        let (max_deg, max_t) = if kind == IcpKind::Plane { (0.1, 0.1 * h) } else { (1.5, 0.5 * h) };
+        for (what, t) in [("target alone", t_plain), ("with copies", t_levels), ("warm", t_warm)] {
+            let (er, et) = (rotation_error_deg(&t, &t_gt), translation_error(&t, &t_gt));
+            eprintln!("{kind:?} {what}: {er:.3e} deg, {et:.2e}");
+            assert!(er < max_deg && et < max_t, "{kind:?} {what}: {er} deg, {et}");
+        }
+        assert!(rotation_error_deg(&t_levels, &t_plain) < 0.2 * max_deg, "{kind:?}: the copies moved the answer");
+    }
+    // few points: no copies
+    let small: Vec<[f32; 3]> = moved_target.iter().copied().take(arps::icp::LEVELS_MIN_POINTS - 1).collect();
+    let (a, b) = (IcpTarget::new(&small, false), IcpTarget::with_levels(&small, h));
+    let p = IcpParams::new(IcpKind::Plane, 16.0 * h);
+    assert_eq!(a.align(&source, &Matrix4::identity(), &p), b.align(&source, &Matrix4::identity(), &p));
+}

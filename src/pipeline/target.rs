@@ -169,9 +169,10 @@ impl PreparedTarget {
         self.sizes = sizes;
     }
 
-    /// ICP's index of the voxelised target (normals estimated as ICP first needs them).
+    /// ICP's index of the voxelised target (normals estimated as ICP first needs them; a large
+    /// target with coarser copies for the wide stages, [`IcpTarget::with_levels`]).
     pub(crate) fn index(&self) -> &IcpTarget {
-        self.index.get_or_init(|| IcpTarget::new(&self.icp.points, false))
+        self.index.get_or_init(|| IcpTarget::with_levels(&self.icp.points, f64::from_bits(self.sizes.voxel)))
     }
 
     /// Whether ICP's index was built (by this call or an earlier one).
