@@ -132,11 +132,6 @@ pub struct IcpTarget {
 /// the searches of the wide stages are cheap already.
 pub const LEVELS_MIN_POINTS: usize = 8192;
 
-/// Most points a target may have and still get coarser copies ([`IcpTarget::with_levels`]): the
-/// copies hold at most 3/4 as many points again, which beside the largest input fits the
-/// memory budget without a budget of its own ([`crate::limits`]).
-pub const LEVELS_MAX_POINTS: usize = crate::spatial::neighbourhood::MAX_POINTS;
-
 /// How many coarser copies a target may have: voxels of 2 and 4 times its own.
 const LEVELS: usize = 2;
 
@@ -313,15 +308,16 @@ impl IcpTarget {
 
     /// A target whose points were voxelised at `voxel` (a grid's centroids, as
     /// [`crate::sampling::voxel_downsample`] gives them), with normals estimated as runs need
-    /// them. With [`LEVELS_MIN_POINTS`] to [`LEVELS_MAX_POINTS`] points it also has coarser
-    /// copies, voxelised at 2 and 4 times `voxel`, for the runs at wide distances: a search costs
-    /// about the number of target points within the distance of its query, and a run at
-    /// `4 voxel` or more pairs its points as well with fewer target points.
-    /// [`IcpTarget::align`] and [`IcpTarget::align_warm`] run on the coarsest copy whose voxel is
-    /// at most half their max correspondence distance; the other methods always use every point.
+    /// them. With at least [`LEVELS_MIN_POINTS`] points it also has coarser copies, voxelised
+    /// at 2 and 4 times `voxel`, for the runs at wide distances: a search costs about the number
+    /// of target points within the distance of its query, and a run at `4 voxel` or more pairs
+    /// its points as well with fewer target points. [`IcpTarget::align`] and
+    /// [`IcpTarget::align_warm`] run on the coarsest copy whose voxel is at most half their max
+    /// correspondence distance; the other methods always use every point. The copies hold at
+    /// most 3/4 of the points again ([`crate::limits::icp_copies_fit`] tells whether they fit).
     pub fn with_levels(points: &[[f32; 3]], voxel: f64) -> Self {
         let mut target = Self::new(points, false);
-        if (LEVELS_MIN_POINTS..=LEVELS_MAX_POINTS).contains(&points.len()) && voxel.is_finite() && voxel > 0.0 {
+        if points.len() >= LEVELS_MIN_POINTS && voxel.is_finite() && voxel > 0.0 {
             target.levels = Some(Levels { voxel, coarser: Default::default() });
         }
         target

@@ -14,7 +14,7 @@
 //! | [`MAX_POINTS_PER_CLOUD`] | 16,000,000 | points per cloud given to a registration: `MAX_CALL_BYTES / (2 x INPUT_BYTES_PER_POINT)` (19.2M), rounded down |
 //! | ICP's cloud ([`check_icp_points`]) | `input x 56 B + icp x 72 B <= 1 GiB` per cloud | points each cloud keeps for ICP after voxelisation: 8,388,608 when nothing is thinned (`voxelSize: 0`), fewer the more input points there are |
 //! | the hints' neighbourhoods ([`crate::spatial::neighbourhood`]) | at most 262,144 points x 84 B (21 MiB) per index | kept only by ICP clouds of at most [`crate::spatial::neighbourhood::MAX_POINTS`] points, so they fit beside the input at its limit (16M x 56 B + 262,144 x (72 + 84) B < 1 GiB) and need no budget of their own |
-//! | the coarser copies of ICP's target ([`crate::icp::IcpTarget::with_levels`]) | at most 3/4 of its points again, each with its k-d tree, normals and hints | kept only by targets of [`crate::icp::LEVELS_MIN_POINTS`] to [`crate::icp::LEVELS_MAX_POINTS`] (262,144) points, so they fit beside the input at its limit with the target's own hints (16M x 56 B + 262,144 x 1.75 x (72 + 84) B < 1 GiB) and need no budget of their own |
+//! | [`ICP_COPIES_BYTES_PER_POINT`] | 117 B | the coarser copies of ICP's target ([`crate::icp::IcpTarget::with_levels`]) per point of the target: at most 3/4 of its points again, each with 72 B and the hints' 84 B; built only where they fit beside the input and the target ([`icp_copies_fit`]), else ICP searches the target alone |
 //! | [`MAX_FILE_POINTS`] | 16,000,000 | points (vertices) a file may hold for the readers (the same figure: a cloud that cannot be registered is not worth decoding) |
 //! | [`MAX_DECODED_BYTES`] | 1 GiB | bytes a compressed body (PCD `binary_compressed`) may decompress to |
 //! | [`MAX_MODEL_DIM`] | 4,096 | every size in a model config (N, C, heads, hidden widths, H, J) |
@@ -111,6 +111,24 @@ pub fn max_icp_points(input: usize) -> usize {
     (left / ICP_BYTES_PER_POINT) as usize
 }
 
+/// Most memory the coarser copies of ICP's target take per point of the target, in bytes: they
+/// hold at most 3/4 of its points again ([`crate::icp::IcpTarget::with_levels`]), each with
+/// [`ICP_BYTES_PER_POINT`] and the hints' neighbourhood
+/// ([`crate::spatial::neighbourhood::BYTES_PER_POINT`]).
+pub const ICP_COPIES_BYTES_PER_POINT: u64 =
+    (ICP_BYTES_PER_POINT + crate::spatial::neighbourhood::BYTES_PER_POINT as u64) * 3 / 4;
+
+/// Whether the coarser copies of ICP's target ([`crate::icp::IcpTarget::with_levels`]) of `icp`
+/// points fit beside it and its `input` points in the cloud's half of [`MAX_CALL_BYTES`]
+/// ([`ICP_COPIES_BYTES_PER_POINT`] each); without them ICP searches the target alone.
+pub fn icp_copies_fit(input: usize, icp: usize) -> bool {
+    let (input, icp) = (input as u64, icp as u64);
+    let bytes = input
+        .saturating_mul(INPUT_BYTES_PER_POINT)
+        .saturating_add(icp.saturating_mul(ICP_BYTES_PER_POINT + ICP_COPIES_BYTES_PER_POINT));
+    bytes <= MAX_CALL_BYTES / 2
+}
+
 /// Fails with [`Error::TooLarge`] when a cloud of `input` points keeps `icp` points for ICP after
 /// voxelisation (`voxel`, in the caller's units; 0 for none) and the two do not fit its half of
 /// the call's budget ([`max_icp_points`]); `what` names it. Checked before ICP builds anything
@@ -169,6 +187,18 @@ mod tests {
         let most = MAX_POINTS_PER_CLOUD as u64 * INPUT_BYTES_PER_POINT
             + MAX_POINTS as u64 * (ICP_BYTES_PER_POINT + BYTES_PER_POINT as u64);
         assert!(most <= MAX_CALL_BYTES / 2, "{most}");
+    }
+
+    #[test]
+    fn coarser_copies_of_the_target_only_where_they_fit() {
+        assert_eq!(ICP_COPIES_BYTES_PER_POINT, 117);
+        // a 1M-point scan and ICP's 275k points of it, or the largest input at the default voxel
+        assert!(icp_copies_fit(1_000_000, 275_000));
+        assert!(icp_copies_fit(MAX_POINTS_PER_CLOUD, 200_000));
+        // the largest input with as many ICP points as fit beside it: no room for copies
+        assert!(!icp_copies_fit(MAX_POINTS_PER_CLOUD, max_icp_points(MAX_POINTS_PER_CLOUD)));
+        assert!(!icp_copies_fit(0, 8_388_608));
+        assert!(icp_copies_fit(0, 4_000_000));
     }
 
     #[test]

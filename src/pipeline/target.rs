@@ -16,7 +16,7 @@ use crate::global::TargetFeatures;
 use crate::icp::IcpTarget;
 use crate::outliers::Outliers;
 use crate::support::Support;
-use crate::{checks, sampling, Result};
+use crate::{checks, limits, sampling, Result};
 use std::sync::OnceLock;
 
 /// What recognises a target given again: a 128-bit fingerprint (XXH3) of its points' bytes, their
@@ -170,9 +170,16 @@ impl PreparedTarget {
     }
 
     /// ICP's index of the voxelised target (normals estimated as ICP first needs them; a large
-    /// target with coarser copies for the wide stages, [`IcpTarget::with_levels`]).
+    /// target with coarser copies for the wide stages, [`IcpTarget::with_levels`], where they fit
+    /// the memory budget, [`limits::icp_copies_fit`]).
     pub(crate) fn index(&self) -> &IcpTarget {
-        self.index.get_or_init(|| IcpTarget::with_levels(&self.icp.points, f64::from_bits(self.sizes.voxel)))
+        self.index.get_or_init(|| {
+            if limits::icp_copies_fit(self.cloud.len(), self.icp.len()) {
+                IcpTarget::with_levels(&self.icp.points, f64::from_bits(self.sizes.voxel))
+            } else {
+                IcpTarget::new(&self.icp.points, false)
+            }
+        })
     }
 
     /// Whether ICP's index was built (by this call or an earlier one).
