@@ -137,6 +137,11 @@ def clouds():
         u, v = (i * 0.754877) % 1.0 * 2 * math.pi, math.acos(2 * ((i * 0.569840) % 1.0) - 1)
         r = 90 + 12 * math.sin(3 * u) * math.cos(2 * v)
         bumpy.append((r * math.sin(v) * math.cos(u) * 1.2, r * math.sin(v) * math.sin(u) * 0.8, r * math.cos(v)))
+    dense = []
+    for i in range(2600):
+        u, v = (i * 0.754877) % 1.0 * 2 * math.pi, math.acos(2 * ((i * 0.569840) % 1.0) - 1)
+        r = 90 + 12 * math.sin(3 * u) * math.cos(2 * v)
+        dense.append((r * math.sin(v) * math.cos(u) * 1.2, r * math.sin(v) * math.sin(u) * 0.8, r * math.cos(v)))
     plane = [(x * 9, y * 9, 0) for x in range(-8, 9) for y in range(-8, 9)]
     line = [(i, 2 * i, -i) for i in range(-40, 40)]
     box = [(x, y, z) for x in (-60, 60) for y in range(-60, 61, 12) for z in range(-30, 31, 10)]
@@ -149,6 +154,8 @@ def clouds():
         "bumpy_vs_box": bytes([0, 0, 30, 226, 150, 0]) + body(bumpy[:150] + box),
         # many copies per point: a cloud of thousands of points (the large-cloud paths)
         "bumpy_copies": bytes([0b1010_0000, 0x4F, 0, 0, 255, 0x39]) + body(bumpy),
+        # a dense surface, 16 spread copies of each point: ICP's target has coarser copies
+        "bumpy_dense": bytes([0b1010_0000, 0xFF, 0, 0, 255, 0x4B]) + body(dense),
         # degenerate: a plane, a line, duplicates
         "plane": bytes([0b0010_0000, 0, 0, 0, 255, 0x33]) + body(plane),
         "line": bytes([0b0010_0000, 0x03, 0, 0, 255, 0x21]) + body(line),
