@@ -132,16 +132,16 @@ def clouds():
     def body(points):
         return bytes(i8(c) for p in points for c in p)
 
-    bumpy = []
-    for i in range(300):
-        u, v = (i * 0.754877) % 1.0 * 2 * math.pi, math.acos(2 * ((i * 0.569840) % 1.0) - 1)
-        r = 90 + 12 * math.sin(3 * u) * math.cos(2 * v)
-        bumpy.append((r * math.sin(v) * math.cos(u) * 1.2, r * math.sin(v) * math.sin(u) * 0.8, r * math.cos(v)))
-    dense = []
-    for i in range(2600):
-        u, v = (i * 0.754877) % 1.0 * 2 * math.pi, math.acos(2 * ((i * 0.569840) % 1.0) - 1)
-        r = 90 + 12 * math.sin(3 * u) * math.cos(2 * v)
-        dense.append((r * math.sin(v) * math.cos(u) * 1.2, r * math.sin(v) * math.sin(u) * 0.8, r * math.cos(v)))
+    def surface(n):
+        """`n` points of a bumpy closed surface, from a low-discrepancy sequence."""
+        points = []
+        for i in range(n):
+            u, v = (i * 0.754877) % 1.0 * 2 * math.pi, math.acos(2 * ((i * 0.569840) % 1.0) - 1)
+            r = 90 + 12 * math.sin(3 * u) * math.cos(2 * v)
+            points.append((r * math.sin(v) * math.cos(u) * 1.2, r * math.sin(v) * math.sin(u) * 0.8, r * math.cos(v)))
+        return points
+
+    bumpy, dense = surface(300), surface(2600)
     plane = [(x * 9, y * 9, 0) for x in range(-8, 9) for y in range(-8, 9)]
     line = [(i, 2 * i, -i) for i in range(-40, 40)]
     box = [(x, y, z) for x in (-60, 60) for y in range(-60, 61, 12) for z in range(-30, 31, 10)]
