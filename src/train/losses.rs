@@ -48,7 +48,7 @@ use super::ops::{self, ConsistencyKind};
 use super::pair::Pair;
 use super::partition::{self, Role};
 use super::tape::{Id, Tape};
-use crate::transform::{apply, rigid_inverse};
+use crate::transform::{mapping, rigid_inverse};
 use serde::{Deserialize, Serialize};
 
 /// Which reference points the centroid loss supervises.
@@ -204,8 +204,9 @@ const IDENTITY: [f32; 16] = [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 1
 pub fn correspondences(pair: &Pair, radius: f32) -> Vec<(usize, usize)> {
     let r2 = radius * radius;
     let mut out = Vec::new();
+    let to_target = mapping(&pair.t_gt);
     for (i, p) in pair.source.iter().enumerate() {
-        let q = apply(&pair.t_gt, *p);
+        let q = to_target(*p);
         let mut best = (f32::INFINITY, 0usize);
         for (k, x) in pair.target.iter().enumerate() {
             let d = (q[0] - x[0]).powi(2) + (q[1] - x[1]).powi(2) + (q[2] - x[2]).powi(2);

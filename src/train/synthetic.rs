@@ -4,7 +4,7 @@
 
 use super::pair::Pair;
 use crate::sampling::rng;
-use crate::transform::{apply, euler_xyz, from_rotation_translation};
+use crate::transform::{euler_xyz, from_rotation_translation, mapping};
 use nalgebra::Vector3;
 use rand::Rng;
 
@@ -106,10 +106,11 @@ pub fn pair(shape: Shape, n: usize, seed: u64) -> Pair {
     let t_gt = from_rotation_translation(&rot, &(dir * r.random_range(0.0..0.5)));
     let mut noise = |p: [f32; 3]| p.map(|v| v + r.random_range(-0.01f32..0.01));
     let source: Vec<[f32; 3]> = src.into_iter().map(&mut noise).collect();
-    let target: Vec<[f32; 3]> = tgt0.iter().map(|p| noise(apply(&t_gt, *p))).collect();
+    let to_target = mapping(&t_gt);
+    let target: Vec<[f32; 3]> = tgt0.iter().map(|p| noise(to_target(*p))).collect();
     let c = centroid.map(|v| v as f32);
     let (ms, mt) = (mean(&source), mean(&target));
-    let ct = apply(&t_gt, c);
+    let ct = to_target(c);
     Pair {
         v_gt_source: [0, 1, 2].map(|a| (c[a] as f64 - ms[a]) as f32),
         v_gt_target: [0, 1, 2].map(|a| (ct[a] as f64 - mt[a]) as f32),
