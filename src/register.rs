@@ -192,7 +192,7 @@ pub enum Search {
     /// [`Start::RotationsNetwork`], which search every orientation better); an answer at 0.85 or
     /// more once the global stage has run ([`NEARLY_SURE_CONFIDENCE`]), or at 0.5 or more when the
     /// global stage found it again ([`AGREED_CONFIDENCE`]), skips the stages left and gets only a
-    /// few more global hypotheses; an answer still below [`UNSURE_CONFIDENCE`] (0.5) then gets the
+    /// few more global hypotheses, those whose short run comes near its fit; an answer still below [`UNSURE_CONFIDENCE`] (0.5) then gets the
     /// starts for unsure answers ([`Start::RotationsNetwork`]) when the starts name them. When
     /// either cloud has many points (at least 3,000, [`GLOBAL_BEFORE_STOP_POINTS`]: scans, or a
     /// scan onto a model) it does not stop before the global stage.

@@ -631,7 +631,8 @@ fn the_rotation_starts_are_the_cube_group() {
 }
 
 /// `shortlist` keeps the starts that fit best after a short run, in their original order, and
-/// all of them when there are no more than asked for.
+/// all of them when there are no more than asked for; against an answer, only those whose short
+/// run comes near the answer's.
 #[test]
 fn a_shortlist_keeps_the_starts_that_fit_best_in_their_order() {
     let (target, source, truth) = surface_pair();
@@ -644,8 +645,15 @@ fn a_shortlist_keeps_the_starts_that_fit_best_in_their_order() {
         (Start::Global, away(9.0)),
         (Start::Rotations, truth),
     ];
-    let kept = refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 2);
+    let kept = refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 2, None);
     assert_eq!(kept, vec![list[1], list[3]]);
-    assert_eq!(refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4), list);
-    assert!(refine::shortlist(&target, &source, list, &how(IcpKind::Plane, d), 0).is_empty());
+    assert_eq!(refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4, None), list);
+    assert!(refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 0, None).is_empty());
+    // against an answer at the truth: only the starts that come back near its fit
+    let kept = refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4, Some(&truth));
+    assert_eq!(kept, vec![list[1], list[3]]);
+    // against an answer that fits nowhere, every start is kept, up to `keep`
+    let nowhere = away(30.0);
+    assert_eq!(refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4, Some(&nowhere)), list);
+    assert_eq!(refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 2, Some(&nowhere)).len(), 2);
 }

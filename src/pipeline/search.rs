@@ -14,7 +14,8 @@
 //! guess, [`UNSURE_TURN_SLACK_DEG`]). An answer that reaches [`NEARLY_SURE_CONFIDENCE`] once the
 //! global stage has run, or [`AGREED_CONFIDENCE`] when the global stage's best is that same pose
 //! again, skips the stages left and the rotations: its last stage is the best
-//! [`NEARLY_SURE_LAST_STAGE_STARTS`] of the further global hypotheses. Each stage's best, when it
+//! [`NEARLY_SURE_LAST_STAGE_STARTS`] of the further global hypotheses, of those whose short run
+//! comes near the answer's own ([`refine::SHORTLIST_ANSWER_FIT`]). Each stage's best, when it
 //! is better than the answer so far and another pose ([`refine::coincide`]), is judged by the
 //! confidence probe, and a probe pose that fits better is refined as one more start ([`settle`]);
 //! while the answer is below [`STOP_CONFIDENCE`], a stage's best that does not replace it is judged
@@ -161,7 +162,9 @@ pub(crate) fn search(
                 let rotations = starts::blind_rotations(&kinds, nearly_sure);
                 let more = builder.more(&kinds, rotations, model, workspace)?;
                 let keep = if nearly_sure { NEARLY_SURE_LAST_STAGE_STARTS } else { LAST_STAGE_STARTS };
-                refine::shortlist(target_index, &p.icp_src.points, more, &how, keep)
+                // a nearly sure answer's last stage: only starts that come near its fit
+                let answer = best.as_ref().filter(|_| nearly_sure).map(|b| &b.0.T_target_source);
+                refine::shortlist(target_index, &p.icp_src.points, more, &how, keep, answer)
             }
             Step::Blind => continue,
             // judged as the caller would see it: with the look-alikes the search found so far
@@ -343,8 +346,10 @@ const LAST_STAGE_STARTS: usize = 12;
 
 /// Most starts of the last stage that are refined when the answer was nearly sure after the
 /// global stage ([`NEARLY_SURE_CONFIDENCE`], or [`AGREED_CONFIDENCE`] with the global stage finding
-/// it again): the best of the further global hypotheses after a short run each (`BENCHMARK.md`,
-/// "Nearly sure after the global stage").
+/// it again): the best of the further global hypotheses after a short run each, of those that
+/// fit at least [`refine::SHORTLIST_ANSWER_FIT`] as well as the answer's own short run
+/// (`BENCHMARK.md`, "Nearly sure after the global stage", "The last stage of a nearly sure
+/// answer, screened against the answer").
 const NEARLY_SURE_LAST_STAGE_STARTS: usize = 3;
 
 /// Most better poses of the confidence probe that [`settle`] refines in a row.
