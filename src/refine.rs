@@ -176,25 +176,36 @@ pub const SHORTLIST_POINTS: usize = 256;
 /// Iterations of each short ICP run of [`shortlist`], at the first distance of [`SCHEDULE`].
 pub const SHORTLIST_ITERATIONS: u32 = 5;
 
+/// An answer that [`shortlist`] screens the starts against: a start is kept only when its short
+/// run fits at least `fit` as well as the same short run from the answer (`keep_best` of the best
+/// starts are kept whatever their fit). A start that does not come near the answer's fit even at
+/// the coarse distance seldom ends better than it.
+#[derive(Clone, Copy, Debug)]
+#[allow(non_snake_case)]
+pub struct Screen<'a> {
+    /// The answer, `T_target_source`.
+    pub T_target_source: &'a Matrix4<f64>,
+    /// The share of the answer's short-run fitness that a start's short run must reach.
+    pub fit: f64,
+    /// How many of the best starts are kept whatever their fit.
+    pub keep_best: usize,
+}
+
 /// The `keep` of `starts` that fit best after a short ICP run each ([`SHORTLIST_ITERATIONS`] at
 /// the coarsest distance of [`SCHEDULE`], on [`SHORTLIST_POINTS`] of the `source` points, evenly
-/// spread), in their original order; all of them when there are no more than `keep`. Ties keep
-/// the earlier start. A cheap first cut of many blind starts, most of which land nowhere.
-///
-/// With an `answer` (a refined pose the starts could only replace by fitting clearly better), a
-/// start is kept only when its short run also fits at least [`SHORTLIST_ANSWER_FIT`] as well as
-/// the same short run from the answer: a start that cannot come near the answer's fit even at the
-/// coarse distance does not end clearly better than it.
-#[allow(non_snake_case)]
+/// spread), in their original order; all of them when there are no more than `keep` and no
+/// `screen`. Ties keep the earlier start. A cheap first cut of many blind starts, most of which
+/// land nowhere. With a `screen`, of those only the ones that come near its answer's fit
+/// ([`Screen`]).
 pub fn shortlist(
     target: &IcpTarget,
     source: &[[f32; 3]],
     starts: Vec<(Start, Matrix4<f64>)>,
     how: &Refinement,
     keep: usize,
-    answer: Option<&Matrix4<f64>>,
+    screen: Option<Screen>,
 ) -> Vec<(Start, Matrix4<f64>)> {
-    if starts.len() <= keep && answer.is_none() {
+    if starts.len() <= keep && screen.is_none() {
         return starts;
     }
     let sample = even_sample(source, SHORTLIST_POINTS);
@@ -202,23 +213,23 @@ pub fn shortlist(
         max_iterations: SHORTLIST_ITERATIONS,
         ..IcpParams::new(how.kind.or_point(), SCHEDULE[0] * how.d_final)
     };
-    let bar = answer.map_or(f64::NEG_INFINITY, |T_target_source| {
-        SHORTLIST_ANSWER_FIT * target.align(&sample, T_target_source, &params).fitness
-    });
+    let (bar, keep_best) = match screen {
+        Some(s) => (s.fit * target.align(&sample, s.T_target_source, &params).fitness, s.keep_best),
+        None => (f64::NEG_INFINITY, 0),
+    };
     let mut scored: Vec<(f64, usize)> =
         starts.iter().enumerate().map(|(i, (_, t))| (target.align(&sample, t, &params).fitness, i)).collect();
     scored.sort_by(|a, b| b.0.total_cmp(&a.0).then(a.1.cmp(&b.1)));
-    let mut kept: Vec<usize> =
-        scored.into_iter().take(keep).filter(|&(fitness, _)| fitness >= bar).map(|(_, i)| i).collect();
+    let mut kept: Vec<usize> = scored
+        .into_iter()
+        .take(keep)
+        .enumerate()
+        .filter(|&(rank, (fitness, _))| rank < keep_best || fitness >= bar)
+        .map(|(_, (_, i))| i)
+        .collect();
     kept.sort_unstable();
     kept.into_iter().map(|i| starts[i]).collect()
 }
-
-/// The share of an answer's short-run fitness that a start's short run must reach to be kept by
-/// [`shortlist`] with that answer. Measured against refining the best three further global
-/// hypotheses of a nearly sure answer's last stage without the bar (`BENCHMARK.md`, "The last
-/// stage of a nearly sure answer, screened against the answer").
-pub const SHORTLIST_ANSWER_FIT: f64 = 0.95;
 
 /// ICP runs coarse to fine at these multiples of the final max correspondence distance.
 pub const SCHEDULE: [f64; 3] = [4.0, 2.0, 1.0];

@@ -187,7 +187,8 @@ pub struct Options {
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationSearch"))]
 pub enum Search {
     /// In stages, stopping at a confident answer: the first start; then the others in order, each
-    /// run of local or of global starts a stage; then, while the answer is still below the stop
+    /// run of local or of global starts a stage (of the global hypotheses, the best after a short
+    /// ICP run and those whose short run comes near the answer's so far); then, while the answer is still below the stop
     /// (0.95), more global hypotheses (and blind rotations, unless the starts name
     /// [`Start::RotationsNetwork`], which search every orientation better); an answer at 0.85 or
     /// more once the global stage has run ([`NEARLY_SURE_CONFIDENCE`]), or at 0.5 or more when the

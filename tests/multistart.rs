@@ -650,10 +650,23 @@ fn a_shortlist_keeps_the_starts_that_fit_best_in_their_order() {
     assert_eq!(refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4, None), list);
     assert!(refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 0, None).is_empty());
     // against an answer at the truth: only the starts that come back near its fit
-    let kept = refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4, Some(&truth));
+    let screen = |t, fit, keep_best| Some(refine::Screen { T_target_source: t, fit, keep_best });
+    let kept = refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4, screen(&truth, 0.95, 0));
     assert_eq!(kept, vec![list[1], list[3]]);
+    // the best kept whatever its fit
+    let kept = refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4, screen(&truth, 2.0, 1));
+    assert_eq!(kept.len(), 1);
+    assert!(kept[0] == list[1] || kept[0] == list[3]);
+    assert!(refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4, screen(&truth, 2.0, 0))
+        .is_empty());
     // against an answer that fits nowhere, every start is kept, up to `keep`
     let nowhere = away(30.0);
-    assert_eq!(refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4, Some(&nowhere)), list);
-    assert_eq!(refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 2, Some(&nowhere)).len(), 2);
+    assert_eq!(
+        refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 4, screen(&nowhere, 0.95, 0)),
+        list
+    );
+    assert_eq!(
+        refine::shortlist(&target, &source, list.clone(), &how(IcpKind::Plane, d), 2, screen(&nowhere, 0.95, 0)).len(),
+        2
+    );
 }
