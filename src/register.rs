@@ -188,15 +188,16 @@ pub struct Options {
 pub enum Search {
     /// In stages, stopping at a confident answer: the first start; then the others in order, each
     /// run of local or of global starts a stage (of the global hypotheses, the best after a short
-    /// ICP run and those whose short run comes near the answer's so far); then, while the answer is still below the stop
-    /// (0.95), more global hypotheses (and blind rotations, unless the starts name
-    /// [`Start::RotationsNetwork`], which search every orientation better); an answer at 0.85 or
-    /// more once the global stage has run ([`NEARLY_SURE_CONFIDENCE`]), or at 0.5 or more when the
-    /// global stage found it again ([`AGREED_CONFIDENCE`]), skips the stages left and gets only a
-    /// few more global hypotheses, those whose short run comes near its fit; an answer still below [`UNSURE_CONFIDENCE`] (0.5) then gets the
-    /// starts for unsure answers ([`Start::RotationsNetwork`]) when the starts name them. When
-    /// either cloud has many points (at least 3,000, [`GLOBAL_BEFORE_STOP_POINTS`]: scans, or a
-    /// scan onto a model) it does not stop before the global stage.
+    /// ICP run and those whose short run comes near the answer's so far); then, while the answer
+    /// is still below the stop (0.95), more global hypotheses (and blind rotations, unless the
+    /// starts name [`Start::RotationsNetwork`], which search every orientation better); an answer
+    /// at 0.85 or more once the global stage has run ([`NEARLY_SURE_CONFIDENCE`]), or at 0.5 or
+    /// more when the global stage found it again ([`AGREED_CONFIDENCE`]), skips the stages left
+    /// and gets only a few more global hypotheses, those whose short run comes near its fit; an
+    /// answer still below [`UNSURE_CONFIDENCE`] (0.5) then gets the starts for unsure answers
+    /// ([`Start::RotationsNetwork`]) when the starts name them. When either cloud has many points
+    /// (at least 3,000, [`GLOBAL_BEFORE_STOP_POINTS`]: scans, or a scan onto a model) it does not
+    /// stop before the global stage.
     /// The best of everything refined is returned. Easy pairs cost one start; hard ones get every
     /// start and more.
     #[default]
