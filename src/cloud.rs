@@ -38,6 +38,11 @@ pub struct PointCloud {
     pub origin: [f64; 3],
 }
 
+/// Whether every coordinate of `p` is finite.
+fn is_finite(p: &[f32; 3]) -> bool {
+    p[0].is_finite() && p[1].is_finite() && p[2].is_finite()
+}
+
 /// What to do with points that have a NaN or infinite coordinate.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "camelCase")]
@@ -153,35 +158,53 @@ impl PointCloud {
     /// error; so is a cloud whose points all coincide. `what` names the cloud in messages
     /// (`"source"`, `"target"`).
     pub fn validated(&self, what: &str, min_points: usize, non_finite: NonFinite) -> Result<PointCloud> {
-        self.clone().into_validated(what, min_points, non_finite)
+        match (self.points.iter().position(|p| !is_finite(p)), non_finite) {
+            // only the finite points are copied
+            (Some(_), NonFinite::Drop) => {
+                let points = self.points.iter().copied().filter(is_finite).collect();
+                PointCloud { points, origin: self.origin }.into_validated(what, min_points, non_finite)
+            }
+            // checked before the copy: a cloud that fails costs no copy of its points
+            (bad, _) => {
+                self.check(what, min_points, bad)?;
+                Ok(self.clone())
+            }
+        }
     }
 
     /// [`PointCloud::validated`], keeping the cloud's own points (without a copy of a large one).
     pub fn into_validated(self, what: &str, min_points: usize, non_finite: NonFinite) -> Result<PointCloud> {
         let mut cloud = self;
-        let finite = |p: &[f32; 3]| p[0].is_finite() && p[1].is_finite() && p[2].is_finite();
-        match (cloud.points.iter().position(|p| !finite(p)), non_finite) {
-            (None, _) => {}
-            (Some(i), NonFinite::Error) => {
-                return Err(Error::InvalidCloud(format!(
-                    "{what} point {i} has a non-finite coordinate {:?} (drop such points with the non-finite option set to drop)",
-                    cloud.points[i]
-                )))
-            }
-            (Some(_), NonFinite::Drop) => cloud.points.retain(finite),
+        let mut bad = cloud.points.iter().position(|p| !is_finite(p));
+        if bad.is_some() && non_finite == NonFinite::Drop {
+            cloud.points.retain(is_finite);
+            bad = None;
         }
-        if cloud.len() < min_points {
+        cloud.check(what, min_points, bad)?;
+        Ok(cloud)
+    }
+
+    /// The checks of [`PointCloud::validated`] on a cloud whose first non-finite point (to be
+    /// reported) is `bad`: that point, fewer than `min_points` points, or zero extent is an error.
+    fn check(&self, what: &str, min_points: usize, bad: Option<usize>) -> Result<()> {
+        if let Some(i) = bad {
             return Err(Error::InvalidCloud(format!(
-                "{what} has {} finite points; at least {min_points} are needed",
-                cloud.len()
+                "{what} point {i} has a non-finite coordinate {:?} (drop such points with the non-finite option set to drop)",
+                self.points[i]
             )));
         }
-        let (lo, hi) = cloud.bounds();
+        if self.len() < min_points {
+            return Err(Error::InvalidCloud(format!(
+                "{what} has {} finite points; at least {min_points} are needed",
+                self.len()
+            )));
+        }
+        let (lo, hi) = self.bounds();
         let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
         if extent <= 0.0 {
-            return Err(Error::InvalidCloud(format!("{what} has zero extent: all {} points coincide", cloud.len())));
+            return Err(Error::InvalidCloud(format!("{what} has zero extent: all {} points coincide", self.len())));
         }
-        Ok(cloud)
+        Ok(())
     }
 
     /// Axis-aligned bounds `(min, max)` of `points` (relative to the origin). For an empty cloud
