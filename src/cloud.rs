@@ -38,6 +38,20 @@ pub struct PointCloud {
     pub origin: [f64; 3],
 }
 
+/// Axis-aligned bounds `(min, max)` of `points`; both zero when there are none
+/// ([`PointCloud::bounds`]).
+pub(crate) fn bounds_of(points: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
+    if points.is_empty() {
+        return ([0.0; 3], [0.0; 3]);
+    }
+    let mut lo = [f32::INFINITY; 3];
+    let mut hi = [f32::NEG_INFINITY; 3];
+    for p in points {
+        grow_box(&mut lo, &mut hi, p);
+    }
+    (lo, hi)
+}
+
 /// Whether every coordinate of `p` is finite.
 fn is_finite(p: &[f32; 3]) -> bool {
     p[0].is_finite() && p[1].is_finite() && p[2].is_finite()
@@ -210,15 +224,7 @@ impl PointCloud {
     /// Axis-aligned bounds `(min, max)` of `points` (relative to the origin). For an empty cloud
     /// both are zero.
     pub fn bounds(&self) -> ([f32; 3], [f32; 3]) {
-        if self.points.is_empty() {
-            return ([0.0; 3], [0.0; 3]);
-        }
-        let mut lo = [f32::INFINITY; 3];
-        let mut hi = [f32::NEG_INFINITY; 3];
-        for p in &self.points {
-            grow_box(&mut lo, &mut hi, p);
-        }
-        (lo, hi)
+        bounds_of(&self.points)
     }
 
     /// The largest half-extent of the axis-aligned bounds (0 for an empty cloud).

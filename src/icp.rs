@@ -332,8 +332,7 @@ impl IcpTarget {
                 continue;
             }
             let coarser = levels.coarser[k - 1].get_or_init(|| {
-                let cloud = crate::cloud::PointCloud::new(self.points.clone());
-                let points = crate::sampling::voxel_downsample(&cloud, voxel as f32).points;
+                let points = crate::sampling::voxel_downsample_points(&self.points, voxel as f32);
                 (points.len() <= self.points.len() >> k).then(|| Box::new(IcpTarget::new(&points, false)))
             });
             if let Some(coarser) = coarser {

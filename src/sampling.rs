@@ -67,8 +67,14 @@ pub const TARGET_SEED_XOR: u64 = 0x5EED_7A26_E7C0_FFEE;
 /// * The grid is laid on the cloud's offsets (relative to its origin), and the result keeps the
 ///   origin.
 pub fn voxel_downsample(cloud: &PointCloud, voxel: f32) -> PointCloud {
+    let points = voxel_downsample_points(&cloud.points, voxel);
+    PointCloud::with_origin(points, cloud.origin)
+}
+
+/// [`voxel_downsample`] of bare points (relative to any origin), without a cloud around them.
+pub(crate) fn voxel_downsample_points(points: &[[f32; 3]], voxel: f32) -> Vec<[f32; 3]> {
     // without a cap on the voxels there is always an answer
-    grid::<false>(cloud, &cloud.bounds(), voxel, usize::MAX).unwrap_or_default()
+    grid::<false>(points, &crate::cloud::bounds_of(points), voxel, usize::MAX).unwrap_or_default()
 }
 
 /// [`voxel_downsample`] when it gives at most `max` points (the same cloud, bit for bit); `None`
@@ -87,19 +93,19 @@ pub(crate) fn voxel_downsample_at_most_in(
     voxel: f32,
     max: usize,
 ) -> Option<PointCloud> {
-    grid::<true>(cloud, bounds, voxel, max)
+    grid::<true>(&cloud.points, bounds, voxel, max).map(|points| PointCloud::with_origin(points, cloud.origin))
 }
 
-/// [`voxel_downsample`] of `cloud`, whose [`PointCloud::bounds`] are `bounds`, giving up past
-/// `max` voxels only when `CAPPED` (the uncapped loop has no check at all).
+/// [`voxel_downsample`] of `points`, whose bounds ([`PointCloud::bounds`]) are `bounds`, giving
+/// up past `max` voxels only when `CAPPED` (the uncapped loop has no check at all).
 fn grid<const CAPPED: bool>(
-    cloud: &PointCloud,
+    points: &[[f32; 3]],
     bounds: &([f32; 3], [f32; 3]),
     voxel: f32,
     max: usize,
-) -> Option<PointCloud> {
+) -> Option<Vec<[f32; 3]>> {
     if !(voxel.is_finite() && voxel > 0.0) {
-        return (cloud.len() <= max).then(|| cloud.clone());
+        return (points.len() <= max).then(|| points.to_vec());
     }
     let inv = 1.0 / voxel as f64;
     // `as i64` saturates (and a finite f64 floor is never NaN).
@@ -109,10 +115,10 @@ fn grid<const CAPPED: bool>(
     // The keys live apart from the sums: the loop reads and writes a voxel's sums at random (the
     // points are in any order), and a 32-byte, 32-aligned accumulator is one cache line where a
     // record with its key straddled two most of the time.
-    let mut slots = Slots::new(cloud.len(), bounds, &key_of);
+    let mut slots = Slots::new(points.len(), bounds, &key_of);
     let mut keys: Vec<[i64; 3]> = Vec::new();
     let mut sums: Vec<VoxelSum> = Vec::new();
-    for p in cloud.points.iter().filter(|p| p.iter().all(|v| v.is_finite())) {
+    for p in points.iter().filter(|p| p.iter().all(|v| v.is_finite())) {
         let key = key_of(p);
         let slot = slots.slot(key, || {
             keys.push(key);
@@ -140,7 +146,7 @@ fn grid<const CAPPED: bool>(
             [(s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32]
         })
         .collect();
-    Some(PointCloud::with_origin(out, cloud.origin))
+    Some(out)
 }
 
 /// One voxel's running sum of its points' coordinates and their count ([`voxel_downsample`]'s
