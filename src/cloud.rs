@@ -175,8 +175,10 @@ impl PointCloud {
         match (self.points.iter().position(|p| !is_finite(p)), non_finite) {
             // only the finite points are copied
             (Some(_), NonFinite::Drop) => {
-                let points = self.points.iter().copied().filter(is_finite).collect();
-                PointCloud { points, origin: self.origin }.into_validated(what, min_points, non_finite)
+                let cloud =
+                    PointCloud { points: self.points.iter().copied().filter(is_finite).collect(), origin: self.origin };
+                cloud.check(what, min_points, None)?;
+                Ok(cloud)
             }
             // checked before the copy: a cloud that fails costs no copy of its points
             (bad, _) => {
