@@ -205,7 +205,8 @@ pub fn shortlist(
     keep: usize,
     screen: Option<Screen>,
 ) -> Vec<(Start, Matrix4<f64>)> {
-    if starts.len() <= keep && screen.is_none() {
+    // every start kept, whatever the short runs would say
+    if starts.len() <= keep && screen.is_none_or(|s| starts.len() <= s.keep_best) {
         return starts;
     }
     let sample = even_sample(source, SHORTLIST_POINTS);
