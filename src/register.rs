@@ -172,9 +172,9 @@ pub struct Options {
     /// skips the stages left, and its last stage refines only the 3 best of those further
     /// hypotheses. Then, when `starts` has `"rotationsNetwork"` and the answer's confidence is
     /// still below 0.5 (`UNSURE_CONFIDENCE`), those starts are refined, as one more stage whose
-    /// best replaces the answer when it fits better (more than 10% better when it turns more than
-    /// 30 degrees further from the initial guess); so only the answers the engine would
-    /// otherwise flag as unsure pay for their network passes.
+    /// best replaces the answer only when it fits more than 15% better (it searches every
+    /// orientation, where a look-alike can fit a few percent better than the truth); so only the
+    /// answers the engine would otherwise flag as unsure pay for their network passes.
     /// `"exhaustive"` refines every start, without those last stages. The result's `startsRefined`
     /// says how many were refined.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
