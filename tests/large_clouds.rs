@@ -1,7 +1,8 @@
 //! Large clouds: the work of every stage is bounded whatever the point count. The voxel grid
 //! gives the same clouds as the sort-based grid it replaced, target normals are estimated only
 //! where ICP needs them (and equal the eager ones), refinement runs on a capped, evenly spread
-//! source, the feature voxel follows the data's scale, and a 280k-point pair is registered.
+//! source, the feature voxel follows the data's scale, a large cloud's voxelised copy stands in
+//! for it in the global stage, and a 280k-point pair is registered.
 
 mod common;
 
@@ -130,6 +131,60 @@ fn the_feature_voxel_follows_the_data() {
     let sparse = PointCloud::new(refine::even_sample(&cloud.points, 800));
     let own = global::VOXEL_FRACTION * sparse.half_extent();
     assert_eq!(global::feature_voxel(&sparse, &sparse, global::VOXEL_FRACTION), own);
+}
+
+/// A large cloud's voxelised copy, at half the finest feature voxel, stands in for its points in
+/// the global stage (`global::standin`): the dense verdict counts the cloud's own points, the
+/// feature voxel is about the one of the points themselves, and the hypotheses from the copies
+/// recover a motion of any size as those from the points do. A copy that saves few points, or
+/// one voxelised coarser, does not stand in.
+#[test]
+fn a_voxelised_copy_stands_in_for_a_large_cloud_in_the_global_stage() {
+    let full = bumpy_surface(300_000, 0.4);
+    let source_full = crop(&full, [1.0, 0.3, 0.0], 0.7);
+    let target = crop(&full, [-0.2, 1.0, 0.4], 0.7);
+    let truth = motion([150.0, -60.0, 95.0], [0.3, -0.2, 0.1]);
+    let source = source_full.transformed(&rigid_inverse(&truth));
+    let extent = source.half_extent().max(target.half_extent());
+    let fraction = global::VOXEL_FRACTION;
+    let voxel = 0.5 * global::DENSE_VOXEL_FRACTION * extent;
+    let (source_v, target_v) = (voxel_downsample(&source, voxel as f32), voxel_downsample(&target, voxel as f32));
+    assert!(source_v.len() * global::STANDIN_REDUCTION <= source.len(), "{} of {}", source_v.len(), source.len());
+    let s = global::standin(&source, &source_v, voxel, extent, fraction);
+    let t = global::standin(&target, &target_v, voxel, extent, fraction);
+    assert!(std::ptr::eq(s.points, &source_v) && s.count == source.len());
+    assert!(std::ptr::eq(t.points, &target_v) && t.count == target.len());
+    // the copy voxelised coarser than half the finest feature voxel, or one that saves too few
+    // points: the cloud stands for itself
+    let coarse = global::standin(&source, &source_v, 1.5 * voxel, extent, fraction);
+    assert!(std::ptr::eq(coarse.points, &source) && coarse.count == source.len());
+    let few = PointCloud::new(refine::even_sample(&source.points, 2 * source_v.len() - 1));
+    let same = global::standin(&few, &source_v, voxel, extent, fraction);
+    assert!(std::ptr::eq(same.points, &few));
+    // dense as the points are: by the cloud's own count, per voxel the copy occupies
+    let memo = global::TargetFeatures::default;
+    assert!(global::dense(&source, &target, &memo(), fraction));
+    assert!(global::dense(s, t, &memo(), fraction));
+    let sparse_count = global::FeatureCloud { points: &source_v, count: source_v.len() / 100 };
+    assert!(!global::dense(sparse_count, t, &memo(), fraction));
+    // about the feature voxel of the points themselves
+    let (v_points, v_copies) =
+        (global::feature_voxel(&source, &target, fraction), global::feature_voxel(s, t, fraction));
+    assert!((v_copies / v_points - 1.0).abs() < 0.3, "{v_copies} against {v_points}");
+    // the hypotheses from the copies are those from the points (here the truth and the shape's
+    // half-turned look-alike), and recover the motion
+    let params = global::GlobalParams::default();
+    let poses = |m: global::Matched| m.hypotheses(&params).iter().map(|h| h.T_target_source).collect::<Vec<_>>();
+    let from_points = poses(global::Matched::new(&source, &target, fraction));
+    let from_copies = poses(global::Matched::onto(s, t, &memo(), fraction));
+    assert!(from_points.len() >= 2, "{} hypotheses", from_points.len());
+    for p in &from_points {
+        let near = |c: &&nalgebra::Matrix4<f64>| rotation_error_deg(c, p) < 2.0 && translation_error(c, p) < 0.02;
+        assert!(from_copies.iter().any(|c| near(&c)), "no hypothesis of the copies near {p}");
+    }
+    let recovers =
+        |t: &nalgebra::Matrix4<f64>| rotation_error_deg(t, &truth) < 2.0 && translation_error(t, &truth) < 0.02;
+    assert!(from_copies.iter().any(recovers), "the copies' hypotheses miss the truth");
 }
 
 /// A 280k + 280k-point pair (70% crops of a noisy bumpy surface against another, 25 degrees

@@ -8,7 +8,8 @@
 //! voxelised cloud has at most [`MAX_FEATURE_POINTS`] points ([`DENSE_FEATURE_POINTS`] on dense
 //! scans; [`feature_voxel`]), after which
 //! descriptors, matching and RANSAC no longer depend on the input size; only the voxelisation
-//! (O(n log n)) sees every point.
+//! (O(n)) sees every point, and for a large cloud not even that: the pipeline gives a finer
+//! voxelised copy that stands in for its points ([`FeatureCloud`], [`standin`]).
 
 pub mod fpfh;
 pub mod matching;
@@ -72,26 +73,91 @@ impl Default for GlobalParams {
 /// time until both voxelised clouds have at most [`MAX_FEATURE_POINTS`] points; on a [`dense`]
 /// pair from [`DENSE_VOXEL_FRACTION`] (scaled like `fraction`) to at most
 /// [`DENSE_FEATURE_POINTS`].
-pub fn feature_voxel(source: &PointCloud, target: &PointCloud, fraction: f64) -> f64 {
+///
+/// Either cloud may be a stand-in ([`FeatureCloud`]).
+pub fn feature_voxel<'s, 't>(
+    source: impl Into<FeatureCloud<'s>>,
+    target: impl Into<FeatureCloud<'t>>,
+    fraction: f64,
+) -> f64 {
     let memo = TargetFeatures::default();
-    feature_grid(source, target, &memo, fraction, dense(source, target, &memo, fraction)).0
+    let (s, t) = (source.into(), target.into());
+    feature_grid(s, t, &memo, fraction, dense_of(s, t, &memo, fraction)).0
 }
 
 /// Whether both clouds are dense ([`DENSE_OCCUPANCY`]) at the feature voxel of `fraction` (of the
 /// larger largest half-extent): a pass over each cloud, which stops once it has counted too many
-/// voxels. The target's side goes through `memo` ([`TargetFeatures`]).
-pub fn dense(source: &PointCloud, target: &PointCloud, memo: &TargetFeatures, fraction: f64) -> bool {
-    let extent = source.half_extent().max(memo.half_extent(target));
+/// voxels. The target's side goes through `memo` ([`TargetFeatures`]). Either cloud may be a
+/// stand-in ([`FeatureCloud`]): its own points are counted, per voxel the stand-in occupies.
+pub fn dense<'s, 't>(
+    source: impl Into<FeatureCloud<'s>>,
+    target: impl Into<FeatureCloud<'t>>,
+    memo: &TargetFeatures,
+    fraction: f64,
+) -> bool {
+    dense_of(source.into(), target.into(), memo, fraction)
+}
+
+/// [`dense`] of two clouds as the global hypotheses see them.
+fn dense_of(source: FeatureCloud, target: FeatureCloud, memo: &TargetFeatures, fraction: f64) -> bool {
+    let extent = source.points.half_extent().max(memo.half_extent(target.points));
     let v = (fraction * extent).max(f64::MIN_POSITIVE);
-    dense_at(source, v, || source.bounds()) && memo.dense(target, v)
+    dense_at(source, v, || source.points.bounds()) && memo.dense(target, v)
 }
 
 /// `cloud` has at least [`DENSE_MIN_POINTS`] points and [`DENSE_OCCUPANCY`] per occupied voxel of
-/// size `v` (`bounds`: its bounds, computed only when needed).
-fn dense_at(cloud: &PointCloud, v: f64, bounds: impl FnOnce() -> ([f32; 3], [f32; 3])) -> bool {
-    cloud.len() >= DENSE_MIN_POINTS
-        && voxel_downsample_at_most_in(cloud, &bounds(), v as f32, cloud.len() / DENSE_OCCUPANCY).is_some()
+/// size `v` (`bounds`: its points' bounds, computed only when needed). The voxels are those its
+/// [`FeatureCloud::points`] occupy; the points counted, all of its [`FeatureCloud::count`].
+fn dense_at(cloud: FeatureCloud, v: f64, bounds: impl FnOnce() -> ([f32; 3], [f32; 3])) -> bool {
+    cloud.count >= DENSE_MIN_POINTS
+        && voxel_downsample_at_most_in(cloud.points, &bounds(), v as f32, cloud.count / DENSE_OCCUPANCY).is_some()
 }
+
+/// A cloud as the global hypotheses see it ([`Matched::onto`]): its points, or for a large cloud a
+/// finer voxelised copy of them standing in for them (the pipeline gives ICP's copy, at half the
+/// final distance, where it holds at most a quarter of the points: [`standin`]), with how many
+/// points the cloud itself has. The feature voxel's search voxelises the copy, each try a pass
+/// over far fewer points; [`dense`] counts the cloud's own points per voxel the copy occupies.
+/// Voxelised again at the coarser feature voxel, the copy gives about the cloud's own voxel
+/// centroids (a centroid of centroids, each weighted alike).
+#[derive(Clone, Copy, Debug)]
+pub struct FeatureCloud<'a> {
+    /// The points that are voxelised at the feature voxel (or described as they are, when few).
+    pub points: &'a PointCloud,
+    /// How many points the cloud itself has (at least `points.len()`).
+    pub count: usize,
+}
+
+impl<'a> From<&'a PointCloud> for FeatureCloud<'a> {
+    fn from(cloud: &'a PointCloud) -> Self {
+        Self { points: cloud, count: cloud.len() }
+    }
+}
+
+/// A cloud voxelised at `voxel` stands in for `cloud` ([`FeatureCloud`]) when it has at most
+/// `1 /` [`STANDIN_REDUCTION`] of its points and `voxel` is at most half the finest feature voxel
+/// ([`DENSE_VOXEL_FRACTION`] of `extent`, the pair's larger half-extent, scaled like `fraction`
+/// against [`VOXEL_FRACTION`]); otherwise the cloud stands for itself.
+pub fn standin<'a>(
+    cloud: &'a PointCloud,
+    voxelised: &'a PointCloud,
+    voxel: f64,
+    extent: f64,
+    fraction: f64,
+) -> FeatureCloud<'a> {
+    let finest = fraction * DENSE_VOXEL_FRACTION / VOXEL_FRACTION * extent;
+    let fewer = voxelised.len().saturating_mul(STANDIN_REDUCTION) <= cloud.len();
+    if fewer && voxel > 0.0 && voxel <= 0.5 * finest * (1.0 + 1e-9) {
+        FeatureCloud { points: voxelised, count: cloud.len() }
+    } else {
+        cloud.into()
+    }
+}
+
+/// How many times fewer points a voxelised copy must have to stand in for a cloud ([`standin`]):
+/// below that the passes it saves are few, and the protocol's clouds (voxelised for ICP they lose a
+/// few of their points) are described from their own points.
+pub const STANDIN_REDUCTION: usize = 2;
 
 /// How a cloud fits the feature budget at one voxel size.
 #[derive(Clone, Debug)]
@@ -111,12 +177,13 @@ enum Fit {
 /// steps). A size that does not fit stops voxelising a cloud as soon as it has more voxels than
 /// the budget. The target's side goes through `memo` ([`TargetFeatures`]).
 fn feature_grid(
-    source: &PointCloud,
-    target: &PointCloud,
+    source: FeatureCloud,
+    target: FeatureCloud,
     memo: &TargetFeatures,
     fraction: f64,
     dense: bool,
 ) -> (f64, Option<PointCloud>, Option<PointCloud>) {
+    let (source, target) = (source.points, target.points);
     let extent = source.half_extent().max(memo.half_extent(target));
     let (fraction, cap) = if dense {
         (fraction * DENSE_VOXEL_FRACTION / VOXEL_FRACTION, DENSE_FEATURE_POINTS)
@@ -184,12 +251,12 @@ impl TargetFeatures {
     }
 
     /// Whether `target` is dense at voxel size `v` ([`dense`]; computed once per size).
-    fn dense(&self, target: &PointCloud, v: f64) -> bool {
+    fn dense(&self, target: FeatureCloud, v: f64) -> bool {
         let mut dense = self.dense.lock().unwrap_or_else(|e| e.into_inner());
         if let Some((_, d)) = dense.iter().find(|(bits, _)| *bits == v.to_bits()) {
             return *d;
         }
-        let d = dense_at(target, v, || *self.bounds.get_or_init(|| target.bounds()));
+        let d = dense_at(target, v, || *self.bounds.get_or_init(|| target.points.bounds()));
         dense.push((v.to_bits(), d));
         d
     }
@@ -255,10 +322,18 @@ impl Matched {
     }
 
     /// [`Matched::new`], with the target's side taken from `memo` where an earlier pair onto the
-    /// same `target` left it (the same result either way).
-    pub fn onto(source: &PointCloud, target: &PointCloud, memo: &TargetFeatures, voxel_fraction: f64) -> Self {
-        let dense = dense(source, target, memo, voxel_fraction);
+    /// same `target` left it (the same result either way). Either cloud may be a stand-in
+    /// ([`FeatureCloud`], [`standin`]); `memo` must always be given the target the same way.
+    pub fn onto<'s, 't>(
+        source: impl Into<FeatureCloud<'s>>,
+        target: impl Into<FeatureCloud<'t>>,
+        memo: &TargetFeatures,
+        voxel_fraction: f64,
+    ) -> Self {
+        let (source, target) = (source.into(), target.into());
+        let dense = dense_of(source, target, memo, voxel_fraction);
         let (voxel, source_v, target_v) = feature_grid(source, target, memo, voxel_fraction, dense);
+        let (source, target) = (source.points, target.points);
         // the search's voxelised clouds where it made them (the same as describing anew)
         let source = match source_v {
             Some(v) => describe_voxelised(v.points, voxel),

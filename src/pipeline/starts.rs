@@ -196,7 +196,12 @@ impl<'a> Starts<'a> {
         let mut w = Stopwatch::start(self.clock);
         let params = global::GlobalParams { seed: self.seed, hypotheses: count, ..Default::default() };
         let matched = self.matched.get_or_insert_with(|| {
-            global::Matched::onto(&p.src_n, &p.target.cloud, &p.target.features, params.voxel_fraction)
+            // large clouds: ICP's voxelised copies stand in for their points (normalised units,
+            // where the pair's larger half-extent is 1)
+            let (voxel, fraction) = (f64::from_bits(p.target.sizes.voxel), params.voxel_fraction);
+            let source = global::standin(&p.src_n, &p.icp_src, voxel, 1.0, fraction);
+            let target = global::standin(&p.target.cloud, &p.target.icp, voxel, 1.0, fraction);
+            global::Matched::onto(source, target, &p.target.features, fraction)
         });
         let hypotheses = matched.hypotheses(&params).iter().map(|h| h.T_target_source).collect();
         self.global_ms += w.lap();

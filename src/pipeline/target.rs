@@ -12,7 +12,7 @@
 //! piece is what preparing anew would make, so the result is the same either way.
 
 use crate::cloud::{JointNormalization, NonFinite, PointCloud};
-use crate::global::TargetFeatures;
+use crate::global::{self, TargetFeatures};
 use crate::icp::IcpTarget;
 use crate::outliers::Outliers;
 use crate::support::Support;
@@ -155,13 +155,20 @@ impl PreparedTarget {
     }
 
     /// Brings the kept target to `sizes`, whose scale is its own: voxelised again for ICP (its
-    /// index and normals dropped) when the voxel differs, sampled again for the network when the
-    /// point count or the seed does; the normalised cloud, its centroid and its descriptors stay.
+    /// index and normals dropped, and its descriptors when ICP's copy may stand in for it,
+    /// `global::standin`) when the voxel differs, sampled again for the network when the point
+    /// count or the seed does; the normalised cloud and its centroid stay.
     pub(crate) fn resize(&mut self, sizes: Sizes) {
         debug_assert_eq!(self.sizes.scale, sizes.scale);
         if self.sizes.voxel != sizes.voxel {
+            let was = self.icp.len();
             self.icp = icp_cloud(&self.cloud, &sizes);
             self.index = OnceLock::new();
+            // the descriptors were made from ICP's copy where it could stand in for the target
+            // (`global::standin`)
+            if [was, self.icp.len()].iter().any(|&n| n.saturating_mul(global::STANDIN_REDUCTION) <= self.cloud.len()) {
+                self.features = TargetFeatures::default();
+            }
         }
         if (self.sizes.n_net, self.sizes.seed) != (sizes.n_net, sizes.seed) {
             self.net = net_sample(&self.cloud, &sizes);
