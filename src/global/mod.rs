@@ -115,7 +115,7 @@ fn dense_at(cloud: FeatureCloud, v: f64, bounds: impl FnOnce() -> ([f32; 3], [f3
 
 /// A cloud as the global hypotheses see it ([`Matched::onto`]): its points, or for a large cloud a
 /// finer voxelised copy of them standing in for them (the pipeline gives ICP's copy, at half the
-/// final distance, where it holds at most a quarter of the points: [`standin`]), with how many
+/// final distance, where it holds at most half the points: [`standin`]), with how many
 /// points the cloud itself has. The feature voxel's search voxelises the copy, each try a pass
 /// over far fewer points; [`dense`] counts the cloud's own points per voxel the copy occupies.
 /// Voxelised again at the coarser feature voxel, the copy gives about the cloud's own voxel

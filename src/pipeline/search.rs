@@ -10,9 +10,10 @@
 //! [`LAST_STAGE_STARTS`] ([`refine::shortlist`]), whose best must fit clearly better
 //! ([`refine::clearly_better`]). An answer still below [`UNSURE_CONFIDENCE`] after that gets the
 //! stage of starts for unsure answers ([`Start::is_for_unsure`], when the options name them), whose
-//! best replaces it only when it fits much better ([`UNSURE_GAIN`]). An answer that reaches [`NEARLY_SURE_CONFIDENCE`] once the
-//! global stage has run, or [`AGREED_CONFIDENCE`] when the global stage's best is that same pose
-//! again, skips the stages left and the rotations: its last stage is the best
+//! best replaces it only when it fits much better ([`UNSURE_GAIN`]). An answer that reaches
+//! [`NEARLY_SURE_CONFIDENCE`] once the global stage has run, or [`AGREED_CONFIDENCE`] when the
+//! global stage's best is that same pose again, skips the stages left and the rotations: its last
+//! stage is the best
 //! [`NEARLY_SURE_LAST_STAGE_STARTS`] of the further global hypotheses, of those whose short run
 //! comes near the answer's own ([`NEARLY_SURE_SCREEN_FIT`]). The global stage refines, of its
 //! hypotheses, the one that fits best after a short run, and those whose short run comes near the
