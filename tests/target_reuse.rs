@@ -82,6 +82,36 @@ fn registrations_onto_a_kept_target_equal_fresh_ones() {
     }
 }
 
+/// A large target (the CAD model read as 400,000 surface points), whose ICP copy stands in for
+/// its points in the global stage (`global::standin`): kept from call to call, through another
+/// ICP voxel (another copy, which no longer stands in) and back, every registration equals a
+/// fresh one.
+#[test]
+fn registrations_onto_a_kept_large_target_equal_fresh_ones_through_another_voxel() {
+    let name = "angle_block_binary_solid.stl";
+    let bytes = std::fs::read(format!("{}/fixtures/formats/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
+    let model = read_point_cloud_with(&bytes, name, &ReadOptions { surface_points: Some(400_000), seed: 1 }).unwrap();
+    let (_, scans) = model_and_scans();
+    // the default ICP voxel (half of 0.025 of the scale, the model's half-extent) keeps at most
+    // half the model's points, so its copy stands in; at a tenth of that voxel, it does not
+    let scale = model.half_extent();
+    let copy = arps::sampling::voxel_downsample(&model, (0.0125 * scale) as f32);
+    assert!(copy.len() * arps::global::STANDIN_REDUCTION <= model.len(), "{} of {}", copy.len(), model.len());
+    let defaults = Options::default();
+    let fine = Options { voxel_size: Some(0.00125 * scale), ..Options::default() };
+    let calls: Vec<(&PointCloud, &Options)> = vec![
+        (&scans[2], &defaults), // any pose: the global stage describes the model's copy
+        (&scans[2], &fine),     // another copy, the model's own points described
+        (&scans[2], &defaults), // the default copy again
+        (&scans[1], &defaults),
+    ];
+    let mut kept = Registrar::with_default_model().unwrap();
+    for (k, (source, options)) in calls.into_iter().enumerate() {
+        let again = untimed(kept.register(source, &model, options).unwrap());
+        assert_eq!(again, fresh(source, &model, options).unwrap(), "call {k}");
+    }
+}
+
 #[test]
 fn a_failed_call_or_forget_target_leaves_the_next_registration_as_a_fresh_one() {
     let (model, scans) = model_and_scans();
