@@ -352,9 +352,10 @@ fn refine_alternatives(
 /// shapes with look-alikes (doors, bottles, cones, flower pots) some turn ends on a look-alike that
 /// fits a few percent better than the truth; the truth it finds where every other start missed
 /// fits far better than the answer. On 3,750 validation pairs, of the stage's bests that would
-/// have replaced the answer, those that fit up to 11.5% better turned 12 right answers wrong and
-/// 8 wrong ones right; those that fit more than 15% better turned 8 wrong answers right and none
-/// wrong (`BENCHMARK.md`, "The stage for unsure answers: a much better fit or nothing").
+/// have replaced the answer, those that fit less than 15% better turned 12 right answers wrong
+/// (each within 11.5%) and 8 wrong ones right; those that fit more than 15% better turned 8 wrong
+/// answers right and none wrong (`BENCHMARK.md`, "The stage for unsure answers: a much better fit
+/// or nothing").
 const UNSURE_GAIN: f64 = 0.15;
 
 /// Most starts of the adaptive search's last stage that are refined: the best after a short run
