@@ -332,7 +332,7 @@ fn choose_origin(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
 }
 
 /// The largest half-extent of the box `[lo, hi]`.
-fn half_extent_of(lo: [f32; 3], hi: [f32; 3]) -> f64 {
+pub(crate) fn half_extent_of(lo: [f32; 3], hi: [f32; 3]) -> f64 {
     (0..3).map(|a| (hi[a] as f64 - lo[a] as f64) * 0.5).fold(0.0, f64::max)
 }
 

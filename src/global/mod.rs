@@ -15,7 +15,7 @@ pub mod fpfh;
 pub mod matching;
 pub mod ransac;
 
-use crate::cloud::PointCloud;
+use crate::cloud::{half_extent_of, PointCloud};
 use crate::sampling::{voxel_downsample, voxel_downsample_at_most_in};
 use crate::spatial::KdIndex;
 pub use ransac::{Hypothesis, RansacParams};
@@ -81,8 +81,8 @@ pub fn feature_voxel<'s, 't>(
     fraction: f64,
 ) -> f64 {
     let memo = TargetFeatures::default();
-    let (s, t) = (source.into(), target.into());
-    feature_grid(s, t, &memo, fraction, dense_of(s, t, &memo, fraction)).0
+    let pair = Pair::new(source.into(), target.into(), &memo);
+    feature_grid(&pair, &memo, fraction, dense_of(&pair, &memo, fraction)).0
 }
 
 /// Whether both clouds are dense ([`DENSE_OCCUPANCY`]) at the feature voxel of `fraction` (of the
@@ -95,22 +95,39 @@ pub fn dense<'s, 't>(
     memo: &TargetFeatures,
     fraction: f64,
 ) -> bool {
-    dense_of(source.into(), target.into(), memo, fraction)
+    dense_of(&Pair::new(source.into(), target.into(), memo), memo, fraction)
 }
 
 /// [`dense`] of two clouds as the global hypotheses see them.
-fn dense_of(source: FeatureCloud, target: FeatureCloud, memo: &TargetFeatures, fraction: f64) -> bool {
-    let extent = source.points.half_extent().max(memo.half_extent(target.points));
-    let v = (fraction * extent).max(f64::MIN_POSITIVE);
-    dense_at(source, v, || source.points.bounds()) && memo.dense(target, v)
+fn dense_of(pair: &Pair, memo: &TargetFeatures, fraction: f64) -> bool {
+    let v = (fraction * pair.extent).max(f64::MIN_POSITIVE);
+    dense_at(pair.source, &pair.source_bounds, v) && memo.dense(pair.target, v)
 }
 
 /// `cloud` has at least [`DENSE_MIN_POINTS`] points and [`DENSE_OCCUPANCY`] per occupied voxel of
-/// size `v` (`bounds`: its points' bounds, computed only when needed). The voxels are those its
-/// [`FeatureCloud::points`] occupy; the points counted, all of its [`FeatureCloud::count`].
-fn dense_at(cloud: FeatureCloud, v: f64, bounds: impl FnOnce() -> ([f32; 3], [f32; 3])) -> bool {
+/// size `v` (`bounds`: its points' bounds). The voxels are those its [`FeatureCloud::points`]
+/// occupy; the points counted, all of its [`FeatureCloud::count`].
+fn dense_at(cloud: FeatureCloud, bounds: &([f32; 3], [f32; 3]), v: f64) -> bool {
     cloud.count >= DENSE_MIN_POINTS
-        && voxel_downsample_at_most_in(cloud.points, &bounds(), v as f32, cloud.count / DENSE_OCCUPANCY).is_some()
+        && voxel_downsample_at_most_in(cloud.points, bounds, v as f32, cloud.count / DENSE_OCCUPANCY).is_some()
+}
+
+/// The two clouds of a feature voxel's search, with what its passes need of them, each computed
+/// once: the source's bounds and the pair's larger half-extent (the target's through the memo).
+struct Pair<'s, 't> {
+    source: FeatureCloud<'s>,
+    target: FeatureCloud<'t>,
+    source_bounds: ([f32; 3], [f32; 3]),
+    extent: f64,
+}
+
+impl<'s, 't> Pair<'s, 't> {
+    fn new(source: FeatureCloud<'s>, target: FeatureCloud<'t>, memo: &TargetFeatures) -> Self {
+        let source_bounds = source.points.bounds();
+        let (lo, hi) = source_bounds;
+        let extent = half_extent_of(lo, hi).max(memo.half_extent(target.points));
+        Self { source, target, source_bounds, extent }
+    }
 }
 
 /// A cloud as the global hypotheses see it ([`Matched::onto`]): its points, or for a large cloud a
@@ -145,9 +162,8 @@ pub fn standin<'a>(
     extent: f64,
     fraction: f64,
 ) -> FeatureCloud<'a> {
-    let finest = fraction * DENSE_VOXEL_FRACTION / VOXEL_FRACTION * extent;
-    let fewer = voxelised.len().saturating_mul(STANDIN_REDUCTION) <= cloud.len();
-    if fewer && voxel > 0.0 && voxel <= 0.5 * finest * (1.0 + 1e-9) {
+    let finest = dense_fraction(fraction) * extent;
+    if saves_enough(cloud.len(), voxelised.len()) && voxel > 0.0 && voxel <= 0.5 * finest * (1.0 + 1e-9) {
         FeatureCloud { points: voxelised, count: cloud.len() }
     } else {
         cloud.into()
@@ -158,6 +174,18 @@ pub fn standin<'a>(
 /// below that the passes it saves are few, and the protocol's clouds (voxelised for ICP they lose a
 /// few of their points) are described from their own points.
 pub const STANDIN_REDUCTION: usize = 2;
+
+/// Whether a copy of `copy` points saves enough of a cloud's `points` to stand in for it
+/// ([`STANDIN_REDUCTION`], [`standin`]).
+pub fn saves_enough(points: usize, copy: usize) -> bool {
+    copy.saturating_mul(STANDIN_REDUCTION) <= points
+}
+
+/// The feature voxel's starting fraction on a dense pair ([`DENSE_VOXEL_FRACTION`]), scaled like
+/// `fraction` against [`VOXEL_FRACTION`].
+fn dense_fraction(fraction: f64) -> f64 {
+    fraction * DENSE_VOXEL_FRACTION / VOXEL_FRACTION
+}
 
 /// How a cloud fits the feature budget at one voxel size.
 #[derive(Clone, Debug)]
@@ -177,26 +205,21 @@ enum Fit {
 /// steps). A size that does not fit stops voxelising a cloud as soon as it has more voxels than
 /// the budget. The target's side goes through `memo` ([`TargetFeatures`]).
 fn feature_grid(
-    source: FeatureCloud,
-    target: FeatureCloud,
+    pair: &Pair,
     memo: &TargetFeatures,
     fraction: f64,
     dense: bool,
 ) -> (f64, Option<PointCloud>, Option<PointCloud>) {
-    let (source, target) = (source.points, target.points);
-    let extent = source.half_extent().max(memo.half_extent(target));
-    let (fraction, cap) = if dense {
-        (fraction * DENSE_VOXEL_FRACTION / VOXEL_FRACTION, DENSE_FEATURE_POINTS)
-    } else {
-        (fraction, MAX_FEATURE_POINTS)
-    };
-    let mut v = (fraction * extent).max(f64::MIN_POSITIVE);
-    // the source's bounds once for every try (a try that does not fit stops early)
-    let source_bounds = (source.len() > cap).then(|| source.bounds());
+    let (source, target) = (pair.source.points, pair.target.points);
+    let (fraction, cap) =
+        if dense { (dense_fraction(fraction), DENSE_FEATURE_POINTS) } else { (fraction, MAX_FEATURE_POINTS) };
+    let mut v = (fraction * pair.extent).max(f64::MIN_POSITIVE);
     for _ in 0..60 {
-        let fits_source = match &source_bounds {
-            None => Some(None),
-            Some(b) => voxel_downsample_at_most_in(source, b, v as f32, cap).map(Some),
+        // (a try that does not fit stops early)
+        let fits_source = if source.len() > cap {
+            voxel_downsample_at_most_in(source, &pair.source_bounds, v as f32, cap).map(Some)
+        } else {
+            Some(None)
         };
         if let Some(s) = fits_source {
             match memo.fit(target, v, cap) {
@@ -211,12 +234,11 @@ fn feature_grid(
 }
 
 /// The target's side of the global hypotheses ([`Matched::onto`]), remembered so that
-/// registrations onto the same target describe it once: its largest half-extent, which feature
-/// voxel sizes it fits (a pass over every point each), and its descriptors at the size last used.
-/// Only ever use one with the same target cloud.
+/// registrations onto the same target describe it once: its bounds, which feature voxel sizes it
+/// fits (a pass over every point each), and its descriptors at the size last used. Only ever use
+/// one with the same target cloud.
 #[derive(Debug, Default)]
 pub struct TargetFeatures {
-    half_extent: OnceLock<f64>,
     bounds: OnceLock<([f32; 3], [f32; 3])>,
     /// Per voxel size tried (its bits) and point budget, how the target fits it.
     fits: Mutex<Vec<(u64, usize, Fit)>>,
@@ -227,8 +249,15 @@ pub struct TargetFeatures {
 }
 
 impl TargetFeatures {
+    /// The bounds of `target` (computed once).
+    fn bounds(&self, target: &PointCloud) -> &([f32; 3], [f32; 3]) {
+        self.bounds.get_or_init(|| target.bounds())
+    }
+
+    /// The largest half-extent of `target`'s bounds.
     fn half_extent(&self, target: &PointCloud) -> f64 {
-        *self.half_extent.get_or_init(|| target.half_extent())
+        let (lo, hi) = *self.bounds(target);
+        half_extent_of(lo, hi)
     }
 
     /// How `target` fits the budget of `cap` points at voxel size `v` (computed once per size).
@@ -240,8 +269,7 @@ impl TargetFeatures {
         let fit = if target.len() <= cap {
             Fit::AsIs
         } else {
-            let bounds = self.bounds.get_or_init(|| target.bounds());
-            match voxel_downsample_at_most_in(target, bounds, v as f32, cap) {
+            match voxel_downsample_at_most_in(target, self.bounds(target), v as f32, cap) {
                 Some(c) => Fit::Voxelised(c),
                 None => Fit::No,
             }
@@ -256,7 +284,7 @@ impl TargetFeatures {
         if let Some((_, d)) = dense.iter().find(|(bits, _)| *bits == v.to_bits()) {
             return *d;
         }
-        let d = dense_at(target, v, || *self.bounds.get_or_init(|| target.points.bounds()));
+        let d = dense_at(target, self.bounds(target.points), v);
         dense.push((v.to_bits(), d));
         d
     }
@@ -330,10 +358,10 @@ impl Matched {
         memo: &TargetFeatures,
         voxel_fraction: f64,
     ) -> Self {
-        let (source, target) = (source.into(), target.into());
-        let dense = dense_of(source, target, memo, voxel_fraction);
-        let (voxel, source_v, target_v) = feature_grid(source, target, memo, voxel_fraction, dense);
-        let (source, target) = (source.points, target.points);
+        let pair = Pair::new(source.into(), target.into(), memo);
+        let dense = dense_of(&pair, memo, voxel_fraction);
+        let (voxel, source_v, target_v) = feature_grid(&pair, memo, voxel_fraction, dense);
+        let (source, target) = (pair.source.points, pair.target.points);
         // the search's voxelised clouds where it made them (the same as describing anew)
         let source = match source_v {
             Some(v) => describe_voxelised(v.points, voxel),

@@ -166,7 +166,7 @@ impl PreparedTarget {
             self.index = OnceLock::new();
             // the descriptors were made from ICP's copy where it could stand in for the target
             // (`global::standin`)
-            if [was, self.icp.len()].iter().any(|&n| n.saturating_mul(global::STANDIN_REDUCTION) <= self.cloud.len()) {
+            if [was, self.icp.len()].iter().any(|&n| global::saves_enough(self.cloud.len(), n)) {
                 self.features = TargetFeatures::default();
             }
         }
