@@ -55,7 +55,7 @@ pub struct GlobalParams {
     /// [`dense`] pair it starts finer, [`DENSE_VOXEL_FRACTION`], and the budget is
     /// [`DENSE_FEATURE_POINTS`]).
     pub voxel_fraction: f64,
-    /// RANSAC's most draws.
+    /// RANSAC's most draws ([`MAX_ITERATIONS`]).
     pub max_iterations: u32,
     /// How many distinct hypotheses to return at most.
     pub hypotheses: usize,
@@ -65,9 +65,16 @@ pub struct GlobalParams {
 
 impl Default for GlobalParams {
     fn default() -> Self {
-        Self { voxel_fraction: VOXEL_FRACTION, max_iterations: 20_000, hypotheses: 5, seed: 0 }
+        Self { voxel_fraction: VOXEL_FRACTION, max_iterations: MAX_ITERATIONS, hypotheses: 5, seed: 0 }
     }
 }
+
+/// RANSAC's most draws by default (Open3D's tutorial pipeline takes as many). A pair whose matches
+/// are mostly right stops far sooner (the draws stop once a better one is unlikely); the cap
+/// binds on scans of rooms, where a few percent of the matches are right: there three right
+/// matches come together about once in 10,000 draws, and 20,000 draws missed the truth on about
+/// one pair in eight (`BENCHMARK.md`, "RANSAC's draws on scans of rooms").
+pub const MAX_ITERATIONS: u32 = 100_000;
 
 /// The feature voxel for a pair: `fraction` of the larger largest half-extent, grown by 25% at a
 /// time until both voxelised clouds have at most [`MAX_FEATURE_POINTS`] points; on a [`dense`]

@@ -47,6 +47,9 @@ struct EvalResult {
     starts: Option<String>,
     /// The seed of `eval --perturb` (null when the sources were not moved).
     perturb: Value,
+    /// Its largest Euler angle, degrees (`eval --perturb-angle`; results written before it had
+    /// the option moved the sources by at most 45); `None` when the sources were not moved.
+    perturb_angle: Option<f64>,
     rot_threshold: f64,
     trans_threshold: f64,
     names: Vec<String>,
@@ -96,6 +99,7 @@ fn read(path: &Path) -> Result<EvalResult, String> {
         weights: v["weights"].as_str().unwrap_or("?").to_string(),
         starts: v["starts"].as_array().map(|a| a.iter().filter_map(Value::as_str).collect::<Vec<_>>().join(", ")),
         perturb: v["perturb"].clone(),
+        perturb_angle: v["perturb_angle_deg"].as_f64().or((!v["perturb"].is_null()).then_some(45.0)),
         rot_threshold,
         trans_threshold,
         names,
@@ -126,13 +130,16 @@ pub fn run(args: CompareArgs) -> Result<(), String> {
             if a.names.len() == b.names.len() { ", different names or order" } else { "" }
         ));
     }
-    if a.perturb != b.perturb {
+    if a.perturb != b.perturb || a.perturb_angle != b.perturb_angle {
+        let angle = |r: &EvalResult| r.perturb_angle.map(|d| format!(" --perturb-angle {d}")).unwrap_or_default();
         return Err(format!(
-            "{} and {} moved the sources differently (--perturb {} and {})",
+            "{} and {} moved the sources differently (--perturb {}{} and {}{})",
             args.a.display(),
             args.b.display(),
             a.perturb,
-            b.perturb
+            angle(&a),
+            b.perturb,
+            angle(&b)
         ));
     }
     if a.rot_threshold != b.rot_threshold || a.trans_threshold != b.trans_threshold {

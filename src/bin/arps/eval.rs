@@ -75,9 +75,14 @@ pub struct EvalArgs {
     #[arg(long)]
     limit: Option<usize>,
     /// Move each source by a random pose (Euler angles in [-45, 45] deg about its bounding-box
-    /// centre, translation up to 0.5 normalised units) from this seed, and compose the GT accordingly.
+    /// centre, or in [-A, A] with `--perturb-angle A`; translation up to 0.5 normalised units) from
+    /// this seed, and compose the GT accordingly.
     #[arg(long)]
     perturb: Option<u64>,
+    /// With `--perturb`: the largest Euler angle of the random pose, degrees, in (0, 180] (180:
+    /// any orientation, the scans as they would arrive in unrelated frames).
+    #[arg(long, default_value_t = 45.0, requires = "perturb")]
+    perturb_angle: f64,
     /// Write recall-vs-threshold curves (rotation 0-30 deg, translation 0-0.4) to this SVG.
     #[arg(long)]
     svg: Option<PathBuf>,
@@ -203,11 +208,11 @@ impl Method {
     }
 }
 
-/// A random pose about `center`: Euler angles U[-45, 45] deg each (R = Rx Ry Rz), translation
-/// `a * u * scale`, u uniform on S², a ~ U[0, 0.5].
-fn perturbation(seed: u64, index: u64, center: [f64; 3], scale: f64) -> Matrix4<f64> {
+/// A random pose about `center`: Euler angles U[-`max_deg`, `max_deg`] each (R = Rx Ry Rz),
+/// translation `a * u * scale`, u uniform on S², a ~ U[0, 0.5].
+fn perturbation(seed: u64, index: u64, center: [f64; 3], scale: f64, max_deg: f64) -> Matrix4<f64> {
     let mut rng = arps::sampling::rng(arps::data::mix(seed, index));
-    let a = 45f64.to_radians();
+    let a = max_deg.to_radians();
     let mut ang = || (rng.random::<f64>() * 2.0 - 1.0) * a;
     let r = euler_xyz(ang(), ang(), ang());
     let u = arps::data::pairs::unit_vector(&mut rng);
@@ -281,6 +286,9 @@ struct MethodSummary {
 }
 
 pub fn run(a: EvalArgs) -> Result<(), String> {
+    if !(a.perturb_angle > 0.0 && a.perturb_angle <= 180.0) {
+        return Err(format!("--perturb-angle must be in (0, 180] degrees, got {}", a.perturb_angle));
+    }
     let entries = manifest::read(&a.manifest)?;
     let entries: Vec<_> = entries.into_iter().take(a.limit.unwrap_or(usize::MAX)).collect();
     if entries.is_empty() {
@@ -318,7 +326,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         let mut gt = e.T_target_source;
         if let Some(seed) = a.perturb {
             let n = JointNormalization::of_pair(&source, &target);
-            let p = perturbation(seed, k as u64, n.source_center, n.scale);
+            let p = perturbation(seed, k as u64, n.source_center, n.scale, a.perturb_angle);
             source = source.transformed(&p);
             gt *= rigid_inverse(&p);
         }
@@ -446,7 +454,9 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "{} ({} pairs{})",
             a.manifest.display(),
             results.len(),
-            a.perturb.map(|s| format!(", perturbed, seed {s}")).unwrap_or_default()
+            a.perturb
+                .map(|s| format!(", perturbed, seed {s}, angles up to {} deg", a.perturb_angle))
+                .unwrap_or_default()
         );
         let svg = recall_svg(&curves, a.rot_threshold, a.trans_threshold, 30.0, 0.4, &title);
         std::fs::write(path, svg).map_err(|e| format!("{}: {e}", path.display()))?;
@@ -459,6 +469,7 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             "weights_provenance": trained.provenance(),
             "starts": starts.iter().map(|s| s.name()).collect::<Vec<_>>(),
             "perturb": a.perturb,
+            "perturb_angle_deg": a.perturb.map(|_| a.perturb_angle),
             "units": units,
             "rot_threshold_deg": a.rot_threshold,
             "trans_threshold": a.trans_threshold,
@@ -502,7 +513,9 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
         "arps eval: {} pairs from {}{}",
         results.len(),
         a.manifest.display(),
-        a.perturb.map(|s| format!(", sources perturbed (seed {s})")).unwrap_or_default()
+        a.perturb
+            .map(|s| format!(", sources perturbed (seed {s}, angles up to {} deg)", a.perturb_angle))
+            .unwrap_or_default()
     );
     out!("  weights: {weights_desc}; untrained: random web weights, seed 0");
     let names: Vec<&str> = starts.iter().map(|s| s.name()).collect();
