@@ -171,9 +171,12 @@ export type RegisterOptions = {
    * still below 0.5 (`UNSURE_CONFIDENCE`), those starts are refined, as one more stage whose
    * best replaces the answer only when it fits more than 15% better (it searches every
    * orientation, where a look-alike can fit a few percent better than the truth); so only the
-   * answers the engine would otherwise flag as unsure pay for their network passes.
-   * `"exhaustive"` refines every start, without those last stages. The result's `startsRefined`
-   * says how many were refined.
+   * answers the engine would otherwise flag as unsure pay for their network passes. Once a
+   * global stage has run, the answer's rotation with the translation the descriptor matches
+   * agree on for it is refined as one more start when that translation is another one, and
+   * replaces the answer when it fits more than 10% better (an answer slid along a wall, its
+   * rotation right). `"exhaustive"` refines every start, without those last stages. The
+   * result's `startsRefined` says how many were refined.
    */
   search?: RegistrationSearch,
 };

@@ -174,9 +174,12 @@ pub struct Options {
     /// still below 0.5 (`UNSURE_CONFIDENCE`), those starts are refined, as one more stage whose
     /// best replaces the answer only when it fits more than 15% better (it searches every
     /// orientation, where a look-alike can fit a few percent better than the truth); so only the
-    /// answers the engine would otherwise flag as unsure pay for their network passes.
-    /// `"exhaustive"` refines every start, without those last stages. The result's `startsRefined`
-    /// says how many were refined.
+    /// answers the engine would otherwise flag as unsure pay for their network passes. Once a
+    /// global stage has run, the answer's rotation with the translation the descriptor matches
+    /// agree on for it is refined as one more start when that translation is another one, and
+    /// replaces the answer when it fits more than 10% better (an answer slid along a wall, its
+    /// rotation right). `"exhaustive"` refines every start, without those last stages. The
+    /// result's `startsRefined` says how many were refined.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub search: Search,
 }
@@ -197,7 +200,9 @@ pub enum Search {
     /// answer still below [`UNSURE_CONFIDENCE`] (0.5) then gets the starts for unsure answers
     /// ([`Start::RotationsNetwork`]) when the starts name them. When either cloud has many points
     /// (at least 3,000, [`GLOBAL_BEFORE_STOP_POINTS`]: scans, or a scan onto a model) it does not
-    /// stop before the global stage.
+    /// stop before the global stage. Once the global stage has run, the answer's rotation with the
+    /// translation the descriptor matches agree on for it ([`crate::global::translation`]) is one
+    /// more start, which replaces the answer when it fits clearly better.
     /// The best of everything refined is returned. Easy pairs cost one start; hard ones get every
     /// start and more.
     #[default]

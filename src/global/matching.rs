@@ -37,8 +37,20 @@ pub fn nearest_each(a: &[Descriptor], b: &[Descriptor]) -> Vec<u32> {
 /// distances to them are computed lane by lane in vector registers: each distance with the same
 /// operations in the same order as one computed alone, so the same value.
 pub fn mutual_matches(source: &[Descriptor], target: &[Descriptor], min_mutual: usize) -> Vec<(u32, u32)> {
+    nearest_and_mutual(source, target, min_mutual).1
+}
+
+/// Every source descriptor's nearest target descriptor `(source index, target index)`, in source
+/// order (as [`nearest_each`]), and [`mutual_matches`] among them, from one pass over the distance
+/// matrix.
+#[allow(clippy::type_complexity)]
+pub fn nearest_and_mutual(
+    source: &[Descriptor],
+    target: &[Descriptor],
+    min_mutual: usize,
+) -> (Vec<(u32, u32)>, Vec<(u32, u32)>) {
     if source.is_empty() || target.is_empty() {
-        return Vec::new();
+        return (Vec::new(), Vec::new());
     }
     let groups = transpose(target);
     let mut row = vec![(0u32, f32::INFINITY); source.len()];
@@ -72,7 +84,8 @@ pub fn mutual_matches(source: &[Descriptor], target: &[Descriptor], min_mutual: 
             }
         }
     }
-    keep_mutual(&row, |j| col_i[j as usize], min_mutual)
+    let nearest = row.iter().enumerate().map(|(i, &(j, _))| (i as u32, j)).collect();
+    (nearest, keep_mutual(&row, |j| col_i[j as usize], min_mutual))
 }
 
 /// The pairs `(i, row[i])` whose target's nearest source (`nearest_source`) is `i` again, or

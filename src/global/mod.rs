@@ -2,7 +2,9 @@
 //! of each cloud ([`fpfh`]), mutual nearest neighbours in descriptor space ([`matching`]), and a
 //! seeded RANSAC with geometric pre-checks and early termination ([`ransac`]) that returns a few
 //! ranked rigid motions. Each becomes a start of the pipeline's refinement
-//! ([`crate::Start::Global`], [`crate::Start::GlobalNetwork`]).
+//! ([`crate::Start::Global`], [`crate::Start::GlobalNetwork`]). For a given rotation, the matches
+//! also vote for a translation ([`translation`], [`Matched::translation`]): the search puts back an
+//! answer whose rotation is right and whose translation is not.
 //!
 //! Cost grows gently with the point count: the feature voxel is chosen from the data so that each
 //! voxelised cloud has at most [`MAX_FEATURE_POINTS`] points ([`DENSE_FEATURE_POINTS`] on dense
@@ -14,6 +16,7 @@
 pub mod fpfh;
 pub mod matching;
 pub mod ransac;
+pub mod translation;
 
 use crate::cloud::{half_extent_of, PointCloud};
 use crate::sampling::{voxel_downsample, voxel_downsample_at_most_in};
@@ -346,6 +349,8 @@ pub struct Matched {
     source: Described,
     target: Described,
     matches: Vec<(u32, u32)>,
+    /// Every source point's nearest target descriptor (what [`Matched::translation`] votes with).
+    nearest: Vec<(u32, u32)>,
     voxel: f64,
 }
 
@@ -375,8 +380,8 @@ impl Matched {
             None => describe(source, voxel),
         };
         let target = memo.described(target, voxel, target_v);
-        let matches = matching::mutual_matches(&source.descriptors, &target.descriptors, 30);
-        Self { source, target, matches, voxel }
+        let (nearest, matches) = matching::nearest_and_mutual(&source.descriptors, &target.descriptors, 30);
+        Self { source, target, matches, nearest, voxel }
     }
 
     /// Ranked rigid motions taking the source onto the target, best first (`params.hypotheses` at
@@ -386,14 +391,28 @@ impl Matched {
         let rp = RansacParams {
             max_iterations: params.max_iterations,
             confidence: 0.999,
-            inlier_distance: 1.5 * self.voxel,
+            inlier_distance: self.inlier_distance(),
             edge_ratio: 0.9,
             hypotheses: params.hypotheses,
             seed: params.seed,
         };
         ransac::ransac(&self.source.points, &self.target.points, &self.matches, &rp)
     }
+
+    /// The translation most of every source point's nearest descriptor matches agree on, given the
+    /// rotation `r` ([`translation::voted`] within RANSAC's inlier distance), with how many agree.
+    pub fn translation(&self, r: &nalgebra::Matrix3<f64>) -> Option<(nalgebra::Vector3<f64>, usize)> {
+        translation::voted(&self.source.points, &self.target.points, &self.nearest, r, self.inlier_distance())
+    }
+
+    /// RANSAC's inlier distance, which is also the radius of [`Matched::translation`]'s clusters.
+    pub fn inlier_distance(&self) -> f64 {
+        INLIER_VOXELS * self.voxel
+    }
 }
+
+/// RANSAC's inlier distance, in feature voxels.
+const INLIER_VOXELS: f64 = 1.5;
 
 /// Ranked rigid motions taking `source` onto `target` (both in one unit, any relative pose), best
 /// first; empty when the descriptors give fewer than three correspondences. Deterministic for

@@ -29,9 +29,12 @@
 //! answers that fit about as well ([`confidence::count_search_alternatives`]); those alternative
 //! poses are refined like the answer and handed on with it ([`refine_alternatives`]). With `up`
 //! ([`Prepared::upright`]), every start is levelled first, a stage whose best ends tilted settles
-//! nothing, and the probes count only upright poses (turning the answer about up too). With no
-//! start refined at all, the network's estimate (the initial transform with the network off),
-//! unrefined, and a warning.
+//! nothing, and the probes count only upright poses (turning the answer about up too). Once the
+//! global stage has run, the answer's rotation with the translation its descriptor matches agree
+//! on ([`Starts::voted_pose`]: an answer slid along a wall, or onto the next of a row of alike
+//! parts, has the rotation right and the translation not) is refined like one more start, and
+//! replaces the answer when it fits clearly better. With no start refined at all, the network's
+//! estimate (the initial transform with the network off), unrefined, and a warning.
 
 use super::prepare::Prepared;
 use super::starts::{self, Starts, Step};
@@ -285,6 +288,27 @@ pub(crate) fn search(
     if let Some(w) = waiting.take() {
         let (b, extra) = judged(w, &mut refined);
         (best, starts_refined) = (Some(b), starts_refined + extra);
+    }
+    // a slid answer, its rotation right and its translation not (a wall matched to the next one):
+    // the translation the global stage's matches agree on for its rotation, refined like a
+    // start, replaces it when it fits clearly better
+    let voted = match &best {
+        Some((c, _, _)) if adaptive && options.icp != IcpKind::Off => {
+            builder.voted_pose(&c.T_target_source).map(|t| (*c, t))
+        }
+        _ => None,
+    };
+    if let Some((c, t)) = voted {
+        starts_refined += 1;
+        let r = refine::refine_best(target_index, &p.icp_src.points, &[(c.start, level(t))], &how)
+            .filter(|r| admits(&r.T_target_source));
+        if let Some(r) = r {
+            refined.push((r.T_target_source, r.fitness));
+            if refine::clearly_better(&r, &c) && improves(&c, &r) {
+                let (b, extra) = judged(r, &mut refined);
+                (best, starts_refined) = (Some(b), starts_refined + extra);
+            }
+        }
     }
     // no start at all (only global ones, and the descriptors matched too little): the first
     // start the options name, unrefined

@@ -189,6 +189,19 @@ impl<'a> Starts<'a> {
         Ok(starts)
     }
 
+    /// `T_target_source` with the translation the global stage's descriptor matches agree on for
+    /// its rotation ([`global::Matched::translation`]), when the global stage has run, at least
+    /// [`MIN_TRANSLATION_VOTES`] matches agree, and that translation is another one: farther from
+    /// `T_target_source`'s than the radius of the matches' clusters (RANSAC's inlier distance).
+    #[allow(non_snake_case)]
+    pub(crate) fn voted_pose(&self, T_target_source: &Matrix4<f64>) -> Option<Matrix4<f64>> {
+        let matched = self.matched.as_ref()?;
+        let r = transform::rotation(T_target_source);
+        let (t, votes) = matched.translation(&r)?;
+        let agrees = (t - transform::translation(T_target_source)).norm() <= matched.inlier_distance();
+        (votes >= MIN_TRANSLATION_VOTES && !agrees).then(|| transform::from_rotation_translation(&r, &t))
+    }
+
     /// Up to `count` global hypotheses, best first (describing and matching the clouds on first
     /// use; the time goes to `global_ms`).
     fn draw(&mut self, count: usize) -> Vec<Matrix4<f64>> {
@@ -245,6 +258,9 @@ impl<'a> Starts<'a> {
         Ok(starts)
     }
 }
+
+/// Fewest descriptor matches that must agree on a translation for [`Starts::voted_pose`].
+const MIN_TRANSLATION_VOTES: usize = 8;
 
 /// How many global hypotheses the adaptive search's last stage draws from the matches; those
 /// the global stage did not use already (up to ten) become its starts (`BENCHMARK.md`, "A last
