@@ -179,6 +179,7 @@ fn matches_vote_for_the_translation_of_a_known_rotation() {
     assert_eq!(global::translation::voted(&source, &target, &[(0, n), (n, 0)], &r, 0.03), None);
     assert_eq!(global::translation::voted(&source, &target, &matches, &r, 0.0), None);
     assert_eq!(global::translation::voted(&source, &target, &matches, &r, f64::NAN), None);
+    assert_eq!(global::translation::voted(&source, &target, &matches, &(r * f64::NAN), 0.03), None);
 }
 
 /// A real LiDAR scan (fixtures/scans/velodyne-small.ply, MIT) against its own other half of the

@@ -12,7 +12,7 @@ use nalgebra::{Matrix3, Vector3};
 /// The densest cluster of the votes `q - R p` over `matches` (`(source index, target index)` into
 /// `source` and `target`; a pair with an index out of range is left out): the vote with the most
 /// votes within `radius` of it, and the mean of those, with how many they are. `None` without
-/// votes or with a `radius` that is not positive. Deterministic (ties to the first vote in
+/// votes, with a `radius` that is not positive, or when no vote is finite. Deterministic (ties to the first vote in
 /// `matches`' order); the votes sorted into cells of side `radius`, each vote compared with those
 /// of the 27 cells around its own, so O(m log m) for `m` votes spread evenly.
 pub fn voted(
@@ -61,6 +61,10 @@ pub fn voted(
         if n > best {
             (best, best_k) = (n, k);
         }
+    }
+    if best == 0 {
+        // no vote near even itself: not finite (a rotation with a NaN)
+        return None;
     }
     let (mut sum, mut n) = (Vector3::zeros(), 0usize);
     each_near(&votes[best_k], &mut |k| {
