@@ -12,9 +12,9 @@ use nalgebra::{Matrix3, Vector3};
 /// The densest cluster of the votes `q - R p` over `matches` (`(source index, target index)` into
 /// `source` and `target`; a pair with an index out of range is left out): the vote with the most
 /// votes within `radius` of it, and the mean of those, with how many they are. `None` without
-/// votes, with a `radius` that is not positive, or when no vote is finite. Deterministic (ties to the first vote in
-/// `matches`' order); the votes sorted into cells of side `radius`, each vote compared with those
-/// of the 27 cells around its own, so O(m log m) for `m` votes spread evenly.
+/// votes, with a `radius` that is not positive, or when no vote is finite. Deterministic (ties to
+/// the first vote in `matches`' order); the votes sorted into cells of side `radius`, each vote
+/// compared with those of the 27 cells around its own, so O(m log m) for `m` votes spread evenly.
 pub fn voted(
     source: &[[f32; 3]],
     target: &[[f32; 3]],
