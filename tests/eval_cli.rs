@@ -55,6 +55,7 @@ fn eval_json_and_perturbation() {
     let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
     assert_eq!(v["pairs"], 2);
     assert_eq!(v["perturb"], 3);
+    assert_eq!(v["perturb_angle_deg"], 45.0);
     let methods = v["methods"].as_array().unwrap();
     assert_eq!(methods.len(), METHODS.len());
     for (m, name) in methods.iter().zip(METHODS) {
@@ -87,6 +88,35 @@ fn eval_json_and_perturbation() {
         "{first}"
     );
     assert_eq!(first[4]["start"], "initial");
+}
+
+#[test]
+fn eval_perturb_angle_is_validated() {
+    let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs/pairs.tsv");
+    let m = manifest.to_str().unwrap();
+    let (ok, _, err) = arps(&["eval", m, "--limit", "1", "--perturb", "1", "--perturb-angle", "200"]);
+    assert!(!ok && err.contains("--perturb-angle must be in (0, 180]"), "{err}");
+    let (ok, _, err) = arps(&["eval", m, "--limit", "1", "--perturb", "1", "--perturb-angle", "0"]);
+    assert!(!ok && err.contains("--perturb-angle"), "{err}");
+    // without --perturb there is nothing to turn
+    let (ok, _, err) = arps(&["eval", m, "--limit", "1", "--perturb-angle", "90"]);
+    assert!(!ok && err.contains("--perturb"), "{err}");
+    let (ok, out, err) = arps(&[
+        "eval",
+        m,
+        "--limit",
+        "1",
+        "--perturb",
+        "1",
+        "--perturb-angle",
+        "180",
+        "--methods",
+        "network",
+        "--json",
+    ]);
+    assert!(ok, "{err}");
+    let v: serde_json::Value = serde_json::from_str(out.trim()).unwrap();
+    assert_eq!(v["perturb_angle_deg"], 180.0);
 }
 
 #[test]
@@ -501,6 +531,15 @@ fn compare_counts_discordant_pairs_ambiguity_and_categories() {
             ],
             "--perturb null and 1",
         ),
+        (
+            vec![
+                write_temp("f", &a.replace("\"pairs\":4", "\"perturb\":1,\"pairs\":4")).to_str().unwrap(),
+                write_temp("g", &a.replace("\"pairs\":4", "\"perturb\":1,\"perturb_angle_deg\":180.0,\"pairs\":4"))
+                    .to_str()
+                    .unwrap(),
+            ],
+            "--perturb 1 --perturb-angle 45 and 1 --perturb-angle 180",
+        ),
     ] {
         let mut full = vec!["compare"];
         full.extend(args);
@@ -508,7 +547,7 @@ fn compare_counts_discordant_pairs_ambiguity_and_categories() {
         assert!(!ok, "{full:?} should fail:\n{out}");
         assert!(err.starts_with("arps: ") && err.contains(msg) && err.trim().lines().count() == 1, "{full:?}: {err}");
     }
-    for t in ["a", "b", "c", "d", "e"] {
+    for t in ["a", "b", "c", "d", "e", "f", "g"] {
         let _ =
             std::fs::remove_file(std::env::temp_dir().join(format!("arps-compare-{}-{t}.json", std::process::id())));
     }
