@@ -108,6 +108,15 @@ pub(crate) fn search(
     // every stage's best and every refined probe pose: the final verdict counts those that fit
     // about as well as the answer as its alternatives
     let mut refined: Vec<(Matrix4<f64>, f64)> = Vec::new();
+    // one more pose `t` refined like a start (levelled, reported as `start`), kept only when it
+    // ends upright and noted among the refined answers: a probe's better pose, or the answer's
+    // voted translation
+    let refine_one = |start: Start, t: Matrix4<f64>, refined: &mut Vec<(Matrix4<f64>, f64)>| {
+        let r = refine::refine_best(target_index, &p.icp_src.points, &[(start, level(t))], &how)
+            .filter(|r| admits(&r.T_target_source));
+        refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
+        r
+    };
     // `c` judged by the probe, and the probe's better poses refined ([`settle`]): the answer with
     // its evidence and confidence, and how many probe poses were refined
     let judged = |c: Candidate, refined: &mut Vec<(Matrix4<f64>, f64)>| {
@@ -115,13 +124,7 @@ pub(crate) fn search(
         let (c, probed, extra) = if options.icp == IcpKind::Off {
             (c, judge(&c.T_target_source), 0)
         } else {
-            let refine = |t| {
-                let r = refine::refine_best(target_index, &p.icp_src.points, &[(c.start, level(t))], &how)
-                    .filter(|r| admits(&r.T_target_source));
-                refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
-                r
-            };
-            settle(c, &judge, refine, &improves)
+            settle(c, &judge, |t| refine_one(c.start, t, refined), &improves)
         };
         let confidence = confidence::confidence(&probed.evidence);
         ((c, probed, confidence), extra)
@@ -300,10 +303,7 @@ pub(crate) fn search(
     };
     if let Some((c, t)) = voted {
         starts_refined += 1;
-        let r = refine::refine_best(target_index, &p.icp_src.points, &[(c.start, level(t))], &how)
-            .filter(|r| admits(&r.T_target_source));
-        if let Some(r) = r {
-            refined.push((r.T_target_source, r.fitness));
+        if let Some(r) = refine_one(c.start, t, &mut refined) {
             if refine::clearly_better(&r, &c) && improves(&c, &r) {
                 let (b, extra) = judged(r, &mut refined);
                 (best, starts_refined) = (Some(b), starts_refined + extra);
