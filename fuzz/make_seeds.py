@@ -16,7 +16,7 @@ FIX = os.path.join(HERE, "..", "fixtures", "formats")
 sys.path.insert(0, FIX)
 from derive import lzf_compress  # noqa: E402
 
-PC_NAMES = ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension"]
+PC_NAMES = ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension", "a.las", "a.laz"]
 MESH_NAMES = ["a.ply", "a.obj", "a.off", "a.stl", "no_extension"]
 
 TET = [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.5)]
@@ -91,6 +91,22 @@ def fixture_head(name, lines):
         return b"".join(f.readlines()[:lines])
 
 
+def fixture_whole(name):
+    with open(os.path.join(FIX, name), "rb") as f:
+        return f.read()
+
+
+def las_head(name, n):
+    """The LAS file's header and records up to the point data, then its first n points."""
+    b = bytearray(fixture_whole(name))
+    offset = struct.unpack_from("<I", b, 96)[0]
+    record = struct.unpack_from("<H", b, 105)[0]
+    struct.pack_into("<I", b, 107, n)
+    if b[25] >= 4:
+        struct.pack_into("<Q", b, 247, n)
+    return bytes(b[: offset + n * record])
+
+
 def main():
     files = {
         "ply_ascii": ("a.ply", ply("ascii")),
@@ -108,6 +124,10 @@ def main():
         "csv": ("a.csv", text(",", "x,y,z,i\n")),
         "csv_eth": ("a.csv", fixture_head("eth_car_1000.csv", 12)),
         "txt": ("a.txt", text(";", "# comment\n")),
+        "las": ("a.las", las_head("simple.las", 20)),
+        "las_1_4": ("a.las", las_head("1_4_w_evlr.las", 20)),
+        "laz": ("a.laz", fixture_whole("simple.laz")),
+        "laz_layered": ("a.laz", fixture_whole("1_4_w_evlr.laz")),
     }
     for target, names in (("read_point_cloud", PC_NAMES), ("read_mesh", MESH_NAMES)):
         out = os.path.join(HERE, "seeds", target)

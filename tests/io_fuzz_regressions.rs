@@ -7,8 +7,8 @@
 
 use std::path::Path;
 
-const PC_NAMES: [&str; 10] =
-    ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension"];
+const PC_NAMES: [&str; 12] =
+    ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension", "a.las", "a.laz"];
 const MESH_NAMES: [&str; 5] = ["a.ply", "a.obj", "a.off", "a.stl", "no_extension"];
 
 fn inputs(dir: &str) -> Vec<(String, Vec<u8>)> {

@@ -1,4 +1,5 @@
-//! `parsePointCloud` on real files of every format (fixtures/formats/, see its LICENSES.md),
+//! `parsePointCloud` on real files of every format (fixtures/formats/, see its LICENSES.md; LAS
+//! and LAZ too, decompressed in wasm),
 //! through the JS-facing binding in Node: point counts and values as the native reader tests
 //! check them, format by extension and by sniffing, NaN kept for organised PCD, and registration
 //! of a parsed real scan against a known motion of itself.
@@ -35,6 +36,9 @@ const FILES: &[(&str, &[u8], usize, [f32; 3])] = &[
     fixture!("fuze_binary.ply", 502, NONE),
     fixture!("fuze_ascii.ply", 502, NONE),
     fixture!("fuze.obj", 502, NONE),
+    fixture!("simple.las", 1065, [637_012.24, 849_028.31, 431.66]),
+    fixture!("simple.laz", 1065, [637_012.24, 849_028.31, 431.66]),
+    fixture!("1_4_w_evlr.laz", 1000, [1_694_510.4, 1_816_498.0, 5_598.36]),
 ];
 
 fn close(a: &[f32], b: [f32; 3]) -> bool {
@@ -148,4 +152,24 @@ fn a_mesh_read_as_its_surface() {
     assert!(e.as_deref().is_some_and(|e| e.contains("invalid read options: unknown field `surfacePoint`")), "{e:?}");
     let e = parse_point_cloud(bytes, name, Some(options(r#"{"surfacePoints": 3}"#))).err().map(message);
     assert!(e.as_deref().is_some_and(|e| e.contains("surfacePoints = 3 is fewer than 16")), "{e:?}");
+}
+
+/// A georeferenced LAZ survey (LAS 1.4, layered chunks, decompressed in wasm) through
+/// `readPointCloud`: map-grid coordinates (1.7e6) as laspy reads them, to a millimetre.
+#[wasm_bindgen_test]
+fn read_point_cloud_keeps_a_laz_surveys_coordinates() {
+    let (name, bytes) = fixture!("1_4_w_evlr.laz");
+    let cloud = arps::wasm::read_point_cloud(bytes, name, None).map_err(message).unwrap();
+    let get = |k: &str| js_sys::Reflect::get(&cloud, &k.into()).unwrap();
+    let points = js_sys::Float32Array::from(get("points")).to_vec();
+    let origin: Vec<f64> = js_sys::Array::from(&get("origin")).iter().map(|v| v.as_f64().unwrap()).collect();
+    assert_eq!(points.len(), 3 * 1000);
+    let at = |i: usize| [0, 1, 2].map(|k| origin[k] + points[3 * i + k] as f64);
+    for (i, laspy) in [
+        (0, [1_694_510.386_934_684_1, 1_816_497.966_263_977, 5_598.359_612_814_967_5]),
+        (999, [1_694_291.636_332_655_8, 1_816_493.066_230_584_6, 5_597.089_652_537_912]),
+    ] {
+        let p = at(i);
+        assert!((0..3).all(|k| (p[k] - laspy[k]).abs() < 1e-3), "point {i}: {p:?}, laspy {laspy:?}");
+    }
 }

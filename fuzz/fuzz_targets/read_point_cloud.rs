@@ -4,7 +4,8 @@
 
 use libfuzzer_sys::fuzz_target;
 
-const NAMES: [&str; 10] = ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension"];
+const NAMES: [&str; 12] =
+    ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension", "a.las", "a.laz"];
 
 fuzz_target!(|data: &[u8]| {
     let Some((&choice, bytes)) = data.split_first() else { return };

@@ -8,6 +8,7 @@
 //! | [`Format::Obj`] | `.obj` | `v` and `f` (`i`, `i/t`, `i//n`, `i/t/n`, negative indices) |
 //! | [`Format::Off`] | `.off` | `OFF`, `COFF`, `NOFF`, `CNOFF`, `STOFF`, counts on the header line |
 //! | [`Format::Stl`] | `.stl` | ascii and binary (also binary files whose header starts with `solid`) |
+//! | [`Format::Las`] | `.las .laz` | LAS 1.0 to 1.4, point formats 0 to 10; LAZ (LASzip) compressed |
 //!
 //! Readers are written for hostile input: malformed files give an [`Error::Parse`] saying what
 //! and where (line number, byte offset, element name), never a panic, and no reservation is
@@ -25,6 +26,7 @@
 use crate::cloud::PointCloud;
 use crate::{Error, Result};
 
+mod las;
 mod lzf;
 mod mesh;
 mod obj;
@@ -89,6 +91,8 @@ pub enum Format {
     Off,
     /// Stereolithography.
     Stl,
+    /// ASPRS LAS, and LAS compressed by LASzip (LAZ): airborne and terrestrial LiDAR, survey data.
+    Las,
 }
 
 impl Format {
@@ -101,6 +105,7 @@ impl Format {
             Format::Obj => "OBJ",
             Format::Off => "OFF",
             Format::Stl => "STL",
+            Format::Las => "LAS",
         }
     }
 
@@ -114,26 +119,27 @@ impl Format {
             "obj" => Format::Obj,
             "off" => Format::Off,
             "stl" => Format::Stl,
+            "las" | "laz" => Format::Las,
             _ => return None,
         })
     }
 
     /// True for formats that carry faces (OBJ, OFF, STL, PLY).
     pub fn has_faces(self) -> bool {
-        !matches!(self, Format::Pcd | Format::Xyz)
+        !matches!(self, Format::Pcd | Format::Xyz | Format::Las)
     }
 }
 
 /// Tells the format of a file: from the file name's extension (`.ply .pcd .xyz .pts .txt .csv
-/// .obj .off .stl`, case-insensitive) when it has a known one, else sniffed from the content
-/// (`ply` magic; `# .PCD` / `VERSION` / `FIELDS`; an `OFF` header; binary STL by its size rule or
-/// `solid ... facet`; OBJ `v` lines; else rows of numbers).
+/// .obj .off .stl .las .laz`, case-insensitive) when it has a known one, else sniffed from the
+/// content (`ply` magic; `LASF` signature; `# .PCD` / `VERSION` / `FIELDS`; an `OFF` header;
+/// binary STL by its size rule or `solid ... facet`; OBJ `v` lines; else rows of numbers).
 pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
     if let Some(f) = Format::from_file_name(file_name) {
         return Ok(f);
     }
     sniff(bytes).ok_or_else(|| {
-        const KNOWN: &str = "and the content does not look like PLY, PCD, OFF, STL, OBJ or a text list of points";
+        const KNOWN: &str = "and the content does not look like PLY, LAS, PCD, OFF, STL, OBJ or a text list of points";
         let message = if file_name.is_empty() {
             format!(
                 "cannot tell the format: no file name was given (pass the file's name, e.g. \"scan.ply\", \
@@ -141,7 +147,7 @@ pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
             )
         } else {
             format!(
-                "cannot tell the format of '{}': the extension is not one of .ply .pcd .xyz .pts .txt .csv .obj .off .stl, {KNOWN}",
+                "cannot tell the format of '{}': the extension is not one of .ply .pcd .xyz .pts .txt .csv .obj .off .stl .las .laz, {KNOWN}",
                 file_name.chars().take(200).collect::<String>()
             )
         };
@@ -153,6 +159,9 @@ fn sniff(bytes: &[u8]) -> Option<Format> {
     let first = bytes.split(|&b| b == b'\n').next().unwrap_or_default().trim_ascii();
     if first == b"ply" {
         return Some(Format::Ply);
+    }
+    if bytes.starts_with(b"LASF") {
+        return Some(Format::Las);
     }
     // PCD: a "# .PCD" comment or a VERSION / FIELDS line before anything else.
     for line in bytes[..bytes.len().min(4096)].split(|&b| b == b'\n').take(20) {
@@ -191,6 +200,7 @@ fn read_format(bytes: &[u8], format: Format, faces: Faces) -> Result<Raw> {
         Format::Obj => obj::read(bytes),
         Format::Off => off::read(bytes),
         Format::Stl => stl::read(bytes),
+        Format::Las => las::read(bytes).map(|vertices| Raw { vertices, triangles: Vec::new() }),
     }
 }
 

@@ -1,0 +1,316 @@
+//! LAS (the ASPRS LiDAR exchange format, versions 1.0 to 1.4, point formats 0 to 10) and LAZ
+//! (LAS compressed by LASzip): the X, Y, Z of every point record, as `X * scale + offset` in
+//! `f64`, so georeferenced coordinates keep every digit the file holds.
+//!
+//! The header is read here; a LAZ file's points are decompressed by the `laz` crate (the Rust
+//! port of LASzip), only their X, Y, Z layers where the file is layered (point formats 6 to 10).
+//! That crate trusts the file's chunk table and layer sizes, so they are checked here first: a
+//! count that the bytes could not hold is an error, not an allocation or a panic.
+
+use super::util::bounded_capacity;
+use crate::{Error, Result};
+use laz::laszip::{ChunkTable, LasZipDecompressor, LazItemType, LazVlr};
+use laz::DecompressionSelection;
+use std::io::Cursor;
+
+const FORMAT: &str = "LAS";
+
+/// Bytes of the public header block of LAS 1.0 to 1.2 (1.3 adds 8, 1.4 adds 148).
+const HEADER_1_0: usize = 227;
+/// Bytes of the public header block of LAS 1.4, which holds the 64-bit point count.
+const HEADER_1_4: usize = 375;
+/// Bytes of a variable length record's header.
+const VLR_HEADER: usize = 54;
+/// The LASzip VLR's user id and record id.
+const LASZIP_USER: &[u8] = b"laszip encoded";
+const LASZIP_RECORD: u16 = 22204;
+/// LASzip's compressor types (the VLR's first field).
+const POINTWISE: u16 = 1;
+const LAYERED: u16 = 3;
+/// Layers of a LAS 1.4 point record (`Point14`) in a layered chunk: channel / returns / XY, Z,
+/// classification, flags, intensity, scan angle, user data, point source, GPS time.
+const POINT14_LAYERS: usize = 9;
+
+/// The shortest point record of each point format 0 to 10 (the file may add extra bytes).
+const MIN_RECORD: [usize; 11] = [20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67];
+
+fn err(message: impl Into<String>) -> Error {
+    Error::parse(FORMAT, message)
+}
+
+fn u16_at(b: &[u8], at: usize) -> u16 {
+    u16::from_le_bytes([b[at], b[at + 1]])
+}
+
+fn u32_at(b: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes(b[at..at + 4].try_into().expect("4 bytes"))
+}
+
+fn u64_at(b: &[u8], at: usize) -> u64 {
+    u64::from_le_bytes(b[at..at + 8].try_into().expect("8 bytes"))
+}
+
+fn f64_at(b: &[u8], at: usize) -> f64 {
+    f64::from_le_bytes(b[at..at + 8].try_into().expect("8 bytes"))
+}
+
+/// What the public header block says about the points.
+struct Header {
+    /// Where the point records start.
+    offset: usize,
+    /// Where the variable length records start (the header's size).
+    vlrs_at: usize,
+    vlr_count: u32,
+    compressed: bool,
+    record_len: usize,
+    count: u64,
+    scale: [f64; 3],
+    shift: [f64; 3],
+}
+
+impl Header {
+    fn read(bytes: &[u8]) -> Result<Header> {
+        if !bytes.starts_with(b"LASF") {
+            return Err(err("the file does not start with the 'LASF' signature"));
+        }
+        if bytes.len() < HEADER_1_0 {
+            return Err(err(format!("the file has {} bytes, fewer than a LAS header's {HEADER_1_0}", bytes.len())));
+        }
+        let (major, minor) = (bytes[24], bytes[25]);
+        if major != 1 || minor > 4 {
+            return Err(err(format!("version {major}.{minor} is not supported (LAS 1.0 to 1.4 are)")));
+        }
+        let header_size = u16_at(bytes, 94) as usize;
+        let offset = u32_at(bytes, 96) as usize;
+        if header_size < HEADER_1_0 || header_size > bytes.len() {
+            return Err(err(format!(
+                "the header size {header_size} is not between {HEADER_1_0} and the file's {} bytes",
+                bytes.len()
+            )));
+        }
+        if offset < header_size || offset > bytes.len() {
+            return Err(err(format!(
+                "the offset to the point data {offset} is not between the header's {header_size} bytes and the file's {}",
+                bytes.len()
+            )));
+        }
+        let id = bytes[104];
+        // LASzip marks a compressed format by setting bit 7 (older writers bit 6)
+        let (compressed, format) = (id & 0xC0 != 0, id & 0x3F);
+        let Some(&min_record) = MIN_RECORD.get(format as usize) else {
+            return Err(err(format!("point data format {format} is not one of 0 to 10")));
+        };
+        let record_len = u16_at(bytes, 105) as usize;
+        if record_len < min_record {
+            return Err(err(format!(
+                "point records of {record_len} bytes are shorter than point data format {format}'s {min_record}"
+            )));
+        }
+        let legacy = u32_at(bytes, 107) as u64;
+        let count = if minor >= 4 && header_size >= HEADER_1_4 {
+            Some(u64_at(bytes, 247)).filter(|&n| n > 0).unwrap_or(legacy)
+        } else {
+            legacy
+        };
+        let (scale, shift) = ([131, 139, 147].map(|at| f64_at(bytes, at)), [155, 163, 171].map(|at| f64_at(bytes, at)));
+        for (axis, (s, o)) in ["x", "y", "z"].iter().zip(scale.iter().zip(&shift)) {
+            if !s.is_finite() || *s == 0.0 || !o.is_finite() {
+                return Err(err(format!(
+                    "the {axis} scale {s} and offset {o} do not map the stored integers to coordinates \
+                     (the scale must be finite and non-zero, the offset finite)"
+                )));
+            }
+        }
+        Ok(Header {
+            offset,
+            vlrs_at: header_size,
+            vlr_count: u32_at(bytes, 100),
+            compressed,
+            record_len,
+            count,
+            scale,
+            shift,
+        })
+    }
+
+    /// The point of a record's first 12 bytes (X, Y, Z as `i32`, in every point format).
+    fn point(&self, record: &[u8]) -> [f64; 3] {
+        [0, 1, 2].map(|k| u32_at(record, 4 * k) as i32 as f64 * self.scale[k] + self.shift[k])
+    }
+}
+
+/// Reads the points of a LAS or LAZ file.
+pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
+    let header = Header::read(bytes)?;
+    crate::limits::check_file_points(FORMAT, header.count)?;
+    if header.compressed {
+        read_compressed(bytes, &header)
+    } else {
+        read_records(bytes, &header)
+    }
+}
+
+/// The points of an uncompressed file.
+fn read_records(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
+    let body = &bytes[h.offset..];
+    let held = body.len() / h.record_len;
+    if (held as u64) < h.count {
+        return Err(err(format!(
+            "the header claims {} points of {} bytes from byte {}, but the file holds {held}",
+            h.count, h.record_len, h.offset
+        )));
+    }
+    Ok(body.chunks_exact(h.record_len).take(h.count as usize).map(|r| h.point(r)).collect())
+}
+
+/// The LASzip VLR's data, among the variable length records after the header.
+fn laszip_vlr<'a>(bytes: &'a [u8], h: &Header) -> Result<&'a [u8]> {
+    let mut at = h.vlrs_at;
+    for k in 0..h.vlr_count {
+        if at + VLR_HEADER > h.offset {
+            return Err(err(format!(
+                "variable length record {} of {} runs past the start of the point data (byte {})",
+                k + 1,
+                h.vlr_count,
+                h.offset
+            )));
+        }
+        let user = &bytes[at + 2..at + 18];
+        let record = u16_at(bytes, at + 18);
+        let len = u16_at(bytes, at + 20) as usize;
+        let data = at + VLR_HEADER;
+        if data + len > h.offset {
+            return Err(err(format!(
+                "variable length record {} of {} ({len} bytes from byte {data}) runs past the start of the point data (byte {})",
+                k + 1,
+                h.vlr_count,
+                h.offset
+            )));
+        }
+        let user = user.split(|&b| b == 0).next().unwrap_or_default();
+        if user == LASZIP_USER && record == LASZIP_RECORD {
+            return Ok(&bytes[data..data + len]);
+        }
+        at = data + len;
+    }
+    Err(err("the point data format is marked compressed (LAZ), but the file has no LASzip record"))
+}
+
+/// The points of a LAZ file, decompressed by the `laz` crate once its chunk table and layer
+/// sizes are known to fit in the file.
+fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
+    let vlr_data = laszip_vlr(bytes, h)?;
+    let laz_err = |e: laz::LasZipError| err(format!("the LASzip record cannot be used: {e}"));
+    let vlr = LazVlr::from_buffer(vlr_data).map_err(laz_err)?;
+    let compressor = u16_at(vlr_data, 0);
+    let first = vlr.items().first().map(|i| i.item_type());
+    if !matches!(first, Some(LazItemType::Point10 | LazItemType::Point14)) {
+        return Err(err(format!("the LASzip record's first item is {first:?}, not a point (Point10 or Point14)")));
+    }
+    if vlr.items_size() != h.record_len as u64 {
+        return Err(err(format!(
+            "the LASzip record's items make {}-byte points, the header {}-byte ones",
+            vlr.items_size(),
+            h.record_len
+        )));
+    }
+    if compressor != POINTWISE {
+        check_chunks(bytes, h, &vlr, compressor == LAYERED)?;
+    }
+    // only X, Y, Z (and what they are coded with) where the file is layered
+    let selection = DecompressionSelection(DecompressionSelection::XY_RETURNS_CHANNEL | DecompressionSelection::Z);
+    let mut cursor = Cursor::new(bytes);
+    cursor.set_position(h.offset as u64);
+    let mut decompressor = LasZipDecompressor::selective(cursor, vlr, selection).map_err(laz_err)?;
+    // a compressed point takes at least a byte or so; the reservation grows with what decodes
+    let mut points = Vec::with_capacity(bounded_capacity(h.count, bytes.len() - h.offset, h.record_len));
+    let mut record = vec![0u8; h.record_len];
+    for _ in 0..h.count {
+        decompressor.decompress_one(&mut record).map_err(|e| {
+            err(format!("the compressed points end or break after {} of {} points: {e}", points.len(), h.count))
+        })?;
+        points.push(h.point(&record));
+    }
+    Ok(points)
+}
+
+/// Checks the chunk table of a chunked LAZ file before the `laz` crate reads it: its chunk count
+/// against the bytes before it, its chunks' points against the header's count, and in a layered
+/// file each chunk's layer sizes against the chunk's bytes (the crate allocates what they say).
+fn check_chunks(bytes: &[u8], h: &Header, vlr: &LazVlr, layered: bool) -> Result<()> {
+    let data = h.offset as u64 + 8;
+    if bytes.len() < h.offset + 8 {
+        return Err(err("the compressed point data ends before its chunk table's offset"));
+    }
+    // the table's offset, or -1 and the offset in the file's last 8 bytes (a writer that could
+    // not seek back)
+    let mut table = u64_at(bytes, h.offset) as i64;
+    if table <= h.offset as i64 && bytes.len() >= h.offset + 16 {
+        table = u64_at(bytes, bytes.len() - 8) as i64;
+    }
+    let len = bytes.len() as u64;
+    if table <= h.offset as i64 || table as u64 + 8 > len {
+        if layered || vlr.uses_variable_size_chunks() {
+            return Err(err(format!(
+                "the compressed point data has no chunk table (its offset {table} is not within the file's {len} bytes)"
+            )));
+        }
+        return Ok(());
+    }
+    let table = table as u64;
+    let chunks = u32_at(bytes, table as usize + 4) as u64;
+    // every chunk starts with its first point uncompressed
+    let room = table.saturating_sub(data) / h.record_len as u64;
+    if chunks > room {
+        return Err(err(format!(
+            "the chunk table at byte {table} lists {chunks} chunks, more than the {room} that the compressed data before it could hold"
+        )));
+    }
+    let mut cursor = Cursor::new(bytes);
+    cursor.set_position(h.offset as u64);
+    let entries =
+        ChunkTable::read_from(&mut cursor, vlr).map_err(|e| err(format!("the chunk table cannot be read: {e}")))?;
+    let entries = entries.as_ref();
+    let mut points = 0u64;
+    let mut start = data;
+    for (k, e) in entries.iter().enumerate() {
+        let end = start.checked_add(e.byte_count).filter(|&end| end <= table && e.byte_count >= h.record_len as u64);
+        let Some(end) = end else {
+            return Err(err(format!(
+                "chunk {} of {} has {} bytes from byte {start}: not a chunk within the compressed data (up to byte {table})",
+                k + 1,
+                entries.len(),
+                e.byte_count
+            )));
+        };
+        if vlr.uses_variable_size_chunks() && e.point_count == 0 {
+            return Err(err(format!("chunk {} of {} holds no points", k + 1, entries.len())));
+        }
+        if layered {
+            // the chunk: its first point, its point count, then the size of each layer
+            let sizes = start + h.record_len as u64 + 4;
+            if sizes + 4 * POINT14_LAYERS as u64 > end {
+                return Err(err(format!("chunk {} of {} is too short for its layer sizes", k + 1, entries.len())));
+            }
+            let total: u64 = (0..POINT14_LAYERS).map(|l| u32_at(bytes, (sizes + 4 * l as u64) as usize) as u64).sum();
+            if sizes + 4 * POINT14_LAYERS as u64 + total > end {
+                return Err(err(format!(
+                    "chunk {} of {}: its point's layers ({total} bytes) overrun its {} bytes",
+                    k + 1,
+                    entries.len(),
+                    e.byte_count
+                )));
+            }
+        }
+        points = points.saturating_add(e.point_count);
+        start = end;
+    }
+    if points < h.count {
+        return Err(err(format!(
+            "the header claims {} points, but the chunk table's {} chunks hold {points}",
+            h.count,
+            entries.len()
+        )));
+    }
+    Ok(())
+}
