@@ -216,6 +216,9 @@ fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
     }
     if compressor != POINTWISE {
         check_chunks(bytes, h, &vlr, compressor == LAYERED)?;
+    } else if vlr.uses_variable_size_chunks() {
+        // one stream without chunks cannot have chunks of variable size (the crate panics on it)
+        return Err(err("the LASzip record has no chunks (point-wise) but says they vary in size"));
     }
     // only X, Y, Z (and what they are coded with) where the file is layered
     let selection = DecompressionSelection(DecompressionSelection::XY_RETURNS_CHANNEL | DecompressionSelection::Z);
