@@ -102,8 +102,9 @@ pub fn version() -> String {
     env!("CARGO_PKG_VERSION").to_string()
 }
 
-/// Reads a point cloud from a file's bytes with the core readers. The format comes from the
-/// file name's extension, else it is sniffed from the content; mesh formats give their
+/// Reads a point cloud from a file's bytes with the core readers (PLY, PCD, LAS/LAZ, XYZ/PTS/CSV,
+/// OBJ, OFF, STL). The format comes from the file name's extension, else it is sniffed from the
+/// content; mesh formats give their
 /// vertices, or with `options.surfacePoints` that many points drawn uniformly over their surface
 /// (`ReadOptions`: what a CAD model should be read as). Returns packed xyz (`[x0, y0, z0, x1,
 /// ...]`). Throws on unreadable input and invalid options.
@@ -121,8 +122,8 @@ pub fn parse_point_cloud(
 /// Reads a point cloud from a file's bytes like [`parse_point_cloud`], keeping the precision of
 /// large coordinates: returns `{ points, origin }`, `points` a `Float32Array` of offsets from
 /// `origin` (`[x, y, z]`, f64: zero unless the file's coordinates are far from zero relative to
-/// the cloud's size, then near the points). Point `i` is `origin + points[i]`; the object is a
-/// cloud `register` accepts as is. `options` as for [`parse_point_cloud`]. Throws on unreadable
+/// the cloud's size, then near the points: a georeferenced LAS/LAZ survey, say). Point `i` is
+/// `origin + points[i]`; the object is a cloud `register` accepts as is. `options` as for [`parse_point_cloud`]. Throws on unreadable
 /// input and invalid options.
 #[wasm_bindgen(js_name = readPointCloud, unchecked_return_type = "CloudWithOrigin")]
 pub fn read_point_cloud(
