@@ -2,7 +2,8 @@
 // (or the correct answer) AND that the same Registrar then registers the fixture pair correctly.
 // Cases: bad lengths, NaN, too few / too many points, wrong types, array-likes that lie about
 // their length, bad options (unknown, wrong type, throwing getters, Proxies, bad
-// initialTransform), bad onProgress, bad files and file names, bad weights, use after free, and
+// initialTransform), bad onProgress, bad files (corrupt LAZ too) and file names, bad weights, use
+// after free, and
 // a real trap inside the engine, after which the module is re-instantiated and the registrars
 // built before it keep working.
 // Run after scripts/build-pkg.sh: node --test js/test/
@@ -12,7 +13,7 @@ import { readFileSync } from "node:fs";
 import { createRequire } from "node:module";
 import path from "node:path";
 import { pathToFileURL } from "node:url";
-import { pkg, source, target, sourcePly, targetPly, errors, groundTruth } from "./common.mjs";
+import { pkg, root, source, target, sourcePly, targetPly, errors, groundTruth } from "./common.mjs";
 
 const nodeBuild = await import(pathToFileURL(path.join(pkg, "node", "index.mjs")).href);
 const webBuild = await import(pathToFileURL(path.join(pkg, "arps.js")).href);
@@ -141,6 +142,8 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
   });
 
   test(`${name}: hostile files, weights, and use after free`, () => {
+    const regression = (f) => readFileSync(path.join(root, "fuzz", "regressions", "read_point_cloud", f)).subarray(1);
+    const laz = readFileSync(path.join(root, "fixtures", "formats", "1_4_w_evlr.laz"));
     const r = arps.Registrar.withDefaultModel();
     const parse = (b, n) => () => arps.parsePointCloud(b, n);
     const cases = [
@@ -152,6 +155,10 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       ["truncated PLY", parse(sourcePly.subarray(0, 300), "a.ply"), /./],
       ["empty file", parse(new Uint8Array(0), "a.ply"), /./],
       ["garbage with an unknown extension", parse(new Uint8Array([0, 1, 2, 3]), "x.unknownext"), /./],
+      // corrupt LAZ found by fuzzing (the file after the fuzz input's first byte): errors, not traps
+      ["LAZ whose GPS time switches without end", parse(regression("laz-gps-time-switches-without-end"), "a.laz"), /corrupt GPS time/],
+      ["LAZ point-wise with chunks of variable size", parse(regression("laz-pointwise-variable-chunks"), "a.laz"), /vary in size/],
+      ["LAZ cut in half", parse(laz.subarray(0, laz.length >> 1), "a.laz"), /LAS parse error/],
       ["weights: 3 bytes", () => arps.Registrar.fromBytes(new Uint8Array([1, 2, 3])), /^weights: /],
       ["weights: a string", () => arps.Registrar.fromBytes("model.safetensors"), /^weights: expected a Uint8Array or an ArrayBuffer, got a string/],
       ["new Registrar()", () => new arps.Registrar(), /^arps: use Registrar.withDefaultModel\(\), Registrar.fromBytes\(bytes\) or await Registrar.fromUrl/],
