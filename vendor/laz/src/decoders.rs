@@ -167,6 +167,13 @@ impl<T: Read> ArithmeticDecoder<T> {
             }
             let dv = self.value / self.length;
             let t = dv >> model.table_shift;
+            // (vendored patch, PATCHES.md) a corrupt stream's value can point past the table
+            if t as usize + 1 >= model.decoder_table.len() {
+                return Err(std::io::Error::new(
+                    std::io::ErrorKind::InvalidData,
+                    "corrupt compressed stream: a symbol beyond its model's table",
+                ));
+            }
 
             sym = model.decoder_table[t as usize]; // initial decision based on table look-up
             n = model.decoder_table[t as usize + 1] + 1;
