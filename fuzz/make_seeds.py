@@ -16,7 +16,7 @@ FIX = os.path.join(HERE, "..", "fixtures", "formats")
 sys.path.insert(0, FIX)
 from derive import lzf_compress  # noqa: E402
 
-PC_NAMES = ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension", "a.las", "a.laz"]
+PC_NAMES = ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension", "a.las", "a.laz", "a.e57"]
 MESH_NAMES = ["a.ply", "a.obj", "a.off", "a.stl", "no_extension"]
 
 TET = [(0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), (0.0, 0.0, 1.5)]
@@ -128,6 +128,8 @@ def main():
         "las_1_4": ("a.las", las_head("1_4_w_evlr.las", 20)),
         "laz": ("a.laz", fixture_whole("simple.laz")),
         "laz_layered": ("a.laz", fixture_whole("1_4_w_evlr.laz")),
+        "e57_spherical": ("a.e57", fixture_whole("tiny_spherical.e57")),
+        "e57_two_scans": ("a.e57", fixture_whole("velodyne_two_scans.e57")),
     }
     for target, names in (("read_point_cloud", PC_NAMES), ("read_mesh", MESH_NAMES)):
         out = os.path.join(HERE, "seeds", target)

@@ -102,8 +102,8 @@ pub fn version() -> String {
     env!("CARGO_PKG_VERSION").to_string()
 }
 
-/// Reads a point cloud from a file's bytes with the core readers (PLY, PCD, LAS/LAZ, XYZ/PTS/CSV,
-/// OBJ, OFF, STL). The format comes from the file name's extension, else it is sniffed from the
+/// Reads a point cloud from a file's bytes with the core readers (PLY, PCD, LAS/LAZ, E57,
+/// XYZ/PTS/CSV, OBJ, OFF, STL). The format comes from the file name's extension, else it is sniffed from the
 /// content; mesh formats give their
 /// vertices, or with `options.surfacePoints` that many points drawn uniformly over their surface
 /// (`ReadOptions`: what a CAD model should be read as). Returns packed xyz (`[x0, y0, z0, x1,

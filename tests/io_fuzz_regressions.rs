@@ -7,8 +7,21 @@
 
 use std::path::Path;
 
-const PC_NAMES: [&str; 12] =
-    ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension", "a.las", "a.laz"];
+const PC_NAMES: [&str; 13] = [
+    "a.ply",
+    "a.pcd",
+    "a.xyz",
+    "a.pts",
+    "a.csv",
+    "a.obj",
+    "a.off",
+    "a.stl",
+    "a.txt",
+    "no_extension",
+    "a.las",
+    "a.laz",
+    "a.e57",
+];
 const MESH_NAMES: [&str; 5] = ["a.ply", "a.obj", "a.off", "a.stl", "no_extension"];
 
 fn inputs(dir: &str) -> Vec<(String, Vec<u8>)> {

@@ -4,8 +4,9 @@
 
 use libfuzzer_sys::fuzz_target;
 
-const NAMES: [&str; 12] =
-    ["a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension", "a.las", "a.laz"];
+const NAMES: [&str; 13] = [
+    "a.ply", "a.pcd", "a.xyz", "a.pts", "a.csv", "a.obj", "a.off", "a.stl", "a.txt", "no_extension", "a.las", "a.laz", "a.e57",
+];
 
 fuzz_target!(|data: &[u8]| {
     let Some((&choice, bytes)) = data.split_first() else { return };

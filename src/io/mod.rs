@@ -9,6 +9,7 @@
 //! | [`Format::Off`] | `.off` | `OFF`, `COFF`, `NOFF`, `CNOFF`, `STOFF`, counts on the header line |
 //! | [`Format::Stl`] | `.stl` | ascii and binary (also binary files whose header starts with `solid`) |
 //! | [`Format::Las`] | `.las .laz` | LAS 1.0 to 1.4, point formats 0 to 10; LAZ (LASzip) compressed |
+//! | [`Format::E57`] | `.e57` | every point cloud placed by its pose; Cartesian or spherical; invalid points left out |
 //!
 //! Readers are written for hostile input: malformed files give an [`Error::Parse`] saying what
 //! and where (line number, byte offset, element name), never a panic, and no reservation is
@@ -26,6 +27,7 @@
 use crate::cloud::PointCloud;
 use crate::{Error, Result};
 
+mod e57;
 mod las;
 mod lzf;
 mod mesh;
@@ -93,6 +95,8 @@ pub enum Format {
     Stl,
     /// ASPRS LAS, and LAS compressed by LASzip (LAZ): airborne and terrestrial LiDAR, survey data.
     Las,
+    /// ASTM E57, the exchange format of terrestrial and handheld laser scanners.
+    E57,
 }
 
 impl Format {
@@ -106,6 +110,7 @@ impl Format {
             Format::Off => "OFF",
             Format::Stl => "STL",
             Format::Las => "LAS",
+            Format::E57 => "E57",
         }
     }
 
@@ -120,26 +125,27 @@ impl Format {
             "off" => Format::Off,
             "stl" => Format::Stl,
             "las" | "laz" => Format::Las,
+            "e57" => Format::E57,
             _ => return None,
         })
     }
 
     /// True for formats that carry faces (OBJ, OFF, STL, PLY).
     pub fn has_faces(self) -> bool {
-        !matches!(self, Format::Pcd | Format::Xyz | Format::Las)
+        !matches!(self, Format::Pcd | Format::Xyz | Format::Las | Format::E57)
     }
 }
 
 /// Tells the format of a file: from the file name's extension (`.ply .pcd .xyz .pts .txt .csv
-/// .obj .off .stl .las .laz`, case-insensitive) when it has a known one, else sniffed from the
-/// content (`ply` magic; `LASF` signature; `# .PCD` / `VERSION` / `FIELDS`; an `OFF` header;
+/// .obj .off .stl .las .laz .e57`, case-insensitive) when it has a known one, else sniffed from
+/// the content (`ply` magic; `LASF` and `ASTM-E57` signatures; `# .PCD` / `VERSION` / `FIELDS`; an `OFF` header;
 /// binary STL by its size rule or `solid ... facet`; OBJ `v` lines; else rows of numbers).
 pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
     if let Some(f) = Format::from_file_name(file_name) {
         return Ok(f);
     }
     sniff(bytes).ok_or_else(|| {
-        const KNOWN: &str = "and the content does not look like PLY, LAS, PCD, OFF, STL, OBJ or a text list of points";
+        const KNOWN: &str = "and the content does not look like PLY, LAS, E57, PCD, OFF, STL, OBJ or a text list of points";
         let message = if file_name.is_empty() {
             format!(
                 "cannot tell the format: no file name was given (pass the file's name, e.g. \"scan.ply\", \
@@ -147,7 +153,7 @@ pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
             )
         } else {
             format!(
-                "cannot tell the format of '{}': the extension is not one of .ply .pcd .xyz .pts .txt .csv .obj .off .stl .las .laz, {KNOWN}",
+                "cannot tell the format of '{}': the extension is not one of .ply .pcd .xyz .pts .txt .csv .obj .off .stl .las .laz .e57, {KNOWN}",
                 file_name.chars().take(200).collect::<String>()
             )
         };
@@ -162,6 +168,9 @@ fn sniff(bytes: &[u8]) -> Option<Format> {
     }
     if bytes.starts_with(b"LASF") {
         return Some(Format::Las);
+    }
+    if bytes.starts_with(b"ASTM-E57") {
+        return Some(Format::E57);
     }
     // PCD: a "# .PCD" comment or a VERSION / FIELDS line before anything else.
     for line in bytes[..bytes.len().min(4096)].split(|&b| b == b'\n').take(20) {
@@ -201,6 +210,7 @@ fn read_format(bytes: &[u8], format: Format, faces: Faces) -> Result<Raw> {
         Format::Off => off::read(bytes),
         Format::Stl => stl::read(bytes),
         Format::Las => las::read(bytes).map(|vertices| Raw { vertices, triangles: Vec::new() }),
+        Format::E57 => e57::read(bytes).map(|vertices| Raw { vertices, triangles: Vec::new() }),
     }
 }
 

@@ -50,7 +50,7 @@ enum Command {
     /// target frame). Several sources are registered in turn onto the target read once (and, where
     /// it is at least as large as they are, prepared once).
     Register {
-        /// Source cloud(s) (PLY, PCD, LAS/LAZ, XYZ/PTS/CSV, OBJ, OFF, STL).
+        /// Source cloud(s) (PLY, PCD, LAS/LAZ, E57, XYZ/PTS/CSV, OBJ, OFF, STL).
         #[arg(required = true, num_args = 1..)]
         sources: Vec<PathBuf>,
         /// Target cloud.
