@@ -2,7 +2,7 @@
 // (or the correct answer) AND that the same Registrar then registers the fixture pair correctly.
 // Cases: bad lengths, NaN, too few / too many points, wrong types, array-likes that lie about
 // their length, bad options (unknown, wrong type, throwing getters, Proxies, bad
-// initialTransform), bad onProgress, bad files (corrupt LAZ too) and file names, bad weights, use
+// initialTransform), bad onProgress, bad files (corrupt LAZ and E57 too) and file names, bad weights, use
 // after free, and
 // a real trap inside the engine, after which the module is re-instantiated and the registrars
 // built before it keep working.
@@ -144,6 +144,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
   test(`${name}: hostile files, weights, and use after free`, () => {
     const regression = (f) => readFileSync(path.join(root, "fuzz", "regressions", "read_point_cloud", f)).subarray(1);
     const laz = readFileSync(path.join(root, "fixtures", "formats", "1_4_w_evlr.laz"));
+    const flipped = (b, at) => { const c = Uint8Array.from(b); c[at] ^= 0x55; return c; };
     const r = arps.Registrar.withDefaultModel();
     const parse = (b, n) => () => arps.parsePointCloud(b, n);
     const cases = [
@@ -159,6 +160,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       ["LAZ whose GPS time switches without end", parse(regression("laz-gps-time-switches-without-end"), "a.laz"), /corrupt GPS time/],
       ["LAZ point-wise with chunks of variable size", parse(regression("laz-pointwise-variable-chunks"), "a.laz"), /vary in size/],
       ["LAZ cut in half", parse(laz.subarray(0, laz.length >> 1), "a.laz"), /LAS parse error/],
+      ["E57 with a flipped byte", parse(flipped(readFileSync(path.join(root, "fixtures", "formats", "velodyne_two_scans.e57")), 3000), "a.e57"), /E57 parse error: .*checksum/i],
       ["weights: 3 bytes", () => arps.Registrar.fromBytes(new Uint8Array([1, 2, 3])), /^weights: /],
       ["weights: a string", () => arps.Registrar.fromBytes("model.safetensors"), /^weights: expected a Uint8Array or an ArrayBuffer, got a string/],
       ["new Registrar()", () => new arps.Registrar(), /^arps: use Registrar.withDefaultModel\(\), Registrar.fromBytes\(bytes\) or await Registrar.fromUrl/],
