@@ -183,6 +183,14 @@ fn hostile_compressed_data_gives_errors_not_allocations() {
     let user = b.windows(14).position(|w| w == b"laszip encoded").unwrap();
     b[user] = b'L';
     has(&err(&b, "a.laz"), &["no LASzip record"]);
+    // the first variable length record's length runs past the point data
+    let header_size = u16::from_le_bytes(laz[94..96].try_into().unwrap()) as usize;
+    let mut b = laz.clone();
+    set(&mut b, header_size + 20, &60000u16.to_le_bytes());
+    has(
+        &err(&b, "a.laz"),
+        &["variable length record 1 of", "(60000 bytes from byte", "runs past the start of the point data"],
+    );
     // a chunk table claiming four billion chunks: refused before the decompressor reserves them
     let table = i64::from_le_bytes(laz[start..start + 8].try_into().unwrap()) as usize;
     let mut b = laz.clone();

@@ -167,25 +167,23 @@ fn read_records(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
 fn laszip_vlr<'a>(bytes: &'a [u8], h: &Header) -> Result<&'a [u8]> {
     let mut at = h.vlrs_at;
     for k in 0..h.vlr_count {
-        if at + VLR_HEADER > h.offset {
-            return Err(err(format!(
-                "variable length record {} of {} runs past the start of the point data (byte {})",
+        let past = |what: String| {
+            err(format!(
+                "variable length record {} of {}{what} runs past the start of the point data (byte {})",
                 k + 1,
                 h.vlr_count,
                 h.offset
-            )));
+            ))
+        };
+        if at + VLR_HEADER > h.offset {
+            return Err(past(String::new()));
         }
         let user = &bytes[at + 2..at + 18];
         let record = u16_at(bytes, at + 18);
         let len = u16_at(bytes, at + 20) as usize;
         let data = at + VLR_HEADER;
         if data + len > h.offset {
-            return Err(err(format!(
-                "variable length record {} of {} ({len} bytes from byte {data}) runs past the start of the point data (byte {})",
-                k + 1,
-                h.vlr_count,
-                h.offset
-            )));
+            return Err(past(format!(" ({len} bytes from byte {data})")));
         }
         let user = user.split(|&b| b == 0).next().unwrap_or_default();
         if user == LASZIP_USER && record == LASZIP_RECORD {
