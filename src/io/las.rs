@@ -1,6 +1,9 @@
 //! LAS (the ASPRS LiDAR exchange format, versions 1.0 to 1.4, point formats 0 to 10) and LAZ
 //! (LAS compressed by LASzip): the X, Y, Z of every point record, as `X * scale + offset` in
-//! `f64`, so georeferenced coordinates keep every digit the file holds.
+//! `f64`, so georeferenced coordinates keep every digit the file holds. Every record is read,
+//! whatever its classification (noise classes and withheld points too, as PDAL and laspy read
+//! them); isolated noise far from the rest is what the registration's far-outlier step leaves
+//! out (`Options::outliers`).
 //!
 //! The header is read here; a LAZ file's points are decompressed by the `laz` crate (the Rust
 //! port of LASzip), only their X, Y, Z layers where the file is layered (point formats 6 to 10).
