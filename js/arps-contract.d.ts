@@ -439,6 +439,12 @@ export type ReadOptions = {
    * platform. Default 0. A non-negative integer (in JS a `bigint` for values above 2^53).
    */
   seed?: number | bigint,
+  /**
+   * For an E57 file, which holds one point cloud per scan: only this one (0-based, in the
+   * file's order), placed by its pose. An index beyond the file's scans is an error; other
+   * formats are read as they are. Unset (the default): every scan, as one cloud.
+   */
+  scan?: number | null,
 };
 
 /**

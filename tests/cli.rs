@@ -125,6 +125,26 @@ fn register_reads_a_mesh_as_its_surface() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `--source-scan K` / `--target-scan K` read one scan of an E57 file: the file's second scan
+/// registers onto the whole file (both scans, placed by their poses) where it already lies.
+#[test]
+fn register_reads_one_scan_of_an_e57_file() {
+    let e57 = "fixtures/formats/velodyne_two_scans.e57";
+    let out = arps(&["register", e57, e57, "--source-scan", "1", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
+    let id = nalgebra::Matrix4::identity();
+    assert!(arps::transform::rotation_error_deg(&r.T_target_source, &id) < 0.1, "{}", r.T_target_source);
+    // where the scan lies (near (512345, 4123456, 87) on the map grid) the answer moves it by little;
+    // the translation alone carries the lever of the map's origin
+    let at = nalgebra::Point3::new(512_350.0, 4_123_456.0, 87.0);
+    let moved = (r.T_target_source.transform_point(&at) - at).norm();
+    assert!(moved < 0.05, "the scan moved by {moved}: {}", r.T_target_source);
+    let bad = arps(&["register", e57, e57, "--target-scan", "2"]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("scan = 2, but the E57 file holds 2 scans"), "{err}");
+}
+
 #[test]
 fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
     let dir = std::env::temp_dir().join(format!("arps-cli-{}", std::process::id()));

@@ -2,7 +2,7 @@
 //! libE57Format read back in the file's frame (map-grid coordinates), spherical coordinates
 //! converted and invalid points left out, and hostile files giving errors.
 
-use arps::io::{detect_format, read_point_cloud, Format};
+use arps::io::{detect_format, read_point_cloud, read_point_cloud_with, Format, ReadOptions};
 use arps::PointCloud;
 
 fn fixture(dir: &str, name: &str) -> Vec<u8> {
@@ -35,6 +35,29 @@ fn two_scans_with_poses_come_back_in_the_files_frame() {
     assert!(worst < 1e-3, "{worst}");
     assert_eq!(detect_format(&fixture("formats", name), "upload").unwrap(), Format::E57);
     assert_eq!(read_point_cloud(&fixture("formats", name), "upload").unwrap(), c, "sniffed");
+}
+
+#[test]
+fn one_scan_of_several_is_read_alone_and_a_scan_beyond_them_is_an_error() {
+    let name = "velodyne_two_scans.e57";
+    let bytes = fixture("formats", name);
+    let all = read(name);
+    let one = |k: usize| read_point_cloud_with(&bytes, name, &ReadOptions { scan: Some(k), ..ReadOptions::default() });
+    for k in 0..2 {
+        // the second scan alone: the Velodyne points 1000-1999, placed by its own pose
+        let c = one(k).unwrap();
+        assert_eq!(c.len(), 1000);
+        let worst = (0..1000)
+            .map(|i| (0..3).map(|a| (c.point_f64(i)[a] - all.point_f64(1000 * k + i)[a]).abs()).fold(0.0, f64::max))
+            .fold(0.0, f64::max);
+        assert!(worst < 1e-3, "scan {k}: {worst}");
+    }
+    let e = one(2).unwrap_err().to_string();
+    assert!(e.contains("scan = 2, but the E57 file holds 2 scans (0 to 1)"), "{e}");
+    // other formats are read as they are
+    let ply = fixture("scans", "velodyne-small.ply");
+    let with = read_point_cloud_with(&ply, "v.ply", &ReadOptions { scan: Some(5), ..ReadOptions::default() });
+    assert_eq!(with.unwrap(), read_point_cloud(&ply, "v.ply").unwrap());
 }
 
 #[test]

@@ -146,8 +146,11 @@ fn read_point_cloud_keeps_large_coordinates() {
 fn a_mesh_read_as_its_surface() {
     let (name, bytes) = fixture!("angle_block_binary_solid.stl");
     let xyz = parse_point_cloud(bytes, name, Some(options(r#"{"surfacePoints": 1000, "seed": 3}"#))).map_err(message);
-    let core =
-        arps::io::read_point_cloud_with(bytes, name, &arps::io::ReadOptions { surface_points: Some(1000), seed: 3 });
+    let core = arps::io::read_point_cloud_with(
+        bytes,
+        name,
+        &arps::io::ReadOptions { surface_points: Some(1000), seed: 3, scan: None },
+    );
     assert_eq!(xyz.unwrap(), core.unwrap().to_xyz());
     let e = parse_point_cloud(bytes, name, Some(options(r#"{"surfacePoint": 1000}"#))).err().map(message);
     assert!(e.as_deref().is_some_and(|e| e.contains("invalid read options: unknown field `surfacePoint`")), "{e:?}");
@@ -173,4 +176,21 @@ fn read_point_cloud_keeps_a_laz_surveys_coordinates() {
         let p = at(i);
         assert!((0..3).all(|k| (p[k] - laspy[k]).abs() < 1e-3), "point {i}: {p:?}, laspy {laspy:?}");
     }
+}
+
+/// `options.scan` reads one scan of an E57 file (placed by its pose); one beyond the file's scans,
+/// or a negative index, throws a clear error.
+#[wasm_bindgen_test]
+fn one_scan_of_an_e57_file() {
+    let (name, bytes) = fixture!("velodyne_two_scans.e57");
+    let all = parse_point_cloud(bytes, name, None).map_err(message).unwrap();
+    let second = parse_point_cloud(bytes, name, Some(options(r#"{"scan": 1}"#))).map_err(message).unwrap();
+    assert_eq!((all.len(), second.len()), (6000, 3000));
+    // the file's last 1,000 points (f32 on the map grid: 0.25-0.5 apart near 4e6)
+    let worst = second.iter().zip(&all[3000..]).map(|(a, b)| (a - b).abs()).fold(0.0, f32::max);
+    assert!(worst <= 0.5, "the second scan is the file's last 1,000 points: {worst}");
+    let e = parse_point_cloud(bytes, name, Some(options(r#"{"scan": 2}"#))).err().map(message);
+    assert!(e.as_deref().is_some_and(|e| e.contains("scan = 2, but the E57 file holds 2 scans")), "{e:?}");
+    let e = parse_point_cloud(bytes, name, Some(options(r#"{"scan": -1}"#))).err().map(message);
+    assert!(e.as_deref().is_some_and(|e| e.contains("invalid read options")), "{e:?}");
 }

@@ -1,5 +1,6 @@
 //! E57 (ASTM E2807, what terrestrial and handheld laser scanners export): every point cloud of the
-//! file, each placed by its pose, as one cloud in the file's frame, in `f64`. Spherical
+//! file (or one, [`super::ReadOptions::scan`]), each placed by its pose, as one cloud in the
+//! file's frame, in `f64`. Spherical
 //! coordinates (range, azimuth, elevation) are converted to Cartesian ones; points the scanner
 //! marked invalid (no return, or a direction without a range) are left out. The file is read by
 //! the `e57` crate, which checks its pages' checksums.
@@ -15,19 +16,28 @@ fn err(what: &str, e: e57::Error) -> Error {
     Error::parse(FORMAT, format!("{what}: {e}"))
 }
 
-/// Reads the points of every point cloud of an E57 file, in the file's frame.
-pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
+/// Reads the points of every point cloud of an E57 file, or of the one numbered `scan`
+/// (0-based), in the file's frame.
+pub(crate) fn read(bytes: &[u8], scan: Option<usize>) -> Result<Vec<[f64; 3]>> {
     let mut reader = E57Reader::new(Cursor::new(bytes)).map_err(|e| err("the file cannot be read", e))?;
     let clouds = reader.pointclouds();
-    if clouds.is_empty() {
+    let n = clouds.len();
+    if n == 0 {
         return Err(Error::parse(FORMAT, "the file holds no point clouds (its data3D list is empty)"));
     }
-    let records = clouds.iter().fold(0u64, |n, c| n.saturating_add(c.records));
+    let chosen: Vec<(usize, &e57::PointCloud)> = match scan {
+        Some(k) if k >= n => {
+            return Err(Error::InvalidOption(format!("scan = {k}, but the E57 file holds {n} scans (0 to {})", n - 1)))
+        }
+        Some(k) => vec![(k, &clouds[k])],
+        None => clouds.iter().enumerate().collect(),
+    };
+    let records = chosen.iter().fold(0u64, |sum, (_, c)| sum.saturating_add(c.records));
     crate::limits::check_file_points(FORMAT, records)?;
     // a record can take under a byte (bit-packed integers): the reservation is bounded, the rest grows
     let mut points = Vec::with_capacity(bounded_capacity(records, bytes.len(), 4));
-    for (k, cloud) in clouds.iter().enumerate() {
-        let what = || format!("point cloud {} of {}", k + 1, clouds.len());
+    for (k, cloud) in chosen {
+        let what = || format!("point cloud {} of {n}", k + 1);
         let mut iter = reader.pointcloud_simple(cloud).map_err(|e| err(&what(), e))?;
         // only the coordinates are used: no colour from intensity, no normalising
         iter.intensity_to_color(false);

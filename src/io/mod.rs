@@ -201,7 +201,7 @@ fn sniff(bytes: &[u8]) -> Option<Format> {
     None
 }
 
-fn read_format(bytes: &[u8], format: Format, faces: Faces) -> Result<Raw> {
+fn read_format(bytes: &[u8], format: Format, faces: Faces, scan: Option<usize>) -> Result<Raw> {
     match format {
         Format::Ply => ply::read(bytes, faces),
         Format::Pcd => pcd::read(bytes),
@@ -210,7 +210,7 @@ fn read_format(bytes: &[u8], format: Format, faces: Faces) -> Result<Raw> {
         Format::Off => off::read(bytes),
         Format::Stl => stl::read(bytes),
         Format::Las => las::read(bytes).map(|vertices| Raw { vertices, triangles: Vec::new() }),
-        Format::E57 => e57::read(bytes).map(|vertices| Raw { vertices, triangles: Vec::new() }),
+        Format::E57 => e57::read(bytes, scan).map(|vertices| Raw { vertices, triangles: Vec::new() }),
     }
 }
 
@@ -241,6 +241,11 @@ pub struct ReadOptions {
     /// platform. Default 0. A non-negative integer (in JS a `bigint` for values above 2^53).
     #[cfg_attr(feature = "ts", ts(type = "number | bigint", optional = nullable))]
     pub seed: u64,
+    /// For an E57 file, which holds one point cloud per scan: only this one (0-based, in the
+    /// file's order), placed by its pose. An index beyond the file's scans is an error; other
+    /// formats are read as they are. Unset (the default): every scan, as one cloud.
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
+    pub scan: Option<usize>,
 }
 
 /// [`read_point_cloud`], with a mesh's surface sampled when `options.surface_points` is set
@@ -259,7 +264,7 @@ pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOption
         crate::limits::check_file_points(format.name(), n as u64)?;
     }
     let faces = if options.surface_points.is_some() { Faces::IfAny } else { Faces::Skip };
-    let raw = read_format(bytes, format, faces)?;
+    let raw = read_format(bytes, format, faces, options.scan)?;
     crate::limits::check_file_points(format.name(), raw.vertices.len() as u64)?;
     if raw.vertices.is_empty() {
         return Err(Error::parse(format.name(), "the file holds no points"));
@@ -281,7 +286,7 @@ pub fn read_mesh(bytes: &[u8], file_name: &str) -> Result<Mesh> {
     if !format.has_faces() {
         return Err(Error::parse(format.name(), "this format holds points only, not a mesh (use read_point_cloud)"));
     }
-    Ok(read_format(bytes, format, Faces::Required)?.into_mesh())
+    Ok(read_format(bytes, format, Faces::Required, None)?.into_mesh())
 }
 
 /// Writes a cloud as binary little-endian PLY, in the caller's frame: `float x y z` per vertex

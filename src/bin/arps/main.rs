@@ -102,6 +102,13 @@ enum Command {
         /// point files are read as they are.
         #[arg(long)]
         surface_points: Option<usize>,
+        /// Of a source E57 file holding several scans, only this one (0-based), placed by its
+        /// pose (by default every scan, as one cloud); other formats are read as they are.
+        #[arg(long)]
+        source_scan: Option<usize>,
+        /// Of a target E57 file holding several scans, only this one (0-based); see `--source-scan`.
+        #[arg(long)]
+        target_scan: Option<usize>,
         /// Print exactly one JSON object on stdout: the engine's result (`arps::Registration`), fields
         /// camelCase, transforms as 16 column-major numbers, like the JS API's result; plus
         /// `wallMs`, the milliseconds of reading both files and registering. With several sources,
@@ -261,12 +268,15 @@ fn run(command: Command) -> Result<(), String> {
             keep_outliers,
             keep_support,
             surface_points,
+            source_scan,
+            target_scan,
             json,
         } => {
             let up = up.map(|v| up_axis(&v)).transpose()?;
             let mut registrar = load_registrar(weights.as_deref())?;
             let mut t0 = std::time::Instant::now();
-            let reading = io::ReadOptions { surface_points, seed };
+            let reading = io::ReadOptions { surface_points, seed, scan: source_scan };
+            let reading_target = io::ReadOptions { scan: target_scan, ..reading };
             let options = Options {
                 icp: match icp {
                     IcpArg::Point => IcpKind::Point,
@@ -289,7 +299,7 @@ fn run(command: Command) -> Result<(), String> {
                 ..Options::default()
             };
             // the target is read once; the registrar keeps it prepared from one source to the next
-            let tgt = read_cloud(&target, &reading)?;
+            let tgt = read_cloud(&target, &reading_target)?;
             let several = sources.len() > 1;
             let mut failed = 0usize;
             for source in &sources {
