@@ -183,6 +183,19 @@ fn hostile_compressed_data_gives_errors_not_allocations() {
     let user = b.windows(14).position(|w| w == b"laszip encoded").unwrap();
     b[user] = b'L';
     has(&err(&b, "a.laz"), &["no LASzip record"]);
+    // the compressor says layered, the items (point format 3, version 2) are not; and a layered
+    // file (format 6) whose compressor says point-wise: the layer sizes would go unchecked
+    let data = user - 2 + 54;
+    let mut b = laz.clone();
+    set(&mut b, data, &3u16.to_le_bytes());
+    has(&err(&b, "a.laz"), &["compressor (3) and its items' version (2) disagree"]);
+    let layered = fixture("1_4_w_evlr.laz");
+    let at = layered.windows(14).position(|w| w == b"laszip encoded").unwrap() - 2 + 54;
+    for compressor in [1u16, 2] {
+        let mut b = layered.clone();
+        set(&mut b, at, &compressor.to_le_bytes());
+        has(&err(&b, "a.laz"), &[&format!("compressor ({compressor}) and its items' version (3) disagree")]);
+    }
     // the first variable length record's length runs past the point data
     let header_size = u16::from_le_bytes(laz[94..96].try_into().unwrap()) as usize;
     let mut b = laz.clone();

@@ -204,9 +204,18 @@ fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
     let laz_err = |e: laz::LasZipError| err(format!("the LASzip record cannot be used: {e}"));
     let vlr = LazVlr::from_buffer(vlr_data).map_err(laz_err)?;
     let compressor = u16_at(vlr_data, 0);
-    let first = vlr.items().first().map(|i| i.item_type());
-    if !matches!(first, Some(LazItemType::Point10 | LazItemType::Point14)) {
+    let first = vlr.items().first().map(|i| (i.item_type(), i.version()));
+    let Some((LazItemType::Point10 | LazItemType::Point14, version)) = first else {
         return Err(err(format!("the LASzip record's first item is {first:?}, not a point (Point10 or Point14)")));
+    };
+    // the crate decodes layers by the items' version (3 and 4), whatever the compressor says; the
+    // layer sizes are checked only for a layered compressor, so the two must agree
+    let layered = version >= 3;
+    if layered != (compressor == LAYERED) {
+        return Err(err(format!(
+            "the LASzip record's compressor ({compressor}) and its items' version ({version}) disagree on whether \
+             the points are layered"
+        )));
     }
     if vlr.items_size() != h.record_len as u64 {
         return Err(err(format!(
@@ -216,7 +225,7 @@ fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
         )));
     }
     if compressor != POINTWISE {
-        check_chunks(bytes, h, &vlr, compressor == LAYERED)?;
+        check_chunks(bytes, h, &vlr, layered)?;
     } else if vlr.uses_variable_size_chunks() {
         // one stream without chunks cannot have chunks of variable size (the crate panics on it)
         return Err(err("the LASzip record has no chunks (point-wise) but says they vary in size"));
