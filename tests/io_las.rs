@@ -196,6 +196,10 @@ fn hostile_compressed_data_gives_errors_not_allocations() {
         set(&mut b, at, &compressor.to_le_bytes());
         has(&err(&b, "a.laz"), &[&format!("compressor ({compressor}) and its items' version (3) disagree")]);
     }
+    // an item that says another size than the crate decodes (it slices each point by its own)
+    let mut b = laz.clone();
+    set(&mut b, data + 34 + 2, &5u16.to_le_bytes());
+    has(&err(&b, "a.laz"), &["Point10 item says 5 bytes, not its 20"]);
     // the first variable length record's length runs past the point data
     let header_size = u16::from_le_bytes(laz[94..96].try_into().unwrap()) as usize;
     let mut b = laz.clone();

@@ -217,10 +217,31 @@ fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
              the points are layered"
         )));
     }
-    if vlr.items_size() != h.record_len as u64 {
+    // each item as large as the crate decodes it (it slices the point by its own sizes), and
+    // together the header's point record
+    let mut bytes_per_point = 0u64;
+    for item in vlr.items() {
+        let decoded = match item.item_type() {
+            LazItemType::Byte(n) | LazItemType::Byte14(n) => n,
+            LazItemType::Point10 => 20,
+            LazItemType::GpsTime => 8,
+            LazItemType::RGB12 | LazItemType::RGB14 => 6,
+            LazItemType::RGBNIR14 => 8,
+            LazItemType::WavePacket13 | LazItemType::WavePacket14 => 29,
+            LazItemType::Point14 => 30,
+        };
+        if item.size() != decoded {
+            return Err(err(format!(
+                "the LASzip record's {:?} item says {} bytes, not its {decoded}",
+                item.item_type(),
+                item.size()
+            )));
+        }
+        bytes_per_point += u64::from(decoded);
+    }
+    if bytes_per_point != h.record_len as u64 {
         return Err(err(format!(
-            "the LASzip record's items make {}-byte points, the header {}-byte ones",
-            vlr.items_size(),
+            "the LASzip record's items make {bytes_per_point}-byte points, the header {}-byte ones",
             h.record_len
         )));
     }
