@@ -1,5 +1,5 @@
-// Shared by the `read_point_cloud` fuzz target and `tests/io_fuzz_regressions.rs` (which replays
-// its inputs), through `include!`, so both check the round trip the same way.
+// Shared by the `read_point_cloud` and `read_e57` fuzz targets and `tests/io_fuzz_regressions.rs`
+// (which replays their inputs), through `include!`, so all check the round trip the same way.
 
 /// True when `b` holds the same points as `a` in the caller's frame: bit for bit when both
 /// origins are zero (the usual case: written as `float`, read back as such), else within `f32`
@@ -17,4 +17,10 @@ fn same_points(a: &arps::PointCloud, b: &arps::PointCloud) -> bool {
         let (p, q) = (a.point_f64(i), b.point_f64(i));
         (0..3).all(|k| if p[k].is_finite() { (p[k] - q[k]).abs() <= tol } else { p[k].is_nan() == q[k].is_nan() })
     })
+}
+
+/// Whatever was read writes as PLY and reads back with the same points ([`same_points`]).
+fn reads_back(cloud: &arps::PointCloud) -> bool {
+    let back = arps::io::read_point_cloud(&arps::io::write_ply_binary(cloud), "b.ply").expect("own PLY reads back");
+    same_points(cloud, &back)
 }

@@ -43,7 +43,7 @@ pub(crate) fn read(bytes: &[u8], scan: Option<usize>) -> Result<Vec<[f64; 3]>> {
         iter.intensity_to_color(false);
         iter.normalize_intensity(false);
         iter.normalize_color(false);
-        for p in iter.by_ref() {
+        for p in iter {
             let p = p.map_err(|e| err(&what(), e))?;
             if let CartesianCoordinate::Valid { x, y, z } = p.cartesian {
                 points.push([x, y, z]);

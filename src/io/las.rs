@@ -256,7 +256,8 @@ fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
     let mut cursor = Cursor::new(bytes);
     cursor.set_position(h.offset as u64);
     let mut decompressor = LasZipDecompressor::selective(cursor, vlr, selection).map_err(laz_err)?;
-    // a compressed point takes at least a byte or so; the reservation grows with what decodes
+    // reserved as if the points were stored uncompressed (fewer than a compressed file holds), the
+    // rest grows as they decode
     let mut points = Vec::with_capacity(bounded_capacity(h.count, bytes.len() - h.offset, h.record_len));
     let mut record = vec![0u8; h.record_len];
     for _ in 0..h.count {

@@ -482,8 +482,9 @@ test("a mesh file is read as points over its surface", { timeout: TIMEOUT * 2 },
 test("a georeferenced LAZ survey aligned onto itself moved, in map-grid coordinates", { timeout: TIMEOUT * 2 }, async () => {
   // The source: fixtures/formats/1_4_w_evlr.laz as is (LAS 1.4, layered LAZ, 1,000 points near
   // (1.69e6, 1.82e6, 5.6e3)). The target: its points moved by 12 degrees about the vertical through
-  // the survey's centre plus (4, -3, 0.5), written as a PLY of doubles (float32 would round them to
-  // 0.125 at these coordinates).
+  // the survey's centre plus (4, -3, 0.5), written as a PLY of doubles. The page itself reads both
+  // files as float32 in their own frame (parsePointCloud), 0.125 apart at these coordinates: this
+  // checks that it reads LAZ and aligns in map-grid coordinates, not to the millimetre.
   const { readPointCloud } = await import(pathToFileURL(join(ROOT, "pkg", "node", "index.mjs")).href);
   const laz = join(ROOT, "fixtures", "formats", "1_4_w_evlr.laz");
   const cloud = readPointCloud(readFileSync(laz), "1_4_w_evlr.laz");
@@ -513,8 +514,7 @@ test("a georeferenced LAZ survey aligned onto itself moved, in map-grid coordina
   const off = Math.hypot(at[0] - want[0], at[1] - want[1], at[2] - want[2]);
   console.log(`LAZ survey: the centre off by ${off.toFixed(4)}, rotation ${result.rotationDeg.toFixed(2)} deg (12 applied), confidence ${result.confidence.toFixed(3)}`);
   // 1,000 points over a strip about 500 long: a few units apart, so ICP's last distance, and what
-  // a slide along the strip costs, are a few tenths (the native build: 0.57); lost precision at
-  // 1.7e6 would be units to kilometres
+  // a slide along the strip costs, are a few tenths (the native build, in f64: 0.57)
   assert.ok(off < 1.0, `the survey's centre off by ${off}`);
   assert.ok(Math.abs(result.rotationDeg - 12) < 0.5, `page says ${result.rotationDeg} deg`);
 });
