@@ -68,7 +68,8 @@ export interface WorkerRequestOptions {
   onProgress?: (stage: Stage) => void;
   /**
    * Transfer the input buffers to the worker instead of copying them (faster for big clouds;
-   * the caller's arrays become detached, length 0). Default `false`.
+   * the caller's arrays, a `{ points, origin }` cloud's `points` included, become detached,
+   * length 0). Default `false`.
    */
   transfer?: boolean;
   /**

@@ -250,7 +250,17 @@ function abortError(signal) {
 
 function uniqueBuffers(views) {
   const out = [];
-  for (const v of views) {
+  for (const item of views) {
+    // a cloud with an origin, { points, origin }, transfers its points (a getter that throws is
+    // left to the engine's own check of the argument, which names it)
+    let v = item;
+    if (item && typeof item === "object" && !ArrayBuffer.isView(item) && !(item instanceof ArrayBuffer)) {
+      try {
+        v = item.points;
+      } catch {
+        v = null;
+      }
+    }
     const b = ArrayBuffer.isView(v) ? v.buffer : v instanceof ArrayBuffer ? v : null;
     if (b && !out.includes(b)) out.push(b);
   }

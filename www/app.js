@@ -1,10 +1,22 @@
 // The arps demo page: load two scans (parsed in the engine's worker, readied for drawing in the
 // page's worker), align them in the engine's worker, show the result in three.js. The main thread
-// never walks a whole scan. Test hooks: #source-file, #target-file, #align, #result (the result
+// never walks a whole scan. Each scan is float32 offsets from a float64 origin, from reading to
+// the engine, the view and the download, so georeferenced surveys keep their digits. Test hooks: #source-file, #target-file, #align, #result (the result
 // as JSON), #verdict (the confidence in words), #alternatives (buttons for the other poses that fit
 // about as well, when there are some), #error (the message).
 import { createWorkerRegistrar, STAGES } from "../pkg/worker-client.js";
-import { confidenceWords, makeExample, modelSummary, multiply, invertRigid, parseBunny, posesOf, rotationAngleDeg, rowMajor } from "./lib.js";
+import {
+  confidenceWords,
+  hasOrigin,
+  invertRigid,
+  makeExample,
+  modelSummary,
+  multiply,
+  parseBunny,
+  posesOf,
+  rotationAngleDeg,
+  rowMajor,
+} from "./lib.js";
 import { alignedPly, copyCloud, dropCloud, storeCloud } from "./prep.js";
 import { MAX_DRAWN, createView } from "./view.js";
 
@@ -16,8 +28,8 @@ const MESH_SURFACE_POINTS = 200_000;
 // ---- state --------------------------------------------------------------------------------
 
 const state = {
-  // { key (its points in the page's store, www/prep.js), count, bounds: { min, max }, name, note };
-  // the main thread holds no whole scan
+  // { key (its points in the page's store, www/prep.js), count, bounds: { min, max } (offsets from
+  // origin), origin: [x, y, z], name, note }; the main thread holds no whole scan
   source: null,
   target: null,
   truth: null, // the example's known T_target_source (column-major), if the example is loaded
@@ -108,13 +120,18 @@ const loads = { source: 0, target: 0 }; // the latest load of each slot wins
 
 const count = (n) => n.toLocaleString("en");
 
+/** An origin in words: its coordinates to a tenth of a unit. */
+const place = (origin) => `(${Array.from(origin, (v) => v.toLocaleString("en", { maximumFractionDigits: 1 })).join(", ")})`;
+
 /**
- * Hands `points` (transferred) to the page's store under a key of this load; resolves to the
- * page's cloud `{ key, count, drawn, bounds, name, note }` (`drawn`: the view's subsample).
+ * Hands `cloud` (`{ points, origin }`, points transferred) to the page's store under a key of
+ * this load; resolves to the page's cloud `{ key, count, drawn, bounds, origin, name, note }`
+ * (`drawn`: the view's subsample).
  */
-async function readyCloud(points, name, which, token) {
+async function readyCloud(cloud, name, which, token) {
   const key = `${which}#${token}`;
-  const ready = await storeCloud(key, points, MAX_DRAWN, which === "source" ? 1 : 2);
+  const origin = Array.from(cloud.origin ?? [0, 0, 0], Number);
+  const ready = await storeCloud(key, { points: cloud.points, origin }, MAX_DRAWN, which === "source" ? 1 : 2);
   if (!ready.bounds) {
     dropCloud(key);
     throw new Error("the file holds no (finite) points");
@@ -122,7 +139,8 @@ async function readyCloud(points, name, which, token) {
   const notes = [];
   if (ready.drawn.length / 3 < ready.count) notes.push(`${count(ready.drawn.length / 3)} drawn`);
   if (ready.dropped) notes.push(`${count(ready.dropped)} non-finite dropped`);
-  return { key, count: ready.count, drawn: ready.drawn, bounds: ready.bounds, name, note: notes.join(" · ") };
+  if (hasOrigin(origin)) notes.push(`about ${place(origin)}`);
+  return { key, count: ready.count, drawn: ready.drawn, bounds: ready.bounds, origin, name, note: notes.join(" · ") };
 }
 
 async function loadFile(which, file) {
@@ -135,10 +153,11 @@ async function loadFile(which, file) {
     const bytes = new Uint8Array(await file.arrayBuffer());
     const arps = await getEngine();
     // A mesh (a CAD model, say) is read as points spread over its surface, not its vertices,
-    // which sit on its edges and corners; a point file is read as it is.
-    const parsed = await arps.parsePointCloud(bytes, file.name, { surfacePoints: MESH_SURFACE_POINTS }, { transfer: true });
+    // which sit on its edges and corners; a point file is read as it is. Coordinates far from
+    // zero (a map grid) come as offsets from an origin, in f64.
+    const parsed = await arps.readPointCloud(bytes, file.name, { surfacePoints: MESH_SURFACE_POINTS }, { transfer: true });
     if (token !== loads[which]) return;
-    $(`${which}-info`).textContent = `${file.name}: preparing ${count(parsed.length / 3)} points…`;
+    $(`${which}-info`).textContent = `${file.name}: preparing ${count(parsed.points.length / 3)} points…`;
     const cloud = await readyCloud(parsed, file.name, which, token);
     if (token !== loads[which]) return dropCloud(cloud.key);
     setCloud(which, cloud);
@@ -178,8 +197,8 @@ async function loadExample() {
     if (!response.ok) throw new Error(`HTTP ${response.status} fetching the bunny mesh`);
     const example = makeExample(parseBunny(await response.text()));
     const tokens = [++loads.source, ++loads.target];
-    const source = await readyCloud(example.source, "bunny, view A (moved)", "source", tokens[0]);
-    const target = await readyCloud(example.target, "bunny, view B", "target", tokens[1]);
+    const source = await readyCloud({ points: example.source }, "bunny, view A (moved)", "source", tokens[0]);
+    const target = await readyCloud({ points: example.target }, "bunny, view B", "target", tokens[1]);
     if (tokens[0] !== loads.source || tokens[1] !== loads.target) {
       dropCloud(source.key);
       dropCloud(target.key);
@@ -248,8 +267,9 @@ async function align() {
   try {
     const arps = await getEngine();
     const truth = state.truth;
-    // Copies made in the page's store, handed (transferred) to the engine's worker: the main
-    // thread neither copies nor serialises the scans.
+    // Copies made in the page's store ({ points, origin }), handed (transferred) to the engine's
+    // worker: the main thread neither copies nor serialises the scans. The answer maps the
+    // source's absolute frame (points + origin) onto the target's.
     const [source, target] = await Promise.all([copyCloud(state.source.key), copyCloud(state.target.key)]);
     controller.signal.throwIfAborted();
     const result = await arps.register(source, target, options, {
@@ -299,6 +319,7 @@ function resultJson(r, truth) {
     evidence: r.evidence,
     rotationDeg: rotationAngleDeg(m),
     translation: [m[12], m[13], m[14]],
+    sourceCentreMoves: centreMoves(m, state.source),
     icpIterations: r.icpIterations,
     icpConverged: r.icpConverged,
     maxCorrespondenceDistance: r.maxCorrespondenceDistance,
@@ -355,6 +376,15 @@ function showResult(r, truth = null) {
       `(${json.translation.map((v) => fmt(v)).join(", ")}) · |t| = ${fmt(Math.hypot(...json.translation))} units`,
       "How far it then moves, in the scans' units.",
     ],
+    ...(json.sourceCentreMoves
+      ? [
+          [
+            "Centre moves",
+            `(${json.sourceCentreMoves.map((v) => fmt(v)).join(", ")}) · ${fmt(Math.hypot(...json.sourceCentreMoves))} units`,
+            "How far the source's centre moves. The translation above is that of the point (0, 0, 0), far from scans in map-grid coordinates.",
+          ],
+        ]
+      : []),
     [
       "Fitness",
       `${(pose.fitness * 100).toFixed(1)}% of source points within ${d} units`,
@@ -403,6 +433,17 @@ function showResult(r, truth = null) {
     }),
   );
   $("result").textContent = JSON.stringify(json, null, 2);
+}
+
+/**
+ * How far the column-major `m` moves the centre of `source`'s bounding box (in f64), `[x, y, z]`,
+ * or null without a source. With map-grid coordinates the translation is the motion of the far
+ * away point (0, 0, 0); this is the distance a user would measure on the scans.
+ */
+function centreMoves(m, source) {
+  if (!source?.bounds) return null;
+  const c = [0, 1, 2].map((k) => source.origin[k] + (source.bounds.min[k] + source.bounds.max[k]) / 2);
+  return [0, 1, 2].map((r) => m[r] * c[0] + m[4 + r] * c[1] + m[8 + r] * c[2] + m[12 + r] - c[r]);
 }
 
 /** The buttons that pick the pose shown (#alternatives), when the result offers more than one. */

@@ -36,21 +36,26 @@ function request(message, transfer = []) {
 }
 
 /**
- * Stores `points` (packed xyz; transferred, so detached here afterwards) under `key`, without its
- * non-finite points. Resolves to `{ count, drawn, bounds, dropped }`: `drawn` at most `maxDrawn`
- * of the points (a seeded stratified subsample) for the view, `bounds` `{ min, max }` of all of
- * them (`null` when none is finite), `dropped` how many were non-finite.
+ * Stores the cloud `{ points, origin }` under `key`, without its non-finite points: `points` packed
+ * xyz offsets from `origin` (`[x, y, z]`, f64; null for zero), transferred, so detached here
+ * afterwards. Resolves to `{ count, drawn, bounds, dropped }`: `drawn` at most `maxDrawn` of the
+ * points (a seeded stratified subsample) for the view, `bounds` `{ min, max }` of all of them
+ * (`null` when none is finite), both as offsets from the origin; `dropped` how many were non-finite.
  */
-export function storeCloud(key, points, maxDrawn, seed = 0) {
-  return request({ type: "store", key, points, maxDrawn, seed }, [points.buffer]);
+export function storeCloud(key, { points, origin = null }, maxDrawn, seed = 0) {
+  return request({ type: "store", key, points, origin: origin ? Array.from(origin, Number) : null, maxDrawn, seed }, [points.buffer]);
 }
 
-/** A fresh copy of the points stored under `key` (yours to transfer). */
+/** A fresh copy of the cloud stored under `key`, `{ points, origin }` (yours to transfer). */
 export async function copyCloud(key) {
-  return (await request({ type: "copy", key })).points;
+  const { points, origin } = await request({ type: "copy", key });
+  return { points, origin };
 }
 
-/** The binary PLY bytes of the points stored under `key` mapped through `matrix` (column-major). */
+/**
+ * The binary PLY bytes of the cloud stored under `key` (origin added) mapped through `matrix`
+ * (column-major): doubles when the cloud has an origin, so map-grid coordinates keep their digits.
+ */
 export async function alignedPly(key, matrix, comment) {
   return (await request({ type: "ply", key, matrix: Float64Array.from(matrix), comment })).bytes;
 }

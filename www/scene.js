@@ -2,8 +2,11 @@
 // an OffscreenCanvas, www/render-worker.js, or on the page when there is none). It draws what it
 // is given (each cloud's subsample), never walks the points itself (culling spheres come from the
 // bounds it is sent), and renders once per animation frame after a change.
-//   { type: "cloud", key: "source" | "target", drawn?: Float32Array, bounds? }   set or clear
-//   { type: "aligned", matrix?: number[16] }     the source's points under this matrix, or none
+//   { type: "cloud", key: "source" | "target", drawn?: Float32Array, bounds?, offset? }   set or
+//       clear; `offset` [x, y, z] places the cloud in the scene (drawn + offset)
+//   { type: "offset", key, offset }              moves a cloud to a new place
+//   { type: "aligned", matrix?: number[16] }     the source's drawn points under this matrix (to
+//       scene coordinates), or none
 //   { type: "visible", source: bool, aligned: bool }
 //   { type: "pointSize", px }
 //   { type: "camera", position, quaternion, up, fov, near, far }
@@ -67,10 +70,14 @@ export function createScene(canvas, onRendered = () => {}) {
           const max = new THREE.Vector3(...msg.bounds.max);
           geometry.boundingSphere = new THREE.Sphere(min.clone().add(max).multiplyScalar(0.5), min.distanceTo(max) / 2);
           objects[msg.key] = new THREE.Points(geometry, material(COLORS[msg.key]));
+          if (msg.offset) objects[msg.key].position.fromArray(msg.offset);
           scene.add(objects[msg.key]);
         }
         break;
       }
+      case "offset":
+        objects[msg.key]?.position.fromArray(msg.offset);
+        break;
       case "aligned": {
         remove("aligned");
         if (msg.matrix && objects.source) {

@@ -1,10 +1,13 @@
 // The demo page's view, main-thread side: the camera and its OrbitControls, framing from bounding
 // boxes (eight corners per cloud, never a pass over the points), and the scene (www/scene.js),
 // which draws in a worker on an OffscreenCanvas where the browser can (render-worker.js), else
-// here. Clouds arrive already subsampled (at most MAX_DRAWN points each; the engine gets them all).
+// here. Clouds arrive already subsampled (at most MAX_DRAWN points each; the engine gets them all),
+// as float32 offsets from their own float64 origin. The scene's frame sits at the target's origin
+// (else the source's): each cloud is placed there by the difference of origins, taken in f64, so
+// two map-grid surveys are drawn, and framed, without rounding.
 import * as THREE from "three";
 import { OrbitControls } from "three/addons/controls/OrbitControls.js";
-import { transformBounds, unionBounds } from "./lib.js";
+import { relativeTo, transformBounds, unionBounds } from "./lib.js";
 import { createScene } from "./scene.js";
 
 /** At most this many points of each cloud are drawn (`?drawn=N` in the page's URL overrides it). */
@@ -37,12 +40,17 @@ function sceneBackend(canvas, onError, onRendered) {
   return { send: (msg) => handle(msg), offscreen: false };
 }
 
+/** `b` (`{ min, max }` or null) moved by `d`. */
+const shifted = (b, d) => b && { min: b.min.map((v, k) => v + d[k]), max: b.max.map((v, k) => v + d[k]) };
+
 /**
  * The view on `canvas`. Test hook: `canvas.dataset.sent` counts the changes sent to the scene,
  * `canvas.dataset.drawn` is the count the last drawn frame shows (equal: the view is up to date).
- * Methods: `setCloud(key, cloud)` (`key` "source" or "target", `cloud`
- * `{ drawn, bounds }` or null; `drawn` is handed over, detached afterwards), `setAligned(matrix)`,
- * `show("before" | "after")`, `setPointSize(px)`, `fit()`. `offscreen` says where it draws.
+ * Methods: `setCloud(key, cloud)` (`key` "source" or "target", `cloud` `{ drawn, bounds, origin }`
+ * or null: `drawn` and `bounds` offsets from `origin`, `[x, y, z]` or null for zero; `drawn` is
+ * handed over, detached afterwards), `setAligned(T_target_source)` (column-major, between the
+ * clouds' absolute frames, or null), `show("before" | "after")`, `setPointSize(px)`, `fit()`.
+ * `offscreen` says where it draws.
  */
 export function createView(canvas, { onError = (e) => console.error(e) } = {}) {
   let seq = 0;
@@ -54,8 +62,26 @@ export function createView(canvas, { onError = (e) => console.error(e) } = {}) {
   const pixelRatio = Math.min(window.devicePixelRatio || 1, 2);
   const camera = new THREE.PerspectiveCamera(45, 1, 0.01, 1000);
   camera.position.set(3, 2, 4);
-  const boxes = { source: null, target: null, aligned: null };
+  // each cloud's bounds and origin as given; the scene's frame (an origin); the aligned pose
+  const local = { source: null, target: null };
+  const origins = { source: null, target: null };
+  let frame = [0, 0, 0];
+  let T_target_source = null;
   const visible = { source: true, aligned: false };
+  const offset = (key) => origins[key].map((v, k) => v - frame[k]);
+  const box = (key) => (local[key] ? shifted(local[key], offset(key)) : null);
+  const alignedBox = () => (T_target_source && local.source ? transformBounds(local.source, alignedMatrix()) : null);
+  // T_target_source acting on the source's offsets, giving scene coordinates
+  const alignedMatrix = () => relativeTo(T_target_source, origins.source, frame);
+  const sendAligned = () => send({ type: "aligned", matrix: T_target_source && local.source ? Array.from(alignedMatrix()) : null });
+  /** Moves the scene's frame to the target's origin (else the source's) and re-places the clouds. */
+  const reframe = () => {
+    const next = origins.target ?? origins.source ?? [0, 0, 0];
+    if (next.every((v, k) => v === frame[k])) return;
+    frame = next;
+    for (const key of ["source", "target"]) if (local[key]) send({ type: "offset", key, offset: offset(key) });
+    if (T_target_source) sendAligned();
+  };
 
   const sendCamera = () =>
     send({
@@ -90,16 +116,19 @@ export function createView(canvas, { onError = (e) => console.error(e) } = {}) {
   return {
     offscreen: backend.offscreen,
     setCloud(key, cloud) {
-      if (key === "source") boxes.aligned = null;
-      boxes[key] = cloud?.bounds ?? null;
-      send({ type: "cloud", key, drawn: cloud?.drawn ?? null, bounds: cloud?.bounds ?? null });
+      if (key === "source") T_target_source = null;
+      local[key] = cloud?.bounds ?? null;
+      origins[key] = local[key] ? Array.from(cloud.origin ?? [0, 0, 0], Number) : null;
+      reframe();
+      const placed = local[key] ? { offset: offset(key) } : {};
+      send({ type: "cloud", key, drawn: cloud?.drawn ?? null, bounds: local[key], ...placed });
     },
     setAligned(matrix) {
-      boxes.aligned = matrix && boxes.source ? transformBounds(boxes.source, matrix) : null;
-      send({ type: "aligned", matrix: matrix ? Array.from(matrix) : null });
+      T_target_source = matrix && local.source ? Float64Array.from(matrix) : null;
+      sendAligned();
     },
     show(which) {
-      visible.aligned = which === "after" && !!boxes.aligned;
+      visible.aligned = which === "after" && !!T_target_source;
       visible.source = !visible.aligned;
       send({ type: "visible", ...visible });
     },
@@ -108,10 +137,10 @@ export function createView(canvas, { onError = (e) => console.error(e) } = {}) {
     },
     /** Frames the visible clouds' boxes; Z up when the data is flat in z (scans), else Y up (three.js). */
     fit() {
-      const box = unionBounds([visible.source ? boxes.source : null, boxes.target, visible.aligned ? boxes.aligned : null]);
-      if (!box) return;
-      const min = new THREE.Vector3(...box.min);
-      const max = new THREE.Vector3(...box.max);
+      const all = unionBounds([visible.source ? box("source") : null, box("target"), visible.aligned ? alignedBox() : null]);
+      if (!all) return;
+      const min = new THREE.Vector3(...all.min);
+      const max = new THREE.Vector3(...all.max);
       const extent = max.clone().sub(min);
       const center = min.clone().add(max).multiplyScalar(0.5);
       const radius = Math.max(extent.length() / 2, 1e-6);

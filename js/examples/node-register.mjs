@@ -1,12 +1,13 @@
 #!/usr/bin/env node
 // Registers two point-cloud files in Node and prints T_target_source.
 //   node node_modules/arps/examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] [--json]
-// SOURCE and TARGET are any format the readers know (PLY, PCD, XYZ/PTS/CSV, OBJ, OFF, STL).
+// SOURCE and TARGET are any format the readers know (PLY, PCD, LAS/LAZ, E57, XYZ/PTS/CSV, OBJ,
+// OFF, STL), read with their coordinates kept (map-grid surveys too: `readPointCloud`).
 // It imports "arps" as an app that installed the package does (inside the package, Node resolves
 // the package's own name to itself).
 import { readFileSync } from "node:fs";
 import path from "node:path";
-import init, { Registrar, parsePointCloud } from "arps";
+import init, { Registrar, readPointCloud } from "arps";
 
 function usage(message) {
   if (message) console.error(`node-register: ${message}`);
@@ -29,7 +30,9 @@ if (files.length !== 2) usage();
 
 try {
   await init(); // a no-op under Node; loads the .wasm in a browser
-  const [source, target] = files.map((f) => parsePointCloud(readFileSync(f), path.basename(f)));
+  // { points, origin }: float32 offsets from a float64 origin, which register takes as is; the
+  // answer is in the files' own frames
+  const [source, target] = files.map((f) => readPointCloud(readFileSync(f), path.basename(f)));
   const registrar = Registrar.withDefaultModel();
   const t0 = performance.now();
   const r = registrar.register(source, target, options);
@@ -40,7 +43,7 @@ try {
     // The result as it is: the same object `arps register --json` prints.
     console.log(JSON.stringify(r));
   } else {
-    console.log(`source ${files[0]}: ${source.length / 3} points; target ${files[1]}: ${target.length / 3} points`);
+    console.log(`source ${files[0]}: ${source.points.length / 3} points; target ${files[1]}: ${target.points.length / 3} points`);
     console.log("T_target_source (maps source points into the target frame):");
     for (const row of rows) console.log("  " + row.map((v) => v.toFixed(6).padStart(11)).join(" "));
     console.log(`confidence ${r.confidence.toFixed(3)} (the engine's estimate that the answer is right; below 0.5 it warns)`);

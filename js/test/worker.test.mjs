@@ -72,6 +72,13 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     const res2 = await arps.register(s, t, {}, { transfer: true });
     assert.equal(s.length, 0, "source buffer transferred");
     assert.deepEqual(res2.T_target_source, res.T_target_source);
+    // Clouds with an origin transfer their points too; zero origins give the same answer.
+    const so = { points: source(), origin: [0, 0, 0] };
+    const to = { points: target(), origin: [0, 0, 0] };
+    const res3 = await arps.register(so, to, {}, { transfer: true });
+    assert.equal(so.points.length, 0, "a { points, origin } source's points transferred");
+    assert.equal(to.points.length, 0, "a { points, origin } target's points transferred");
+    assert.deepEqual(res3.T_target_source, res.T_target_source);
 
     // Concurrent requests resolve to their own results.
     const [a, b] = await Promise.all([

@@ -1,7 +1,8 @@
 // End-to-end test of the demo page (www/) in Debian's Chromium, headless, through playwright-core.
 // Needs the built package (scripts/build-pkg.sh) and the npm dev dependencies; run it with
 // scripts/test-e2e.sh. Screenshots go to $ARPS_E2E_OUT (default target/e2e/): demo.png,
-// example.png, box-alternative.png (a box pair's first alternative pose shown), big-1400x860.png and
+// example.png, box-alternative.png (a box pair's first alternative pose shown), survey.png (a LAZ
+// survey aligned in map-grid coordinates), big-1400x860.png and
 // big-390x844.png (the 1M-point pair's result, desktop and phone).
 //
 // The known-transform pair: two half-space crops (85% each) of the committed Velodyne fixture
@@ -33,8 +34,13 @@ import {
   multiply,
   parameterCount,
   rigid,
+  relativeTo,
   rotationAngleDeg,
   transformBounds,
+  transformFromOrigin,
+  transformPoints,
+  hasOrigin,
+  writePly,
 } from "../../www/lib.js";
 import { readFloatPly, streetCrops, streetPair, TRUTH } from "./street-pair.mjs";
 
@@ -235,6 +241,40 @@ test("page helpers: drawn subsample, bounds, parameter count, model in words", (
   const turned = transformBounds({ min: [0, 0, 0], max: [1, 2, 3] }, rigid([0, 0, 1], 90, [1, 0, 0]));
   assert.deepEqual(turned.min.map((v) => Math.round(v * 1e6) / 1e6), [-1, 0, 0]);
   assert.deepEqual(turned.max.map((v) => Math.round(v * 1e6) / 1e6), [1, 1, 3]);
+
+  // Offsets from a map-grid origin, moved in f64: the same as moving the absolute points (float32
+  // would round them to 0.25 here), and the scene's matrix gives offsets from another origin.
+  const origin = [4_512_345.25, 5_612_345.5, 1234.125];
+  const offsets = new Float32Array([0.5, -1.25, 2, 10.75, 3.5, -0.5]);
+  const T = rigid([0.2, 0.1, 1], 33, [-7.5, 12.25, 0.75]);
+  const moved = transformFromOrigin(offsets, origin, T);
+  assert.ok(moved instanceof Float64Array);
+  const other = [Math.round(moved[0]) - 40, Math.round(moved[1]) + 30, Math.round(moved[2]) - 5]; // near the moved points
+  const scene = transformPoints(offsets, relativeTo(T, origin, other));
+  for (let i = 0; i < 6; i += 3) {
+    const abs = [0, 1, 2].map((k) => origin[k] + offsets[i + k]);
+    for (let r = 0; r < 3; r++) {
+      const want = T[r] * abs[0] + T[4 + r] * abs[1] + T[8 + r] * abs[2] + T[12 + r];
+      assert.ok(Math.abs(moved[i + r] - want) < 1e-8, `point ${i / 3}, axis ${r}: ${moved[i + r]} vs ${want}`);
+      assert.ok(Math.abs(scene[i + r] + other[r] - want) < 1e-4, `scene point ${i / 3}, axis ${r}`);
+    }
+  }
+  assert.equal(hasOrigin([0, 0, 0]), false);
+  assert.equal(hasOrigin(null), false);
+  assert.equal(hasOrigin(origin), true);
+  // PLY in doubles for a Float64Array (every digit back), floats otherwise.
+  const ply = (points) => {
+    const bytes = writePly(points, "t");
+    const text = new TextDecoder("latin1").decode(bytes);
+    const head = text.indexOf("end_header\n") + 11;
+    return { header: text.slice(0, head), body: bytes.slice(head) };
+  };
+  const d = ply(moved);
+  assert.match(d.header, /property double x\nproperty double y\nproperty double z\n/);
+  assert.deepEqual(new Float64Array(d.body.buffer), moved);
+  const f = ply(offsets);
+  assert.match(f.header, /property float x\n/);
+  assert.deepEqual(new Float32Array(f.body.buffer), offsets);
 
   // The count the engine's ModelConfig::parameter_count gives the shipped model (models/MODEL.md).
   const { config, provenance } = shippedModelConfig();
@@ -479,15 +519,15 @@ test("a mesh file is read as points over its surface", { timeout: TIMEOUT * 2 },
   assert.match(await page.textContent("#target-info"), /200,000 points/);
 });
 
-test("a georeferenced LAZ survey aligned onto itself moved, in map-grid coordinates", { timeout: TIMEOUT * 2 }, async () => {
+test("a georeferenced LAZ survey aligned onto itself moved, in map-grid coordinates, to the last digit", { timeout: TIMEOUT * 2 }, async () => {
   // The source: fixtures/formats/1_4_w_evlr.laz as is (LAS 1.4, layered LAZ, 1,000 points near
-  // (1.69e6, 1.82e6, 5.6e3)). The target: its points moved by 12 degrees about the vertical through
-  // the survey's centre plus (4, -3, 0.5), written as a PLY of doubles. The page itself reads both
-  // files as float32 in their own frame (parsePointCloud), 0.125 apart at these coordinates: this
-  // checks that it reads LAZ and aligns in map-grid coordinates, not to the millimetre.
-  const { readPointCloud } = await import(pathToFileURL(join(ROOT, "pkg", "node", "index.mjs")).href);
+  // (1.69e6, 1.82e6, 5.6e3), where float32 steps are 0.125). The target: its points moved by 12
+  // degrees about the vertical through the survey's centre plus (4, -3, 0.5), written as a PLY of
+  // doubles. The page keeps each scan as float32 offsets from a float64 origin, so its answer must
+  // be the package's own on the same files in Node, and its download the source moved in f64.
+  const arps = await import(pathToFileURL(join(ROOT, "pkg", "node", "index.mjs")).href);
   const laz = join(ROOT, "fixtures", "formats", "1_4_w_evlr.laz");
-  const cloud = readPointCloud(readFileSync(laz), "1_4_w_evlr.laz");
+  const cloud = arps.readPointCloud(readFileSync(laz), "1_4_w_evlr.laz");
   const n = cloud.points.length / 3;
   const p = (i, k) => cloud.origin[k] + cloud.points[3 * i + k];
   const centre = [0, 1, 2].map((k) => { let s = 0; for (let i = 0; i < n; i++) s += p(i, k); return s / n; });
@@ -500,23 +540,74 @@ test("a georeferenced LAZ survey aligned onto itself moved, in map-grid coordina
   const header = `ply\nformat binary_little_endian 1.0\nelement vertex ${n}\nproperty double x\nproperty double y\nproperty double z\nend_header\n`;
   const body = new Float64Array(3 * n);
   for (let i = 0; i < n; i++) body.set(move(p(i, 0), p(i, 1), p(i, 2)), 3 * i);
-  writeFileSync(join(dir, "survey-moved.ply"), Buffer.concat([Buffer.from(header), Buffer.from(body.buffer)]));
+  const moved = Buffer.concat([Buffer.from(header), Buffer.from(body.buffer)]);
+  writeFileSync(join(dir, "survey-moved.ply"), moved);
   await page.setInputFiles("#source-file", laz);
   await page.waitForFunction(() => /1_4_w_evlr[\s\S]*1,000 points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
+  // the page says where a survey lies
+  assert.match(await page.textContent("#source-info"), /about \(1,69\d,\d{3}(\.\d)?, 1,8\d{2},\d{3}(\.\d)?, 5,\d{3}(\.\d)?\)/);
   await page.setInputFiles("#target-file", join(dir, "survey-moved.ply"));
   await page.waitForFunction(() => /survey-moved[\s\S]*1,000 points/.test(document.getElementById("target-info").textContent), null, { timeout: TIMEOUT });
   const { result, error } = await alignAndWait();
   assert.equal(error, "", `unexpected #error: ${error}`);
-  // where the answer puts the survey's centre (row-major #result), against where the motion does
-  const m = result.T_target_source;
+
+  // The package in Node, on the same files with the page's options, in f64: the same answer.
+  const registrar = arps.Registrar.withDefaultModel();
+  const target = arps.readPointCloud(moved, "survey-moved.ply");
+  const node = registrar.register(cloud, target, { icp: "plane", search: "adaptive", seed: 0 });
+  registrar.free();
+  const m = result.T_target_source; // row-major
+  let apart = 0;
+  for (let r = 0; r < 4; r++) for (let c = 0; c < 4; c++) apart = Math.max(apart, Math.abs(m[r][c] - node.T_target_source[c * 4 + r]));
+  assert.ok(apart < 1e-6, `the page's answer is ${apart} from the package's`);
+
+  // where the answer puts the survey's centre, against where the motion does
   const at = [0, 1, 2].map((r) => m[r][0] * centre[0] + m[r][1] * centre[1] + m[r][2] * centre[2] + m[r][3]);
   const want = move(...centre);
   const off = Math.hypot(at[0] - want[0], at[1] - want[1], at[2] - want[2]);
-  console.log(`LAZ survey: the centre off by ${off.toFixed(4)}, rotation ${result.rotationDeg.toFixed(2)} deg (12 applied), confidence ${result.confidence.toFixed(3)}`);
+  console.log(
+    `LAZ survey: the page's answer ${apart.toExponential(1)} from the package's in Node; the centre off by ${off.toFixed(4)}, ` +
+      `rotation ${result.rotationDeg.toFixed(2)} deg (12 applied), confidence ${result.confidence.toFixed(3)}`,
+  );
   // 1,000 points over a strip about 500 long: a few units apart, so ICP's last distance, and what
-  // a slide along the strip costs, are a few tenths (the native build, in f64: 0.57)
+  // a slide along the strip costs, are a few tenths
   assert.ok(off < 1.0, `the survey's centre off by ${off}`);
   assert.ok(Math.abs(result.rotationDeg - 12) < 0.5, `page says ${result.rotationDeg} deg`);
+  // how far the source's centre (of its box) moves: a few units, where the translation is 1e5
+  const lo = [0, 1, 2].map((k) => { let v = Infinity; for (let i = 0; i < n; i++) v = Math.min(v, p(i, k)); return v; });
+  const hi = [0, 1, 2].map((k) => { let v = -Infinity; for (let i = 0; i < n; i++) v = Math.max(v, p(i, k)); return v; });
+  const box = [0, 1, 2].map((k) => (lo[k] + hi[k]) / 2);
+  const shift = move(...box).map((v, k) => v - box[k]);
+  const shiftOff = Math.hypot(...result.sourceCentreMoves.map((v, k) => v - shift[k]));
+  assert.ok(shiftOff < 1.0, `the page says the centre moves by ${result.sourceCentreMoves}, the motion by ${shift}`);
+  assert.match(await page.textContent("#figures"), /Centre moves\(-?[\d.]+, -?[\d.]+, -?[\d.]+\) · [\d.]+ units/);
+
+  // The view frames the survey (drawn as offsets from the target's origin) and shows the aligned
+  // source on the target.
+  await page.click("#fit");
+  await settle();
+  mkdirSync(OUT, { recursive: true });
+  await page.screenshot({ path: join(OUT, "survey.png") });
+  const green = await pixelsNear([0x4a, 0xde, 0x80]);
+  const orange = await pixelsNear([0xf9, 0x73, 0x16]);
+  console.log(`LAZ survey view: aligned (green) pixels ${green}, source (orange) ${orange}`);
+  assert.ok(green > 1000 && orange === 0, `aligned (green) pixels ${green}, source (orange) ${orange}`);
+
+  // The download: the source moved by the answer, in doubles, as f64 arithmetic gives it.
+  const [download] = await Promise.all([page.waitForEvent("download"), page.click("#download-ply")]);
+  const file = join(dir, "survey-aligned.ply");
+  await download.saveAs(file);
+  const aligned = readFloatPly(file);
+  assert.ok(aligned instanceof Float64Array, "the aligned survey is written in doubles");
+  assert.equal(aligned.length, 3 * n);
+  let worst = 0;
+  for (let i = 0; i < n; i++) {
+    for (let r = 0; r < 3; r++) {
+      const want = m[r][0] * p(i, 0) + m[r][1] * p(i, 1) + m[r][2] * p(i, 2) + m[r][3];
+      worst = Math.max(worst, Math.abs(aligned[3 * i + r] - want));
+    }
+  }
+  assert.ok(worst < 1e-6, `the aligned survey's points are up to ${worst} from the answer applied in f64`);
 });
 
 test("a 1M-point pair: loaded, fitted and aligned without blocking the main thread", { timeout: TIMEOUT * 3 }, async () => {

@@ -17,15 +17,20 @@ const ROOT = resolve(dirname(fileURLToPath(import.meta.url)), "../..");
 /** T_target_source of the pairs (column-major, as www/lib.js's `rigid` returns it). */
 export const TRUTH = rigid([0.1, 0.15, 1], 15, [1.0, -0.6, 0.2]);
 
-/** The points of a binary little-endian PLY with float x, y, z only (the fixture's layout). */
+/**
+ * The points of a binary little-endian PLY with x, y, z only, all float (the fixture's layout; a
+ * Float32Array) or all double (a Float64Array).
+ */
 export function readFloatPly(path) {
   const buf = readFileSync(path);
   const head = buf.indexOf("end_header\n") + "end_header\n".length;
   const header = buf.subarray(0, head).toString("latin1");
   if (!/format binary_little_endian 1\.0/.test(header)) throw new Error(`${path}: not a binary little-endian PLY`);
   const n = Number(header.match(/element vertex (\d+)/)[1]);
-  const body = buf.subarray(head, head + n * 12);
-  return new Float32Array(body.buffer.slice(body.byteOffset, body.byteOffset + body.length));
+  const double = /property double x/.test(header);
+  const body = buf.subarray(head, head + n * (double ? 24 : 12));
+  const bytes = body.buffer.slice(body.byteOffset, body.byteOffset + body.length);
+  return double ? new Float64Array(bytes) : new Float32Array(bytes);
 }
 
 /** `n` points: the given ones in turn, each moved by a seeded jitter of about `sigma` per axis. */
