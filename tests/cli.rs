@@ -318,3 +318,99 @@ fn register_takes_several_sources_onto_one_target() {
     assert_eq!(text.lines().filter(|l| l.starts_with("source ")).count(), 2, "{text}");
     assert_eq!(text.matches("T_target_source").count(), 2, "{text}");
 }
+
+/// `--aligned PATH` writes the source moved by its answer as binary PLY: every point as read,
+/// mapped in f64, so a map-grid survey comes back in doubles to the last digit and a local scan
+/// in floats; the JSON names the file. With several sources `{stem}` names each one. An input
+/// file is never overwritten, several sources need `{stem}`, and two sources may not share a file:
+/// each refused before anything is registered.
+#[test]
+fn register_writes_the_aligned_source() {
+    let dir = std::env::temp_dir().join(format!("arps-cli-aligned-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let matrix = |v: &serde_json::Value| {
+        let m: Vec<f64> = v["T_target_source"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+        nalgebra::Matrix4::from_column_slice(&m)
+    };
+    let apply = |m: &nalgebra::Matrix4<f64>, p: [f64; 3]| {
+        let q = m.transform_point(&nalgebra::Point3::from(p));
+        [q.x, q.y, q.z]
+    };
+
+    // a georeferenced survey (about 1.7e6 from zero) onto a copy of itself moved, in f64
+    let survey = "fixtures/formats/1_4_w_evlr.laz";
+    let cloud = arps::io::read_path(&root.join(survey)).unwrap();
+    assert!(!cloud.origin_is_zero());
+    let c: [f64; 3] = std::array::from_fn(|k| cloud.origin[k] + cloud.centroid()[k]);
+    let truth = nalgebra::Matrix4::new_translation(&nalgebra::Vector3::new(c[0] + 4.0, c[1] - 3.0, c[2] + 0.5))
+        * nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::z_axis(), 0.2).to_homogeneous()
+        * nalgebra::Matrix4::new_translation(&nalgebra::Vector3::new(-c[0], -c[1], -c[2]));
+    let moved = dir.join("survey-moved.ply");
+    std::fs::write(&moved, arps::io::write_ply_binary(&cloud.transformed(&truth))).unwrap();
+    let out_path = dir.join("survey-aligned.ply");
+    let out = arps(&["register", survey, moved.to_str().unwrap(), "--json", "--aligned", out_path.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["aligned"], out_path.to_str().unwrap());
+    let m = matrix(&v);
+    let bytes = std::fs::read(&out_path).unwrap();
+    assert!(String::from_utf8_lossy(&bytes[..200]).contains("property double x"), "doubles for a survey");
+    let written = arps::io::read_point_cloud(&bytes, "survey-aligned.ply").unwrap();
+    assert_eq!(written.len(), cloud.len());
+    let mut worst = 0.0f64;
+    for i in 0..cloud.len() {
+        let (want, got) = (apply(&m, cloud.point_f64(i)), written.point_f64(i));
+        worst = (0..3).map(|k| (want[k] - got[k]).abs()).fold(worst, f64::max);
+    }
+    // f32 offsets from a nearby origin: a hair off f64 arithmetic on the absolute points
+    assert!(worst < 1e-4, "the written survey is up to {worst} from the answer applied in f64");
+    // the answer itself lands the survey on its moved copy (a strip of 1,000 points: a few tenths)
+    let centre_off = (0..3).map(|k| apply(&m, c)[k] - apply(&truth, c)[k]).map(|d| d * d).sum::<f64>().sqrt();
+    assert!(centre_off < 1.0, "centre off by {centre_off}");
+
+    // several local scans: floats, one file per source stem, each the source moved by its answer
+    let (a, b, target) = ("fixtures/wasm/source.ply", "fixtures/any/00084_source.ply", "fixtures/wasm/target.ply");
+    let pattern = dir.join("{stem}-aligned.ply");
+    let out = arps(&["register", a, b, target, "--json", "--aligned", pattern.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let stdout = String::from_utf8(out.stdout).unwrap();
+    for (line, (source, stem)) in stdout.lines().zip([(a, "source"), (b, "00084_source")]) {
+        let v: serde_json::Value = serde_json::from_str(line).unwrap();
+        let path = dir.join(format!("{stem}-aligned.ply"));
+        assert_eq!(v["aligned"], path.to_str().unwrap());
+        let bytes = std::fs::read(&path).unwrap();
+        assert!(String::from_utf8_lossy(&bytes[..200]).contains("property float x"), "floats for a local scan");
+        let written = arps::io::read_point_cloud(&bytes, "x.ply").unwrap();
+        let src = arps::io::read_path(&root.join(source)).unwrap();
+        assert_eq!(written.len(), src.len());
+        let m = matrix(&v);
+        for i in 0..src.len() {
+            let (want, got) = (apply(&m, src.point_f64(i)), written.point_f64(i));
+            assert!((0..3).all(|k| (want[k] - got[k]).abs() < 1e-5), "point {i}: {want:?} vs {got:?}");
+        }
+    }
+    // the text report says where it wrote
+    let out = arps(&["register", a, target, "--aligned", dir.join("one.ply").to_str().unwrap()]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("wrote the aligned source to"), "{out:?}");
+
+    // refused before registering: an input as output (however named), several sources without
+    // {stem}, two sources onto one file; nothing is written
+    let before = std::fs::read(root.join(target)).unwrap();
+    let as_input = format!("{}/../wasm/target.ply", root.join("fixtures/any").display());
+    let several = dir.join("all.ply");
+    let twice = dir.join("{stem}.ply");
+    for (args, message) in [
+        (vec!["register", a, target, "--aligned", &as_input], "is an input file"),
+        (vec!["register", a, b, target, "--aligned", several.to_str().unwrap()], "must hold {stem}"),
+        (vec!["register", a, a, target, "--aligned", twice.to_str().unwrap()], "would both be written to"),
+    ] {
+        let out = arps(&args);
+        assert!(!out.status.success() && out.stdout.is_empty(), "{args:?}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains(message) && stderr.lines().count() == 1, "{args:?}: {stderr}");
+    }
+    assert_eq!(std::fs::read(root.join(target)).unwrap(), before, "the target file is untouched");
+    assert!(!several.exists() && !dir.join("source.ply").exists());
+    std::fs::remove_dir_all(&dir).ok();
+}

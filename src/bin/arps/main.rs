@@ -109,6 +109,13 @@ enum Command {
         /// Of a target E57 file holding several scans, only this one (0-based); see `--source-scan`.
         #[arg(long)]
         target_scan: Option<usize>,
+        /// Write each source, moved by its answer into the target's frame, to PATH as binary PLY
+        /// (every point as read; `double` coordinates when they are far from zero, else `float`).
+        /// With several sources PATH must hold `{stem}`, replaced by each source file's name
+        /// without its extension (e.g. `out/{stem}-aligned.ply`). An input file is never
+        /// overwritten.
+        #[arg(long, value_name = "PATH")]
+        aligned: Option<PathBuf>,
         /// Print exactly one JSON object on stdout: the engine's result (`arps::Registration`), fields
         /// camelCase, transforms as 16 column-major numbers, like the JS API's result; plus
         /// `wallMs`, the milliseconds of reading both files and registering. With several sources,
@@ -164,6 +171,9 @@ struct JsonOutput<'a> {
     source: Option<String>,
     #[serde(flatten)]
     result: &'a arps::Registration,
+    /// Where the aligned source was written (`--aligned`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    aligned: Option<String>,
     /// Reading both files and registering, in-process (model loading excluded), milliseconds.
     wall_ms: f64,
 }
@@ -184,13 +194,20 @@ fn read_cloud(path: &Path, options: &io::ReadOptions) -> Result<arps::PointCloud
 }
 
 /// Prints one registration of `arps register`: the text report, or one JSON line (`--json`);
-/// `source` names the source when several were given.
-fn print_registration(r: &arps::Registration, time_ms: f64, json: bool, source: Option<String>) -> Result<(), String> {
+/// `source` names the source when several were given, `aligned` where the moved source was
+/// written (`--aligned`).
+fn print_registration(
+    r: &arps::Registration,
+    time_ms: f64,
+    json: bool,
+    source: Option<String>,
+    aligned: Option<String>,
+) -> Result<(), String> {
     if let Some(source) = source.as_ref().filter(|_| !json) {
         out!("source {source}");
     }
     if json {
-        let out = serde_json::to_string(&JsonOutput { source, result: r, wall_ms: time_ms })
+        let out = serde_json::to_string(&JsonOutput { source, result: r, aligned, wall_ms: time_ms })
             .map_err(|e| format!("internal: {e}"))?;
         out!("{out}");
     } else {
@@ -235,8 +252,33 @@ fn print_registration(r: &arps::Registration, time_ms: f64, json: bool, source: 
         for w in &r.warnings {
             out!("warning: {w}");
         }
+        if let Some(path) = aligned {
+            out!("wrote the aligned source to {path}");
+        }
     }
     Ok(())
+}
+
+/// Where `--aligned PATTERN` writes the aligned `source`: `{stem}` replaced by the source file's
+/// name without its extension. Refuses a path that is one of the `inputs` (the same file, however
+/// named).
+fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathBuf, String> {
+    let stem = source.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default();
+    let path = PathBuf::from(pattern.to_string_lossy().replace("{stem}", &stem));
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    };
+    if let Some(input) = inputs.iter().find(|input| same(&path, input)) {
+        return Err(format!("--aligned: {} is an input file ({}); name another file", path.display(), input.display()));
+    }
+    Ok(path)
+}
+
+/// Writes `source` moved by `r`'s answer to `path` as binary PLY (`io::write_ply_binary`).
+fn write_aligned(source: &arps::PointCloud, r: &arps::Registration, path: &Path) -> Result<(), String> {
+    let bytes = io::write_ply_binary(&source.transformed(&r.T_target_source));
+    std::fs::write(path, bytes).map_err(|e| format!("--aligned: {}: {e}", path.display()))
 }
 
 /// The weights at `path`, or the embedded default model.
@@ -270,9 +312,38 @@ fn run(command: Command) -> Result<(), String> {
             surface_points,
             source_scan,
             target_scan,
+            aligned,
             json,
         } => {
             let up = up.map(|v| up_axis(&v)).transpose()?;
+            if let Some(pattern) =
+                aligned.as_ref().filter(|p| sources.len() > 1 && !p.to_string_lossy().contains("{stem}"))
+            {
+                return Err(format!(
+                    "--aligned: with {} sources the path must hold {{stem}} (each source's name), e.g. {{stem}}-aligned.ply; got {}",
+                    sources.len(),
+                    pattern.display()
+                ));
+            }
+            let inputs: Vec<&Path> = sources.iter().map(PathBuf::as_path).chain([target.as_path()]).collect();
+            let outputs = match &aligned {
+                Some(pattern) => sources.iter().map(|s| aligned_path(pattern, s, &inputs).map(Some)).collect::<Result<
+                    Vec<_>,
+                    _,
+                >>(
+                )?,
+                None => vec![None; sources.len()],
+            };
+            for (k, path) in outputs.iter().enumerate().filter_map(|(k, p)| Some((k, p.as_ref()?))) {
+                if let Some(j) = outputs[..k].iter().position(|q| q.as_ref() == Some(path)) {
+                    return Err(format!(
+                        "--aligned: sources {} and {} would both be written to {}; put more of the name in the path",
+                        sources[j].display(),
+                        sources[k].display(),
+                        path.display()
+                    ));
+                }
+            }
             let mut registrar = load_registrar(weights.as_deref())?;
             let mut t0 = std::time::Instant::now();
             let reading = io::ReadOptions { surface_points, seed, scan: source_scan };
@@ -302,14 +373,24 @@ fn run(command: Command) -> Result<(), String> {
             let tgt = read_cloud(&target, &reading_target)?;
             let several = sources.len() > 1;
             let mut failed = 0usize;
-            for source in &sources {
-                let outcome = read_cloud(source, &reading)
-                    .and_then(|src| registrar.register(&src, &tgt, &options).map_err(|e| e.to_string()));
+            for (source, output) in sources.iter().zip(&outputs) {
+                let outcome = read_cloud(source, &reading).and_then(|src| {
+                    let r = registrar.register(&src, &tgt, &options).map_err(|e| e.to_string())?;
+                    Ok((src, r))
+                });
                 let time_ms = t0.elapsed().as_secs_f64() * 1e3;
-                t0 = std::time::Instant::now();
                 let named = several.then(|| source.display().to_string());
+                let outcome = outcome.and_then(|(src, r)| {
+                    if let Some(path) = output {
+                        write_aligned(&src, &r, path)?;
+                    }
+                    Ok(r)
+                });
+                t0 = std::time::Instant::now();
                 match outcome {
-                    Ok(r) => print_registration(&r, time_ms, json, named)?,
+                    Ok(r) => {
+                        print_registration(&r, time_ms, json, named, output.as_ref().map(|p| p.display().to_string()))?
+                    }
                     Err(e) if !several => return Err(e),
                     Err(e) => {
                         failed += 1;
