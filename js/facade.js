@@ -1,5 +1,6 @@
 // The package's public API over the raw wasm-bindgen glue (arps_glue.js): the same classes and
-// functions (`Registrar`, `parsePointCloud`, `readPointCloud`, `version`), with two guarantees
+// functions (`Registrar`, `parsePointCloud`, `readPointCloud`, `transformPointCloud`, `writePly`,
+// `version`), with two guarantees
 // the glue alone does not give:
 //
 // 1. Inputs are checked here, in JavaScript, before they reach the glue: clouds must be real
@@ -346,10 +347,9 @@ function readLengthOption(v, path, prefix) {
   return len;
 }
 
-function checkTransformShape(m) {
+function checkTransformShape(m, name = "invalid options: initialTransform") {
   if (m === undefined || m === null) return;
-  const bad = (what) =>
-    fail(`invalid options: initialTransform${what}; expected 16 numbers (column-major) or 4 rows of 4 numbers (row-major)`);
+  const bad = (what) => fail(`${name}${what}; expected 16 numbers (column-major) or 4 rows of 4 numbers (row-major)`);
   if (!Array.isArray(m)) bad(` is ${describe(m)}`);
   if (m.every((x) => typeof x === "number")) {
     if (m.length !== 16) bad(` has ${m.length} elements`);
@@ -362,6 +362,14 @@ function checkTransformShape(m) {
       if (typeof x !== "number") bad(`[${i}][${j}] is ${describe(x)}`);
     });
   });
+}
+
+/** A 4x4 argument (16 column-major numbers or 4 row-major rows, checked) -> 16 column-major. */
+function matrixArg(m, name) {
+  if (m === undefined || m === null) fail(`${name} is ${describe(m)}; expected 16 numbers (column-major) or 4 rows of 4 numbers (row-major)`);
+  const plain = plainValue(m, name, 1, name);
+  checkTransformShape(plain, name);
+  return toColumnMajor(plain);
 }
 
 /** A checked `initialTransform` (16 column-major numbers or 4 row-major rows) -> 16 column-major. */
@@ -676,10 +684,23 @@ export function makeApi(glue, isReady, env = {}) {
     return guarded("readPointCloud", () => glue.readPointCloud(b, name, o));
   }
 
+  /** Maps a cloud by a rigid 4x4, its origin in f64; see arps.d.ts. */
+  function transformPointCloud(cloud, matrix) {
+    const c = cloudArg(cloud, "cloud");
+    const m = matrixArg(matrix, "matrix");
+    return guarded("transformPointCloud", () => glue.transformPointCloud(c, m));
+  }
+
+  /** A cloud as binary PLY bytes (doubles when it has an origin); see arps.d.ts. */
+  function writePly(cloud) {
+    const c = cloudArg(cloud, "cloud");
+    return guarded("writePly", () => glue.writePly(c));
+  }
+
   /** The crate version. */
   function version() {
     return guarded("version", () => glue.version());
   }
 
-  return { Registrar, parsePointCloud, readPointCloud, version, setDefaultModel };
+  return { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly, version, setDefaultModel };
 }

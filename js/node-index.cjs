@@ -45,6 +45,8 @@ module.exports = {
   Registrar: api.Registrar,
   parsePointCloud: api.parsePointCloud,
   readPointCloud: api.readPointCloud,
+  transformPointCloud: api.transformPointCloud,
+  writePly: api.writePly,
   version: api.version,
   /**
    * Nothing to do in Node (the engine is ready on require; the default model is read from disk on

@@ -12,7 +12,9 @@
 //!   serde like the CLI's JSON ([`crate::contract`]); the options are the core [`Options`]
 //!   (`RegisterOptions`), read by serde;
 //! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`;
-//! * `readPointCloud(bytes: Uint8Array, fileName: string) -> { points: Float32Array, origin }`.
+//! * `readPointCloud(bytes: Uint8Array, fileName: string) -> { points: Float32Array, origin }`;
+//! * `transformPointCloud(cloud, matrix) -> { points, origin }` and `writePly(cloud) -> Uint8Array`
+//!   (a cloud: a `Float32Array` or `{ points: Float32Array, origin }`).
 //!
 //! Nothing here may panic on user input: a panic in wasm aborts the instance (wasm32 builds with
 //! `panic = "abort"`; there is no `catch_unwind`), so every fallible step returns
@@ -133,12 +135,85 @@ pub fn read_point_cloud(
 ) -> Result<JsValue, JsError> {
     let options = parse_object(options.unwrap_or(JsValue::UNDEFINED), "read options")?;
     let cloud = crate::io::read_point_cloud_with(bytes, file_name, &options).map_err(js_err)?;
+    cloud_object(&cloud)
+}
+
+/// A cloud as the JS object `{ points: Float32Array, origin: [x, y, z] }`.
+fn cloud_object(cloud: &PointCloud) -> Result<JsValue, JsError> {
     let out = Object::new();
     let points: Vec<f32> = cloud.points.iter().flatten().copied().collect();
     set(&out, "points", &Float32Array::from(&points[..]))?;
     let origin: Array = cloud.origin.iter().map(|v| JsValue::from_f64(*v)).collect();
     set(&out, "origin", &origin)?;
     Ok(out.into())
+}
+
+/// A cloud argument: a `Float32Array` of packed xyz, or `{ points: Float32Array, origin }` with
+/// `origin` three finite numbers (or `null`/absent for zero). `what` names it in errors.
+fn cloud_arg(value: &JsValue, what: &str) -> Result<PointCloud, JsError> {
+    let bad = || {
+        JsError::new(&format!(
+            "{what}: expected a Float32Array of packed xyz, or {{ points: Float32Array, origin: [x, y, z] }}"
+        ))
+    };
+    let field = |key: &str| {
+        Reflect::get(value, &JsValue::from_str(key))
+            .map_err(|e| JsError::new(&format!("{what}: reading {key} threw: {}", js_message(&e))))
+    };
+    let (points, origin) = if value.is_instance_of::<Float32Array>() {
+        (value.clone(), JsValue::NULL)
+    } else if value.is_object() && !Array::is_array(value) {
+        (field("points")?, field("origin")?)
+    } else {
+        return Err(bad());
+    };
+    if !points.is_instance_of::<Float32Array>() {
+        return Err(bad());
+    }
+    let flat = Float32Array::from(points).to_vec();
+    let cloud = PointCloud::from_xyz(&flat).map_err(|e| prefixed(what, e))?;
+    if origin.is_undefined() || origin.is_null() {
+        return Ok(cloud);
+    }
+    // anything but an array of three finite numbers is refused (a non-number reads as NaN)
+    let o: Vec<f64> = match Array::is_array(&origin) {
+        true => Array::from(&origin).iter().map(|v| v.as_f64().unwrap_or(f64::NAN)).collect(),
+        false => Vec::new(),
+    };
+    match o[..] {
+        [x, y, z] if o.iter().all(|v| v.is_finite()) => Ok(PointCloud::with_origin(cloud.points, [x, y, z])),
+        _ => Err(JsError::new(&format!("{what}: origin must be 3 finite numbers [x, y, z]"))),
+    }
+}
+
+/// Maps a cloud by a rigid transform, e.g. a source by the `T_target_source` of its registration
+/// into the target's frame: returns `{ points, origin }` (what `register` and `writePly` take),
+/// the origin mapped in f64 and the offsets by the rotation, so map-grid coordinates keep their
+/// digits (a cloud without an origin is mapped as it is; any number of points). `matrix`: 16
+/// numbers, column-major (what a result's `T_target_source` and three.js `Matrix4.elements`
+/// hold), or (through the package's entry) four row-major rows; rigid to 1e-4. Throws on a bad
+/// cloud or matrix.
+#[wasm_bindgen(js_name = transformPointCloud, unchecked_return_type = "CloudWithOrigin")]
+pub fn transform_point_cloud(
+    #[wasm_bindgen(unchecked_param_type = "CloudInput")] cloud: JsValue,
+    #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
+) -> Result<JsValue, JsError> {
+    if matrix.len() != 16 {
+        return Err(JsError::new(&format!("matrix: expected 16 numbers (a 4x4, column-major), got {}", matrix.len())));
+    }
+    let m = nalgebra::Matrix4::from_column_slice(matrix);
+    crate::transform::check_rigid(&m, 1e-4).map_err(|e| JsError::new(&format!("matrix is not rigid: {e}")))?;
+    let cloud = cloud_arg(&cloud, "cloud")?;
+    cloud_object(&cloud.transformed(&m))
+}
+
+/// A cloud as a binary little-endian PLY file (`x`, `y`, `z` per vertex): `double` coordinates
+/// (`origin + points[i]`) when the cloud's origin is not zero, so map-grid coordinates keep their
+/// digits, else `float`. With `transformPointCloud`, what saves a registered source in the
+/// target's frame. Throws on a bad cloud.
+#[wasm_bindgen(js_name = writePly)]
+pub fn write_ply(#[wasm_bindgen(unchecked_param_type = "CloudInput")] cloud: JsValue) -> Result<Vec<u8>, JsError> {
+    Ok(crate::io::write_ply_binary(&cloud_arg(&cloud, "cloud")?))
 }
 
 /// Holds a loaded model and reusable buffers; registers pairs of clouds.

@@ -554,6 +554,74 @@ fn parse_point_cloud_errors_are_thrown() {
     assert!(e.is_some(), "PLY without y/z throws");
 }
 
+/// `transformPointCloud` maps a cloud, a `Float32Array` or `{ points, origin }`, by a rigid 4x4
+/// (the origin in f64); `writePly` writes it back in doubles when it has an origin, floats when
+/// not; bad matrices and clouds throw, and the registrar still works.
+#[wasm_bindgen_test]
+fn transform_and_write_a_cloud() {
+    use arps::wasm::{transform_point_cloud, write_ply};
+    let gt = ground_truth();
+    let column_major: Vec<f64> = gt.as_slice().to_vec();
+    // a Float32Array: the points mapped, origin zero, the same as the core's transform
+    let flat = Float32Array::from(&source()[..]);
+    let moved = transform_point_cloud(flat.clone().into(), &column_major).map_err(message).unwrap();
+    let points = Float32Array::from(get(&moved, "points")).to_vec();
+    let core = arps::PointCloud::from_xyz(&source()).unwrap().transformed(&gt);
+    assert_eq!(points, core.to_xyz());
+    assert_eq!(Array::from(&get(&moved, "origin")).to_vec(), vec![JsValue::from_f64(0.0); 3]);
+    // { points, origin } far from zero: the origin mapped in f64, the offsets turned only
+    let origin = [1_694_289.25, 1_816_495.5, 5_595.75];
+    let far = js_sys::Object::new();
+    js_sys::Reflect::set(&far, &"points".into(), &flat).unwrap();
+    let o: Array = origin.iter().map(|v| JsValue::from_f64(*v)).collect();
+    js_sys::Reflect::set(&far, &"origin".into(), &o).unwrap();
+    let moved = transform_point_cloud(far.clone().into(), &column_major).map_err(message).unwrap();
+    let want = gt.transform_point(&nalgebra::Point3::from(origin));
+    let got: Vec<f64> = Array::from(&get(&moved, "origin")).iter().map(|v| v.as_f64().unwrap()).collect();
+    assert_eq!(got, vec![want.x, want.y, want.z]);
+    // written: doubles for the far cloud, floats for the local one; both read back
+    let ply = write_ply(moved).map_err(message).unwrap();
+    assert!(String::from_utf8_lossy(&ply[..150]).contains("property double x"));
+    let back = arps::io::read_point_cloud(&ply, "x.ply").unwrap();
+    let first = back.point_f64(0);
+    let expect = gt.transform_point(&nalgebra::Point3::new(
+        origin[0] + source()[0] as f64,
+        origin[1] + source()[1] as f64,
+        origin[2] + source()[2] as f64,
+    ));
+    assert!((first[0] - expect.x).abs() < 1e-5 && (first[1] - expect.y).abs() < 1e-5, "{first:?} vs {expect:?}");
+    let ply = write_ply(flat.into()).map_err(message).unwrap();
+    assert!(String::from_utf8_lossy(&ply[..150]).contains("property float x"));
+    assert_eq!(arps::io::read_point_cloud(&ply, "x.ply").unwrap().to_xyz(), source());
+
+    let mut r = Registrar::with_default_model().map_err(message).unwrap();
+    let mut scaled = column_major.clone();
+    scaled[0] *= 2.0;
+    let cloud = || -> JsValue { Float32Array::from(&source()[..]).into() };
+    for (e, want) in [
+        (transform_point_cloud(cloud(), &column_major[..15]).err(), "matrix: expected 16 numbers"),
+        (transform_point_cloud(cloud(), &scaled).err(), "matrix is not rigid"),
+        (transform_point_cloud(JsValue::from_str("x"), &column_major).err(), "cloud: expected a Float32Array"),
+        (write_ply(Float32Array::new_with_length(4).into()).err(), "not a multiple of 3"),
+        (write_ply(JsValue::NULL).err(), "cloud: expected a Float32Array"),
+    ] {
+        let e = message(e.expect(want));
+        assert!(e.contains(want), "{e}");
+        still_works(&mut r);
+    }
+    let bad_origin = js_sys::Object::new();
+    js_sys::Reflect::set(&bad_origin, &"points".into(), &Float32Array::from(&source()[..])).unwrap();
+    for origin in [
+        Array::of2(&1.0.into(), &2.0.into()).into(),
+        Array::of3(&1.0.into(), &f64::NAN.into(), &0.0.into()).into(),
+        JsValue::from_str("here"),
+    ] {
+        js_sys::Reflect::set(&bad_origin, &"origin".into(), &origin).unwrap();
+        let e = message(write_ply(bad_origin.clone().into()).expect_err("a bad origin throws"));
+        assert!(e.contains("origin must be 3 finite numbers"), "{e}");
+    }
+}
+
 /// Degenerate but valid inputs: a finite result or a thrown Error, never a trap (a trap would
 /// abort this test run), and the registrar still works afterwards.
 #[wasm_bindgen_test]

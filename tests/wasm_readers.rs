@@ -36,8 +36,8 @@ const FILES: &[(&str, &[u8], usize, [f32; 3])] = &[
     fixture!("fuze_binary.ply", 502, NONE),
     fixture!("fuze_ascii.ply", 502, NONE),
     fixture!("fuze.obj", 502, NONE),
-    fixture!("simple.las", 1065, [637_012.24, 849_028.31, 431.66]),
-    fixture!("simple.laz", 1065, [637_012.24, 849_028.31, 431.66]),
+    fixture!("simple.las", 1065, [637_012.24, 849_028.3, 431.66]),
+    fixture!("simple.laz", 1065, [637_012.24, 849_028.3, 431.66]),
     fixture!("1_4_w_evlr.laz", 1000, [1_694_510.4, 1_816_498.0, 5_598.36]),
     fixture!("tiny_spherical.e57", 180, [1.0, 0.0, 0.0]),
 ];

@@ -2,8 +2,8 @@
 // (or the correct answer) AND that the same Registrar then registers the fixture pair correctly.
 // Cases: bad lengths, NaN, too few / too many points, wrong types, array-likes that lie about
 // their length, bad options (unknown, wrong type, throwing getters, Proxies, bad
-// initialTransform), bad onProgress, bad files (corrupt LAZ and E57 too) and file names, bad weights, use
-// after free, and
+// initialTransform), bad onProgress, bad files (corrupt LAZ and E57 too) and file names, bad
+// matrices and clouds for transformPointCloud / writePly, bad weights, use after free, and
 // a real trap inside the engine, after which the module is re-instantiated and the registrars
 // built before it keep working.
 // Run after scripts/build-pkg.sh: node --test js/test/
@@ -246,6 +246,71 @@ test("large coordinates: Float64Array or { points, origin } in, T_target_source 
   rejects(r, "points not f32", () => r.register({ points: [1, 2, 3], origin: a }, t64), /^source: expected a Float32Array/);
   r.free();
 });
+
+for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]]) {
+  test(`${name}: transformPointCloud and writePly save a registered source in the target's frame, to the last digit`, () => {
+    const r = arps.Registrar.withDefaultModel();
+    // A map-grid survey (LAS 1.4 LAZ, about 1.7e6 from zero) onto a copy of itself moved; the
+    // copy comes from transformPointCloud itself, checked first against f64 arithmetic.
+    const survey = arps.readPointCloud(readFileSync(path.join(root, "fixtures", "formats", "1_4_w_evlr.laz")), "survey.laz");
+    const n = survey.points.length / 3;
+    const abs = (c, i, k) => c.origin[k] + c.points[3 * i + k];
+    const apply = (m, p) => [0, 1, 2].map((k) => m[k] * p[0] + m[4 + k] * p[1] + m[8 + k] * p[2] + m[12 + k]);
+    const c = [0, 1, 2].map((k) => abs(survey, 0, k));
+    const a = 0.2;
+    // 0.2 rad about the vertical through the first point, then (4, -3, 0.5); column-major
+    const truth = [Math.cos(a), Math.sin(a), 0, 0, -Math.sin(a), Math.cos(a), 0, 0, 0, 0, 1, 0];
+    truth.push(...[0, 1, 2].map((k) => c[k] - (truth[k] * c[0] + truth[4 + k] * c[1] + truth[8 + k] * c[2]) + [4, -3, 0.5][k]), 1);
+    const moved = arps.transformPointCloud(survey, truth);
+    assert.ok(moved.points instanceof Float32Array && moved.points.length === survey.points.length);
+    let worst = 0;
+    for (let i = 0; i < n; i++) {
+      const want = apply(truth, [0, 1, 2].map((k) => abs(survey, i, k)));
+      for (let k = 0; k < 3; k++) worst = Math.max(worst, Math.abs(abs(moved, i, k) - want[k]));
+    }
+    assert.ok(worst < 1e-4, `transformPointCloud: ${worst} from f64 arithmetic`);
+    // four row-major rows are the same matrix
+    const rows = [0, 1, 2, 3].map((row) => [0, 1, 2, 3].map((col) => truth[col * 4 + row]));
+    assert.deepEqual(arps.transformPointCloud(survey, rows), moved);
+
+    // register, move the source by the answer, write it: the PLY is in doubles and holds the
+    // answer applied in f64; read back, it lies on the target
+    const res = r.register(survey, moved);
+    const aligned = arps.transformPointCloud(survey, res.T_target_source);
+    const ply = arps.writePly(aligned);
+    assert.ok(ply instanceof Uint8Array);
+    assert.match(new TextDecoder().decode(ply.subarray(0, 200)), /property double x\nproperty double y\nproperty double z\nend_header\n/);
+    const back = arps.readPointCloud(ply, "aligned.ply");
+    assert.equal(back.points.length, survey.points.length);
+    worst = 0;
+    let landed = 0;
+    for (let i = 0; i < n; i++) {
+      const want = apply(res.T_target_source, [0, 1, 2].map((k) => abs(survey, i, k)));
+      for (let k = 0; k < 3; k++) worst = Math.max(worst, Math.abs(abs(back, i, k) - want[k]));
+      landed = Math.max(landed, Math.hypot(...[0, 1, 2].map((k) => abs(back, i, k) - abs(moved, i, k))));
+    }
+    assert.ok(worst < 1e-4, `the written survey is ${worst} from the answer applied in f64`);
+    // a strip of 1,000 points a few units apart: the answer lands every point within a unit or two
+    assert.ok(landed < 3, `a written point is ${landed} from its place on the target`);
+    // local clouds are written as floats; a Float64Array keeps its digits as doubles
+    assert.match(new TextDecoder().decode(arps.writePly(source()).subarray(0, 120)), /property float x/);
+    const far = Float64Array.from([1e6 + 0.125, 2e6, 3, 1e6, 2e6 + 0.0625, 4]);
+    const farBack = arps.readPointCloud(arps.writePly(far), "far.ply");
+    far.forEach((v, i) => assert.ok(Math.abs(farBack.origin[i % 3] + farBack.points[i] - v) < 1e-9, `coordinate ${i}`));
+
+    // bad input: clear errors, and the registrar still works
+    const T = res.T_target_source;
+    rejects(r, "matrix of 15", () => arps.transformPointCloud(survey, T.slice(0, 15)), /^matrix has 15 elements; expected 16 numbers/);
+    rejects(r, "no matrix", () => arps.transformPointCloud(survey), /^matrix is undefined/);
+    rejects(r, "scaled", () => arps.transformPointCloud(survey, T.map((v, i) => (i < 12 ? 2 * v : v))), /^matrix is not rigid/);
+    rejects(r, "NaN matrix", () => arps.transformPointCloud(survey, T.map((v, i) => (i === 13 ? NaN : v))), /^matrix is not rigid/);
+    rejects(r, "row of 3", () => arps.transformPointCloud(survey, [[1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), /^matrix row 0 has 3 elements/);
+    rejects(r, "bad origin", () => arps.writePly({ points: source(), origin: [1, 2] }), /^cloud: origin must be 3 finite numbers/);
+    rejects(r, "length 4", () => arps.writePly(new Float32Array(4)), /^cloud: .*not a multiple of 3/);
+    rejects(r, "not a cloud", () => arps.transformPointCloud("points", T), /^cloud: expected a Float32Array/);
+    r.free();
+  });
+}
 
 test("a real trap in the engine: the module is re-instantiated and registrars keep working", () => {
   // The raw glue that the Node build's facade wraps; a facade over it whose parsePointCloud
