@@ -125,6 +125,20 @@ export interface WorkerRegistrar {
     readOptions?: ReadOptions | null,
     request?: { transfer?: boolean; signal?: AbortSignal },
   ): Promise<CloudWithOrigin>;
+  /**
+   * Moves a cloud by a rigid 4x4 in the worker, its origin in f64 (see `transformPointCloud` in
+   * arps.d.ts): e.g. a registered source by its result's `T_target_source` into the target's frame.
+   */
+  transformPointCloud(
+    cloud: CloudInput,
+    matrix: ArrayLike<number> | number[][],
+    request?: { transfer?: boolean; signal?: AbortSignal },
+  ): Promise<CloudWithOrigin>;
+  /**
+   * A cloud as binary PLY bytes, written in the worker (see `writePly` in arps.d.ts: `double`
+   * coordinates when it has an origin away from zero).
+   */
+  writePly(cloud: CloudInput, request?: { transfer?: boolean; signal?: AbortSignal }): Promise<Uint8Array>;
   /** Stops the worker; pending and later requests reject. */
   terminate(): void;
 }

@@ -224,6 +224,16 @@ export async function createWorkerRegistrar(options = {}) {
       const reply = await request({ type: "read", bytes, fileName, options: readOptions }, { transfer: buffers, signal });
       return reply.cloud;
     },
+    async transformPointCloud(cloud, matrix, { transfer = false, signal } = {}) {
+      const buffers = transfer ? uniqueBuffers([cloud]) : [];
+      const reply = await request({ type: "transform", cloud, matrix }, { transfer: buffers, signal });
+      return reply.cloud;
+    },
+    async writePly(cloud, { transfer = false, signal } = {}) {
+      const buffers = transfer ? uniqueBuffers([cloud]) : [];
+      const reply = await request({ type: "write", cloud }, { transfer: buffers, signal });
+      return reply.bytes;
+    },
     terminate() {
       terminated = true;
       if (current) retire(current, new Error("arps worker: terminated"));

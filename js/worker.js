@@ -9,14 +9,17 @@
 //   { id, type: "register", source, target, options? }
 //   { id, type: "parse", bytes, fileName, options? }
 //   { id, type: "read", bytes, fileName, options? }   readPointCloud: { points, origin }
+//   { id, type: "transform", cloud, matrix }   transformPointCloud: { points, origin }
+//   { id, type: "write", cloud }            writePly: the PLY file's bytes
 // Replies (worker -> main), with the request's `id`:
 //   { id, type: "progress", stage }         stage: "loading" | "preparing" | "network" | "refining" | "done"
 //   { id, type: "ready", provenance, modelConfig }
 //   { id, type: "result", result }          the matrices' buffers transferred
 //   { id, type: "parsed", points }          points (Float32Array) buffer transferred
-//   { id, type: "read", cloud }             cloud.points buffer transferred
+//   { id, type: "read", cloud }             cloud.points buffer transferred (read and transform)
+//   { id, type: "written", bytes }          bytes (Uint8Array) buffer transferred
 //   { id, type: "error", message, name, code? }   code: "ARPS_TRAPPED" | "ARPS_UNUSABLE" after a trap
-import init, { Registrar, parsePointCloud, readPointCloud } from "./arps.js";
+import init, { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly } from "./arps.js";
 
 let registrar = null;
 let loading = null;
@@ -74,6 +77,18 @@ async function handle(msg) {
       await load(id);
       const cloud = readPointCloud(msg.bytes, msg.fileName, msg.options ?? undefined);
       post({ id, type: "read", cloud }, [cloud.points.buffer]);
+      return;
+    }
+    case "transform": {
+      await load(id);
+      const cloud = transformPointCloud(msg.cloud, msg.matrix);
+      post({ id, type: "read", cloud }, [cloud.points.buffer]);
+      return;
+    }
+    case "write": {
+      await load(id);
+      const bytes = writePly(msg.cloud);
+      post({ id, type: "written", bytes }, [bytes.buffer]);
       return;
     }
     default:

@@ -95,6 +95,7 @@ export async function inAWorker(source: Float32Array, target: Float32Array): Pro
   const cloud = await arps.readPointCloud(new Uint8Array(), "cloud.pcd");
   const fromWorker = await arps.register(cloud, points, { search: "exhaustive" });
   if (fromWorker.confidence < 0.5) console.warn(fromWorker.warnings, fromWorker.evidence.ambiguity);
+  const ply: Uint8Array = await arps.writePly(await arps.transformPointCloud(cloud, fromWorker.T_target_source), { transfer: true });
   arps.terminate();
-  return points.length + surface.length ? result.T_target_source : result.T_target_source_network;
+  return points.length + surface.length + ply.length ? result.T_target_source : result.T_target_source_network;
 }

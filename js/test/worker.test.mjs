@@ -72,6 +72,14 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     const res2 = await arps.register(s, t, {}, { transfer: true });
     assert.equal(s.length, 0, "source buffer transferred");
     assert.deepEqual(res2.T_target_source, res.T_target_source);
+    // The source saved in the target's frame, in the worker: moved, then PLY bytes; a bad
+    // matrix rejects and the client keeps working.
+    const moved = await arps.transformPointCloud({ points: source(), origin: [5e5, 4e6, 10] }, res.T_target_source);
+    assert.ok(moved.points instanceof Float32Array && moved.points.length === source().length && moved.origin.length === 3);
+    const ply = await arps.writePly(moved, { transfer: true });
+    assert.equal(moved.points.length, 0, "written cloud's points transferred");
+    assert.match(new TextDecoder().decode(ply.subarray(0, 150)), /property double x/);
+    await assert.rejects(arps.transformPointCloud(source(), [1, 2, 3]), /matrix has 3 elements/);
     // Clouds with an origin transfer their points too; zero origins give the same answer.
     const so = { points: source(), origin: [0, 0, 0] };
     const to = { points: target(), origin: [0, 0, 0] };
