@@ -17,7 +17,7 @@ import {
   rotationAngleDeg,
   rowMajor,
 } from "./lib.js";
-import { alignedPly, copyCloud, dropCloud, storeCloud } from "./prep.js";
+import { copyCloud, dropCloud, storeCloud } from "./prep.js";
 import { MAX_DRAWN, createView } from "./view.js";
 
 const $ = (id) => document.getElementById(id);
@@ -492,12 +492,16 @@ async function copyMatrix() {
 
 async function downloadAligned() {
   if (!state.result || !state.source) return;
-  const { source, target, result } = state;
+  const { source, result } = state;
   const button = $("download-ply");
   button.disabled = true;
   try {
-    // The transform and the PLY writing run in the page's store, where the points are.
-    const bytes = await alignedPly(source.key, shownPose(result).T_target_source, `arps: ${source.name} aligned onto ${target.name}`);
+    // The package's own: a copy from the page's store, moved and written in the engine's worker
+    // (the origin in f64; doubles when the scan has one), every buffer transferred.
+    const arps = await getEngine();
+    const cloud = await copyCloud(source.key);
+    const moved = await arps.transformPointCloud(cloud, shownPose(result).T_target_source, { transfer: true });
+    const bytes = await arps.writePly(moved, { transfer: true });
     const a = document.createElement("a");
     a.href = URL.createObjectURL(new Blob([bytes], { type: "application/octet-stream" }));
     a.download = `${source.name.replace(/\.[^.]*$/, "").replace(/[^\w.-]+/g, "_") || "source"}-aligned.ply`;

@@ -68,25 +68,6 @@ export function transformPoints(points, m) {
 }
 
 /**
- * Packed xyz offsets from `origin` (`[x, y, z]`) mapped through the column-major rigid transform
- * `m`, as a new Float64Array of `m (origin + p)`, computed as `R p + (R origin + t)` in f64, so map
- * grid coordinates keep their digits.
- */
-export function transformFromOrigin(points, origin, m) {
-  const t = [0, 1, 2].map((r) => m[r] * origin[0] + m[4 + r] * origin[1] + m[8 + r] * origin[2] + m[12 + r]);
-  const out = new Float64Array(points.length);
-  for (let i = 0; i < points.length; i += 3) {
-    const x = points[i];
-    const y = points[i + 1];
-    const z = points[i + 2];
-    out[i] = m[0] * x + m[4] * y + m[8] * z + t[0];
-    out[i + 1] = m[1] * x + m[5] * y + m[9] * z + t[1];
-    out[i + 2] = m[2] * x + m[6] * y + m[10] * z + t[2];
-  }
-  return out;
-}
-
-/**
  * The column-major rigid transform `m` (between absolute frames) acting on points stored as
  * offsets from `from` and giving offsets from `to`: `T(-to) m T(from)`, in f64 (its translation
  * `R from + t - to` stays small when the frames are near each other, whatever their coordinates).
@@ -119,25 +100,18 @@ export function finitePoints(points) {
   return { points: out, dropped: bad };
 }
 
-/**
- * A binary little-endian PLY file of packed xyz points: `double` x, y, z for a Float64Array
- * (coordinates far from zero keep their digits), else `float`.
- */
+/** A binary little-endian PLY file (float x, y, z) of packed xyz points. */
 export function writePly(points, comment = "") {
   const n = points.length / 3;
-  const double = points instanceof Float64Array;
-  const type = double ? "double" : "float";
   const header =
     "ply\nformat binary_little_endian 1.0\n" +
     (comment ? `comment ${comment.replace(/\s+/g, " ")}\n` : "") +
-    `element vertex ${n}\nproperty ${type} x\nproperty ${type} y\nproperty ${type} z\nend_header\n`;
+    `element vertex ${n}\nproperty float x\nproperty float y\nproperty float z\nend_header\n`;
   const head = new TextEncoder().encode(header);
-  const size = double ? 8 : 4;
-  const bytes = new Uint8Array(head.length + n * 3 * size);
+  const bytes = new Uint8Array(head.length + n * 12);
   bytes.set(head, 0);
   const view = new DataView(bytes.buffer, head.length);
-  if (double) for (let i = 0; i < points.length; i++) view.setFloat64(i * 8, points[i], true);
-  else for (let i = 0; i < points.length; i++) view.setFloat32(i * 4, points[i], true);
+  for (let i = 0; i < points.length; i++) view.setFloat32(i * 4, points[i], true);
   return bytes;
 }
 

@@ -9,10 +9,8 @@
 //       offsets from the origin; dropped = how many were non-finite
 //   { type: "copy", key }                  -> { points, origin }  a fresh copy of the points,
 //                                              transferred (for the engine)
-//   { type: "ply", key, matrix, comment }  -> { bytes }   binary PLY of the points (origin added)
-//       mapped through the column-major matrix: doubles when the origin is not zero, else floats
 //   { type: "drop", key }                  forgets the points (no reply)
-import { bounds, decimate, finitePoints, hasOrigin, transformFromOrigin, transformPoints, writePly } from "./lib.js";
+import { bounds, decimate, finitePoints } from "./lib.js";
 
 const clouds = new Map();
 
@@ -40,13 +38,6 @@ self.addEventListener("message", ({ data }) => {
         const { points, origin } = stored(key);
         const copy = points.slice();
         self.postMessage({ id, points: copy, origin }, [copy.buffer]);
-        return;
-      }
-      case "ply": {
-        const { points, origin } = stored(key);
-        const moved = hasOrigin(origin) ? transformFromOrigin(points, origin, data.matrix) : transformPoints(points, data.matrix);
-        const bytes = writePly(moved, data.comment);
-        self.postMessage({ id, bytes }, [bytes.buffer]);
         return;
       }
       case "drop":

@@ -52,14 +52,6 @@ export async function copyCloud(key) {
   return { points, origin };
 }
 
-/**
- * The binary PLY bytes of the cloud stored under `key` (origin added) mapped through `matrix`
- * (column-major): doubles when the cloud has an origin, so map-grid coordinates keep their digits.
- */
-export async function alignedPly(key, matrix, comment) {
-  return (await request({ type: "ply", key, matrix: Float64Array.from(matrix), comment })).bytes;
-}
-
 /** Forgets the points stored under `key`. */
 export function dropCloud(key) {
   if (worker) worker.postMessage({ type: "drop", key, id: 0 });
