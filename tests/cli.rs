@@ -414,3 +414,58 @@ fn register_writes_the_aligned_source() {
     assert!(!several.exists() && !dir.join("source.ply").exists());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `--source-scale F` multiplies the source by F after reading: a source in metres onto a target
+/// in millimetres registers with F = 1000 (the answer in millimetres: the truth's rotation, its
+/// translation times 1000), where without it the engine warns that the sizes differ; a factor that
+/// is not a finite number > 0 is refused.
+#[test]
+fn register_scales_a_source_in_another_unit() {
+    let dir = std::env::temp_dir().join(format!("arps-cli-scale-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let target = arps::io::read_path(&root.join("fixtures/wasm/target.ply")).unwrap();
+    let target_mm = dir.join("target-mm.ply");
+    std::fs::write(
+        &target_mm,
+        arps::io::write_ply_binary(&target.transformed(&nalgebra::Matrix4::new_scaling(1000.0))),
+    )
+    .unwrap();
+    let (src, tgt) = ("fixtures/wasm/source.ply", target_mm.to_str().unwrap());
+    let truth = {
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(root.join("fixtures/wasm/pair.json")).unwrap()).unwrap();
+        let rows: Vec<Vec<f64>> = serde_json::from_value(v["T_target_source"].clone()).unwrap();
+        let mut m = nalgebra::Matrix4::from_fn(|r, c| rows[r][c]);
+        m.fixed_view_mut::<3, 1>(0, 3).scale_mut(1000.0);
+        m
+    };
+    let aligned = dir.join("aligned.ply");
+    let out = arps(&["register", src, tgt, "--source-scale", "1000", "--json", "--aligned", aligned.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
+    let (rot, tr) = (
+        arps::transform::rotation_error_deg(&r.T_target_source, &truth),
+        arps::transform::translation_error(&r.T_target_source, &truth),
+    );
+    assert!(rot < 1.0 && tr < 20.0, "rotation error {rot} deg, translation error {tr} mm");
+    assert!(!r.warnings.iter().any(|w| w.contains("differ in size")), "{:?}", r.warnings);
+    // the aligned source is in millimetres: the scaled source moved by the answer
+    let written = arps::io::read_path(&aligned).unwrap();
+    let source = arps::io::read_path(&root.join(src)).unwrap();
+    let p = source.point_f64(7);
+    let want = r.T_target_source.transform_point(&nalgebra::Point3::new(1000.0 * p[0], 1000.0 * p[1], 1000.0 * p[2]));
+    let got = written.point_f64(7);
+    assert!((0..3).all(|k| (got[k] - want[k]).abs() < 1e-2), "{got:?} vs {want:?}");
+
+    let out = arps(&["register", src, tgt, "--json"]);
+    let r: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(r.warnings.iter().any(|w| w.contains("differ in size by 10")), "{:?}", r.warnings);
+    for bad in ["0", "-2", "NaN", "inf"] {
+        let out = arps(&["register", src, tgt, "--source-scale", bad]);
+        assert!(!out.status.success() && out.stdout.is_empty(), "{bad}");
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(stderr.contains("--source-scale: expected a finite number > 0"), "{bad}: {stderr}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

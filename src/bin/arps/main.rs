@@ -109,6 +109,11 @@ enum Command {
         /// Of a target E57 file holding several scans, only this one (0-based); see `--source-scan`.
         #[arg(long)]
         target_scan: Option<usize>,
+        /// Multiply every source point by this factor after reading, when the source is in
+        /// another unit than the target (e.g. 1000 for a scan in metres onto a model in
+        /// millimetres): the answer, and `--aligned`, are then in the target's unit.
+        #[arg(long, value_name = "FACTOR")]
+        source_scale: Option<f64>,
         /// Write each source, moved by its answer into the target's frame, to PATH as binary PLY
         /// (every point as read; `double` coordinates when they are far from zero, else `float`).
         /// With several sources PATH must hold `{stem}`, replaced by each source file's name
@@ -312,10 +317,18 @@ fn run(command: Command) -> Result<(), String> {
             surface_points,
             source_scan,
             target_scan,
+            source_scale,
             aligned,
             json,
         } => {
             let up = up.map(|v| up_axis(&v)).transpose()?;
+            let scale = match source_scale {
+                Some(s) if !(s.is_finite() && s > 0.0) => {
+                    return Err(format!("--source-scale: expected a finite number > 0, got {s}"))
+                }
+                Some(s) => Some(nalgebra::Matrix4::new_scaling(s)),
+                None => None,
+            };
             if let Some(pattern) =
                 aligned.as_ref().filter(|p| sources.len() > 1 && !p.to_string_lossy().contains("{stem}"))
             {
@@ -374,7 +387,11 @@ fn run(command: Command) -> Result<(), String> {
             let several = sources.len() > 1;
             let mut failed = 0usize;
             for (source, output) in sources.iter().zip(&outputs) {
-                let outcome = read_cloud(source, &reading).and_then(|src| {
+                let read = read_cloud(source, &reading).map(|src| match &scale {
+                    Some(m) => src.into_transformed(m),
+                    None => src,
+                });
+                let outcome = read.and_then(|src| {
                     let r = registrar.register(&src, &tgt, &options).map_err(|e| e.to_string())?;
                     Ok((src, r))
                 });
