@@ -112,7 +112,7 @@ enum Command {
         /// Multiply every source point by this factor after reading, when the source is in
         /// another unit than the target (e.g. 1000 for a scan in metres onto a model in
         /// millimetres): the answer, and `--aligned`, are then in the target's unit.
-        #[arg(long, value_name = "FACTOR")]
+        #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
         source_scale: Option<f64>,
         /// Write each source, moved by its answer into the target's frame, to PATH as binary PLY
         /// (every point as read; `double` coordinates when they are far from zero, else `float`).
