@@ -17,7 +17,7 @@ import {
   rotationAngleDeg,
   rowMajor,
 } from "./lib.js";
-import { copyCloud, dropCloud, storeCloud } from "./prep.js";
+import { copyCloud, dropCloud, rescaleCloud, storeCloud } from "./prep.js";
 import { MAX_DRAWN, createView } from "./view.js";
 
 const $ = (id) => document.getElementById(id);
@@ -111,6 +111,8 @@ function updateButtons() {
   $("example").disabled = state.busy;
   $("source-file").disabled = state.busy;
   $("target-file").disabled = state.busy;
+  $("source-unit").disabled = state.busy;
+  $("target-unit").disabled = state.busy;
   $("view-after").disabled = !state.result;
 }
 
@@ -123,24 +125,53 @@ const count = (n) => n.toLocaleString("en");
 /** An origin in words: its coordinates to a tenth of a unit. */
 const place = (origin) => `(${Array.from(origin, (v) => v.toLocaleString("en", { maximumFractionDigits: 1 })).join(", ")})`;
 
+/** How many target units one source unit is (the #source-unit and #target-unit choice). */
+function sourceScale() {
+  return Number($("source-unit").value) / Number($("target-unit").value);
+}
+
+/**
+ * The page's cloud `{ key, count, drawn, bounds, origin, name, note, dropped }` from the store's
+ * reply `ready` for `key` (`drawn`: the view's subsample; `scale`: the unit change applied).
+ */
+function pageCloud(key, ready, name, scale, dropped) {
+  const notes = [];
+  if (ready.drawn.length / 3 < ready.count) notes.push(`${count(ready.drawn.length / 3)} drawn`);
+  if (dropped) notes.push(`${count(dropped)} non-finite dropped`);
+  if (scale !== 1) notes.push(`scaled ×${fmt(scale)} into the target's unit`);
+  if (hasOrigin(ready.origin)) notes.push(`about ${place(ready.origin)}`);
+  const { count: n, drawn, bounds, origin } = ready;
+  return { key, count: n, drawn, bounds, origin, name, note: notes.join(" · "), dropped };
+}
+
 /**
  * Hands `cloud` (`{ points, origin }`, points transferred) to the page's store under a key of
- * this load; resolves to the page's cloud `{ key, count, drawn, bounds, origin, name, note }`
- * (`drawn`: the view's subsample).
+ * this load (a source scaled into the target's unit); resolves to the page's cloud (`pageCloud`).
  */
 async function readyCloud(cloud, name, which, token) {
   const key = `${which}#${token}`;
-  const origin = Array.from(cloud.origin ?? [0, 0, 0], Number);
-  const ready = await storeCloud(key, { points: cloud.points, origin }, MAX_DRAWN, which === "source" ? 1 : 2);
+  const scale = which === "source" ? sourceScale() : 1;
+  const ready = await storeCloud(key, cloud, { scale, maxDrawn: MAX_DRAWN, seed: which === "source" ? 1 : 2 });
   if (!ready.bounds) {
     dropCloud(key);
     throw new Error("the file holds no (finite) points");
   }
-  const notes = [];
-  if (ready.drawn.length / 3 < ready.count) notes.push(`${count(ready.drawn.length / 3)} drawn`);
-  if (ready.dropped) notes.push(`${count(ready.dropped)} non-finite dropped`);
-  if (hasOrigin(origin)) notes.push(`about ${place(origin)}`);
-  return { key, count: ready.count, drawn: ready.drawn, bounds: ready.bounds, origin, name, note: notes.join(" · ") };
+  return pageCloud(key, ready, name, scale, ready.dropped);
+}
+
+/** After a change of units: the source, rescaled in the store, drawn again (any result cleared). */
+async function rescaleSource() {
+  const source = state.source;
+  if (!source || state.busy) return;
+  const token = loads.source;
+  const scale = sourceScale();
+  try {
+    const ready = await rescaleCloud(source.key, { scale, maxDrawn: MAX_DRAWN, seed: 1 });
+    if (token !== loads.source || state.source !== source) return;
+    setCloud("source", pageCloud(source.key, ready, source.name, scale, source.dropped));
+  } catch (e) {
+    showError(`Could not rescale ${source.name}: ${e?.message ?? e}`);
+  }
 }
 
 async function loadFile(which, file) {
@@ -561,6 +592,7 @@ $("viewer").addEventListener("drop", (e) => {
   }
 });
 
+for (const id of ["source-unit", "target-unit"]) $(id).addEventListener("change", rescaleSource);
 $("example").addEventListener("click", loadExample);
 $("align").addEventListener("click", align);
 $("cancel").addEventListener("click", () => cancelAlign?.());

@@ -38,15 +38,22 @@ function request(message, transfer = []) {
 /**
  * Stores the cloud `{ points, origin }` under `key`, without its non-finite points: `points` packed
  * xyz offsets from `origin` (`[x, y, z]`, f64; null for zero), transferred, so detached here
- * afterwards. Resolves to `{ count, drawn, bounds, dropped }`: `drawn` at most `maxDrawn` of the
- * points (a seeded stratified subsample) for the view, `bounds` `{ min, max }` of all of them
- * (`null` when none is finite), both as offsets from the origin; `dropped` how many were non-finite.
+ * afterwards; `scale` (a change of unit, default 1) multiplies all it hands out. Resolves to
+ * `{ count, drawn, bounds, origin, dropped }`: `drawn` at most `maxDrawn` of the points (a seeded
+ * stratified subsample) for the view, `bounds` `{ min, max }` of all of them (`null` when none is
+ * finite), both as offsets from `origin`, all scaled; `dropped` how many were non-finite.
  */
-export function storeCloud(key, { points, origin = null }, maxDrawn, seed = 0) {
-  return request({ type: "store", key, points, origin: origin ? Array.from(origin, Number) : null, maxDrawn, seed }, [points.buffer]);
+export function storeCloud(key, { points, origin = null }, { scale = 1, maxDrawn, seed = 0 }) {
+  const o = origin ? Array.from(origin, Number) : null;
+  return request({ type: "store", key, points, origin: o, scale, maxDrawn, seed }, [points.buffer]);
 }
 
-/** A fresh copy of the cloud stored under `key`, `{ points, origin }` (yours to transfer). */
+/** Sets the scale of the cloud under `key`; resolves as `storeCloud` does (without `dropped`). */
+export function rescaleCloud(key, { scale, maxDrawn, seed = 0 }) {
+  return request({ type: "scale", key, scale, maxDrawn, seed });
+}
+
+/** A fresh copy of the cloud stored under `key`, scaled, `{ points, origin }` (yours to transfer). */
 export async function copyCloud(key) {
   const { points, origin } = await request({ type: "copy", key });
   return { points, origin };

@@ -39,6 +39,7 @@ import {
   transformBounds,
   transformPoints,
   hasOrigin,
+  writePly,
 } from "../../www/lib.js";
 import { readFloatPly, streetCrops, streetPair, TRUTH } from "./street-pair.mjs";
 
@@ -489,6 +490,35 @@ test("a symmetric box: the other poses that fit as well are offered, and picking
   } finally {
     await page.selectOption("#up", "");
   }
+});
+
+test("a scan in metres onto a target in millimetres: the units said, it aligns in millimetres", { timeout: TIMEOUT * 2 }, async () => {
+  // The street pair's target written in millimetres; the source stays in metres.
+  const mm = readFloatPly(join(dir, "target.ply")).map((v) => v * 1000);
+  writeFileSync(join(dir, "target-mm.ply"), writePly(mm, "street pair target in millimetres"));
+  await page.setInputFiles("#source-file", join(dir, "source.ply"));
+  await page.waitForFunction(() => /source\.ply · [\d,]+ points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
+  await page.setInputFiles("#target-file", join(dir, "target-mm.ply"));
+  await page.waitForFunction(() => /target-mm\.ply · [\d,]+ points/.test(document.getElementById("target-info").textContent), null, { timeout: TIMEOUT });
+  // Units unsaid: the engine warns that the sizes differ.
+  let { result, error } = await alignAndWait();
+  assert.equal(error, "", `unexpected #error: ${error}`);
+  assert.ok(result.warnings.some((w) => /differ in size by \d+x/.test(w)), JSON.stringify(result.warnings));
+  // Said: the source is scaled by 1000 (drawn again, the result cleared), and aligns in millimetres.
+  await page.selectOption("#target-unit", "0.001");
+  await page.waitForFunction(() => /scaled ×1000 into the target's unit/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
+  assert.equal((await page.textContent("#result")).trim(), "", "the old result is cleared");
+  ({ result, error } = await alignAndWait());
+  assert.equal(error, "", `unexpected #error: ${error}`);
+  const truthMm = Float64Array.from(TRUTH, (v, i) => (i >= 12 && i < 15 ? v * 1000 : v));
+  const e = errorsAgainstTruth(result, truthMm);
+  console.log(`metres onto millimetres: rotation error ${e.rotationDeg.toFixed(3)} deg, translation error ${e.translation.toFixed(1)} mm`);
+  assert.ok(e.rotationDeg < 5, `rotation error ${e.rotationDeg} deg`);
+  assert.ok(e.translation < 250, `translation error ${e.translation} mm`);
+  assert.ok(!result.warnings.some((w) => /differ in size/.test(w)), JSON.stringify(result.warnings));
+  // Back to the same unit: the source as read again.
+  await page.selectOption("#target-unit", "1");
+  await page.waitForFunction(() => !/scaled/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
 });
 
 test("a mesh file is read as points over its surface", { timeout: TIMEOUT * 2 }, async () => {
