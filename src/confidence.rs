@@ -373,7 +373,8 @@ fn turns(
 /// the answer `T_target_source` (fitness `fitness`, measured like theirs) and turn more than 15
 /// degrees (`SAME_POSE_DEGREES`) away from it and from each other, when that number is higher,
 /// and adds those poses to `poses` (the probes' alternatives, [`Probed::alternatives`]) where
-/// they are more than 15 degrees from every pose there. The probes turn the answer about a few
+/// they are more than 15 degrees from every pose there; none when the answer fits nothing
+/// (`fitness` 0). The probes turn the answer about a few
 /// axes; a search that refined starts from unrelated poses (global hypotheses, turned starts)
 /// finds look-alikes about other axes too. The count stays the larger of the two sets' (what the
 /// confidence was calibrated with); `poses` gathers every look-alike found.
@@ -385,6 +386,11 @@ pub fn count_search_alternatives(
     fitness: f64,
     others: &[(Matrix4<f64>, f64)],
 ) {
+    // an answer that fits nothing has no look-alikes (every pose fits "as well" as it), as in
+    // the probes
+    if fitness <= 0.0 {
+        return;
+    }
     let mut distinct: Vec<Matrix4<f64>> = Vec::new();
     for (t, f) in others {
         if *f >= ALTERNATIVE_FIT * fitness {

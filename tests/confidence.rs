@@ -280,6 +280,12 @@ fn the_searchs_other_answers_that_fit_as_well_are_alternatives() {
     let mut poses = vec![flip_x_again, flip_z];
     confidence::count_search_alternatives(&mut e, &mut poses, &answer, 0.6, &[(flip_x, 0.55), (flip_y, 0.65)]);
     assert_eq!((e.alternatives, poses), (2.0, vec![flip_x_again, flip_z, flip_y]), "every look-alike, once");
+    // an answer that fits nothing (clouds in different units, say) has no look-alikes: every
+    // pose would fit "as well" as it
+    let mut e = Evidence { fitness: 0.0, ..e0 };
+    let mut poses = Vec::new();
+    confidence::count_search_alternatives(&mut e, &mut poses, &answer, 0.0, &[(flip_x, 0.0), (flip_y, 0.0)]);
+    assert_eq!((e.alternatives, poses.len()), (0.0, 0), "no look-alikes of an answer fitting nothing");
 }
 
 /// An answer that moved the source almost off the target: the probes find nothing that fits
