@@ -241,7 +241,10 @@ test("the package's examples/node-register.mjs aligns the pair", async () => {
   console.log("examples/node-register.mjs:", JSON.stringify(assertRecovered(out.T_target_source, "examples/node-register.mjs")));
 });
 
-/** Opens `url` (the browser example), uploads the pair, aligns; returns the parsed #result. */
+/**
+ * Opens `url` (the browser example), uploads the pair, aligns, checks the aligned source's
+ * download; returns the parsed #result.
+ */
 async function alignInBrowser(browser, url) {
   const page = await browser.newPage();
   const problems = [];
@@ -260,6 +263,15 @@ async function alignInBrowser(browser, url) {
     );
     assert.equal(await page.textContent("#error"), "", `the page shows an error (${problems.join("; ")})`);
     assert.ok(page.workers().length >= 1, "no worker ran: the example must align through arps/worker-client");
+    // the aligned source offered as a PLY download (made in the worker)
+    await page.waitForSelector("#download:not([hidden])", { timeout: 120_000 });
+    const saved = await page.evaluate(async () => {
+      const a = document.getElementById("download");
+      const bytes = new Uint8Array(await (await fetch(a.href)).arrayBuffer());
+      return { name: a.download, head: new TextDecoder().decode(bytes.subarray(0, 40)), size: bytes.length };
+    });
+    assert.equal(saved.name, "source-aligned.ply");
+    assert.ok(saved.head.startsWith("ply\nformat binary_little_endian 1.0\n") && saved.size > 1000, JSON.stringify(saved));
     assert.deepEqual(problems, []);
     return JSON.parse(await page.textContent("#result"));
   } finally {

@@ -1,6 +1,7 @@
 // The browser example's script (index.html): reads the two chosen files, aligns them in a worker
-// through arps/worker-client, and prints T_target_source (row-major rows, as people read
-// matrices; `result.T_target_source` itself is column-major for three.js `Matrix4.fromArray`).
+// through arps/worker-client, prints T_target_source (row-major rows, as people read matrices;
+// `result.T_target_source` itself is column-major for three.js `Matrix4.fromArray`), and offers
+// the source moved into the target's frame as a PLY download.
 import { createWorkerRegistrar } from "arps/worker-client";
 
 const $ = (id) => document.getElementById(id);
@@ -16,6 +17,7 @@ async function engine() {
 $("align").addEventListener("click", async () => {
   $("error").textContent = "";
   $("result").textContent = "";
+  $("download").hidden = true;
   const files = [$("source-file").files[0], $("target-file").files[0]];
   if (!files[0] || !files[1]) {
     $("error").textContent = "choose a source file and a target file";
@@ -47,6 +49,15 @@ $("align").addEventListener("click", async () => {
       2,
     );
     status(`done in ${(performance.now() - t0).toFixed(0)} ms (confidence ${r.confidence.toFixed(2)})`);
+    // The source saved in the target's frame: moved and written in the worker (the origin in f64,
+    // doubles when the coordinates are far from zero), offered as a download.
+    const moved = await arps.transformPointCloud(source, r.T_target_source, { transfer: true });
+    const ply = await arps.writePly(moved, { transfer: true });
+    const link = $("download");
+    if (link.href) URL.revokeObjectURL(link.href);
+    link.href = URL.createObjectURL(new Blob([ply], { type: "application/octet-stream" }));
+    link.download = `${files[0].name.replace(/\.[^.]*$/, "") || "source"}-aligned.ply`;
+    link.hidden = false;
   } catch (e) {
     $("error").textContent = e.message;
     status("failed");
