@@ -456,8 +456,12 @@ function showResult(r, truth = null) {
       return [dt, dd];
     }),
   );
+  // the engine's warnings, and where the page can mend one: scans in different units
+  const hints = r.warnings.some((w) => /differ in size/.test(w))
+    ? ["Different units? Say which under Units (with the scans): the source is then scaled into the target's unit."]
+    : [];
   $("warnings").replaceChildren(
-    ...r.warnings.map((w) => {
+    ...[...r.warnings, ...hints].map((w) => {
       const li = document.createElement("li");
       li.textContent = w;
       return li;

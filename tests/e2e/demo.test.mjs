@@ -504,6 +504,7 @@ test("a scan in metres onto a target in millimetres: the units said, it aligns i
   let { result, error } = await alignAndWait();
   assert.equal(error, "", `unexpected #error: ${error}`);
   assert.ok(result.warnings.some((w) => /differ in size by \d+x/.test(w)), JSON.stringify(result.warnings));
+  assert.match(await page.textContent("#warnings"), /Different units\? Say which under Units/);
   // Said: the source is scaled by 1000 (drawn again, the result cleared), and aligns in millimetres.
   await page.selectOption("#target-unit", "0.001");
   await page.waitForFunction(() => /scaled ×1000 into the target's unit/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
