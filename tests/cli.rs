@@ -395,7 +395,7 @@ fn register_writes_the_aligned_source() {
     assert!(String::from_utf8_lossy(&out.stdout).contains("wrote the aligned source to"), "{out:?}");
 
     // refused before registering: an input as output (however named), several sources without
-    // {stem}, two sources onto one file; nothing is written
+    // {stem}, two sources onto one file, a name that is not .ply; nothing is written
     let before = std::fs::read(root.join(target)).unwrap();
     let as_input = format!("{}/../wasm/target.ply", root.join("fixtures/any").display());
     let several = dir.join("all.ply");
@@ -404,6 +404,10 @@ fn register_writes_the_aligned_source() {
         (vec!["register", a, target, "--aligned", &as_input], "is an input file"),
         (vec!["register", a, b, target, "--aligned", several.to_str().unwrap()], "must hold {stem}"),
         (vec!["register", a, a, target, "--aligned", twice.to_str().unwrap()], "would both be written to"),
+        (
+            vec!["register", a, target, "--aligned", dir.join("aligned.las").to_str().unwrap()],
+            "would hold PLY; name it .ply",
+        ),
     ] {
         let out = arps(&args);
         assert!(!out.status.success() && out.stdout.is_empty(), "{args:?}");

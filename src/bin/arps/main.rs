@@ -115,7 +115,8 @@ enum Command {
         #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
         source_scale: Option<f64>,
         /// Write each source, moved by its answer into the target's frame, to PATH as binary PLY
-        /// (every point as read; `double` coordinates when they are far from zero, else `float`).
+        /// (every point as read; `double` coordinates when they are far from zero, else `float`;
+        /// the name must end in `.ply`).
         /// With several sources PATH must hold `{stem}`, replaced by each source file's name
         /// without its extension (e.g. `out/{stem}-aligned.ply`). An input file is never
         /// overwritten.
@@ -265,11 +266,14 @@ fn print_registration(
 }
 
 /// Where `--aligned PATTERN` writes the aligned `source`: `{stem}` replaced by the source file's
-/// name without its extension. Refuses a path that is one of the `inputs` (the same file, however
-/// named).
+/// name without its extension. Refuses a path that does not end in `.ply` (what is written) or
+/// that is one of the `inputs` (the same file, however named).
 fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathBuf, String> {
     let stem = source.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default();
     let path = PathBuf::from(pattern.to_string_lossy().replace("{stem}", &stem));
+    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
+        return Err(format!("--aligned: {} would hold PLY; name it .ply", path.display()));
+    }
     let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
         _ => a == b,
