@@ -1,6 +1,6 @@
 // The package's public API over the raw wasm-bindgen glue (arps_glue.js): the same classes and
 // functions (`Registrar`, `parsePointCloud`, `readPointCloud`, `transformPointCloud`, `writePly`,
-// `version`), with two guarantees
+// `transformPly`, `version`), with two guarantees
 // the glue alone does not give:
 //
 // 1. Inputs are checked here, in JavaScript, before they reach the glue: clouds must be real
@@ -697,10 +697,17 @@ export function makeApi(glue, isReady, env = {}) {
     return guarded("writePly", () => glue.writePly(c));
   }
 
+  /** A PLY file moved as it is (every property kept, normals turned); see arps.d.ts. */
+  function transformPly(bytes, matrix) {
+    const b = bytesArg(bytes, "bytes");
+    const m = matrixArg(matrix, "matrix");
+    return guarded("transformPly", () => glue.transformPly(b, m));
+  }
+
   /** The crate version. */
   function version() {
     return guarded("version", () => glue.version());
   }
 
-  return { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly, version, setDefaultModel };
+  return { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly, transformPly, version, setDefaultModel };
 }

@@ -47,6 +47,7 @@ module.exports = {
   readPointCloud: api.readPointCloud,
   transformPointCloud: api.transformPointCloud,
   writePly: api.writePly,
+  transformPly: api.transformPly,
   version: api.version,
   /**
    * Nothing to do in Node (the engine is ready on require; the default model is read from disk on

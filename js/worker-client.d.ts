@@ -139,6 +139,15 @@ export interface WorkerRegistrar {
    * coordinates when it has an origin away from zero).
    */
   writePly(cloud: CloudInput, request?: { transfer?: boolean; signal?: AbortSignal }): Promise<Uint8Array>;
+  /**
+   * A PLY file moved as it is, in the worker (see `transformPly` in arps.d.ts: every property and
+   * element kept, normals turned): e.g. a registered source's file by its `T_target_source`.
+   */
+  transformPly(
+    bytes: Uint8Array | ArrayBuffer,
+    matrix: ArrayLike<number> | number[][],
+    request?: { transfer?: boolean; signal?: AbortSignal },
+  ): Promise<Uint8Array>;
   /** Stops the worker; pending and later requests reject. */
   terminate(): void;
 }

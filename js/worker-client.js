@@ -234,6 +234,11 @@ export async function createWorkerRegistrar(options = {}) {
       const reply = await request({ type: "write", cloud }, { transfer: buffers, signal });
       return reply.bytes;
     },
+    async transformPly(bytes, matrix, { transfer = false, signal } = {}) {
+      const buffers = transfer ? uniqueBuffers([bytes]) : [];
+      const reply = await request({ type: "move-ply", bytes, matrix }, { transfer: buffers, signal });
+      return reply.bytes;
+    },
     terminate() {
       terminated = true;
       if (current) retire(current, new Error("arps worker: terminated"));

@@ -14,7 +14,8 @@
 //! * `parsePointCloud(bytes: Uint8Array, fileName: string) -> Float32Array`;
 //! * `readPointCloud(bytes: Uint8Array, fileName: string) -> { points: Float32Array, origin }`;
 //! * `transformPointCloud(cloud, matrix) -> { points, origin }` and `writePly(cloud) -> Uint8Array`
-//!   (a cloud: a `Float32Array` or `{ points: Float32Array, origin }`).
+//!   (a cloud: a `Float32Array` or `{ points: Float32Array, origin }`);
+//! * `transformPly(bytes, matrix) -> Uint8Array` (a PLY file moved as it is).
 //!
 //! Nothing here may panic on user input: a panic in wasm aborts the instance (wasm32 builds with
 //! `panic = "abort"`; there is no `catch_unwind`), so every fallible step returns
@@ -214,6 +215,27 @@ pub fn transform_point_cloud(
 #[wasm_bindgen(js_name = writePly)]
 pub fn write_ply(#[wasm_bindgen(unchecked_param_type = "CloudInput")] cloud: JsValue) -> Result<Vec<u8>, JsError> {
     Ok(crate::io::write_ply_binary(&cloud_arg(&cloud, "cloud")?))
+}
+
+/// A PLY file moved as it is, e.g. a registered source by its result's `T_target_source`: the
+/// positions of its `vertex` element mapped in f64 and written back in their own type, normals
+/// (`nx`, `ny`, `nz`) turned, every other property and element kept (colours, intensity, faces).
+/// `matrix`: 16 numbers, column-major (or, through the package's entry, four row-major rows), a
+/// rigid transform or one times a uniform scale. Returns the moved file's bytes. Throws on a file
+/// the PLY reader refuses, a vertex element with integer coordinates or a list property, and a
+/// matrix that is not rigid (or uniformly scaled).
+#[wasm_bindgen(js_name = transformPly)]
+pub fn transform_ply(
+    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
+) -> Result<Vec<u8>, JsError> {
+    if matrix.len() != 16 {
+        return Err(JsError::new(&format!(
+            "matrix: expected 16 numbers (a 4x4, column-major), got {}",
+            matrix.len()
+        )));
+    }
+    crate::io::transform_ply(bytes, &nalgebra::Matrix4::from_column_slice(matrix)).map_err(js_err)
 }
 
 /// Holds a loaded model and reusable buffers; registers pairs of clouds.

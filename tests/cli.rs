@@ -390,6 +390,15 @@ fn register_writes_the_aligned_source() {
             assert!((0..3).all(|k| (want[k] - got[k]).abs() < 1e-5), "point {i}: {want:?} vs {got:?}");
         }
     }
+    // a PLY source is written as its own file moved: its normals, colours and faces kept
+    let frag = "fixtures/formats/frag_115_2000_binary.ply";
+    let out_path = dir.join("frag-aligned.ply");
+    let out = arps(&["register", frag, frag, "--json", "--aligned", out_path.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let (before, after) = (std::fs::read(root.join(frag)).unwrap(), std::fs::read(&out_path).unwrap());
+    assert_eq!(after, arps::io::transform_ply(&before, &matrix(&v)).unwrap());
+    assert!(String::from_utf8_lossy(&after[..400]).contains("property uchar red") && after.len() == before.len());
     // the text report says where it wrote
     let out = arps(&["register", a, target, "--aligned", dir.join("one.ply").to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("wrote the aligned source to"), "{out:?}");

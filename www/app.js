@@ -131,24 +131,25 @@ function sourceScale() {
 }
 
 /**
- * The page's cloud `{ key, count, drawn, bounds, origin, name, note, dropped }` from the store's
- * reply `ready` for `key` (`drawn`: the view's subsample; `scale`: the unit change applied).
+ * The page's cloud `{ key, count, drawn, bounds, origin, name, note, dropped, scale, file }` from
+ * the store's reply `ready` for `key` (`drawn`: the view's subsample; `scale`: the unit change
+ * applied; `file`: the `File` it was read from, if any).
  */
-function pageCloud(key, ready, name, scale, dropped) {
+function pageCloud(key, ready, name, scale, dropped, file = null) {
   const notes = [];
   if (ready.drawn.length / 3 < ready.count) notes.push(`${count(ready.drawn.length / 3)} drawn`);
   if (dropped) notes.push(`${count(dropped)} non-finite dropped`);
   if (scale !== 1) notes.push(`scaled ×${fmt(scale)} into the target's unit`);
   if (hasOrigin(ready.origin)) notes.push(`about ${place(ready.origin)}`);
   const { count: n, drawn, bounds, origin } = ready;
-  return { key, count: n, drawn, bounds, origin, name, note: notes.join(" · "), dropped };
+  return { key, count: n, drawn, bounds, origin, name, note: notes.join(" · "), dropped, scale, file };
 }
 
 /**
  * Hands `cloud` (`{ points, origin }`, points transferred) to the page's store under a key of
  * this load (a source scaled into the target's unit); resolves to the page's cloud (`pageCloud`).
  */
-async function readyCloud(cloud, name, which, token) {
+async function readyCloud(cloud, name, which, token, file = null) {
   const key = `${which}#${token}`;
   const scale = which === "source" ? sourceScale() : 1;
   const ready = await storeCloud(key, cloud, { scale, maxDrawn: MAX_DRAWN, seed: which === "source" ? 1 : 2 });
@@ -156,7 +157,7 @@ async function readyCloud(cloud, name, which, token) {
     dropCloud(key);
     throw new Error("the file holds no (finite) points");
   }
-  return pageCloud(key, ready, name, scale, ready.dropped);
+  return pageCloud(key, ready, name, scale, ready.dropped, file);
 }
 
 /** After a change of units: the source, rescaled in the store, drawn again (any result cleared). */
@@ -168,7 +169,7 @@ async function rescaleSource() {
   try {
     const ready = await rescaleCloud(source.key, { scale, maxDrawn: MAX_DRAWN, seed: 1 });
     if (token !== loads.source || state.source !== source) return;
-    setCloud("source", pageCloud(source.key, ready, source.name, scale, source.dropped));
+    setCloud("source", pageCloud(source.key, ready, source.name, scale, source.dropped, source.file));
   } catch (e) {
     showError(`Could not rescale ${source.name}: ${e?.message ?? e}`);
   }
@@ -189,7 +190,7 @@ async function loadFile(which, file) {
     const parsed = await arps.readPointCloud(bytes, file.name, { surfacePoints: MESH_SURFACE_POINTS }, { transfer: true });
     if (token !== loads[which]) return;
     $(`${which}-info`).textContent = `${file.name}: preparing ${count(parsed.points.length / 3)} points…`;
-    const cloud = await readyCloud(parsed, file.name, which, token);
+    const cloud = await readyCloud(parsed, file.name, which, token, file);
     if (token !== loads[which]) return dropCloud(cloud.key);
     setCloud(which, cloud);
   } catch (e) {
@@ -531,12 +532,21 @@ async function downloadAligned() {
   const button = $("download-ply");
   button.disabled = true;
   try {
-    // The package's own: a copy from the page's store, moved and written in the engine's worker
-    // (the origin in f64; doubles when the scan has one), every buffer transferred.
+    // The package's own, in the engine's worker, every buffer transferred: a PLY file moved as it
+    // is (its colours, normals and faces kept; the unit change included), else the points from
+    // the page's store, moved (the origin in f64) and written (doubles when the scan has one).
     const arps = await getEngine();
-    const cloud = await copyCloud(source.key);
-    const moved = await arps.transformPointCloud(cloud, shownPose(result).T_target_source, { transfer: true });
-    const bytes = await arps.writePly(moved, { transfer: true });
+    const T = shownPose(result).T_target_source;
+    let bytes = null;
+    if (source.file && /\.ply$/i.test(source.name)) {
+      const file = new Uint8Array(await source.file.arrayBuffer());
+      const m = Array.from(T, (v, i) => (i < 12 && i % 4 < 3 ? v * source.scale : v)); // T S
+      bytes = await arps.transformPly(file, m, { transfer: true }).catch(() => null); // e.g. integer coordinates
+    }
+    if (!bytes) {
+      const cloud = await copyCloud(source.key);
+      bytes = await arps.writePly(await arps.transformPointCloud(cloud, T, { transfer: true }), { transfer: true });
+    }
     const a = document.createElement("a");
     a.href = URL.createObjectURL(new Blob([bytes], { type: "application/octet-stream" }));
     a.download = `${source.name.replace(/\.[^.]*$/, "").replace(/[^\w.-]+/g, "_") || "source"}-aligned.ply`;

@@ -3,7 +3,8 @@
 // Cases: bad lengths, NaN, too few / too many points, wrong types, array-likes that lie about
 // their length, bad options (unknown, wrong type, throwing getters, Proxies, bad
 // initialTransform), bad onProgress, bad files (corrupt LAZ and E57 too) and file names, bad
-// matrices and clouds for transformPointCloud / writePly, bad weights, use after free, and
+// matrices and clouds for transformPointCloud / writePly / transformPly, bad weights, use after
+// free, and
 // a real trap inside the engine, after which the module is re-instantiated and the registrars
 // built before it keep working.
 // Run after scripts/build-pkg.sh: node --test js/test/
@@ -248,7 +249,7 @@ test("large coordinates: Float64Array or { points, origin } in, T_target_source 
 });
 
 for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]]) {
-  test(`${name}: transformPointCloud and writePly save a registered source in the target's frame, to the last digit`, () => {
+  test(`${name}: transformPointCloud, writePly and transformPly save a registered source in the target's frame`, () => {
     const r = arps.Registrar.withDefaultModel();
     // A map-grid survey (LAS 1.4 LAZ, about 1.7e6 from zero) onto a copy of itself moved; the
     // copy comes from transformPointCloud itself, checked first against f64 arithmetic.
@@ -308,6 +309,23 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     rejects(r, "bad origin", () => arps.writePly({ points: source(), origin: [1, 2] }), /^cloud: origin must be 3 finite numbers/);
     rejects(r, "length 4", () => arps.writePly(new Float32Array(4)), /^cloud: .*not a multiple of 3/);
     rejects(r, "not a cloud", () => arps.transformPointCloud("points", T), /^cloud: expected a Float32Array/);
+
+    // transformPly: a PLY file moved as it is (a fragment with normals, colours and faces): the
+    // same length and header, its points those transformPointCloud gives, its colours kept
+    const frag = readFileSync(path.join(root, "fixtures", "formats", "frag_115_2000_binary.ply"));
+    const movedPly = arps.transformPly(frag, T);
+    assert.ok(movedPly instanceof Uint8Array && movedPly.length === frag.length);
+    const body = frag.indexOf("end_header\n") + 11;
+    assert.deepEqual(movedPly.subarray(0, body), new Uint8Array(frag.subarray(0, body)));
+    const want = arps.transformPointCloud(arps.readPointCloud(frag, "f.ply"), T);
+    const got = arps.readPointCloud(movedPly, "f.ply");
+    let apart = 0;
+    for (let i = 0; i < got.points.length; i++) apart = Math.max(apart, Math.abs(got.origin[i % 3] + got.points[i] - (want.origin[i % 3] + want.points[i])));
+    assert.ok(apart < 1e-4, `transformPly's points ${apart} from transformPointCloud's`);
+    for (const i of [0, 999, 1999]) assert.deepEqual(movedPly.subarray(body + i * 27 + 24, body + i * 27 + 27), new Uint8Array(frag.subarray(body + i * 27 + 24, body + i * 27 + 27)), `colour ${i}`);
+    rejects(r, "transformPly: not a PLY", () => arps.transformPly(new Uint8Array([1, 2, 3]), T), /PLY/);
+    rejects(r, "transformPly: scaled along one axis", () => arps.transformPly(frag, T.map((v, i) => (i === 0 ? 2 * v : v))), /not rigid/);
+    rejects(r, "transformPly: no matrix", () => arps.transformPly(frag), /^matrix is undefined/);
     r.free();
   });
 }

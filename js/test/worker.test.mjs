@@ -80,6 +80,10 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     assert.equal(moved.points.length, 0, "written cloud's points transferred");
     assert.match(new TextDecoder().decode(ply.subarray(0, 150)), /property double x/);
     await assert.rejects(arps.transformPointCloud(source(), [1, 2, 3]), /matrix has 3 elements/);
+    const plyFile = new Uint8Array(sourcePly);
+    const movedFile = await arps.transformPly(plyFile, res.T_target_source, { transfer: true });
+    assert.equal(plyFile.length, 0, "the file's bytes transferred");
+    assert.ok(movedFile instanceof Uint8Array && movedFile.length > 100);
     // Clouds with an origin transfer their points too; zero origins give the same answer.
     const so = { points: source(), origin: [0, 0, 0] };
     const to = { points: target(), origin: [0, 0, 0] };

@@ -35,6 +35,7 @@ mod obj;
 mod off;
 mod pcd;
 mod ply;
+mod ply_transform;
 mod stl;
 mod text;
 mod util;
@@ -295,6 +296,8 @@ pub fn read_mesh(bytes: &[u8], file_name: &str) -> Result<Mesh> {
 pub fn write_ply_binary(cloud: &PointCloud) -> Vec<u8> {
     ply::write_binary(cloud)
 }
+
+pub use ply_transform::transform_ply;
 
 /// Reads a point cloud from a file (native only); the format comes from the file name.
 #[cfg(not(target_arch = "wasm32"))]

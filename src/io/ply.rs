@@ -11,10 +11,10 @@ use super::{Faces, Raw};
 use crate::cloud::PointCloud;
 use crate::{Error, Result};
 
-const F: &str = "PLY";
+pub(super) const F: &str = "PLY";
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Scalar {
+pub(super) enum Scalar {
     I8,
     U8,
     I16,
@@ -40,7 +40,7 @@ impl Scalar {
         })
     }
 
-    fn size(self) -> usize {
+    pub(super) fn size(self) -> usize {
         match self {
             Scalar::I8 | Scalar::U8 => 1,
             Scalar::I16 | Scalar::U16 => 2,
@@ -49,12 +49,12 @@ impl Scalar {
         }
     }
 
-    fn is_int(self) -> bool {
+    pub(super) fn is_int(self) -> bool {
         !matches!(self, Scalar::F32 | Scalar::F64)
     }
 
     /// Reads a value from exactly `size()` bytes.
-    fn read_f64(self, b: &[u8], big: bool) -> f64 {
+    pub(super) fn read_f64(self, b: &[u8], big: bool) -> f64 {
         match self {
             Scalar::F32 => f32::from_bits(read_u32(b, big)) as f64,
             Scalar::F64 => f64::from_bits(read_u64(b, big)),
@@ -106,27 +106,27 @@ fn read_u64(b: &[u8], big: bool) -> u64 {
 }
 
 #[derive(Clone, Copy, Debug)]
-enum Kind {
+pub(super) enum Kind {
     Scalar(Scalar),
     List { count: Scalar, item: Scalar },
 }
 
 #[derive(Clone, Debug)]
-struct Property {
-    name: String,
-    kind: Kind,
+pub(super) struct Property {
+    pub(super) name: String,
+    pub(super) kind: Kind,
 }
 
 #[derive(Clone, Debug)]
-struct Element {
-    name: String,
-    count: u64,
-    props: Vec<Property>,
+pub(super) struct Element {
+    pub(super) name: String,
+    pub(super) count: u64,
+    pub(super) props: Vec<Property>,
 }
 
 impl Element {
     /// Bytes of one instance when it has no list property.
-    fn fixed_size(&self) -> Option<usize> {
+    pub(super) fn fixed_size(&self) -> Option<usize> {
         self.props
             .iter()
             .map(|p| match p.kind {
@@ -149,22 +149,22 @@ impl Element {
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Encoding {
+pub(super) enum Encoding {
     Ascii,
     BinaryLe,
     BinaryBe,
 }
 
-struct Header {
-    encoding: Encoding,
-    elements: Vec<Element>,
+pub(super) struct Header {
+    pub(super) encoding: Encoding,
+    pub(super) elements: Vec<Element>,
     /// Byte offset where the body starts.
-    body: usize,
+    pub(super) body: usize,
     /// Number of the `end_header` line.
-    last_line: usize,
+    pub(super) last_line: usize,
 }
 
-fn parse_header(bytes: &[u8]) -> Result<Header> {
+pub(super) fn parse_header(bytes: &[u8]) -> Result<Header> {
     let mut lines = Lines::new(bytes);
     match lines.next() {
         Some((_, l)) if l.trim_ascii_end() == b"ply" => {}
@@ -242,7 +242,7 @@ fn parse_header(bytes: &[u8]) -> Result<Header> {
 
 /// What to take from an element.
 #[derive(Clone, Copy)]
-enum Want {
+pub(super) enum Want {
     /// Property indices of x, y, z.
     Points([usize; 3]),
     /// Property index of the vertex index list; the vertex count to check against.
@@ -251,7 +251,7 @@ enum Want {
 }
 
 #[derive(Default)]
-struct Out {
+pub(super) struct Out {
     points: Vec<[f64; 3]>,
     triangles: Vec<[u32; 3]>,
 }
@@ -333,7 +333,7 @@ pub(crate) fn read(bytes: &[u8], faces: Faces) -> Result<Raw> {
     Ok(Raw { vertices: out.points, triangles: out.triangles })
 }
 
-fn read_binary_element(
+pub(super) fn read_binary_element(
     bytes: &[u8],
     pos: &mut usize,
     el: &Element,
@@ -453,7 +453,7 @@ fn read_binary_element(
     Ok(())
 }
 
-fn read_ascii_element(lines: &mut Lines, el: &Element, want: Want, out: &mut Out) -> Result<()> {
+pub(super) fn read_ascii_element(lines: &mut Lines, el: &Element, want: Want, out: &mut Out) -> Result<()> {
     if el.props.is_empty() || el.count == 0 {
         return Ok(());
     }

@@ -300,6 +300,8 @@ test("download the aligned source as PLY; copy the matrix as JSON", async () => 
   assert.equal(download.suggestedFilename(), "source-aligned.ply");
   const file = join(dir, "aligned.ply");
   await download.saveAs(file);
+  // a PLY source comes back as its own file moved (its header, comment included, kept)
+  assert.match(readFileSync(file).subarray(0, 200).toString("latin1"), /comment street pair source\n/);
   const aligned = readFloatPly(file);
   const source = streetCrops().source;
   assert.equal(aligned.length, source.length);

@@ -114,9 +114,10 @@ enum Command {
         /// millimetres): the answer, and `--aligned`, are then in the target's unit.
         #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
         source_scale: Option<f64>,
-        /// Write each source, moved by its answer into the target's frame, to PATH as binary PLY
-        /// (every point as read; `double` coordinates when they are far from zero, else `float`;
-        /// the name must end in `.ply`).
+        /// Write each source, moved by its answer into the target's frame, to PATH as PLY (the
+        /// name must end in `.ply`): a PLY source as its own file moved, every property and
+        /// element kept (colours, normals turned, faces); any other as the points read, in binary
+        /// (`double` coordinates when they are far from zero, else `float`).
         /// With several sources PATH must hold `{stem}`, replaced by each source file's name
         /// without its extension (e.g. `out/{stem}-aligned.ply`). An input file is never
         /// overwritten.
@@ -284,10 +285,27 @@ fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathB
     Ok(path)
 }
 
-/// Writes `source` moved by `r`'s answer to `path` as binary PLY (`io::write_ply_binary`).
-fn write_aligned(source: &arps::PointCloud, r: &arps::Registration, path: &Path) -> Result<(), String> {
-    let bytes = io::write_ply_binary(&source.transformed(&r.T_target_source));
-    std::fs::write(path, bytes).map_err(|e| format!("--aligned: {}: {e}", path.display()))
+/// Writes the source moved by `r`'s answer to `path` as PLY: a PLY source file as itself, moved
+/// (`io::transform_ply`: every property and element kept, normals turned; `scale` is the
+/// `--source-scale` applied before registering), any other as the points read (`cloud`, already
+/// scaled) in binary PLY (`io::write_ply_binary`).
+fn write_aligned(
+    file: &Path,
+    cloud: &arps::PointCloud,
+    scale: Option<&nalgebra::Matrix4<f64>>,
+    r: &arps::Registration,
+    path: &Path,
+) -> Result<(), String> {
+    let bytes = std::fs::read(file).map_err(|e| format!("{}: {e}", file.display()))?;
+    let name = file.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+    let out = match io::detect_format(&bytes, &name) {
+        Ok(io::Format::Ply) => {
+            let m = scale.map_or(r.T_target_source, |s| r.T_target_source * s);
+            io::transform_ply(&bytes, &m).map_err(|e| format!("--aligned: {}: {e}", file.display()))?
+        }
+        _ => io::write_ply_binary(&cloud.transformed(&r.T_target_source)),
+    };
+    std::fs::write(path, out).map_err(|e| format!("--aligned: {}: {e}", path.display()))
 }
 
 /// The weights at `path`, or the embedded default model.
@@ -403,7 +421,7 @@ fn run(command: Command) -> Result<(), String> {
                 let named = several.then(|| source.display().to_string());
                 let outcome = outcome.and_then(|(src, r)| {
                     if let Some(path) = output {
-                        write_aligned(&src, &r, path)?;
+                        write_aligned(source, &src, scale.as_ref(), &r, path)?;
                     }
                     Ok(r)
                 });

@@ -1,0 +1,263 @@
+//! A PLY file moved as it is: the positions of its `vertex` element mapped by a rigid (or
+//! uniformly scaled) transform, its normals turned, every other byte kept (colours, intensity,
+//! other properties, faces and other elements, comments, the encoding). What saves a registered
+//! scan in the target's frame without losing what the registration did not read.
+//!
+//! Binary files are copied and the vertex records rewritten in place; ASCII files get their
+//! vertex lines rewritten (values separated by one space) and every other line as it was. Values
+//! are computed in f64 and written back in the property's own type: a `float` file stays `float`
+//! (its own precision), a `double` file keeps every digit. The header and the elements before the
+//! vertices are read by the PLY reader's own parser, so a file it refuses is refused here too.
+
+use super::ply::{
+    parse_header, read_ascii_element, read_binary_element, Element, Encoding, Kind, Out, Scalar, Want, F,
+};
+use super::util::{parse_f64, utf8_line, Lines};
+use crate::{Error, Result};
+use nalgebra::{Matrix3, Matrix4, Vector3};
+
+/// Where a vertex's position and normal are: property indices of x, y, z and, when the element
+/// has all three as floating-point scalars, of nx, ny, nz.
+struct Layout {
+    position: [usize; 3],
+    normal: Option<[usize; 3]>,
+}
+
+/// The vertex element's layout; an error when x, y or z is missing, not a floating-point
+/// scalar, or the element has a list property (a vertex of variable size).
+fn layout(el: &Element) -> Result<Layout> {
+    if el.props.iter().any(|p| matches!(p.kind, Kind::List { .. })) {
+        return Err(Error::parse(F, "element 'vertex' has a list property: its positions cannot be moved in place"));
+    }
+    let find = |name: &str| el.props.iter().position(|p| p.name == name);
+    let float = |i: usize| matches!(el.props[i].kind, Kind::Scalar(s) if !s.is_int());
+    let mut position = [0usize; 3];
+    for (a, axis) in ["x", "y", "z"].into_iter().enumerate() {
+        let i = find(axis).ok_or_else(|| Error::parse(F, format!("element 'vertex' has no '{axis}' property")))?;
+        if !float(i) {
+            return Err(Error::parse(
+                F,
+                format!(
+                    "vertex property '{axis}' is an integer: it cannot hold moved coordinates (float or double needed)"
+                ),
+            ));
+        }
+        position[a] = i;
+    }
+    let normal = match (find("nx"), find("ny"), find("nz")) {
+        (Some(x), Some(y), Some(z)) if float(x) && float(y) && float(z) => Some([x, y, z]),
+        _ => None,
+    };
+    Ok(Layout { position, normal })
+}
+
+/// `m`'s linear part as `s R` (`R` a rotation, `s > 0`), checked: finite, the bottom row
+/// `[0, 0, 0, 1]`, and `R` orthonormal with determinant 1 to 1e-4. Returns `(s R, R, t)`.
+fn similarity(m: &Matrix4<f64>) -> Result<(Matrix3<f64>, Matrix3<f64>, Vector3<f64>)> {
+    let bad = |why: &str| Err(Error::InvalidOption(format!("the transform is not rigid (or uniformly scaled): {why}")));
+    if m.iter().any(|v| !v.is_finite()) {
+        return bad("it has a non-finite entry");
+    }
+    let bottom = [m[(3, 0)], m[(3, 1)], m[(3, 2)], m[(3, 3)] - 1.0];
+    if bottom.iter().map(|v| v.abs()).sum::<f64>() > 1e-9 {
+        return bad("its bottom row is not [0, 0, 0, 1]");
+    }
+    let linear: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
+    let det = linear.determinant();
+    if det <= 0.0 {
+        return bad("it mirrors or flattens (determinant not > 0)");
+    }
+    let rotation = linear / det.cbrt();
+    if (rotation.transpose() * rotation - Matrix3::identity()).abs().max() > 1e-4 {
+        return bad("its linear part is not a rotation times one scale");
+    }
+    Ok((linear, rotation, m.fixed_view::<3, 1>(0, 3).into_owned()))
+}
+
+/// The PLY file `bytes` with its vertices moved by `m` (`T_target_source`: a rigid transform, or
+/// one times a uniform scale), normals (`nx`, `ny`, `nz`) turned by its rotation, everything else
+/// as it was (see the module docs). Errors: a file the PLY reader refuses, a `vertex` element
+/// that is missing, has a list property or integer coordinates, a transform that is not rigid
+/// (or uniformly scaled).
+pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
+    let (linear, rotation, t) = similarity(m)?;
+    let h = parse_header(bytes)?;
+    let vi = h
+        .elements
+        .iter()
+        .position(|e| e.name == "vertex")
+        .ok_or_else(|| Error::parse(F, "the file has no 'vertex' element"))?;
+    let vertex = &h.elements[vi];
+    let layout = layout(vertex)?;
+    let position = |p: [f64; 3]| (linear * Vector3::from(p) + t).into();
+    let normal = |n: [f64; 3]| (rotation * Vector3::from(n)).into();
+    match h.encoding {
+        Encoding::Ascii => {
+            let mut lines = Lines::at(bytes, h.body, h.last_line);
+            for el in &h.elements[..vi] {
+                read_ascii_element(&mut lines, el, Want::Skip, &mut Out::default())?;
+            }
+            let start = lines.offset();
+            let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 4);
+            out.extend_from_slice(&bytes[..start]);
+            move_ascii(bytes, &mut lines, vertex, &layout, &position, &normal, &mut out)?;
+            out.extend_from_slice(&bytes[lines.offset()..]);
+            Ok(out)
+        }
+        Encoding::BinaryLe | Encoding::BinaryBe => {
+            let big = h.encoding == Encoding::BinaryBe;
+            let mut pos = h.body;
+            for el in &h.elements[..vi] {
+                read_binary_element(bytes, &mut pos, el, Want::Skip, big, &mut Out::default())?;
+            }
+            let mut out = bytes.to_vec();
+            move_binary(&mut out, pos, vertex, &layout, big, &position, &normal)?;
+            Ok(out)
+        }
+    }
+}
+
+/// Byte offset of each property in a record of `el` (no list properties) and its type.
+fn offsets(el: &Element) -> Vec<(usize, Scalar)> {
+    let mut at = 0;
+    el.props
+        .iter()
+        .map(|p| {
+            let Kind::Scalar(s) = p.kind else { unreachable!("checked by layout") };
+            let here = (at, s);
+            at += s.size();
+            here
+        })
+        .collect()
+}
+
+/// Writes `v` as the float type `s` (`layout` admits no other for moved values).
+fn put(record: &mut [u8], (off, s): (usize, Scalar), v: f64, big: bool) {
+    match s {
+        Scalar::F64 => {
+            let b = if big { v.to_be_bytes() } else { v.to_le_bytes() };
+            record[off..off + 8].copy_from_slice(&b);
+        }
+        _ => {
+            let v = v as f32;
+            let b = if big { v.to_be_bytes() } else { v.to_le_bytes() };
+            record[off..off + 4].copy_from_slice(&b);
+        }
+    }
+}
+
+/// Rewrites the vertex records of `out` (a copy of the file) from byte `pos`.
+fn move_binary(
+    out: &mut [u8],
+    pos: usize,
+    el: &Element,
+    layout: &Layout,
+    big: bool,
+    position: &dyn Fn([f64; 3]) -> [f64; 3],
+    normal: &dyn Fn([f64; 3]) -> [f64; 3],
+) -> Result<()> {
+    let stride = el.fixed_size().unwrap_or(0);
+    let remaining = out.len() - pos;
+    let need = usize::try_from(el.count).ok().and_then(|n| n.checked_mul(stride));
+    let Some(need) = need.filter(|&need| need <= remaining) else {
+        return Err(Error::parse(
+            F,
+            format!(
+                "element 'vertex' declares {} records of {stride} bytes, but only {remaining} bytes follow (from byte offset {pos}): truncated file or bad count",
+                el.count
+            ),
+        ));
+    };
+    if stride == 0 {
+        return Ok(());
+    }
+    let offsets = offsets(el);
+    let slots = |idx: [usize; 3]| idx.map(|i| offsets[i]);
+    let (p, n) = (slots(layout.position), layout.normal.map(slots));
+    for record in out[pos..pos + need].chunks_exact_mut(stride) {
+        let read = |slot: [(usize, Scalar); 3]| slot.map(|(off, s)| s.read_f64(&record[off..off + s.size()], big));
+        let moved = position(read(p));
+        let turned = n.map(|n| normal(read(n)));
+        for a in 0..3 {
+            put(record, p[a], moved[a], big);
+        }
+        if let (Some(n), Some(turned)) = (n, turned) {
+            for a in 0..3 {
+                put(record, n[a], turned[a], big);
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A value for an ASCII file, in the property's type: the shortest text that reads back the same.
+fn text(v: f64, s: Scalar) -> String {
+    if s == Scalar::F64 {
+        format!("{v}")
+    } else {
+        format!("{}", v as f32)
+    }
+}
+
+/// Copies the vertex lines from `lines` (over `bytes`) to `out`, each with its position and normal
+/// rewritten (blank lines as they are, each line's own terminator kept).
+fn move_ascii(
+    bytes: &[u8],
+    lines: &mut Lines,
+    el: &Element,
+    layout: &Layout,
+    position: &dyn Fn([f64; 3]) -> [f64; 3],
+    normal: &dyn Fn([f64; 3]) -> [f64; 3],
+    out: &mut Vec<u8>,
+) -> Result<()> {
+    let types: Vec<Scalar> = el
+        .props
+        .iter()
+        .map(|p| if let Kind::Scalar(s) = p.kind { s } else { unreachable!("checked by layout") })
+        .collect();
+    let mut done = 0u64;
+    while done < el.count {
+        let start = lines.offset();
+        let Some((n, raw)) = lines.next() else {
+            return Err(Error::parse(
+                F,
+                format!("the file ends after {done} of the {} 'vertex' lines the header declares", el.count),
+            ));
+        };
+        let terminator = start + raw.len()..lines.offset();
+        let line = utf8_line(F, n, raw)?;
+        let mut tokens: Vec<String> = line.split_ascii_whitespace().map(str::to_string).collect();
+        if tokens.is_empty() {
+            out.extend_from_slice(raw);
+        } else {
+            if tokens.len() < types.len() {
+                return Err(Error::parse(
+                    F,
+                    format!("line {n}: a vertex needs {} values, the line has {}", types.len(), tokens.len()),
+                ));
+            }
+            let read = |tokens: &[String], idx: [usize; 3]| -> Result<[f64; 3]> {
+                let mut v = [0.0; 3];
+                for a in 0..3 {
+                    v[a] = parse_f64(F, n, &format!("'{}'", el.props[idx[a]].name), &tokens[idx[a]])?;
+                }
+                Ok(v)
+            };
+            let moved = position(read(&tokens, layout.position)?);
+            let turned = match layout.normal {
+                Some(idx) => Some((idx, normal(read(&tokens, idx)?))),
+                None => None,
+            };
+            let (position, normal) = (Some((layout.position, moved)), turned);
+            for (idx, values) in [position, normal].into_iter().flatten() {
+                for (i, v) in idx.into_iter().zip(values) {
+                    tokens[i] = text(v, types[i]);
+                }
+            }
+            out.extend_from_slice(tokens.join(" ").as_bytes());
+            done += 1;
+        }
+        out.extend_from_slice(&bytes[terminator]);
+    }
+    Ok(())
+}
