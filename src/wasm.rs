@@ -230,10 +230,7 @@ pub fn transform_ply(
     #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
 ) -> Result<Vec<u8>, JsError> {
     if matrix.len() != 16 {
-        return Err(JsError::new(&format!(
-            "matrix: expected 16 numbers (a 4x4, column-major), got {}",
-            matrix.len()
-        )));
+        return Err(JsError::new(&format!("matrix: expected 16 numbers (a 4x4, column-major), got {}", matrix.len())));
     }
     crate::io::transform_ply(bytes, &nalgebra::Matrix4::from_column_slice(matrix)).map_err(js_err)
 }

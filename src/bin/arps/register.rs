@@ -1,0 +1,363 @@
+//! `arps register`: each source onto the target, the answer printed (text or JSON), and the
+//! moved source written where `--aligned` says.
+
+use crate::{load_registrar, up_axis};
+use arps::{io, transform, IcpKind, NonFinite, Options, Outliers, Start, Support};
+use clap::{Args, ValueEnum};
+use std::path::{Path, PathBuf};
+
+#[derive(Clone, Copy, ValueEnum)]
+enum SearchArg {
+    /// The first start, then the others in stages (the global ones, then the other local ones),
+    /// stopping at a confident answer.
+    Adaptive,
+    /// Every start refined, the best by fitness.
+    Exhaustive,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum IcpArg {
+    /// Point-to-point ICP.
+    Point,
+    /// Point-to-plane ICP (default).
+    Plane,
+    /// No refinement.
+    Off,
+}
+
+/// The options of `arps register`.
+#[derive(Args)]
+pub struct RegisterArgs {
+    /// Source cloud(s) (PLY, PCD, LAS/LAZ, E57, XYZ/PTS/CSV, OBJ, OFF, STL).
+    #[arg(required = true, num_args = 1..)]
+    sources: Vec<PathBuf>,
+    /// Target cloud.
+    target: PathBuf,
+    /// Weights file (safetensors); default: the embedded model.
+    #[arg(long)]
+    weights: Option<PathBuf>,
+    /// Refinement after the network.
+    #[arg(long, value_enum, default_value_t = IcpArg::Plane)]
+    icp: IcpArg,
+    /// Final ICP max correspondence distance, in the clouds' units (default: 2.5% of their half-extent).
+    #[arg(long)]
+    max_correspondence_distance: Option<f64>,
+    /// Iteration cap of each ICP stage [default: the engine's `Options::icp_max_iterations`].
+    #[arg(long)]
+    icp_max_iterations: Option<u32>,
+    /// Points per cloud fed to the network (default: the model's N).
+    #[arg(long)]
+    network_points: Option<usize>,
+    /// Seed of the network's point sampling.
+    #[arg(long, default_value_t = 0)]
+    seed: u64,
+    /// Where ICP starts from, comma-separated, from network, centroids, initial, turned,
+    /// turnedInitial, global, globalNetwork, rotations, rotationsNetwork; the best refinement by fitness wins
+    /// [default: the engine's `Options::starts`].
+    #[arg(long, value_delimiter = ',')]
+    starts: Option<Vec<Start>>,
+    /// Search the starts in stages and stop at a confident answer (adaptive), or refine
+    /// them all (exhaustive).
+    #[arg(long, value_enum, default_value_t = SearchArg::Adaptive)]
+    search: SearchArg,
+    /// The direction that is up in both clouds, x,y,z (e.g. 0,0,1), when both were captured
+    /// level: the answer then only turns the source about it (`Options::up`).
+    #[arg(long, value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
+    up: Option<Vec<f64>>,
+    /// Drop NaN/Inf points instead of failing.
+    #[arg(long)]
+    drop_non_finite: bool,
+    /// Keep the points that lie far out from the rest of their cloud (by default they are
+    /// left out, with a warning: `Options::outliers`).
+    #[arg(long)]
+    keep_outliers: bool,
+    /// Keep a support plane (the table or floor under a scanned object; by default it is
+    /// left out, with a warning: `Options::support_plane`).
+    #[arg(long)]
+    keep_support: bool,
+    /// Read a mesh file (OBJ, OFF, STL, PLY with faces) as this many points drawn uniformly
+    /// over its surface instead of its vertices (a CAD model's vertices sit on its edges);
+    /// point files are read as they are.
+    #[arg(long)]
+    surface_points: Option<usize>,
+    /// Of a source E57 file holding several scans, only this one (0-based), placed by its
+    /// pose (by default every scan, as one cloud); other formats are read as they are.
+    #[arg(long)]
+    source_scan: Option<usize>,
+    /// Of a target E57 file holding several scans, only this one (0-based); see `--source-scan`.
+    #[arg(long)]
+    target_scan: Option<usize>,
+    /// Multiply every source point by this factor after reading, when the source is in
+    /// another unit than the target (e.g. 1000 for a scan in metres onto a model in
+    /// millimetres): the answer, and `--aligned`, are then in the target's unit.
+    #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
+    source_scale: Option<f64>,
+    /// Write each source, moved by its answer into the target's frame, to PATH as PLY (the
+    /// name must end in `.ply`): a PLY source as its own file moved, every property and
+    /// element kept (colours, normals turned, faces); any other as the points read, in binary
+    /// (`double` coordinates when they are far from zero, else `float`).
+    /// With several sources PATH must hold `{stem}`, replaced by each source file's name
+    /// without its extension (e.g. `out/{stem}-aligned.ply`). An input file is never
+    /// overwritten.
+    #[arg(long, value_name = "PATH")]
+    aligned: Option<PathBuf>,
+    /// Print exactly one JSON object on stdout: the engine's result (`arps::Registration`), fields
+    /// camelCase, transforms as 16 column-major numbers, like the JS API's result; plus
+    /// `wallMs`, the milliseconds of reading both files and registering. With several sources,
+    /// one such line per source (JSON Lines), each with its `source` path (reading the target
+    /// counts in the first's `wallMs`), or `{"source", "error"}` for one that failed.
+    #[arg(long)]
+    json: bool,
+}
+
+/// `register --json`: the engine's result as it is (`arps::contract`: the same fields as the JS
+/// result), plus the CLI's own wall-clock time.
+#[derive(serde::Serialize)]
+#[serde(rename_all = "camelCase")]
+struct JsonOutput<'a> {
+    /// The source's path, when several were given.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    source: Option<String>,
+    #[serde(flatten)]
+    result: &'a arps::Registration,
+    /// Where the aligned source was written (`--aligned`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    aligned: Option<String>,
+    /// Reading both files and registering, in-process (model loading excluded), milliseconds.
+    wall_ms: f64,
+}
+
+fn read_cloud(path: &Path, options: &io::ReadOptions) -> Result<arps::PointCloud, String> {
+    io::read_path_with(path, options).map_err(|e| format!("{}: {e}", path.display()))
+}
+
+/// Prints one registration of `arps register`: the text report, or one JSON line (`--json`);
+/// `source` names the source when several were given, `aligned` where the moved source was
+/// written (`--aligned`).
+fn print_registration(
+    r: &arps::Registration,
+    time_ms: f64,
+    json: bool,
+    source: Option<String>,
+    aligned: Option<String>,
+) -> Result<(), String> {
+    if let Some(source) = source.as_ref().filter(|_| !json) {
+        out!("source {source}");
+    }
+    if json {
+        let out = serde_json::to_string(&JsonOutput { source, result: r, aligned, wall_ms: time_ms })
+            .map_err(|e| format!("internal: {e}"))?;
+        out!("{out}");
+    } else {
+        out!("T_target_source (maps source points into the target frame):");
+        for row in transform::to_rows(&r.T_target_source) {
+            out!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
+        }
+        out!(
+            "rotation {:.3} deg, translation {:.6}",
+            transform::rotation_angle_deg(&r.T_target_source),
+            transform::translation(&r.T_target_source).norm()
+        );
+        out!(
+            "fitness {:.4} (within {:.4}), inlier RMSE {:.6}, ICP from the {} start, {} iterations ({})",
+            r.fitness,
+            r.max_correspondence_distance,
+            r.inlier_rmse,
+            r.start.name(),
+            r.icp_iterations,
+            if r.icp_converged { "converged" } else { "not converged" }
+        );
+        out!("confidence {:.3}", r.confidence);
+        for (k, a) in r.alternatives.iter().enumerate() {
+            out!(
+                "alternative {} (fits about as well): fitness {:.4}, inlier RMSE {:.6}",
+                k + 1,
+                a.fitness,
+                a.inlier_rmse
+            );
+            for row in transform::to_rows(&a.T_target_source) {
+                out!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
+            }
+        }
+        let t = r.timings;
+        out!(
+            "time {time_ms:.1} ms (read+all); preprocess {:.1}, network {:.1}, GMR {:.2}, ICP {:.1} ms",
+            t.preprocess_ms,
+            t.network_ms,
+            t.gmr_ms,
+            t.icp_ms
+        );
+        for w in &r.warnings {
+            out!("warning: {w}");
+        }
+        if let Some(path) = aligned {
+            out!("wrote the aligned source to {path}");
+        }
+    }
+    Ok(())
+}
+
+/// Where `--aligned PATTERN` writes the aligned `source`: `{stem}` replaced by the source file's
+/// name without its extension. Refuses a path that does not end in `.ply` (what is written) or
+/// that is one of the `inputs` (the same file, however named).
+fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathBuf, String> {
+    let stem = source.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default();
+    let path = PathBuf::from(pattern.to_string_lossy().replace("{stem}", &stem));
+    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
+        return Err(format!("--aligned: {} would hold PLY; name it .ply", path.display()));
+    }
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    };
+    if let Some(input) = inputs.iter().find(|input| same(&path, input)) {
+        return Err(format!("--aligned: {} is an input file ({}); name another file", path.display(), input.display()));
+    }
+    Ok(path)
+}
+
+/// Writes the source moved by `r`'s answer to `path` as PLY: a PLY source file as itself, moved
+/// (`io::transform_ply`: every property and element kept, normals turned; `scale` is the
+/// `--source-scale` applied before registering), any other as the points read (`cloud`, already
+/// scaled) in binary PLY (`io::write_ply_binary`).
+fn write_aligned(
+    file: &Path,
+    cloud: &arps::PointCloud,
+    scale: Option<&nalgebra::Matrix4<f64>>,
+    r: &arps::Registration,
+    path: &Path,
+) -> Result<(), String> {
+    let bytes = std::fs::read(file).map_err(|e| format!("{}: {e}", file.display()))?;
+    let name = file.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+    let out = match io::detect_format(&bytes, &name) {
+        Ok(io::Format::Ply) => {
+            let m = scale.map_or(r.T_target_source, |s| r.T_target_source * s);
+            io::transform_ply(&bytes, &m).map_err(|e| format!("--aligned: {}: {e}", file.display()))?
+        }
+        _ => io::write_ply_binary(&cloud.transformed(&r.T_target_source)),
+    };
+    std::fs::write(path, out).map_err(|e| format!("--aligned: {}: {e}", path.display()))
+}
+
+/// Registers each source onto the target (see [`RegisterArgs`]).
+pub fn run(args: RegisterArgs) -> Result<(), String> {
+    let RegisterArgs {
+        sources,
+        target,
+        weights,
+        icp,
+        max_correspondence_distance,
+        icp_max_iterations,
+        network_points,
+        seed,
+        starts,
+        search,
+        up,
+        drop_non_finite,
+        keep_outliers,
+        keep_support,
+        surface_points,
+        source_scan,
+        target_scan,
+        source_scale,
+        aligned,
+        json,
+    } = args;
+    let up = up.map(|v| up_axis(&v)).transpose()?;
+    let scale = match source_scale {
+        Some(s) if !(s.is_finite() && s > 0.0) => {
+            return Err(format!("--source-scale: expected a finite number > 0, got {s}"))
+        }
+        Some(s) => Some(nalgebra::Matrix4::new_scaling(s)),
+        None => None,
+    };
+    if let Some(pattern) = aligned.as_ref().filter(|p| sources.len() > 1 && !p.to_string_lossy().contains("{stem}")) {
+        return Err(format!(
+            "--aligned: with {} sources the path must hold {{stem}} (each source's name), e.g. {{stem}}-aligned.ply; got {}",
+            sources.len(),
+            pattern.display()
+        ));
+    }
+    let inputs: Vec<&Path> = sources.iter().map(PathBuf::as_path).chain([target.as_path()]).collect();
+    let outputs = match &aligned {
+        Some(pattern) => {
+            sources.iter().map(|s| aligned_path(pattern, s, &inputs).map(Some)).collect::<Result<Vec<_>, _>>()?
+        }
+        None => vec![None; sources.len()],
+    };
+    for (k, path) in outputs.iter().enumerate().filter_map(|(k, p)| Some((k, p.as_ref()?))) {
+        if let Some(j) = outputs[..k].iter().position(|q| q.as_ref() == Some(path)) {
+            return Err(format!(
+                "--aligned: sources {} and {} would both be written to {}; put more of the name in the path",
+                sources[j].display(),
+                sources[k].display(),
+                path.display()
+            ));
+        }
+    }
+    let mut registrar = load_registrar(weights.as_deref())?;
+    let mut t0 = std::time::Instant::now();
+    let reading = io::ReadOptions { surface_points, seed, scan: source_scan };
+    let reading_target = io::ReadOptions { scan: target_scan, ..reading };
+    let options = Options {
+        icp: match icp {
+            IcpArg::Point => IcpKind::Point,
+            IcpArg::Plane => IcpKind::Plane,
+            IcpArg::Off => IcpKind::Off,
+        },
+        max_correspondence_distance,
+        icp_max_iterations: icp_max_iterations.unwrap_or(Options::default().icp_max_iterations),
+        network_points,
+        seed,
+        non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
+        outliers: if keep_outliers { Outliers::Keep } else { Outliers::Drop },
+        support_plane: if keep_support { Support::Keep } else { Support::Drop },
+        up,
+        starts: starts.unwrap_or_else(|| Options::default().starts),
+        search: match search {
+            SearchArg::Adaptive => arps::Search::Adaptive,
+            SearchArg::Exhaustive => arps::Search::Exhaustive,
+        },
+        ..Options::default()
+    };
+    // the target is read once; the registrar keeps it prepared from one source to the next
+    let tgt = read_cloud(&target, &reading_target)?;
+    let several = sources.len() > 1;
+    let mut failed = 0usize;
+    for (source, output) in sources.iter().zip(&outputs) {
+        let read = read_cloud(source, &reading).map(|src| match &scale {
+            Some(m) => src.into_transformed(m),
+            None => src,
+        });
+        let outcome = read.and_then(|src| {
+            let r = registrar.register(&src, &tgt, &options).map_err(|e| e.to_string())?;
+            Ok((src, r))
+        });
+        let time_ms = t0.elapsed().as_secs_f64() * 1e3;
+        let named = several.then(|| source.display().to_string());
+        let outcome = outcome.and_then(|(src, r)| {
+            if let Some(path) = output {
+                write_aligned(source, &src, scale.as_ref(), &r, path)?;
+            }
+            Ok(r)
+        });
+        t0 = std::time::Instant::now();
+        match outcome {
+            Ok(r) => print_registration(&r, time_ms, json, named, output.as_ref().map(|p| p.display().to_string()))?,
+            Err(e) if !several => return Err(e),
+            Err(e) => {
+                failed += 1;
+                if json {
+                    out!("{}", serde_json::json!({ "source": named, "error": e }));
+                } else {
+                    out!("source {}", source.display());
+                    out!("error: {e}");
+                }
+            }
+        }
+    }
+    if failed > 0 {
+        return Err(format!("{failed} of {} sources failed", sources.len()));
+    }
+    Ok(())
+}
