@@ -125,6 +125,18 @@ const count = (n) => n.toLocaleString("en");
 /** An origin in words: its coordinates to a tenth of a unit. */
 const place = (origin) => `(${Array.from(origin, (v) => v.toLocaleString("en", { maximumFractionDigits: 1 })).join(", ")})`;
 
+/** The units the page offers for each scan: name and metres per unit (the options' values). */
+const UNITS = [
+  ["m", 1],
+  ["cm", 0.01],
+  ["mm", 0.001],
+  ["in", 0.0254],
+  ["ft", 0.3048],
+];
+for (const id of ["source-unit", "target-unit"]) {
+  $(id).replaceChildren(...UNITS.map(([name, metres]) => new Option(name, String(metres), metres === 1, metres === 1)));
+}
+
 /** How many target units one source unit is (the #source-unit and #target-unit choice). */
 function sourceScale() {
   return Number($("source-unit").value) / Number($("target-unit").value);

@@ -164,6 +164,16 @@ pub(super) struct Header {
     pub(super) last_line: usize,
 }
 
+impl Header {
+    /// The index of the `vertex` element; an error when there is none.
+    pub(super) fn vertex_index(&self) -> Result<usize> {
+        self.elements
+            .iter()
+            .position(|e| e.name == "vertex")
+            .ok_or_else(|| Error::parse(F, "the file has no 'vertex' element"))
+    }
+}
+
 pub(super) fn parse_header(bytes: &[u8]) -> Result<Header> {
     let mut lines = Lines::new(bytes);
     match lines.next() {
@@ -292,11 +302,7 @@ fn face_want(el: &Element, n_vertices: usize) -> Result<Want> {
 /// Reads the vertices (and the faces, as `faces` says) of a PLY file.
 pub(crate) fn read(bytes: &[u8], faces: Faces) -> Result<Raw> {
     let h = parse_header(bytes)?;
-    let vi = h
-        .elements
-        .iter()
-        .position(|e| e.name == "vertex")
-        .ok_or_else(|| Error::parse(F, "the file has no 'vertex' element"))?;
+    let vi = h.vertex_index()?;
     crate::limits::check_file_points(F, h.elements[vi].count)?;
     let n_vertices = usize::try_from(h.elements[vi].count).unwrap_or(usize::MAX);
     let face = h.elements.iter().position(|e| e.name == "face");

@@ -82,11 +82,7 @@ fn similarity(m: &Matrix4<f64>) -> Result<(Matrix3<f64>, Matrix3<f64>, Vector3<f
 pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let (linear, rotation, t) = similarity(m)?;
     let h = parse_header(bytes)?;
-    let vi = h
-        .elements
-        .iter()
-        .position(|e| e.name == "vertex")
-        .ok_or_else(|| Error::parse(F, "the file has no 'vertex' element"))?;
+    let vi = h.vertex_index()?;
     let vertex = &h.elements[vi];
     let layout = layout(vertex)?;
     let position = |p: [f64; 3]| (linear * Vector3::from(p) + t).into();
