@@ -399,6 +399,24 @@ fn register_writes_the_aligned_source() {
     let (before, after) = (std::fs::read(root.join(frag)).unwrap(), std::fs::read(&out_path).unwrap());
     assert_eq!(after, arps::io::transform_ply(&before, &matrix(&v)).unwrap());
     assert!(String::from_utf8_lossy(&after[..400]).contains("property uchar red") && after.len() == before.len());
+    // a LAS source to a .las name: the survey file itself moved (its attributes kept); to .ply:
+    // its points; a LAZ source only to .ply
+    let las = "fixtures/formats/simple.las";
+    let (las_out, ply_out) = (dir.join("simple-aligned.las"), dir.join("simple-aligned.ply"));
+    for out_path in [&las_out, &ply_out] {
+        let out = arps(&["register", las, las, "--json", "--aligned", out_path.to_str().unwrap()]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        if out_path == &las_out {
+            let bytes = std::fs::read(root.join(las)).unwrap();
+            assert_eq!(std::fs::read(out_path).unwrap(), arps::io::transform_las(&bytes, &matrix(&v)).unwrap());
+        } else {
+            assert!(std::fs::read(out_path).unwrap().starts_with(b"ply\n"));
+        }
+    }
+    let laz_to_las = arps(&["register", "fixtures/formats/simple.laz", las, "--aligned", las_out.to_str().unwrap()]);
+    let stderr = String::from_utf8_lossy(&laz_to_las.stderr);
+    assert!(!laz_to_las.status.success() && stderr.contains("simple-aligned.las .ply, for"), "{stderr}");
     // the text report says where it wrote
     let out = arps(&["register", a, target, "--aligned", dir.join("one.ply").to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("wrote the aligned source to"), "{out:?}");
@@ -413,10 +431,7 @@ fn register_writes_the_aligned_source() {
         (vec!["register", a, target, "--aligned", &as_input], "is an input file"),
         (vec!["register", a, b, target, "--aligned", several.to_str().unwrap()], "must hold {stem}"),
         (vec!["register", a, a, target, "--aligned", twice.to_str().unwrap()], "would both be written to"),
-        (
-            vec!["register", a, target, "--aligned", dir.join("aligned.las").to_str().unwrap()],
-            "would hold PLY; name it .ply",
-        ),
+        (vec!["register", a, target, "--aligned", dir.join("aligned.las").to_str().unwrap()], "aligned.las .ply, for"),
     ] {
         let out = arps(&args);
         assert!(!out.status.success() && out.stdout.is_empty(), "{args:?}");

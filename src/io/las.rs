@@ -16,7 +16,7 @@ use laz::laszip::{ChunkTable, LasZipDecompressor, LazItemType, LazVlr};
 use laz::DecompressionSelection;
 use std::io::Cursor;
 
-const FORMAT: &str = "LAS";
+pub(super) const FORMAT: &str = "LAS";
 
 /// Bytes of the public header block of LAS 1.0 to 1.2 (1.3 adds 8, 1.4 adds 148).
 const HEADER_1_0: usize = 227;
@@ -37,7 +37,7 @@ const POINT14_LAYERS: usize = 9;
 /// The shortest point record of each point format 0 to 10 (the file may add extra bytes).
 const MIN_RECORD: [usize; 11] = [20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67];
 
-fn err(message: impl Into<String>) -> Error {
+pub(super) fn err(message: impl Into<String>) -> Error {
     Error::parse(FORMAT, message)
 }
 
@@ -58,21 +58,21 @@ fn f64_at(b: &[u8], at: usize) -> f64 {
 }
 
 /// What the public header block says about the points.
-struct Header {
+pub(super) struct Header {
     /// Where the point records start.
-    offset: usize,
+    pub(super) offset: usize,
     /// Where the variable length records start (the header's size).
     vlrs_at: usize,
     vlr_count: u32,
-    compressed: bool,
-    record_len: usize,
-    count: u64,
-    scale: [f64; 3],
-    shift: [f64; 3],
+    pub(super) compressed: bool,
+    pub(super) record_len: usize,
+    pub(super) count: u64,
+    pub(super) scale: [f64; 3],
+    pub(super) shift: [f64; 3],
 }
 
 impl Header {
-    fn read(bytes: &[u8]) -> Result<Header> {
+    pub(super) fn read(bytes: &[u8]) -> Result<Header> {
         if !bytes.starts_with(b"LASF") {
             return Err(err("the file does not start with the 'LASF' signature"));
         }
@@ -137,7 +137,7 @@ impl Header {
     }
 
     /// The point of a record's first 12 bytes (X, Y, Z as `i32`, in every point format).
-    fn point(&self, record: &[u8]) -> [f64; 3] {
+    pub(super) fn point(&self, record: &[u8]) -> [f64; 3] {
         [0, 1, 2].map(|k| u32_at(record, 4 * k) as i32 as f64 * self.scale[k] + self.shift[k])
     }
 }

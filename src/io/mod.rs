@@ -29,8 +29,10 @@ use crate::{Error, Result};
 
 mod e57;
 mod las;
+mod las_transform;
 mod lzf;
 mod mesh;
+mod motion;
 mod obj;
 mod off;
 mod pcd;
@@ -297,6 +299,7 @@ pub fn write_ply_binary(cloud: &PointCloud) -> Vec<u8> {
     ply::write_binary(cloud)
 }
 
+pub use las_transform::transform_las;
 pub use ply_transform::transform_ply;
 
 /// Reads a point cloud from a file (native only); the format comes from the file name.

@@ -9,12 +9,13 @@
 //! (its own precision), a `double` file keeps every digit. The header and the elements before the
 //! vertices are read by the PLY reader's own parser, so a file it refuses is refused here too.
 
+use super::motion::similarity;
 use super::ply::{
     parse_header, read_ascii_element, read_binary_element, Element, Encoding, Kind, Out, Scalar, Want, F,
 };
 use super::util::{parse_f64, utf8_line, Lines};
 use crate::{Error, Result};
-use nalgebra::{Matrix3, Matrix4, Vector3};
+use nalgebra::{Matrix4, Vector3};
 
 /// Where a vertex's position and normal are: property indices of x, y, z and, when the element
 /// has all three as floating-point scalars, of nx, ny, nz.
@@ -49,29 +50,6 @@ fn layout(el: &Element) -> Result<Layout> {
         _ => None,
     };
     Ok(Layout { position, normal })
-}
-
-/// `m`'s linear part as `s R` (`R` a rotation, `s > 0`), checked: finite, the bottom row
-/// `[0, 0, 0, 1]`, and `R` orthonormal with determinant 1 to 1e-4. Returns `(s R, R, t)`.
-fn similarity(m: &Matrix4<f64>) -> Result<(Matrix3<f64>, Matrix3<f64>, Vector3<f64>)> {
-    let bad = |why: &str| Err(Error::InvalidOption(format!("the transform is not rigid (or uniformly scaled): {why}")));
-    if m.iter().any(|v| !v.is_finite()) {
-        return bad("it has a non-finite entry");
-    }
-    let bottom = [m[(3, 0)], m[(3, 1)], m[(3, 2)], m[(3, 3)] - 1.0];
-    if bottom.iter().map(|v| v.abs()).sum::<f64>() > 1e-9 {
-        return bad("its bottom row is not [0, 0, 0, 1]");
-    }
-    let linear: Matrix3<f64> = m.fixed_view::<3, 3>(0, 0).into_owned();
-    let det = linear.determinant();
-    if det <= 0.0 {
-        return bad("it mirrors or flattens (determinant not > 0)");
-    }
-    let rotation = linear / det.cbrt();
-    if (rotation.transpose() * rotation - Matrix3::identity()).abs().max() > 1e-4 {
-        return bad("its linear part is not a rotation times one scale");
-    }
-    Ok((linear, rotation, m.fixed_view::<3, 1>(0, 3).into_owned()))
 }
 
 /// The PLY file `bytes` with its vertices moved by `m` (`T_target_source`: a rigid transform, or

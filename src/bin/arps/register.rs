@@ -92,10 +92,11 @@ pub struct RegisterArgs {
     /// millimetres): the answer, and `--aligned`, are then in the target's unit.
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     source_scale: Option<f64>,
-    /// Write each source, moved by its answer into the target's frame, to PATH as PLY (the
-    /// name must end in `.ply`): a PLY source as its own file moved, every property and
-    /// element kept (colours, normals turned, faces); any other as the points read, in binary
-    /// (`double` coordinates when they are far from zero, else `float`).
+    /// Write each source, moved by its answer into the target's frame, to PATH: a LAS source to
+    /// a `.las` PATH as its own file moved, every attribute kept (the header's offsets and
+    /// bounds updated); else as PLY (a `.ply` PATH): a PLY source as its own file moved, every
+    /// property and element kept (colours, normals turned, faces); any other (LAZ too) as the
+    /// points read, in binary (`double` coordinates when they are far from zero, else `float`).
     /// With several sources PATH must hold `{stem}`, replaced by each source file's name
     /// without its extension (e.g. `out/{stem}-aligned.ply`). An input file is never
     /// overwritten.
@@ -198,13 +199,15 @@ fn print_registration(
 }
 
 /// Where `--aligned PATTERN` writes the aligned `source`: `{stem}` replaced by the source file's
-/// name without its extension. Refuses a path that does not end in `.ply` (what is written) or
-/// that is one of the `inputs` (the same file, however named).
+/// name without its extension. Refuses a path that does not say what is written (`.ply`, or
+/// `.las` for a `.las` source) or that is one of the `inputs` (the same file, however named).
 fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathBuf, String> {
     let stem = source.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default();
     let path = PathBuf::from(pattern.to_string_lossy().replace("{stem}", &stem));
-    if !path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply")) {
-        return Err(format!("--aligned: {} would hold PLY; name it .ply", path.display()));
+    let is = |p: &Path, ext: &str| p.extension().is_some_and(|e| e.eq_ignore_ascii_case(ext));
+    if !(is(&path, "ply") || is(&path, "las") && is(source, "las")) {
+        let what = if is(source, "las") { ".las (the survey moved as it is) or .ply (its points)" } else { ".ply" };
+        return Err(format!("--aligned: name {} {what}, for {}", path.display(), source.display()));
     }
     let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
@@ -216,10 +219,11 @@ fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathB
     Ok(path)
 }
 
-/// Writes the source moved by `r`'s answer to `path` as PLY: a PLY source file as itself, moved
-/// (`io::transform_ply`: every property and element kept, normals turned; `scale` is the
-/// `--source-scale` applied before registering), any other as the points read (`cloud`, already
-/// scaled) in binary PLY (`io::write_ply_binary`).
+/// Writes the source moved by `r`'s answer to `path`: to a `.las` path the LAS source file as
+/// itself, moved (`io::transform_las`); else as PLY, a PLY source file as itself, moved
+/// (`io::transform_ply`: every property and element kept, normals turned), any other as the
+/// points read (`cloud`, already scaled) in binary PLY (`io::write_ply_binary`). `scale` is the
+/// `--source-scale` applied before registering.
 fn write_aligned(
     file: &Path,
     cloud: &arps::PointCloud,
@@ -229,11 +233,14 @@ fn write_aligned(
 ) -> Result<(), String> {
     let bytes = std::fs::read(file).map_err(|e| format!("{}: {e}", file.display()))?;
     let name = file.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
+    // the file's own points to the target's frame (the scale first)
+    let m = scale.map_or(r.T_target_source, |s| r.T_target_source * s);
+    let moved = |e: arps::Error| format!("--aligned: {}: {e}", file.display());
     let out = match io::detect_format(&bytes, &name) {
-        Ok(io::Format::Ply) => {
-            let m = scale.map_or(r.T_target_source, |s| r.T_target_source * s);
-            io::transform_ply(&bytes, &m).map_err(|e| format!("--aligned: {}: {e}", file.display()))?
+        _ if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("las")) => {
+            io::transform_las(&bytes, &m).map_err(moved)?
         }
+        Ok(io::Format::Ply) => io::transform_ply(&bytes, &m).map_err(moved)?,
         _ => io::write_ply_binary(&cloud.transformed(&r.T_target_source)),
     };
     std::fs::write(path, out).map_err(|e| format!("--aligned: {}: {e}", path.display()))

@@ -1,0 +1,84 @@
+//! A LAS file moved as it is: every point record's X, Y, Z mapped by a rigid (or uniformly
+//! scaled) transform in f64 and stored again with the file's own scales; the header's offsets
+//! (new ones, at the moved points' centre, so the integers fit) and bounds updated; every other
+//! byte kept (intensity, returns, classification, GPS time, colour, extra bytes, the VLRs and
+//! EVLRs, the CRS records). What saves a registered survey in the target's frame as the LAS its
+//! tools read. LAZ files are refused: they would have to be compressed again.
+
+use super::las::{err, Header};
+use super::motion::similarity;
+use crate::Result;
+use nalgebra::{Matrix4, Vector3};
+
+/// Where the header holds the x, y, z offsets (f64 each).
+const OFFSETS_AT: usize = 155;
+/// Where the header holds max x, min x, max y, min y, max z, min z (f64 each).
+const BOUNDS_AT: usize = 179;
+
+/// The LAS file `bytes` with its points moved by `m` (`T_target_source`: rigid, or rigid times a
+/// uniform scale), everything else as it was (see the module docs). Errors: a file the LAS reader
+/// refuses, a LAZ file, points the file's scales cannot store once moved (more than 2^31 steps
+/// from the new offset), a transform that is not rigid (or uniformly scaled).
+pub fn transform_las(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
+    let (linear, _, t) = similarity(m)?;
+    let h = Header::read(bytes)?;
+    if h.compressed {
+        return Err(err(
+            "a LAZ file cannot be moved as it is (it would have to be compressed again): save its points as PLY instead",
+        ));
+    }
+    let held = (bytes.len() - h.offset) / h.record_len;
+    if (held as u64) < h.count {
+        return Err(err(format!(
+            "the header claims {} points of {} bytes from byte {}, but the file holds {held}",
+            h.count, h.record_len, h.offset
+        )));
+    }
+    let n = h.count as usize;
+    let end = h.offset + n * h.record_len;
+    let moved = |record: &[u8]| linear * Vector3::from(h.point(record)) + t;
+    // the new offsets: the moved points' centre, on each axis's grid of the scale
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for record in bytes[h.offset..end].chunks_exact(h.record_len) {
+        let q = moved(record);
+        for k in 0..3 {
+            lo[k] = lo[k].min(q[k]);
+            hi[k] = hi[k].max(q[k]);
+        }
+    }
+    let shift: [f64; 3] = if n == 0 {
+        h.shift
+    } else {
+        std::array::from_fn(|k| ((lo[k] + hi[k]) / 2.0 / h.scale[k]).round() * h.scale[k])
+    };
+    for (k, axis) in ["x", "y", "z"].into_iter().enumerate().filter(|_| n > 0) {
+        let steps = [lo[k], hi[k]].map(|v| ((v - shift[k]) / h.scale[k]).round());
+        if steps.iter().any(|s| !(*s >= i32::MIN as f64 && *s <= i32::MAX as f64)) {
+            return Err(err(format!(
+                "the moved points span {} to {} in {axis}, more than the file's scale {} can store in 32-bit integers",
+                lo[k], hi[k], h.scale[k]
+            )));
+        }
+    }
+    let mut out = bytes.to_vec();
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for record in out[h.offset..end].chunks_exact_mut(h.record_len) {
+        let q = moved(record);
+        for k in 0..3 {
+            let stored = ((q[k] - shift[k]) / h.scale[k]).round() as i32;
+            record[4 * k..4 * k + 4].copy_from_slice(&stored.to_le_bytes());
+            let v = stored as f64 * h.scale[k] + shift[k];
+            lo[k] = lo[k].min(v);
+            hi[k] = hi[k].max(v);
+        }
+    }
+    for k in 0..3 {
+        out[OFFSETS_AT + 8 * k..OFFSETS_AT + 8 * k + 8].copy_from_slice(&shift[k].to_le_bytes());
+        if n > 0 {
+            let at = BOUNDS_AT + 16 * k;
+            out[at..at + 8].copy_from_slice(&hi[k].to_le_bytes());
+            out[at + 8..at + 16].copy_from_slice(&lo[k].to_le_bytes());
+        }
+    }
+    Ok(out)
+}

@@ -1,0 +1,122 @@
+//! `io::transform_las`: a LAS file moved as it is. On the laspy fixtures (LAS 1.2 format 3 with
+//! colour and GPS time; LAS 1.4 format 6 with EVLRs after the points): the points read back are
+//! the transform of the file's own to the file's scale; every record's other bytes, the VLRs and
+//! EVLRs are kept; the header's offsets and bounds say where the points now are. A LAZ file, a
+//! motion the scales cannot store, a transform that is not rigid and every truncation are refused.
+
+use arps::io::{read_point_cloud, transform_las};
+use nalgebra::{Matrix4, Rotation3, Vector3};
+
+fn fixture(name: &str) -> Vec<u8> {
+    std::fs::read(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/formats").join(name)).unwrap()
+}
+
+fn u32_at(b: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes(b[at..at + 4].try_into().unwrap())
+}
+
+fn f64_at(b: &[u8], at: usize) -> f64 {
+    f64::from_le_bytes(b[at..at + 8].try_into().unwrap())
+}
+
+/// 30 degrees about the vertical through a point of the survey, then a shift: a registration's
+/// answer between two visits.
+fn motion(about: [f64; 3]) -> Matrix4<f64> {
+    let c = Vector3::from(about);
+    Matrix4::new_translation(&(c + Vector3::new(12.5, -7.25, 1.5)))
+        * Rotation3::from_axis_angle(&Vector3::z_axis(), 30f64.to_radians()).to_homogeneous()
+        * Matrix4::new_translation(&-c)
+}
+
+/// Checks `moved` against `bytes` moved by `m`: points to within half a scale step (plus the
+/// reader's f32 offsets), every record's bytes after X, Y, Z and everything after the records
+/// kept, the header's bounds those of the points.
+fn check(bytes: &[u8], moved: &[u8], m: &Matrix4<f64>) {
+    assert_eq!(moved.len(), bytes.len());
+    let (offset, record) = (u32_at(bytes, 96) as usize, u16::from_le_bytes([bytes[105], bytes[106]]) as usize);
+    // LAS 1.4 keeps the count in 64 bits (the legacy 32-bit field may be 0)
+    let legacy = u32_at(bytes, 107) as usize;
+    let count = if legacy > 0 { legacy } else { u64::from_le_bytes(bytes[247..255].try_into().unwrap()) as usize };
+    let scale = [131, 139, 147].map(|at| f64_at(bytes, at));
+    assert!(moved[..155] == bytes[..155], "the header before the offsets");
+    assert!(moved[227..offset] == bytes[227..offset], "the rest of the header and the VLRs");
+    let end = offset + count * record;
+    assert!(moved[end..] == bytes[end..], "what follows the points (EVLRs)");
+    for i in 0..count {
+        let at = offset + i * record;
+        assert!(moved[at + 12..at + record] == bytes[at + 12..at + record], "record {i}'s attributes");
+    }
+    let (before, after) = (read_point_cloud(bytes, "a.las").unwrap(), read_point_cloud(moved, "a.las").unwrap());
+    assert_eq!(after.len(), count);
+    let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
+    for i in 0..count {
+        let want = m.transform_point(&nalgebra::Point3::from(before.point_f64(i)));
+        let got = after.point_f64(i);
+        for k in 0..3 {
+            // half a scale step, plus the reader's f32 offsets (both clouds go through them)
+            assert!((got[k] - want[k]).abs() <= scale[k] / 2.0 + 2e-4, "point {i} axis {k}: {} vs {}", got[k], want[k]);
+            lo[k] = lo[k].min(got[k]);
+            hi[k] = hi[k].max(got[k]);
+        }
+    }
+    for k in 0..3 {
+        let (max, min) = (f64_at(moved, 179 + 16 * k), f64_at(moved, 187 + 16 * k));
+        assert!(
+            (max - hi[k]).abs() < 1e-3 && (min - lo[k]).abs() < 1e-3,
+            "axis {k} bounds [{min}, {max}] vs [{}, {}]",
+            lo[k],
+            hi[k]
+        );
+    }
+}
+
+#[test]
+fn a_las_1_2_survey_keeps_its_colours_and_gps_times() {
+    let bytes = fixture("simple.las");
+    let first = read_point_cloud(&bytes, "a.las").unwrap().point_f64(0);
+    let m = motion(first);
+    check(&bytes, &transform_las(&bytes, &m).unwrap(), &m);
+}
+
+#[test]
+fn a_las_1_4_file_keeps_its_evlrs() {
+    let bytes = fixture("1_4_w_evlr.las");
+    let first = read_point_cloud(&bytes, "a.las").unwrap().point_f64(0);
+    let m = motion(first);
+    check(&bytes, &transform_las(&bytes, &m).unwrap(), &m);
+    // a uniform scale (a change of unit) too
+    let mm = m * Matrix4::new_scaling(1.5);
+    check(&bytes, &transform_las(&bytes, &mm).unwrap(), &mm);
+}
+
+#[test]
+fn laz_motions_the_scales_cannot_store_and_other_transforms_are_refused() {
+    let m = motion([0.0; 3]);
+    let laz = transform_las(&fixture("simple.laz"), &m).unwrap_err().to_string();
+    assert!(laz.contains("LAZ file cannot be moved as it is"), "{laz}");
+    let bytes = fixture("simple.las");
+    let mut sheared = m;
+    sheared[(0, 2)] += 0.5;
+    assert!(transform_las(&bytes, &sheared).unwrap_err().to_string().contains("not rigid"));
+    assert!(transform_las(b"not a las file", &m).unwrap_err().to_string().contains("LASF"));
+    // two points about 4.2e9 steps apart on a diagonal: turned 45 degrees they are 5.9e9 apart in
+    // x, beyond 32-bit integers on either side of any offset
+    let mut wide = bytes.clone();
+    let (offset, record) = (u32_at(&bytes, 96) as usize, u16::from_le_bytes([bytes[105], bytes[106]]) as usize);
+    for (i, (x, y)) in [(2_100_000_000i32, -2_100_000_000i32), (-2_100_000_000, 2_100_000_000)].into_iter().enumerate()
+    {
+        wide[offset + i * record..offset + i * record + 4].copy_from_slice(&x.to_le_bytes());
+        wide[offset + i * record + 4..offset + i * record + 8].copy_from_slice(&y.to_le_bytes());
+    }
+    let turn = Rotation3::from_axis_angle(&Vector3::z_axis(), 45f64.to_radians()).to_homogeneous();
+    let e = transform_las(&wide, &turn).unwrap_err().to_string();
+    assert!(e.contains("more than the file's scale") && e.contains(" in x,"), "{e}");
+    // every prefix: refused, never a panic (the points end the file's bytes that matter)
+    for cut in (0..bytes.len()).step_by(53) {
+        let end = offset + 1065 * record;
+        match transform_las(&bytes[..cut], &m) {
+            Ok(_) => assert!(cut >= end, "cut at {cut}"),
+            Err(e) => assert!(!e.to_string().is_empty()),
+        }
+    }
+}
