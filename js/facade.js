@@ -1,6 +1,6 @@
 // The package's public API over the raw wasm-bindgen glue (arps_glue.js): the same classes and
 // functions (`Registrar`, `parsePointCloud`, `readPointCloud`, `transformPointCloud`, `writePly`,
-// `transformPly`, `version`), with two guarantees
+// `transformPly`, `transformLas`, `version`), with two guarantees
 // the glue alone does not give:
 //
 // 1. Inputs are checked here, in JavaScript, before they reach the glue: clouds must be real
@@ -704,10 +704,27 @@ export function makeApi(glue, isReady, env = {}) {
     return guarded("transformPly", () => glue.transformPly(b, m));
   }
 
+  /** A LAS file moved as it is (every attribute kept); see arps.d.ts. */
+  function transformLas(bytes, matrix) {
+    const b = bytesArg(bytes, "bytes");
+    const m = matrixArg(matrix, "matrix");
+    return guarded("transformLas", () => glue.transformLas(b, m));
+  }
+
   /** The crate version. */
   function version() {
     return guarded("version", () => glue.version());
   }
 
-  return { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly, transformPly, version, setDefaultModel };
+  return {
+    Registrar,
+    parsePointCloud,
+    readPointCloud,
+    transformPointCloud,
+    writePly,
+    transformPly,
+    transformLas,
+    version,
+    setDefaultModel,
+  };
 }

@@ -48,6 +48,7 @@ module.exports = {
   transformPointCloud: api.transformPointCloud,
   writePly: api.writePly,
   transformPly: api.transformPly,
+  transformLas: api.transformLas,
   version: api.version,
   /**
    * Nothing to do in Node (the engine is ready on require; the default model is read from disk on

@@ -148,6 +148,15 @@ export interface WorkerRegistrar {
     matrix: ArrayLike<number> | number[][],
     request?: { transfer?: boolean; signal?: AbortSignal },
   ): Promise<Uint8Array>;
+  /**
+   * A LAS file moved as it is, in the worker (see `transformLas` in arps.d.ts: every attribute
+   * kept, the header's offsets and bounds updated; LAZ refused).
+   */
+  transformLas(
+    bytes: Uint8Array | ArrayBuffer,
+    matrix: ArrayLike<number> | number[][],
+    request?: { transfer?: boolean; signal?: AbortSignal },
+  ): Promise<Uint8Array>;
   /** Stops the worker; pending and later requests reject. */
   terminate(): void;
 }

@@ -239,6 +239,11 @@ export async function createWorkerRegistrar(options = {}) {
       const reply = await request({ type: "move-ply", bytes, matrix }, { transfer: buffers, signal });
       return reply.bytes;
     },
+    async transformLas(bytes, matrix, { transfer = false, signal } = {}) {
+      const buffers = transfer ? uniqueBuffers([bytes]) : [];
+      const reply = await request({ type: "move-las", bytes, matrix }, { transfer: buffers, signal });
+      return reply.bytes;
+    },
     terminate() {
       terminated = true;
       if (current) retire(current, new Error("arps worker: terminated"));

@@ -15,7 +15,8 @@
 //! * `readPointCloud(bytes: Uint8Array, fileName: string) -> { points: Float32Array, origin }`;
 //! * `transformPointCloud(cloud, matrix) -> { points, origin }` and `writePly(cloud) -> Uint8Array`
 //!   (a cloud: a `Float32Array` or `{ points: Float32Array, origin }`);
-//! * `transformPly(bytes, matrix) -> Uint8Array` (a PLY file moved as it is).
+//! * `transformPly(bytes, matrix)`, `transformLas(bytes, matrix)` -> `Uint8Array` (a PLY or LAS
+//!   file moved as it is).
 //!
 //! Nothing here may panic on user input: a panic in wasm aborts the instance (wasm32 builds with
 //! `panic = "abort"`; there is no `catch_unwind`), so every fallible step returns
@@ -139,6 +140,14 @@ pub fn read_point_cloud(
     cloud_object(&cloud)
 }
 
+/// A 4x4 argument: 16 numbers, column-major.
+fn matrix_arg(matrix: &[f64]) -> Result<nalgebra::Matrix4<f64>, JsError> {
+    if matrix.len() != 16 {
+        return Err(JsError::new(&format!("matrix: expected 16 numbers (a 4x4, column-major), got {}", matrix.len())));
+    }
+    Ok(nalgebra::Matrix4::from_column_slice(matrix))
+}
+
 /// A cloud as the JS object `{ points: Float32Array, origin: [x, y, z] }`.
 fn cloud_object(cloud: &PointCloud) -> Result<JsValue, JsError> {
     let out = Object::new();
@@ -199,10 +208,7 @@ pub fn transform_point_cloud(
     #[wasm_bindgen(unchecked_param_type = "CloudInput")] cloud: JsValue,
     #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
 ) -> Result<JsValue, JsError> {
-    if matrix.len() != 16 {
-        return Err(JsError::new(&format!("matrix: expected 16 numbers (a 4x4, column-major), got {}", matrix.len())));
-    }
-    let m = nalgebra::Matrix4::from_column_slice(matrix);
+    let m = matrix_arg(matrix)?;
     crate::transform::check_rigid(&m, 1e-4).map_err(|e| JsError::new(&format!("matrix is not rigid: {e}")))?;
     let cloud = cloud_arg(&cloud, "cloud")?;
     cloud_object(&cloud.transformed(&m))
@@ -229,10 +235,21 @@ pub fn transform_ply(
     #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
     #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
 ) -> Result<Vec<u8>, JsError> {
-    if matrix.len() != 16 {
-        return Err(JsError::new(&format!("matrix: expected 16 numbers (a 4x4, column-major), got {}", matrix.len())));
-    }
-    crate::io::transform_ply(bytes, &nalgebra::Matrix4::from_column_slice(matrix)).map_err(js_err)
+    crate::io::transform_ply(bytes, &matrix_arg(matrix)?).map_err(js_err)
+}
+
+/// A LAS file moved as it is, e.g. a registered survey by its result's `T_target_source`: every
+/// point's X, Y, Z mapped in f64 and stored again with the file's scales, the header's offsets
+/// and bounds updated, every other byte kept (intensity, classification, GPS time, colour, the
+/// VLRs). `matrix` as for `transformPly`. Returns the moved file's bytes. Throws on a file the
+/// LAS reader refuses, a LAZ file (it would have to be compressed again), points the file's
+/// scales cannot store once moved, and a matrix that is not rigid (or uniformly scaled).
+#[wasm_bindgen(js_name = transformLas)]
+pub fn transform_las(
+    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
+) -> Result<Vec<u8>, JsError> {
+    crate::io::transform_las(bytes, &matrix_arg(matrix)?).map_err(js_err)
 }
 
 /// Holds a loaded model and reusable buffers; registers pairs of clouds.

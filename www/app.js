@@ -550,10 +550,15 @@ async function downloadAligned() {
     const arps = await getEngine();
     const T = shownPose(result).T_target_source;
     let bytes = null;
-    if (source.file && /\.ply$/i.test(source.name)) {
+    let ext = "ply";
+    const own = source.file && /\.(ply|las)$/i.exec(source.name)?.[1].toLowerCase();
+    if (own) {
+      // a PLY or LAS file moved as it is (integer PLY coordinates, say, fall back to the points)
       const file = new Uint8Array(await source.file.arrayBuffer());
       const m = Array.from(T, (v, i) => (i < 12 && i % 4 < 3 ? v * source.scale : v)); // T S
-      bytes = await arps.transformPly(file, m, { transfer: true }).catch(() => null); // e.g. integer coordinates
+      const move = own === "las" ? arps.transformLas : arps.transformPly;
+      bytes = await move(file, m, { transfer: true }).catch(() => null);
+      if (bytes) ext = own;
     }
     if (!bytes) {
       const cloud = await copyCloud(source.key);
@@ -561,7 +566,7 @@ async function downloadAligned() {
     }
     const a = document.createElement("a");
     a.href = URL.createObjectURL(new Blob([bytes], { type: "application/octet-stream" }));
-    a.download = `${source.name.replace(/\.[^.]*$/, "").replace(/[^\w.-]+/g, "_") || "source"}-aligned.ply`;
+    a.download = `${source.name.replace(/\.[^.]*$/, "").replace(/[^\w.-]+/g, "_") || "source"}-aligned.${ext}`;
     document.body.append(a);
     a.click();
     a.remove();

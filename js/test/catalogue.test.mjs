@@ -3,7 +3,8 @@
 // Cases: bad lengths, NaN, too few / too many points, wrong types, array-likes that lie about
 // their length, bad options (unknown, wrong type, throwing getters, Proxies, bad
 // initialTransform), bad onProgress, bad files (corrupt LAZ and E57 too) and file names, bad
-// matrices and clouds for transformPointCloud / writePly / transformPly, bad weights, use after
+// matrices and clouds for transformPointCloud / writePly / transformPly / transformLas, bad
+// weights, use after
 // free, and
 // a real trap inside the engine, after which the module is re-instantiated and the registrars
 // built before it keep working.
@@ -249,7 +250,7 @@ test("large coordinates: Float64Array or { points, origin } in, T_target_source 
 });
 
 for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]]) {
-  test(`${name}: transformPointCloud, writePly and transformPly save a registered source in the target's frame`, () => {
+  test(`${name}: transformPointCloud, writePly, transformPly and transformLas save a registered source in the target's frame`, () => {
     const r = arps.Registrar.withDefaultModel();
     // A map-grid survey (LAS 1.4 LAZ, about 1.7e6 from zero) onto a copy of itself moved; the
     // copy comes from transformPointCloud itself, checked first against f64 arithmetic.
@@ -326,6 +327,23 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     rejects(r, "transformPly: not a PLY", () => arps.transformPly(new Uint8Array([1, 2, 3]), T), /PLY/);
     rejects(r, "transformPly: scaled along one axis", () => arps.transformPly(frag, T.map((v, i) => (i === 0 ? 2 * v : v))), /not rigid/);
     rejects(r, "transformPly: no matrix", () => arps.transformPly(frag), /^matrix is undefined/);
+
+    // transformLas: a LAS survey moved as it is: the same length and VLRs, its points those
+    // transformPointCloud gives (to the file's 0.01 scale), its records' attributes kept
+    const las = readFileSync(path.join(root, "fixtures", "formats", "simple.las"));
+    const movedLas = arps.transformLas(las, T);
+    assert.ok(movedLas instanceof Uint8Array && movedLas.length === las.length);
+    const offset = las.readUInt32LE(96);
+    assert.deepEqual(movedLas.subarray(227, offset), new Uint8Array(las.subarray(227, offset)), "the VLRs");
+    assert.deepEqual(movedLas.subarray(offset + 12, offset + 34), new Uint8Array(las.subarray(offset + 12, offset + 34)), "a record's attributes");
+    const wantLas = arps.transformPointCloud(arps.readPointCloud(las, "a.las"), T);
+    const gotLas = arps.readPointCloud(movedLas, "a.las");
+    apart = 0;
+    for (let i = 0; i < gotLas.points.length; i++) apart = Math.max(apart, Math.abs(gotLas.origin[i % 3] + gotLas.points[i] - (wantLas.origin[i % 3] + wantLas.points[i])));
+    assert.ok(apart <= 0.0052, `transformLas's points ${apart} from transformPointCloud's`);
+    const laz = readFileSync(path.join(root, "fixtures", "formats", "simple.laz"));
+    rejects(r, "transformLas: LAZ", () => arps.transformLas(laz, T), /LAZ file cannot be moved as it is/);
+    rejects(r, "transformLas: not LAS", () => arps.transformLas(frag, T), /LASF/);
     r.free();
   });
 }

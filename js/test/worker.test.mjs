@@ -84,6 +84,10 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     const movedFile = await arps.transformPly(plyFile, res.T_target_source, { transfer: true });
     assert.equal(plyFile.length, 0, "the file's bytes transferred");
     assert.ok(movedFile instanceof Uint8Array && movedFile.length > 100);
+    const las = readFileSync(path.join(root, "fixtures", "formats", "simple.las"));
+    const movedLas = await arps.transformLas(las, res.T_target_source);
+    assert.ok(movedLas.length === las.length && new TextDecoder().decode(movedLas.subarray(0, 4)) === "LASF");
+    await assert.rejects(arps.transformLas(las, [1, 2]), /matrix has 2 elements/);
     // Clouds with an origin transfer their points too; zero origins give the same answer.
     const so = { points: source(), origin: [0, 0, 0] };
     const to = { points: target(), origin: [0, 0, 0] };

@@ -625,6 +625,34 @@ test("a georeferenced LAZ survey aligned onto itself moved, in map-grid coordina
   assert.ok(worst < 1e-4, `the aligned survey's points are up to ${worst} from the answer applied in f64`);
 });
 
+test("a LAS survey is downloaded as LAS, moved as it is", { timeout: TIMEOUT * 2 }, async () => {
+  // fixtures/formats/simple.las (LAS 1.2 format 3: colour, GPS time) onto the moved survey of the
+  // test before: the download is the LAS file itself, moved by the answer (the engine's
+  // transformLas), its attributes kept
+  const las = join(ROOT, "fixtures", "formats", "simple.las");
+  await page.setInputFiles("#source-file", las);
+  await page.waitForFunction(() => /simple\.las · 1,065 points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
+  await page.setInputFiles("#target-file", las);
+  await page.waitForFunction(() => /simple\.las · 1,065 points/.test(document.getElementById("target-info").textContent), null, { timeout: TIMEOUT });
+  const { result, error } = await alignAndWait();
+  assert.equal(error, "", `unexpected #error: ${error}`);
+  const [download] = await Promise.all([page.waitForEvent("download"), page.click("#download-ply")]);
+  assert.equal(download.suggestedFilename(), "simple-aligned.las");
+  const file = join(dir, "simple-aligned.las");
+  await download.saveAs(file);
+  const [before, after] = [readFileSync(las), readFileSync(file)];
+  assert.equal(after.length, before.length);
+  assert.equal(after.subarray(0, 4).toString("latin1"), "LASF");
+  const offset = before.readUInt32LE(96);
+  assert.ok(after.subarray(offset + 12, offset + 34).equals(before.subarray(offset + 12, offset + 34)), "the first record's attributes");
+  // its first point is where the answer puts it (to the file's 0.01 scale)
+  const m = result.T_target_source; // row-major
+  const p = [0, 1, 2].map((k) => before.readInt32LE(offset + 4 * k) * before.readDoubleLE(131 + 8 * k) + before.readDoubleLE(155 + 8 * k));
+  const q = [0, 1, 2].map((k) => after.readInt32LE(offset + 4 * k) * after.readDoubleLE(131 + 8 * k) + after.readDoubleLE(155 + 8 * k));
+  const want = [0, 1, 2].map((r) => m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2] + m[r][3]);
+  assert.ok(Math.hypot(...q.map((v, k) => v - want[k])) < 0.01, `first point ${q} vs ${want}`);
+});
+
 test("a 1M-point pair: loaded, fitted and aligned without blocking the main thread", { timeout: TIMEOUT * 3 }, async () => {
   const infoDone = (which) =>
     page.waitForFunction((id) => /[\d,]+ points( ·|$)/.test(document.getElementById(id).textContent), `${which}-info`, { timeout: TIMEOUT });
