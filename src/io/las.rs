@@ -34,6 +34,12 @@ const LAYERED: u16 = 3;
 /// classification, flags, intensity, scan angle, user data, point source, GPS time.
 const POINT14_LAYERS: usize = 9;
 
+/// Where the public header block holds the x, y, z scales and offsets (f64 each), and max x,
+/// min x, max y, min y, max z, min z (f64 each).
+pub(super) const SCALES_AT: usize = 131;
+pub(super) const OFFSETS_AT: usize = 155;
+pub(super) const BOUNDS_AT: usize = 179;
+
 /// The shortest point record of each point format 0 to 10 (the file may add extra bytes).
 const MIN_RECORD: [usize; 11] = [20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67];
 
@@ -115,7 +121,8 @@ impl Header {
         } else {
             legacy
         };
-        let (scale, shift) = ([131, 139, 147].map(|at| f64_at(bytes, at)), [155, 163, 171].map(|at| f64_at(bytes, at)));
+        let (scale, shift) =
+            ([0, 1, 2].map(|k| f64_at(bytes, SCALES_AT + 8 * k)), [0, 1, 2].map(|k| f64_at(bytes, OFFSETS_AT + 8 * k)));
         for (axis, (s, o)) in ["x", "y", "z"].iter().zip(scale.iter().zip(&shift)) {
             if !s.is_finite() || *s == 0.0 || !o.is_finite() {
                 return Err(err(format!(
@@ -134,6 +141,19 @@ impl Header {
             scale,
             shift,
         })
+    }
+
+    /// The bytes of the `count` point records of an uncompressed file; an error when the file
+    /// holds fewer.
+    pub(super) fn records<'a>(&self, bytes: &'a [u8]) -> Result<&'a [u8]> {
+        let held = (bytes.len() - self.offset) / self.record_len;
+        if (held as u64) < self.count {
+            return Err(err(format!(
+                "the header claims {} points of {} bytes from byte {}, but the file holds {held}",
+                self.count, self.record_len, self.offset
+            )));
+        }
+        Ok(&bytes[self.offset..self.offset + self.count as usize * self.record_len])
     }
 
     /// The point of a record's first 12 bytes (X, Y, Z as `i32`, in every point format).
@@ -155,15 +175,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
 
 /// The points of an uncompressed file.
 fn read_records(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
-    let body = &bytes[h.offset..];
-    let held = body.len() / h.record_len;
-    if (held as u64) < h.count {
-        return Err(err(format!(
-            "the header claims {} points of {} bytes from byte {}, but the file holds {held}",
-            h.count, h.record_len, h.offset
-        )));
-    }
-    Ok(body.chunks_exact(h.record_len).take(h.count as usize).map(|r| h.point(r)).collect())
+    Ok(h.records(bytes)?.chunks_exact(h.record_len).map(|r| h.point(r)).collect())
 }
 
 /// The LASzip VLR's data, among the variable length records after the header.

@@ -5,15 +5,10 @@
 //! EVLRs, the CRS records). What saves a registered survey in the target's frame as the LAS its
 //! tools read. LAZ files are refused: they would have to be compressed again.
 
-use super::las::{err, Header};
+use super::las::{err, Header, BOUNDS_AT, OFFSETS_AT};
 use super::motion::similarity;
 use crate::Result;
 use nalgebra::{Matrix4, Vector3};
-
-/// Where the header holds the x, y, z offsets (f64 each).
-const OFFSETS_AT: usize = 155;
-/// Where the header holds max x, min x, max y, min y, max z, min z (f64 each).
-const BOUNDS_AT: usize = 179;
 
 /// The LAS file `bytes` with its points moved by `m` (`T_target_source`: rigid, or rigid times a
 /// uniform scale), everything else as it was (see the module docs). Errors: a file the LAS reader
@@ -27,19 +22,13 @@ pub fn transform_las(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
             "a LAZ file cannot be moved as it is (it would have to be compressed again): save its points as PLY instead",
         ));
     }
-    let held = (bytes.len() - h.offset) / h.record_len;
-    if (held as u64) < h.count {
-        return Err(err(format!(
-            "the header claims {} points of {} bytes from byte {}, but the file holds {held}",
-            h.count, h.record_len, h.offset
-        )));
-    }
+    let records = h.records(bytes)?;
+    let end = h.offset + records.len();
     let n = h.count as usize;
-    let end = h.offset + n * h.record_len;
     let moved = |record: &[u8]| linear * Vector3::from(h.point(record)) + t;
     // the new offsets: the moved points' centre, on each axis's grid of the scale
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
-    for record in bytes[h.offset..end].chunks_exact(h.record_len) {
+    for record in records.chunks_exact(h.record_len) {
         let q = moved(record);
         for k in 0..3 {
             lo[k] = lo[k].min(q[k]);
