@@ -311,8 +311,17 @@ pub fn read_path(path: &std::path::Path) -> Result<PointCloud> {
 /// [`read_path`] with [`ReadOptions`] ([`read_point_cloud_with`]; native only).
 #[cfg(not(target_arch = "wasm32"))]
 pub fn read_path_with(path: &std::path::Path, options: &ReadOptions) -> Result<PointCloud> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| Error::Io(std::io::Error::new(e.kind(), format!("{}: {e}", path.display()))))?;
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    read_point_cloud_with(&bytes, &name, options)
+    read_point_cloud_with(&read_file(path)?, &file_name(path), options)
+}
+
+/// A file's bytes, as [`read_path_with`] reads them: an I/O error names the path (native only).
+#[cfg(not(target_arch = "wasm32"))]
+pub fn read_file(path: &std::path::Path) -> Result<Vec<u8>> {
+    std::fs::read(path).map_err(|e| Error::Io(std::io::Error::new(e.kind(), format!("{}: {e}", path.display()))))
+}
+
+/// The name [`read_path_with`] gives the readers for `path` (its last component; the format
+/// comes from its extension).
+pub fn file_name(path: &std::path::Path) -> String {
+    path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
 }

@@ -132,6 +132,19 @@ fn read_cloud(path: &Path, options: &io::ReadOptions) -> Result<arps::PointCloud
     io::read_path_with(path, options).map_err(|e| format!("{}: {e}", path.display()))
 }
 
+/// A source file read once: its cloud (as [`read_cloud`] reads it), and its bytes when `keep`
+/// (what `--aligned` moves as it is).
+fn read_source(
+    path: &Path,
+    options: &io::ReadOptions,
+    keep: bool,
+) -> Result<(arps::PointCloud, Option<Vec<u8>>), String> {
+    let at = |e: arps::Error| format!("{}: {e}", path.display());
+    let bytes = io::read_file(path).map_err(at)?;
+    let cloud = io::read_point_cloud_with(&bytes, &io::file_name(path), options).map_err(at)?;
+    Ok((cloud, keep.then_some(bytes)))
+}
+
 /// Prints one registration of `arps register`: the text report, or one JSON line (`--json`);
 /// `source` names the source when several were given, `aligned` where the moved source was
 /// written (`--aligned`).
@@ -219,28 +232,28 @@ fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathB
     Ok(path)
 }
 
-/// Writes the source moved by `r`'s answer to `path`: to a `.las` path the LAS source file as
-/// itself, moved (`io::transform_las`); else as PLY, a PLY source file as itself, moved
+/// Writes the source moved by `r`'s answer to `path`: to a `.las` path the LAS source file
+/// (`bytes`, the file `file` as read for registering) as itself, moved (`io::transform_las`);
+/// else as PLY, a PLY source file as itself, moved
 /// (`io::transform_ply`: every property and element kept, normals turned), any other as the
 /// points read (`cloud`, already scaled) in binary PLY (`io::write_ply_binary`). `scale` is the
 /// `--source-scale` applied before registering.
 fn write_aligned(
     file: &Path,
+    bytes: &[u8],
     cloud: &arps::PointCloud,
     scale: Option<&nalgebra::Matrix4<f64>>,
     r: &arps::Registration,
     path: &Path,
 ) -> Result<(), String> {
-    let bytes = std::fs::read(file).map_err(|e| format!("{}: {e}", file.display()))?;
-    let name = file.file_name().map(|n| n.to_string_lossy()).unwrap_or_default();
     // the file's own points to the target's frame (the scale first)
     let m = scale.map_or(r.T_target_source, |s| r.T_target_source * s);
     let moved = |e: arps::Error| format!("--aligned: {}: {e}", file.display());
-    let out = match io::detect_format(&bytes, &name) {
+    let out = match io::detect_format(bytes, &io::file_name(file)) {
         _ if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("las")) => {
-            io::transform_las(&bytes, &m).map_err(moved)?
+            io::transform_las(bytes, &m).map_err(moved)?
         }
-        Ok(io::Format::Ply) => io::transform_ply(&bytes, &m).map_err(moved)?,
+        Ok(io::Format::Ply) => io::transform_ply(bytes, &m).map_err(moved)?,
         _ => io::write_ply_binary(&cloud.transformed(&r.T_target_source)),
     };
     std::fs::write(path, out).map_err(|e| format!("--aligned: {}: {e}", path.display()))
@@ -332,19 +345,19 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
     let several = sources.len() > 1;
     let mut failed = 0usize;
     for (source, output) in sources.iter().zip(&outputs) {
-        let read = read_cloud(source, &reading).map(|src| match &scale {
-            Some(m) => src.into_transformed(m),
-            None => src,
+        let read = read_source(source, &reading, output.is_some()).map(|(src, bytes)| match &scale {
+            Some(m) => (src.into_transformed(m), bytes),
+            None => (src, bytes),
         });
-        let outcome = read.and_then(|src| {
+        let outcome = read.and_then(|(src, bytes)| {
             let r = registrar.register(&src, &tgt, &options).map_err(|e| e.to_string())?;
-            Ok((src, r))
+            Ok((src, bytes, r))
         });
         let time_ms = t0.elapsed().as_secs_f64() * 1e3;
         let named = several.then(|| source.display().to_string());
-        let outcome = outcome.and_then(|(src, r)| {
-            if let Some(path) = output {
-                write_aligned(source, &src, scale.as_ref(), &r, path)?;
+        let outcome = outcome.and_then(|(src, bytes, r)| {
+            if let (Some(path), Some(bytes)) = (output, bytes) {
+                write_aligned(source, &bytes, &src, scale.as_ref(), &r, path)?;
             }
             Ok(r)
         });
