@@ -198,6 +198,13 @@ export async function createWorkerRegistrar(options = {}) {
     });
   };
 
+  /**
+   * `request` for a method: the buffers of `inputs` transferred when its request options say
+   * `transfer`, their `signal` passed on (and `onProgress`, for `register`).
+   */
+  const ask = (message, inputs, { transfer = false, signal } = {}, onProgress = undefined) =>
+    request(message, { onProgress, transfer: transfer ? uniqueBuffers(inputs) : [], signal });
+
   current = spawn(options.onProgress);
   const ready = await current.ready; // on failure the worker was already stopped
 
@@ -205,44 +212,28 @@ export async function createWorkerRegistrar(options = {}) {
     provenance: ready.provenance,
     modelConfig: ready.modelConfig,
     async register(source, target, registerOptions, { onProgress, transfer = false, signal } = {}) {
-      const buffers = transfer ? uniqueBuffers([source, target]) : [];
-      const reply = await request(
-        { type: "register", source, target, options: registerOptions },
-        { onProgress, transfer: buffers, signal },
-      );
-      return reply.result;
+      const message = { type: "register", source, target, options: registerOptions };
+      return (await ask(message, [source, target], { transfer, signal }, onProgress)).result;
     },
-    async parsePointCloud(bytes, fileName, readOptions, { transfer = false, signal } = {}) {
+    async parsePointCloud(bytes, fileName, readOptions, req = {}) {
       misplacedRequest("parsePointCloud", readOptions);
-      const buffers = transfer ? uniqueBuffers([bytes]) : [];
-      const reply = await request({ type: "parse", bytes, fileName, options: readOptions }, { transfer: buffers, signal });
-      return reply.points;
+      return (await ask({ type: "parse", bytes, fileName, options: readOptions }, [bytes], req)).points;
     },
-    async readPointCloud(bytes, fileName, readOptions, { transfer = false, signal } = {}) {
+    async readPointCloud(bytes, fileName, readOptions, req = {}) {
       misplacedRequest("readPointCloud", readOptions);
-      const buffers = transfer ? uniqueBuffers([bytes]) : [];
-      const reply = await request({ type: "read", bytes, fileName, options: readOptions }, { transfer: buffers, signal });
-      return reply.cloud;
+      return (await ask({ type: "read", bytes, fileName, options: readOptions }, [bytes], req)).cloud;
     },
-    async transformPointCloud(cloud, matrix, { transfer = false, signal } = {}) {
-      const buffers = transfer ? uniqueBuffers([cloud]) : [];
-      const reply = await request({ type: "transform", cloud, matrix }, { transfer: buffers, signal });
-      return reply.cloud;
+    async transformPointCloud(cloud, matrix, req = {}) {
+      return (await ask({ type: "transform", cloud, matrix }, [cloud], req)).cloud;
     },
-    async writePly(cloud, { transfer = false, signal } = {}) {
-      const buffers = transfer ? uniqueBuffers([cloud]) : [];
-      const reply = await request({ type: "write", cloud }, { transfer: buffers, signal });
-      return reply.bytes;
+    async writePly(cloud, req = {}) {
+      return (await ask({ type: "write", cloud }, [cloud], req)).bytes;
     },
-    async transformPly(bytes, matrix, { transfer = false, signal } = {}) {
-      const buffers = transfer ? uniqueBuffers([bytes]) : [];
-      const reply = await request({ type: "move-ply", bytes, matrix }, { transfer: buffers, signal });
-      return reply.bytes;
+    async transformPly(bytes, matrix, req = {}) {
+      return (await ask({ type: "move-ply", bytes, matrix }, [bytes], req)).bytes;
     },
-    async transformLas(bytes, matrix, { transfer = false, signal } = {}) {
-      const buffers = transfer ? uniqueBuffers([bytes]) : [];
-      const reply = await request({ type: "move-las", bytes, matrix }, { transfer: buffers, signal });
-      return reply.bytes;
+    async transformLas(bytes, matrix, req = {}) {
+      return (await ask({ type: "move-las", bytes, matrix }, [bytes], req)).bytes;
     },
     terminate() {
       terminated = true;
