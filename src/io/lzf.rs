@@ -70,9 +70,87 @@ pub(crate) fn decompress(input: &[u8], out_len: usize) -> Result<Vec<u8>, String
     Ok(out)
 }
 
+/// The farthest a back-reference reaches, and the longest match it copies.
+const MAX_BACK: usize = 1 << 13;
+const MAX_MATCH: usize = 264;
+
+/// Compresses `input` as LZF (what [`decompress`] reads; PCL's `binary_compressed` codec): a
+/// greedy match finder over a hash of the next three bytes, literal runs of at most 32 bytes.
+/// Input that does not compress grows by one byte in 32.
+pub(crate) fn compress(input: &[u8]) -> Vec<u8> {
+    const HASH_BITS: u32 = 14;
+    let mut out = Vec::with_capacity(input.len() / 2 + 64);
+    let mut table = vec![usize::MAX; 1 << HASH_BITS];
+    let hash = |i: usize| {
+        let v = u32::from_le_bytes([input[i], input[i + 1], input[i + 2], 0]);
+        (v.wrapping_mul(2_654_435_761) >> (32 - HASH_BITS)) as usize
+    };
+    let flush = |out: &mut Vec<u8>, literals: &[u8]| {
+        for run in literals.chunks(32) {
+            out.push((run.len() - 1) as u8);
+            out.extend_from_slice(run);
+        }
+    };
+    let mut literal_start = 0;
+    let mut i = 0;
+    while i + 3 <= input.len() {
+        let h = hash(i);
+        let candidate = std::mem::replace(&mut table[h], i);
+        let found = candidate < i && i - candidate <= MAX_BACK && input[candidate..candidate + 3] == input[i..i + 3];
+        if !found {
+            i += 1;
+            continue;
+        }
+        let max = MAX_MATCH.min(input.len() - i);
+        let mut len = 3;
+        while len < max && input[candidate + len] == input[i + len] {
+            len += 1;
+        }
+        flush(&mut out, &input[literal_start..i]);
+        let back = i - candidate - 1;
+        let l = len - 2;
+        if l < 7 {
+            out.push(((l << 5) | (back >> 8)) as u8);
+        } else {
+            out.push(((7 << 5) | (back >> 8)) as u8);
+            out.push((l - 7) as u8);
+        }
+        out.push((back & 0xff) as u8);
+        // The matched bytes enter the table too, so later data finds them.
+        for k in i + 1..(i + len).min(input.len().saturating_sub(2)) {
+            table[hash(k)] = k;
+        }
+        i += len;
+        literal_start = i;
+    }
+    flush(&mut out, &input[literal_start..]);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn compress_round_trips() {
+        let mut state = 7u64;
+        let noise: Vec<u8> = (0..5000)
+            .map(|_| {
+                state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+                (state >> 56) as u8
+            })
+            .collect();
+        let repeats: Vec<u8> = (0..20_000u32).map(|i| (i % 7) as u8 * 3).collect();
+        let floats: Vec<u8> = (0..4000).flat_map(|i| ((i / 10) as f32 * 0.5).to_le_bytes()).collect();
+        for data in
+            [&b""[..], b"a", b"ab", b"abc", b"aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa", &noise, &repeats, &floats]
+        {
+            let c = compress(data);
+            assert_eq!(decompress(&c, data.len()).unwrap(), data, "{} bytes", data.len());
+        }
+        assert!(compress(&repeats).len() < repeats.len() / 50);
+        assert!(compress(&noise).len() <= noise.len() + noise.len().div_ceil(32));
+    }
 
     #[test]
     fn literal_and_backref() {

@@ -28,18 +28,25 @@ use crate::cloud::PointCloud;
 use crate::{Error, Result};
 
 mod e57;
+mod keyword_lines;
 mod las;
 mod las_transform;
 mod lzf;
 mod mesh;
 mod motion;
+mod number_style;
 mod obj;
+mod obj_transform;
 mod off;
 mod pcd;
+mod pcd_transform;
 mod ply;
 mod ply_transform;
 mod stl;
+mod stl_transform;
 mod text;
+mod text_transform;
+mod transform;
 mod util;
 
 /// A triangle mesh (vertices and triangles), as read from OBJ/OFF/STL/PLY.
@@ -300,7 +307,10 @@ pub fn write_ply_binary(cloud: &PointCloud) -> Vec<u8> {
 }
 
 pub use las_transform::transform_las;
+pub use pcd_transform::transform_pcd;
 pub use ply_transform::transform_ply;
+pub use text_transform::transform_text;
+pub use transform::{can_transform, transform_file};
 
 /// Reads a point cloud from a file (native only); the format comes from the file name.
 #[cfg(not(target_arch = "wasm32"))]

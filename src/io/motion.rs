@@ -26,3 +26,36 @@ pub(super) fn similarity(m: &Matrix4<f64>) -> Result<(Matrix3<f64>, Matrix3<f64>
     }
     Ok((linear, rotation, m.fixed_view::<3, 1>(0, 3).into_owned()))
 }
+
+/// A checked motion ([`similarity`]) that maps points and turns normals.
+pub(super) struct Motion {
+    /// `s R`.
+    pub(super) linear: Matrix3<f64>,
+    /// `R`.
+    pub(super) rotation: Matrix3<f64>,
+    /// The translation.
+    pub(super) t: Vector3<f64>,
+}
+
+impl Motion {
+    /// `m` checked as [`similarity`] checks it.
+    pub(super) fn new(m: &Matrix4<f64>) -> Result<Self> {
+        let (linear, rotation, t) = similarity(m)?;
+        Ok(Self { linear, rotation, t })
+    }
+
+    /// The uniform scale `s`.
+    pub(super) fn scale(&self) -> f64 {
+        self.linear.determinant().cbrt()
+    }
+
+    /// A point mapped: `s R p + t`.
+    pub(super) fn point(&self, p: [f64; 3]) -> [f64; 3] {
+        (self.linear * Vector3::from(p) + self.t).into()
+    }
+
+    /// A normal turned: `R n`.
+    pub(super) fn normal(&self, n: [f64; 3]) -> [f64; 3] {
+        (self.rotation * Vector3::from(n)).into()
+    }
+}

@@ -8,7 +8,7 @@ use super::util::{check_index, fan, parse_f64, parse_int, utf8_line, Lines};
 use super::Raw;
 use crate::{Error, Result};
 
-const F: &str = "OBJ";
+pub(crate) const F: &str = "OBJ";
 
 pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
     let mut vertices: Vec<[f64; 3]> = Vec::new();

@@ -9,14 +9,14 @@ use super::util::{bounded_capacity, parse_count, parse_f64, show, utf8_line, Lin
 use super::{lzf, Raw};
 use crate::{Error, Result};
 
-const F: &str = "PCD";
+pub(crate) const F: &str = "PCD";
 
 #[derive(Clone, Debug)]
-struct Field {
-    name: String,
-    size: usize,
-    ty: char,
-    count: usize,
+pub(crate) struct Field {
+    pub(crate) name: String,
+    pub(crate) size: usize,
+    pub(crate) ty: char,
+    pub(crate) count: usize,
 }
 
 impl Field {
@@ -25,7 +25,7 @@ impl Field {
     }
 
     /// Decodes one little-endian value of this field.
-    fn read_f64(&self, b: &[u8]) -> f64 {
+    pub(crate) fn read_f64(&self, b: &[u8]) -> f64 {
         match (self.ty, self.size) {
             ('F', 4) => f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
             ('F', 8) => f64::from_le_bytes([b[0], b[1], b[2], b[3], b[4], b[5], b[6], b[7]]),
@@ -42,14 +42,50 @@ impl Field {
     }
 }
 
+impl Field {
+    /// Writes `v` as this field's little-endian value; only for floating-point fields (`F`).
+    pub(crate) fn write_float(&self, v: f64, b: &mut [u8]) {
+        if self.size == 8 {
+            b[..8].copy_from_slice(&v.to_le_bytes());
+        } else {
+            b[..4].copy_from_slice(&(v as f32).to_le_bytes());
+        }
+    }
+}
+
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Data {
+pub(crate) enum Data {
     Ascii,
     Binary,
     Compressed,
 }
 
-pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
+/// The ascii token index of the first value of field `i`.
+pub(crate) fn token_index(fields: &[Field], i: usize) -> usize {
+    fields[..i].iter().map(|f| f.count).fold(0, usize::saturating_add)
+}
+
+/// The byte offset of field `i` in a binary record.
+pub(crate) fn byte_offset(fields: &[Field], i: usize) -> usize {
+    fields[..i].iter().map(|f| f.size.saturating_mul(f.count)).fold(0, usize::saturating_add)
+}
+
+/// A parsed PCD header: the fields, the point count, the encoding, where the body starts.
+pub(crate) struct Header {
+    pub(crate) fields: Vec<Field>,
+    pub(crate) n_points: u64,
+    pub(crate) data: Data,
+    /// Byte offset of the body (after the DATA line).
+    pub(crate) body_at: usize,
+    /// Number of the DATA line (an ascii body's lines are numbered after it).
+    data_line: usize,
+    /// Where x, y, z are: field index, value index (in ascii tokens), byte offset in a record.
+    pub(crate) axes: [(usize, usize, usize); 3],
+    /// Bytes per point record.
+    pub(crate) stride: usize,
+}
+
+pub(crate) fn parse_header(bytes: &[u8]) -> Result<Header> {
     let mut lines = Lines::new(bytes);
     let mut names: Option<Vec<String>> = None;
     let mut sizes: Option<(usize, Vec<usize>)> = None;
@@ -182,89 +218,32 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
         if fields[i].count != 1 {
             return Err(Error::parse(F, format!("field '{axis}' has COUNT {}, expected 1", fields[i].count)));
         }
-        let token: usize = fields[..i].iter().map(|f| f.count).fold(0, usize::saturating_add);
-        let offset: usize = fields[..i].iter().map(|f| f.size.saturating_mul(f.count)).fold(0, usize::saturating_add);
-        axes[a] = (i, token, offset);
+        axes[a] = (i, token_index(&fields, i), byte_offset(&fields, i));
     }
     let stride = fields
         .iter()
         .try_fold(0usize, |acc, f| f.size.checked_mul(f.count).and_then(|b| acc.checked_add(b)))
         .ok_or_else(|| Error::parse(F, "the point record size (SIZE x COUNT summed) overflows"))?;
-    let body_at = lines.offset();
-    let body = &bytes[body_at..];
-    let mut out = Vec::new();
-    match data {
-        Data::Ascii => {
-            let n_tokens: usize = fields.iter().map(|f| f.count).fold(0, usize::saturating_add);
-            out.reserve(bounded_capacity(n_points, body.len(), n_tokens.saturating_mul(2)));
-            let mut read = 0u64;
-            while read < n_points {
-                let Some((n, raw)) = lines.next() else {
-                    return Err(Error::parse(
-                        F,
-                        format!(
-                            "the file ends after {read} of the {n_points} points the header declares (line {})",
-                            lines.line_no()
-                        ),
-                    ));
-                };
-                let line = utf8_line(F, n, raw)?;
-                let toks: Vec<&str> = line.split_ascii_whitespace().take(n_tokens).collect();
-                if toks.is_empty() {
-                    continue;
-                }
-                if toks.len() < n_tokens {
-                    return Err(Error::parse(
-                        F,
-                        format!("line {n}: expected {n_tokens} values per point, found {}", toks.len()),
-                    ));
-                }
-                let mut p = [0.0f64; 3];
-                for a in 0..3 {
-                    p[a] = parse_f64(F, n, &format!("field '{}'", fields[axes[a].0].name), toks[axes[a].1])?;
-                }
-                out.push(p);
-                read += 1;
-            }
-        }
-        Data::Binary => {
-            let need = n_points.checked_mul(stride as u64);
-            if need.is_none_or(|need| need > body.len() as u64) {
-                return Err(Error::parse(
-                    F,
-                    format!(
-                        "truncated binary data: {n_points} points of {stride} bytes need {} bytes after byte offset {body_at}, but only {} remain",
-                        need.map_or("too many".to_string(), |v| v.to_string()),
-                        body.len()
-                    ),
-                ));
-            }
-            if stride > 0 {
-                let n = n_points as usize;
-                out.reserve(n);
-                for rec in body[..n * stride].chunks_exact(stride) {
-                    out.push([0, 1, 2].map(|a| {
-                        let (fi, _, off) = axes[a];
-                        fields[fi].read_f64(&rec[off..off + fields[fi].size])
-                    }));
-                }
-            } else {
-                // Only reachable when x/y/z have SIZE... never: x/y/z have a valid nonzero size.
-                return Err(Error::parse(F, "point records have zero size"));
-            }
-        }
-        Data::Compressed => {
-            let head = body.get(..8).ok_or_else(|| {
-                Error::parse(
-                    F,
-                    format!(
-                        "binary_compressed data is cut off at byte offset {body_at}: the 8-byte size header is missing"
-                    ),
-                )
-            })?;
-            let comp = u32::from_le_bytes([head[0], head[1], head[2], head[3]]) as usize;
-            let uncomp = u32::from_le_bytes([head[4], head[5], head[6], head[7]]) as u64;
-            let payload = 8usize.checked_add(comp).and_then(|end| body.get(8..end)).ok_or_else(|| {
+    Ok(Header { fields, n_points, data, body_at: lines.offset(), data_line: lines.line_no(), axes, stride })
+}
+
+impl Header {
+    /// The decompressed body of a `binary_compressed` file (field-major: all points' values of
+    /// field 0, then of field 1, ...) and the byte offset where its compressed data ends.
+    pub(crate) fn decompress(&self, bytes: &[u8]) -> Result<(Vec<u8>, usize)> {
+        let Header { n_points, body_at, stride, .. } = *self;
+        let body = &bytes[body_at..];
+        let head = body.get(..8).ok_or_else(|| {
+            Error::parse(
+                F,
+                format!(
+                    "binary_compressed data is cut off at byte offset {body_at}: the 8-byte size header is missing"
+                ),
+            )
+        })?;
+        let comp = u32::from_le_bytes([head[0], head[1], head[2], head[3]]) as usize;
+        let uncomp = u32::from_le_bytes([head[4], head[5], head[6], head[7]]) as u64;
+        let payload = 8usize.checked_add(comp).and_then(|end| body.get(8..end)).ok_or_else(|| {
                 Error::parse(
                     F,
                     format!(
@@ -274,34 +253,132 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
                     ),
                 )
             })?;
-            let need = n_points.checked_mul(stride as u64);
-            if need != Some(uncomp) {
-                return Err(Error::parse(
+        let need = n_points.checked_mul(stride as u64);
+        if need != Some(uncomp) {
+            return Err(Error::parse(
                     F,
                     format!(
                         "binary_compressed data declares {uncomp} uncompressed bytes, but {n_points} points of {stride} bytes need {}",
                         need.map_or("more".to_string(), |v| v.to_string())
                     ),
                 ));
-            }
-            if uncomp > crate::limits::MAX_DECODED_BYTES {
-                return Err(Error::TooLarge(format!(
+        }
+        if uncomp > crate::limits::MAX_DECODED_BYTES {
+            return Err(Error::TooLarge(format!(
                     "PCD binary_compressed data declares {uncomp} uncompressed bytes, more than the {} the reader decodes (WebAssembly has 4 GiB of memory): downsample the cloud or drop fields before saving",
                     crate::limits::MAX_DECODED_BYTES
                 )));
-            }
-            if uncomp > comp as u64 * lzf::MAX_RATIO {
-                return Err(Error::parse(
+        }
+        if uncomp > comp as u64 * lzf::MAX_RATIO {
+            return Err(Error::parse(
                     F,
                     format!("binary_compressed data declares {uncomp} uncompressed bytes from {comp} compressed bytes, more than LZF can produce"),
                 ));
+        }
+        let raw = lzf::decompress(payload, uncomp as usize)
+            .map_err(|e| Error::parse(F, format!("binary_compressed data (from byte offset {}): {e}", body_at + 8)))?;
+        Ok((raw, body_at + 8 + comp))
+    }
+}
+
+impl Header {
+    /// Calls `visit(line number, line, tokens)` for each point of an ascii body (blank lines
+    /// skipped; `tokens` holds the point's values, at least as many as the fields declare).
+    /// Returns the byte offset after the last point's line.
+    pub(crate) fn ascii_rows<'a>(
+        &self,
+        bytes: &'a [u8],
+        mut visit: impl FnMut(usize, &'a str, &[&'a str]) -> Result<()>,
+    ) -> Result<usize> {
+        let n_points = self.n_points;
+        let n_tokens: usize = self.fields.iter().map(|f| f.count).fold(0, usize::saturating_add);
+        let mut lines = Lines::at(bytes, self.body_at, self.data_line);
+        let mut toks: Vec<&'a str> = Vec::new();
+        let mut read = 0u64;
+        while read < n_points {
+            let Some((n, raw)) = lines.next() else {
+                return Err(Error::parse(
+                    F,
+                    format!(
+                        "the file ends after {read} of the {n_points} points the header declares (line {})",
+                        lines.line_no()
+                    ),
+                ));
+            };
+            let line = utf8_line(F, n, raw)?;
+            toks.clear();
+            toks.extend(line.split_ascii_whitespace().take(n_tokens));
+            if toks.is_empty() {
+                continue;
             }
-            let raw = lzf::decompress(payload, uncomp as usize).map_err(|e| {
-                Error::parse(F, format!("binary_compressed data (from byte offset {}): {e}", body_at + 8))
+            if toks.len() < n_tokens {
+                return Err(Error::parse(
+                    F,
+                    format!("line {n}: expected {n_tokens} values per point, found {}", toks.len()),
+                ));
+            }
+            visit(n, line, &toks)?;
+            read += 1;
+        }
+        Ok(lines.offset())
+    }
+
+    /// The point records of a binary body (`n_points` records of `stride` bytes), checked
+    /// against the bytes present.
+    pub(crate) fn records<'a>(&self, bytes: &'a [u8]) -> Result<&'a [u8]> {
+        let Header { n_points, body_at, stride, .. } = *self;
+        let body = &bytes[body_at..];
+        let need = n_points.checked_mul(stride as u64);
+        match need {
+            Some(need) if need <= body.len() as u64 && stride > 0 => Ok(&body[..need as usize]),
+            _ => Err(Error::parse(
+                F,
+                format!(
+                    "truncated binary data: {n_points} points of {stride} bytes need {} bytes after byte offset {body_at}, but only {} remain",
+                    need.map_or("too many".to_string(), |v| v.to_string()),
+                    body.len()
+                ),
+            )),
+        }
+    }
+
+    /// Where field `i`'s values start in a decompressed (field-major) body.
+    pub(crate) fn column_start(&self, i: usize) -> usize {
+        self.fields[..i].iter().map(|f| f.bytes() * self.n_points as usize).sum()
+    }
+}
+
+pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
+    let h = parse_header(bytes)?;
+    let Header { ref fields, n_points, data, body_at, axes, .. } = h;
+    let mut out = Vec::new();
+    match data {
+        Data::Ascii => {
+            let n_tokens: usize = fields.iter().map(|f| f.count).fold(0, usize::saturating_add);
+            out.reserve(bounded_capacity(n_points, bytes.len() - body_at, n_tokens.saturating_mul(2)));
+            h.ascii_rows(bytes, |n, _, toks| {
+                let mut p = [0.0f64; 3];
+                for a in 0..3 {
+                    p[a] = parse_f64(F, n, &format!("field '{}'", fields[axes[a].0].name), toks[axes[a].1])?;
+                }
+                out.push(p);
+                Ok(())
             })?;
-            // Field-major layout: all points' values of field 0, then of field 1, ...
+        }
+        Data::Binary => {
+            let records = h.records(bytes)?;
+            out.reserve(n_points as usize);
+            for rec in records.chunks_exact(h.stride) {
+                out.push([0, 1, 2].map(|a| {
+                    let (fi, _, off) = axes[a];
+                    fields[fi].read_f64(&rec[off..off + fields[fi].size])
+                }));
+            }
+        }
+        Data::Compressed => {
+            let (raw, _) = h.decompress(bytes)?;
             let n = n_points as usize;
-            let starts: Vec<usize> = (0..3).map(|a| fields[..axes[a].0].iter().map(|f| f.bytes() * n).sum()).collect();
+            let starts = axes.map(|(fi, _, _)| h.column_start(fi));
             out.reserve(n);
             for i in 0..n {
                 out.push([0, 1, 2].map(|a| {

@@ -10,7 +10,7 @@ use super::Raw;
 use crate::{Error, Result};
 use std::collections::HashMap;
 
-const F: &str = "STL";
+pub(crate) const F: &str = "STL";
 
 /// True when the length matches the binary layout exactly: 80-byte header, `u32` facet count,
 /// 50 bytes per facet.
@@ -22,7 +22,7 @@ pub(crate) fn binary_size_matches(bytes: &[u8]) -> bool {
 }
 
 /// Binary when the size rule holds, or when the file does not start with `solid`.
-fn is_binary(bytes: &[u8]) -> bool {
+pub(crate) fn is_binary(bytes: &[u8]) -> bool {
     binary_size_matches(bytes) || !bytes.trim_ascii_start().starts_with(b"solid")
 }
 

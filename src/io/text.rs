@@ -1,24 +1,50 @@
 //! Text point lists: XYZ, PTS, CSV, TXT.
 //!
-//! Values are separated by whitespace, commas or semicolons; the first three numbers of a row
-//! are x, y, z and extra columns (intensity, colour, normals) are ignored. Before the first data
-//! row, lines that are not data (column names, a PTS point-count line, anything with fewer than
-//! three leading numbers) are skipped as a header. Blank lines and `#` / `//` comments are
-//! skipped anywhere. After data has started, a row without three leading numbers is an error
-//! naming its line.
+//! Values are separated by whitespace, commas or semicolons. Before the first data row, lines
+//! that are not data (column names, a PTS point-count line, anything with fewer than three
+//! leading numbers) are skipped as a header. When a header line names the coordinate columns
+//! (`x`, `y`, `z`, or `easting`, `northing`, `elevation`/`height`, case-insensitive; a `//` or
+//! `#` comment line such as CloudCompare's `//X,Y,Z,R,G,B` counts), those columns are read, so a
+//! survey's `PointID,Easting,Northing,Elevation` reads its coordinates, not its point numbers;
+//! otherwise the first three numbers of a row are x, y, z. Other columns (intensity, colour,
+//! normals) are ignored. Blank lines and `#` / `//` comments are skipped anywhere. After data has
+//! started, a row without numbers in its coordinate columns is an error naming its line.
 
 use super::util::{parse_f64, show, split_fields, utf8_line, Lines};
 use crate::{Error, Result};
 
-const F: &str = "XYZ";
+pub(crate) const F: &str = "XYZ";
 
-fn data_row(line: &str) -> Option<[f64; 3]> {
-    let mut t = split_fields(line);
-    let mut p = [0.0f64; 3];
-    for v in &mut p {
-        *v = t.next()?.parse::<f64>().ok()?;
-    }
-    Some(p)
+/// Where a row's values are: the columns (0-based fields) of x, y, z, and of a normal when the
+/// header names one.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Columns {
+    pub(crate) xyz: [usize; 3],
+    pub(crate) normal: Option<[usize; 3]>,
+}
+
+/// The first three fields, no normal: a list without column names.
+const UNNAMED: Columns = Columns { xyz: [0, 1, 2], normal: None };
+
+/// The columns a header line names, when it names all three coordinates.
+fn named_columns(line: &str) -> Option<Columns> {
+    let names: Vec<String> =
+        split_fields(line).map(|t| t.trim_matches(['"', '\'']).trim_start_matches("//").to_ascii_lowercase()).collect();
+    let find = |aliases: &[&str]| names.iter().position(|n| aliases.contains(&n.as_str()));
+    let xyz = [
+        find(&["x", "easting", "east"])?,
+        find(&["y", "northing", "north"])?,
+        find(&["z", "elevation", "elev", "height", "altitude", "alt"])?,
+    ];
+    let normal = match (
+        find(&["nx", "normal_x", "normalx"]),
+        find(&["ny", "normal_y", "normaly"]),
+        find(&["nz", "normal_z", "normalz"]),
+    ) {
+        (Some(x), Some(y), Some(z)) => Some([x, y, z]),
+        _ => None,
+    };
+    Some(Columns { xyz, normal })
 }
 
 /// True when the line holds no data (blank or a comment).
@@ -27,43 +53,92 @@ fn is_comment(line: &str) -> bool {
     l.is_empty() || l.starts_with('#') || l.starts_with("//")
 }
 
-pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
-    let mut out = Vec::new();
+/// The line's text after its comment marker.
+fn comment_text(line: &str) -> &str {
+    let l = line.trim_start();
+    l.strip_prefix("//").or_else(|| l.strip_prefix('#')).unwrap_or(l)
+}
+
+/// The point in `fields` at `columns`, when all three are numbers.
+fn point(fields: &[&str], columns: &Columns) -> Option<[f64; 3]> {
+    let mut p = [0.0f64; 3];
+    for (v, &c) in p.iter_mut().zip(&columns.xyz) {
+        *v = fields.get(c)?.parse::<f64>().ok()?;
+    }
+    Some(p)
+}
+
+/// One data row, as [`scan`] hands it over.
+pub(crate) struct Row<'a, 'b> {
+    /// The line (without its terminator), a sub-slice of the file's bytes.
+    pub(crate) line: &'a str,
+    /// Its fields, sub-slices of `line`.
+    pub(crate) fields: &'b [&'a str],
+    /// Where its values are.
+    pub(crate) columns: Columns,
+    /// Its coordinates.
+    pub(crate) point: [f64; 3],
+}
+
+/// Calls `visit` with every data row of a text point list, in order (see the module docs for
+/// what a row is). Errors: a line that is not UTF-8, a row after the data started without
+/// numbers in its coordinate columns, a file without any data row.
+pub(crate) fn scan<'a>(bytes: &'a [u8], mut visit: impl FnMut(&Row<'a, '_>) -> Result<()>) -> Result<()> {
+    let mut columns = UNNAMED;
     let mut started = false;
+    let mut fields: Vec<&'a str> = Vec::new();
     for (n, raw) in Lines::new(bytes) {
         let line = utf8_line(F, n, raw)?;
         if is_comment(line) {
+            if !started {
+                columns = named_columns(comment_text(line)).unwrap_or(columns);
+            }
             continue;
         }
-        match data_row(line) {
-            Some(p) => {
+        fields.clear();
+        fields.extend(split_fields(line));
+        match point(&fields, &columns) {
+            Some(point) => {
                 started = true;
-                if out.len() == crate::limits::MAX_FILE_POINTS {
-                    crate::limits::check_file_points(F, out.len() as u64 + 1)?;
-                }
-                out.push(p);
+                visit(&Row { line, fields: &fields, columns, point })?;
             }
-            None if !started => {} // header
-            None => {
-                let toks: Vec<&str> = split_fields(line).take(3).collect();
-                // Name the offending value when there is one.
-                for (k, t) in toks.iter().enumerate() {
-                    parse_f64(F, n, ["x", "y", "z"][k], t)?;
-                }
-                return Err(Error::parse(
-                    F,
-                    format!(
-                        "line {n}: expected at least 3 numbers (x y z), found {} in {}",
-                        toks.len(),
-                        show(line.trim())
-                    ),
-                ));
-            }
+            None if !started => columns = named_columns(line).unwrap_or(columns), // header
+            None => return Err(bad_row(n, line, &fields, &columns)),
         }
     }
     if !started {
         return Err(Error::parse(F, "no line with three numbers (x y z) found: not a text point list"));
     }
+    Ok(())
+}
+
+/// The error for a row after the data started whose coordinates are not all numbers.
+fn bad_row(n: usize, line: &str, fields: &[&str], columns: &Columns) -> Error {
+    // Name the offending value when there is one.
+    for (k, &c) in columns.xyz.iter().enumerate() {
+        if let Some(t) = fields.get(c) {
+            if let Err(e) = parse_f64(F, n, ["x", "y", "z"][k], t) {
+                return e;
+            }
+        }
+    }
+    let wanted = if *columns == UNNAMED {
+        "at least 3 numbers (x y z)".to_string()
+    } else {
+        format!("x, y, z in columns {:?} (named in the header)", columns.xyz.map(|c| c + 1))
+    };
+    Error::parse(F, format!("line {n}: expected {wanted}, found {} fields in {}", fields.len(), show(line.trim())))
+}
+
+pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
+    let mut out = Vec::new();
+    scan(bytes, |row| {
+        if out.len() == crate::limits::MAX_FILE_POINTS {
+            crate::limits::check_file_points(F, out.len() as u64 + 1)?;
+        }
+        out.push(row.point);
+        Ok(())
+    })?;
     Ok(out)
 }
 
@@ -79,7 +154,8 @@ pub(crate) fn sniff(bytes: &[u8]) -> bool {
         if is_comment(line) {
             continue;
         }
-        if data_row(line).is_some() {
+        let fields: Vec<&str> = split_fields(line).take(3).collect();
+        if point(&fields, &UNNAMED).is_some() {
             return true;
         }
         seen += 1;
@@ -88,4 +164,30 @@ pub(crate) fn sniff(bytes: &[u8]) -> bool {
         }
     }
     false
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn header_names_pick_the_columns() {
+        let csv = b"PointID,Easting,Northing,Elevation,Code\n1,500000.25,4100000.5,12.0,TREE\n2,500001.0,4100001.0,13.5,POLE\n";
+        assert_eq!(read(csv).unwrap(), vec![[500000.25, 4100000.5, 12.0], [500001.0, 4100001.0, 13.5]]);
+        let cc = b"//X,Y,Z,R,G,B,Nx,Ny,Nz\n1,2,3,255,0,0,0,0,1\n";
+        let mut cols = None;
+        scan(cc, |r| {
+            cols = Some(r.columns);
+            Ok(())
+        })
+        .unwrap();
+        assert_eq!(cols, Some(Columns { xyz: [0, 1, 2], normal: Some([6, 7, 8]) }));
+        // Named columns, and a later row without a number there: the error names the column.
+        let e = read(b"id x y z\n7 1 2 3\n8 1 y 3\n").unwrap_err().to_string();
+        assert!(e.contains("line 3") && e.contains("'y'"), "{e}");
+        let e = read(b"id x y z\n7 1 2 3\n8 1\n").unwrap_err().to_string();
+        assert!(e.contains("columns [2, 3, 4]"), "{e}");
+        // Unnamed: the first three numbers, as before.
+        assert_eq!(read(b"12\n1 2 3 9 9 9\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+    }
 }

@@ -1,0 +1,95 @@
+//! Moving the coordinates of a line-based text format in which a keyword introduces three
+//! values: OBJ's `v x y z` and `vn x y z`, ASCII STL's `vertex x y z` and `facet normal x y z`.
+//! Every other byte is kept; the values are written as the file wrote its numbers
+//! ([`NumberStyle`]).
+
+use super::motion::Motion;
+use super::number_style::{span, splice, NumberStyle};
+use super::util::{parse_f64, utf8_line, Lines};
+use crate::Result;
+
+/// What the three values after a keyword are.
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) enum Triple {
+    /// A position: mapped.
+    Point,
+    /// A direction: turned.
+    Normal,
+}
+
+/// The keywords (as the tokens that start a line) and what follows them.
+pub(super) type Keywords<'k> = &'k [(&'k [&'k str], Triple)];
+
+/// The triple a line holds: what it is, and its three tokens.
+fn triple<'a>(line: &'a str, keywords: Keywords) -> Option<(Triple, [&'a str; 3])> {
+    let mut toks = line.split_ascii_whitespace();
+    let first = toks.next()?;
+    let (words, kind) = keywords.iter().find(|(words, _)| words[0] == first)?;
+    for w in &words[1..] {
+        if toks.next()? != *w {
+            return None;
+        }
+    }
+    Some((*kind, [toks.next()?, toks.next()?, toks.next()?]))
+}
+
+/// Calls `visit(line, kind, tokens, values)` for every line with a triple of numbers.
+fn each_triple<'a>(
+    bytes: &'a [u8],
+    format: &'static str,
+    keywords: Keywords,
+    mut visit: impl FnMut(&'a str, Triple, [&'a str; 3], [f64; 3]),
+) -> Result<()> {
+    for (n, raw) in Lines::new(bytes) {
+        if !keywords.iter().any(|(words, _)| raw.trim_ascii_start().starts_with(words[0].as_bytes())) {
+            continue;
+        }
+        let line = utf8_line(format, n, raw)?;
+        if let Some((kind, toks)) = triple(line, keywords) {
+            let mut v = [0.0; 3];
+            for a in 0..3 {
+                v[a] = parse_f64(format, n, ["x", "y", "z"][a], toks[a])?;
+            }
+            visit(line, kind, toks, v);
+        }
+    }
+    Ok(())
+}
+
+/// The file with every keyword line's triple moved (points) or turned (normals): positions in
+/// the style of the file's positions (shifted by the motion's scale), normals with at least six
+/// decimals. A triple that is not three numbers is an error naming its line (`format`); one that
+/// is not finite is kept as it is.
+pub(super) fn move_keyword_lines(
+    bytes: &[u8],
+    format: &'static str,
+    keywords: Keywords,
+    motion: &Motion,
+) -> Result<Vec<u8>> {
+    // First pass: how the file writes its numbers.
+    let mut styles = [NumberStyle::default(); 2];
+    each_triple(bytes, format, keywords, |_, kind, toks, _| {
+        toks.iter().for_each(|t| styles[(kind == Triple::Normal) as usize].learn(t))
+    })?;
+    let [point_style, normal_style] = styles;
+    let (point_style, normal_style) = (point_style.scaled(motion.scale()), normal_style.at_least(6));
+    // Second pass: the triples rewritten, the bytes between them copied.
+    let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 8);
+    let mut copied = 0;
+    each_triple(bytes, format, keywords, |line, kind, toks, v| {
+        if !v.iter().all(|v| v.is_finite()) {
+            return;
+        }
+        let (moved, style) = match kind {
+            Triple::Point => (motion.point(v), point_style),
+            Triple::Normal => (motion.normal(v), normal_style),
+        };
+        let edits: Vec<_> = (0..3).map(|a| (span(line, toks[a]), moved[a], style)).collect();
+        let start = line.as_ptr() as usize - bytes.as_ptr() as usize;
+        out.extend_from_slice(&bytes[copied..start]);
+        splice(line.as_bytes(), &edits, &mut out);
+        copied = start + line.len();
+    })?;
+    out.extend_from_slice(&bytes[copied..]);
+    Ok(out)
+}

@@ -1,0 +1,121 @@
+//! How a text file writes its numbers, so that a file moved as it is ([`super::transform_file`])
+//! writes its moved coordinates the way it wrote them: as many decimals as its most precise
+//! value (shifted by a change of unit), or in exponent notation with as many significant digits
+//! when it used it.
+
+use std::ops::Range;
+
+/// The style learned from a file's tokens of one kind (coordinates, or normals).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub(super) struct NumberStyle {
+    /// The most digits after the decimal point (of the mantissa, in exponent notation).
+    decimals: u32,
+    /// True when any token is written with an exponent (`1.5e-3`).
+    exponent: bool,
+}
+
+/// The most decimals written: beyond 17 an `f64` has no more digits to give.
+const MAX_DECIMALS: i64 = 17;
+
+impl NumberStyle {
+    /// Learns from one token (a number as the file wrote it).
+    pub(super) fn learn(&mut self, token: &str) {
+        let mantissa = match token.find(['e', 'E']) {
+            Some(i) => {
+                self.exponent = true;
+                &token[..i]
+            }
+            None => token,
+        };
+        if let Some((_, frac)) = mantissa.split_once('.') {
+            self.decimals = self.decimals.max(frac.len().min(MAX_DECIMALS as usize) as u32);
+        }
+    }
+
+    /// The style of values multiplied by `scale` (a change of unit, e.g. 1000 from metres to
+    /// millimetres): as many fewer decimals as the scale has powers of ten, rounded towards more
+    /// (exponent notation keeps its significant digits).
+    pub(super) fn scaled(self, scale: f64) -> Self {
+        if self.exponent {
+            return self; // as many significant digits as before
+        }
+        let shift = (-scale.log10() - 1e-9).ceil() as i64;
+        Self { decimals: (self.decimals as i64 + shift).clamp(0, MAX_DECIMALS) as u32, ..self }
+    }
+
+    /// This style with at least `decimals` decimals (unit normals written as integers would lose
+    /// their direction once turned).
+    pub(super) fn at_least(self, decimals: u32) -> Self {
+        Self { decimals: self.decimals.max(decimals), ..self }
+    }
+
+    /// Appends `v` in this style: with its decimals, in exponent form (`1.018757e2`) when the
+    /// file used exponents. A value that rounds to zero is written without a sign.
+    pub(super) fn write(self, v: f64, out: &mut Vec<u8>) {
+        let d = self.decimals as usize;
+        let mut s = if self.exponent { format!("{v:.d$e}") } else { format!("{v:.d$}") };
+        if s.starts_with('-') && s[1..].bytes().all(|b| matches!(b, b'0' | b'.')) {
+            s.remove(0);
+        }
+        out.extend_from_slice(s.as_bytes());
+    }
+}
+
+/// Appends `line` with the byte ranges `edits` replaced by their values in `style`, every other
+/// byte as it was. `edits` are in increasing order and do not overlap.
+pub(super) fn splice(line: &[u8], edits: &[(Range<usize>, f64, NumberStyle)], out: &mut Vec<u8>) {
+    let mut at = 0;
+    for (range, v, style) in edits {
+        out.extend_from_slice(&line[at..range.start]);
+        style.write(*v, out);
+        at = range.end;
+    }
+    out.extend_from_slice(&line[at..]);
+}
+
+/// The byte range of `token` within `line` (`token` a sub-slice of `line`).
+pub(super) fn span(line: &str, token: &str) -> Range<usize> {
+    let start = token.as_ptr() as usize - line.as_ptr() as usize;
+    start..start + token.len()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn written(style: NumberStyle, v: f64) -> String {
+        let mut out = Vec::new();
+        style.write(v, &mut out);
+        String::from_utf8(out).unwrap()
+    }
+
+    #[test]
+    fn learns_the_most_decimals_and_exponents() {
+        let mut s = NumberStyle::default();
+        for t in ["1", "-2.5", "3.125", "4.0"] {
+            s.learn(t);
+        }
+        assert_eq!(written(s, 1.0 / 3.0), "0.333");
+        assert_eq!(written(s, -0.0001), "0.000");
+        assert_eq!(written(s.scaled(1000.0), 1234.5678), "1235");
+        assert_eq!(written(s.scaled(0.0254), 1.0), "1.00000");
+        assert_eq!(written(s.scaled(1.0), 2.0), "2.000");
+        assert_eq!(written(NumberStyle::default().at_least(6), 0.5), "0.500000");
+        s.learn("1.5e-3");
+        assert_eq!(written(s, 0.1 + 0.2), "3.000e-1");
+        assert_eq!(written(s.scaled(1000.0), -1234.5678), "-1.235e3");
+        assert_eq!(written(s, -1e-9), "-1.000e-9");
+    }
+
+    #[test]
+    fn splices_values_into_a_line() {
+        let line = "v 1.0 2.0 3.0 # c";
+        let toks: Vec<&str> = line.split(' ').collect();
+        let mut s = NumberStyle::default();
+        s.learn("1.0");
+        let edits: Vec<_> = toks[1..4].iter().zip([5.0, 6.75, -7.0]).map(|(t, v)| (span(line, t), v, s)).collect();
+        let mut out = Vec::new();
+        splice(line.as_bytes(), &edits, &mut out);
+        assert_eq!(String::from_utf8(out).unwrap(), "v 5.0 6.8 -7.0 # c");
+    }
+}

@@ -1,0 +1,90 @@
+//! A text point list (XYZ, PTS, CSV, TXT) moved as it is: each data row's coordinates rewritten,
+//! its normal turned, every other byte kept (the header, comments, other columns such as
+//! intensity and colour, the separators, the line endings).
+//!
+//! The rows are the ones the reader reads ([`super::text`]), in the columns it reads. A normal is
+//! turned when the header names its columns (`nx ny nz`, `normal_x ...`), or, in a list without
+//! column names, when the three columns after x, y, z hold a unit vector on every row (MeshLab's
+//! and CloudCompare's `x y z nx ny nz`). Values are written with as many decimals as the file's
+//! most precise coordinate (fewer or more after a change of unit: see
+//! [`super::number_style::NumberStyle`]), or in exponent form when the file uses it; normals with
+//! at least six decimals. Rows whose coordinates are not finite are kept as they are.
+
+use super::motion::Motion;
+use super::number_style::{span, splice, NumberStyle};
+use super::text::{scan, Row};
+use crate::Result;
+use nalgebra::{Matrix4, Vector3};
+
+/// How far from 1 a normal's length may be (values rounded to a few decimals).
+const UNIT_TOLERANCE: f64 = 1e-2;
+
+/// The three values of `row` at `columns`, when they are numbers.
+fn values(row: &Row, columns: [usize; 3]) -> Option<[f64; 3]> {
+    let mut v = [0.0f64; 3];
+    for (v, c) in v.iter_mut().zip(columns) {
+        *v = row.fields.get(c)?.parse().ok()?;
+    }
+    Some(v)
+}
+
+/// Where an unnamed list's normal would be: the three columns after x, y, z.
+const AFTER_XYZ: [usize; 3] = [3, 4, 5];
+
+/// Where `row`'s normal is: the columns the header names, else, in a list without column names
+/// and when `guess`, the three after x, y, z.
+fn normal_columns(row: &Row, guess: bool) -> Option<[usize; 3]> {
+    row.columns.normal.or((guess && row.columns.xyz == [0, 1, 2]).then_some(AFTER_XYZ))
+}
+
+/// The text list `bytes` with its points moved by `m` (`T_target_source`: a rigid transform, or
+/// one times a uniform scale) and its normals turned, everything else as it was (see the module
+/// docs). Errors: a file the reader refuses, a transform that is not rigid (or uniformly scaled).
+pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
+    let motion = Motion::new(m)?;
+    // First pass: how the file writes its numbers, and whether an unnamed list holds normals.
+    let mut position_style = NumberStyle::default();
+    let mut normal_style = NumberStyle::default();
+    let mut unit_after_xyz = true;
+    scan(bytes, |row| {
+        for &c in &row.columns.xyz {
+            position_style.learn(row.fields[c]);
+        }
+        match normal_columns(row, true).and_then(|c| values(row, c).map(|n| (c, n))) {
+            Some((normal, n)) => {
+                normal.iter().for_each(|&c| normal_style.learn(row.fields[c]));
+                unit_after_xyz &= (Vector3::from(n).norm() - 1.0).abs() <= UNIT_TOLERANCE;
+            }
+            None => unit_after_xyz = false,
+        }
+        Ok(())
+    })?;
+    let position_style = position_style.scaled(motion.scale());
+    let normal_style = normal_style.at_least(6);
+    // Second pass: the data rows rewritten, the bytes between them copied.
+    let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 8);
+    let mut copied = 0;
+    scan(bytes, |row| {
+        if !row.point.iter().all(|v| v.is_finite()) {
+            return Ok(());
+        }
+        let normal = normal_columns(row, unit_after_xyz);
+        let p = motion.point(row.point);
+        let mut edits: Vec<_> =
+            row.columns.xyz.iter().zip(p).map(|(&c, v)| (span(row.line, row.fields[c]), v, position_style)).collect();
+        if let Some(columns) = normal {
+            if let Some(n) = values(row, columns).filter(|n| n.iter().all(|v| v.is_finite())) {
+                let n = motion.normal(n);
+                edits.extend(columns.iter().zip(n).map(|(&c, v)| (span(row.line, row.fields[c]), v, normal_style)));
+            }
+        }
+        edits.sort_by_key(|(range, _, _)| range.start);
+        let start = row.line.as_ptr() as usize - bytes.as_ptr() as usize;
+        out.extend_from_slice(&bytes[copied..start]);
+        splice(row.line.as_bytes(), &edits, &mut out);
+        copied = start + row.line.len();
+        Ok(())
+    })?;
+    out.extend_from_slice(&bytes[copied..]);
+    Ok(out)
+}

@@ -1,0 +1,44 @@
+//! A file moved as it is, whatever its format: the mover of the format the file is in
+//! ([`transform_ply`](super::transform_ply), [`transform_las`](super::transform_las),
+//! [`transform_pcd`](super::transform_pcd), [`transform_text`](super::transform_text), and those
+//! of OBJ and STL), so that a registered scan can be saved in the target's frame in its own
+//! format, with everything the registration did not read (colours, intensity, normals, faces,
+//! other fields).
+
+use super::{detect_format, Format};
+use crate::{Error, Result};
+use nalgebra::Matrix4;
+
+/// The extensions of the files [`transform_file`] moves as they are.
+const MOVABLE: &[&str] = &["ply", "pcd", "xyz", "pts", "txt", "csv", "obj", "stl", "las"];
+
+/// True when a file of this name is one [`transform_file`] moves as it is: PLY, PCD, text point
+/// lists (XYZ, PTS, TXT, CSV), OBJ, STL and LAS by their extension (case-insensitive). False for
+/// LAZ (it would have to be compressed again), E57, OFF and unknown extensions: save such a
+/// source's points moved instead ([`super::write_ply_binary`] of
+/// [`PointCloud::transformed`](crate::PointCloud::transformed)).
+pub fn can_transform(file_name: &str) -> bool {
+    file_name.rsplit_once('.').is_some_and(|(_, ext)| MOVABLE.contains(&ext.to_ascii_lowercase().as_str()))
+}
+
+/// The file `bytes` (named `file_name`, whose extension, or else whose content, says the format:
+/// [`detect_format`]) in its own format with its points moved by `m` (`T_target_source`: a rigid
+/// transform, or one times a uniform scale for a change of unit) and its normals turned,
+/// everything else kept as it was: see each format's mover for what that means. Errors: a format
+/// that cannot be moved as it is (LAZ, E57, OFF: see [`can_transform`]), a file its reader
+/// refuses, coordinates stored as integers where the moved ones cannot be stored, a transform
+/// that is not rigid (or uniformly scaled).
+pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result<Vec<u8>> {
+    match detect_format(bytes, file_name)? {
+        Format::Ply => super::transform_ply(bytes, m),
+        Format::Pcd => super::transform_pcd(bytes, m),
+        Format::Xyz => super::transform_text(bytes, m),
+        Format::Obj => super::obj_transform::transform_obj(bytes, m),
+        Format::Stl => super::stl_transform::transform_stl(bytes, m),
+        Format::Las => super::transform_las(bytes, m),
+        f @ (Format::Off | Format::E57) => Err(Error::parse(
+            f.name(),
+            format!("{} files cannot be moved as they are: save the moved points instead (as PLY)", f.name()),
+        )),
+    }
+}
