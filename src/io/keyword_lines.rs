@@ -33,14 +33,15 @@ fn triple<'a>(line: &'a str, keywords: Keywords) -> Option<(Triple, [&'a str; 3]
     Some((*kind, [toks.next()?, toks.next()?, toks.next()?]))
 }
 
-/// Calls `visit(line, kind, tokens, values)` for every line with a triple of numbers.
+/// Calls `visit(line, kind, tokens, values)` for every line with a triple of numbers. A point
+/// that is not three numbers is an error naming its line; a normal that is not is left out.
 fn each_triple<'a>(
     bytes: &'a [u8],
     format: &'static str,
     keywords: Keywords,
     mut visit: impl FnMut(&'a str, Triple, [&'a str; 3], [f64; 3]),
 ) -> Result<()> {
-    for (n, raw) in Lines::new(bytes) {
+    'lines: for (n, raw) in Lines::new(bytes) {
         if !keywords.iter().any(|(words, _)| raw.trim_ascii_start().starts_with(words[0].as_bytes())) {
             continue;
         }
@@ -48,7 +49,12 @@ fn each_triple<'a>(
         if let Some((kind, toks)) = triple(line, keywords) {
             let mut v = [0.0; 3];
             for a in 0..3 {
-                v[a] = parse_f64(format, n, ["x", "y", "z"][a], toks[a])?;
+                match parse_f64(format, n, ["x", "y", "z"][a], toks[a]) {
+                    Ok(x) => v[a] = x,
+                    // the readers ignore normals: one that is not three numbers is kept as it is
+                    Err(_) if kind == Triple::Normal => continue 'lines,
+                    Err(e) => return Err(e),
+                }
             }
             visit(line, kind, toks, v);
         }
@@ -58,8 +64,8 @@ fn each_triple<'a>(
 
 /// The file with every keyword line's triple moved (points) or turned (normals): positions in
 /// the style of the file's positions (shifted by the motion's scale), normals with at least six
-/// decimals. A triple that is not three numbers is an error naming its line (`format`); one that
-/// is not finite is kept as it is.
+/// decimals. A point that is not three numbers is an error naming its line (`format`); a normal
+/// that is not, or a triple that is not finite, is kept as it is.
 pub(super) fn move_keyword_lines(
     bytes: &[u8],
     format: &'static str,
