@@ -1,6 +1,6 @@
 // The package's public API over the raw wasm-bindgen glue (arps_glue.js): the same classes and
 // functions (`Registrar`, `parsePointCloud`, `readPointCloud`, `transformPointCloud`, `writePly`,
-// `transformPly`, `transformLas`, `version`), with two guarantees
+// `transformFile`, `canTransform`, `version`), with two guarantees
 // the glue alone does not give:
 //
 // 1. Inputs are checked here, in JavaScript, before they reach the glue: clouds must be real
@@ -697,18 +697,18 @@ export function makeApi(glue, isReady, env = {}) {
     return guarded("writePly", () => glue.writePly(c));
   }
 
-  /** A PLY file moved as it is (every property kept, normals turned); see arps.d.ts. */
-  function transformPly(bytes, matrix) {
+  /** A file moved as it is, in its own format (every attribute kept, normals turned); see arps.d.ts. */
+  function transformFile(bytes, fileName, matrix) {
     const b = bytesArg(bytes, "bytes");
+    const name = fileNameArg(fileName);
     const m = matrixArg(matrix, "matrix");
-    return guarded("transformPly", () => glue.transformPly(b, m));
+    return guarded("transformFile", () => glue.transformFile(b, name, m));
   }
 
-  /** A LAS file moved as it is (every attribute kept); see arps.d.ts. */
-  function transformLas(bytes, matrix) {
-    const b = bytesArg(bytes, "bytes");
-    const m = matrixArg(matrix, "matrix");
-    return guarded("transformLas", () => glue.transformLas(b, m));
+  /** True when transformFile moves a file of this name as it is; see arps.d.ts. */
+  function canTransform(fileName) {
+    const name = fileNameArg(fileName);
+    return guarded("canTransform", () => glue.canTransform(name));
   }
 
   /** The crate version. */
@@ -722,8 +722,8 @@ export function makeApi(glue, isReady, env = {}) {
     readPointCloud,
     transformPointCloud,
     writePly,
-    transformPly,
-    transformLas,
+    transformFile,
+    canTransform,
     version,
     setDefaultModel,
   };

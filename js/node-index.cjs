@@ -47,8 +47,8 @@ module.exports = {
   readPointCloud: api.readPointCloud,
   transformPointCloud: api.transformPointCloud,
   writePly: api.writePly,
-  transformPly: api.transformPly,
-  transformLas: api.transformLas,
+  transformFile: api.transformFile,
+  canTransform: api.canTransform,
   version: api.version,
   /**
    * Nothing to do in Node (the engine is ready on require; the default model is read from disk on

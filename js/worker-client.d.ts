@@ -140,20 +140,14 @@ export interface WorkerRegistrar {
    */
   writePly(cloud: CloudInput, request?: { transfer?: boolean; signal?: AbortSignal }): Promise<Uint8Array>;
   /**
-   * A PLY file moved as it is, in the worker (see `transformPly` in arps.d.ts: every property and
-   * element kept, normals turned): e.g. a registered source's file by its `T_target_source`.
+   * A file moved as it is, in its own format, in the worker (see `transformFile` in arps.d.ts:
+   * PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, STL, LAS; every attribute kept, normals turned): e.g. a
+   * registered source's file by its `T_target_source`. Rejects for LAZ, E57 and OFF (save their
+   * points: `writePly(await transformPointCloud(cloud, T))`).
    */
-  transformPly(
+  transformFile(
     bytes: Uint8Array | ArrayBuffer,
-    matrix: ArrayLike<number> | number[][],
-    request?: { transfer?: boolean; signal?: AbortSignal },
-  ): Promise<Uint8Array>;
-  /**
-   * A LAS file moved as it is, in the worker (see `transformLas` in arps.d.ts: every attribute
-   * kept, the header's offsets and bounds updated; LAZ refused).
-   */
-  transformLas(
-    bytes: Uint8Array | ArrayBuffer,
+    fileName: string,
     matrix: ArrayLike<number> | number[][],
     request?: { transfer?: boolean; signal?: AbortSignal },
   ): Promise<Uint8Array>;

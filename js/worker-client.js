@@ -229,11 +229,8 @@ export async function createWorkerRegistrar(options = {}) {
     async writePly(cloud, req = {}) {
       return (await ask({ type: "write", cloud }, [cloud], req)).bytes;
     },
-    async transformPly(bytes, matrix, req = {}) {
-      return (await ask({ type: "move-ply", bytes, matrix }, [bytes], req)).bytes;
-    },
-    async transformLas(bytes, matrix, req = {}) {
-      return (await ask({ type: "move-las", bytes, matrix }, [bytes], req)).bytes;
+    async transformFile(bytes, fileName, matrix, req = {}) {
+      return (await ask({ type: "move", bytes, fileName, matrix }, [bytes], req)).bytes;
     },
     terminate() {
       terminated = true;

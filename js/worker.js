@@ -11,8 +11,7 @@
 //   { id, type: "read", bytes, fileName, options? }   readPointCloud: { points, origin }
 //   { id, type: "transform", cloud, matrix }   transformPointCloud: { points, origin }
 //   { id, type: "write", cloud }            writePly: the PLY file's bytes
-//   { id, type: "move-ply", bytes, matrix }  transformPly: the moved PLY file's bytes
-//   { id, type: "move-las", bytes, matrix }  transformLas: the moved LAS file's bytes
+//   { id, type: "move", bytes, fileName, matrix }  transformFile: the moved file's bytes
 // Replies (worker -> main), with the request's `id`:
 //   { id, type: "progress", stage }         stage: "loading" | "preparing" | "network" | "refining" | "done"
 //   { id, type: "ready", provenance, modelConfig }
@@ -21,7 +20,7 @@
 //   { id, type: "read", cloud }             cloud.points buffer transferred (read and transform)
 //   { id, type: "written", bytes }          bytes (Uint8Array) buffer transferred
 //   { id, type: "error", message, name, code? }   code: "ARPS_TRAPPED" | "ARPS_UNUSABLE" after a trap
-import init, { Registrar, parsePointCloud, readPointCloud, transformLas, transformPly, transformPointCloud, writePly } from "./arps.js";
+import init, { Registrar, parsePointCloud, readPointCloud, transformFile, transformPointCloud, writePly } from "./arps.js";
 
 let registrar = null;
 let loading = null;
@@ -93,15 +92,9 @@ async function handle(msg) {
       post({ id, type: "written", bytes }, [bytes.buffer]);
       return;
     }
-    case "move-ply": {
+    case "move": {
       await load(id);
-      const bytes = transformPly(msg.bytes, msg.matrix);
-      post({ id, type: "written", bytes }, [bytes.buffer]);
-      return;
-    }
-    case "move-las": {
-      await load(id);
-      const bytes = transformLas(msg.bytes, msg.matrix);
+      const bytes = transformFile(msg.bytes, msg.fileName, msg.matrix);
       post({ id, type: "written", bytes }, [bytes.buffer]);
       return;
     }

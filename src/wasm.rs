@@ -15,8 +15,8 @@
 //! * `readPointCloud(bytes: Uint8Array, fileName: string) -> { points: Float32Array, origin }`;
 //! * `transformPointCloud(cloud, matrix) -> { points, origin }` and `writePly(cloud) -> Uint8Array`
 //!   (a cloud: a `Float32Array` or `{ points: Float32Array, origin }`);
-//! * `transformPly(bytes, matrix)`, `transformLas(bytes, matrix)` -> `Uint8Array` (a PLY or LAS
-//!   file moved as it is).
+//! * `transformFile(bytes, fileName, matrix)` -> `Uint8Array` (a file moved as it is, in its own
+//!   format) and `canTransform(fileName)`.
 //!
 //! Nothing here may panic on user input: a panic in wasm aborts the instance (wasm32 builds with
 //! `panic = "abort"`; there is no `catch_unwind`), so every fallible step returns
@@ -223,33 +223,31 @@ pub fn write_ply(#[wasm_bindgen(unchecked_param_type = "CloudInput")] cloud: JsV
     Ok(crate::io::write_ply_binary(&cloud_arg(&cloud, "cloud")?))
 }
 
-/// A PLY file moved as it is, e.g. a registered source by its result's `T_target_source`: the
-/// positions of its `vertex` element mapped in f64 and written back in their own type, normals
-/// (`nx`, `ny`, `nz`) turned, every other property and element kept (colours, intensity, faces).
-/// `matrix`: 16 numbers, column-major (or, through the package's entry, four row-major rows), a
-/// rigid transform or one times a uniform scale. Returns the moved file's bytes. Throws on a file
-/// the PLY reader refuses, a vertex element with integer coordinates or a list property, and a
-/// matrix that is not rigid (or uniformly scaled).
-#[wasm_bindgen(js_name = transformPly)]
-pub fn transform_ply(
+/// A file moved as it is, in its own format, e.g. a registered source by its result's
+/// `T_target_source`: PLY, PCD, text lists (XYZ, PTS, TXT, CSV), OBJ, STL and LAS (see
+/// `canTransform`). Positions are mapped in f64 and written back as the file stored them (the
+/// property's type, the text's decimals, LAS's scaled integers with new offsets), normals turned,
+/// everything else kept (colours, intensity, classification, faces, other fields, the header).
+/// `fileName` says the format by its extension (else the content does). `matrix`: 16 numbers,
+/// column-major (or, through the package's entry, four row-major rows), a rigid transform or one
+/// times a uniform scale (a change of unit). Returns the moved file's bytes. Throws on a format
+/// that cannot be moved as it is (LAZ, E57, OFF), a file its reader refuses, integer coordinates
+/// where the moved ones cannot be stored, and a matrix that is not rigid (or uniformly scaled).
+#[wasm_bindgen(js_name = transformFile)]
+pub fn transform_file(
     #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    #[wasm_bindgen(js_name = fileName)] file_name: &str,
     #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
 ) -> Result<Vec<u8>, JsError> {
-    crate::io::transform_ply(bytes, &matrix_arg(matrix)?).map_err(js_err)
+    crate::io::transform_file(bytes, file_name, &matrix_arg(matrix)?).map_err(js_err)
 }
 
-/// A LAS file moved as it is, e.g. a registered survey by its result's `T_target_source`: every
-/// point's X, Y, Z mapped in f64 and stored again with the file's scales, the header's offsets
-/// and bounds updated, every other byte kept (intensity, classification, GPS time, colour, the
-/// VLRs). `matrix` as for `transformPly`. Returns the moved file's bytes. Throws on a file the
-/// LAS reader refuses, a LAZ file (it would have to be compressed again), points the file's
-/// scales cannot store once moved, and a matrix that is not rigid (or uniformly scaled).
-#[wasm_bindgen(js_name = transformLas)]
-pub fn transform_las(
-    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
-    #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
-) -> Result<Vec<u8>, JsError> {
-    crate::io::transform_las(bytes, &matrix_arg(matrix)?).map_err(js_err)
+/// True when `transformFile` moves a file of this name as it is: `.ply .pcd .xyz .pts .txt .csv
+/// .obj .stl .las` (case-insensitive). False for LAZ, E57, OFF and other names: save such a
+/// source as `writePly(transformPointCloud(cloud, T))`.
+#[wasm_bindgen(js_name = canTransform)]
+pub fn can_transform(#[wasm_bindgen(js_name = fileName)] file_name: &str) -> bool {
+    crate::io::can_transform(file_name)
 }
 
 /// Holds a loaded model and reusable buffers; registers pairs of clouds.

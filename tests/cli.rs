@@ -414,6 +414,28 @@ fn register_writes_the_aligned_source() {
             assert!(std::fs::read(out_path).unwrap().starts_with(b"ply\n"));
         }
     }
+    // a PCD and a CSV source to their own format: the file itself moved (io::transform_file)
+    for (source, name) in [
+        ("fixtures/formats/velodyne_2000_binary.pcd", "velo-aligned.pcd"),
+        ("fixtures/formats/eth_car_1000.csv", "car.xyz"),
+    ] {
+        let out_path = dir.join(name);
+        let out = arps(&["register", source, source, "--json", "--aligned", out_path.to_str().unwrap()]);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let bytes = std::fs::read(root.join(source)).unwrap();
+        let want = arps::io::transform_file(&bytes, source, &matrix(&v)).unwrap();
+        assert_eq!(std::fs::read(&out_path).unwrap(), want, "{source}");
+    }
+    let pcd_to_obj = arps(&[
+        "register",
+        "fixtures/formats/velodyne_2000_binary.pcd",
+        target,
+        "--aligned",
+        dir.join("v.obj").to_str().unwrap(),
+    ]);
+    let stderr = String::from_utf8_lossy(&pcd_to_obj.stderr);
+    assert!(stderr.contains("v.obj .pcd (the source moved as it is) or .ply (its points), for"), "{stderr}");
     let laz_to_las = arps(&["register", "fixtures/formats/simple.laz", las, "--aligned", las_out.to_str().unwrap()]);
     let stderr = String::from_utf8_lossy(&laz_to_las.stderr);
     assert!(!laz_to_las.status.success() && stderr.contains("simple-aligned.las .ply, for"), "{stderr}");

@@ -544,20 +544,20 @@ async function downloadAligned() {
   const button = $("download-ply");
   button.disabled = true;
   try {
-    // The package's own, in the engine's worker, every buffer transferred: a PLY file moved as it
-    // is (its colours, normals and faces kept; the unit change included), else the points from
-    // the page's store, moved (the origin in f64) and written (doubles when the scan has one).
+    // The package's own, in the engine's worker, every buffer transferred: the source's file moved
+    // as it is, in its own format (its colours, intensity, normals and faces kept; the unit change
+    // included), else (LAZ, E57, OFF) the points from the page's store, moved (the origin in f64)
+    // and written as PLY (doubles when the scan has one).
     const arps = await getEngine();
     const T = shownPose(result).T_target_source;
     let bytes = null;
     let ext = "ply";
-    const own = source.file && /\.(ply|las)$/i.exec(source.name)?.[1].toLowerCase();
+    const own = source.file && /\.([a-z0-9]+)$/i.exec(source.name)?.[1].toLowerCase();
     if (own) {
-      // a PLY or LAS file moved as it is (integer PLY coordinates, say, fall back to the points)
+      // (a format transformFile does not move, or integer PLY coordinates, fall back to the points)
       const file = new Uint8Array(await source.file.arrayBuffer());
       const m = Array.from(T, (v, i) => (i < 12 && i % 4 < 3 ? v * source.scale : v)); // T S
-      const move = own === "las" ? arps.transformLas : arps.transformPly;
-      bytes = await move(file, m, { transfer: true }).catch(() => null);
+      bytes = await arps.transformFile(file, source.name, m, { transfer: true }).catch(() => null);
       if (bytes) ext = own;
     }
     if (!bytes) {

@@ -3,7 +3,7 @@
 // Cases: bad lengths, NaN, too few / too many points, wrong types, array-likes that lie about
 // their length, bad options (unknown, wrong type, throwing getters, Proxies, bad
 // initialTransform), bad onProgress, bad files (corrupt LAZ and E57 too) and file names, bad
-// matrices and clouds for transformPointCloud / writePly / transformPly / transformLas, bad
+// matrices and clouds for transformPointCloud / writePly / transformFile, bad
 // weights, use after
 // free, and
 // a real trap inside the engine, after which the module is re-instantiated and the registrars
@@ -250,7 +250,7 @@ test("large coordinates: Float64Array or { points, origin } in, T_target_source 
 });
 
 for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]]) {
-  test(`${name}: transformPointCloud, writePly, transformPly and transformLas save a registered source in the target's frame`, () => {
+  test(`${name}: transformPointCloud, writePly and transformFile save a registered source in the target's frame`, () => {
     const r = arps.Registrar.withDefaultModel();
     // A map-grid survey (LAS 1.4 LAZ, about 1.7e6 from zero) onto a copy of itself moved; the
     // copy comes from transformPointCloud itself, checked first against f64 arithmetic.
@@ -311,10 +311,10 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     rejects(r, "length 4", () => arps.writePly(new Float32Array(4)), /^cloud: .*not a multiple of 3/);
     rejects(r, "not a cloud", () => arps.transformPointCloud("points", T), /^cloud: expected a Float32Array/);
 
-    // transformPly: a PLY file moved as it is (a fragment with normals, colours and faces): the
+    // transformFile on a PLY: the file moved as it is (a fragment with normals, colours and faces): the
     // same length and header, its points those transformPointCloud gives, its colours kept
     const frag = readFileSync(path.join(root, "fixtures", "formats", "frag_115_2000_binary.ply"));
-    const movedPly = arps.transformPly(frag, T);
+    const movedPly = arps.transformFile(frag, "frag.ply", T);
     assert.ok(movedPly instanceof Uint8Array && movedPly.length === frag.length);
     const body = frag.indexOf("end_header\n") + 11;
     assert.deepEqual(movedPly.subarray(0, body), new Uint8Array(frag.subarray(0, body)));
@@ -322,16 +322,17 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     const got = arps.readPointCloud(movedPly, "f.ply");
     let apart = 0;
     for (let i = 0; i < got.points.length; i++) apart = Math.max(apart, Math.abs(got.origin[i % 3] + got.points[i] - (want.origin[i % 3] + want.points[i])));
-    assert.ok(apart < 1e-4, `transformPly's points ${apart} from transformPointCloud's`);
+    assert.ok(apart < 1e-4, `transformFile's PLY points ${apart} from transformPointCloud's`);
     for (const i of [0, 999, 1999]) assert.deepEqual(movedPly.subarray(body + i * 27 + 24, body + i * 27 + 27), new Uint8Array(frag.subarray(body + i * 27 + 24, body + i * 27 + 27)), `colour ${i}`);
-    rejects(r, "transformPly: not a PLY", () => arps.transformPly(new Uint8Array([1, 2, 3]), T), /PLY/);
-    rejects(r, "transformPly: scaled along one axis", () => arps.transformPly(frag, T.map((v, i) => (i === 0 ? 2 * v : v))), /not rigid/);
-    rejects(r, "transformPly: no matrix", () => arps.transformPly(frag), /^matrix is undefined/);
+    rejects(r, "transformFile: not a PLY", () => arps.transformFile(new Uint8Array([1, 2, 3]), "a.ply", T), /PLY/);
+    rejects(r, "transformFile: scaled along one axis", () => arps.transformFile(frag, "a.ply", T.map((v, i) => (i === 0 ? 2 * v : v))), /not rigid/);
+    rejects(r, "transformFile: no matrix", () => arps.transformFile(frag, "a.ply"), /^matrix is undefined/);
+    rejects(r, "transformFile: a file name that is not a string", () => arps.transformFile(frag, 7, T), /^fileName: expected a string/);
 
-    // transformLas: a LAS survey moved as it is: the same length and VLRs, its points those
+    // transformFile on a LAS survey: moved as it is: the same length and VLRs, its points those
     // transformPointCloud gives (to the file's 0.01 scale), its records' attributes kept
     const las = readFileSync(path.join(root, "fixtures", "formats", "simple.las"));
-    const movedLas = arps.transformLas(las, T);
+    const movedLas = arps.transformFile(las, "simple.las", T);
     assert.ok(movedLas instanceof Uint8Array && movedLas.length === las.length);
     const offset = las.readUInt32LE(96);
     assert.deepEqual(movedLas.subarray(227, offset), new Uint8Array(las.subarray(227, offset)), "the VLRs");
@@ -340,10 +341,25 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     const gotLas = arps.readPointCloud(movedLas, "a.las");
     apart = 0;
     for (let i = 0; i < gotLas.points.length; i++) apart = Math.max(apart, Math.abs(gotLas.origin[i % 3] + gotLas.points[i] - (wantLas.origin[i % 3] + wantLas.points[i])));
-    assert.ok(apart <= 0.0052, `transformLas's points ${apart} from transformPointCloud's`);
+    assert.ok(apart <= 0.0052, `transformFile's LAS points ${apart} from transformPointCloud's`);
     const laz = readFileSync(path.join(root, "fixtures", "formats", "simple.laz"));
-    rejects(r, "transformLas: LAZ", () => arps.transformLas(laz, T), /LAZ file cannot be moved as it is/);
-    rejects(r, "transformLas: not LAS", () => arps.transformLas(frag, T), /LASF/);
+    rejects(r, "transformFile: LAZ", () => arps.transformFile(laz, "simple.laz", T), /LAZ file cannot be moved as it is/);
+    rejects(r, "transformFile: not LAS", () => arps.transformFile(frag, "a.las", T), /LASF/);
+    // a PCD (x y z normal_x normal_y normal_z rgb) moved as it is: its points those
+    // transformPointCloud gives, its header and colours kept; the names canTransform accepts
+    const pcd = readFileSync(path.join(root, "fixtures", "formats", "cloud_bin_0_binary.pcd"));
+    const movedPcd = arps.transformFile(pcd, "cloud.pcd", T);
+    const pcdBody = pcd.indexOf("DATA binary\n") + 12;
+    assert.ok(movedPcd.length === pcd.length);
+    assert.deepEqual(movedPcd.subarray(0, pcdBody), new Uint8Array(pcd.subarray(0, pcdBody)), "the PCD header");
+    assert.deepEqual(movedPcd.subarray(pcdBody + 24, pcdBody + 28), new Uint8Array(pcd.subarray(pcdBody + 24, pcdBody + 28)), "a colour");
+    const wantPcd = arps.transformPointCloud(arps.readPointCloud(pcd, "c.pcd"), T);
+    const gotPcd = arps.readPointCloud(movedPcd, "c.pcd");
+    apart = 0;
+    for (let i = 0; i < gotPcd.points.length; i++) apart = Math.max(apart, Math.abs(gotPcd.origin[i % 3] + gotPcd.points[i] - (wantPcd.origin[i % 3] + wantPcd.points[i])));
+    assert.ok(apart < 1e-4, `transformFile's PCD points ${apart} from transformPointCloud's`);
+    assert.deepEqual(["a.ply", "b.PCD", "c.pts", "d.csv", "e.obj", "f.stl", "g.las", "h.laz", "i.e57", "j.off", "k"].map(arps.canTransform), [true, true, true, true, true, true, true, false, false, false, false]);
+    rejects(r, "transformFile: E57", () => arps.transformFile(new Uint8Array(8), "scan.e57", T), /E57 files cannot be moved as they are/);
     r.free();
   });
 }

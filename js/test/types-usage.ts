@@ -1,6 +1,6 @@
 // Compile-only check of the package's TypeScript declarations (tsc --noEmit -p js/test): typical
 // use must type-check, options are typed (not `any`), and misspelled options are rejected.
-import init, { initSync, Registrar, parsePointCloud, readPointCloud, transformLas, transformPly, transformPointCloud, version, writePly } from "../../pkg/arps.js";
+import init, { canTransform, initSync, Registrar, parsePointCloud, readPointCloud, transformFile, transformPointCloud, version, writePly } from "../../pkg/arps.js";
 import type { InitOptions, RegisterOptions, RegistrationEvidence, RegistrationResult, RegistrationSearch } from "../../pkg/arps.js";
 import { createWorkerRegistrar, type Stage, type WorkerRegistrar } from "../../pkg/worker-client.js";
 
@@ -79,9 +79,11 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   const bytes: Uint8Array = writePly(transformPointCloud(new Float64Array(source), [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]));
   // @ts-expect-error the matrix comes second
   transformPointCloud(result.T_target_source);
-  // A PLY file moved as it is (colours, normals and faces kept).
-  const movedFile: Uint8Array = transformPly(new Uint8Array(), result.T_target_source);
-  const movedSurvey: Uint8Array = transformLas(new Uint8Array(), result.T_target_source);
+  // A file moved as it is, in its own format (colours, normals and faces kept).
+  const movedFile: Uint8Array = transformFile(new Uint8Array(), "scan.pcd", result.T_target_source);
+  const movedSurvey: Uint8Array = canTransform("survey.las") ? transformFile(new Uint8Array(), "survey.las", result.T_target_source) : new Uint8Array();
+  // @ts-expect-error the file's name comes second
+  transformFile(new Uint8Array(), result.T_target_source);
   r.free();
   return far.length + ms + confidence + figures + String(snakeEvidence).length + networkPoints + reference.length + String(snake).length + w.length + start.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length + aligned.length + bytes.length + movedFile.length + movedSurvey.length;
 }

@@ -81,13 +81,15 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     assert.match(new TextDecoder().decode(ply.subarray(0, 150)), /property double x/);
     await assert.rejects(arps.transformPointCloud(source(), [1, 2, 3]), /matrix has 3 elements/);
     const plyFile = new Uint8Array(sourcePly);
-    const movedFile = await arps.transformPly(plyFile, res.T_target_source, { transfer: true });
+    const movedFile = await arps.transformFile(plyFile, "source.ply", res.T_target_source, { transfer: true });
     assert.equal(plyFile.length, 0, "the file's bytes transferred");
     assert.ok(movedFile instanceof Uint8Array && movedFile.length > 100);
     const las = readFileSync(path.join(root, "fixtures", "formats", "simple.las"));
-    const movedLas = await arps.transformLas(las, res.T_target_source);
+    const movedLas = await arps.transformFile(las, "simple.las", res.T_target_source);
     assert.ok(movedLas.length === las.length && new TextDecoder().decode(movedLas.subarray(0, 4)) === "LASF");
-    await assert.rejects(arps.transformLas(las, [1, 2]), /matrix has 2 elements/);
+    await assert.rejects(arps.transformFile(las, "simple.las", [1, 2]), /matrix has 2 elements/);
+    const laz = readFileSync(path.join(root, "fixtures", "formats", "simple.laz"));
+    await assert.rejects(arps.transformFile(laz, "simple.laz", res.T_target_source), /LAZ file cannot be moved/);
     // Clouds with an origin transfer their points too; zero origins give the same answer.
     const so = { points: source(), origin: [0, 0, 0] };
     const to = { points: target(), origin: [0, 0, 0] };

@@ -90,10 +90,10 @@ pub(super) fn move_keyword_lines(
             Triple::Point => (motion.point(v), point_style),
             Triple::Normal => (motion.normal(v), normal_style),
         };
-        let edits: Vec<_> = (0..3).map(|a| (span(line, toks[a]), moved[a], style)).collect();
+        let mut edits: Vec<_> = (0..3).map(|a| (span(line, toks[a]), moved[a], style)).collect();
         let start = line.as_ptr() as usize - bytes.as_ptr() as usize;
         out.extend_from_slice(&bytes[copied..start]);
-        splice(line.as_bytes(), &edits, &mut out);
+        splice(line.as_bytes(), &mut edits, &mut out);
         copied = start + line.len();
     })?;
     out.extend_from_slice(&bytes[copied..]);

@@ -62,8 +62,16 @@ impl NumberStyle {
 }
 
 /// Appends `line` with the byte ranges `edits` replaced by their values in `style`, every other
-/// byte as it was. `edits` are in increasing order and do not overlap.
-pub(super) fn splice(line: &[u8], edits: &[(Range<usize>, f64, NumberStyle)], out: &mut Vec<u8>) {
+/// byte as it was. `edits` (a few per line) do not overlap; they are put in order here (an
+/// insertion sort: the library's sorts would add kilobytes to the WebAssembly module for this).
+pub(super) fn splice(line: &[u8], edits: &mut [(Range<usize>, f64, NumberStyle)], out: &mut Vec<u8>) {
+    for i in 1..edits.len() {
+        let mut j = i;
+        while j > 0 && edits[j - 1].0.start > edits[j].0.start {
+            edits.swap(j - 1, j);
+            j -= 1;
+        }
+    }
     let mut at = 0;
     for (range, v, style) in edits {
         out.extend_from_slice(&line[at..range.start]);
@@ -113,9 +121,10 @@ mod tests {
         let toks: Vec<&str> = line.split(' ').collect();
         let mut s = NumberStyle::default();
         s.learn("1.0");
-        let edits: Vec<_> = toks[1..4].iter().zip([5.0, 6.75, -7.0]).map(|(t, v)| (span(line, t), v, s)).collect();
+        let mut edits: Vec<_> =
+            toks[1..4].iter().zip([5.0, 6.75, -7.0]).map(|(t, v)| (span(line, t), v, s)).rev().collect();
         let mut out = Vec::new();
-        splice(line.as_bytes(), &edits, &mut out);
+        splice(line.as_bytes(), &mut edits, &mut out);
         assert_eq!(String::from_utf8(out).unwrap(), "v 5.0 6.8 -7.0 # c");
     }
 }

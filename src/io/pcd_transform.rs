@@ -144,10 +144,9 @@ fn move_ascii(
                 edits.extend((0..3).map(|a| (span(line, toks[at[a]]), turned[a], normal_style)));
             }
         }
-        edits.sort_by_key(|(range, _, _)| range.start);
         let start = line.as_ptr() as usize - bytes.as_ptr() as usize;
         out.extend_from_slice(&bytes[copied..start]);
-        splice(line.as_bytes(), &edits, &mut out);
+        splice(line.as_bytes(), &mut edits, &mut out);
         copied = start + line.len();
         Ok(())
     })?;

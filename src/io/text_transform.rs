@@ -78,10 +78,9 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
                 edits.extend(columns.iter().zip(n).map(|(&c, v)| (span(row.line, row.fields[c]), v, normal_style)));
             }
         }
-        edits.sort_by_key(|(range, _, _)| range.start);
         let start = row.line.as_ptr() as usize - bytes.as_ptr() as usize;
         out.extend_from_slice(&bytes[copied..start]);
-        splice(row.line.as_bytes(), &edits, &mut out);
+        splice(row.line.as_bytes(), &mut edits, &mut out);
         copied = start + row.line.len();
         Ok(())
     })?;

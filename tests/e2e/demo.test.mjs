@@ -628,7 +628,7 @@ test("a georeferenced LAZ survey aligned onto itself moved, in map-grid coordina
 test("a LAS survey is downloaded as LAS, moved as it is", { timeout: TIMEOUT * 2 }, async () => {
   // fixtures/formats/simple.las (LAS 1.2 format 3: colour, GPS time) onto the moved survey of the
   // test before: the download is the LAS file itself, moved by the answer (the engine's
-  // transformLas), its attributes kept
+  // transformFile), its attributes kept
   const las = join(ROOT, "fixtures", "formats", "simple.las");
   await page.setInputFiles("#source-file", las);
   await page.waitForFunction(() => /simple\.las · 1,065 points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
@@ -651,6 +651,36 @@ test("a LAS survey is downloaded as LAS, moved as it is", { timeout: TIMEOUT * 2
   const q = [0, 1, 2].map((k) => after.readInt32LE(offset + 4 * k) * after.readDoubleLE(131 + 8 * k) + after.readDoubleLE(155 + 8 * k));
   const want = [0, 1, 2].map((r) => m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2] + m[r][3]);
   assert.ok(Math.hypot(...q.map((v, k) => v - want[k])) < 0.01, `first point ${q} vs ${want}`);
+});
+
+test("a PCD scan is downloaded as PCD, moved as it is", { timeout: TIMEOUT * 2 }, async () => {
+  // fixtures/formats/velodyne_2000_binary.pcd (x y z intensity, float) onto itself: the download
+  // is the PCD file itself, its header and intensities kept, its points moved by the answer
+  const pcd = join(ROOT, "fixtures", "formats", "velodyne_2000_binary.pcd");
+  for (const which of ["source", "target"]) {
+    await page.setInputFiles(`#${which}-file`, pcd);
+    await page.waitForFunction((id) => /velodyne_2000_binary\.pcd · 2,000 points/.test(document.getElementById(id).textContent), `${which}-info`, { timeout: TIMEOUT });
+  }
+  const { result, error } = await alignAndWait();
+  assert.equal(error, "", `unexpected #error: ${error}`);
+  const [download] = await Promise.all([page.waitForEvent("download"), page.click("#download-ply")]);
+  assert.equal(download.suggestedFilename(), "velodyne_2000_binary-aligned.pcd");
+  const file = join(dir, "velodyne-aligned.pcd");
+  await download.saveAs(file);
+  const [before, after] = [readFileSync(pcd), readFileSync(file)];
+  const body = before.indexOf("DATA binary\n") + 12;
+  assert.equal(after.length, before.length);
+  assert.ok(after.subarray(0, body).equals(before.subarray(0, body)), "the header");
+  const m = result.T_target_source; // row-major
+  let worst = 0;
+  for (let i = 0; i < 2000; i++) {
+    const at = body + 16 * i;
+    assert.equal(after.readFloatLE(at + 12), before.readFloatLE(at + 12), `intensity of point ${i}`);
+    const p = [0, 1, 2].map((k) => before.readFloatLE(at + 4 * k));
+    const want = [0, 1, 2].map((r) => m[r][0] * p[0] + m[r][1] * p[1] + m[r][2] * p[2] + m[r][3]);
+    worst = Math.max(worst, ...[0, 1, 2].map((k) => Math.abs(after.readFloatLE(at + 4 * k) - want[k])));
+  }
+  assert.ok(worst < 1e-5, `the points are up to ${worst} from the answer applied`);
 });
 
 test("a 1M-point pair: loaded, fitted and aligned without blocking the main thread", { timeout: TIMEOUT * 3 }, async () => {

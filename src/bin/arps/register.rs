@@ -92,11 +92,12 @@ pub struct RegisterArgs {
     /// millimetres): the answer, and `--aligned`, are then in the target's unit.
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     source_scale: Option<f64>,
-    /// Write each source, moved by its answer into the target's frame, to PATH: a LAS source to
-    /// a `.las` PATH as its own file moved, every attribute kept (the header's offsets and
-    /// bounds updated); else as PLY (a `.ply` PATH): a PLY source as its own file moved, every
-    /// property and element kept (colours, normals turned, faces); any other (LAZ too) as the
-    /// points read, in binary (`double` coordinates when they are far from zero, else `float`).
+    /// Write each source, moved by its answer into the target's frame, to PATH. To a PATH of the
+    /// source's own format (PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, STL, LAS), the source file as itself,
+    /// moved: every attribute kept (colours, intensity, other fields and columns, faces, LAS's
+    /// header updated), normals turned, coordinates stored as the file stored them. To a `.ply`
+    /// PATH (and for LAZ, E57 and OFF sources, which cannot be moved as they are), the points
+    /// read, in binary PLY (`double` coordinates when they are far from zero, else `float`).
     /// With several sources PATH must hold `{stem}`, replaced by each source file's name
     /// without its extension (e.g. `out/{stem}-aligned.ply`). An input file is never
     /// overwritten.
@@ -211,15 +212,32 @@ fn print_registration(
     Ok(())
 }
 
+/// True when `path` names a file of `source`'s own format that `io::transform_file` moves as it
+/// is (`scan.pcd` to `out.pcd`, `a.pts` to `b.xyz`; never a LAZ, E57 or OFF source).
+fn moves_as_it_is(source: &Path, path: &Path) -> bool {
+    let name = |p: &Path| p.to_string_lossy().into_owned();
+    let (source, path) = (name(source), name(path));
+    io::can_transform(&source)
+        && io::can_transform(&path)
+        && io::Format::from_file_name(&source) == io::Format::from_file_name(&path)
+}
+
 /// Where `--aligned PATTERN` writes the aligned `source`: `{stem}` replaced by the source file's
-/// name without its extension. Refuses a path that does not say what is written (`.ply`, or
-/// `.las` for a `.las` source) or that is one of the `inputs` (the same file, however named).
+/// name without its extension. Refuses a path that does not say what is written (the source's
+/// own format when it can be moved as it is, or `.ply`) or that is one of the `inputs` (the same
+/// file, however named).
 fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathBuf, String> {
     let stem = source.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default();
     let path = PathBuf::from(pattern.to_string_lossy().replace("{stem}", &stem));
-    let is = |p: &Path, ext: &str| p.extension().is_some_and(|e| e.eq_ignore_ascii_case(ext));
-    if !(is(&path, "ply") || is(&path, "las") && is(source, "las")) {
-        let what = if is(source, "las") { ".las (the survey moved as it is) or .ply (its points)" } else { ".ply" };
+    let is_ply = path.extension().is_some_and(|e| e.eq_ignore_ascii_case("ply"));
+    if !(is_ply || moves_as_it_is(source, &path)) {
+        let own = source.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
+        let what = match own {
+            Some(ext) if io::can_transform(&source.to_string_lossy()) && ext != "ply" => {
+                format!(".{ext} (the source moved as it is) or .ply (its points)")
+            }
+            _ => ".ply".to_string(),
+        };
         return Err(format!("--aligned: name {} {what}, for {}", path.display(), source.display()));
     }
     let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
@@ -232,12 +250,11 @@ fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathB
     Ok(path)
 }
 
-/// Writes the source moved by `r`'s answer to `path`: to a `.las` path the LAS source file
-/// (`bytes`, the file `file` as read for registering) as itself, moved (`io::transform_las`);
-/// else as PLY, a PLY source file as itself, moved
-/// (`io::transform_ply`: every property and element kept, normals turned), any other as the
-/// points read (`cloud`, already scaled) in binary PLY (`io::write_ply_binary`). `scale` is the
-/// `--source-scale` applied before registering.
+/// Writes the source moved by `r`'s answer to `path`: to a path of the source's own format, the
+/// source file (`bytes`, the file `file` as read for registering) as itself, moved
+/// (`io::transform_file`: PLY, PCD, text lists, OBJ, STL, LAS; every attribute kept, normals
+/// turned); else (a `.ply` path) as the points read (`cloud`, already scaled) in binary PLY
+/// (`io::write_ply_binary`). `scale` is the `--source-scale` applied before registering.
 fn write_aligned(
     file: &Path,
     bytes: &[u8],
@@ -248,13 +265,11 @@ fn write_aligned(
 ) -> Result<(), String> {
     // the file's own points to the target's frame (the scale first)
     let m = scale.map_or(r.T_target_source, |s| r.T_target_source * s);
-    let moved = |e: arps::Error| format!("--aligned: {}: {e}", file.display());
-    let out = match io::detect_format(bytes, &io::file_name(file)) {
-        _ if path.extension().is_some_and(|e| e.eq_ignore_ascii_case("las")) => {
-            io::transform_las(bytes, &m).map_err(moved)?
-        }
-        Ok(io::Format::Ply) => io::transform_ply(bytes, &m).map_err(moved)?,
-        _ => io::write_ply_binary(&cloud.transformed(&r.T_target_source)),
+    let out = if moves_as_it_is(file, path) {
+        io::transform_file(bytes, &io::file_name(file), &m)
+            .map_err(|e| format!("--aligned: {}: {e}", file.display()))?
+    } else {
+        io::write_ply_binary(&cloud.transformed(&r.T_target_source))
     };
     std::fs::write(path, out).map_err(|e| format!("--aligned: {}: {e}", path.display()))
 }
