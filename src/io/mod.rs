@@ -4,7 +4,7 @@
 //! | --- | --- | --- |
 //! | [`Format::Ply`] | `.ply` | ascii, binary little/big endian; any vertex properties; faces |
 //! | [`Format::Pcd`] | `.pcd` | DATA ascii, binary, binary_compressed (LZF); organised clouds |
-//! | [`Format::Xyz`] | `.xyz .pts .txt .csv` | whitespace/comma/semicolon separated, header lines skipped |
+//! | [`Format::Xyz`] | `.xyz .pts .txt .csv` | whitespace/comma/semicolon separated; the columns a header names (`x y z`, `Easting,Northing,Elevation`), else the first three numbers |
 //! | [`Format::Obj`] | `.obj` | `v` and `f` (`i`, `i/t`, `i//n`, `i/t/n`, negative indices) |
 //! | [`Format::Off`] | `.off` | `OFF`, `COFF`, `NOFF`, `CNOFF`, `STOFF`, counts on the header line |
 //! | [`Format::Stl`] | `.stl` | ascii and binary (also binary files whose header starts with `solid`) |
@@ -19,6 +19,10 @@
 //! A mesh file gives its vertices ([`read_point_cloud`]), its triangles too ([`read_mesh`]), or
 //! points drawn uniformly over its surface ([`read_point_cloud_with`], [`ReadOptions`]): a CAD
 //! model's vertices sit on its edges and corners, so a scan registers against its surface.
+//!
+//! A registered source is saved in the target's frame as the file it was, moved
+//! ([`transform_file`]: PLY, PCD, text lists, OBJ, STL, LAS; everything else in the file kept), or
+//! as its points ([`write_ply_binary`] of [`PointCloud::transformed`]).
 //!
 //! Coordinates are read as precisely as the file holds them (`double` properties and text in
 //! `f64`), and a cloud far from zero gets an origin near its points before anything becomes `f32`
