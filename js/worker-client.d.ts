@@ -141,8 +141,8 @@ export interface WorkerRegistrar {
   writePly(cloud: CloudInput, request?: { transfer?: boolean; signal?: AbortSignal }): Promise<Uint8Array>;
   /**
    * A file moved as it is, in its own format, in the worker (see `transformFile` in arps.d.ts:
-   * PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, STL, LAS; every attribute kept, normals turned): e.g. a
-   * registered source's file by its `T_target_source`. Rejects for LAZ, E57 and OFF (save their
+   * PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, STL, LAS, and LAZ as LAS; every attribute kept, normals
+   * turned): e.g. a registered source's file by its `T_target_source`. Rejects for E57 and OFF (save their
    * points: `writePly(await transformPointCloud(cloud, T))`).
    */
   transformFile(

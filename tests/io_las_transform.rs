@@ -1,8 +1,9 @@
 //! `io::transform_las`: a LAS file moved as it is. On the laspy fixtures (LAS 1.2 format 3 with
 //! colour and GPS time; LAS 1.4 format 6 with EVLRs after the points): the points read back are
 //! the transform of the file's own to the file's scale; every record's other bytes, the VLRs and
-//! EVLRs are kept; the header's offsets and bounds say where the points now are. A LAZ file, a
-//! motion the scales cannot store, a transform that is not rigid and every truncation are refused.
+//! EVLRs are kept; the header's offsets and bounds say where the points now are. A LAZ file comes
+//! back as the LAS file it compresses, moved: byte for byte what the LAS fixture gives. A motion
+//! the scales cannot store, a transform that is not rigid and every truncation are refused.
 
 use arps::io::{read_point_cloud, transform_las};
 use nalgebra::{Matrix4, Rotation3, Vector3};
@@ -90,10 +91,32 @@ fn a_las_1_4_file_keeps_its_evlrs() {
 }
 
 #[test]
-fn laz_motions_the_scales_cannot_store_and_other_transforms_are_refused() {
+fn a_laz_file_comes_back_as_the_las_file_it_compresses_moved() {
+    // the LAZ fixtures compress the LAS ones (LAS 1.2 format 3; LAS 1.4 format 6 with EVLRs after
+    // the points): moved, they are the LAS ones moved, to the byte
+    let m = motion([0.0; 3]) * Matrix4::new_scaling(1.5);
+    for (laz, las) in [("simple.laz", "simple.las"), ("1_4_w_evlr.laz", "1_4_w_evlr.las")] {
+        let moved = transform_las(&fixture(laz), &m).unwrap();
+        assert_eq!(moved, transform_las(&fixture(las), &m).unwrap(), "{laz}");
+        assert_eq!(moved[104] & 0xC0, 0, "{laz}: the point format is not marked compressed");
+    }
+    // a COPC file (LAZ in chunks of varying size, with its own VLRs): its points moved
+    let copc = fixture("simple.copc.laz");
+    let moved = transform_las(&copc, &m).unwrap();
+    assert_eq!(moved[104] & 0xC0, 0);
+    let (before, after) = (read_point_cloud(&copc, "a.laz").unwrap(), read_point_cloud(&moved, "a.las").unwrap());
+    assert_eq!(before.len(), after.len());
+    let scale = [131, 139, 147].map(|at| f64_at(&copc, at));
+    for i in 0..before.len() {
+        let want = m.transform_point(&nalgebra::Point3::from(before.point_f64(i)));
+        let got = after.point_f64(i);
+        assert!((0..3).all(|k| (got[k] - want[k]).abs() <= scale[k] / 2.0 + 2e-4), "point {i}: {got:?} vs {want:?}");
+    }
+}
+
+#[test]
+fn motions_the_scales_cannot_store_and_other_transforms_are_refused() {
     let m = motion([0.0; 3]);
-    let laz = transform_las(&fixture("simple.laz"), &m).unwrap_err().to_string();
-    assert!(laz.contains("LAZ file cannot be moved as it is"), "{laz}");
     let bytes = fixture("simple.las");
     let mut sheared = m;
     sheared[(0, 2)] += 0.5;

@@ -88,8 +88,8 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     const movedLas = await arps.transformFile(las, "simple.las", res.T_target_source);
     assert.ok(movedLas.length === las.length && new TextDecoder().decode(movedLas.subarray(0, 4)) === "LASF");
     await assert.rejects(arps.transformFile(las, "simple.las", [1, 2]), /matrix has 2 elements/);
-    const laz = readFileSync(path.join(root, "fixtures", "formats", "simple.laz"));
-    await assert.rejects(arps.transformFile(laz, "simple.laz", res.T_target_source), /LAZ file cannot be moved/);
+    const e57 = readFileSync(path.join(root, "fixtures", "formats", "tiny_spherical.e57"));
+    await assert.rejects(arps.transformFile(e57, "scan.e57", res.T_target_source), /E57 files cannot be moved/);
     // Clouds with an origin transfer their points too; zero origins give the same answer.
     const so = { points: source(), origin: [0, 0, 0] };
     const to = { points: target(), origin: [0, 0, 0] };

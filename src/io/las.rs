@@ -178,8 +178,9 @@ fn read_records(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
     Ok(h.records(bytes)?.chunks_exact(h.record_len).map(|r| h.point(r)).collect())
 }
 
-/// The LASzip VLR's data, among the variable length records after the header.
-fn laszip_vlr<'a>(bytes: &'a [u8], h: &Header) -> Result<&'a [u8]> {
+/// The LASzip VLR's data, among the variable length records after the header, and where the
+/// whole record (its header and data) lies in the file.
+fn laszip_vlr<'a>(bytes: &'a [u8], h: &Header) -> Result<(&'a [u8], std::ops::Range<usize>)> {
     let mut at = h.vlrs_at;
     for k in 0..h.vlr_count {
         let past = |what: String| {
@@ -202,17 +203,21 @@ fn laszip_vlr<'a>(bytes: &'a [u8], h: &Header) -> Result<&'a [u8]> {
         }
         let user = user.split(|&b| b == 0).next().unwrap_or_default();
         if user == LASZIP_USER && record == LASZIP_RECORD {
-            return Ok(&bytes[data..data + len]);
+            return Ok((&bytes[data..data + len], at..data + len));
         }
         at = data + len;
     }
     Err(err("the point data format is marked compressed (LAZ), but the file has no LASzip record"))
 }
 
-/// The points of a LAZ file, decompressed by the `laz` crate once its chunk table and layer
-/// sizes are known to fit in the file.
-fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
-    let vlr_data = laszip_vlr(bytes, h)?;
+/// A LAZ file's decompressor at its first point, once the file's LASzip record, chunk table and
+/// layer sizes are checked (the `laz` crate trusts them); `selection`: the layers to decode.
+fn decompressor<'a>(
+    bytes: &'a [u8],
+    h: &Header,
+    selection: DecompressionSelection,
+) -> Result<LasZipDecompressor<'a, Cursor<&'a [u8]>>> {
+    let (vlr_data, _) = laszip_vlr(bytes, h)?;
     let laz_err = |e: laz::LasZipError| err(format!("the LASzip record cannot be used: {e}"));
     let vlr = LazVlr::from_buffer(vlr_data).map_err(laz_err)?;
     let compressor = u16_at(vlr_data, 0);
@@ -263,11 +268,17 @@ fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
         // one stream without chunks cannot have chunks of variable size (the crate panics on it)
         return Err(err("the LASzip record has no chunks (point-wise) but says they vary in size"));
     }
-    // only X, Y, Z (and what they are coded with) where the file is layered
-    let selection = DecompressionSelection(DecompressionSelection::XY_RETURNS_CHANNEL | DecompressionSelection::Z);
     let mut cursor = Cursor::new(bytes);
     cursor.set_position(h.offset as u64);
-    let mut decompressor = LasZipDecompressor::selective(cursor, vlr, selection).map_err(laz_err)?;
+    LasZipDecompressor::selective(cursor, vlr, selection).map_err(laz_err)
+}
+
+/// The points of a LAZ file, decompressed by the `laz` crate once its chunk table and layer
+/// sizes are known to fit in the file.
+fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
+    // only X, Y, Z (and what they are coded with) where the file is layered
+    let selection = DecompressionSelection(DecompressionSelection::XY_RETURNS_CHANNEL | DecompressionSelection::Z);
+    let mut decompressor = decompressor(bytes, h, selection)?;
     // reserved as if the points were stored uncompressed (fewer than a compressed file holds), the
     // rest grows as they decode
     let mut points = Vec::with_capacity(bounded_capacity(h.count, bytes.len() - h.offset, h.record_len));
@@ -279,6 +290,66 @@ fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
         points.push(h.point(&record));
     }
     Ok(points)
+}
+
+/// Where the LAS 1.3 header holds the start of the waveform data packet record, and the LAS 1.4
+/// header the start of the first extended VLR (u64 each).
+const WAVEFORM_AT: usize = 227;
+const EVLRS_AT: usize = 235;
+
+/// A LAZ file as the LAS file it compresses: the header with the point format's compression bit
+/// cleared, its VLRs but the LASzip record, every point record decompressed whole, then the
+/// extended VLRs (and waveform record) that followed the compressed points, their start in the
+/// header moved to where they now are. An error when the records would decompress to more than
+/// [`crate::limits::MAX_DECODED_BYTES`].
+pub(super) fn decompressed(bytes: &[u8], h: &Header) -> Result<Vec<u8>> {
+    let size = h.count.saturating_mul(h.record_len as u64);
+    if size > crate::limits::MAX_DECODED_BYTES {
+        return Err(Error::TooLarge(format!(
+            "the LAZ file's {} points of {} bytes decompress to {size} bytes, more than the {} decoded at once \
+             (WebAssembly has 4 GiB of memory): save its points instead",
+            h.count,
+            h.record_len,
+            crate::limits::MAX_DECODED_BYTES
+        )));
+    }
+    let (_, vlr) = laszip_vlr(bytes, h)?;
+    let mut decompressor = decompressor(bytes, h, DecompressionSelection::all())?;
+    // header and VLRs without the LASzip record (and what lies between them and the points)
+    // reserved up to four times the file (a lying count cannot make us allocate), the rest grows
+    let mut out = Vec::with_capacity(h.offset + (size as usize).min(4 * bytes.len()));
+    out.extend_from_slice(&bytes[..vlr.start]);
+    out.extend_from_slice(&bytes[vlr.end..h.offset]);
+    let offset = out.len();
+    out[96..100].copy_from_slice(&(offset as u32).to_le_bytes());
+    out[100..104].copy_from_slice(&(h.vlr_count - 1).to_le_bytes());
+    out[104] &= 0x3F;
+    let mut record = vec![0u8; h.record_len];
+    for n in 0..h.count {
+        decompressor
+            .decompress_one(&mut record)
+            .map_err(|e| err(format!("the compressed points end or break after {n} of {} points: {e}", h.count)))?;
+        out.extend_from_slice(&record);
+    }
+    // what follows the compressed points and their chunk table: the records the header points to
+    let pointers: Vec<usize> = [(3, WAVEFORM_AT), (4, EVLRS_AT)]
+        .into_iter()
+        .filter(|&(minor, at)| bytes[25] >= minor && h.vlrs_at >= at + 8)
+        .map(|(_, at)| at)
+        .collect();
+    let starts =
+        pointers.iter().map(|&at| u64_at(bytes, at)).filter(|&v| v > h.offset as u64 && v <= bytes.len() as u64);
+    if let Some(first) = starts.min() {
+        let (old, new) = (first as usize, out.len());
+        out.extend_from_slice(&bytes[old..]);
+        for at in pointers {
+            let v = u64_at(bytes, at);
+            if v >= first {
+                out[at..at + 8].copy_from_slice(&(v - old as u64 + new as u64).to_le_bytes());
+            }
+        }
+    }
+    Ok(out)
 }
 
 /// Checks the chunk table of a chunked LAZ file before the `laz` crate reads it: its chunk count

@@ -3,26 +3,35 @@
 //! (new ones, at the moved points' centre, so the integers fit) and bounds updated; every other
 //! byte kept (intensity, returns, classification, GPS time, colour, extra bytes, the VLRs and
 //! EVLRs, the CRS records). What saves a registered survey in the target's frame as the LAS its
-//! tools read. LAZ files are refused: they would have to be compressed again.
+//! tools read. A LAZ file comes back as the LAS file it compresses, moved (its header, VLRs,
+//! records and EVLRs, uncompressed: compressing again is left to LASzip's own tools).
 
-use super::las::{err, Header, BOUNDS_AT, OFFSETS_AT};
+use super::las::{decompressed, err, Header, BOUNDS_AT, OFFSETS_AT};
 use super::motion::similarity;
 use crate::Result;
-use nalgebra::{Matrix4, Vector3};
+use nalgebra::{Matrix3, Matrix4, Vector3};
 
 /// The LAS file `bytes` with its points moved by `m` (`T_target_source`: rigid, or rigid times a
-/// uniform scale), everything else as it was (see the module docs). Errors: a file the LAS reader
-/// refuses, a LAZ file, points the file's scales cannot store once moved (more than 2^31 steps
-/// from the new offset), a transform that is not rigid (or uniformly scaled).
+/// uniform scale), everything else as it was (see the module docs); a LAZ file comes back as LAS.
+/// Errors: a file the LAS reader refuses, points the file's scales cannot store once moved (more
+/// than 2^31 steps from the new offset), a transform that is not rigid (or uniformly scaled), a
+/// LAZ file whose points decompress to more than [`crate::limits::MAX_DECODED_BYTES`].
 pub fn transform_las(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let (linear, _, t) = similarity(m)?;
     let h = Header::read(bytes)?;
     if h.compressed {
-        return Err(err(
-            "a LAZ file cannot be moved as it is (it would have to be compressed again): save its points as PLY instead",
-        ));
+        let las = decompressed(bytes, &h)?;
+        let h = Header::read(&las)?;
+        return move_records(las, &h, &linear, &t);
     }
-    let records = h.records(bytes)?;
+    h.records(bytes)?;
+    move_records(bytes.to_vec(), &h, &linear, &t)
+}
+
+/// `out`, an uncompressed LAS file described by `h`, with its records moved and its header's
+/// offsets and bounds updated.
+fn move_records(mut out: Vec<u8>, h: &Header, linear: &Matrix3<f64>, t: &Vector3<f64>) -> Result<Vec<u8>> {
+    let records = h.records(&out)?;
     let end = h.offset + records.len();
     let n = h.count as usize;
     let moved = |record: &[u8]| linear * Vector3::from(h.point(record)) + t;
@@ -49,7 +58,6 @@ pub fn transform_las(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
             )));
         }
     }
-    let mut out = bytes.to_vec();
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for record in out[h.offset..end].chunks_exact_mut(h.record_len) {
         let q = moved(record);

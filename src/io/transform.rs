@@ -10,12 +10,12 @@ use crate::{Error, Result};
 use nalgebra::Matrix4;
 
 /// The extensions of the files [`transform_file`] moves as they are.
-const MOVABLE: &[&str] = &["ply", "pcd", "xyz", "pts", "txt", "csv", "obj", "stl", "las"];
+const MOVABLE: &[&str] = &["ply", "pcd", "xyz", "pts", "txt", "csv", "obj", "stl", "las", "laz"];
 
 /// True when a file of this name is one [`transform_file`] moves as it is: PLY, PCD, text point
-/// lists (XYZ, PTS, TXT, CSV), OBJ, STL and LAS by their extension (case-insensitive). False for
-/// LAZ (it would have to be compressed again), E57, OFF and unknown extensions: save such a
-/// source's points moved instead ([`super::write_ply_binary`] of
+/// lists (XYZ, PTS, TXT, CSV), OBJ, STL, LAS and LAZ (which comes back as LAS) by their extension
+/// (case-insensitive). False for E57, OFF and unknown extensions: save such a source's points
+/// moved instead ([`super::write_ply_binary`] of
 /// [`PointCloud::transformed`](crate::PointCloud::transformed)).
 pub fn can_transform(file_name: &str) -> bool {
     file_name.rsplit_once('.').is_some_and(|(_, ext)| MOVABLE.contains(&ext.to_ascii_lowercase().as_str()))
@@ -24,8 +24,9 @@ pub fn can_transform(file_name: &str) -> bool {
 /// The file `bytes` (named `file_name`, whose extension, or else whose content, says the format:
 /// [`detect_format`]) in its own format with its points moved by `m` (`T_target_source`: a rigid
 /// transform, or one times a uniform scale for a change of unit) and its normals turned,
-/// everything else kept as it was: see each format's mover for what that means. Errors: a format
-/// that cannot be moved as it is (LAZ, E57, OFF: see [`can_transform`]), a file its reader
+/// everything else kept as it was: see each format's mover for what that means. A LAZ file comes
+/// back as the LAS file it compresses, moved (name it `.las`). Errors: a format that cannot be
+/// moved as it is (E57, OFF: see [`can_transform`]), a file its reader
 /// refuses, coordinates stored as integers where the moved ones cannot be stored, a transform
 /// that is not rigid (or uniformly scaled).
 pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result<Vec<u8>> {
