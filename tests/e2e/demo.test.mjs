@@ -537,7 +537,8 @@ test("a georeferenced LAZ survey aligned onto itself moved, in map-grid coordina
   // (1.69e6, 1.82e6, 5.6e3), where float32 steps are 0.125). The target: its points moved by 12
   // degrees about the vertical through the survey's centre plus (4, -3, 0.5), written as a PLY of
   // doubles. The page keeps each scan as float32 offsets from a float64 origin, so its answer must
-  // be the package's own on the same files in Node, and its download the source moved in f64.
+  // be the package's own on the same files in Node, and its download the source moved in f64 (the
+  // LAZ file as the LAS it compresses, stored with its own scales).
   const arps = await import(pathToFileURL(join(ROOT, "pkg", "node", "index.mjs")).href);
   const laz = join(ROOT, "fixtures", "formats", "1_4_w_evlr.laz");
   const cloud = arps.readPointCloud(readFileSync(laz), "1_4_w_evlr.laz");
@@ -556,11 +557,11 @@ test("a georeferenced LAZ survey aligned onto itself moved, in map-grid coordina
   const moved = Buffer.concat([Buffer.from(header), Buffer.from(body.buffer)]);
   writeFileSync(join(dir, "survey-moved.ply"), moved);
   await page.setInputFiles("#source-file", laz);
-  await page.waitForFunction(() => /1_4_w_evlr[\s\S]*1,000 points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
+  await page.waitForFunction(() => /1_4_w_evlr\.laz · 1,000 points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
   // the page says where a survey lies
   assert.match(await page.textContent("#source-info"), /about \(1,69\d,\d{3}(\.\d)?, 1,8\d{2},\d{3}(\.\d)?, 5,\d{3}(\.\d)?\)/);
   await page.setInputFiles("#target-file", join(dir, "survey-moved.ply"));
-  await page.waitForFunction(() => /survey-moved[\s\S]*1,000 points/.test(document.getElementById("target-info").textContent), null, { timeout: TIMEOUT });
+  await page.waitForFunction(() => /survey-moved\.ply · 1,000 points/.test(document.getElementById("target-info").textContent), null, { timeout: TIMEOUT });
   const { result, error } = await alignAndWait();
   assert.equal(error, "", `unexpected #error: ${error}`);
 
@@ -606,23 +607,32 @@ test("a georeferenced LAZ survey aligned onto itself moved, in map-grid coordina
   console.log(`LAZ survey view: aligned (green) pixels ${green}, source (orange) ${orange}`);
   assert.ok(green > 1000 && orange === 0, `aligned (green) pixels ${green}, source (orange) ${orange}`);
 
-  // The download (the engine's transformPointCloud and writePly): the source moved by the
-  // answer, in doubles.
+  // The download (the engine's transformFile): the LAZ survey comes back as the LAS file it
+  // compresses, moved by the answer, its points stored with the file's own scales.
   const [download] = await Promise.all([page.waitForEvent("download"), page.click("#download-ply")]);
-  const file = join(dir, "survey-aligned.ply");
+  assert.equal(download.suggestedFilename(), "1_4_w_evlr-aligned.las");
+  const file = join(dir, "survey-aligned.las");
   await download.saveAs(file);
-  const aligned = readFloatPly(file);
-  assert.ok(aligned instanceof Float64Array, "the aligned survey is written in doubles");
-  assert.equal(aligned.length, 3 * n);
+  const las = readFileSync(file);
+  assert.equal(las.subarray(0, 4).toString("latin1"), "LASF");
+  assert.equal(las[104] & 0xc0, 0, "not marked compressed");
+  const offset = las.readUInt32LE(96);
+  const record = las.readUInt16LE(105);
+  const count = las.readUInt32LE(107) || Number(las.readBigUInt64LE(247));
+  assert.equal(count, n);
+  const scale = [0, 1, 2].map((k) => las.readDoubleLE(131 + 8 * k));
+  const lasOffsets = [0, 1, 2].map((k) => las.readDoubleLE(155 + 8 * k));
   let worst = 0;
   for (let i = 0; i < n; i++) {
     for (let r = 0; r < 3; r++) {
       const want = m[r][0] * p(i, 0) + m[r][1] * p(i, 1) + m[r][2] * p(i, 2) + m[r][3];
-      worst = Math.max(worst, Math.abs(aligned[3 * i + r] - want));
+      const got = las.readInt32LE(offset + i * record + 4 * r) * scale[r] + lasOffsets[r];
+      worst = Math.max(worst, Math.abs(got - want) - scale[r] / 2);
     }
   }
-  // offsets kept in float32 beside a float64 origin: microns here (float32 alone: 0.125 steps)
-  assert.ok(worst < 1e-4, `the aligned survey's points are up to ${worst} from the answer applied in f64`);
+  // stored to the file's own scale (about 1e-6 here): within half a step of the answer applied
+  // in f64 to the points as read (float32 offsets beside a float64 origin: microns)
+  assert.ok(worst < 1e-4, `the aligned survey's points are up to ${worst} (beyond half a step) from the answer applied in f64`);
 });
 
 test("a LAS survey is downloaded as LAS, moved as it is", { timeout: TIMEOUT * 2 }, async () => {
