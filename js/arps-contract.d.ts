@@ -448,6 +448,22 @@ export type ReadOptions = {
 };
 
 /**
+ * One scan of a file that holds several (E57), as `list_scans` describes it. In JS a plain
+ * object with these fields.
+ */
+export type ScanInfo = {
+  /**
+   * The scan's name in the file, if it has one (often the scanner's station name).
+   */
+  name: string | null,
+  /**
+   * The scan's point records, invalid ones (no return) included: an upper bound of the points
+   * read. A non-negative integer (in JS a `number`).
+   */
+  records: number,
+};
+
+/**
  * Every size of the network. Stored as JSON in the weights file's metadata, with snake_case
  * keys; in JS (`Registrar.modelConfig`) the keys are camelCase (`arps::contract`).
  */

@@ -1,6 +1,6 @@
 // The package's public API over the raw wasm-bindgen glue (arps_glue.js): the same classes and
 // functions (`Registrar`, `parsePointCloud`, `readPointCloud`, `transformPointCloud`, `writePly`,
-// `transformFile`, `canTransform`, `version`), with two guarantees
+// `transformFile`, `canTransform`, `listScans`, `version`), with two guarantees
 // the glue alone does not give:
 //
 // 1. Inputs are checked here, in JavaScript, before they reach the glue: clouds must be real
@@ -705,6 +705,13 @@ export function makeApi(glue, isReady, env = {}) {
     return guarded("transformFile", () => glue.transformFile(b, name, m));
   }
 
+  /** The scans of an E57 file ([] for other formats); see arps.d.ts. */
+  function listScans(bytes, fileName) {
+    const b = bytesArg(bytes, "bytes");
+    const name = fileNameArg(fileName);
+    return guarded("listScans", () => glue.listScans(b, name));
+  }
+
   /** True when transformFile moves a file of this name as it is; see arps.d.ts. */
   function canTransform(fileName) {
     const name = fileNameArg(fileName);
@@ -724,6 +731,7 @@ export function makeApi(glue, isReady, env = {}) {
     writePly,
     transformFile,
     canTransform,
+    listScans,
     version,
     setDefaultModel,
   };

@@ -49,6 +49,7 @@ module.exports = {
   writePly: api.writePly,
   transformFile: api.transformFile,
   canTransform: api.canTransform,
+  listScans: api.listScans,
   version: api.version,
   /**
    * Nothing to do in Node (the engine is ready on require; the default model is read from disk on

@@ -1,7 +1,7 @@
 // The package's web entry (pkg/arps.js): `await init()` (instantiates arps_bg.wasm and fetches the
 // default model, models/arps-web.safetensors, in parallel; both next to this file by default) or
 // `initSync()`, then `Registrar`, `parsePointCloud`, `readPointCloud`, `transformPointCloud`,
-// `writePly`, `transformFile`, `canTransform`, `version`. The API is the
+// `writePly`, `transformFile`, `canTransform`, `listScans`, `version`. The API is the
 // facade's (facade.js) over the raw wasm-bindgen glue (arps_glue.js): inputs checked at the
 // boundary, and a trap re-instantiates the module instead of leaving it broken.
 import glueInit, * as glue from "./arps_glue.js";
@@ -63,4 +63,4 @@ export function initSync(options) {
   return exports;
 }
 
-export const { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly, transformFile, canTransform, version } = api;
+export const { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly, transformFile, canTransform, listScans, version } = api;

@@ -7,6 +7,7 @@ import type {
   RegisterOptions,
   RegistrationResult,
   RegistrationStage,
+  ScanInfo,
 } from "./arps.js";
 
 /**
@@ -139,6 +140,15 @@ export interface WorkerRegistrar {
    * coordinates when it has an origin away from zero).
    */
   writePly(cloud: CloudInput, request?: { transfer?: boolean; signal?: AbortSignal }): Promise<Uint8Array>;
+  /**
+   * The scans of an E57 file, in the worker (see `listScans` in arps.d.ts; `[]` for other
+   * formats): choose one, then `readPointCloud(bytes, fileName, { scan: K })`.
+   */
+  listScans(
+    bytes: Uint8Array | ArrayBuffer,
+    fileName: string,
+    request?: { transfer?: boolean; signal?: AbortSignal },
+  ): Promise<ScanInfo[]>;
   /**
    * A file moved as it is, in its own format, in the worker (see `transformFile` in arps.d.ts:
    * PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, STL, LAS, and LAZ as LAS; every attribute kept, normals

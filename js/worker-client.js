@@ -229,6 +229,9 @@ export async function createWorkerRegistrar(options = {}) {
     async writePly(cloud, req = {}) {
       return (await ask({ type: "write", cloud }, [cloud], req)).bytes;
     },
+    async listScans(bytes, fileName, req = {}) {
+      return (await ask({ type: "scans", bytes, fileName }, [bytes], req)).scans;
+    },
     async transformFile(bytes, fileName, matrix, req = {}) {
       return (await ask({ type: "move", bytes, fileName, matrix }, [bytes], req)).bytes;
     },

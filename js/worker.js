@@ -12,6 +12,7 @@
 //   { id, type: "transform", cloud, matrix }   transformPointCloud: { points, origin }
 //   { id, type: "write", cloud }            writePly: the PLY file's bytes
 //   { id, type: "move", bytes, fileName, matrix }  transformFile: the moved file's bytes
+//   { id, type: "scans", bytes, fileName }  listScans: an E57 file's scans
 // Replies (worker -> main), with the request's `id`:
 //   { id, type: "progress", stage }         stage: "loading" | "preparing" | "network" | "refining" | "done"
 //   { id, type: "ready", provenance, modelConfig }
@@ -19,8 +20,9 @@
 //   { id, type: "parsed", points }          points (Float32Array) buffer transferred
 //   { id, type: "read", cloud }             cloud.points buffer transferred (read and transform)
 //   { id, type: "written", bytes }          bytes (Uint8Array) buffer transferred
+//   { id, type: "scans", scans }            ScanInfo[]
 //   { id, type: "error", message, name, code? }   code: "ARPS_TRAPPED" | "ARPS_UNUSABLE" after a trap
-import init, { Registrar, parsePointCloud, readPointCloud, transformFile, transformPointCloud, writePly } from "./arps.js";
+import init, { listScans, Registrar, parsePointCloud, readPointCloud, transformFile, transformPointCloud, writePly } from "./arps.js";
 
 let registrar = null;
 let loading = null;
@@ -90,6 +92,11 @@ async function handle(msg) {
       await load(id);
       const bytes = writePly(msg.cloud);
       post({ id, type: "written", bytes }, [bytes.buffer]);
+      return;
+    }
+    case "scans": {
+      await load(id);
+      post({ id, type: "scans", scans: listScans(msg.bytes, msg.fileName) });
       return;
     }
     case "move": {

@@ -195,6 +195,7 @@ pub fn typescript() -> String {
         decl::<Evidence>(&cfg),
         decl::<Alternative>(&cfg),
         decl::<crate::io::ReadOptions>(&cfg),
+        decl::<crate::io::ScanInfo>(&cfg),
         decl::<ModelConfig>(&cfg),
         decl::<Reference>(&cfg),
     ] {

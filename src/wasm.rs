@@ -16,7 +16,8 @@
 //! * `transformPointCloud(cloud, matrix) -> { points, origin }` and `writePly(cloud) -> Uint8Array`
 //!   (a cloud: a `Float32Array` or `{ points: Float32Array, origin }`);
 //! * `transformFile(bytes, fileName, matrix)` -> `Uint8Array` (a file moved as it is, in its own
-//!   format) and `canTransform(fileName)`.
+//!   format) and `canTransform(fileName)`;
+//! * `listScans(bytes, fileName)` -> `ScanInfo[]` (an E57 file's scans).
 //!
 //! Nothing here may panic on user input: a panic in wasm aborts the instance (wasm32 builds with
 //! `panic = "abort"`; there is no `catch_unwind`), so every fallible step returns
@@ -221,6 +222,21 @@ pub fn transform_point_cloud(
 #[wasm_bindgen(js_name = writePly)]
 pub fn write_ply(#[wasm_bindgen(unchecked_param_type = "CloudInput")] cloud: JsValue) -> Result<Vec<u8>, JsError> {
     Ok(crate::io::write_ply_binary(&cloud_arg(&cloud, "cloud")?))
+}
+
+/// The scans of a file that holds several, in the file's order: for an E57 file its point clouds
+/// as `{ name, records }` (`name` a string or `null`, `records` the scan's point records, invalid
+/// ones included), read from its XML section alone; for any other format `[]`. A scan is then
+/// read alone by `readPointCloud(bytes, fileName, { scan: K })`. Throws on an E57 file that cannot
+/// be read.
+#[wasm_bindgen(js_name = listScans, unchecked_return_type = "ScanInfo[]")]
+pub fn list_scans(
+    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    #[wasm_bindgen(js_name = fileName)] file_name: &str,
+) -> Result<JsValue, JsError> {
+    let scans = crate::io::list_scans(bytes, file_name).map_err(js_err)?;
+    let ser = serde_wasm_bindgen::Serializer::new().serialize_missing_as_null(true);
+    serde::Serialize::serialize(&scans, &ser).map_err(|e| JsError::new(&format!("internal: {e}")))
 }
 
 /// A file moved as it is, in its own format, e.g. a registered source by its result's

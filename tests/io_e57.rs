@@ -1,8 +1,9 @@
 //! E57 on real files (fixtures/formats, see LICENSES.md there): two scans with poses written by
-//! libE57Format read back in the file's frame (map-grid coordinates), spherical coordinates
+//! libE57Format read back in the file's frame (map-grid coordinates), and listed by name,
+//! spherical coordinates
 //! converted and invalid points left out, and hostile files giving errors.
 
-use arps::io::{detect_format, read_point_cloud, read_point_cloud_with, Format, ReadOptions};
+use arps::io::{detect_format, list_scans, read_point_cloud, read_point_cloud_with, Format, ReadOptions, ScanInfo};
 use arps::PointCloud;
 
 fn fixture(dir: &str, name: &str) -> Vec<u8> {
@@ -54,6 +55,12 @@ fn one_scan_of_several_is_read_alone_and_a_scan_beyond_them_is_an_error() {
     }
     let e = one(2).unwrap_err().to_string();
     assert!(e.contains("scan = 2, but the E57 file holds 2 scans (0 to 1)"), "{e}");
+    // the scans listed, by name and record count, without decoding a point
+    let scans = list_scans(&bytes, name).unwrap();
+    let named = |k: usize| ScanInfo { name: Some(format!("scan {k}")), records: 1000 };
+    assert_eq!(scans, vec![named(1), named(2)]);
+    assert!(list_scans(&bytes[..bytes.len() / 2], name).is_err(), "half a file");
+    assert_eq!(list_scans(&fixture("scans", "velodyne-small.ply"), "v.ply").unwrap(), vec![], "one cloud");
     // other formats are read as they are
     let ply = fixture("scans", "velodyne-small.ply");
     let with = read_point_cloud_with(&ply, "v.ply", &ReadOptions { scan: Some(5), ..ReadOptions::default() });

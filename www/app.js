@@ -113,6 +113,8 @@ function updateButtons() {
   $("target-file").disabled = state.busy;
   $("source-unit").disabled = state.busy;
   $("target-unit").disabled = state.busy;
+  $("source-scan").disabled = state.busy;
+  $("target-scan").disabled = state.busy;
   $("view-after").disabled = !state.result;
 }
 
@@ -187,11 +189,31 @@ async function rescaleSource() {
   }
 }
 
-async function loadFile(which, file) {
+/**
+ * The #source-scan / #target-scan choice for slot `which`: shown, with one option per scan and
+ * one for all of them, when its file is an E57 file of several scans (`scans`: `listScans`'s
+ * answer); else hidden. `scan`: the one read (`null`: all).
+ */
+function showScans(which, scans, scan) {
+  const select = $(`${which}-scan`);
+  $(`${which}-scan-field`).hidden = scans.length < 2;
+  const name = (s, k) => `${k + 1}: ${s.name ?? `scan ${k + 1}`} (${count(s.records)} points)`;
+  select.replaceChildren(
+    new Option(`all ${scans.length} scans`, "", scan === null, scan === null),
+    ...scans.map((s, k) => new Option(name(s, k), String(k), k === scan, k === scan)),
+  );
+}
+
+/**
+ * Reads `file` into slot `which`: all of it, or of an E57 file of several scans only scan number
+ * `scan` (0-based; the slot's scan choice then lists them).
+ */
+async function loadFile(which, file, scan = null) {
   if (!file || state.busy) return;
   const token = ++loads[which];
   clearError();
   setCloud(which, null);
+  if (scan === null) showScans(which, [], null);
   $(`${which}-info`).textContent = `reading ${file.name}…`;
   try {
     const bytes = new Uint8Array(await file.arrayBuffer());
@@ -199,10 +221,18 @@ async function loadFile(which, file) {
     // A mesh (a CAD model, say) is read as points spread over its surface, not its vertices,
     // which sit on its edges and corners; a point file is read as it is. Coordinates far from
     // zero (a map grid) come as offsets from an origin, in f64.
-    const parsed = await arps.readPointCloud(bytes, file.name, { surfacePoints: MESH_SURFACE_POINTS }, { transfer: true });
+    const options = { surfacePoints: MESH_SURFACE_POINTS, scan };
+    const parsed = await arps.readPointCloud(bytes, file.name, options, { transfer: true });
     if (token !== loads[which]) return;
+    if (/\.e57$/i.test(file.name)) {
+      // an E57 file's scans, from its XML section (the bytes read again: the first went over)
+      const scans = await arps.listScans(new Uint8Array(await file.arrayBuffer()), file.name, { transfer: true });
+      if (token !== loads[which]) return;
+      showScans(which, scans, scan);
+    }
     $(`${which}-info`).textContent = `${file.name}: preparing ${count(parsed.points.length / 3)} points…`;
-    const cloud = await readyCloud(parsed, file.name, which, token, file);
+    const name = scan === null ? file.name : `${file.name}, scan ${scan + 1}`;
+    const cloud = await readyCloud(parsed, name, which, token, file);
     if (token !== loads[which]) return dropCloud(cloud.key);
     setCloud(which, cloud);
   } catch (e) {
@@ -248,6 +278,7 @@ async function loadExample() {
       dropCloud(target.key);
       return;
     }
+    for (const which of ["source", "target"]) showScans(which, [], null);
     setCloud("source", source);
     setCloud("target", target);
     state.truth = example.truth;
@@ -624,6 +655,12 @@ $("viewer").addEventListener("drop", (e) => {
 });
 
 for (const id of ["source-unit", "target-unit"]) $(id).addEventListener("change", rescaleSource);
+for (const which of ["source", "target"]) {
+  $(`${which}-scan`).addEventListener("change", (e) => {
+    const file = state[which]?.file;
+    if (file) loadFile(which, file, e.target.value === "" ? null : Number(e.target.value));
+  });
+}
 $("example").addEventListener("click", loadExample);
 $("align").addEventListener("click", align);
 $("cancel").addEventListener("click", () => cancelAlign?.());

@@ -361,6 +361,12 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     assert.ok(apart < 1e-4, `transformFile's PCD points ${apart} from transformPointCloud's`);
     assert.deepEqual(["a.ply", "b.PCD", "c.pts", "d.csv", "e.obj", "f.stl", "g.las", "h.laz", "i.e57", "j.off", "k"].map(arps.canTransform), [true, true, true, true, true, true, true, true, false, false, false]);
     rejects(r, "transformFile: E57", () => arps.transformFile(new Uint8Array(8), "scan.e57", T), /E57 files cannot be moved as they are/);
+    // an E57 file's scans, by name and records; one chosen is read alone
+    const e57 = readFileSync(path.join(root, "fixtures", "formats", "velodyne_two_scans.e57"));
+    assert.deepEqual(arps.listScans(e57, "two.e57"), [{ name: "scan 1", records: 1000 }, { name: "scan 2", records: 1000 }]);
+    assert.equal(arps.readPointCloud(e57, "two.e57", { scan: 1 }).points.length, 3000);
+    assert.deepEqual(arps.listScans(frag, "frag.ply"), []);
+    rejects(r, "listScans: half an E57 file", () => arps.listScans(e57.subarray(0, 5000), "two.e57"), /E57/);
     r.free();
   });
 }

@@ -1,7 +1,7 @@
 // Compile-only check of the package's TypeScript declarations (tsc --noEmit -p js/test): typical
 // use must type-check, options are typed (not `any`), and misspelled options are rejected.
-import init, { canTransform, initSync, Registrar, parsePointCloud, readPointCloud, transformFile, transformPointCloud, version, writePly } from "../../pkg/arps.js";
-import type { InitOptions, RegisterOptions, RegistrationEvidence, RegistrationResult, RegistrationSearch } from "../../pkg/arps.js";
+import init, { canTransform, initSync, listScans, Registrar, parsePointCloud, readPointCloud, transformFile, transformPointCloud, version, writePly } from "../../pkg/arps.js";
+import type { InitOptions, RegisterOptions, RegistrationEvidence, RegistrationResult, RegistrationSearch, ScanInfo } from "../../pkg/arps.js";
 import { createWorkerRegistrar, type Stage, type WorkerRegistrar } from "../../pkg/worker-client.js";
 
 export async function modelFiles(wasm: Uint8Array, model: Uint8Array, signal: AbortSignal): Promise<Registrar> {
@@ -82,10 +82,12 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   // A file moved as it is, in its own format (colours, normals and faces kept).
   const movedFile: Uint8Array = transformFile(new Uint8Array(), "scan.pcd", result.T_target_source);
   const movedSurvey: Uint8Array = canTransform("survey.las") ? transformFile(new Uint8Array(), "survey.las", result.T_target_source) : new Uint8Array();
+  const scans: ScanInfo[] = listScans(new Uint8Array(), "scan.e57");
+  const firstName: string | null = scans[0]?.name ?? null;
   // @ts-expect-error the file's name comes second
   transformFile(new Uint8Array(), result.T_target_source);
   r.free();
-  return far.length + ms + confidence + figures + String(snakeEvidence).length + networkPoints + reference.length + String(snake).length + w.length + start.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length + aligned.length + bytes.length + movedFile.length + movedSurvey.length;
+  return far.length + ms + confidence + figures + String(snakeEvidence).length + networkPoints + reference.length + String(snake).length + w.length + start.length + version().length + (kind?.length ?? 0) + parsePointCloud(new Uint8Array(), "a.ply").length + aligned.length + bytes.length + movedFile.length + movedSurvey.length + (firstName?.length ?? 0);
 }
 
 export async function inAWorker(source: Float32Array, target: Float32Array): Promise<number[]> {

@@ -262,6 +262,31 @@ pub struct ReadOptions {
     pub scan: Option<usize>,
 }
 
+/// One scan of a file that holds several (E57), as [`list_scans`] describes it. In JS a plain
+/// object with these fields.
+#[derive(Clone, Debug, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "ScanInfo"))]
+pub struct ScanInfo {
+    /// The scan's name in the file, if it has one (often the scanner's station name).
+    pub name: Option<String>,
+    /// The scan's point records, invalid ones (no return) included: an upper bound of the points
+    /// read. A non-negative integer (in JS a `number`).
+    #[cfg_attr(feature = "ts", ts(type = "number"))]
+    pub records: u64,
+}
+
+/// The scans of a file that holds several, in the file's order, so that one can be chosen
+/// ([`ReadOptions::scan`]): for an E57 file its point clouds (from its XML section alone, no
+/// point decoded); for any other format an empty list (one cloud, nothing to choose). Errors:
+/// an E57 file that cannot be read, a name and content whose format cannot be told.
+pub fn list_scans(bytes: &[u8], file_name: &str) -> Result<Vec<ScanInfo>> {
+    match detect_format(bytes, file_name)? {
+        Format::E57 => e57::scans(bytes),
+        _ => Ok(Vec::new()),
+    }
+}
+
 /// [`read_point_cloud`], with a mesh's surface sampled when `options.surface_points` is set
 /// ([`ReadOptions`]): the points are drawn in `f64` from the file's own vertices, so large
 /// coordinates keep their shape as the vertices do. Fails with a clear error for a count out of

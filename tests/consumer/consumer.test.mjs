@@ -263,7 +263,7 @@ async function alignInBrowser(browser, url) {
     );
     assert.equal(await page.textContent("#error"), "", `the page shows an error (${problems.join("; ")})`);
     assert.ok(page.workers().length >= 1, "no worker ran: the example must align through arps/worker-client");
-    // the aligned source offered as a PLY download (made in the worker)
+    // the aligned source offered as a download (made in the worker): the PLY file itself, moved
     await page.waitForSelector("#download:not([hidden])", { timeout: 120_000 });
     const saved = await page.evaluate(async () => {
       const a = document.getElementById("download");
@@ -271,7 +271,7 @@ async function alignInBrowser(browser, url) {
       return { name: a.download, head: new TextDecoder().decode(bytes.subarray(0, 40)), size: bytes.length };
     });
     assert.equal(saved.name, "source-aligned.ply");
-    assert.ok(saved.head.startsWith("ply\nformat binary_little_endian 1.0\n") && saved.size > 1000, JSON.stringify(saved));
+    assert.ok(saved.head.startsWith("ply\nformat ascii 1.0\ncomment arps wasm test fixture") && saved.size > 1000, JSON.stringify(saved));
     assert.deepEqual(problems, []);
     return JSON.parse(await page.textContent("#result"));
   } finally {

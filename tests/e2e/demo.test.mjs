@@ -693,6 +693,32 @@ test("a PCD scan is downloaded as PCD, moved as it is", { timeout: TIMEOUT * 2 }
   assert.ok(worst < 1e-5, `the points are up to ${worst} from the answer applied`);
 });
 
+test("an E57 file of several scans offers them: all, or one read alone", { timeout: TIMEOUT * 2 }, async () => {
+  // fixtures/formats/velodyne_two_scans.e57: two scans of 1,000 points, each placed by its pose
+  const e57 = join(ROOT, "fixtures", "formats", "velodyne_two_scans.e57");
+  assert.ok(await page.isHidden("#source-scan-field"), "no scan choice before an E57 file");
+  await page.setInputFiles("#source-file", e57);
+  await page.waitForFunction(() => /velodyne_two_scans\.e57 · 2,000 points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
+  assert.ok(await page.isVisible("#source-scan-field"));
+  const options = await page.$$eval("#source-scan option", (os) => os.map((o) => [o.value, o.textContent]));
+  assert.deepEqual(options, [["", "all 2 scans"], ["0", "1: scan 1 (1,000 points)"], ["1", "2: scan 2 (1,000 points)"]]);
+  await page.selectOption("#source-scan", "1");
+  await page.waitForFunction(() => /velodyne_two_scans\.e57, scan 2 · 1,000 points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
+  assert.equal(await page.inputValue("#source-scan"), "1", "the choice stays");
+  // aligned alone onto the whole file: it is the file's second half, so it lands where it is
+  await page.setInputFiles("#target-file", e57);
+  await page.waitForFunction(() => /velodyne_two_scans\.e57 · 2,000 points/.test(document.getElementById("target-info").textContent), null, { timeout: TIMEOUT });
+  const { result, error } = await alignAndWait();
+  assert.equal(error, "", `unexpected #error: ${error}`);
+  assert.ok(result.rotationDeg < 1, `scan 2 onto the file turned by ${result.rotationDeg} deg`);
+  // back to all scans; another format hides the choice
+  await page.selectOption("#source-scan", "");
+  await page.waitForFunction(() => /velodyne_two_scans\.e57 · 2,000 points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
+  await page.setInputFiles("#source-file", join(ROOT, "fixtures", "formats", "velodyne_2000_binary.pcd"));
+  await page.waitForFunction(() => /velodyne_2000_binary\.pcd · 2,000 points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
+  assert.ok(await page.isHidden("#source-scan-field"));
+});
+
 test("a 1M-point pair: loaded, fitted and aligned without blocking the main thread", { timeout: TIMEOUT * 3 }, async () => {
   const infoDone = (which) =>
     page.waitForFunction((id) => /[\d,]+ points( ·|$)/.test(document.getElementById(id).textContent), `${which}-info`, { timeout: TIMEOUT });

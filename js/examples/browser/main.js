@@ -1,7 +1,7 @@
 // The browser example's script (index.html): reads the two chosen files, aligns them in a worker
 // through arps/worker-client, prints T_target_source (row-major rows, as people read matrices;
 // `result.T_target_source` itself is column-major for three.js `Matrix4.fromArray`), and offers
-// the source moved into the target's frame as a PLY download.
+// the source moved into the target's frame as a download (its own format when it can be moved).
 import { createWorkerRegistrar } from "arps/worker-client";
 
 const $ = (id) => document.getElementById(id);
@@ -49,14 +49,22 @@ $("align").addEventListener("click", async () => {
       2,
     );
     status(`done in ${(performance.now() - t0).toFixed(0)} ms (confidence ${r.confidence.toFixed(2)})`);
-    // The source saved in the target's frame: moved and written in the worker (the origin in f64,
-    // doubles when the coordinates are far from zero), offered as a download.
-    const moved = await arps.transformPointCloud(source, r.T_target_source, { transfer: true });
-    const ply = await arps.writePly(moved, { transfer: true });
+    // The source saved in the target's frame, in the worker, offered as a download: its own file
+    // moved as it is (colours, normals, attributes kept; a LAZ survey as LAS), or, for a format
+    // that cannot be (E57, OFF), its points moved (the origin in f64) and written as PLY.
+    let ext = /\.([a-z0-9]+)$/i.exec(files[0].name)?.[1].toLowerCase();
+    const own = new Uint8Array(await files[0].arrayBuffer());
+    let bytes = ext ? await arps.transformFile(own, files[0].name, m, { transfer: true }).catch(() => null) : null;
+    if (bytes) {
+      if (ext === "laz") ext = "las";
+    } else {
+      ext = "ply";
+      bytes = await arps.writePly(await arps.transformPointCloud(source, m, { transfer: true }), { transfer: true });
+    }
     const link = $("download");
     if (link.href) URL.revokeObjectURL(link.href);
-    link.href = URL.createObjectURL(new Blob([ply], { type: "application/octet-stream" }));
-    link.download = `${files[0].name.replace(/\.[^.]*$/, "") || "source"}-aligned.ply`;
+    link.href = URL.createObjectURL(new Blob([bytes], { type: "application/octet-stream" }));
+    link.download = `${files[0].name.replace(/\.[^.]*$/, "") || "source"}-aligned.${ext}`;
     link.hidden = false;
   } catch (e) {
     $("error").textContent = e.message;
