@@ -271,7 +271,7 @@ async function alignInBrowser(browser, url) {
       return { name: a.download, head: new TextDecoder().decode(bytes.subarray(0, 40)), size: bytes.length };
     });
     assert.equal(saved.name, "source-aligned.ply");
-    assert.ok(saved.head.startsWith("ply\nformat ascii 1.0\ncomment arps wasm test fixture") && saved.size > 1000, JSON.stringify(saved));
+    assert.ok(saved.head.startsWith("ply\nformat ascii 1.0\ncomment arps wasm") && saved.size > 1000, JSON.stringify(saved));
     assert.deepEqual(problems, []);
     return JSON.parse(await page.textContent("#result"));
   } finally {
