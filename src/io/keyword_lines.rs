@@ -4,7 +4,7 @@
 //! ([`NumberStyle`]).
 
 use super::motion::Motion;
-use super::number_style::{span, splice, NumberStyle};
+use super::number_style::{span, NumberStyle, Rewrite};
 use super::util::{parse_f64, utf8_line, Lines};
 use crate::Result;
 
@@ -80,8 +80,7 @@ pub(super) fn move_keyword_lines(
     let [point_style, normal_style] = styles;
     let (point_style, normal_style) = (point_style.scaled(motion.scale()), normal_style.at_least(6));
     // Second pass: the triples rewritten, the bytes between them copied.
-    let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 8);
-    let mut copied = 0;
+    let mut out = Rewrite::new(bytes);
     each_triple(bytes, format, keywords, |line, kind, toks, v| {
         if !v.iter().all(|v| v.is_finite()) {
             return;
@@ -91,11 +90,7 @@ pub(super) fn move_keyword_lines(
             Triple::Normal => (motion.normal(v), normal_style),
         };
         let mut edits: Vec<_> = (0..3).map(|a| (span(line, toks[a]), moved[a], style)).collect();
-        let start = line.as_ptr() as usize - bytes.as_ptr() as usize;
-        out.extend_from_slice(&bytes[copied..start]);
-        splice(line.as_bytes(), &mut edits, &mut out);
-        copied = start + line.len();
+        out.line(line, &mut edits);
     })?;
-    out.extend_from_slice(&bytes[copied..]);
-    Ok(out)
+    Ok(out.finish())
 }

@@ -64,7 +64,7 @@ impl NumberStyle {
 /// Appends `line` with the byte ranges `edits` replaced by their values in `style`, every other
 /// byte as it was. `edits` (a few per line) do not overlap; they are put in order here (an
 /// insertion sort: the library's sorts would add kilobytes to the WebAssembly module for this).
-pub(super) fn splice(line: &[u8], edits: &mut [(Range<usize>, f64, NumberStyle)], out: &mut Vec<u8>) {
+fn splice(line: &[u8], edits: &mut [(Range<usize>, f64, NumberStyle)], out: &mut Vec<u8>) {
     for i in 1..edits.len() {
         let mut j = i;
         while j > 0 && edits[j - 1].0.start > edits[j].0.start {
@@ -79,6 +79,35 @@ pub(super) fn splice(line: &[u8], edits: &mut [(Range<usize>, f64, NumberStyle)]
         at = range.end;
     }
     out.extend_from_slice(&line[at..]);
+}
+
+/// A text file copied with some of its lines rewritten ([`Rewrite::line`]), every byte between
+/// them (other lines, line endings) as it was.
+pub(super) struct Rewrite<'a> {
+    bytes: &'a [u8],
+    out: Vec<u8>,
+    /// How far `bytes` is copied or rewritten.
+    copied: usize,
+}
+
+impl<'a> Rewrite<'a> {
+    pub(super) fn new(bytes: &'a [u8]) -> Self {
+        Self { bytes, out: Vec::with_capacity(bytes.len() + bytes.len() / 8), copied: 0 }
+    }
+
+    /// `line` (a sub-slice of the file, after the lines rewritten before) with `edits` spliced in.
+    pub(super) fn line(&mut self, line: &str, edits: &mut [(Range<usize>, f64, NumberStyle)]) {
+        let start = line.as_ptr() as usize - self.bytes.as_ptr() as usize;
+        self.out.extend_from_slice(&self.bytes[self.copied..start]);
+        splice(line.as_bytes(), edits, &mut self.out);
+        self.copied = start + line.len();
+    }
+
+    /// The file: its rewritten lines and everything else.
+    pub(super) fn finish(mut self) -> Vec<u8> {
+        self.out.extend_from_slice(&self.bytes[self.copied..]);
+        self.out
+    }
 }
 
 /// The byte range of `token` within `line` (`token` a sub-slice of `line`).

@@ -11,7 +11,7 @@
 
 use super::lzf;
 use super::motion::Motion;
-use super::number_style::{span, splice, NumberStyle};
+use super::number_style::{span, NumberStyle, Rewrite};
 use super::pcd::{parse_header, Data, Header, F};
 use crate::{Error, Result};
 use nalgebra::Matrix4;
@@ -129,9 +129,8 @@ fn move_ascii(
     let position_style = position_style.scaled(motion.scale());
     let normal_style = normal_style.at_least(6);
     // Second pass: the point lines rewritten, the bytes between them copied.
-    let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 8);
-    let mut copied = 0;
-    let end = h.ascii_rows(bytes, |n, line, toks| {
+    let mut out = Rewrite::new(bytes);
+    h.ascii_rows(bytes, |n, line, toks| {
         let mut edits = Vec::with_capacity(6);
         let p = parse(n, toks, xyz, xyz_at)?;
         if p.iter().all(|v| v.is_finite()) {
@@ -144,15 +143,10 @@ fn move_ascii(
                 edits.extend((0..3).map(|a| (span(line, toks[at[a]]), turned[a], normal_style)));
             }
         }
-        let start = line.as_ptr() as usize - bytes.as_ptr() as usize;
-        out.extend_from_slice(&bytes[copied..start]);
-        splice(line.as_bytes(), &mut edits, &mut out);
-        copied = start + line.len();
+        out.line(line, &mut edits);
         Ok(())
     })?;
-    debug_assert!(copied <= end);
-    out.extend_from_slice(&bytes[copied..]);
-    Ok(out)
+    Ok(out.finish())
 }
 
 #[cfg(test)]

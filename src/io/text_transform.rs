@@ -11,7 +11,7 @@
 //! at least six decimals. Rows whose coordinates are not finite are kept as they are.
 
 use super::motion::Motion;
-use super::number_style::{span, splice, NumberStyle};
+use super::number_style::{span, NumberStyle, Rewrite};
 use super::text::{scan, Row};
 use crate::Result;
 use nalgebra::{Matrix4, Vector3};
@@ -62,8 +62,7 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let position_style = position_style.scaled(motion.scale());
     let normal_style = normal_style.at_least(6);
     // Second pass: the data rows rewritten, the bytes between them copied.
-    let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 8);
-    let mut copied = 0;
+    let mut out = Rewrite::new(bytes);
     scan(bytes, |row| {
         if !row.point.iter().all(|v| v.is_finite()) {
             return Ok(());
@@ -78,12 +77,8 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
                 edits.extend(columns.iter().zip(n).map(|(&c, v)| (span(row.line, row.fields[c]), v, normal_style)));
             }
         }
-        let start = row.line.as_ptr() as usize - bytes.as_ptr() as usize;
-        out.extend_from_slice(&bytes[copied..start]);
-        splice(row.line.as_bytes(), &mut edits, &mut out);
-        copied = start + row.line.len();
+        out.line(row.line, &mut edits);
         Ok(())
     })?;
-    out.extend_from_slice(&bytes[copied..]);
-    Ok(out)
+    Ok(out.finish())
 }
