@@ -89,7 +89,7 @@ pub(super) fn move_keyword_lines(
             Triple::Point => (motion.point(v), point_style),
             Triple::Normal => (motion.normal(v), normal_style),
         };
-        let mut edits: Vec<_> = (0..3).map(|a| (span(line, toks[a]), moved[a], style)).collect();
+        let mut edits = [0, 1, 2].map(|a| (span(line, toks[a]), moved[a], style));
         out.line(line, &mut edits);
     })?;
     Ok(out.finish())

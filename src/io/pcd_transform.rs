@@ -130,8 +130,9 @@ fn move_ascii(
     let normal_style = normal_style.at_least(6);
     // Second pass: the point lines rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
+    let mut edits = Vec::with_capacity(6);
     h.ascii_rows(bytes, |n, line, toks| {
-        let mut edits = Vec::with_capacity(6);
+        edits.clear();
         let p = parse(n, toks, xyz, xyz_at)?;
         if p.iter().all(|v| v.is_finite()) {
             let moved = motion.point(p);

@@ -63,14 +63,15 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let normal_style = normal_style.at_least(6);
     // Second pass: the data rows rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
+    let mut edits = Vec::with_capacity(6);
     scan(bytes, |row| {
         if !row.point.iter().all(|v| v.is_finite()) {
             return Ok(());
         }
         let normal = normal_columns(row, unit_after_xyz);
         let p = motion.point(row.point);
-        let mut edits: Vec<_> =
-            row.columns.xyz.iter().zip(p).map(|(&c, v)| (span(row.line, row.fields[c]), v, position_style)).collect();
+        edits.clear();
+        edits.extend(row.columns.xyz.iter().zip(p).map(|(&c, v)| (span(row.line, row.fields[c]), v, position_style)));
         if let Some(columns) = normal {
             if let Some(n) = values(row, columns).filter(|n| n.iter().all(|v| v.is_finite())) {
                 let n = motion.normal(n);
