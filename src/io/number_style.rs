@@ -179,6 +179,34 @@ mod tests {
     }
 
     #[test]
+    fn fixed_decimals_round_to_the_nearest_step() {
+        let mut state = 11u64;
+        let mut next = || {
+            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            (state >> 11) as f64 / (1u64 << 53) as f64
+        };
+        for k in 0..20_000 {
+            let d = k % 10;
+            let v = (next() - 0.5) * 10f64.powi((k % 13) as i32 - 3);
+            let mut out = Vec::new();
+            if !write_fixed(v, d, &mut out) {
+                assert!(v.abs() * 10f64.powi(d as i32) >= 9e15 && out.is_empty(), "{v} {d}");
+                continue;
+            }
+            let text = String::from_utf8(out).unwrap();
+            assert_eq!(text.split_once('.').map_or(0, |(_, f)| f.len()), d, "{text}");
+            let back: f64 = text.parse().unwrap();
+            assert!(
+                (back - v).abs() <= 0.5 * 10f64.powi(-(d as i32)) * (1.0 + 1e-9) + v.abs() * 1e-15,
+                "{v} {d}: {text}"
+            );
+        }
+        let mut out = Vec::new();
+        assert!(!write_fixed(1e20, 3, &mut out) && out.is_empty(), "beyond 2^53: the general way");
+        assert_eq!(written(NumberStyle { decimals: 3, exponent: false }, 1e20), "100000000000000000000.000");
+    }
+
+    #[test]
     fn splices_values_into_a_line() {
         let line = "v 1.0 2.0 3.0 # c";
         let toks: Vec<&str> = line.split(' ').collect();
