@@ -1,6 +1,7 @@
 //! Replays the fuzz seeds (which must all read) and every input the fuzzers found crashing
 //! (`fuzz/regressions/<target>/`, which must now give a result or an error without panicking),
-//! through the same code as the fuzz targets in `fuzz/fuzz_targets/`. The `register_clouds`
+//! through the same code as the fuzz targets in `fuzz/fuzz_targets/` (the movers' seeds must
+//! move, their regressions fail cleanly). The `register_clouds`
 //! seeds and regressions go through that target's own body (`fuzz/register_clouds.rs`): each
 //! must register or fail cleanly, with a finite, rigid answer, a fitness and a confidence in
 //! [0, 1], the same answer twice, and a usable registrar after an error.
@@ -94,6 +95,49 @@ fn seeds_read() {
     }
     for (name, data) in inputs("seeds/read_mesh") {
         assert_eq!(mesh_target(&data).unwrap_or_else(|e| panic!("seed {name}: {e}")), 4, "seed {name}");
+    }
+}
+
+/// The fixed motion of the `transform_las` and `transform_file` fuzz targets (the latter scaled
+/// by 1000 when the first byte is 128 or more).
+fn fuzz_motion(scaled: bool) -> nalgebra::Matrix4<f64> {
+    let turn = nalgebra::Rotation3::from_euler_angles(0.3, -1.1, 2.0).to_homogeneous();
+    let m = nalgebra::Matrix4::new_translation(&nalgebra::Vector3::new(1.5, -2.0, 0.25)) * turn;
+    if scaled {
+        m * nalgebra::Matrix4::new_scaling(1000.0)
+    } else {
+        m
+    }
+}
+
+#[test]
+fn transform_seeds_move_and_regressions_fail_cleanly() {
+    // every seed moves, and reads back to as many points (STL: facets)
+    for (name, data) in inputs("seeds/transform_las") {
+        let moved = arps::io::transform_las(&data, &fuzz_motion(false)).unwrap_or_else(|e| panic!("seed {name}: {e}"));
+        let (a, b) =
+            (arps::io::read_point_cloud(&data, "a.las").unwrap(), arps::io::read_point_cloud(&moved, "a.las").unwrap());
+        assert_eq!(a.len(), b.len(), "seed {name}");
+    }
+    const NAMES: [&str; 8] = ["a.pcd", "a.xyz", "a.csv", "a.pts", "a.obj", "a.stl", "a.ply", "a.las"];
+    let seeds = inputs("seeds/transform_file");
+    assert!(seeds.len() >= 10);
+    for (name, data) in seeds {
+        let (&pick, bytes) = data.split_first().unwrap();
+        let file = NAMES[pick as usize % NAMES.len()];
+        let moved = arps::io::transform_file(bytes, file, &fuzz_motion(pick >= 128))
+            .unwrap_or_else(|e| panic!("seed {name} ({file}): {e}"));
+        let count = |b: &[u8]| match file {
+            "a.stl" => arps::io::read_mesh(b, file).unwrap().triangles.len(),
+            _ => arps::io::read_point_cloud(b, file).unwrap().len(),
+        };
+        assert_eq!(count(bytes), count(&moved), "seed {name}");
+    }
+    // a LAZ file whose NIR layer claims 1.8 GB: refused before the layer is read
+    for (name, data) in inputs("regressions/transform_las") {
+        let r = arps::io::transform_las(&data, &fuzz_motion(false));
+        eprintln!("transform_las {name}: {:?}", r.as_ref().map(|b| b.len()));
+        assert!(r.is_err(), "{name}");
     }
 }
 

@@ -389,6 +389,19 @@ fn check_chunks(bytes: &[u8], h: &Header, vlr: &LazVlr, layered: bool) -> Result
     let entries =
         ChunkTable::read_from(&mut cursor, vlr).map_err(|e| err(format!("the chunk table cannot be read: {e}")))?;
     let entries = entries.as_ref();
+    // the layers of a layered chunk: nine for the point, one per colour, NIR, wave packet and
+    // extra byte
+    let layers: u64 = vlr
+        .items()
+        .iter()
+        .map(|item| match item.item_type() {
+            LazItemType::Point14 => POINT14_LAYERS as u64,
+            LazItemType::RGBNIR14 => 2,
+            LazItemType::Byte14(n) => u64::from(n),
+            LazItemType::RGB14 | LazItemType::WavePacket14 => 1,
+            _ => 0,
+        })
+        .sum();
     let mut points = 0u64;
     let mut start = data;
     for (k, e) in entries.iter().enumerate() {
@@ -405,13 +418,14 @@ fn check_chunks(bytes: &[u8], h: &Header, vlr: &LazVlr, layered: bool) -> Result
             return Err(err(format!("chunk {} of {} holds no points", k + 1, entries.len())));
         }
         if layered {
-            // the chunk: its first point, its point count, then the size of each layer
+            // the chunk: its first point, its point count, then the size of each layer of each
+            // item (every layer is checked: a file may be decoded whole, `decompressed`)
             let sizes = start + h.record_len as u64 + 4;
-            if sizes + 4 * POINT14_LAYERS as u64 > end {
+            if sizes + 4 * layers > end {
                 return Err(err(format!("chunk {} of {} is too short for its layer sizes", k + 1, entries.len())));
             }
-            let total: u64 = (0..POINT14_LAYERS).map(|l| u32_at(bytes, (sizes + 4 * l as u64) as usize) as u64).sum();
-            if sizes + 4 * POINT14_LAYERS as u64 + total > end {
+            let total: u64 = (0..layers).map(|l| u32_at(bytes, (sizes + 4 * l) as usize) as u64).sum();
+            if sizes + 4 * layers + total > end {
                 return Err(err(format!(
                     "chunk {} of {}: its point's layers ({total} bytes) overrun its {} bytes",
                     k + 1,
