@@ -92,7 +92,7 @@ fn write_fixed(v: f64, d: usize, out: &mut Vec<u8>) -> bool {
     const POW10: [f64; 18] =
         [1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16, 1e17];
     let scaled = (v * POW10[d.min(17)]).round();
-    if !(scaled.abs() < 9.007_199_254_740_992e15) {
+    if scaled.is_nan() || scaled.abs() >= 9.007_199_254_740_992e15 {
         return false;
     }
     let mut n = scaled.abs() as u64;
