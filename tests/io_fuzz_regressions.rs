@@ -133,6 +133,16 @@ fn transform_seeds_move_and_regressions_fail_cleanly() {
         };
         assert_eq!(count(bytes), count(&moved), "seed {name}");
     }
+    for (name, data) in inputs("seeds/transform_e57") {
+        let bytes = e57_pages(&data);
+        let moved = arps::io::transform_file(&bytes, "a.e57", &fuzz_motion(false))
+            .unwrap_or_else(|e| panic!("seed {name}: {e}"));
+        let (a, b) = (
+            arps::io::read_point_cloud(&bytes, "a.e57").unwrap(),
+            arps::io::read_point_cloud(&moved, "a.e57").unwrap(),
+        );
+        assert_eq!(a.len(), b.len(), "seed {name}");
+    }
     // a LAZ file whose NIR layer claims 1.8 GB: refused before the layer is read
     for (name, data) in inputs("regressions/transform_las") {
         let r = arps::io::transform_las(&data, &fuzz_motion(false));

@@ -359,10 +359,17 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     apart = 0;
     for (let i = 0; i < gotPcd.points.length; i++) apart = Math.max(apart, Math.abs(gotPcd.origin[i % 3] + gotPcd.points[i] - (wantPcd.origin[i % 3] + wantPcd.points[i])));
     assert.ok(apart < 1e-4, `transformFile's PCD points ${apart} from transformPointCloud's`);
-    assert.deepEqual(["a.ply", "b.PCD", "c.pts", "d.csv", "e.obj", "f.stl", "g.las", "h.laz", "i.e57", "j.off", "k"].map(arps.canTransform), [true, true, true, true, true, true, true, true, false, false, false]);
-    rejects(r, "transformFile: E57", () => arps.transformFile(new Uint8Array(8), "scan.e57", T), /E57 files cannot be moved as they are/);
-    // an E57 file's scans, by name and records; one chosen is read alone
+    assert.deepEqual(["a.ply", "b.PCD", "c.pts", "d.csv", "e.obj", "f.stl", "g.las", "h.laz", "i.e57", "j.off", "k"].map(arps.canTransform), [true, true, true, true, true, true, true, true, true, false, false]);
+    rejects(r, "transformFile: OFF", () => arps.transformFile(new Uint8Array(8), "mesh.off", T), /OFF files cannot be moved as they are/);
+    // an E57 file's scans, by name and records; one chosen is read alone; the file moved by its
+    // scans' poses reads as transformPointCloud's points
     const e57 = readFileSync(path.join(root, "fixtures", "formats", "velodyne_two_scans.e57"));
+    const wantE57 = arps.transformPointCloud(arps.readPointCloud(e57, "two.e57"), T);
+    const gotE57 = arps.readPointCloud(arps.transformFile(e57, "two.e57", T), "two.e57");
+    apart = 0;
+    for (let i = 0; i < gotE57.points.length; i++) apart = Math.max(apart, Math.abs(gotE57.origin[i % 3] + gotE57.points[i] - (wantE57.origin[i % 3] + wantE57.points[i])));
+    assert.ok(apart < 1e-3, `transformFile's E57 points ${apart} from transformPointCloud's`);
+    rejects(r, "transformFile: E57 scaled", () => arps.transformFile(e57, "two.e57", T.map((v, i) => (i < 12 && i % 4 < 3 ? 2 * v : v))), /poses are rigid/);
     assert.deepEqual(arps.listScans(e57, "two.e57"), [{ name: "scan 1", records: 1000 }, { name: "scan 2", records: 1000 }]);
     assert.equal(arps.readPointCloud(e57, "two.e57", { scan: 1 }).points.length, 3000);
     assert.deepEqual(arps.listScans(frag, "frag.ply"), []);

@@ -16,17 +16,24 @@ fn err(what: &str, e: e57::Error) -> Error {
     Error::parse(FORMAT, format!("{what}: {e}"))
 }
 
+/// The file opened by the e57 crate (its header and XML section read and checked). One function
+/// for the readers and the mover, not inlined: the crate's reader is large in WebAssembly.
+#[inline(never)]
+pub(super) fn open(bytes: &[u8]) -> Result<E57Reader<Cursor<&[u8]>>> {
+    E57Reader::new(Cursor::new(bytes)).map_err(|e| err("the file cannot be read", e))
+}
+
 /// The point clouds (scans) an E57 file holds, in the file's order: each one's name and record
 /// count (invalid points included), read from the file's XML section alone.
 pub(crate) fn scans(bytes: &[u8]) -> Result<Vec<super::ScanInfo>> {
-    let reader = E57Reader::new(Cursor::new(bytes)).map_err(|e| err("the file cannot be read", e))?;
+    let reader = open(bytes)?;
     Ok(reader.pointclouds().into_iter().map(|c| super::ScanInfo { name: c.name, records: c.records }).collect())
 }
 
 /// Reads the points of every point cloud of an E57 file, or of the one numbered `scan`
 /// (0-based), in the file's frame.
 pub(crate) fn read(bytes: &[u8], scan: Option<usize>) -> Result<Vec<[f64; 3]>> {
-    let mut reader = E57Reader::new(Cursor::new(bytes)).map_err(|e| err("the file cannot be read", e))?;
+    let mut reader = open(bytes)?;
     let clouds = reader.pointclouds();
     let n = clouds.len();
     if n == 0 {

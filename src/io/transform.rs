@@ -10,11 +10,11 @@ use crate::{Error, Result};
 use nalgebra::Matrix4;
 
 /// The extensions of the files [`transform_file`] moves as they are.
-const MOVABLE: &[&str] = &["ply", "pcd", "xyz", "pts", "txt", "csv", "obj", "stl", "las", "laz"];
+const MOVABLE: &[&str] = &["ply", "pcd", "xyz", "pts", "txt", "csv", "obj", "stl", "las", "laz", "e57"];
 
 /// True when a file of this name is one [`transform_file`] moves as it is: PLY, PCD, text point
-/// lists (XYZ, PTS, TXT, CSV), OBJ, STL, LAS and LAZ (which comes back as LAS) by their extension
-/// (case-insensitive). False for E57, OFF and unknown extensions: save such a source's points
+/// lists (XYZ, PTS, TXT, CSV), OBJ, STL, LAS, LAZ (which comes back as LAS) and E57 by their
+/// extension (case-insensitive). False for OFF and unknown extensions: save such a source's points
 /// moved instead ([`super::write_ply_binary`] of
 /// [`PointCloud::transformed`](crate::PointCloud::transformed)).
 pub fn can_transform(file_name: &str) -> bool {
@@ -25,8 +25,9 @@ pub fn can_transform(file_name: &str) -> bool {
 /// [`detect_format`]) in its own format with its points moved by `m` (`T_target_source`: a rigid
 /// transform, or one times a uniform scale for a change of unit) and its normals turned,
 /// everything else kept as it was: see each format's mover for what that means. A LAZ file comes
-/// back as the LAS file it compresses, moved (name it `.las`). Errors: a format that cannot be
-/// moved as it is (E57, OFF: see [`can_transform`]), a file its reader
+/// back as the LAS file it compresses, moved (name it `.las`); an E57 file keeps its points as
+/// stored and gets new poses (rigid motions only). Errors: a format that cannot be moved as it is
+/// (OFF: see [`can_transform`]), a file its reader
 /// refuses, coordinates stored as integers where the moved ones cannot be stored, a transform
 /// that is not rigid (or uniformly scaled).
 pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result<Vec<u8>> {
@@ -37,7 +38,8 @@ pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result
         Format::Obj => super::obj_transform::transform_obj(bytes, m),
         Format::Stl => super::stl_transform::transform_stl(bytes, m),
         Format::Las => super::transform_las(bytes, m),
-        f @ (Format::Off | Format::E57) => Err(Error::parse(
+        Format::E57 => super::e57_transform::transform_e57(bytes, m),
+        f @ Format::Off => Err(Error::parse(
             f.name(),
             format!("{} files cannot be moved as they are: save the moved points instead (as PLY)", f.name()),
         )),

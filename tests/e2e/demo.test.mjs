@@ -693,7 +693,7 @@ test("a PCD scan is downloaded as PCD, moved as it is", { timeout: TIMEOUT * 2 }
   assert.ok(worst < 1e-5, `the points are up to ${worst} from the answer applied`);
 });
 
-test("an E57 file of several scans offers them: all, or one read alone", { timeout: TIMEOUT * 2 }, async () => {
+test("an E57 file of several scans offers them: all, or one read alone; saved as E57 or as points", { timeout: TIMEOUT * 2 }, async () => {
   // fixtures/formats/velodyne_two_scans.e57: two scans of 1,000 points, each placed by its pose
   const e57 = join(ROOT, "fixtures", "formats", "velodyne_two_scans.e57");
   assert.ok(await page.isHidden("#source-scan-field"), "no scan choice before an E57 file");
@@ -711,9 +711,21 @@ test("an E57 file of several scans offers them: all, or one read alone", { timeo
   const { result, error } = await alignAndWait();
   assert.equal(error, "", `unexpected #error: ${error}`);
   assert.ok(result.rotationDeg < 1, `scan 2 onto the file turned by ${result.rotationDeg} deg`);
-  // back to all scans; another format hides the choice
+  // one scan is saved as its points (PLY)
+  let [download] = await Promise.all([page.waitForEvent("download"), page.click("#download-ply")]);
+  assert.equal(download.suggestedFilename(), "velodyne_two_scans-aligned.ply");
+  // back to all scans: aligned onto the file, the file is saved as E57 with its scans' poses
+  // moved (its points' pages kept byte for byte)
   await page.selectOption("#source-scan", "");
   await page.waitForFunction(() => /velodyne_two_scans\.e57 · 2,000 points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
+  const again = await alignAndWait();
+  assert.equal(again.error, "", `unexpected #error: ${again.error}`);
+  [download] = await Promise.all([page.waitForEvent("download"), page.click("#download-ply")]);
+  assert.equal(download.suggestedFilename(), "velodyne_two_scans-aligned.e57");
+  const file = join(dir, "two-aligned.e57");
+  await download.saveAs(file);
+  const [before, after] = [readFileSync(e57), readFileSync(file)];
+  assert.ok(after.length > before.length && after.subarray(1024, before.length).equals(before.subarray(1024)), "the points' pages kept");
   await page.setInputFiles("#source-file", join(ROOT, "fixtures", "formats", "velodyne_2000_binary.pcd"));
   await page.waitForFunction(() => /velodyne_2000_binary\.pcd · 2,000 points/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
   assert.ok(await page.isHidden("#source-scan-field"));

@@ -93,12 +93,12 @@ pub struct RegisterArgs {
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     source_scale: Option<f64>,
     /// Write each source, moved by its answer into the target's frame, to PATH. To a PATH of the
-    /// source's own format (PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, STL, LAS; `.las` for a LAZ source),
-    /// the source file as itself, moved: every attribute kept (colours, intensity, other fields
-    /// and columns, faces, LAS's header updated), normals turned, coordinates stored as the file
-    /// stored them. To a `.ply` PATH (and for E57 and OFF sources, which cannot be moved as they
-    /// are), the points read, in binary PLY (`double` coordinates when they are far from zero,
-    /// else `float`).
+    /// source's own format (PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, STL, LAS, E57; `.las` for a LAZ
+    /// source), the source file as itself, moved: every attribute kept (colours, intensity, other
+    /// fields and columns, faces, LAS's header updated), normals turned, coordinates stored as the
+    /// file stored them (an E57 file's scans by their poses). To a `.ply` PATH (and for OFF
+    /// sources, which cannot be moved as they are), the points read, in binary PLY (`double`
+    /// coordinates when they are far from zero, else `float`).
     /// With several sources PATH must hold `{stem}`, replaced by each source file's name
     /// without its extension (e.g. `out/{stem}-aligned.ply`). An input file is never
     /// overwritten.
