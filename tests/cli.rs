@@ -414,10 +414,11 @@ fn register_writes_the_aligned_source() {
             assert!(std::fs::read(out_path).unwrap().starts_with(b"ply\n"));
         }
     }
-    // a PCD and a CSV source to their own format: the file itself moved (io::transform_file)
+    // a PCD, a CSV and an E57 source to their own format: the file itself moved (io::transform_file)
     for (source, name) in [
         ("fixtures/formats/velodyne_2000_binary.pcd", "velo-aligned.pcd"),
         ("fixtures/formats/eth_car_1000.csv", "car.xyz"),
+        ("fixtures/formats/velodyne_two_scans.e57", "two-aligned.e57"),
     ] {
         let out_path = dir.join(name);
         let out = arps(&["register", source, source, "--json", "--aligned", out_path.to_str().unwrap()]);
