@@ -5,11 +5,9 @@
 //! of unit is refused.
 
 use arps::io::{read_point_cloud, read_point_cloud_with, transform_file, ReadOptions};
+mod common;
+use common::format_fixture;
 use nalgebra::{Matrix4, Rotation3, Vector3};
-
-fn fixture(name: &str) -> Vec<u8> {
-    std::fs::read(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/formats").join(name)).unwrap()
-}
 
 /// 30 degrees about a tilted axis, then a shift of the size of a map grid's.
 fn motion() -> Matrix4<f64> {
@@ -35,7 +33,7 @@ fn assert_moved(bytes: &[u8], moved: &[u8], options: &ReadOptions, m: &Matrix4<f
 fn scans_move_by_their_poses_and_their_points_stay_as_stored() {
     let m = motion();
     for name in ["velodyne_two_scans.e57", "tiny_spherical.e57"] {
-        let bytes = fixture(name);
+        let bytes = format_fixture(name);
         let moved = transform_file(&bytes, name, &m).unwrap();
         assert_moved(&bytes, &moved, &ReadOptions::default(), &m);
         // the pages after the first (the points' binary sections, the old XML) are the same bytes
@@ -45,7 +43,7 @@ fn scans_move_by_their_poses_and_their_points_stay_as_stored() {
         let back = transform_file(&moved, name, &m.try_inverse().unwrap()).unwrap();
         assert_moved(&bytes, &back, &ReadOptions::default(), &Matrix4::identity());
     }
-    let bytes = fixture("velodyne_two_scans.e57");
+    let bytes = format_fixture("velodyne_two_scans.e57");
     let moved = transform_file(&bytes, "two.e57", &m).unwrap();
     for k in 0..2 {
         assert_moved(&bytes, &moved, &ReadOptions { scan: Some(k), ..ReadOptions::default() }, &m);
@@ -56,7 +54,7 @@ fn scans_move_by_their_poses_and_their_points_stay_as_stored() {
 
 #[test]
 fn a_change_of_unit_and_broken_files_are_refused() {
-    let bytes = fixture("velodyne_two_scans.e57");
+    let bytes = format_fixture("velodyne_two_scans.e57");
     let e = transform_file(&bytes, "two.e57", &(motion() * Matrix4::new_scaling(1000.0))).unwrap_err().to_string();
     assert!(e.contains("poses are rigid") && e.contains("x1000"), "{e}");
     let e = transform_file(&bytes[..bytes.len() - 1024], "two.e57", &motion()).unwrap_err().to_string();

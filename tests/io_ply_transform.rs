@@ -5,23 +5,9 @@
 //! faces, comments, the header) is kept; hostile files and transforms are refused with a message.
 
 use arps::io::{read_mesh, read_point_cloud, transform_ply};
-use nalgebra::{Matrix4, Rotation3, Vector3};
-
-fn fixture(name: &str) -> Vec<u8> {
-    std::fs::read(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/formats").join(name)).unwrap()
-}
-
-/// 50 degrees about a tilted axis, then a shift.
-fn motion() -> Matrix4<f64> {
-    let r =
-        Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(Vector3::new(0.3, -1.0, 0.4)), 50f64.to_radians());
-    Matrix4::new_translation(&Vector3::new(2.5, -1.25, 0.75)) * r.to_homogeneous()
-}
-
-fn apply(m: &Matrix4<f64>, p: [f64; 3]) -> [f64; 3] {
-    let q = m.transform_point(&nalgebra::Point3::from(p));
-    [q.x, q.y, q.z]
-}
+mod common;
+use common::{apply, format_fixture, tilted_motion};
+use nalgebra::{Matrix4, Vector3};
 
 fn header_len(bytes: &[u8]) -> usize {
     let at = bytes.windows(11).position(|w| w == b"end_header\n").unwrap();
@@ -36,8 +22,8 @@ fn f32_at(b: &[u8], off: usize) -> f32 {
 fn a_binary_fragment_keeps_its_colours_and_faces_and_turns_its_normals() {
     // frag_115_2000_binary.ply: 2,000 vertices of x y z nx ny nz (float) red green blue (uchar),
     // then 3,270 faces
-    let bytes = fixture("frag_115_2000_binary.ply");
-    let m = motion();
+    let bytes = format_fixture("frag_115_2000_binary.ply");
+    let m = tilted_motion();
     let moved = transform_ply(&bytes, &m).unwrap();
     assert_eq!(moved.len(), bytes.len());
     let body = header_len(&bytes);
@@ -68,8 +54,8 @@ fn a_binary_fragment_keeps_its_colours_and_faces_and_turns_its_normals() {
 #[test]
 fn an_ascii_mesh_keeps_every_other_value_and_line() {
     // fuze_ascii.ply: 502 vertices x y z (float) red green blue alpha, 1,000 textured faces
-    let bytes = fixture("fuze_ascii.ply");
-    let m = motion();
+    let bytes = format_fixture("fuze_ascii.ply");
+    let m = tilted_motion();
     let moved = transform_ply(&bytes, &m).unwrap();
     let (a, b) = (String::from_utf8(bytes.clone()).unwrap(), String::from_utf8(moved.clone()).unwrap());
     let (la, lb): (Vec<&str>, Vec<&str>) = (a.lines().collect(), b.lines().collect());
@@ -126,7 +112,7 @@ fn big_endian_doubles_far_from_zero_keep_every_digit() {
         .collect();
     let normals: Vec<[f32; 3]> = (0..40).map(|i| if i % 2 == 0 { [0.0, 0.0, 1.0] } else { [0.6, 0.0, 0.8] }).collect();
     let bytes = made_big_endian(&points, &normals);
-    let m = motion();
+    let m = tilted_motion();
     let moved = transform_ply(&bytes, &m).unwrap();
     assert_eq!(moved.len(), bytes.len());
     let cloud = read_point_cloud(&moved, "far.ply").unwrap();
@@ -156,7 +142,7 @@ fn a_uniform_scale_moves_positions_and_leaves_normals_unit() {
     // a source in metres saved into a target in millimetres: T times 1000
     let points = vec![[1.0, 2.0, 3.0], [-0.5, 0.25, 4.0]];
     let bytes = made_big_endian(&points, &[[0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]);
-    let m = motion() * Matrix4::new_scaling(1000.0);
+    let m = tilted_motion() * Matrix4::new_scaling(1000.0);
     let moved = transform_ply(&bytes, &m).unwrap();
     let cloud = read_point_cloud(&moved, "mm.ply").unwrap();
     let want = apply(&m, points[1]);
@@ -178,8 +164,8 @@ fn blank_lines_and_crlf_in_an_ascii_file_are_kept() {
 
 #[test]
 fn hostile_files_and_transforms_are_refused_with_a_message() {
-    let m = motion();
-    let good = fixture("frag_115_2000_binary.ply");
+    let m = tilted_motion();
+    let good = format_fixture("frag_115_2000_binary.ply");
     let refused = |bytes: &[u8], m: &Matrix4<f64>| transform_ply(bytes, m).unwrap_err().to_string();
     assert!(refused(
         b"ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int vertex_indices\nend_header\n",

@@ -6,26 +6,12 @@
 //! message.
 
 use arps::io::{can_transform, read_mesh, read_point_cloud, transform_file, transform_las, transform_ply};
+mod common;
+use common::{apply, format_fixture, tilted_motion};
 use nalgebra::{Matrix3, Matrix4, Rotation3, Vector3};
-
-fn fixture(name: &str) -> Vec<u8> {
-    std::fs::read(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/formats").join(name)).unwrap()
-}
-
-/// 50 degrees about a tilted axis, then a shift.
-fn motion() -> Matrix4<f64> {
-    let r =
-        Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(Vector3::new(0.3, -1.0, 0.4)), 50f64.to_radians());
-    Matrix4::new_translation(&Vector3::new(2.5, -1.25, 0.75)) * r.to_homogeneous()
-}
 
 fn rotation(m: &Matrix4<f64>) -> Matrix3<f64> {
     m.fixed_view::<3, 3>(0, 0).into_owned()
-}
-
-fn apply(m: &Matrix4<f64>, p: [f64; 3]) -> [f64; 3] {
-    let q = m.transform_point(&nalgebra::Point3::from(p));
-    [q.x, q.y, q.z]
 }
 
 /// Asserts that the file `moved` reads as the points of `bytes` moved by `m`, to `tol`.
@@ -57,7 +43,7 @@ fn pcd_header(bytes: &[u8]) -> &[u8] {
 
 #[test]
 fn pcd_files_move_in_every_encoding() {
-    let m = motion();
+    let m = tilted_motion();
     for name in [
         "velodyne_2000_ascii.pcd",
         "velodyne_2000_binary.pcd",
@@ -65,13 +51,13 @@ fn pcd_files_move_in_every_encoding() {
         "milk_compressed.pcd",
         "table_scene_80x60_compressed.pcd",
     ] {
-        let bytes = fixture(name);
+        let bytes = format_fixture(name);
         let moved = transform_file(&bytes, name, &m).unwrap();
         assert_eq!(pcd_header(&moved), pcd_header(&bytes), "{name}: the header is kept");
         assert_points_moved(&bytes, &moved, name, &m, 1e-4);
     }
     // Binary records: the coordinates (and normals) rewritten, the other fields kept byte for byte.
-    let bytes = fixture("velodyne_2000_binary.pcd");
+    let bytes = format_fixture("velodyne_2000_binary.pcd");
     let moved = transform_file(&bytes, "v.pcd", &m).unwrap();
     let body = pcd_header(&bytes).len();
     assert_eq!(moved.len(), bytes.len());
@@ -80,7 +66,7 @@ fn pcd_files_move_in_every_encoding() {
         assert_eq!(moved[at..at + 4], bytes[at..at + 4], "intensity of point {i}");
     }
     // cloud_bin_0: x y z normal_x normal_y normal_z rgb, all 4-byte: normals turned, colours kept.
-    let bytes = fixture("cloud_bin_0_binary.pcd");
+    let bytes = format_fixture("cloud_bin_0_binary.pcd");
     let moved = transform_file(&bytes, "c.pcd", &m).unwrap();
     let body = pcd_header(&bytes).len();
     let f = |b: &[u8], at: usize| f32::from_le_bytes(b[at..at + 4].try_into().unwrap()) as f64;
@@ -94,7 +80,7 @@ fn pcd_files_move_in_every_encoding() {
         assert_eq!(moved[at + 24..at + 28], bytes[at + 24..at + 28], "rgb of point {i}");
     }
     // Ascii: the intensity column and the line layout kept, coordinates as precise as the file's.
-    let bytes = fixture("velodyne_2000_ascii.pcd");
+    let bytes = format_fixture("velodyne_2000_ascii.pcd");
     let moved = transform_file(&bytes, "v.pcd", &m).unwrap();
     let (a, b) = (String::from_utf8(bytes).unwrap(), String::from_utf8(moved).unwrap());
     assert_eq!(a.lines().count(), b.lines().count());
@@ -108,15 +94,15 @@ fn pcd_files_move_in_every_encoding() {
 #[test]
 fn pcd_with_integer_coordinates_is_refused() {
     let pcd = b"VERSION 0.7\nFIELDS x y z\nSIZE 2 2 2\nTYPE I I I\nCOUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nPOINTS 2\nDATA ascii\n1 2 3\n4 5 6\n";
-    let e = transform_file(pcd, "int.pcd", &motion()).unwrap_err().to_string();
+    let e = transform_file(pcd, "int.pcd", &tilted_motion()).unwrap_err().to_string();
     assert!(e.contains("field 'x' is an integer"), "{e}");
 }
 
 #[test]
 fn a_csv_with_named_normals_keeps_its_layout_and_turns_them() {
     // eth_car_1000.csv: "x,y,z,nx,ny,nz", values written "-3.5376 , 0.639553 , -1.37678 , ..."
-    let m = motion();
-    let bytes = fixture("eth_car_1000.csv");
+    let m = tilted_motion();
+    let bytes = format_fixture("eth_car_1000.csv");
     let moved = transform_file(&bytes, "car.csv", &m).unwrap();
     assert_points_moved(&bytes, &moved, "car.csv", &m, 1e-5);
     let (a, b) = (String::from_utf8(bytes).unwrap(), String::from_utf8(moved).unwrap());
@@ -162,7 +148,7 @@ fn a_survey_csv_moves_its_named_columns_and_keeps_ids_codes_and_line_endings() {
 
 #[test]
 fn text_lists_keep_colours_turn_unnamed_normals_and_follow_a_change_of_unit() {
-    let m = motion();
+    let m = tilted_motion();
     // PTS: a count line, then x y z intensity r g b.
     let pts = "3\n1.5 2.25 -0.5 -1200 255 128 0\n1.0 2.0 3.0 -800 10 20 30\n0.125 0.5 0.75 0 1 2 3\n";
     let moved = String::from_utf8(transform_file(pts.as_bytes(), "scan.pts", &m).unwrap()).unwrap();
@@ -198,8 +184,8 @@ fn text_lists_keep_colours_turn_unnamed_normals_and_follow_a_change_of_unit() {
 
 #[test]
 fn obj_keeps_faces_and_texture_and_turns_normals() {
-    let m = motion();
-    let bytes = fixture("fuze.obj");
+    let m = tilted_motion();
+    let bytes = format_fixture("fuze.obj");
     let moved = transform_file(&bytes, "fuze.obj", &m).unwrap();
     let (before, after) = (read_mesh(&bytes, "fuze.obj").unwrap(), read_mesh(&moved, "fuze.obj").unwrap());
     assert_eq!(before.triangles, after.triangles);
@@ -225,9 +211,9 @@ fn obj_keeps_faces_and_texture_and_turns_normals() {
 
 #[test]
 fn stl_binary_and_ascii_move_their_corners_and_turn_their_normals() {
-    let m = motion();
+    let m = tilted_motion();
     for name in ["cylinder_binary.stl", "angle_block_binary_solid.stl", "tray_bottom_150_ascii.stl"] {
-        let bytes = fixture(name);
+        let bytes = format_fixture(name);
         let moved = transform_file(&bytes, name, &m).unwrap();
         // Corners compared facet by facet: STL repeats them, and two that differ in the last bit
         // of a float may round to one once moved, so the welded meshes may differ.
@@ -268,23 +254,23 @@ fn stl_binary_and_ascii_move_their_corners_and_turn_their_normals() {
 
 #[test]
 fn the_format_picks_the_mover_and_unmovable_formats_say_so() {
-    let m = motion();
+    let m = tilted_motion();
     for name in ["simple.las", "fuze_binary.ply", "fuze_ascii.ply"] {
-        let bytes = fixture(name);
+        let bytes = format_fixture(name);
         let own = if name.ends_with(".las") { transform_las(&bytes, &m) } else { transform_ply(&bytes, &m) };
         assert_eq!(transform_file(&bytes, name, &m).unwrap(), own.unwrap(), "{name}");
         assert!(can_transform(name));
     }
     // Without an extension the content says the format.
-    let bytes = fixture("velodyne_2000_binary.pcd");
+    let bytes = format_fixture("velodyne_2000_binary.pcd");
     assert_eq!(transform_file(&bytes, "", &m).unwrap(), transform_file(&bytes, "a.pcd", &m).unwrap());
     // LAZ comes back as the LAS it compresses
     assert_eq!(
-        transform_file(&fixture("simple.laz"), "simple.laz", &m).unwrap(),
-        transform_las(&fixture("simple.las"), &m).unwrap()
+        transform_file(&format_fixture("simple.laz"), "simple.laz", &m).unwrap(),
+        transform_las(&format_fixture("simple.las"), &m).unwrap()
     );
     // OFF cannot be moved (E57 can: tests/io_e57_transform.rs)
-    let e = transform_file(&fixture("ballA.off"), "ballA.off", &m).unwrap_err().to_string();
+    let e = transform_file(&format_fixture("ballA.off"), "ballA.off", &m).unwrap_err().to_string();
     assert!(e.contains("OFF files cannot be moved as they are"), "{e}");
     assert!(!can_transform("ballA.off"));
     for name in ["a.PCD", "b.xyz", "c.pts", "d.txt", "e.csv", "f.obj", "g.stl", "h.Ply", "i.las", "j.LAZ", "k.e57"] {
@@ -293,6 +279,6 @@ fn the_format_picks_the_mover_and_unmovable_formats_say_so() {
     assert!(!can_transform("noextension") && !can_transform("x.off") && !can_transform("x.dxf"));
     // A mirror is not a motion of the file.
     let mirror = Matrix4::new_nonuniform_scaling(&Vector3::new(-1.0, 1.0, 1.0));
-    let e = transform_file(&fixture("eth_car_1000.csv"), "car.csv", &mirror).unwrap_err().to_string();
+    let e = transform_file(&format_fixture("eth_car_1000.csv"), "car.csv", &mirror).unwrap_err().to_string();
     assert!(e.contains("mirrors"), "{e}");
 }

@@ -311,6 +311,15 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     rejects(r, "length 4", () => arps.writePly(new Float32Array(4)), /^cloud: .*not a multiple of 3/);
     rejects(r, "not a cloud", () => arps.transformPointCloud("points", T), /^cloud: expected a Float32Array/);
 
+    // how far the points of `moved` (a file named `name`) are from those of `file` moved by T
+    // through transformPointCloud (in f64, each beside its origin)
+    const apartFrom = (file, moved, name) => {
+      const want = arps.transformPointCloud(arps.readPointCloud(file, name), T);
+      const got = arps.readPointCloud(moved, name);
+      let apart = 0;
+      for (let i = 0; i < got.points.length; i++) apart = Math.max(apart, Math.abs(got.origin[i % 3] + got.points[i] - (want.origin[i % 3] + want.points[i])));
+      return apart;
+    };
     // transformFile on a PLY: the file moved as it is (a fragment with normals, colours and faces): the
     // same length and header, its points those transformPointCloud gives, its colours kept
     const frag = readFileSync(path.join(root, "fixtures", "formats", "frag_115_2000_binary.ply"));
@@ -318,10 +327,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     assert.ok(movedPly instanceof Uint8Array && movedPly.length === frag.length);
     const body = frag.indexOf("end_header\n") + 11;
     assert.deepEqual(movedPly.subarray(0, body), new Uint8Array(frag.subarray(0, body)));
-    const want = arps.transformPointCloud(arps.readPointCloud(frag, "f.ply"), T);
-    const got = arps.readPointCloud(movedPly, "f.ply");
-    let apart = 0;
-    for (let i = 0; i < got.points.length; i++) apart = Math.max(apart, Math.abs(got.origin[i % 3] + got.points[i] - (want.origin[i % 3] + want.points[i])));
+    let apart = apartFrom(frag, movedPly, "f.ply");
     assert.ok(apart < 1e-4, `transformFile's PLY points ${apart} from transformPointCloud's`);
     for (const i of [0, 999, 1999]) assert.deepEqual(movedPly.subarray(body + i * 27 + 24, body + i * 27 + 27), new Uint8Array(frag.subarray(body + i * 27 + 24, body + i * 27 + 27)), `colour ${i}`);
     rejects(r, "transformFile: not a PLY", () => arps.transformFile(new Uint8Array([1, 2, 3]), "a.ply", T), /PLY/);
@@ -337,10 +343,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     const offset = las.readUInt32LE(96);
     assert.deepEqual(movedLas.subarray(227, offset), new Uint8Array(las.subarray(227, offset)), "the VLRs");
     assert.deepEqual(movedLas.subarray(offset + 12, offset + 34), new Uint8Array(las.subarray(offset + 12, offset + 34)), "a record's attributes");
-    const wantLas = arps.transformPointCloud(arps.readPointCloud(las, "a.las"), T);
-    const gotLas = arps.readPointCloud(movedLas, "a.las");
-    apart = 0;
-    for (let i = 0; i < gotLas.points.length; i++) apart = Math.max(apart, Math.abs(gotLas.origin[i % 3] + gotLas.points[i] - (wantLas.origin[i % 3] + wantLas.points[i])));
+    apart = apartFrom(las, movedLas, "a.las");
     assert.ok(apart <= 0.0052, `transformFile's LAS points ${apart} from transformPointCloud's`);
     const laz = readFileSync(path.join(root, "fixtures", "formats", "simple.laz"));
     // a LAZ file comes back as the LAS file it compresses, moved: what the LAS file gives
@@ -354,20 +357,14 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     assert.ok(movedPcd.length === pcd.length);
     assert.deepEqual(movedPcd.subarray(0, pcdBody), new Uint8Array(pcd.subarray(0, pcdBody)), "the PCD header");
     assert.deepEqual(movedPcd.subarray(pcdBody + 24, pcdBody + 28), new Uint8Array(pcd.subarray(pcdBody + 24, pcdBody + 28)), "a colour");
-    const wantPcd = arps.transformPointCloud(arps.readPointCloud(pcd, "c.pcd"), T);
-    const gotPcd = arps.readPointCloud(movedPcd, "c.pcd");
-    apart = 0;
-    for (let i = 0; i < gotPcd.points.length; i++) apart = Math.max(apart, Math.abs(gotPcd.origin[i % 3] + gotPcd.points[i] - (wantPcd.origin[i % 3] + wantPcd.points[i])));
+    apart = apartFrom(pcd, movedPcd, "c.pcd");
     assert.ok(apart < 1e-4, `transformFile's PCD points ${apart} from transformPointCloud's`);
     assert.deepEqual(["a.ply", "b.PCD", "c.pts", "d.csv", "e.obj", "f.stl", "g.las", "h.laz", "i.e57", "j.off", "k"].map(arps.canTransform), [true, true, true, true, true, true, true, true, true, false, false]);
     rejects(r, "transformFile: OFF", () => arps.transformFile(new Uint8Array(8), "mesh.off", T), /OFF files cannot be moved as they are/);
     // an E57 file's scans, by name and records; one chosen is read alone; the file moved by its
     // scans' poses reads as transformPointCloud's points
     const e57 = readFileSync(path.join(root, "fixtures", "formats", "velodyne_two_scans.e57"));
-    const wantE57 = arps.transformPointCloud(arps.readPointCloud(e57, "two.e57"), T);
-    const gotE57 = arps.readPointCloud(arps.transformFile(e57, "two.e57", T), "two.e57");
-    apart = 0;
-    for (let i = 0; i < gotE57.points.length; i++) apart = Math.max(apart, Math.abs(gotE57.origin[i % 3] + gotE57.points[i] - (wantE57.origin[i % 3] + wantE57.points[i])));
+    apart = apartFrom(e57, arps.transformFile(e57, "two.e57", T), "two.e57");
     assert.ok(apart < 1e-3, `transformFile's E57 points ${apart} from transformPointCloud's`);
     rejects(r, "transformFile: E57 scaled", () => arps.transformFile(e57, "two.e57", T.map((v, i) => (i < 12 && i % 4 < 3 ? 2 * v : v))), /poses are rigid/);
     assert.deepEqual(arps.listScans(e57, "two.e57"), [{ name: "scan 1", records: 1000 }, { name: "scan 2", records: 1000 }]);

@@ -4,7 +4,7 @@
 //! ([`NumberStyle`]).
 
 use super::motion::Motion;
-use super::number_style::{span, NumberStyle, Rewrite};
+use super::number_style::{span, Rewrite, Styles};
 use super::util::{parse_f64, utf8_line, Lines};
 use crate::Result;
 
@@ -73,12 +73,12 @@ pub(super) fn move_keyword_lines(
     motion: &Motion,
 ) -> Result<Vec<u8>> {
     // First pass: how the file writes its numbers.
-    let mut styles = [NumberStyle::default(); 2];
+    let mut styles = Styles::default();
     each_triple(bytes, format, keywords, |_, kind, toks, _| {
-        toks.iter().for_each(|t| styles[(kind == Triple::Normal) as usize].learn(t))
+        let style = if kind == Triple::Normal { &mut styles.normal } else { &mut styles.position };
+        toks.iter().for_each(|t| style.learn(t))
     })?;
-    let [point_style, normal_style] = styles;
-    let (point_style, normal_style) = (point_style.scaled(motion.scale()), normal_style.at_least(6));
+    let styles = styles.for_writing(motion.scale());
     // Second pass: the triples rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
     each_triple(bytes, format, keywords, |line, kind, toks, v| {
@@ -86,8 +86,8 @@ pub(super) fn move_keyword_lines(
             return;
         }
         let (moved, style) = match kind {
-            Triple::Point => (motion.point(v), point_style),
-            Triple::Normal => (motion.normal(v), normal_style),
+            Triple::Point => (motion.point(v), styles.position),
+            Triple::Normal => (motion.normal(v), styles.normal),
         };
         let mut edits = [0, 1, 2].map(|a| (span(line, toks[a]), moved[a], style));
         out.line(line, &mut edits);

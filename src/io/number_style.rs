@@ -14,6 +14,22 @@ pub(super) struct NumberStyle {
     exponent: bool,
 }
 
+/// The styles of a file's positions and of its normals, learned over a first pass
+/// ([`NumberStyle::learn`]), then made ready for writing ([`Styles::for_writing`]).
+#[derive(Clone, Copy, Debug, Default)]
+pub(super) struct Styles {
+    pub(super) position: NumberStyle,
+    pub(super) normal: NumberStyle,
+}
+
+impl Styles {
+    /// As the moved values are written: positions shifted by the motion's `scale` (a change of
+    /// unit), normals with at least six decimals.
+    pub(super) fn for_writing(self, scale: f64) -> Self {
+        Self { position: self.position.scaled(scale), normal: self.normal.at_least(6) }
+    }
+}
+
 /// The most decimals written: beyond 17 an `f64` has no more digits to give.
 const MAX_DECIMALS: i64 = 17;
 

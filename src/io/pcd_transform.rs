@@ -11,7 +11,7 @@
 
 use super::lzf;
 use super::motion::Motion;
-use super::number_style::{span, NumberStyle, Rewrite};
+use super::number_style::{span, Rewrite, Styles};
 use super::pcd::{parse_header, Data, Header, F};
 use crate::{Error, Result};
 use nalgebra::Matrix4;
@@ -117,17 +117,16 @@ fn move_ascii(
         Ok(v)
     };
     // First pass: how the file writes its numbers.
-    let (mut position_style, mut normal_style) = (NumberStyle::default(), NumberStyle::default());
+    let mut styles = Styles::default();
     h.ascii_rows(bytes, |n, _, toks| {
         parse(n, toks, xyz, xyz_at)?;
-        xyz_at.iter().for_each(|&k| position_style.learn(toks[k]));
+        xyz_at.iter().for_each(|&k| styles.position.learn(toks[k]));
         if let Some(at) = normal_at {
-            at.iter().for_each(|&k| normal_style.learn(toks[k]));
+            at.iter().for_each(|&k| styles.normal.learn(toks[k]));
         }
         Ok(())
     })?;
-    let position_style = position_style.scaled(motion.scale());
-    let normal_style = normal_style.at_least(6);
+    let styles = styles.for_writing(motion.scale());
     // Second pass: the point lines rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
     let mut edits = Vec::with_capacity(6);
@@ -136,12 +135,12 @@ fn move_ascii(
         let p = parse(n, toks, xyz, xyz_at)?;
         if p.iter().all(|v| v.is_finite()) {
             let moved = motion.point(p);
-            edits.extend((0..3).map(|a| (span(line, toks[xyz_at[a]]), moved[a], position_style)));
+            edits.extend((0..3).map(|a| (span(line, toks[xyz_at[a]]), moved[a], styles.position)));
         }
         if let (Some(f), Some(at)) = (normal, normal_at) {
             if let Some(v) = parse(n, toks, f, at).ok().filter(|v| v.iter().all(|v| v.is_finite())) {
                 let turned = motion.normal(v);
-                edits.extend((0..3).map(|a| (span(line, toks[at[a]]), turned[a], normal_style)));
+                edits.extend((0..3).map(|a| (span(line, toks[at[a]]), turned[a], styles.normal)));
             }
         }
         out.line(line, &mut edits);

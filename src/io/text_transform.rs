@@ -11,7 +11,7 @@
 //! at least six decimals. Rows whose coordinates are not finite are kept as they are.
 
 use super::motion::Motion;
-use super::number_style::{span, NumberStyle, Rewrite};
+use super::number_style::{span, Rewrite, Styles};
 use super::text::{scan, Row};
 use crate::Result;
 use nalgebra::{Matrix4, Vector3};
@@ -43,24 +43,22 @@ fn normal_columns(row: &Row, guess: bool) -> Option<[usize; 3]> {
 pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let motion = Motion::new(m)?;
     // First pass: how the file writes its numbers, and whether an unnamed list holds normals.
-    let mut position_style = NumberStyle::default();
-    let mut normal_style = NumberStyle::default();
+    let mut styles = Styles::default();
     let mut unit_after_xyz = true;
     scan(bytes, |row| {
         for &c in &row.columns.xyz {
-            position_style.learn(row.fields[c]);
+            styles.position.learn(row.fields[c]);
         }
         match normal_columns(row, true).and_then(|c| values(row, c).map(|n| (c, n))) {
             Some((normal, n)) => {
-                normal.iter().for_each(|&c| normal_style.learn(row.fields[c]));
+                normal.iter().for_each(|&c| styles.normal.learn(row.fields[c]));
                 unit_after_xyz &= (Vector3::from(n).norm() - 1.0).abs() <= UNIT_TOLERANCE;
             }
             None => unit_after_xyz = false,
         }
         Ok(())
     })?;
-    let position_style = position_style.scaled(motion.scale());
-    let normal_style = normal_style.at_least(6);
+    let styles = styles.for_writing(motion.scale());
     // Second pass: the data rows rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
     let mut edits = Vec::with_capacity(6);
@@ -71,11 +69,11 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
         let normal = normal_columns(row, unit_after_xyz);
         let p = motion.point(row.point);
         edits.clear();
-        edits.extend(row.columns.xyz.iter().zip(p).map(|(&c, v)| (span(row.line, row.fields[c]), v, position_style)));
+        edits.extend(row.columns.xyz.iter().zip(p).map(|(&c, v)| (span(row.line, row.fields[c]), v, styles.position)));
         if let Some(columns) = normal {
             if let Some(n) = values(row, columns).filter(|n| n.iter().all(|v| v.is_finite())) {
                 let n = motion.normal(n);
-                edits.extend(columns.iter().zip(n).map(|(&c, v)| (span(row.line, row.fields[c]), v, normal_style)));
+                edits.extend(columns.iter().zip(n).map(|(&c, v)| (span(row.line, row.fields[c]), v, styles.normal)));
             }
         }
         out.line(row.line, &mut edits);

@@ -87,3 +87,21 @@ pub fn drop_or_keep_from_json<T: PartialEq + std::fmt::Debug>(
     let e = serde_json::from_str::<arps::Options>(&format!(r#"{{"{key}": "remove"}}"#)).unwrap_err().to_string();
     assert!(e.contains("unknown variant `remove`") && e.contains("drop") && e.contains("keep"), "{e}");
 }
+
+/// The bytes of `fixtures/formats/NAME` (one real file per format).
+pub fn format_fixture(name: &str) -> Vec<u8> {
+    std::fs::read(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/formats").join(name)).unwrap()
+}
+
+/// 50 degrees about a tilted axis, then a shift: what the file movers' tests move files by.
+pub fn tilted_motion() -> Matrix4<f64> {
+    let axis = nalgebra::Unit::new_normalize(Vector3::new(0.3, -1.0, 0.4));
+    Matrix4::new_translation(&Vector3::new(2.5, -1.25, 0.75))
+        * nalgebra::Rotation3::from_axis_angle(&axis, 50f64.to_radians()).to_homogeneous()
+}
+
+/// `m` applied to the point `p`, in f64.
+pub fn apply(m: &Matrix4<f64>, p: [f64; 3]) -> [f64; 3] {
+    let q = m.transform_point(&nalgebra::Point3::from(p));
+    [q.x, q.y, q.z]
+}
