@@ -1,17 +1,20 @@
 #!/usr/bin/env node
 // Registers two point-cloud files in Node and prints T_target_source.
-//   node node_modules/arps/examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] [--json]
+//   node node_modules/arps/examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] [--json] [--aligned OUT]
 // SOURCE and TARGET are any format the readers know (PLY, PCD, LAS/LAZ, E57, XYZ/PTS/CSV, OBJ,
 // OFF, STL), read with their coordinates kept (map-grid surveys too: `readPointCloud`).
+// --aligned OUT writes the source moved into the target's frame: the source file itself, moved
+// (`transformFile`: every attribute kept), when OUT has the source's extension (.las for a LAZ
+// source), else its points as binary PLY (`transformPointCloud`, `writePly`).
 // It imports "arps" as an app that installed the package does (inside the package, Node resolves
 // the package's own name to itself).
-import { readFileSync } from "node:fs";
+import { readFileSync, writeFileSync } from "node:fs";
 import path from "node:path";
-import init, { Registrar, readPointCloud } from "arps";
+import init, { canTransform, Registrar, readPointCloud, transformFile, transformPointCloud, writePly } from "arps";
 
 function usage(message) {
   if (message) console.error(`node-register: ${message}`);
-  console.error("usage: node examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] [--json]");
+  console.error("usage: node examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] [--json] [--aligned OUT]");
   process.exit(2);
 }
 
@@ -19,14 +22,28 @@ const args = process.argv.slice(2);
 const files = [];
 const options = {};
 let json = false;
+let aligned = null;
 for (let i = 0; i < args.length; i++) {
   if (args[i] === "--json") json = true;
   else if (args[i] === "--icp") options.icp = args[++i] ?? usage("--icp needs a value");
   else if (args[i] === "--search") options.search = args[++i] ?? usage("--search needs a value");
+  else if (args[i] === "--aligned") aligned = args[++i] ?? usage("--aligned needs a path");
   else if (args[i].startsWith("--")) usage(`unknown flag ${args[i]}`);
   else files.push(args[i]);
 }
 if (files.length !== 2) usage();
+// --aligned: the source's own format (moved as it is) or .ply (its points), said before registering
+const ext = (f) => path.extname(f).slice(1).toLowerCase();
+// (a LAZ source comes back as LAS: never to a .laz name)
+const own =
+  aligned !== null &&
+  canTransform(files[0]) &&
+  ext(aligned) !== "laz" &&
+  (ext(aligned) === ext(files[0]) || (ext(files[0]) === "laz" && ext(aligned) === "las"));
+if (aligned !== null && !own && ext(aligned) !== "ply") {
+  const moved = canTransform(files[0]) ? ` or .${ext(files[0]) === "laz" ? "las" : ext(files[0])} (the source moved as it is)` : "";
+  usage(`--aligned: name ${aligned} .ply (the source's points)${moved}`);
+}
 
 try {
   await init(); // a no-op under Node; loads the .wasm in a browser
@@ -58,6 +75,14 @@ try {
     if (registrar.provenance?.kind === "random") console.log("note: the loaded model is an untrained placeholder (random weights)");
   }
   registrar.free();
+  if (aligned) {
+    // the source file itself moved when OUT names its own format, else its points as PLY
+    const bytes = own
+      ? transformFile(readFileSync(files[0]), path.basename(files[0]), r.T_target_source)
+      : writePly(transformPointCloud(source, r.T_target_source));
+    writeFileSync(aligned, bytes);
+    if (!json) console.log(`wrote the aligned source to ${aligned} (${own ? "the source file moved" : "its points, as PLY"})`);
+  }
 } catch (e) {
   console.error(`node-register: ${e.message}`);
   process.exit(1);

@@ -236,9 +236,13 @@ test("only the exported entry points can be imported", async () => {
   for (const [f, r] of Object.entries(results)) assert.equal(r, "ERR_PACKAGE_PATH_NOT_EXPORTED", `arps/${f}: ${r}`);
 });
 
-test("the package's examples/node-register.mjs aligns the pair", async () => {
-  const out = await nodeJson(["node_modules/arps/examples/node-register.mjs", SOURCE, TARGET, "--json"]);
+test("the package's examples/node-register.mjs aligns the pair and writes the aligned source", async () => {
+  const moved = join(dir, "source-aligned.ply");
+  const out = await nodeJson(["node_modules/arps/examples/node-register.mjs", SOURCE, TARGET, "--json", "--aligned", moved]);
   console.log("examples/node-register.mjs:", JSON.stringify(assertRecovered(out.T_target_source, "examples/node-register.mjs")));
+  // the source (an ASCII PLY) written as itself, moved: its header and comment kept
+  const head = readFileSync(moved, "latin1").slice(0, 60);
+  assert.ok(head.startsWith("ply\nformat ascii 1.0\ncomment arps wasm test fixture"), head);
 });
 
 /**
