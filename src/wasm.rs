@@ -240,15 +240,15 @@ pub fn list_scans(
 }
 
 /// A file moved as it is, in its own format, e.g. a registered source by its result's
-/// `T_target_source`: PLY, PCD, text lists (XYZ, PTS, TXT, CSV), OBJ, STL, LAS, LAZ (which comes
-/// back as the LAS file it compresses) and E57 (its scans' poses moved, its points kept as
+/// `T_target_source`: PLY, PCD, text lists (XYZ, PTS, TXT, CSV), OBJ, OFF, STL, LAS, LAZ (which
+/// comes back as the LAS file it compresses) and E57 (its scans' poses moved, its points kept as
 /// stored; rigid motions only) (see `canTransform`). Positions are mapped in f64 and written back as the file stored them (the
 /// property's type, the text's decimals, LAS's scaled integers with new offsets), normals turned,
 /// everything else kept (colours, intensity, classification, faces, other fields, the header).
 /// `fileName` says the format by its extension (else the content does). `matrix`: 16 numbers,
 /// column-major (or, through the package's entry, four row-major rows), a rigid transform or one
 /// times a uniform scale (a change of unit). Returns the moved file's bytes. Throws on a format
-/// that cannot be moved as it is (OFF), a file its reader refuses, integer coordinates
+/// it cannot tell, a file its reader refuses, integer coordinates
 /// where the moved ones cannot be stored, and a matrix that is not rigid (or uniformly scaled).
 #[wasm_bindgen(js_name = transformFile)]
 pub fn transform_file(
@@ -260,7 +260,7 @@ pub fn transform_file(
 }
 
 /// True when `transformFile` moves a file of this name as it is: `.ply .pcd .xyz .pts .txt .csv
-/// .obj .stl .las .laz .e57` (case-insensitive; a LAZ file comes back as LAS). False for OFF and
+/// .obj .off .stl .las .laz .e57` (case-insensitive; a LAZ file comes back as LAS). False for
 /// other names: save such a source as `writePly(transformPointCloud(cloud, T))`.
 #[wasm_bindgen(js_name = canTransform)]
 pub fn can_transform(#[wasm_bindgen(js_name = fileName)] file_name: &str) -> bool {

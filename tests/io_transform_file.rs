@@ -210,6 +210,37 @@ fn obj_keeps_faces_and_texture_and_turns_normals() {
 }
 
 #[test]
+fn off_keeps_faces_and_colours_turns_normals_and_follows_split_records() {
+    let m = tilted_motion();
+    // ballA.off (ModelNet's layout): 1,900 vertices, 3,796 faces
+    let bytes = format_fixture("ballA.off");
+    let moved = transform_file(&bytes, "ballA.off", &m).unwrap();
+    let (before, after) = (read_mesh(&bytes, "a.off").unwrap(), read_mesh(&moved, "a.off").unwrap());
+    assert_eq!(before.triangles, after.triangles);
+    for (p, q) in before.vertices.iter().zip(&after.vertices) {
+        let want = apply(&m, p.map(f64::from));
+        assert!((0..3).all(|k| (q[k] as f64 - want[k]).abs() < 1e-4), "{q:?} vs {want:?}");
+    }
+    let (a, b) = (String::from_utf8(bytes).unwrap(), String::from_utf8(moved).unwrap());
+    assert_eq!(a.lines().count(), b.lines().count());
+    assert!(a.lines().zip(b.lines()).skip(1902).all(|(x, y)| x == y), "the faces are kept");
+    // NOFF with a colour after the normal, a comment, and a vertex split over two lines
+    let noff = "NOFF\n# made\n3 1 0\n1.0 0.0 0.0 0.0 0.0 1.0 255\n0.0 1.0\n 0.0 1.0 0.0 0.0 7\n0.0 0.0 1.0 0.6 0.8 0.0 9\n3 0 1 2\n";
+    let moved = String::from_utf8(transform_file(noff.as_bytes(), "n.off", &m).unwrap()).unwrap();
+    let lines: Vec<&str> = moved.lines().collect();
+    assert_eq!((lines[0], lines[1], lines[2], lines[7]), ("NOFF", "# made", "3 1 0", "3 0 1 2"));
+    let values = |l: &str| l.split_whitespace().map(|t| t.parse::<f64>().unwrap()).collect::<Vec<_>>();
+    let first = values(lines[3]);
+    assert_eq!(first[6], 255.0, "the colour kept");
+    let (p, n) = (apply(&m, [1.0, 0.0, 0.0]), rotation(&m) * Vector3::new(0.0, 0.0, 1.0));
+    assert!((0..3).all(|k| (first[k] - p[k]).abs() < 0.05 + 1e-9 && (first[3 + k] - n[k]).abs() < 1e-6), "{first:?}");
+    let split = [values(lines[4]), values(lines[5])].concat();
+    let (p, n) = (apply(&m, [0.0, 1.0, 0.0]), rotation(&m) * Vector3::new(1.0, 0.0, 0.0));
+    assert!((0..3).all(|k| (split[k] - p[k]).abs() < 0.05 + 1e-9 && (split[3 + k] - n[k]).abs() < 1e-6), "{split:?}");
+    assert_eq!(split[6], 7.0);
+}
+
+#[test]
 fn stl_binary_and_ascii_move_their_corners_and_turn_their_normals() {
     let m = tilted_motion();
     for name in ["cylinder_binary.stl", "angle_block_binary_solid.stl", "tray_bottom_150_ascii.stl"] {
@@ -269,14 +300,15 @@ fn the_format_picks_the_mover_and_unmovable_formats_say_so() {
         transform_file(&format_fixture("simple.laz"), "simple.laz", &m).unwrap(),
         transform_las(&format_fixture("simple.las"), &m).unwrap()
     );
-    // OFF cannot be moved (E57 can: tests/io_e57_transform.rs)
-    let e = transform_file(&format_fixture("ballA.off"), "ballA.off", &m).unwrap_err().to_string();
-    assert!(e.contains("OFF files cannot be moved as they are"), "{e}");
-    assert!(!can_transform("ballA.off"));
-    for name in ["a.PCD", "b.xyz", "c.pts", "d.txt", "e.csv", "f.obj", "g.stl", "h.Ply", "i.las", "j.LAZ", "k.e57"] {
+    // (E57: tests/io_e57_transform.rs); a name and content that say no format
+    let e = transform_file(b"\x00\x01 not a point file", "drawing.dxf", &m).unwrap_err().to_string();
+    assert!(e.contains("cannot tell the format"), "{e}");
+    for name in
+        ["a.PCD", "b.xyz", "c.pts", "d.txt", "e.csv", "f.obj", "g.stl", "h.Ply", "i.las", "j.LAZ", "k.e57", "l.off"]
+    {
         assert!(can_transform(name), "{name}");
     }
-    assert!(!can_transform("noextension") && !can_transform("x.off") && !can_transform("x.dxf"));
+    assert!(!can_transform("noextension") && !can_transform("x.dxf"));
     // A mirror is not a motion of the file.
     let mirror = Matrix4::new_nonuniform_scaling(&Vector3::new(-1.0, 1.0, 1.0));
     let e = transform_file(&format_fixture("eth_car_1000.csv"), "car.csv", &mirror).unwrap_err().to_string();

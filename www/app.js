@@ -577,9 +577,9 @@ async function downloadAligned() {
   try {
     // The package's own, in the engine's worker, every buffer transferred: the source's file moved
     // as it is, in its own format (its colours, intensity, normals and faces kept; the unit change
-    // included; a LAZ survey as LAS; an E57 file by its scans' poses), else (OFF, or one scan of an
-    // E57 file) the points from the page's store, moved (the origin in f64) and written as PLY
-    // (doubles when the scan has one).
+    // included; a LAZ survey as LAS; an E57 file by its scans' poses), else (one scan of an E57
+    // file, a file without a known extension) the points from the page's store, moved (the origin
+    // in f64) and written as PLY (doubles when the scan has one).
     const arps = await getEngine();
     const T = shownPose(result).T_target_source;
     let bytes = null;

@@ -359,8 +359,8 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     assert.deepEqual(movedPcd.subarray(pcdBody + 24, pcdBody + 28), new Uint8Array(pcd.subarray(pcdBody + 24, pcdBody + 28)), "a colour");
     apart = apartFrom(pcd, movedPcd, "c.pcd");
     assert.ok(apart < 1e-4, `transformFile's PCD points ${apart} from transformPointCloud's`);
-    assert.deepEqual(["a.ply", "b.PCD", "c.pts", "d.csv", "e.obj", "f.stl", "g.las", "h.laz", "i.e57", "j.off", "k"].map(arps.canTransform), [true, true, true, true, true, true, true, true, true, false, false]);
-    rejects(r, "transformFile: OFF", () => arps.transformFile(new Uint8Array(8), "mesh.off", T), /OFF files cannot be moved as they are/);
+    assert.deepEqual(["a.ply", "b.PCD", "c.pts", "d.csv", "e.obj", "f.stl", "g.las", "h.laz", "i.e57", "j.off", "k.dxf"].map(arps.canTransform), [true, true, true, true, true, true, true, true, true, true, false]);
+    rejects(r, "transformFile: no format", () => arps.transformFile(new Uint8Array(8), "drawing.dxf", T), /cannot tell the format/);
     // an E57 file's scans, by name and records; one chosen is read alone; the file moved by its
     // scans' poses reads as transformPointCloud's points
     const e57 = readFileSync(path.join(root, "fixtures", "formats", "velodyne_two_scans.e57"));

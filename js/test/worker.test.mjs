@@ -88,8 +88,7 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     const movedLas = await arps.transformFile(las, "simple.las", res.T_target_source);
     assert.ok(movedLas.length === las.length && new TextDecoder().decode(movedLas.subarray(0, 4)) === "LASF");
     await assert.rejects(arps.transformFile(las, "simple.las", [1, 2]), /matrix has 2 elements/);
-    const off = readFileSync(path.join(root, "fixtures", "formats", "ballA.off"));
-    await assert.rejects(arps.transformFile(off, "ball.off", res.T_target_source), /OFF files cannot be moved/);
+    await assert.rejects(arps.transformFile(new Uint8Array(8), "drawing.dxf", res.T_target_source), /cannot tell the format/);
     const two = readFileSync(path.join(root, "fixtures", "formats", "velodyne_two_scans.e57"));
     assert.deepEqual((await arps.listScans(two, "two.e57")).map((s) => s.name), ["scan 1", "scan 2"]);
     // Clouds with an origin transfer their points too; zero origins give the same answer.

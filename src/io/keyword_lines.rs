@@ -39,7 +39,7 @@ fn each_triple<'a>(
     bytes: &'a [u8],
     format: &'static str,
     keywords: Keywords,
-    mut visit: impl FnMut(&'a str, Triple, [&'a str; 3], [f64; 3]),
+    visit: &mut dyn FnMut(&'a str, Triple, [&'a str; 3], [f64; 3]),
 ) -> Result<()> {
     'lines: for (n, raw) in Lines::new(bytes) {
         if !keywords.iter().any(|(words, _)| raw.trim_ascii_start().starts_with(words[0].as_bytes())) {
@@ -74,14 +74,14 @@ pub(super) fn move_keyword_lines(
 ) -> Result<Vec<u8>> {
     // First pass: how the file writes its numbers.
     let mut styles = Styles::default();
-    each_triple(bytes, format, keywords, |_, kind, toks, _| {
+    each_triple(bytes, format, keywords, &mut |_, kind, toks, _| {
         let style = if kind == Triple::Normal { &mut styles.normal } else { &mut styles.position };
         toks.iter().for_each(|t| style.learn(t))
     })?;
     let styles = styles.for_writing(motion.scale());
     // Second pass: the triples rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
-    each_triple(bytes, format, keywords, |line, kind, toks, v| {
+    each_triple(bytes, format, keywords, &mut |line, kind, toks, v| {
         if !v.iter().all(|v| v.is_finite()) {
             return;
         }

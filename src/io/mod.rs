@@ -21,7 +21,7 @@
 //! model's vertices sit on its edges and corners, so a scan registers against its surface.
 //!
 //! A registered source is saved in the target's frame as the file it was, moved
-//! ([`transform_file`]: PLY, PCD, text lists, OBJ, STL, LAS, E57; everything else in the file kept), or
+//! ([`transform_file`]: PLY, PCD, text lists, OBJ, OFF, STL, LAS, E57; everything else in the file kept), or
 //! as its points ([`write_ply_binary`] of [`PointCloud::transformed`]).
 //!
 //! Coordinates are read as precisely as the file holds them (`double` properties and text in
@@ -43,6 +43,7 @@ mod number_style;
 mod obj;
 mod obj_transform;
 mod off;
+mod off_transform;
 mod pcd;
 mod pcd_transform;
 mod ply;

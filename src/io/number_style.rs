@@ -153,6 +153,15 @@ impl<'a> Rewrite<'a> {
         self.copied = start + line.len();
     }
 
+    /// `token` (a sub-slice of the file, after what was rewritten before) replaced by `v` in
+    /// `style`: for records that may span lines (OFF).
+    pub(super) fn token(&mut self, token: &str, v: f64, style: NumberStyle) {
+        let start = token.as_ptr() as usize - self.bytes.as_ptr() as usize;
+        self.out.extend_from_slice(&self.bytes[self.copied..start]);
+        style.write(v, &mut self.out);
+        self.copied = start + token.len();
+    }
+
     /// The file: its rewritten lines and everything else.
     pub(super) fn finish(mut self) -> Vec<u8> {
         self.out.extend_from_slice(&self.bytes[self.copied..]);

@@ -9,7 +9,7 @@ use super::util::{bounded_capacity, check_index, fan, parse_count, parse_f64, pa
 use super::Raw;
 use crate::{Error, Result};
 
-const F: &str = "OFF";
+pub(crate) const F: &str = "OFF";
 
 /// The next line holding something other than a comment, as its tokens.
 fn next_tokens<'a>(lines: &mut Lines<'a>) -> Result<Option<(usize, Vec<&'a str>)>> {
@@ -60,8 +60,60 @@ fn header_keyword(tok: &str) -> Option<(&str, &str)> {
     }
 }
 
+/// The header's prefix (`C`, `N`, `ST`, ... before `OFF`), the vertex and face counts, and where
+/// the vertices start.
+struct Header<'a> {
+    prefix: String,
+    nv: u64,
+    nf: u64,
+    lines: Lines<'a>,
+}
+
 pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
+    let Header { nv, nf, mut lines, .. } = header(bytes)?;
+    // "0 0 0\n" is the shortest vertex line.
+    let mut vertices = Vec::with_capacity(bounded_capacity(nv, lines.remaining(), 6));
+    each_vertex(&mut lines, nv, &mut |n, toks| {
+        vertices.push([parse_f64(F, n, "x", toks[0])?, parse_f64(F, n, "y", toks[1])?, parse_f64(F, n, "z", toks[2])?]);
+        Ok(())
+    })?;
+    read_faces(&mut lines, nf, vertices)
+}
+
+/// Calls `visit(line number, tokens)` for each of the `nv` vertex records (at least three
+/// tokens, a record split over lines joined; tokens are sub-slices of the file).
+fn each_vertex<'a>(
+    lines: &mut Lines<'a>,
+    nv: u64,
+    visit: &mut dyn FnMut(usize, &[&'a str]) -> Result<()>,
+) -> Result<()> {
+    for i in 0..nv {
+        let (n, toks) = next_tokens(lines)?.ok_or_else(|| {
+            Error::parse(
+                F,
+                format!("the file ends after {i} of the {nv} vertices the header declares (line {})", lines.line_no()),
+            )
+        })?;
+        let toks = continue_record(lines, toks, 3, || format!("vertex {i} (line {n})"))?;
+        visit(n, &toks)?;
+    }
+    Ok(())
+}
+
+/// The file's vertices, in order: `visit(line number, tokens)` for each (see [`each_vertex`]);
+/// returns the header's prefix (`N` in it: a normal follows x, y, z).
+pub(crate) fn vertex_records<'a>(
+    bytes: &'a [u8],
+    visit: &mut dyn FnMut(usize, &[&'a str]) -> Result<()>,
+) -> Result<String> {
+    let Header { prefix, nv, mut lines, .. } = header(bytes)?;
+    each_vertex(&mut lines, nv, visit)?;
+    Ok(prefix)
+}
+
+fn header(bytes: &[u8]) -> Result<Header<'_>> {
     let mut lines = Lines::new(bytes);
+    let mut kind = String::new();
     let (hn, htoks) = next_tokens(&mut lines)?.ok_or_else(|| Error::parse(F, "the file is empty"))?;
     let mut count_toks: Vec<String> = Vec::new();
     let count_line;
@@ -75,9 +127,11 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
         if prefix.contains('4') || prefix.contains('n') {
             return Err(Error::parse(F, format!("line {hn}: {} (4D or n-dimensional OFF) is not supported", htoks[0])));
         }
+
         if htoks.get(1).is_some_and(|t| t.eq_ignore_ascii_case("BINARY")) {
             return Err(Error::parse(F, format!("line {hn}: binary OFF is not supported")));
         }
+        kind = prefix.to_string();
         if !glued.is_empty() {
             count_toks.push(glued.to_string());
         }
@@ -98,23 +152,15 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
     let nv = parse_count(F, count_line, "vertex count", &count_toks[0])?;
     crate::limits::check_file_points(F, nv)?;
     let nf = parse_count(F, count_line, "face count", &count_toks[1])?;
+    Ok(Header { prefix: kind, nv, nf, lines })
+}
 
-    // "0 0 0\n" is the shortest vertex line.
-    let mut vertices = Vec::with_capacity(bounded_capacity(nv, lines.remaining(), 6));
-    for i in 0..nv {
-        let (n, toks) = next_tokens(&mut lines)?.ok_or_else(|| {
-            Error::parse(
-                F,
-                format!("the file ends after {i} of the {nv} vertices the header declares (line {})", lines.line_no()),
-            )
-        })?;
-        let toks = continue_record(&mut lines, toks, 3, || format!("vertex {i} (line {n})"))?;
-        vertices.push([parse_f64(F, n, "x", toks[0])?, parse_f64(F, n, "y", toks[1])?, parse_f64(F, n, "z", toks[2])?]);
-    }
+/// The `nf` faces after the vertices, fan-triangulated, their indices checked.
+fn read_faces(lines: &mut Lines, nf: u64, vertices: Vec<[f64; 3]>) -> Result<Raw> {
     let mut triangles = Vec::with_capacity(bounded_capacity(nf, lines.remaining(), 8));
     let mut poly = Vec::new();
     for f in 0..nf {
-        let (n, toks) = next_tokens(&mut lines)?.ok_or_else(|| {
+        let (n, toks) = next_tokens(lines)?.ok_or_else(|| {
             Error::parse(
                 F,
                 format!("the file ends after {f} of the {nf} faces the header declares (line {})", lines.line_no()),
@@ -122,7 +168,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
         })?;
         let k = parse_count(F, n, "face corner count", toks[0])?;
         let need = usize::try_from(k).unwrap_or(usize::MAX).saturating_add(1);
-        let toks = continue_record(&mut lines, toks, need, || format!("face {f} (line {n}, {k} corners)"))?;
+        let toks = continue_record(lines, toks, need, || format!("face {f} (line {n}, {k} corners)"))?;
         poly.clear();
         for tok in &toks[1..=k as usize] {
             let i = parse_int(F, n, "vertex index", tok)?;

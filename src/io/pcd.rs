@@ -281,15 +281,14 @@ impl Header {
     }
 }
 
+/// What [`Header::ascii_rows`] calls for each point: `(line number, line, tokens)`.
+pub(crate) type AsciiRow<'v, 'a> = dyn FnMut(usize, &'a str, &[&'a str]) -> Result<()> + 'v;
+
 impl Header {
     /// Calls `visit(line number, line, tokens)` for each point of an ascii body (blank lines
     /// skipped; `tokens` holds the point's values, at least as many as the fields declare).
     /// Returns the byte offset after the last point's line.
-    pub(crate) fn ascii_rows<'a>(
-        &self,
-        bytes: &'a [u8],
-        mut visit: impl FnMut(usize, &'a str, &[&'a str]) -> Result<()>,
-    ) -> Result<usize> {
+    pub(crate) fn ascii_rows<'a>(&self, bytes: &'a [u8], visit: &mut AsciiRow<'_, 'a>) -> Result<usize> {
         let n_points = self.n_points;
         let n_tokens: usize = self.fields.iter().map(|f| f.count).fold(0, usize::saturating_add);
         let mut lines = Lines::at(bytes, self.body_at, self.data_line);
@@ -356,7 +355,7 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
         Data::Ascii => {
             let n_tokens: usize = fields.iter().map(|f| f.count).fold(0, usize::saturating_add);
             out.reserve(bounded_capacity(n_points, bytes.len() - body_at, n_tokens.saturating_mul(2)));
-            h.ascii_rows(bytes, |n, _, toks| {
+            h.ascii_rows(bytes, &mut |n, _, toks| {
                 let mut p = [0.0f64; 3];
                 for a in 0..3 {
                     p[a] = parse_f64(F, n, &format!("field '{}'", fields[axes[a].0].name), toks[axes[a].1])?;

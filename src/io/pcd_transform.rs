@@ -118,7 +118,7 @@ fn move_ascii(
     };
     // First pass: how the file writes its numbers.
     let mut styles = Styles::default();
-    h.ascii_rows(bytes, |n, _, toks| {
+    h.ascii_rows(bytes, &mut |n, _, toks| {
         parse(n, toks, xyz, xyz_at)?;
         xyz_at.iter().for_each(|&k| styles.position.learn(toks[k]));
         if let Some(at) = normal_at {
@@ -130,7 +130,7 @@ fn move_ascii(
     // Second pass: the point lines rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
     let mut edits = Vec::with_capacity(6);
-    h.ascii_rows(bytes, |n, line, toks| {
+    h.ascii_rows(bytes, &mut |n, line, toks| {
         edits.clear();
         let p = parse(n, toks, xyz, xyz_at)?;
         if p.iter().all(|v| v.is_finite()) {

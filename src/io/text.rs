@@ -83,7 +83,7 @@ pub(crate) struct Row<'a, 'b> {
 /// Calls `visit` with every data row of a text point list, in order (see the module docs for
 /// what a row is). Errors: a line that is not UTF-8, a row after the data started without
 /// numbers in its coordinate columns, a file without any data row.
-pub(crate) fn scan<'a>(bytes: &'a [u8], mut visit: impl FnMut(&Row<'a, '_>) -> Result<()>) -> Result<()> {
+pub(crate) fn scan<'a>(bytes: &'a [u8], visit: &mut dyn FnMut(&Row<'a, '_>) -> Result<()>) -> Result<()> {
     let mut columns = UNNAMED;
     let mut started = false;
     let mut fields: Vec<&'a str> = Vec::new();
@@ -132,7 +132,7 @@ fn bad_row(n: usize, line: &str, fields: &[&str], columns: &Columns) -> Error {
 
 pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
     let mut out = Vec::new();
-    scan(bytes, |row| {
+    scan(bytes, &mut |row| {
         if out.len() == crate::limits::MAX_FILE_POINTS {
             crate::limits::check_file_points(F, out.len() as u64 + 1)?;
         }
@@ -176,7 +176,7 @@ mod tests {
         assert_eq!(read(csv).unwrap(), vec![[500000.25, 4100000.5, 12.0], [500001.0, 4100001.0, 13.5]]);
         let cc = b"//X,Y,Z,R,G,B,Nx,Ny,Nz\n1,2,3,255,0,0,0,0,1\n";
         let mut cols = None;
-        scan(cc, |r| {
+        scan(cc, &mut |r: &Row| {
             cols = Some(r.columns);
             Ok(())
         })

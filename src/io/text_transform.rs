@@ -45,7 +45,7 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     // First pass: how the file writes its numbers, and whether an unnamed list holds normals.
     let mut styles = Styles::default();
     let mut unit_after_xyz = true;
-    scan(bytes, |row| {
+    scan(bytes, &mut |row| {
         for &c in &row.columns.xyz {
             styles.position.learn(row.fields[c]);
         }
@@ -62,7 +62,7 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     // Second pass: the data rows rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
     let mut edits = Vec::with_capacity(6);
-    scan(bytes, |row| {
+    scan(bytes, &mut |row| {
         if !row.point.iter().all(|v| v.is_finite()) {
             return Ok(());
         }

@@ -1,20 +1,20 @@
 //! A file moved as it is, whatever its format: the mover of the format the file is in
 //! ([`transform_ply`](super::transform_ply), [`transform_las`](super::transform_las),
 //! [`transform_pcd`](super::transform_pcd), [`transform_text`](super::transform_text), and those
-//! of OBJ and STL), so that a registered scan can be saved in the target's frame in its own
+//! of OBJ, OFF, STL and E57), so that a registered scan can be saved in the target's frame in its own
 //! format, with everything the registration did not read (colours, intensity, normals, faces,
 //! other fields).
 
 use super::{detect_format, Format};
-use crate::{Error, Result};
+use crate::Result;
 use nalgebra::Matrix4;
 
 /// The extensions of the files [`transform_file`] moves as they are.
-const MOVABLE: &[&str] = &["ply", "pcd", "xyz", "pts", "txt", "csv", "obj", "stl", "las", "laz", "e57"];
+const MOVABLE: &[&str] = &["ply", "pcd", "xyz", "pts", "txt", "csv", "obj", "off", "stl", "las", "laz", "e57"];
 
 /// True when a file of this name is one [`transform_file`] moves as it is: PLY, PCD, text point
-/// lists (XYZ, PTS, TXT, CSV), OBJ, STL, LAS, LAZ (which comes back as LAS) and E57 by their
-/// extension (case-insensitive). False for OFF and unknown extensions: save such a source's points
+/// lists (XYZ, PTS, TXT, CSV), OBJ, OFF, STL, LAS, LAZ (which comes back as LAS) and E57 by their
+/// extension (case-insensitive). False for unknown extensions: save such a source's points
 /// moved instead ([`super::write_ply_binary`] of
 /// [`PointCloud::transformed`](crate::PointCloud::transformed)).
 pub fn can_transform(file_name: &str) -> bool {
@@ -26,8 +26,7 @@ pub fn can_transform(file_name: &str) -> bool {
 /// transform, or one times a uniform scale for a change of unit) and its normals turned,
 /// everything else kept as it was: see each format's mover for what that means. A LAZ file comes
 /// back as the LAS file it compresses, moved (name it `.las`); an E57 file keeps its points as
-/// stored and gets new poses (rigid motions only). Errors: a format that cannot be moved as it is
-/// (OFF: see [`can_transform`]), a file its reader
+/// stored and gets new poses (rigid motions only). Errors: a file its reader
 /// refuses, coordinates stored as integers where the moved ones cannot be stored, a transform
 /// that is not rigid (or uniformly scaled).
 pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result<Vec<u8>> {
@@ -39,9 +38,6 @@ pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result
         Format::Stl => super::stl_transform::transform_stl(bytes, m),
         Format::Las => super::transform_las(bytes, m),
         Format::E57 => super::e57_transform::transform_e57(bytes, m),
-        f @ Format::Off => Err(Error::parse(
-            f.name(),
-            format!("{} files cannot be moved as they are: save the moved points instead (as PLY)", f.name()),
-        )),
+        Format::Off => super::off_transform::transform_off(bytes, m),
     }
 }

@@ -93,12 +93,11 @@ pub struct RegisterArgs {
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     source_scale: Option<f64>,
     /// Write each source, moved by its answer into the target's frame, to PATH. To a PATH of the
-    /// source's own format (PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, STL, LAS, E57; `.las` for a LAZ
+    /// source's own format (PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, E57; `.las` for a LAZ
     /// source), the source file as itself, moved: every attribute kept (colours, intensity, other
     /// fields and columns, faces, LAS's header updated), normals turned, coordinates stored as the
-    /// file stored them (an E57 file's scans by their poses). To a `.ply` PATH (and for OFF
-    /// sources, which cannot be moved as they are), the points read, in binary PLY (`double`
-    /// coordinates when they are far from zero, else `float`).
+    /// file stored them (an E57 file's scans by their poses). To a `.ply` PATH, the points read,
+    /// in binary PLY (`double` coordinates when they are far from zero, else `float`).
     /// With several sources PATH must hold `{stem}`, replaced by each source file's name
     /// without its extension (e.g. `out/{stem}-aligned.ply`). An input file is never
     /// overwritten.
@@ -214,8 +213,8 @@ fn print_registration(
 }
 
 /// True when `path` names a file of `source`'s own format that `io::transform_file` moves as it
-/// is (`scan.pcd` to `out.pcd`, `a.pts` to `b.xyz`, a LAZ or LAS source to `out.las`; never an
-/// E57 or OFF source, never a `.laz` path: a LAZ source comes back as LAS).
+/// is (`scan.pcd` to `out.pcd`, `a.pts` to `b.xyz`, a LAZ or LAS source to `out.las`; never a
+/// `.laz` path: a LAZ source comes back as LAS).
 fn moves_as_it_is(source: &Path, path: &Path) -> bool {
     let name = |p: &Path| p.to_string_lossy().into_owned();
     let (source, path) = (name(source), name(path));
@@ -256,8 +255,8 @@ fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathB
 
 /// Writes the source moved by `r`'s answer to `path`: to a path of the source's own format, the
 /// source file (`bytes`, the file `file` as read for registering) as itself, moved
-/// (`io::transform_file`: PLY, PCD, text lists, OBJ, STL, LAS, LAZ as LAS; every attribute kept,
-/// normals turned); else (a `.ply` path) as the points read (`cloud`, already scaled) in binary PLY
+/// (`io::transform_file`: PLY, PCD, text lists, OBJ, OFF, STL, LAS, LAZ as LAS, E57; every
+/// attribute kept, normals turned); else (a `.ply` path) as the points read (`cloud`, already scaled) in binary PLY
 /// (`io::write_ply_binary`). `scale` is the `--source-scale` applied before registering.
 fn write_aligned(
     file: &Path,

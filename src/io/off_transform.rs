@@ -1,0 +1,53 @@
+//! An OFF file moved as it is: each vertex's x, y, z mapped and, in an `NOFF` file, its normal
+//! (the three values after them) turned; every other byte kept (the header, colours, texture
+//! coordinates, faces, comments), the values written as the file wrote its numbers. A vertex
+//! record split over several lines is moved where its values are. The motion keeps the faces'
+//! winding (it never mirrors). The file is read by the OFF reader first, so a file it refuses is
+//! refused here too.
+
+use super::motion::Motion;
+use super::number_style::{Rewrite, Styles};
+use super::off::{vertex_records, F};
+use super::util::parse_f64;
+use crate::Result;
+use nalgebra::Matrix4;
+
+/// The three values of `toks` from `at`, when they are there and are finite numbers.
+fn triple(n: usize, toks: &[&str], at: usize) -> Option<[f64; 3]> {
+    let mut v = [0.0; 3];
+    for a in 0..3 {
+        v[a] = parse_f64(F, n, "value", toks.get(at + a)?).ok().filter(|v| v.is_finite())?;
+    }
+    Some(v)
+}
+
+/// The OFF file `bytes` with its vertices moved by `m` (`T_target_source`: a rigid transform, or
+/// one times a uniform scale) and, in an `NOFF` file, its normals turned (see the module docs).
+/// Errors: a file the OFF reader refuses, a transform that is not rigid (or uniformly scaled).
+pub(crate) fn transform_off(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
+    let motion = Motion::new(m)?;
+    super::off::read(bytes)?;
+    // First pass: how the file writes its numbers, and whether its vertices carry normals.
+    let mut styles = Styles::default();
+    let prefix = vertex_records(bytes, &mut |_, toks| {
+        toks[..3].iter().for_each(|t| styles.position.learn(t));
+        toks.iter().skip(3).take(3).for_each(|t| styles.normal.learn(t));
+        Ok(())
+    })?;
+    let normals = prefix.contains('N');
+    let styles = styles.for_writing(motion.scale());
+    // Second pass: the values rewritten where they are, the bytes between them copied.
+    let mut out = Rewrite::new(bytes);
+    vertex_records(bytes, &mut |n, toks| {
+        if let Some(p) = triple(n, toks, 0) {
+            let moved = motion.point(p);
+            (0..3).for_each(|a| out.token(toks[a], moved[a], styles.position));
+        }
+        if let Some(v) = triple(n, toks, 3).filter(|_| normals) {
+            let turned = motion.normal(v);
+            (0..3).for_each(|a| out.token(toks[3 + a], turned[a], styles.normal));
+        }
+        Ok(())
+    })?;
+    Ok(out.finish())
+}
