@@ -527,3 +527,19 @@ fn register_scales_a_source_in_another_unit() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `arps scans FILE` lists an E57 file's scans (index, name, records; `--json` as `listScans`
+/// gives them), says a file of another format holds one cloud, and names a file it cannot read.
+#[test]
+fn scans_lists_an_e57_files_scans() {
+    let out = arps(&["scans", "fixtures/formats/velodyne_two_scans.e57"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(String::from_utf8_lossy(&out.stdout), "0  scan 1  1000 points\n1  scan 2  1000 points\n");
+    let out = arps(&["scans", "fixtures/formats/velodyne_two_scans.e57", "--json"]);
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v, serde_json::json!([{ "name": "scan 1", "records": 1000 }, { "name": "scan 2", "records": 1000 }]));
+    let out = arps(&["scans", "fixtures/formats/simple.las"]);
+    assert!(String::from_utf8_lossy(&out.stdout).contains("one cloud (only E57 files hold several scans)"));
+    let out = arps(&["scans", "fixtures/formats/missing.e57"]);
+    assert!(!out.status.success() && String::from_utf8_lossy(&out.stderr).contains("missing.e57"));
+}

@@ -1,5 +1,5 @@
-//! `arps`: register two point clouds from the command line, describe or quantise a weights file,
-//! or benchmark the pipeline.
+//! `arps`: register two point clouds from the command line, list an E57 file's scans, describe or
+//! quantise a weights file, or benchmark the pipeline.
 //!
 //! Errors print one line on stderr (`arps: ...`) and exit with status 1 (2 for usage errors).
 
@@ -31,6 +31,15 @@ enum Command {
     /// target frame). Several sources are registered in turn onto the target read once (and, where
     /// it is at least as large as they are, prepared once).
     Register(register::RegisterArgs),
+    /// List the scans of an E57 file (index, name, point records), to choose one with
+    /// `register --source-scan K` / `--target-scan K`; a file of another format holds one cloud.
+    Scans {
+        /// The point-cloud file.
+        file: PathBuf,
+        /// Print one JSON array of `{ "name", "records" }` (what the JS API's `listScans` gives).
+        #[arg(long)]
+        json: bool,
+    },
     /// Describe a weights file: config, parameter count, provenance.
     Info {
         /// Weights file (safetensors).
@@ -118,6 +127,21 @@ fn run(command: Command) -> Result<(), String> {
                 "  provenance    {}",
                 serde_json::to_string_pretty(&w.provenance).unwrap_or_default().replace('\n', "\n                ")
             );
+            Ok(())
+        }
+        Command::Scans { file, json } => {
+            let bytes = arps::io::read_file(&file).map_err(|e| e.to_string())?;
+            let scans = arps::io::list_scans(&bytes, &arps::io::file_name(&file))
+                .map_err(|e| format!("{}: {e}", file.display()))?;
+            if json {
+                out!("{}", serde_json::to_string(&scans).map_err(|e| e.to_string())?);
+            } else if scans.is_empty() {
+                out!("{}: one cloud (only E57 files hold several scans)", file.display());
+            } else {
+                for (k, s) in scans.iter().enumerate() {
+                    out!("{k}  {}  {} points", s.name.as_deref().unwrap_or("(no name)"), s.records);
+                }
+            }
             Ok(())
         }
         Command::Bench(args) => bench::run(args),
