@@ -7,9 +7,9 @@
 //! records and EVLRs, uncompressed: compressing again is left to LASzip's own tools).
 
 use super::las::{decompressed, err, Header, BOUNDS_AT, OFFSETS_AT};
-use super::motion::similarity;
+use super::motion::Motion;
 use crate::Result;
-use nalgebra::{Matrix3, Matrix4, Vector3};
+use nalgebra::Matrix4;
 
 /// The LAS file `bytes` with its points moved by `m` (`T_target_source`: rigid, or rigid times a
 /// uniform scale), everything else as it was (see the module docs); a LAZ file comes back as LAS.
@@ -17,24 +17,24 @@ use nalgebra::{Matrix3, Matrix4, Vector3};
 /// than 2^31 steps from the new offset), a transform that is not rigid (or uniformly scaled), a
 /// LAZ file whose points decompress to more than [`crate::limits::MAX_DECODED_BYTES`].
 pub fn transform_las(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
-    let (linear, _, t) = similarity(m)?;
+    let motion = Motion::new(m)?;
     let h = Header::read(bytes)?;
     if h.compressed {
         let las = decompressed(bytes, &h)?;
         let h = Header::read(&las)?;
-        return move_records(las, &h, &linear, &t);
+        return move_records(las, &h, &motion);
     }
     h.records(bytes)?;
-    move_records(bytes.to_vec(), &h, &linear, &t)
+    move_records(bytes.to_vec(), &h, &motion)
 }
 
 /// `out`, an uncompressed LAS file described by `h`, with its records moved and its header's
 /// offsets and bounds updated.
-fn move_records(mut out: Vec<u8>, h: &Header, linear: &Matrix3<f64>, t: &Vector3<f64>) -> Result<Vec<u8>> {
+fn move_records(mut out: Vec<u8>, h: &Header, motion: &Motion) -> Result<Vec<u8>> {
     let records = h.records(&out)?;
     let end = h.offset + records.len();
     let n = h.count as usize;
-    let moved = |record: &[u8]| linear * Vector3::from(h.point(record)) + t;
+    let moved = |record: &[u8]| motion.point(h.point(record));
     // the new offsets: the moved points' centre, on each axis's grid of the scale
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for record in records.chunks_exact(h.record_len) {

@@ -1,12 +1,12 @@
-//! The motions a file can be moved by as it is ([`super::transform_ply`],
-//! [`super::transform_las`]): rigid, or rigid times one uniform scale (a change of unit).
+//! The motions a file can be moved by as it is ([`super::transform_file`]): rigid, or rigid
+//! times one uniform scale (a change of unit).
 
 use crate::{Error, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
 /// `m`'s linear part as `s R` (`R` a rotation, `s > 0`), checked: finite, the bottom row
 /// `[0, 0, 0, 1]`, and `R` orthonormal with determinant 1 to 1e-4. Returns `(s R, R, t)`.
-pub(super) fn similarity(m: &Matrix4<f64>) -> Result<(Matrix3<f64>, Matrix3<f64>, Vector3<f64>)> {
+fn similarity(m: &Matrix4<f64>) -> Result<(Matrix3<f64>, Matrix3<f64>, Vector3<f64>)> {
     let bad = |why: &str| Err(Error::InvalidOption(format!("the transform is not rigid (or uniformly scaled): {why}")));
     if m.iter().any(|v| !v.is_finite()) {
         return bad("it has a non-finite entry");

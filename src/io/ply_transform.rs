@@ -9,13 +9,13 @@
 //! (its own precision), a `double` file keeps every digit. The header and the elements before the
 //! vertices are read by the PLY reader's own parser, so a file it refuses is refused here too.
 
-use super::motion::similarity;
+use super::motion::Motion;
 use super::ply::{
     parse_header, read_ascii_element, read_binary_element, Element, Encoding, Kind, Out, Scalar, Want, F,
 };
 use super::util::{parse_f64, utf8_line, Lines};
 use crate::{Error, Result};
-use nalgebra::{Matrix4, Vector3};
+use nalgebra::Matrix4;
 
 /// Where a vertex's position and normal are: property indices of x, y, z and, when the element
 /// has all three as floating-point scalars, of nx, ny, nz.
@@ -58,13 +58,13 @@ fn layout(el: &Element) -> Result<Layout> {
 /// that is missing, has a list property or integer coordinates, a transform that is not rigid
 /// (or uniformly scaled).
 pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
-    let (linear, rotation, t) = similarity(m)?;
+    let motion = Motion::new(m)?;
     let h = parse_header(bytes)?;
     let vi = h.vertex_index()?;
     let vertex = &h.elements[vi];
     let layout = layout(vertex)?;
-    let position = |p: [f64; 3]| (linear * Vector3::from(p) + t).into();
-    let normal = |n: [f64; 3]| (rotation * Vector3::from(n)).into();
+    let position = |p| motion.point(p);
+    let normal = |n| motion.normal(n);
     match h.encoding {
         Encoding::Ascii => {
             let mut lines = Lines::at(bytes, h.body, h.last_line);
