@@ -9,7 +9,7 @@ use super::util::{bounded_capacity, check_index, fan, parse_count, parse_f64, pa
 use super::Raw;
 use crate::{Error, Result};
 
-pub(crate) const F: &str = "OFF";
+const F: &str = "OFF";
 
 /// The next line holding something other than a comment, as its tokens.
 fn next_tokens<'a>(lines: &mut Lines<'a>) -> Result<Option<(usize, Vec<&'a str>)>> {

@@ -7,18 +7,14 @@
 
 use super::motion::Motion;
 use super::number_style::{Rewrite, Styles};
-use super::off::{vertex_records, F};
-use super::util::parse_f64;
+use super::off::vertex_records;
+use super::text::values;
 use crate::Result;
 use nalgebra::Matrix4;
 
 /// The three values of `toks` from `at`, when they are there and are finite numbers.
-fn triple(n: usize, toks: &[&str], at: usize) -> Option<[f64; 3]> {
-    let mut v = [0.0; 3];
-    for a in 0..3 {
-        v[a] = parse_f64(F, n, "value", toks.get(at + a)?).ok().filter(|v| v.is_finite())?;
-    }
-    Some(v)
+fn triple(toks: &[&str], at: usize) -> Option<[f64; 3]> {
+    values(toks, [at, at + 1, at + 2]).filter(|v| v.iter().all(|v| v.is_finite()))
 }
 
 /// The OFF file `bytes` with its vertices moved by `m` (`T_target_source`: a rigid transform, or
@@ -38,12 +34,12 @@ pub(crate) fn transform_off(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let styles = styles.for_writing(motion.scale());
     // Second pass: the values rewritten where they are, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
-    vertex_records(bytes, &mut |n, toks| {
-        if let Some(p) = triple(n, toks, 0) {
+    vertex_records(bytes, &mut |_, toks| {
+        if let Some(p) = triple(toks, 0) {
             let moved = motion.point(p);
             (0..3).for_each(|a| out.token(toks[a], moved[a], styles.position));
         }
-        if let Some(v) = triple(n, toks, 3).filter(|_| normals) {
+        if let Some(v) = triple(toks, 3).filter(|_| normals) {
             let turned = motion.normal(v);
             (0..3).for_each(|a| out.token(toks[3 + a], turned[a], styles.normal));
         }

@@ -13,7 +13,7 @@
 use super::util::{parse_f64, show, split_fields, utf8_line, Lines};
 use crate::{Error, Result};
 
-pub(crate) const F: &str = "XYZ";
+const F: &str = "XYZ";
 
 /// Where a row's values are: the columns (0-based fields) of x, y, z, and of a normal when the
 /// header names one.
@@ -59,10 +59,10 @@ fn comment_text(line: &str) -> &str {
     l.strip_prefix("//").or_else(|| l.strip_prefix('#')).unwrap_or(l)
 }
 
-/// The point in `fields` at `columns`, when all three are numbers.
-fn point(fields: &[&str], columns: &Columns) -> Option<[f64; 3]> {
+/// The three values of `fields` in `columns` (a point's, a normal's), when all three are numbers.
+pub(crate) fn values(fields: &[&str], columns: [usize; 3]) -> Option<[f64; 3]> {
     let mut p = [0.0f64; 3];
-    for (v, &c) in p.iter_mut().zip(&columns.xyz) {
+    for (v, c) in p.iter_mut().zip(columns) {
         *v = fields.get(c)?.parse::<f64>().ok()?;
     }
     Some(p)
@@ -97,7 +97,7 @@ pub(crate) fn scan<'a>(bytes: &'a [u8], visit: &mut dyn FnMut(&Row<'a, '_>) -> R
         }
         fields.clear();
         fields.extend(split_fields(line));
-        match point(&fields, &columns) {
+        match values(&fields, columns.xyz) {
             Some(point) => {
                 started = true;
                 visit(&Row { line, fields: &fields, columns, point })?;
@@ -155,7 +155,7 @@ pub(crate) fn sniff(bytes: &[u8]) -> bool {
             continue;
         }
         let fields: Vec<&str> = split_fields(line).take(3).collect();
-        if point(&fields, &UNNAMED).is_some() {
+        if values(&fields, UNNAMED.xyz).is_some() {
             return true;
         }
         seen += 1;

@@ -12,21 +12,12 @@
 
 use super::motion::Motion;
 use super::number_style::{span, Rewrite, Styles};
-use super::text::{scan, Row};
+use super::text::{scan, values, Row};
 use crate::Result;
 use nalgebra::{Matrix4, Vector3};
 
 /// How far from 1 a normal's length may be (values rounded to a few decimals).
 const UNIT_TOLERANCE: f64 = 1e-2;
-
-/// The three values of `row` at `columns`, when they are numbers.
-fn values(row: &Row, columns: [usize; 3]) -> Option<[f64; 3]> {
-    let mut v = [0.0f64; 3];
-    for (v, c) in v.iter_mut().zip(columns) {
-        *v = row.fields.get(c)?.parse().ok()?;
-    }
-    Some(v)
-}
 
 /// Where an unnamed list's normal would be: the three columns after x, y, z.
 const AFTER_XYZ: [usize; 3] = [3, 4, 5];
@@ -49,7 +40,7 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
         for &c in &row.columns.xyz {
             styles.position.learn(row.fields[c]);
         }
-        match normal_columns(row, true).and_then(|c| values(row, c).map(|n| (c, n))) {
+        match normal_columns(row, true).and_then(|c| values(row.fields, c).map(|n| (c, n))) {
             Some((normal, n)) => {
                 normal.iter().for_each(|&c| styles.normal.learn(row.fields[c]));
                 unit_after_xyz &= (Vector3::from(n).norm() - 1.0).abs() <= UNIT_TOLERANCE;
@@ -71,7 +62,7 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
         edits.clear();
         edits.extend(row.columns.xyz.iter().zip(p).map(|(&c, v)| (span(row.line, row.fields[c]), v, styles.position)));
         if let Some(columns) = normal {
-            if let Some(n) = values(row, columns).filter(|n| n.iter().all(|v| v.is_finite())) {
+            if let Some(n) = values(row.fields, columns).filter(|n| n.iter().all(|v| v.is_finite())) {
                 let n = motion.normal(n);
                 edits.extend(columns.iter().zip(n).map(|(&c, v)| (span(row.line, row.fields[c]), v, styles.normal)));
             }
