@@ -12,7 +12,7 @@
 use super::lzf;
 use super::motion::Motion;
 use super::number_style::{span, Rewrite, Styles};
-use super::pcd::{parse_header, Data, Header, F};
+use super::pcd::{byte_offset, parse_header, Data, Header, F};
 use crate::{Error, Result};
 use nalgebra::Matrix4;
 
@@ -47,45 +47,16 @@ pub fn transform_pcd(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     match h.data {
         Data::Ascii => move_ascii(bytes, &h, xyz, normal, &motion),
         Data::Binary => {
+            h.records(bytes)?;
             let mut out = bytes.to_vec();
-            let len = h.records(bytes)?.len();
-            let offsets = |f: [usize; 3]| f.map(|i| super::pcd::byte_offset(&h.fields, i));
-            let (at_xyz, at_normal) = (offsets(xyz), normal.map(offsets));
-            for rec in out[h.body_at..h.body_at + len].chunks_exact_mut(h.stride) {
-                let mut value = |f: [usize; 3], at: [usize; 3], map: &dyn Fn([f64; 3]) -> [f64; 3]| {
-                    let fields = f.map(|i| &h.fields[i]);
-                    let v = [0, 1, 2].map(|a| fields[a].read_f64(&rec[at[a]..]));
-                    if v.iter().all(|v| v.is_finite()) {
-                        let moved = map(v);
-                        (0..3).for_each(|a| fields[a].write_float(moved[a], &mut rec[at[a]..]));
-                    }
-                };
-                value(xyz, at_xyz, &|p| motion.point(p));
-                if let (Some(f), Some(at)) = (normal, at_normal) {
-                    value(f, at, &|n| motion.normal(n));
-                }
-            }
+            let offset: Vec<usize> = (0..h.fields.len()).map(|f| h.body_at + byte_offset(&h.fields, f)).collect();
+            move_values(&mut out, &h, xyz, normal, &motion, &|i, f| offset[f] + i * h.stride);
             Ok(out)
         }
         Data::Compressed => {
             let (mut raw, end) = h.decompress(bytes)?;
-            let n = h.n_points as usize;
-            let mut columns = |f: [usize; 3], map: &dyn Fn([f64; 3]) -> [f64; 3]| {
-                let fields = f.map(|i| &h.fields[i]);
-                let starts = f.map(|i| h.column_start(i));
-                for i in 0..n {
-                    let at = [0, 1, 2].map(|a| starts[a] + i * fields[a].size);
-                    let v = [0, 1, 2].map(|a| fields[a].read_f64(&raw[at[a]..]));
-                    if v.iter().all(|v| v.is_finite()) {
-                        let moved = map(v);
-                        (0..3).for_each(|a| fields[a].write_float(moved[a], &mut raw[at[a]..]));
-                    }
-                }
-            };
-            columns(xyz, &|p| motion.point(p));
-            if let Some(f) = normal {
-                columns(f, &|n| motion.normal(n));
-            }
+            let start: Vec<usize> = (0..h.fields.len()).map(|f| h.column_start(f)).collect();
+            move_values(&mut raw, &h, xyz, normal, &motion, &|i, f| start[f] + i * h.fields[f].size);
             let packed = lzf::compress(&raw);
             let mut out = Vec::with_capacity(h.body_at + 8 + packed.len() + (bytes.len() - end));
             out.extend_from_slice(&bytes[..h.body_at]);
@@ -95,6 +66,34 @@ pub fn transform_pcd(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
             out.extend_from_slice(&bytes[end..]);
             Ok(out)
         }
+    }
+}
+
+/// Each point's `xyz` fields in `buf` moved and its `normal` fields turned, in their own type;
+/// `at(i, f)`: where field `f` of point `i` is (a binary body's records, or a decompressed body's
+/// columns). A point whose values are not finite (a hole) is kept as it was.
+fn move_values(
+    buf: &mut [u8],
+    h: &Header,
+    xyz: [usize; 3],
+    normal: Option<[usize; 3]>,
+    motion: &Motion,
+    at: &dyn Fn(usize, usize) -> usize,
+) {
+    let mut map = |f: [usize; 3], how: &dyn Fn([f64; 3]) -> [f64; 3]| {
+        let fields = f.map(|i| &h.fields[i]);
+        for i in 0..h.n_points as usize {
+            let at = f.map(|k| at(i, k));
+            let v = [0, 1, 2].map(|a| fields[a].read_f64(&buf[at[a]..]));
+            if v.iter().all(|v| v.is_finite()) {
+                let moved = how(v);
+                (0..3).for_each(|a| fields[a].write_float(moved[a], &mut buf[at[a]..]));
+            }
+        }
+    };
+    map(xyz, &|p| motion.point(p));
+    if let Some(f) = normal {
+        map(f, &|n| motion.normal(n));
     }
 }
 
