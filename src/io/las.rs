@@ -278,18 +278,30 @@ fn decompressor<'a>(
 fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
     // only X, Y, Z (and what they are coded with) where the file is layered
     let selection = DecompressionSelection(DecompressionSelection::XY_RETURNS_CHANNEL | DecompressionSelection::Z);
-    let mut decompressor = decompressor(bytes, h, selection)?;
     // reserved as if the points were stored uncompressed (fewer than a compressed file holds), the
     // rest grows as they decode
     let mut points = Vec::with_capacity(bounded_capacity(h.count, bytes.len() - h.offset, h.record_len));
-    let mut record = vec![0u8; h.record_len];
-    for _ in 0..h.count {
-        decompressor.decompress_one(&mut record).map_err(|e| {
-            err(format!("the compressed points end or break after {} of {} points: {e}", points.len(), h.count))
-        })?;
-        points.push(h.point(&record));
-    }
+    each_record(bytes, h, selection, &mut |record| points.push(h.point(record)))?;
     Ok(points)
+}
+
+/// Calls `visit` with each of a LAZ file's `count` point records, decompressed (the layers
+/// `selection` names; the others left as zeros).
+fn each_record(
+    bytes: &[u8],
+    h: &Header,
+    selection: DecompressionSelection,
+    visit: &mut dyn FnMut(&[u8]),
+) -> Result<()> {
+    let mut decompressor = decompressor(bytes, h, selection)?;
+    let mut record = vec![0u8; h.record_len];
+    for n in 0..h.count {
+        decompressor
+            .decompress_one(&mut record)
+            .map_err(|e| err(format!("the compressed points end or break after {n} of {} points: {e}", h.count)))?;
+        visit(&record);
+    }
+    Ok(())
 }
 
 /// Where the LAS 1.3 header holds the start of the waveform data packet record, and the LAS 1.4
@@ -314,7 +326,6 @@ pub(super) fn decompressed(bytes: &[u8], h: &Header) -> Result<Vec<u8>> {
         )));
     }
     let (_, vlr) = laszip_vlr(bytes, h)?;
-    let mut decompressor = decompressor(bytes, h, DecompressionSelection::all())?;
     // header and VLRs without the LASzip record (and what lies between them and the points)
     // reserved up to four times the file (a lying count cannot make us allocate), the rest grows
     let mut out = Vec::with_capacity(h.offset + (size as usize).min(4 * bytes.len()));
@@ -324,13 +335,7 @@ pub(super) fn decompressed(bytes: &[u8], h: &Header) -> Result<Vec<u8>> {
     out[96..100].copy_from_slice(&(offset as u32).to_le_bytes());
     out[100..104].copy_from_slice(&(h.vlr_count - 1).to_le_bytes());
     out[104] &= 0x3F;
-    let mut record = vec![0u8; h.record_len];
-    for n in 0..h.count {
-        decompressor
-            .decompress_one(&mut record)
-            .map_err(|e| err(format!("the compressed points end or break after {n} of {} points: {e}", h.count)))?;
-        out.extend_from_slice(&record);
-    }
+    each_record(bytes, h, DecompressionSelection::all(), &mut |record| out.extend_from_slice(record))?;
     // what follows the compressed points and their chunk table: the records the header points to
     let pointers: Vec<usize> = [(3, WAVEFORM_AT), (4, EVLRS_AT)]
         .into_iter()
