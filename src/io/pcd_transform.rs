@@ -80,20 +80,17 @@ fn move_values(
     motion: &Motion,
     at: &dyn Fn(usize, usize) -> usize,
 ) {
-    let mut map = |f: [usize; 3], how: &dyn Fn([f64; 3]) -> [f64; 3]| {
-        let fields = f.map(|i| &h.fields[i]);
-        for i in 0..h.n_points as usize {
+    let triples = [Some((xyz, false)), normal.map(|f| (f, true))];
+    for i in 0..h.n_points as usize {
+        for (f, turn) in triples.iter().flatten() {
+            let fields = f.map(|k| &h.fields[k]);
             let at = f.map(|k| at(i, k));
             let v = [0, 1, 2].map(|a| fields[a].read_f64(&buf[at[a]..]));
             if v.iter().all(|v| v.is_finite()) {
-                let moved = how(v);
+                let moved = if *turn { motion.normal(v) } else { motion.point(v) };
                 (0..3).for_each(|a| fields[a].write_float(moved[a], &mut buf[at[a]..]));
             }
         }
-    };
-    map(xyz, &|p| motion.point(p));
-    if let Some(f) = normal {
-        map(f, &|n| motion.normal(n));
     }
 }
 
