@@ -151,7 +151,7 @@ export interface WorkerRegistrar {
   ): Promise<ScanInfo[]>;
   /**
    * A file moved as it is, in its own format, in the worker (see `transformFile` in arps.d.ts:
-   * PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, LAZ as LAS, E57 by its poses; every attribute
+   * PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, LAZ, E57 by its poses; every attribute
    * kept, normals turned): e.g. a registered source's file by its `T_target_source`. Rejects for a format it cannot tell (save its
    * points: `writePly(await transformPointCloud(cloud, T))`).
    */

@@ -2,7 +2,10 @@
 // Saving a registered source, in Node (after scripts/build-pkg.sh): transformFile on the same made
 // 1M-point cloud (x y z, normals, an 8-bit colour) as binary PLY, binary PCD and an XYZ text list
 // (millimetre decimals), against reading it and writing its points as PLY (readPointCloud,
-// transformPointCloud, writePly). Prints the medians of 5 per format.
+// transformPointCloud, writePly). Prints the medians of 5 per format. Files named on the command
+// line (a LAZ survey, say) are timed the same way: node scripts/bench-save.mjs [FILE ...]
+import { readFileSync } from "node:fs";
+import { basename } from "node:path";
 import { readPointCloud, transformFile, transformPointCloud, writePly } from "../pkg/node/index.mjs";
 const n = 1_000_000;
 const point = (i) => [Math.sin(i) * 10, Math.cos(i * 0.7) * 10, (i % 1000) * 0.01];
@@ -31,10 +34,12 @@ const files = {};
   for (let i = 0; i < n; i++) lines.push(`${point(i).map((v) => v.toFixed(3)).join(" ")} ${i & 255} 7 9\n`);
   files["cloud.xyz"] = new TextEncoder().encode(lines.join(""));
 }
+for (const f of process.argv.slice(2)) files[basename(f)] = new Uint8Array(readFileSync(f));
 const T = [c, s, 0, 0, -s, c, 0, 0, 0, 0, 1, 0, 1, 2, 3, 1];
 const median = (f) => { const t = []; for (let k = 0; k < 5; k++) { const t0 = performance.now(); f(); t.push(performance.now() - t0); } t.sort((x, y) => x - y); return t[2]; };
 for (const [name, bytes] of Object.entries(files)) {
   const moved = median(() => transformFile(bytes, name, T));
   const points = median(() => writePly(transformPointCloud(readPointCloud(bytes, name), T)));
-  console.log(`${name}: 1,000,000 points, ${(bytes.length / 1e6).toFixed(1)} MB: transformFile ${moved.toFixed(0)} ms; readPointCloud + transformPointCloud + writePly ${points.toFixed(0)} ms (median of 5)`);
+  const count = readPointCloud(bytes, name).points.length / 3;
+  console.log(`${name}: ${count.toLocaleString("en-US")} points, ${(bytes.length / 1e6).toFixed(1)} MB: transformFile ${moved.toFixed(0)} ms; readPointCloud + transformPointCloud + writePly ${points.toFixed(0)} ms (median of 5)`);
 }

@@ -240,8 +240,8 @@ pub fn list_scans(
 }
 
 /// A file moved as it is, in its own format, e.g. a registered source by its result's
-/// `T_target_source`: PLY, PCD, text lists (XYZ, PTS, TXT, CSV), OBJ, OFF, STL, LAS, LAZ (which
-/// comes back as the LAS file it compresses) and E57 (its scans' poses moved, its points kept as
+/// `T_target_source`: PLY, PCD, text lists (XYZ, PTS, TXT, CSV), OBJ, OFF, STL, LAS, LAZ
+/// (compressed again) and E57 (its scans' poses moved, its points kept as
 /// stored; rigid motions only) (see `canTransform`). Positions are mapped in f64 and written back as the file stored them (the
 /// property's type, the text's decimals, LAS's scaled integers with new offsets), normals turned,
 /// everything else kept (colours, intensity, classification, faces, other fields, the header).
@@ -260,7 +260,7 @@ pub fn transform_file(
 }
 
 /// True when `transformFile` moves a file of this name as it is: `.ply .pcd .xyz .pts .txt .csv
-/// .obj .off .stl .las .laz .e57` (case-insensitive; a LAZ file comes back as LAS). False for
+/// .obj .off .stl .las .laz .e57` (case-insensitive). False for
 /// other names: save such a source as `writePly(transformPointCloud(cloud, T))`.
 #[wasm_bindgen(js_name = canTransform)]
 pub fn can_transform(#[wasm_bindgen(js_name = fileName)] file_name: &str) -> bool {

@@ -400,7 +400,7 @@ fn register_writes_the_aligned_source() {
     assert_eq!(after, arps::io::transform_ply(&before, &matrix(&v)).unwrap());
     assert!(String::from_utf8_lossy(&after[..400]).contains("property uchar red") && after.len() == before.len());
     // a LAS source to a .las name: the survey file itself moved (its attributes kept); to .ply:
-    // its points; a LAZ source only to .ply
+    // its points
     let las = "fixtures/formats/simple.las";
     let (las_out, ply_out) = (dir.join("simple-aligned.las"), dir.join("simple-aligned.ply"));
     for out_path in [&las_out, &ply_out] {
@@ -437,16 +437,21 @@ fn register_writes_the_aligned_source() {
     ]);
     let stderr = String::from_utf8_lossy(&pcd_to_obj.stderr);
     assert!(stderr.contains("v.obj .pcd (the source moved as it is) or .ply (its points), for"), "{stderr}");
-    // a LAZ source comes back as LAS (to a .las name; a .laz name is refused)
+    // a LAZ source comes back as LAZ (to a .laz name; a .las name is refused, and the other way)
     let laz = "fixtures/formats/simple.laz";
-    let laz_to_las = arps(&["register", laz, las, "--json", "--aligned", las_out.to_str().unwrap()]);
-    assert!(laz_to_las.status.success(), "{}", String::from_utf8_lossy(&laz_to_las.stderr));
-    let v: serde_json::Value = serde_json::from_slice(&laz_to_las.stdout).unwrap();
-    let bytes = std::fs::read(root.join(las)).unwrap();
-    assert_eq!(std::fs::read(&las_out).unwrap(), arps::io::transform_las(&bytes, &matrix(&v)).unwrap());
-    let laz_to_laz = arps(&["register", laz, las, "--aligned", dir.join("x.laz").to_str().unwrap()]);
-    let stderr = String::from_utf8_lossy(&laz_to_laz.stderr);
-    assert!(stderr.contains("x.laz .las (the source moved, as LAS) or .ply (its points), for"), "{stderr}");
+    let laz_out = dir.join("simple-aligned.laz");
+    let laz_to_laz = arps(&["register", laz, las, "--json", "--aligned", laz_out.to_str().unwrap()]);
+    assert!(laz_to_laz.status.success(), "{}", String::from_utf8_lossy(&laz_to_laz.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&laz_to_laz.stdout).unwrap();
+    let bytes = std::fs::read(root.join(laz)).unwrap();
+    assert_eq!(std::fs::read(&laz_out).unwrap(), arps::io::transform_las(&bytes, &matrix(&v)).unwrap());
+    for (source, name, message) in
+        [(laz, "x.las", "x.las .laz (the source moved as it is) or .ply"), (las, "x.laz", "x.laz .las (the source")]
+    {
+        let out = arps(&["register", source, las, "--aligned", dir.join(name).to_str().unwrap()]);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success() && stderr.contains(message), "{stderr}");
+    }
     // the text report says where it wrote
     let out = arps(&["register", a, target, "--aligned", dir.join("one.ply").to_str().unwrap()]);
     assert!(String::from_utf8_lossy(&out.stdout).contains("wrote the aligned source to"), "{out:?}");

@@ -2,7 +2,7 @@
 //! colour and GPS time; LAS 1.4 format 6 with EVLRs after the points): the points read back are
 //! the transform of the file's own to the file's scale; every record's other bytes, the VLRs and
 //! EVLRs are kept; the header's offsets and bounds say where the points now are. A LAZ file comes
-//! back as the LAS file it compresses, moved: byte for byte what the LAS fixture gives. A motion
+//! back as LAZ, its records decompressing to what the LAS fixture gives, byte for byte. A motion
 //! the scales cannot store, a transform that is not rigid and every truncation are refused.
 
 use arps::io::{read_point_cloud, transform_las};
@@ -34,10 +34,7 @@ fn motion(about: [f64; 3]) -> Matrix4<f64> {
 /// kept, the header's bounds those of the points.
 fn check(bytes: &[u8], moved: &[u8], m: &Matrix4<f64>) {
     assert_eq!(moved.len(), bytes.len());
-    let (offset, record) = (u32_at(bytes, 96) as usize, u16::from_le_bytes([bytes[105], bytes[106]]) as usize);
-    // LAS 1.4 keeps the count in 64 bits (the legacy 32-bit field may be 0)
-    let legacy = u32_at(bytes, 107) as usize;
-    let count = if legacy > 0 { legacy } else { u64::from_le_bytes(bytes[247..255].try_into().unwrap()) as usize };
+    let (offset, record, count) = records(bytes);
     let scale = [131, 139, 147].map(|at| f64_at(bytes, at));
     assert!(moved[..155] == bytes[..155], "the header before the offsets");
     assert!(moved[227..offset] == bytes[227..offset], "the rest of the header and the VLRs");
@@ -90,22 +87,78 @@ fn a_las_1_4_file_keeps_its_evlrs() {
     check(&bytes, &transform_las(&bytes, &mm).unwrap(), &mm);
 }
 
+/// The LASzip record's data and where it starts, found by its user id among the VLRs.
+fn laszip_record(bytes: &[u8]) -> (Vec<u8>, usize) {
+    let at = bytes.windows(14).position(|w| w == b"laszip encoded").unwrap() - 2;
+    let len = u16::from_le_bytes([bytes[at + 20], bytes[at + 21]]) as usize;
+    (bytes[at + 54..at + 54 + len].to_vec(), at)
+}
+
+/// Where a LAS file's point records start, their size and count.
+fn records(bytes: &[u8]) -> (usize, usize, usize) {
+    let (offset, record) = (u32_at(bytes, 96) as usize, u16::from_le_bytes([bytes[105], bytes[106]]) as usize);
+    // LAS 1.4 keeps the count in 64 bits (the legacy 32-bit field may be 0)
+    let legacy = u32_at(bytes, 107) as usize;
+    (offset, record, if legacy > 0 { legacy } else { u64::from_le_bytes(bytes[247..255].try_into().unwrap()) as usize })
+}
+
+/// The point records of a LAZ file, decompressed by the `laz` crate.
+fn laz_records(bytes: &[u8]) -> Vec<u8> {
+    let (offset, record, count) = records(bytes);
+    let vlr = laz::LazVlr::from_buffer(laszip_record(bytes).0).unwrap();
+    let mut cursor = std::io::Cursor::new(bytes);
+    cursor.set_position(offset as u64);
+    let mut decompressor = laz::LasZipDecompressor::new(cursor, vlr).unwrap();
+    let mut out = vec![0u8; count * record];
+    decompressor.decompress_many(&mut out).unwrap();
+    out
+}
+
+/// Where a LAS 1.4 file's extended VLRs start.
+fn evlrs_at(bytes: &[u8]) -> usize {
+    u64::from_le_bytes(bytes[235..243].try_into().unwrap()) as usize
+}
+
 #[test]
-fn a_laz_file_comes_back_as_the_las_file_it_compresses_moved() {
-    // the LAZ fixtures compress the LAS ones (LAS 1.2 format 3; LAS 1.4 format 6 with EVLRs after
-    // the points): moved, they are the LAS ones moved, to the byte
+fn a_laz_file_comes_back_as_laz_whose_points_are_the_las_files_moved() {
+    // the LAZ fixtures compress the LAS ones (LAS 1.2 format 3, point-wise chunks; LAS 1.4 format
+    // 6, layered chunks, with EVLRs after the points): moved, they decompress to the LAS ones
+    // moved, to the byte, and keep their header and VLRs but the points' offsets and bounds
     let m = motion([0.0; 3]) * Matrix4::new_scaling(1.5);
     for (laz, las) in [("simple.laz", "simple.las"), ("1_4_w_evlr.laz", "1_4_w_evlr.las")] {
-        let moved = transform_las(&fixture(laz), &m).unwrap();
-        assert_eq!(moved, transform_las(&fixture(las), &m).unwrap(), "{laz}");
-        assert_eq!(moved[104] & 0xC0, 0, "{laz}: the point format is not marked compressed");
+        let (laz_bytes, las_bytes) = (fixture(laz), fixture(las));
+        let moved = transform_las(&laz_bytes, &m).unwrap();
+        let moved_las = transform_las(&las_bytes, &m).unwrap();
+        assert_eq!(moved[104] & 0x80, 0x80, "{laz}: the point format is marked compressed");
+        assert!(moved.len() * 10 < moved_las.len() * 6, "{laz}: {} bytes, the LAS {}", moved.len(), moved_las.len());
+        // unmoved, compressed as small as LASzip compressed it (moved, the points' deltas change)
+        let same = transform_las(&laz_bytes, &Matrix4::identity()).unwrap().len();
+        assert!(same * 100 < laz_bytes.len() * 102, "{laz}: {same} bytes unmoved, the LAZ {}", laz_bytes.len());
+        let (offset, record, count) = records(&moved_las);
+        assert!(laz_records(&moved) == moved_las[offset..offset + count * record], "{laz}: the records");
+        let (a, b) = (read_point_cloud(&moved, "a.laz").unwrap(), read_point_cloud(&moved_las, "a.las").unwrap());
+        assert!((0..a.len()).all(|i| a.point_f64(i) == b.point_f64(i)) && a.len() == b.len(), "{laz}: the points");
+        assert!(moved[..96] == laz_bytes[..96] && moved[100..155] == laz_bytes[100..155], "{laz}: the header");
+        assert!(moved[155..227] == moved_las[155..227], "{laz}: the moved points' offsets and bounds");
+        let (vlr_at, len_at) =
+            (laszip_record(&laz_bytes).1, 227.max(u16::from_le_bytes([laz_bytes[94], laz_bytes[95]]) as usize));
+        assert!(moved[len_at..vlr_at] == laz_bytes[len_at..vlr_at], "{laz}: the VLRs before the LASzip record");
+        if laz_bytes[25] == 4 {
+            assert!(moved[evlrs_at(&moved)..] == moved_las[evlrs_at(&moved_las)..], "{laz}: the EVLRs");
+            assert!(moved[227..235] == laz_bytes[227..235] && moved[243..][..4] == laz_bytes[243..247]);
+        }
     }
-    // a COPC file (LAZ in chunks of varying size, with its own VLRs): its points moved
+    // a COPC file (LAZ in chunks of varying size, an octree indexed by byte offsets): a plain LAZ
+    // file, its COPC records left out, its points moved
     let copc = fixture("simple.copc.laz");
     let moved = transform_las(&copc, &m).unwrap();
-    assert_eq!(moved[104] & 0xC0, 0);
-    let (before, after) = (read_point_cloud(&copc, "a.laz").unwrap(), read_point_cloud(&moved, "a.las").unwrap());
+    assert_eq!(moved[104] & 0x80, 0x80);
+    assert!(copc.windows(5).any(|w| w == b"copc\0") && !moved.windows(5).any(|w| w == b"copc\0"), "COPC's records");
+    assert_eq!(u32_at(&moved, 100), u32_at(&copc, 100) - 1, "the VLRs but COPC's");
+    assert_eq!(u32_at(&moved, 243), u32_at(&copc, 243) - 1, "the EVLRs but COPC's");
+    let (before, after) = (read_point_cloud(&copc, "a.laz").unwrap(), read_point_cloud(&moved, "a.laz").unwrap());
     assert_eq!(before.len(), after.len());
+    assert_eq!(laz_records(&moved).len(), before.len() * u16::from_le_bytes([copc[105], copc[106]]) as usize);
     let scale = [131, 139, 147].map(|at| f64_at(&copc, at));
     for i in 0..before.len() {
         let want = m.transform_point(&nalgebra::Point3::from(before.point_f64(i)));

@@ -577,7 +577,7 @@ async function downloadAligned() {
   try {
     // The package's own, in the engine's worker, every buffer transferred: the source's file moved
     // as it is, in its own format (its colours, intensity, normals and faces kept; the unit change
-    // included; a LAZ survey as LAS; an E57 file by its scans' poses), else (one scan of an E57
+    // included; an E57 file by its scans' poses), else (one scan of an E57
     // file, a file without a known extension) the points from the page's store, moved (the origin
     // in f64) and written as PLY (doubles when the scan has one).
     const arps = await getEngine();
@@ -590,7 +590,7 @@ async function downloadAligned() {
       const file = new Uint8Array(await source.file.arrayBuffer());
       const m = Array.from(T, (v, i) => (i < 12 && i % 4 < 3 ? v * source.scale : v)); // T S
       bytes = await arps.transformFile(file, source.name, m, { transfer: true }).catch(() => null);
-      if (bytes) ext = own === "laz" ? "las" : own;
+      if (bytes) ext = own;
     }
     if (!bytes) {
       const cloud = await copyCloud(source.key);

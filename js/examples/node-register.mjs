@@ -4,8 +4,7 @@
 // SOURCE and TARGET are any format the readers know (PLY, PCD, LAS/LAZ, E57, XYZ/PTS/CSV, OBJ,
 // OFF, STL), read with their coordinates kept (map-grid surveys too: `readPointCloud`).
 // --aligned OUT writes the source moved into the target's frame: the source file itself, moved
-// (`transformFile`: every attribute kept), when OUT has the source's extension (.las for a LAZ
-// source), else its points as binary PLY (`transformPointCloud`, `writePly`).
+// (`transformFile`: every attribute kept), when OUT has the source's extension, else its points as binary PLY (`transformPointCloud`, `writePly`).
 // It imports "arps" as an app that installed the package does (inside the package, Node resolves
 // the package's own name to itself).
 import { readFileSync, writeFileSync } from "node:fs";
@@ -34,14 +33,9 @@ for (let i = 0; i < args.length; i++) {
 if (files.length !== 2) usage();
 // --aligned: the source's own format (moved as it is) or .ply (its points), said before registering
 const ext = (f) => path.extname(f).slice(1).toLowerCase();
-// (a LAZ source comes back as LAS: never to a .laz name)
-const own =
-  aligned !== null &&
-  canTransform(files[0]) &&
-  ext(aligned) !== "laz" &&
-  (ext(aligned) === ext(files[0]) || (ext(files[0]) === "laz" && ext(aligned) === "las"));
+const own = aligned !== null && canTransform(files[0]) && ext(aligned) === ext(files[0]);
 if (aligned !== null && !own && ext(aligned) !== "ply") {
-  const moved = canTransform(files[0]) ? ` or .${ext(files[0]) === "laz" ? "las" : ext(files[0])} (the source moved as it is)` : "";
+  const moved = canTransform(files[0]) ? ` or .${ext(files[0])} (the source moved as it is)` : "";
   usage(`--aligned: name ${aligned} .ply (the source's points)${moved}`);
 }
 

@@ -23,7 +23,7 @@ const HEADER_1_0: usize = 227;
 /// Bytes of the public header block of LAS 1.4, which holds the 64-bit point count.
 const HEADER_1_4: usize = 375;
 /// Bytes of a variable length record's header.
-const VLR_HEADER: usize = 54;
+pub(super) const VLR_HEADER: usize = 54;
 /// The LASzip VLR's user id and record id.
 const LASZIP_USER: &[u8] = b"laszip encoded";
 const LASZIP_RECORD: u16 = 22204;
@@ -41,7 +41,7 @@ pub(super) const OFFSETS_AT: usize = 155;
 pub(super) const BOUNDS_AT: usize = 179;
 
 /// The shortest point record of each point format 0 to 10 (the file may add extra bytes).
-const MIN_RECORD: [usize; 11] = [20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67];
+pub(super) const MIN_RECORD: [usize; 11] = [20, 28, 26, 34, 57, 63, 30, 36, 38, 59, 67];
 
 pub(super) fn err(message: impl Into<String>) -> Error {
     Error::parse(FORMAT, message)
@@ -68,7 +68,7 @@ pub(super) struct Header {
     /// Where the point records start.
     pub(super) offset: usize,
     /// Where the variable length records start (the header's size).
-    vlrs_at: usize,
+    pub(super) vlrs_at: usize,
     vlr_count: u32,
     pub(super) compressed: bool,
     pub(super) record_len: usize,
@@ -178,10 +178,20 @@ fn read_records(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
     Ok(h.records(bytes)?.chunks_exact(h.record_len).map(|r| h.point(r)).collect())
 }
 
-/// The LASzip VLR's data, among the variable length records after the header, and where the
-/// whole record (its header and data) lies in the file.
-fn laszip_vlr<'a>(bytes: &'a [u8], h: &Header) -> Result<(&'a [u8], std::ops::Range<usize>)> {
+/// A variable length record after the public header block.
+pub(super) struct Vlr<'a> {
+    /// Its user id, up to the first NUL.
+    pub(super) user: &'a [u8],
+    pub(super) record: u16,
+    /// Where the whole record (its header and data) lies in the file.
+    pub(super) range: std::ops::Range<usize>,
+}
+
+/// The variable length records between the header and the point data; an error when one runs
+/// past the start of the point data.
+pub(super) fn vlrs<'a>(bytes: &'a [u8], h: &Header) -> Result<Vec<Vlr<'a>>> {
     let mut at = h.vlrs_at;
+    let mut out = Vec::new();
     for k in 0..h.vlr_count {
         let past = |what: String| {
             err(format!(
@@ -202,12 +212,20 @@ fn laszip_vlr<'a>(bytes: &'a [u8], h: &Header) -> Result<(&'a [u8], std::ops::Ra
             return Err(past(format!(" ({len} bytes from byte {data})")));
         }
         let user = user.split(|&b| b == 0).next().unwrap_or_default();
-        if user == LASZIP_USER && record == LASZIP_RECORD {
-            return Ok((&bytes[data..data + len], at..data + len));
-        }
+        out.push(Vlr { user, record, range: at..data + len });
         at = data + len;
     }
-    Err(err("the point data format is marked compressed (LAZ), but the file has no LASzip record"))
+    Ok(out)
+}
+
+/// The LASzip VLR's data, among the variable length records after the header, and where the
+/// whole record (its header and data) lies in the file.
+pub(super) fn laszip_vlr<'a>(bytes: &'a [u8], h: &Header) -> Result<(&'a [u8], std::ops::Range<usize>)> {
+    vlrs(bytes, h)?
+        .into_iter()
+        .find(|v| v.user == LASZIP_USER && v.record == LASZIP_RECORD)
+        .map(|v| (&bytes[v.range.start + VLR_HEADER..v.range.end], v.range))
+        .ok_or_else(|| err("the point data format is marked compressed (LAZ), but the file has no LASzip record"))
 }
 
 /// A LAZ file's decompressor at its first point, once the file's LASzip record, chunk table and
@@ -336,7 +354,16 @@ pub(super) fn decompressed(bytes: &[u8], h: &Header) -> Result<Vec<u8>> {
     out[100..104].copy_from_slice(&(h.vlr_count - 1).to_le_bytes());
     out[104] &= 0x3F;
     each_record(bytes, h, DecompressionSelection::all(), &mut |record| out.extend_from_slice(record))?;
-    // what follows the compressed points and their chunk table: the records the header points to
+    // what follows the compressed points and their chunk table
+    append_tail(bytes, h, &mut out);
+    Ok(out)
+}
+
+/// Appends to `out` (a LAS or LAZ file up to the end of its point data, its header copied from
+/// `bytes`) what follows the point data in `bytes` (described by `h`): the waveform records and
+/// extended VLRs the header points to, from the first of them on, their starts in `out`'s header
+/// moved to where they now are.
+pub(super) fn append_tail(bytes: &[u8], h: &Header, out: &mut Vec<u8>) {
     let pointers: Vec<usize> = [(3, WAVEFORM_AT), (4, EVLRS_AT)]
         .into_iter()
         .filter(|&(minor, at)| bytes[25] >= minor && h.vlrs_at >= at + 8)
@@ -354,7 +381,6 @@ pub(super) fn decompressed(bytes: &[u8], h: &Header) -> Result<Vec<u8>> {
             }
         }
     }
-    Ok(out)
 }
 
 /// Checks the chunk table of a chunked LAZ file before the `laz` crate reads it: its chunk count

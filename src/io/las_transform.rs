@@ -3,16 +3,17 @@
 //! (new ones, at the moved points' centre, so the integers fit) and bounds updated; every other
 //! byte kept (intensity, returns, classification, GPS time, colour, extra bytes, the VLRs and
 //! EVLRs, the CRS records). What saves a registered survey in the target's frame as the LAS its
-//! tools read. A LAZ file comes back as the LAS file it compresses, moved (its header, VLRs,
-//! records and EVLRs, uncompressed: compressing again is left to LASzip's own tools).
+//! tools read. A LAZ file comes back as LAZ: the LAS file it compresses, moved, compressed again
+//! (`laz_write`).
 
 use super::las::{decompressed, err, Header, BOUNDS_AT, OFFSETS_AT};
+use super::laz_write::compressed;
 use super::motion::Motion;
 use crate::Result;
 use nalgebra::Matrix4;
 
 /// The LAS file `bytes` with its points moved by `m` (`T_target_source`: rigid, or rigid times a
-/// uniform scale), everything else as it was (see the module docs); a LAZ file comes back as LAS.
+/// uniform scale), everything else as it was (see the module docs); a LAZ file comes back as LAZ.
 /// Errors: a file the LAS reader refuses, points the file's scales cannot store once moved (more
 /// than 2^31 steps from the new offset), a transform that is not rigid (or uniformly scaled), a
 /// LAZ file whose points decompress to more than [`crate::limits::MAX_DECODED_BYTES`].
@@ -21,8 +22,9 @@ pub fn transform_las(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let h = Header::read(bytes)?;
     if h.compressed {
         let las = decompressed(bytes, &h)?;
-        let h = Header::read(&las)?;
-        return move_records(las, &h, &motion);
+        let h_las = Header::read(&las)?;
+        let moved = move_records(las, &h_las, &motion)?;
+        return compressed(bytes, &h, &moved);
     }
     h.records(bytes)?;
     move_records(bytes.to_vec(), &h, &motion)

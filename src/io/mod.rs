@@ -36,6 +36,7 @@ mod e57_transform;
 mod keyword_lines;
 mod las;
 mod las_transform;
+mod laz_write;
 mod lzf;
 mod mesh;
 mod motion;

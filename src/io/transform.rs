@@ -13,7 +13,7 @@ use nalgebra::Matrix4;
 const MOVABLE: &[&str] = &["ply", "pcd", "xyz", "pts", "txt", "csv", "obj", "off", "stl", "las", "laz", "e57"];
 
 /// True when a file of this name is one [`transform_file`] moves as it is: PLY, PCD, text point
-/// lists (XYZ, PTS, TXT, CSV), OBJ, OFF, STL, LAS, LAZ (which comes back as LAS) and E57 by their
+/// lists (XYZ, PTS, TXT, CSV), OBJ, OFF, STL, LAS, LAZ and E57 by their
 /// extension (case-insensitive). False for unknown extensions: save such a source's points
 /// moved instead ([`super::write_ply_binary`] of
 /// [`PointCloud::transformed`](crate::PointCloud::transformed)).
@@ -25,7 +25,7 @@ pub fn can_transform(file_name: &str) -> bool {
 /// [`detect_format`]) in its own format with its points moved by `m` (`T_target_source`: a rigid
 /// transform, or one times a uniform scale for a change of unit) and its normals turned,
 /// everything else kept as it was: see each format's mover for what that means. A LAZ file comes
-/// back as the LAS file it compresses, moved (name it `.las`); an E57 file keeps its points as
+/// back as LAZ, its points compressed again; an E57 file keeps its points as
 /// stored and gets new poses (rigid motions only). Errors: a file its reader
 /// refuses, coordinates stored as integers where the moved ones cannot be stored, a transform
 /// that is not rigid (or uniformly scaled).

@@ -93,8 +93,8 @@ pub struct RegisterArgs {
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     source_scale: Option<f64>,
     /// Write each source, moved by its answer into the target's frame, to PATH. To a PATH of the
-    /// source's own format (PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, E57; `.las` for a LAZ
-    /// source), the source file as itself, moved: every attribute kept (colours, intensity, other
+    /// source's own format (PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, LAZ, E57), the source
+    /// file as itself, moved: every attribute kept (colours, intensity, other
     /// fields and columns, faces, LAS's header updated), normals turned, coordinates stored as the
     /// file stored them (an E57 file's scans by their poses). To a `.ply` PATH, the points read,
     /// in binary PLY (`double` coordinates when they are far from zero, else `float`).
@@ -213,14 +213,15 @@ fn print_registration(
 }
 
 /// True when `path` names a file of `source`'s own format that `io::transform_file` moves as it
-/// is (`scan.pcd` to `out.pcd`, `a.pts` to `b.xyz`, a LAZ or LAS source to `out.las`; never a
-/// `.laz` path: a LAZ source comes back as LAS).
+/// is (`scan.pcd` to `out.pcd`, `a.pts` to `b.xyz`, a LAS source to `out.las`, a LAZ source to
+/// `out.laz`: LAZ comes back compressed, LAS not).
 fn moves_as_it_is(source: &Path, path: &Path) -> bool {
     let name = |p: &Path| p.to_string_lossy().into_owned();
     let (source, path) = (name(source), name(path));
+    let laz = |name: &str| name.to_ascii_lowercase().ends_with(".laz");
     io::can_transform(&source)
         && io::can_transform(&path)
-        && !path.to_ascii_lowercase().ends_with(".laz")
+        && laz(&source) == laz(&path)
         && io::Format::from_file_name(&source) == io::Format::from_file_name(&path)
 }
 
@@ -235,7 +236,6 @@ fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathB
     if !(is_ply || moves_as_it_is(source, &path)) {
         let own = source.extension().map(|e| e.to_string_lossy().to_ascii_lowercase());
         let what = match own.as_deref() {
-            Some("laz") => ".las (the source moved, as LAS) or .ply (its points)".to_string(),
             Some(ext) if io::can_transform(&source.to_string_lossy()) && ext != "ply" => {
                 format!(".{ext} (the source moved as it is) or .ply (its points)")
             }
@@ -255,7 +255,7 @@ fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathB
 
 /// Writes the source moved by `r`'s answer to `path`: to a path of the source's own format, the
 /// source file (`bytes`, the file `file` as read for registering) as itself, moved
-/// (`io::transform_file`: PLY, PCD, text lists, OBJ, OFF, STL, LAS, LAZ as LAS, E57; every
+/// (`io::transform_file`: PLY, PCD, text lists, OBJ, OFF, STL, LAS, LAZ, E57; every
 /// attribute kept, normals turned); else (a `.ply` path) as the points read (`cloud`, already scaled) in binary PLY
 /// (`io::write_ply_binary`). `scale` is the `--source-scale` applied before registering.
 fn write_aligned(
