@@ -698,11 +698,12 @@ export function makeApi(glue, isReady, env = {}) {
   }
 
   /** A file moved as it is, in its own format (every attribute kept, normals turned); see arps.d.ts. */
-  function transformFile(bytes, fileName, matrix) {
+  function transformFile(bytes, fileName, matrix, options) {
     const b = bytesArg(bytes, "bytes");
     const name = fileNameArg(fileName);
     const m = matrixArg(matrix, "matrix");
-    return guarded("transformFile", () => glue.transformFile(b, name, m));
+    const o = optionsArg(options);
+    return guarded("transformFile", () => glue.transformFile(b, name, m, o));
   }
 
   /** The scans of an E57 file ([] for other formats); see arps.d.ts. */

@@ -152,13 +152,16 @@ export interface WorkerRegistrar {
   /**
    * A file moved as it is, in its own format, in the worker (see `transformFile` in arps.d.ts:
    * PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, LAZ, E57 by its poses; every attribute
-   * kept, normals turned): e.g. a registered source's file by its `T_target_source`. Rejects for a format it cannot tell (save its
-   * points: `writePly(await transformPointCloud(cloud, T))`).
+   * kept, normals turned): e.g. a registered source's file by its `T_target_source`. `readOptions`:
+   * those the cloud was read with (`{ scan: K }`: an E57 file's scan alone, as an E57 file of its
+   * own). Rejects for a format it cannot tell (save its points: `writePly(await
+   * transformPointCloud(cloud, T))`).
    */
   transformFile(
     bytes: Uint8Array | ArrayBuffer,
     fileName: string,
     matrix: ArrayLike<number> | number[][],
+    readOptions?: ReadOptions | null,
     request?: { transfer?: boolean; signal?: AbortSignal },
   ): Promise<Uint8Array>;
   /** Stops the worker; pending and later requests reject. */

@@ -232,8 +232,9 @@ export async function createWorkerRegistrar(options = {}) {
     async listScans(bytes, fileName, req = {}) {
       return (await ask({ type: "scans", bytes, fileName }, [bytes], req)).scans;
     },
-    async transformFile(bytes, fileName, matrix, req = {}) {
-      return (await ask({ type: "move", bytes, fileName, matrix }, [bytes], req)).bytes;
+    async transformFile(bytes, fileName, matrix, readOptions, req = {}) {
+      misplacedRequest("transformFile", readOptions, "fifth");
+      return (await ask({ type: "move", bytes, fileName, matrix, options: readOptions }, [bytes], req)).bytes;
     },
     terminate() {
       terminated = true;
@@ -244,11 +245,11 @@ export async function createWorkerRegistrar(options = {}) {
 
 /**
  * Throws when the request options (`transfer`, `signal`) were passed where the read options go
- * (the third argument; they come fourth, as for `register`).
+ * (they come after them: fourth, as for `register`; fifth for `transformFile`).
  */
-function misplacedRequest(what, readOptions) {
+function misplacedRequest(what, readOptions, place = "fourth") {
   if (readOptions && typeof readOptions === "object" && ("transfer" in readOptions || "signal" in readOptions)) {
-    throw new Error(`${what}: the request options (transfer, signal) come fourth, after the read options (e.g. { surfacePoints })`);
+    throw new Error(`${what}: the request options (transfer, signal) come ${place}, after the read options (e.g. { surfacePoints })`);
   }
 }
 

@@ -11,7 +11,7 @@
 //   { id, type: "read", bytes, fileName, options? }   readPointCloud: { points, origin }
 //   { id, type: "transform", cloud, matrix }   transformPointCloud: { points, origin }
 //   { id, type: "write", cloud }            writePly: the PLY file's bytes
-//   { id, type: "move", bytes, fileName, matrix }  transformFile: the moved file's bytes
+//   { id, type: "move", bytes, fileName, matrix, options }  transformFile: the moved file's bytes
 //   { id, type: "scans", bytes, fileName }  listScans: an E57 file's scans
 // Replies (worker -> main), with the request's `id`:
 //   { id, type: "progress", stage }         stage: "loading" | "preparing" | "network" | "refining" | "done"
@@ -101,7 +101,7 @@ async function handle(msg) {
     }
     case "move": {
       await load(id);
-      const bytes = transformFile(msg.bytes, msg.fileName, msg.matrix);
+      const bytes = transformFile(msg.bytes, msg.fileName, msg.matrix, msg.options);
       post({ id, type: "written", bytes }, [bytes.buffer]);
       return;
     }

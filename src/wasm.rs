@@ -247,16 +247,20 @@ pub fn list_scans(
 /// everything else kept (colours, intensity, classification, faces, other fields, the header).
 /// `fileName` says the format by its extension (else the content does). `matrix`: 16 numbers,
 /// column-major (or, through the package's entry, four row-major rows), a rigid transform or one
-/// times a uniform scale (a change of unit). Returns the moved file's bytes. Throws on a format
-/// it cannot tell, a file its reader refuses, integer coordinates
-/// where the moved ones cannot be stored, and a matrix that is not rigid (or uniformly scaled).
+/// times a uniform scale (a change of unit). `options`: the `ReadOptions` the cloud was read
+/// with; with `scan`, an E57 file's scan alone is saved, as an E57 file of its own (its points'
+/// and images' bytes kept, the other scans left out). Returns the moved file's bytes. Throws on a
+/// format it cannot tell, a file its reader refuses, integer coordinates where the moved ones
+/// cannot be stored, a matrix that is not rigid (or uniformly scaled), and invalid options.
 #[wasm_bindgen(js_name = transformFile)]
 pub fn transform_file(
     #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
     #[wasm_bindgen(js_name = fileName)] file_name: &str,
     #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
+    #[wasm_bindgen(unchecked_optional_param_type = "ReadOptions | null")] options: Option<JsValue>,
 ) -> Result<Vec<u8>, JsError> {
-    crate::io::transform_file(bytes, file_name, &matrix_arg(matrix)?).map_err(js_err)
+    let options = parse_object(options.unwrap_or(JsValue::UNDEFINED), "read options")?;
+    crate::io::transform_file_with(bytes, file_name, &matrix_arg(matrix)?, &options).map_err(js_err)
 }
 
 /// True when `transformFile` moves a file of this name as it is: `.ply .pcd .xyz .pts .txt .csv

@@ -140,6 +140,26 @@ fn register_reads_one_scan_of_an_e57_file() {
     let at = nalgebra::Point3::new(512_350.0, 4_123_456.0, 87.0);
     let moved = (r.T_target_source.transform_point(&at) - at).norm();
     assert!(moved < 0.05, "the scan moved by {moved}: {}", r.T_target_source);
+    // saved to an .e57 name: an E57 file of that scan alone, moved
+    let dir = std::env::temp_dir().join(format!("arps-cli-scan-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("scan2-aligned.e57");
+    let out = arps(&["register", e57, e57, "--source-scan", "1", "--json", "--aligned", path.to_str().unwrap()]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let m: Vec<f64> = v["T_target_source"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let m = nalgebra::Matrix4::from_column_slice(&m);
+    // (the JSON's numbers parse back to within an ulp: the poses' last digits may differ)
+    let saved = std::fs::read(&path).unwrap();
+    assert_eq!(arps::io::list_scans(&saved, "a.e57").unwrap().len(), 1);
+    let scan = arps::io::ReadOptions { scan: Some(1), ..Default::default() };
+    let before = arps::io::read_point_cloud_with(&std::fs::read(e57).unwrap(), e57, &scan).unwrap();
+    let after = arps::io::read_point_cloud(&saved, "a.e57").unwrap();
+    assert_eq!(before.len(), after.len());
+    for i in 0..before.len() {
+        let want = m.transform_point(&nalgebra::Point3::from(before.point_f64(i)));
+        assert!((nalgebra::Point3::from(after.point_f64(i)) - want).norm() < 1e-3, "point {i}");
+    }
     let bad = arps(&["register", e57, e57, "--target-scan", "2"]);
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(!bad.status.success() && err.contains("scan = 2, but the E57 file holds 2 scans"), "{err}");

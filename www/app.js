@@ -234,6 +234,7 @@ async function loadFile(which, file, scan = null) {
     const name = scan === null ? file.name : `${file.name}, scan ${scan + 1}`;
     const cloud = await readyCloud(parsed, name, which, token, file);
     if (token !== loads[which]) return dropCloud(cloud.key);
+    cloud.scan = scan;
     setCloud(which, cloud);
   } catch (e) {
     if (token !== loads[which]) return;
@@ -577,19 +578,21 @@ async function downloadAligned() {
   try {
     // The package's own, in the engine's worker, every buffer transferred: the source's file moved
     // as it is, in its own format (its colours, intensity, normals and faces kept; the unit change
-    // included; an E57 file by its scans' poses), else (one scan of an E57
-    // file, a file without a known extension) the points from the page's store, moved (the origin
+    // included; an E57 file by its scans' poses, one scan chosen as an E57 file of that scan),
+    // else (a file without a known extension) the points from the page's store, moved (the origin
     // in f64) and written as PLY (doubles when the scan has one).
     const arps = await getEngine();
     const T = shownPose(result).T_target_source;
     let bytes = null;
     let ext = "ply";
-    const own = source.file && /\.([a-z0-9]+)$/i.exec(source.name)?.[1].toLowerCase();
+    const own = source.file && /\.([a-z0-9]+)$/i.exec(source.file.name)?.[1].toLowerCase();
+    const scan = source.scan ?? null;
     if (own) {
       // (a format transformFile does not move, or integer PLY coordinates, fall back to the points)
       const file = new Uint8Array(await source.file.arrayBuffer());
       const m = Array.from(T, (v, i) => (i < 12 && i % 4 < 3 ? v * source.scale : v)); // T S
-      bytes = await arps.transformFile(file, source.name, m, { transfer: true }).catch(() => null);
+      const options = scan === null ? null : { scan };
+      bytes = await arps.transformFile(file, source.file.name, m, options, { transfer: true }).catch(() => null);
       if (bytes) ext = own;
     }
     if (!bytes) {
@@ -598,7 +601,8 @@ async function downloadAligned() {
     }
     const a = document.createElement("a");
     a.href = URL.createObjectURL(new Blob([bytes], { type: "application/octet-stream" }));
-    a.download = `${source.name.replace(/\.[^.]*$/, "").replace(/[^\w.-]+/g, "_") || "source"}-aligned.${ext}`;
+    const stem = (source.file?.name ?? source.name).replace(/\.[^.]*$/, "") + (scan === null ? "" : `-scan${scan + 1}`);
+    a.download = `${stem.replace(/[^\w.-]+/g, "_") || "source"}-aligned.${ext}`;
     document.body.append(a);
     a.click();
     a.remove();

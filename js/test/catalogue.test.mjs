@@ -371,6 +371,16 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     rejects(r, "transformFile: E57 scaled", () => arps.transformFile(e57, "two.e57", T.map((v, i) => (i < 12 && i % 4 < 3 ? 2 * v : v))), /poses are rigid/);
     assert.deepEqual(arps.listScans(e57, "two.e57"), [{ name: "scan 1", records: 1000 }, { name: "scan 2", records: 1000 }]);
     assert.equal(arps.readPointCloud(e57, "two.e57", { scan: 1 }).points.length, 3000);
+    // one scan saved alone: an E57 file of that scan, its points those of the scan moved
+    const second = arps.transformFile(e57, "two.e57", T, { scan: 1 });
+    assert.deepEqual(arps.listScans(second, "second.e57"), [{ name: "scan 2", records: 1000 }]);
+    const want = arps.transformPointCloud(arps.readPointCloud(e57, "two.e57", { scan: 1 }), T);
+    const got = arps.readPointCloud(second, "second.e57");
+    apart = 0;
+    for (let i = 0; i < got.points.length; i++) apart = Math.max(apart, Math.abs(got.origin[i % 3] + got.points[i] - (want.origin[i % 3] + want.points[i])));
+    assert.ok(got.points.length === 3000 && apart < 1e-3, `one scan saved alone: ${apart} from transformPointCloud's`);
+    rejects(r, "transformFile: a scan beyond the file's", () => arps.transformFile(e57, "two.e57", T, { scan: 2 }), /scan = 2, but the E57 file holds 2 scans/);
+    rejects(r, "transformFile: bad read options", () => arps.transformFile(e57, "two.e57", T, { scan: -1 }), /invalid read options/);
     assert.deepEqual(arps.listScans(frag, "frag.ply"), []);
     rejects(r, "listScans: half an E57 file", () => arps.listScans(e57.subarray(0, 5000), "two.e57"), /E57/);
     r.free();

@@ -81,7 +81,8 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     assert.match(new TextDecoder().decode(ply.subarray(0, 150)), /property double x/);
     await assert.rejects(arps.transformPointCloud(source(), [1, 2, 3]), /matrix has 3 elements/);
     const plyFile = new Uint8Array(sourcePly);
-    const movedFile = await arps.transformFile(plyFile, "source.ply", res.T_target_source, { transfer: true });
+    await assert.rejects(arps.transformFile(plyFile, "source.ply", res.T_target_source, { transfer: true }), /request options \(transfer, signal\) come fifth/);
+    const movedFile = await arps.transformFile(plyFile, "source.ply", res.T_target_source, null, { transfer: true });
     assert.equal(plyFile.length, 0, "the file's bytes transferred");
     assert.ok(movedFile instanceof Uint8Array && movedFile.length > 100);
     const las = readFileSync(path.join(root, "fixtures", "formats", "simple.las"));
@@ -91,6 +92,9 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     await assert.rejects(arps.transformFile(new Uint8Array(8), "drawing.dxf", res.T_target_source), /cannot tell the format/);
     const two = readFileSync(path.join(root, "fixtures", "formats", "velodyne_two_scans.e57"));
     assert.deepEqual((await arps.listScans(two, "two.e57")).map((s) => s.name), ["scan 1", "scan 2"]);
+    // read options pass through: one scan saved alone
+    const second = await arps.transformFile(two, "two.e57", res.T_target_source, { scan: 1 });
+    assert.deepEqual((await arps.listScans(second, "second.e57")).map((s) => s.name), ["scan 2"]);
     // Clouds with an origin transfer their points too; zero origins give the same answer.
     const so = { points: source(), origin: [0, 0, 0] };
     const to = { points: target(), origin: [0, 0, 0] };

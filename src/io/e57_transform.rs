@@ -8,6 +8,11 @@
 //! new XML section is appended after the last page, in pages of its own, and the header (in page
 //! 0) points to it; the old XML section stays behind, unreferenced. A pose can only be rigid, so
 //! a motion with a change of unit is refused: save such a source's points instead.
+//!
+//! One scan of a file of several is saved as a file of its own ([`transform_e57_scan`]): the
+//! pages of its points' section, and of its images' (those associated with the scan), are copied
+//! as they are into a new file after its header page, their offsets in the XML and in the points'
+//! section header moved with them, and the XML lists that scan and those images alone.
 
 use super::motion::Motion;
 use crate::{Error, Result};
@@ -77,31 +82,49 @@ fn pose_xml(q: UnitQuaternion<f64>, t: Vector3<f64>) -> String {
     )
 }
 
-/// The XML with the pose of every scan (`data3D`) and image (`images2D`) composed with `motion`
-/// (`R`, `t`): the new pose maps a stored point `p` to `R (R0 p + t0) + t`.
-fn moved_xml(xml: &str, rotation: UnitQuaternion<f64>, shift: Vector3<f64>) -> Result<String> {
-    let doc = roxmltree::Document::parse(xml).map_err(|e| err(format!("the XML section cannot be parsed: {e}")))?;
-    let mut edits: Vec<(std::ops::Range<usize>, String)> = Vec::new();
-    for section in ["data3D", "images2D"] {
-        let Some(list) = doc.root_element().children().find(|n| n.has_tag_name(section)) else { continue };
-        for child in list.children().filter(|n| n.has_tag_name("vectorChild")) {
-            let pose = child.children().find(|n| n.has_tag_name("pose"));
-            let (q, t) = pose_of(pose)?;
-            let xml_pose = pose_xml(rotation * q, rotation * t + shift);
-            let range = match pose {
-                Some(p) => p.range(),
-                None => {
-                    // before the child's closing tag
-                    let end = child.range().end;
-                    let at = xml[..end].rfind("</").filter(|&at| at >= child.range().start).ok_or_else(|| {
-                        err(format!("a {section} entry without a pose has no closing tag to add one before"))
-                    })?;
-                    at..at
-                }
-            };
-            edits.push((range, xml_pose));
+fn parse(xml: &str) -> Result<roxmltree::Document<'_>> {
+    roxmltree::Document::parse(xml).map_err(|e| err(format!("the XML section cannot be parsed: {e}")))
+}
+
+/// The entries (`vectorChild`) of the root's list `section` (`data3D`: the scans; `images2D`).
+fn entries<'a, 'i>(doc: &'a roxmltree::Document<'i>, section: &str) -> Vec<roxmltree::Node<'a, 'i>> {
+    let list = doc.root_element().children().find(|n| n.has_tag_name(section));
+    list.map(|l| l.children().filter(|n| n.has_tag_name("vectorChild")).collect()).unwrap_or_default()
+}
+
+/// The text of an entry's child element `name` (its `guid`, say).
+fn child_text<'a>(entry: roxmltree::Node<'a, '_>, name: &str) -> Option<&'a str> {
+    entry.children().find(|n| n.has_tag_name(name)).and_then(|n| n.text()).map(str::trim)
+}
+
+/// The edit that composes an entry's pose with the motion (`rotation`, `shift`): the new pose maps
+/// a stored point `p` to `R (R0 p + t0) + t`. An entry without a pose (the identity) gets one.
+fn pose_edit(
+    xml: &str,
+    entry: roxmltree::Node,
+    section: &str,
+    rotation: UnitQuaternion<f64>,
+    shift: Vector3<f64>,
+) -> Result<(std::ops::Range<usize>, String)> {
+    let pose = entry.children().find(|n| n.has_tag_name("pose"));
+    let (q, t) = pose_of(pose)?;
+    let range = match pose {
+        Some(p) => p.range(),
+        None => {
+            // before the entry's closing tag
+            let end = entry.range().end;
+            let at = xml[..end]
+                .rfind("</")
+                .filter(|&at| at >= entry.range().start)
+                .ok_or_else(|| err(format!("a {section} entry without a pose has no closing tag to add one before")))?;
+            at..at
         }
-    }
+    };
+    Ok((range, pose_xml(rotation * q, rotation * t + shift)))
+}
+
+/// `xml` with each of the (disjoint) `edits`' ranges replaced by its text.
+fn edited(xml: &str, mut edits: Vec<(std::ops::Range<usize>, String)>) -> String {
     // in the file's order (an insertion sort: a few entries; the library's sorts weigh kilobytes
     // of WebAssembly)
     for i in 1..edits.len() {
@@ -119,7 +142,7 @@ fn moved_xml(xml: &str, rotation: UnitQuaternion<f64>, shift: Vector3<f64>) -> R
         at = range.end;
     }
     out.push_str(&xml[at..]);
-    Ok(out)
+    out
 }
 
 /// The E57 file `bytes` with every scan and image moved by `m` (`T_target_source`, rigid): their
@@ -127,6 +150,22 @@ fn moved_xml(xml: &str, rotation: UnitQuaternion<f64>, shift: Vector3<f64>) -> R
 /// the E57 reader refuses or whose pages are not whole, a motion that is not rigid (E57 poses
 /// cannot hold a change of unit).
 pub(crate) fn transform_e57(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
+    let (xml, rotation, shift) = prepare(bytes, m)?;
+    let doc = parse(&xml)?;
+    let mut edits = Vec::new();
+    for section in ["data3D", "images2D"] {
+        for child in entries(&doc, section) {
+            edits.push(pose_edit(&xml, child, section, rotation, shift)?);
+        }
+    }
+    let xml = edited(&xml, edits);
+    // the file, then the new XML section in pages of its own
+    Ok(finish(bytes.to_vec(), &xml))
+}
+
+/// The checks both movers share (a rigid motion; a file the E57 reader opens, in whole pages of
+/// 1,024 bytes): the file's XML section and the motion's rotation and translation.
+fn prepare(bytes: &[u8], m: &Matrix4<f64>) -> Result<(String, UnitQuaternion<f64>, Vector3<f64>)> {
     let motion = Motion::new(m)?;
     if (motion.scale() - 1.0).abs() > 1e-9 {
         return Err(Error::InvalidOption(format!(
@@ -145,13 +184,14 @@ pub(crate) fn transform_e57(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
             bytes.len()
         )));
     }
-    let rotation = UnitQuaternion::from_matrix(&motion.rotation);
-    let xml = moved_xml(reader.xml(), rotation, motion.t)?;
-    // the file, then the new XML section in pages of its own
-    let xml_at = bytes.len();
-    let pages = xml.len().div_ceil(DATA).max(1);
-    let mut out = Vec::with_capacity(bytes.len() + pages * PAGE);
-    out.extend_from_slice(bytes);
+    Ok((reader.xml().to_string(), UnitQuaternion::from_matrix(&motion.rotation), motion.t))
+}
+
+/// `out` (whole pages, the first the file's header page) with the XML section `xml` appended in
+/// pages of its own, and the header (physical length, the XML's offset and length) saying so.
+fn finish(mut out: Vec<u8>, xml: &str) -> Vec<u8> {
+    let xml_at = out.len();
+    out.reserve(xml.len().div_ceil(DATA).max(1) * PAGE);
     for chunk in xml.as_bytes().chunks(DATA).chain(xml.is_empty().then_some(&[][..])) {
         let start = out.len();
         out.extend_from_slice(chunk);
@@ -164,7 +204,107 @@ pub(crate) fn transform_e57(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     out[24..32].copy_from_slice(&(xml_at as u64).to_le_bytes());
     out[32..40].copy_from_slice(&(xml.len() as u64).to_le_bytes());
     seal(&mut out[..PAGE]);
-    Ok(out)
+    out
+}
+
+/// The E57 file `bytes`' scan `scan` (0-based, in the file's order) alone, moved by `m`
+/// (`T_target_source`, rigid), as a file of its own: its points' section and its images' (the
+/// `images2D` entries whose `associatedData3DGuid` is the scan's `guid`) copied page by page, the
+/// XML listing only them, with their poses composed with the motion (see the module docs).
+/// Errors: those of [`transform_e57`], a scan beyond the file's, a binary section the XML places
+/// outside the file.
+pub(crate) fn transform_e57_scan(bytes: &[u8], scan: usize, m: &Matrix4<f64>) -> Result<Vec<u8>> {
+    let (xml, rotation, shift) = prepare(bytes, m)?;
+    let doc = parse(&xml)?;
+    let scans = entries(&doc, "data3D");
+    let Some(&chosen) = scans.get(scan) else {
+        return Err(Error::InvalidOption(format!(
+            "scan = {scan}, but the E57 file holds {} scans{}",
+            scans.len(),
+            if scans.is_empty() { String::new() } else { format!(" (0 to {})", scans.len() - 1) }
+        )));
+    };
+    let guid = child_text(chosen, "guid");
+    let images = entries(&doc, "images2D");
+    let (kept, dropped): (Vec<_>, Vec<_>) =
+        images.into_iter().partition(|image| guid.is_some() && child_text(*image, "associatedData3DGuid") == guid);
+    let mut edits: Vec<(std::ops::Range<usize>, String)> = Vec::new();
+    // the other scans and images left out
+    for entry in scans.iter().enumerate().filter(|(k, _)| *k != scan).map(|(_, e)| e).chain(&dropped) {
+        edits.push((entry.range(), String::new()));
+    }
+    // the header page, then each binary section of the kept entries, copied
+    let mut out = bytes[..PAGE].to_vec();
+    for (entry, section) in std::iter::once((chosen, "data3D")).chain(kept.into_iter().map(|i| (i, "images2D"))) {
+        edits.push(pose_edit(&xml, entry, section, rotation, shift)?);
+        for node in entry.descendants() {
+            let Some(attribute) = node.attributes().find(|a| a.name() == "fileOffset") else { continue };
+            let offset = attribute.value().trim().parse::<u64>().map_err(|_| {
+                err(format!(
+                    "a {} element's fileOffset '{}' is not an offset",
+                    node.tag_name().name(),
+                    attribute.value()
+                ))
+            })?;
+            let compressed = node.attribute("type") == Some("CompressedVector");
+            let moved = copy_section(bytes, offset, compressed, &mut out)?;
+            edits.push((attribute.range(), format!("fileOffset=\"{moved}\"")));
+        }
+    }
+    Ok(finish(out, &edited(&xml, edits)))
+}
+
+/// Where physical byte `p` lies among the pages' data bytes (E57's logical offset), and back.
+fn logical(p: u64) -> u64 {
+    p / PAGE as u64 * DATA as u64 + p % PAGE as u64
+}
+
+fn physical(l: u64) -> u64 {
+    l / DATA as u64 * PAGE as u64 + l % DATA as u64
+}
+
+/// The binary section at physical offset `at` of `bytes` (a compressed vector's, which holds the
+/// physical offsets of its data and index packets, or a blob's) copied to the end of `out` with
+/// the pages it spans, where it keeps its place within its page; in a compressed vector's header
+/// the data's offset moved with it and the index's cleared (index packets, optional, hold
+/// offsets too; readers go through the data in order). Returns its new physical offset.
+fn copy_section(bytes: &[u8], at: u64, compressed: bool, out: &mut Vec<u8>) -> Result<u64> {
+    let header_len: u64 = if compressed { 32 } else { 16 };
+    let outside = || err(format!("a binary section at byte {at} does not lie within the file's {} bytes", bytes.len()));
+    let len = bytes.len() as u64;
+    if at >= len || at % PAGE as u64 >= DATA as u64 || physical(logical(at) + header_len - 1) >= len {
+        return Err(outside());
+    }
+    let byte = |l: u64| bytes[physical(l) as usize];
+    let read_u64 = |l: u64| u64::from_le_bytes(std::array::from_fn(|i| byte(l + i as u64)));
+    let start = logical(at);
+    let section_len = read_u64(start + 8).max(header_len);
+    // (a section no longer than the file keeps the arithmetic below far from overflowing)
+    let last = (section_len <= len).then(|| physical(start + section_len - 1)).filter(|&p| p < len);
+    let last = last.ok_or_else(outside)?;
+    let (first_page, last_page) = (at / PAGE as u64, last / PAGE as u64);
+    let new_first = out.len() as u64 / PAGE as u64;
+    out.extend_from_slice(&bytes[(first_page * PAGE as u64) as usize..((last_page + 1) * PAGE as u64) as usize]);
+    let moved = at - first_page * PAGE as u64 + new_first * PAGE as u64;
+    if compressed {
+        let data = read_u64(start + 16);
+        if data < at || data > last {
+            return Err(err(format!(
+                "a compressed vector at byte {at} has its data at byte {data}, outside the section"
+            )));
+        }
+        let new_start = logical(moved);
+        let mut patch = [0u8; 16];
+        patch[..8].copy_from_slice(&(data - at + moved).to_le_bytes());
+        for (i, b) in patch.iter().enumerate() {
+            out[physical(new_start + 16 + i as u64) as usize] = *b;
+        }
+        for p in [physical(new_start + 16), physical(new_start + 31)] {
+            let page = (p / PAGE as u64) as usize * PAGE;
+            seal(&mut out[page..page + PAGE]);
+        }
+    }
+    Ok(moved)
 }
 
 #[cfg(test)]

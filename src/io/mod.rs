@@ -342,7 +342,7 @@ pub use las_transform::transform_las;
 pub use pcd_transform::transform_pcd;
 pub use ply_transform::transform_ply;
 pub use text_transform::transform_text;
-pub use transform::{can_transform, transform_file};
+pub use transform::{can_transform, transform_file, transform_file_with};
 
 /// Reads a point cloud from a file (native only); the format comes from the file name.
 #[cfg(not(target_arch = "wasm32"))]

@@ -5,7 +5,7 @@
 //! format, with everything the registration did not read (colours, intensity, normals, faces,
 //! other fields).
 
-use super::{detect_format, Format};
+use super::{detect_format, Format, ReadOptions};
 use crate::Result;
 use nalgebra::Matrix4;
 
@@ -30,6 +30,15 @@ pub fn can_transform(file_name: &str) -> bool {
 /// refuses, coordinates stored as integers where the moved ones cannot be stored, a transform
 /// that is not rigid (or uniformly scaled).
 pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result<Vec<u8>> {
+    transform_file_with(bytes, file_name, m, &ReadOptions::default())
+}
+
+/// [`transform_file`] for the cloud that [`read_point_cloud_with`](super::read_point_cloud_with)
+/// reads with `options`: with [`ReadOptions::scan`] set, an E57 file's scan alone, as an E57
+/// file of its own (its points' and images' pages copied as they are, the XML listing only them,
+/// their poses moved; an error for a scan beyond the file's); every other file as
+/// [`transform_file`] moves it (a mesh read as points over its surface is moved as the mesh).
+pub fn transform_file_with(bytes: &[u8], file_name: &str, m: &Matrix4<f64>, options: &ReadOptions) -> Result<Vec<u8>> {
     match detect_format(bytes, file_name)? {
         Format::Ply => super::transform_ply(bytes, m),
         Format::Pcd => super::transform_pcd(bytes, m),
@@ -37,7 +46,10 @@ pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result
         Format::Obj => super::obj_transform::transform_obj(bytes, m),
         Format::Stl => super::stl_transform::transform_stl(bytes, m),
         Format::Las => super::transform_las(bytes, m),
-        Format::E57 => super::e57_transform::transform_e57(bytes, m),
+        Format::E57 => match options.scan {
+            Some(scan) => super::e57_transform::transform_e57_scan(bytes, scan, m),
+            None => super::e57_transform::transform_e57(bytes, m),
+        },
         Format::Off => super::off_transform::transform_off(bytes, m),
     }
 }

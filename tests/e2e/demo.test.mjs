@@ -691,7 +691,7 @@ test("a PCD scan is downloaded as PCD, moved as it is", { timeout: TIMEOUT * 2 }
   assert.ok(worst < 1e-5, `the points are up to ${worst} from the answer applied`);
 });
 
-test("an E57 file of several scans offers them: all, or one read alone; saved as E57 or as points", { timeout: TIMEOUT * 2 }, async () => {
+test("an E57 file of several scans offers them: all, or one read alone; saved as E57, whole or that scan", { timeout: TIMEOUT * 2 }, async () => {
   // fixtures/formats/velodyne_two_scans.e57: two scans of 1,000 points, each placed by its pose
   const e57 = join(ROOT, "fixtures", "formats", "velodyne_two_scans.e57");
   assert.ok(await page.isHidden("#source-scan-field"), "no scan choice before an E57 file");
@@ -709,9 +709,19 @@ test("an E57 file of several scans offers them: all, or one read alone; saved as
   const { result, error } = await alignAndWait();
   assert.equal(error, "", `unexpected #error: ${error}`);
   assert.ok(result.rotationDeg < 1, `scan 2 onto the file turned by ${result.rotationDeg} deg`);
-  // one scan is saved as its points (PLY)
+  // one scan is saved as an E57 file of that scan: its points where the answer puts them (scan 2
+  // onto the file: about where it was)
   let [download] = await Promise.all([page.waitForEvent("download"), page.click("#download-ply")]);
-  assert.equal(download.suggestedFilename(), "velodyne_two_scans-aligned.ply");
+  assert.equal(download.suggestedFilename(), "velodyne_two_scans-scan2-aligned.e57");
+  const one = join(dir, "scan2-aligned.e57");
+  await download.saveAs(one);
+  const arps = await import(pathToFileURL(join(ROOT, "pkg", "node", "index.mjs")).href);
+  const saved = readFileSync(one);
+  assert.deepEqual(arps.listScans(saved, "one.e57"), [{ name: "scan 2", records: 1000 }]);
+  assert.ok(saved.length < readFileSync(e57).length, `${saved.length} bytes, the file ${readFileSync(e57).length}`);
+  const centroid = (c) => [0, 1, 2].map((k) => c.origin[k] + c.points.reduce((s, v, i) => (i % 3 === k ? s + v : s), 0) / (c.points.length / 3));
+  const [was, now] = [centroid(arps.readPointCloud(readFileSync(e57), "a.e57", { scan: 1 })), centroid(arps.readPointCloud(saved, "a.e57"))];
+  assert.ok(Math.hypot(...was.map((v, k) => v - now[k])) < 0.5, `scan 2's centre moved from ${was} to ${now}`);
   // back to all scans: aligned onto the file, the file is saved as E57 with its scans' poses
   // moved (its points' pages kept byte for byte)
   await page.selectOption("#source-scan", "");

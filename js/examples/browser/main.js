@@ -54,7 +54,7 @@ $("align").addEventListener("click", async () => {
     // that cannot be (E57, OFF), its points moved (the origin in f64) and written as PLY.
     let ext = /\.([a-z0-9]+)$/i.exec(files[0].name)?.[1].toLowerCase();
     const own = new Uint8Array(await files[0].arrayBuffer());
-    let bytes = ext ? await arps.transformFile(own, files[0].name, m, { transfer: true }).catch(() => null) : null;
+    let bytes = ext ? await arps.transformFile(own, files[0].name, m, null, { transfer: true }).catch(() => null) : null;
     if (!bytes) {
       ext = "ply";
       bytes = await arps.writePly(await arps.transformPointCloud(source, m, { transfer: true }), { transfer: true });

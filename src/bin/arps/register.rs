@@ -96,7 +96,8 @@ pub struct RegisterArgs {
     /// source's own format (PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, LAZ, E57), the source
     /// file as itself, moved: every attribute kept (colours, intensity, other
     /// fields and columns, faces, LAS's header updated), normals turned, coordinates stored as the
-    /// file stored them (an E57 file's scans by their poses). To a `.ply` PATH, the points read,
+    /// file stored them (an E57 file's scans by their poses; with `--source-scan`, an E57 file of
+    /// that scan alone). To a `.ply` PATH, the points read,
     /// in binary PLY (`double` coordinates when they are far from zero, else `float`).
     /// With several sources PATH must hold `{stem}`, replaced by each source file's name
     /// without its extension (e.g. `out/{stem}-aligned.ply`). An input file is never
@@ -255,12 +256,14 @@ fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathB
 
 /// Writes the source moved by `r`'s answer to `path`: to a path of the source's own format, the
 /// source file (`bytes`, the file `file` as read for registering) as itself, moved
-/// (`io::transform_file`: PLY, PCD, text lists, OBJ, OFF, STL, LAS, LAZ, E57; every
+/// (`io::transform_file_with` and the options it was read with, `reading`: PLY, PCD, text lists,
+/// OBJ, OFF, STL, LAS, LAZ, E57, one scan of an E57 file as an E57 file of that scan; every
 /// attribute kept, normals turned); else (a `.ply` path) as the points read (`cloud`, already scaled) in binary PLY
 /// (`io::write_ply_binary`). `scale` is the `--source-scale` applied before registering.
 fn write_aligned(
     file: &Path,
     bytes: &[u8],
+    reading: &io::ReadOptions,
     cloud: &arps::PointCloud,
     scale: Option<&nalgebra::Matrix4<f64>>,
     r: &arps::Registration,
@@ -269,7 +272,7 @@ fn write_aligned(
     // the file's own points to the target's frame (the scale first)
     let m = scale.map_or(r.T_target_source, |s| r.T_target_source * s);
     let out = if moves_as_it_is(file, path) {
-        io::transform_file(bytes, &io::file_name(file), &m)
+        io::transform_file_with(bytes, &io::file_name(file), &m, reading)
             .map_err(|e| format!("--aligned: {}: {e}", file.display()))?
     } else {
         io::write_ply_binary(&cloud.transformed(&r.T_target_source))
@@ -375,7 +378,7 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         let named = several.then(|| source.display().to_string());
         let outcome = outcome.and_then(|(src, bytes, r)| {
             if let (Some(path), Some(bytes)) = (output, bytes) {
-                write_aligned(source, &bytes, &src, scale.as_ref(), &r, path)?;
+                write_aligned(source, &bytes, &reading, &src, scale.as_ref(), &r, path)?;
             }
             Ok(r)
         });
