@@ -355,7 +355,11 @@ function checkTransformShape(m, name = "invalid options: initialTransform") {
     if (m.length !== 16) bad(` has ${m.length} elements`);
     return;
   }
-  if (m.length !== 4 || !m.every((r) => Array.isArray(r))) bad(` has ${m.length} elements of mixed kinds`);
+  if (!m.every((r) => Array.isArray(r))) {
+    const i = m.findIndex((x) => typeof x !== "number" && !Array.isArray(x));
+    bad(i >= 0 ? `[${i}] is ${describe(m[i])}` : " mixes numbers and rows");
+  }
+  if (m.length !== 4) bad(` has ${m.length} rows`);
   m.forEach((r, i) => {
     if (r.length !== 4) bad(` row ${i} has ${r.length} elements`);
     r.forEach((x, j) => {

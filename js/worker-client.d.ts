@@ -65,7 +65,10 @@ export interface CreateWorkerRegistrarOptions {
 }
 
 export interface WorkerRequestOptions {
-  /** Called with each progress stage of this request. */
+  /**
+   * Called with each progress stage of this request. If it throws, the request rejects with an
+   * `Error` "onProgress threw: ..." (the error as its `cause`); the worker's answer is dropped.
+   */
   onProgress?: (stage: Stage) => void;
   /**
    * Transfer the input buffers to the worker instead of copying them (faster for big clouds;

@@ -115,10 +115,10 @@ export async function createWorkerRegistrar(options = {}) {
             try {
               p.onProgress(msg.stage);
             } catch (e) {
-              // A throwing progress callback must not break the request.
-              setTimeout(() => {
-                throw e;
-              });
+              // As in the engine's own API, a throwing callback fails its request (with an Error
+              // that says so); the worker's answer, when it comes, is dropped.
+              w.pending.delete(msg.id);
+              p.reject(new Error(`onProgress threw: ${e?.message ?? e}`, { cause: e }));
             }
           }
           return;

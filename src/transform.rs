@@ -123,6 +123,19 @@ pub fn check_rigid(m: &Matrix4<f64>, tol: f64) -> Result<(), String> {
     Ok(())
 }
 
+/// How far from rigid a transform a caller gives may be (`|R^T R - I|`, `|det R - 1|` and the
+/// bottom row, each): matrices written with a few decimals (a benchmark's ground truth, a text
+/// file) are within it, and are used as the rigid transform nearest them ([`nearest_rigid`]).
+pub const RIGID_TOLERANCE: f64 = 1e-3;
+
+/// The rigid transform nearest `m`: the rotation nearest its rotation block (its polar factor),
+/// its translation, the bottom row `[0, 0, 0, 1]`. An error saying what is off when `m` is
+/// further than [`RIGID_TOLERANCE`] from rigid (or not finite).
+pub fn nearest_rigid(m: &Matrix4<f64>) -> Result<Matrix4<f64>, String> {
+    check_rigid(m, RIGID_TOLERANCE).map_err(|e| format!("{e}, beyond {RIGID_TOLERANCE:e}"))?;
+    Ok(from_rotation_translation(&crate::rigid::nearest_rotation(&rotation(m)), &translation(m)))
+}
+
 /// Rotation from Euler angles in radians, `R = Rx(ax) * Ry(ay) * Rz(az)` (the DCP / paper protocol).
 pub fn euler_xyz(ax: f64, ay: f64, az: f64) -> Matrix3<f64> {
     let (sx, cx) = ax.sin_cos();
@@ -160,5 +173,25 @@ mod tests {
         let mut bad = m;
         bad[(0, 0)] = 2.0;
         assert!(check_rigid(&bad, 1e-6).is_err());
+    }
+
+    #[test]
+    fn a_rigid_matrix_written_with_few_decimals_is_made_exact() {
+        let m = from_rotation_translation(&euler_xyz(0.3, 0.2, -0.5), &Vector3::new(0.1, -0.4, 0.2));
+        // four decimals, as a benchmark's ground truth or a text file holds them
+        let written = m.map(|v| (v * 1e4).round() / 1e4);
+        assert!(check_rigid(&written, 1e-4).is_err());
+        let exact = nearest_rigid(&written).unwrap();
+        assert!(check_rigid(&exact, 1e-12).is_ok());
+        assert!((exact - m).abs().max() < 1e-4 && translation(&exact) == translation(&written));
+        // a scale of 1%, a shear, a mirror: not rigid
+        for bad in [
+            m * Matrix4::new_scaling(1.01),
+            m + Matrix4::new(0.0, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0),
+            m * Matrix4::new_nonuniform_scaling(&Vector3::new(-1.0, 1.0, 1.0)),
+        ] {
+            let e = nearest_rigid(&bad).unwrap_err();
+            assert!(e.contains("beyond 1e-3"), "{e}");
+        }
     }
 }

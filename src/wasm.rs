@@ -202,15 +202,16 @@ fn cloud_arg(value: &JsValue, what: &str) -> Result<PointCloud, JsError> {
 /// the origin mapped in f64 and the offsets by the rotation, so map-grid coordinates keep their
 /// digits (a cloud without an origin is mapped as it is; any number of points). `matrix`: 16
 /// numbers, column-major (what a result's `T_target_source` and three.js `Matrix4.elements`
-/// hold), or (through the package's entry) four row-major rows; rigid to 1e-4. Throws on a bad
-/// cloud or matrix.
+/// hold), or (through the package's entry) four row-major rows; rigid to 1e-3 (a matrix written
+/// with a few decimals), and used as the rigid transform nearest it. Throws on a bad cloud or
+/// matrix.
 #[wasm_bindgen(js_name = transformPointCloud, unchecked_return_type = "CloudWithOrigin")]
 pub fn transform_point_cloud(
     #[wasm_bindgen(unchecked_param_type = "CloudInput")] cloud: JsValue,
     #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
 ) -> Result<JsValue, JsError> {
     let m = matrix_arg(matrix)?;
-    crate::transform::check_rigid(&m, 1e-4).map_err(|e| JsError::new(&format!("matrix is not rigid: {e}")))?;
+    let m = crate::transform::nearest_rigid(&m).map_err(|e| JsError::new(&format!("matrix is not rigid: {e}")))?;
     let cloud = cloud_arg(&cloud, "cloud")?;
     cloud_object(&cloud.transformed(&m))
 }
@@ -435,7 +436,20 @@ fn parse_object<T: serde::de::DeserializeOwned + Default>(options: JsValue, what
         Reflect::set(&clean, &key, &value)
             .map_err(|_| JsError::new(&format!("internal: could not copy option {name}")))?;
     }
-    serde_wasm_bindgen::from_value::<T>(clean.into()).map_err(|e| JsError::new(&format!("invalid {what}: {e}")))
+    serde_wasm_bindgen::from_value::<T>(clean.clone().into()).map_err(|e| {
+        // serde names the value but not its field: the field is the first that fails alone
+        let message = e.to_string();
+        let message = message.strip_prefix("Error: ").unwrap_or(&message);
+        let alone = |key: &JsValue| {
+            let one = Object::new();
+            Reflect::set(&one, key, &Reflect::get(&clean, key).unwrap_or(JsValue::UNDEFINED)).is_ok()
+                && serde_wasm_bindgen::from_value::<T>(one.into()).is_err()
+        };
+        match object_keys(&clean).ok().and_then(|keys| keys.iter().find(alone)).and_then(|k| k.as_string()) {
+            Some(field) => JsError::new(&format!("invalid {what}: `{field}`: {message}")),
+            None => JsError::new(&format!("invalid {what}: {message}")),
+        }
+    })
 }
 
 /// The (renamed) field names of a `Deserialize` struct: serde's derive passes them to

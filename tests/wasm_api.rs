@@ -426,9 +426,9 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     still_works(&mut r);
     // Bad options: unknown/misspelled field, wrong enum value, wrong type, out of range, not an object.
     expect_err(&mut r, &src, &tgt, options(r#"{"icpMaxIteration": 10}"#), "unknown field `icpMaxIteration`");
-    expect_err(&mut r, &src, &tgt, options(r#"{"icp": "planar"}"#), "invalid options");
-    expect_err(&mut r, &src, &tgt, options(r#"{"seed": "seven"}"#), "invalid options");
-    expect_err(&mut r, &src, &tgt, options(r#"{"seed": -1}"#), "invalid options");
+    expect_err(&mut r, &src, &tgt, options(r#"{"icp": "planar"}"#), "invalid options: `icp`: unknown variant `planar`");
+    expect_err(&mut r, &src, &tgt, options(r#"{"seed": "seven"}"#), "invalid options: `seed`: invalid type");
+    expect_err(&mut r, &src, &tgt, options(r#"{"icp": "point", "seed": -1}"#), "invalid options: `seed`: invalid type");
     expect_err(&mut r, &src, &tgt, options(r#"{"networkPoints": 2}"#), "networkPoints = 2");
     expect_err(&mut r, &src, &tgt, options(r#"{"icpMaxIterations": 100000}"#), "icpMaxIterations");
     expect_err(&mut r, &src, &tgt, options(r#"{"maxCorrespondenceDistance": -1}"#), "maxCorrespondenceDistance");

@@ -110,8 +110,11 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     const proxy = (handler, obj = { icp: "point" }) => new Proxy(obj, handler);
     const cases = [
       ["unknown field", reg({ icpMaxIteration: 3 }), /unknown field `icpMaxIteration`/],
-      ["wrong enum", reg({ icp: "planar" }), /^invalid options/],
-      ["wrong type", reg({ seed: "seven" }), /^invalid options/],
+      ["wrong enum", reg({ icp: "planar" }), /^invalid options: `icp`: unknown variant `planar`, expected one of/],
+      ["wrong type", reg({ seed: "seven" }), /^invalid options: `seed`: invalid type: string "seven"/],
+      ["wrong type after a right one", reg({ icp: "point", icpMaxIterations: 1.5 }), /^invalid options: `icpMaxIterations`: invalid type: floating point `1.5`/],
+      ["three rows", reg({ initialTransform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]] }), /^invalid options: initialTransform has 3 rows; expected/],
+      ["sixteen strings", reg({ initialTransform: new Array(16).fill("1") }), /^invalid options: initialTransform\[0\] is a string/],
       ["out of range", reg({ networkPoints: 1 }), /networkPoints = 1/],
       ["empty starts", reg({ starts: [] }), /starts is empty/],
       ["a number", reg(3), /^invalid options: expected a plain object \(or undefined\), got a number/],
@@ -125,7 +128,6 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       ["a Proxy as initialTransform", reg({ initialTransform: proxy({ get() { throw new Error("matrix"); } }, []) }), /^invalid options: reading `initialTransform.length` threw: Error: matrix/],
       ["15-element initialTransform", reg({ initialTransform: new Array(15).fill(0) }), /^invalid options: initialTransform has 15 elements; expected 16 numbers/],
       ["15-element Float32Array initialTransform", reg({ initialTransform: new Float32Array(15) }), /^invalid options: initialTransform has 15 elements/],
-      ["3x4 rows", reg({ initialTransform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]] }), /^invalid options: initialTransform has 3 elements/],
       ["a row with a string", reg({ initialTransform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, "0"], [0, 0, 0, 1]] }), /^invalid options: initialTransform\[2\]\[3\] is a string/],
       ["non-rigid initialTransform", reg({ initialTransform: [2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 2, 0, 0, 0, 0, 1] }), /initialTransform is not rigid/],
       ["a huge array", reg({ starts: { length: 1e9 } }), /^invalid options/],
@@ -306,6 +308,18 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     rejects(r, "no matrix", () => arps.transformPointCloud(survey), /^matrix is undefined/);
     rejects(r, "scaled", () => arps.transformPointCloud(survey, T.map((v, i) => (i < 12 ? 2 * v : v))), /^matrix is not rigid/);
     rejects(r, "NaN matrix", () => arps.transformPointCloud(survey, T.map((v, i) => (i === 13 ? NaN : v))), /^matrix is not rigid/);
+    // a rigid matrix written with four decimals (a benchmark's ground truth, a text file) is used
+    // as the rigid transform nearest it, here and as an initial guess
+    const [cs, sn] = [Math.cos(0.5), Math.sin(0.5)];
+    const turn = [cs, sn, 0, 0, -sn, cs, 0, 0, 0, 0, 1, 0, 1, 2, 3, 1];
+    const written = turn.map((v) => Math.round(v * 1e4) / 1e4);
+    const small = source();
+    const near = arps.transformPointCloud(small, written);
+    const exact = arps.transformPointCloud(small, turn);
+    let nearWorst = 0;
+    for (let i = 0; i < small.length; i++) nearWorst = Math.max(nearWorst, Math.abs(near.origin[i % 3] + near.points[i] - exact.origin[i % 3] - exact.points[i]));
+    assert.ok(nearWorst < 1e-3, `a matrix written with four decimals moves points ${nearWorst} from the exact one's`);
+    assert.equal(r.register(small, small, { initialTransform: written, starts: ["initial"] }).T_target_source.length, 16);
     rejects(r, "row of 3", () => arps.transformPointCloud(survey, [[1, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]), /^matrix row 0 has 3 elements/);
     rejects(r, "bad origin", () => arps.writePly({ points: source(), origin: [1, 2] }), /^cloud: origin must be 3 finite numbers/);
     rejects(r, "length 4", () => arps.writePly(new Float32Array(4)), /^cloud: .*not a multiple of 3/);

@@ -65,6 +65,11 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     assert.ok(Array.isArray(res.T_target_source) && res.T_target_source.length === 16);
     const { rot, tr } = errors(res.T_target_source);
     assert.ok(rot < 1 && tr < 0.02, `rotation ${rot} deg, translation ${tr}`);
+    // A throwing progress callback fails its request, as in the engine's own API (not the
+    // process); the next request is answered.
+    const boom = new Error("progress boom");
+    await assert.rejects(arps.register(source(), target(), {}, { onProgress: () => { throw boom; } }), (e) => /^onProgress threw: progress boom/.test(e.message) && e.cause === boom);
+    assert.deepEqual((await arps.register(source(), target())).T_target_source, res.T_target_source);
 
     // Transferred inputs: the caller's arrays are detached; the result is the same.
     const s = source();

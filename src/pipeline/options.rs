@@ -55,8 +55,8 @@ pub(crate) fn resolve(options: &Options, model: &Model) -> Result<Resolved> {
     Ok(Resolved { n_net })
 }
 
-/// The initial guess `T_target_source` in the caller's frame (identity when none is given);
-/// an error when it is non-finite or not rigid.
+/// The initial guess `T_target_source` in the caller's frame (identity when none is given), made
+/// exactly rigid ([`transform::nearest_rigid`]); an error when it is non-finite or not rigid.
 pub(crate) fn initial_transform(options: &Options) -> Result<Matrix4<f64>> {
     Ok(match &options.initial_transform {
         Some(rows) => {
@@ -64,9 +64,8 @@ pub(crate) fn initial_transform(options: &Options) -> Result<Matrix4<f64>> {
             if m.iter().any(|v| !v.is_finite()) {
                 return Err(Error::InvalidOption("initialTransform has a non-finite entry".into()));
             }
-            transform::check_rigid(&m, 1e-4)
-                .map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?;
-            m
+            transform::nearest_rigid(&m)
+                .map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?
         }
         None => Matrix4::identity(),
     })
