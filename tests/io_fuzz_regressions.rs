@@ -135,13 +135,26 @@ fn transform_seeds_move_and_regressions_fail_cleanly() {
     }
     for (name, data) in inputs("seeds/transform_e57") {
         let bytes = e57_pages(&data);
-        let moved = arps::io::transform_file(&bytes, "a.e57", &fuzz_motion(false))
-            .unwrap_or_else(|e| panic!("seed {name}: {e}"));
-        let (a, b) = (
-            arps::io::read_point_cloud(&bytes, "a.e57").unwrap(),
-            arps::io::read_point_cloud(&moved, "a.e57").unwrap(),
-        );
-        assert_eq!(a.len(), b.len(), "seed {name}");
+        // the whole file, and its first scan alone
+        for scan in [None, Some(0)] {
+            let options = arps::io::ReadOptions { scan, ..Default::default() };
+            let moved = arps::io::transform_file_with(&bytes, "a.e57", &fuzz_motion(false), &options)
+                .unwrap_or_else(|e| panic!("seed {name}: {e}"));
+            let (a, b) = (
+                arps::io::read_point_cloud_with(&bytes, "a.e57", &options).unwrap(),
+                arps::io::read_point_cloud(&moved, "a.e57").unwrap(),
+            );
+            assert_eq!(a.len(), b.len(), "seed {name}, scan {scan:?}");
+        }
+    }
+    // a scan whose packets fall short of its records (a reader goes on past its section): alone,
+    // a file that fails to read at its end, not one that reads other bytes as points
+    for (name, data) in inputs("regressions/transform_e57") {
+        let bytes = e57_pages(&data);
+        let scan = arps::io::ReadOptions { scan: Some(0), ..Default::default() };
+        let moved = arps::io::transform_file_with(&bytes, "a.e57", &fuzz_motion(false), &scan).unwrap();
+        let e = arps::io::read_point_cloud(&moved, "a.e57").unwrap_err().to_string();
+        assert!(e.contains("E57") && e.contains("fill whole buffer"), "{name}: {e}");
     }
     // a LAZ file whose NIR layer claims 1.8 GB: refused before the layer is read
     for (name, data) in inputs("regressions/transform_las") {

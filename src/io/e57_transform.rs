@@ -11,8 +11,9 @@
 //!
 //! One scan of a file of several is saved as a file of its own ([`transform_e57_scan`]): the
 //! pages of its points' section, and of its images' (those associated with the scan), are copied
-//! as they are into a new file after its header page, their offsets in the XML and in the points'
-//! section header moved with them, and the XML lists that scan and those images alone.
+//! as they are into a new file (the images' after its header page, then the XML, then the
+//! points'), their offsets in the XML and in the points' section header moved with them, and
+//! the XML lists that scan and those images alone.
 
 use super::motion::Motion;
 use crate::{Error, Result};
@@ -160,7 +161,7 @@ pub(crate) fn transform_e57(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     }
     let xml = edited(&xml, edits);
     // the file, then the new XML section in pages of its own
-    Ok(finish(bytes.to_vec(), &xml))
+    Ok(finish(bytes.to_vec(), &xml, &[]))
 }
 
 /// The checks both movers share (a rigid motion; a file the E57 reader opens, in whole pages of
@@ -187,17 +188,24 @@ fn prepare(bytes: &[u8], m: &Matrix4<f64>) -> Result<(String, UnitQuaternion<f64
     Ok((reader.xml().to_string(), UnitQuaternion::from_matrix(&motion.rotation), motion.t))
 }
 
+/// The pages an XML section of `len` bytes takes.
+fn xml_pages(len: usize) -> usize {
+    len.div_ceil(DATA).max(1)
+}
+
 /// `out` (whole pages, the first the file's header page) with the XML section `xml` appended in
-/// pages of its own, and the header (physical length, the XML's offset and length) saying so.
-fn finish(mut out: Vec<u8>, xml: &str) -> Vec<u8> {
+/// pages of its own, then `tail` (whole pages), and the header (physical length, the XML's
+/// offset and length) saying so.
+fn finish(mut out: Vec<u8>, xml: &str, tail: &[u8]) -> Vec<u8> {
     let xml_at = out.len();
-    out.reserve(xml.len().div_ceil(DATA).max(1) * PAGE);
+    out.reserve(xml_pages(xml.len()) * PAGE + tail.len());
     for chunk in xml.as_bytes().chunks(DATA).chain(xml.is_empty().then_some(&[][..])) {
         let start = out.len();
         out.extend_from_slice(chunk);
         out.resize(start + PAGE, 0);
         seal(&mut out[start..start + PAGE]);
     }
+    out.extend_from_slice(tail);
     // the header (physical length, XML offset and length) and page 0's CRC
     let length = out.len() as u64;
     out[16..24].copy_from_slice(&length.to_le_bytes());
@@ -233,8 +241,10 @@ pub(crate) fn transform_e57_scan(bytes: &[u8], scan: usize, m: &Matrix4<f64>) ->
     for entry in scans.iter().enumerate().filter(|(k, _)| *k != scan).map(|(_, e)| e).chain(&dropped) {
         edits.push((entry.range(), String::new()));
     }
-    // the header page, then each binary section of the kept entries, copied
+    // the header page, then the kept entries' blobs (their images), copied; their points'
+    // sections (compressed vectors) later
     let mut out = bytes[..PAGE].to_vec();
+    let mut vectors = Vec::new();
     for (entry, section) in std::iter::once((chosen, "data3D")).chain(kept.into_iter().map(|i| (i, "images2D"))) {
         edits.push(pose_edit(&xml, entry, section, rotation, shift)?);
         for node in entry.descendants() {
@@ -246,12 +256,35 @@ pub(crate) fn transform_e57_scan(bytes: &[u8], scan: usize, m: &Matrix4<f64>) ->
                     attribute.value()
                 ))
             })?;
-            let compressed = node.attribute("type") == Some("CompressedVector");
-            let moved = copy_section(bytes, offset, compressed, &mut out)?;
-            edits.push((attribute.range(), format!("fileOffset=\"{moved}\"")));
+            if node.attribute("type") == Some("CompressedVector") {
+                vectors.push((attribute.range(), offset));
+            } else {
+                let moved = copy_section(bytes, offset, false, &mut out, 0)?;
+                edits.push((attribute.range(), format!("fileOffset=\"{moved}\"")));
+            }
         }
     }
-    Ok(finish(out, &edited(&xml, edits)))
+    // The points' sections go last, after the XML: a reader runs through a compressed vector's
+    // packets until it has its records, whatever the section's length says, so in a file whose
+    // packets fall short of them it meets the file's end (an error), as it could not in the
+    // original's other bytes. Their offsets depend on the XML's pages, which their offsets'
+    // digits may change: planned until the two agree.
+    let xml_at = out.len();
+    let mut pages = xml_pages(xml.len());
+    for _ in 0..4 {
+        let base = (xml_at + pages * PAGE) as u64;
+        let (mut tail, mut all) = (Vec::new(), edits.clone());
+        for (range, offset) in &vectors {
+            let moved = copy_section(bytes, *offset, true, &mut tail, base)?;
+            all.push((range.clone(), format!("fileOffset=\"{moved}\"")));
+        }
+        let new_xml = edited(&xml, all);
+        if xml_pages(new_xml.len()) == pages {
+            return Ok(finish(out, &new_xml, &tail));
+        }
+        pages = xml_pages(new_xml.len());
+    }
+    Err(err("the XML section's length does not settle"))
 }
 
 /// Where physical byte `p` lies among the pages' data bytes (E57's logical offset), and back.
@@ -264,11 +297,12 @@ fn physical(l: u64) -> u64 {
 }
 
 /// The binary section at physical offset `at` of `bytes` (a compressed vector's, which holds the
-/// physical offsets of its data and index packets, or a blob's) copied to the end of `out` with
-/// the pages it spans, where it keeps its place within its page; in a compressed vector's header
-/// the data's offset moved with it and the index's cleared (index packets, optional, hold
-/// offsets too; readers go through the data in order). Returns its new physical offset.
-fn copy_section(bytes: &[u8], at: u64, compressed: bool, out: &mut Vec<u8>) -> Result<u64> {
+/// physical offsets of its data and index packets, or a blob's) copied to the end of `out`
+/// (whole pages, to lie at physical offset `base` of the new file) with the pages it spans,
+/// where it keeps its place within its page; in a compressed vector's header the data's offset
+/// moved with it and the index's cleared (index packets, optional, hold offsets too; readers go
+/// through the data in order). Returns its new physical offset.
+fn copy_section(bytes: &[u8], at: u64, compressed: bool, out: &mut Vec<u8>, base: u64) -> Result<u64> {
     let header_len: u64 = if compressed { 32 } else { 16 };
     let outside = || err(format!("a binary section at byte {at} does not lie within the file's {} bytes", bytes.len()));
     let len = bytes.len() as u64;
@@ -283,7 +317,7 @@ fn copy_section(bytes: &[u8], at: u64, compressed: bool, out: &mut Vec<u8>) -> R
     let last = (section_len <= len).then(|| physical(start + section_len - 1)).filter(|&p| p < len);
     let last = last.ok_or_else(outside)?;
     let (first_page, last_page) = (at / PAGE as u64, last / PAGE as u64);
-    let new_first = out.len() as u64 / PAGE as u64;
+    let new_first = (base + out.len() as u64) / PAGE as u64;
     out.extend_from_slice(&bytes[(first_page * PAGE as u64) as usize..((last_page + 1) * PAGE as u64) as usize]);
     let moved = at - first_page * PAGE as u64 + new_first * PAGE as u64;
     if compressed {
@@ -297,10 +331,10 @@ fn copy_section(bytes: &[u8], at: u64, compressed: bool, out: &mut Vec<u8>) -> R
         let mut patch = [0u8; 16];
         patch[..8].copy_from_slice(&(data - at + moved).to_le_bytes());
         for (i, b) in patch.iter().enumerate() {
-            out[physical(new_start + 16 + i as u64) as usize] = *b;
+            out[(physical(new_start + 16 + i as u64) - base) as usize] = *b;
         }
         for p in [physical(new_start + 16), physical(new_start + 31)] {
-            let page = (p / PAGE as u64) as usize * PAGE;
+            let page = ((p - base) / PAGE as u64) as usize * PAGE;
             seal(&mut out[page..page + PAGE]);
         }
     }
