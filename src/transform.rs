@@ -129,10 +129,14 @@ pub fn check_rigid(m: &Matrix4<f64>, tol: f64) -> Result<(), String> {
 pub const RIGID_TOLERANCE: f64 = 1e-3;
 
 /// The rigid transform nearest `m`: the rotation nearest its rotation block (its polar factor),
-/// its translation, the bottom row `[0, 0, 0, 1]`. An error saying what is off when `m` is
-/// further than [`RIGID_TOLERANCE`] from rigid (or not finite).
+/// its translation, the bottom row `[0, 0, 0, 1]`; `m` itself when it is rigid to 1e-9 (a
+/// computed transform, used bit for bit). An error saying what is off when `m` is further than
+/// [`RIGID_TOLERANCE`] from rigid (or not finite).
 pub fn nearest_rigid(m: &Matrix4<f64>) -> Result<Matrix4<f64>, String> {
     check_rigid(m, RIGID_TOLERANCE).map_err(|e| format!("{e}, beyond {RIGID_TOLERANCE:e}"))?;
+    if check_rigid(m, 1e-9).is_ok() {
+        return Ok(*m);
+    }
     Ok(from_rotation_translation(&crate::rigid::nearest_rotation(&rotation(m)), &translation(m)))
 }
 

@@ -29,9 +29,14 @@ fn similarity(m: &Matrix4<f64>) -> Result<(Matrix3<f64>, Matrix3<f64>, Vector3<f
     if (rotation.transpose() * rotation - Matrix3::identity()).abs().max() > RIGID_TOLERANCE {
         return bad("its linear part is not a rotation times one scale");
     }
+    // (a computed transform, rigid to 1e-9, is used bit for bit)
+    let t = m.fixed_view::<3, 1>(0, 3).into_owned();
+    if (scale - 1.0).abs() <= 1e-9 && crate::transform::check_rigid(m, 1e-9).is_ok() {
+        return Ok((linear, linear, t));
+    }
     let rotation = crate::rigid::nearest_rotation(&rotation);
     let scale = if (scale - 1.0).abs() <= RIGID_TOLERANCE { 1.0 } else { scale };
-    Ok((rotation * scale, rotation, m.fixed_view::<3, 1>(0, 3).into_owned()))
+    Ok((rotation * scale, rotation, t))
 }
 
 /// A checked motion ([`similarity`]) that maps points and turns normals.
