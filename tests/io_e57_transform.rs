@@ -78,11 +78,11 @@ fn one_scan_alone_is_a_file_of_its_own() {
     let m = motion();
     let bytes = format_fixture("velodyne_two_scans.e57");
     let all = arps::io::list_scans(&bytes, "two.e57").unwrap();
-    for k in 0..2 {
+    for (k, info) in all.iter().enumerate() {
         let moved = transform_file_with(&bytes, "two.e57", &m, &scan(k)).unwrap();
-        assert_eq!(arps::io::list_scans(&moved, "two.e57").unwrap(), vec![all[k].clone()]);
+        assert_eq!(arps::io::list_scans(&moved, "two.e57").unwrap(), vec![info.clone()]);
         assert_moved_as(&bytes, &scan(k), &moved, &ReadOptions::default(), &m);
-        assert!(moved.len() < bytes.len() && moved.len() % 1024 == 0, "{} bytes", moved.len());
+        assert!(moved.len() < bytes.len() && moved.len().is_multiple_of(1024), "{} bytes", moved.len());
     }
     // a file of one scan (spherical coordinates), that scan
     let tiny = format_fixture("tiny_spherical.e57");
@@ -140,8 +140,11 @@ fn scans_with_images(n: usize) -> Vec<u8> {
     file.into_inner()
 }
 
-/// Each image of an E57 file: its guid, scan, pose and its blobs' bytes (image, mask).
-fn images(bytes: &[u8]) -> Vec<(Option<String>, Option<String>, Option<e57::Transform>, Vec<Vec<u8>>)> {
+/// An image of an E57 file: its guid, scan, pose and its blobs' bytes (image, mask).
+type ImageParts = (Option<String>, Option<String>, Option<e57::Transform>, Vec<Vec<u8>>);
+
+/// Each image of an E57 file.
+fn images(bytes: &[u8]) -> Vec<ImageParts> {
     let mut reader = e57::E57Reader::new(std::io::Cursor::new(bytes)).unwrap();
     let mut out = Vec::new();
     for image in reader.images() {
@@ -164,14 +167,14 @@ fn one_scan_alone_keeps_its_images() {
     let bytes = scans_with_images(2000);
     let before = images(&bytes);
     assert_eq!(before.len(), 3);
-    for k in 0..2 {
+    for (k, own) in before.iter().enumerate().take(2) {
         let moved = transform_file_with(&bytes, "a.e57", &m, &scan(k)).unwrap();
         assert_moved_as(&bytes, &scan(k), &moved, &ReadOptions::default(), &m);
         let after = images(&moved);
         // the scan's own image alone, its bytes and mask as they were, its pose moved
         assert_eq!(after.len(), 1, "scan {k}");
         let (guid, pc, pose, blobs) = &after[0];
-        assert_eq!((guid, pc, blobs), (&before[k].0, &before[k].1, &before[k].3), "scan {k}");
+        assert_eq!((guid, pc, blobs), (&own.0, &own.1, &own.3), "scan {k}");
         let t = pose.as_ref().expect("a pose").translation.clone();
         assert!((t.x - m[(0, 3)]).abs() < 1e-6 && (t.y - m[(1, 3)]).abs() < 1e-6 && (t.z - m[(2, 3)]).abs() < 1e-6);
         assert!(moved.len() < bytes.len());
