@@ -1,7 +1,9 @@
 //! How a text file writes its numbers, so that a file moved as it is ([`super::transform_file`])
 //! writes its moved coordinates the way it wrote them: as many decimals as its most precise
-//! value (shifted by a change of unit), or in exponent notation with as many significant digits
-//! when it used it.
+//! value (shifted by a change of unit); in exponent notation with as many digits when it used
+//! it, its exponents written as it wrote them (`e-05`, `E+002`); and, where it used both (what
+//! C's `%g` and C++ streams write: `0.11349`, `9.9999997e-05`), the same way, with as many
+//! significant digits.
 
 use std::ops::Range;
 
@@ -12,6 +14,21 @@ pub(super) struct NumberStyle {
     decimals: u32,
     /// True when any token is written with an exponent (`1.5e-3`).
     exponent: bool,
+    /// True when any token is written without one.
+    plain: bool,
+    /// The most significant digits of a token.
+    significant: u32,
+    /// The most digits of an exponent (`e-05`: 2), whether a positive one has its `+`, and
+    /// whether it is written `E` (a positive one gets its `+` too when exponents are padded to
+    /// two digits, as C writes them).
+    exponent_digits: u32,
+    exponent_plus: bool,
+    exponent_upper: bool,
+    /// The decimals of the first token, and whether another had other decimals: a file that
+    /// does not pad its numbers to one number of decimals (`%g`, the shortest form) gets its
+    /// trailing zeros left out.
+    first_decimals: Option<u32>,
+    varied: bool,
 }
 
 /// The styles of a file's positions and of its normals, learned over a first pass
@@ -39,13 +56,23 @@ impl NumberStyle {
         let mantissa = match token.find(['e', 'E']) {
             Some(i) => {
                 self.exponent = true;
+                self.exponent_upper |= token.as_bytes()[i] == b'E';
+                let exponent = &token[i + 1..];
+                self.exponent_plus |= exponent.starts_with('+');
+                let digits = exponent.trim_start_matches(['+', '-']).len().min(4) as u32;
+                self.exponent_digits = self.exponent_digits.max(digits);
                 &token[..i]
             }
-            None => token,
+            None => {
+                self.plain = true;
+                token
+            }
         };
-        if let Some((_, frac)) = mantissa.split_once('.') {
-            self.decimals = self.decimals.max(frac.len().min(MAX_DECIMALS as usize) as u32);
-        }
+        let decimals = mantissa.split_once('.').map_or(0, |(_, frac)| frac.len().min(MAX_DECIMALS as usize) as u32);
+        self.decimals = self.decimals.max(decimals);
+        self.varied |= *self.first_decimals.get_or_insert(decimals) != decimals;
+        let digits = mantissa.bytes().filter(u8::is_ascii_digit).skip_while(|&b| b == b'0').count();
+        self.significant = self.significant.max(digits.min(MAX_DECIMALS as usize) as u32);
     }
 
     /// The style of values multiplied by `scale` (a change of unit, e.g. 1000 from metres to
@@ -65,19 +92,98 @@ impl NumberStyle {
         Self { decimals: self.decimals.max(decimals), ..self }
     }
 
-    /// Appends `v` in this style: with its decimals, in exponent form (`1.018757e2`) when the
-    /// file used exponents. A value that rounds to zero is written without a sign.
+    /// Appends `v` in this style: with its decimals; in exponent form (`1.018757e+02`, the
+    /// exponent as the file wrote its exponents) when the file used exponents only; as C's `%g`
+    /// writes it with the file's most significant digits when it used both. A value that rounds
+    /// to zero is written without a sign.
     pub(super) fn write(self, v: f64, out: &mut Vec<u8>) {
         let d = self.decimals as usize;
+        let start = out.len();
         if !self.exponent && write_fixed(v, d, out) {
+            if self.varied && d > 0 {
+                // trailing zeros (and a bare point) left out, a bare "-0" too
+                let end = start + trim_zeros_len(&out[start..]);
+                out.truncate(end);
+                if out[start..] == *b"-0" {
+                    out.remove(start);
+                }
+            }
             return;
         }
-        let mut s = if self.exponent { format!("{v:.d$e}") } else { format!("{v:.d$}") };
+        let mut s = if !self.exponent {
+            let s = format!("{v:.d$}");
+            if self.varied {
+                trim_zeros(s)
+            } else {
+                s
+            }
+        } else if self.plain {
+            self.general(v)
+        } else {
+            self.with_exponent(&format!("{v:.d$e}"), false)
+        };
         if s.starts_with('-') && s[1..].bytes().all(|b| matches!(b, b'0' | b'.')) {
             s.remove(0);
         }
         out.extend_from_slice(s.as_bytes());
     }
+
+    /// `v` as `%g` writes it with this style's significant digits: in exponent form when its
+    /// exponent is below -4 or not below those digits, else with the decimals they leave;
+    /// trailing zeros left out.
+    fn general(self, v: f64) -> String {
+        let p = self.significant.max(1) as usize;
+        let e = format!("{:.*e}", p - 1, v);
+        let x: i32 = e.split_once('e').and_then(|(_, x)| x.parse().ok()).unwrap_or(0);
+        if x < -4 || x >= p as i32 {
+            return self.with_exponent(&e, true);
+        }
+        let d = (p as i32 - 1 - x).max(0) as usize;
+        trim_zeros(format!("{v:.d$}"))
+    }
+
+    /// `e` (Rust's exponent form, `1.50e-3`) with its exponent written in this style (`e-03`),
+    /// its mantissa's trailing zeros left out when `trim`.
+    fn with_exponent(self, e: &str, trim: bool) -> String {
+        let Some((mantissa, x)) = e.split_once('e') else { return e.to_string() };
+        let mut s = if trim { trim_zeros(mantissa.to_string()) } else { mantissa.to_string() };
+        s.push(if self.exponent_upper { 'E' } else { 'e' });
+        let digits = x.trim_start_matches('-');
+        if x.starts_with('-') {
+            s.push('-');
+        } else if self.exponent_plus || self.exponent_digits >= 2 {
+            // (exponents padded to two digits are C's, whose positive ones have their '+')
+            s.push('+');
+        }
+        for _ in digits.len()..self.exponent_digits as usize {
+            s.push('0');
+        }
+        s.push_str(digits);
+        s
+    }
+}
+
+/// `s` (a number with a decimal point) without its fraction's trailing zeros, nor a point left
+/// bare.
+fn trim_zeros(mut s: String) -> String {
+    s.truncate(trim_zeros_len(s.as_bytes()));
+    s
+}
+
+/// The length of the number `s` without its fraction's trailing zeros and a point left bare
+/// (all of it when it has no point).
+fn trim_zeros_len(s: &[u8]) -> usize {
+    if !s.contains(&b'.') {
+        return s.len();
+    }
+    let mut end = s.len();
+    while s[end - 1] == b'0' {
+        end -= 1;
+    }
+    if s[end - 1] == b'.' {
+        end -= 1;
+    }
+    end
 }
 
 /// Appends `line` with the byte ranges `edits` replaced by their values in `style`, every other
@@ -188,19 +294,59 @@ mod tests {
     #[test]
     fn learns_the_most_decimals_and_exponents() {
         let mut s = NumberStyle::default();
+        // numbers of one number of decimals: padded to them
+        let mut padded = NumberStyle::default();
+        for t in ["1.000", "-2.500", "3.125"] {
+            padded.learn(t);
+        }
+        assert_eq!(written(padded, 1.0 / 3.0), "0.333");
+        assert_eq!(written(padded, -0.0001), "0.000");
+        assert_eq!(written(padded.scaled(1000.0), 1234.5678), "1235");
+        assert_eq!(written(padded.scaled(0.0254), 1.0), "1.00000");
+        assert_eq!(written(padded.scaled(1.0), 2.0), "2.000");
+        assert_eq!(written(NumberStyle::default().at_least(6), 0.5), "0.500000");
+        // numbers of varied decimals (not padded): up to the most, trailing zeros left out
         for t in ["1", "-2.5", "3.125", "4.0"] {
             s.learn(t);
         }
         assert_eq!(written(s, 1.0 / 3.0), "0.333");
-        assert_eq!(written(s, -0.0001), "0.000");
+        assert_eq!(written(s, -0.0001), "0");
+        assert_eq!(written(s, -2.5), "-2.5");
+        assert_eq!(written(s.scaled(0.0254), 1.0), "1");
         assert_eq!(written(s.scaled(1000.0), 1234.5678), "1235");
-        assert_eq!(written(s.scaled(0.0254), 1.0), "1.00000");
-        assert_eq!(written(s.scaled(1.0), 2.0), "2.000");
-        assert_eq!(written(NumberStyle::default().at_least(6), 0.5), "0.500000");
+        assert_eq!(written(s, 1e20), "100000000000000000000");
+        // exponents only: with the decimals, the exponent as written
+        let mut e = NumberStyle::default();
+        e.learn("1.500e-3");
+        assert_eq!(written(e, 0.1 + 0.2), "3.000e-1");
+        assert_eq!(written(e.scaled(1000.0), -1234.5678), "-1.235e3");
+        assert_eq!(written(e, -1e-9), "-1.000e-9");
+        // both, as %g writes them: the most significant digits (4 here), trailing zeros left out
         s.learn("1.5e-3");
-        assert_eq!(written(s, 0.1 + 0.2), "3.000e-1");
-        assert_eq!(written(s.scaled(1000.0), -1234.5678), "-1.235e3");
-        assert_eq!(written(s, -1e-9), "-1.000e-9");
+        assert_eq!(written(s, 0.1 + 0.2), "0.3");
+        assert_eq!(written(s.scaled(1000.0), -1234.5678), "-1235");
+        assert_eq!(written(s, -1e-9), "-1e-9");
+        assert_eq!(written(s, 12345.0), "1.234e4");
+    }
+
+    #[test]
+    fn writes_as_c_and_cpp_streams_wrote() {
+        // a PCL ascii PCD (C++ streams, 8 significant digits): plain, or exponents of two digits
+        let mut pcl = NumberStyle::default();
+        for t in ["0.0054215998", "0.11349", "-0.16884723", "9.9999997e-05"] {
+            pcl.learn(t);
+        }
+        assert_eq!(written(pcl, 0.0184162723543), "0.018416272");
+        assert_eq!(written(pcl, -0.5), "-0.5");
+        assert_eq!(written(pcl, 1.234567891e-5), "1.2345679e-05");
+        assert_eq!(written(pcl, 123456789.0), "1.2345679e+08");
+        // an ASCII STL of a Windows program: exponents only, with a sign and three digits
+        let mut stl = NumberStyle::default();
+        stl.learn("1.000000E+002");
+        stl.learn("-2.500000E-001");
+        assert_eq!(written(stl, 100.0), "1.000000E+002");
+        assert_eq!(written(stl, 0.5), "5.000000E-001");
+        assert_eq!(written(stl, -3.0e-12), "-3.000000E-012");
     }
 
     #[test]
@@ -228,7 +374,7 @@ mod tests {
         }
         let mut out = Vec::new();
         assert!(!write_fixed(1e20, 3, &mut out) && out.is_empty(), "beyond 2^53: the general way");
-        assert_eq!(written(NumberStyle { decimals: 3, exponent: false }, 1e20), "100000000000000000000.000");
+        assert_eq!(written(NumberStyle { decimals: 3, ..Default::default() }, 1e20), "100000000000000000000.000");
     }
 
     #[test]
