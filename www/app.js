@@ -107,7 +107,20 @@ function stopProgress() {
 }
 
 function updateButtons() {
-  $("align").disabled = state.busy || !state.source || !state.target;
+  const reading = loading.source || loading.target;
+  $("align").disabled = state.busy || reading || !state.source || !state.target;
+  // why Align is off, on hover
+  $("align").title = state.busy
+    ? "Working…"
+    : reading
+      ? "Reading a scan…"
+      : !state.source && !state.target
+        ? "Load a source and a target scan first"
+        : !state.source
+          ? "Load a source scan first"
+          : !state.target
+            ? "Load a target scan first"
+            : "";
   $("example").disabled = state.busy;
   $("source-file").disabled = state.busy;
   $("target-file").disabled = state.busy;
@@ -121,6 +134,7 @@ function updateButtons() {
 // ---- loading scans ------------------------------------------------------------------------
 
 const loads = { source: 0, target: 0 }; // the latest load of each slot wins
+const loading = { source: false, target: false }; // a slot reading a file (Align waits)
 
 const count = (n) => n.toLocaleString("en");
 
@@ -211,10 +225,14 @@ function showScans(which, scans, scan) {
 async function loadFile(which, file, scan = null) {
   if (!file || state.busy) return;
   const token = ++loads[which];
+  // the scan loaded before stays until this one is ready (a bad file does not throw it away)
+  const previous = state[which];
   clearError();
-  setCloud(which, null);
+  loading[which] = true;
+  updateButtons();
   if (scan === null) showScans(which, [], null);
   $(`${which}-info`).textContent = `reading ${file.name}…`;
+  let scans = [];
   try {
     const bytes = new Uint8Array(await file.arrayBuffer());
     const arps = await getEngine();
@@ -226,7 +244,7 @@ async function loadFile(which, file, scan = null) {
     if (token !== loads[which]) return;
     if (/\.e57$/i.test(file.name)) {
       // an E57 file's scans, from its XML section (the bytes read again: the first went over)
-      const scans = await arps.listScans(new Uint8Array(await file.arrayBuffer()), file.name, { transfer: true });
+      scans = await arps.listScans(new Uint8Array(await file.arrayBuffer()), file.name, { transfer: true });
       if (token !== loads[which]) return;
       showScans(which, scans, scan);
     }
@@ -235,12 +253,24 @@ async function loadFile(which, file, scan = null) {
     const cloud = await readyCloud(parsed, name, which, token, file);
     if (token !== loads[which]) return dropCloud(cloud.key);
     cloud.scan = scan;
+    cloud.scans = scans;
     setCloud(which, cloud);
   } catch (e) {
     if (token !== loads[which]) return;
-    setCloud(which, null);
-    showError(`Could not read ${file.name}: ${e?.message ?? e}`);
+    showScans(which, previous?.scans ?? [], previous?.scan ?? null);
+    $(`${which}-info`).textContent = slotText(previous);
+    showError(`Could not read ${file.name}: ${e?.message ?? e}${previous ? ` (${previous.name} stays loaded)` : ""}`);
+  } finally {
+    if (token === loads[which]) {
+      loading[which] = false;
+      updateButtons();
+    }
   }
+}
+
+/** What a slot says of its cloud (or that it has none). */
+function slotText(cloud) {
+  return cloud ? `${cloud.name} · ${count(cloud.count)} points${cloud.note ? ` · ${cloud.note}` : ""}` : "drop a file or click to choose";
 }
 
 /** Puts `cloud` (or nothing) in slot `which`: the store forgets the old one, the view draws the new. */
@@ -249,10 +279,7 @@ function setCloud(which, cloud) {
   state[which] = cloud;
   state.result = null;
   state.truth = null;
-  const info = $(`${which}-info`);
-  info.textContent = cloud
-    ? `${cloud.name} · ${count(cloud.count)} points${cloud.note ? ` · ${cloud.note}` : ""}`
-    : "drop a file or click to choose";
+  $(`${which}-info`).textContent = slotText(cloud);
   $(`${which}-drop`).classList.toggle("loaded", !!cloud);
   showResult(null);
   view.setAligned(null);
@@ -358,6 +385,7 @@ async function align() {
     showResult(result, truth);
     view.setAligned(result.T_target_source);
     setView("after");
+    view.fit(); // the target and the aligned source, which may reach beyond the view of before
     // One column (phones): bring the result into view.
     if (window.matchMedia("(max-width: 800px)").matches) $("results").scrollIntoView({ block: "start" });
   } catch (e) {
@@ -371,7 +399,8 @@ async function align() {
   }
 }
 
-const fmt = (x, digits = 4) => (Number.isFinite(x) ? Number(x.toPrecision(digits)).toString() : String(x));
+// (a value within 1e-12 of zero, the arithmetic's dust on an exact answer, is written 0)
+const fmt = (x, digits = 4) => (Number.isFinite(x) ? (Math.abs(x) < 1e-12 ? "0" : Number(x.toPrecision(digits)).toString()) : String(x));
 
 /** The index in `posesOf(r)` of the pose shown: 0 (the answer) unless the user picked another. */
 function shownIndex(r = state.result) {
@@ -433,7 +462,7 @@ function showResult(r, truth = null) {
       const tr = document.createElement("tr");
       for (const v of row) {
         const td = document.createElement("td");
-        td.textContent = v.toFixed(4);
+        td.textContent = (Math.abs(v) < 5e-5 ? 0 : v).toFixed(4); // never "-0.0000"
         tr.append(td);
       }
       return tr;
@@ -452,7 +481,8 @@ function showResult(r, truth = null) {
       `(${json.translation.map((v) => fmt(v)).join(", ")}) · |t| = ${fmt(Math.hypot(...json.translation))} units`,
       "How far it then moves, in the scans' units.",
     ],
-    ...(json.sourceCentreMoves
+    // where the scans lie far from (0, 0, 0) (a map grid), the translation is that of a far point
+    ...(json.sourceCentreMoves && farFromZero(state.source)
       ? [
           [
             "Centre moves",
@@ -501,18 +531,28 @@ function showResult(r, truth = null) {
       return [dt, dd];
     }),
   );
-  // the engine's warnings, and where the page can mend one: scans in different units
+  // the engine's warnings (less the API options the page does not offer), and where the page
+  // can mend one: scans in different units
   const hints = r.warnings.some((w) => /differ in size/.test(w))
     ? ["Different units? Say which under Units (with the scans): the source is then scaled into the target's unit."]
     : [];
+  const warnings = r.warnings.map((w) => w.replace(/; the (outliers|supportPlane) option set to keep keeps (them|it)$/, ""));
   $("warnings").replaceChildren(
-    ...[...r.warnings, ...hints].map((w) => {
+    ...[...warnings, ...hints].map((w) => {
       const li = document.createElement("li");
       li.textContent = w;
       return li;
     }),
   );
   $("result").textContent = JSON.stringify(json, null, 2);
+}
+
+/** True when `source`'s centre lies farther from (0, 0, 0) than ten times its size (a map grid). */
+function farFromZero(source) {
+  if (!source?.bounds) return false;
+  const c = [0, 1, 2].map((k) => source.origin[k] + (source.bounds.min[k] + source.bounds.max[k]) / 2);
+  const size = Math.max(...[0, 1, 2].map((k) => source.bounds.max[k] - source.bounds.min[k]));
+  return Math.hypot(...c) > 10 * size;
 }
 
 /**

@@ -288,7 +288,9 @@ fn decompressor<'a>(
     }
     let mut cursor = Cursor::new(bytes);
     cursor.set_position(h.offset as u64);
-    LasZipDecompressor::selective(cursor, vlr, selection).map_err(laz_err)
+    LasZipDecompressor::selective(cursor, vlr, selection).map_err(|e| {
+        err(format!("the compressed points cannot be read (is the file cut short? it has {} bytes): {e}", bytes.len()))
+    })
 }
 
 /// The points of a LAZ file, decompressed by the `laz` crate once its chunk table and layer

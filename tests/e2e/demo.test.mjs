@@ -343,13 +343,26 @@ test("the view is not blank (screenshot)", async () => {
 });
 
 test("a malformed file shows #error and the page keeps working", { timeout: TIMEOUT * 2 }, async () => {
+  // over a good scan: the error says so, and the good scan stays loaded (and its result)
+  await uploadPair();
+  const before = await page.textContent("#source-info");
   await page.setInputFiles("#source-file", join(dir, "broken.ply"));
   await page.waitForFunction(() => document.getElementById("error").textContent.trim(), null, { timeout: TIMEOUT });
-  const message = (await page.textContent("#error")).trim();
+  let message = (await page.textContent("#error")).trim();
   console.log(`#error: ${message}`);
-  assert.match(message, /broken\.ply/);
+  assert.match(message, /^Could not read broken\.ply: .*\(source\.ply stays loaded\)$/);
+  assert.equal(await page.textContent("#source-info"), before);
+  assert.ok(await page.isEnabled("#align"), "Align stays enabled with the scans loaded");
+  // in an empty slot: Align stays disabled, and says why
+  await page.reload();
+  await page.waitForFunction(() => /engine ready/.test(document.getElementById("engine-status").textContent), null, { timeout: TIMEOUT });
+  await page.setInputFiles("#source-file", join(dir, "broken.ply"));
+  await page.waitForFunction(() => document.getElementById("error").textContent.trim(), null, { timeout: TIMEOUT });
+  message = (await page.textContent("#error")).trim();
+  assert.match(message, /^Could not read broken\.ply: [^(]*$/);
   assert.equal((await page.textContent("#result")).trim(), "");
   assert.ok(await page.isDisabled("#align"), "Align stays disabled without a source");
+  assert.equal(await page.getAttribute("#align", "title"), "Load a source and a target scan first");
 
   // Still usable: a good file again, and Align works.
   await uploadPair();
@@ -466,7 +479,8 @@ test("a symmetric box: the other poses that fit as well are offered, and picking
     assert.equal(shown.shown, k === 0 ? "answer" : `alternative ${k}`);
     assert.deepEqual(shown.T_target_source, poses[k].T_target_source);
     const cells = await page.$$eval("#matrix td", (tds) => tds.map((td) => Number(td.textContent)));
-    assert.deepEqual(cells, poses[k].T_target_source.flat().map((v) => Number(v.toFixed(4))));
+    // (to four decimals; what rounds to zero is written 0, never -0)
+    assert.deepEqual(cells, poses[k].T_target_source.flat().map((v) => Number((Math.abs(v) < 5e-5 ? 0 : v).toFixed(4))));
     assert.equal(await buttons.nth(k).getAttribute("class"), "on");
     const e = errorsAgainstTruth(shown, BOX_TRUTH);
     near.push(e.rotationDeg < 2 && e.translation < 0.02);
