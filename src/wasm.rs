@@ -440,6 +440,10 @@ fn parse_object<T: serde::de::DeserializeOwned + Default>(options: JsValue, what
         // serde names the value but not its field: the field is the first that fails alone
         let message = e.to_string();
         let message = message.strip_prefix("Error: ").unwrap_or(&message);
+        // serde's integer types in words
+        let whole = "expected a whole number, 0 or more";
+        let message =
+            message.replace("expected u64", whole).replace("expected u32", whole).replace("expected usize", whole);
         let alone = |key: &JsValue| {
             let one = Object::new();
             Reflect::set(&one, key, &Reflect::get(&clean, key).unwrap_or(JsValue::UNDEFINED)).is_ok()

@@ -111,7 +111,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     const cases = [
       ["unknown field", reg({ icpMaxIteration: 3 }), /unknown field `icpMaxIteration`/],
       ["wrong enum", reg({ icp: "planar" }), /^invalid options: `icp`: unknown variant `planar`, expected one of/],
-      ["wrong type", reg({ seed: "seven" }), /^invalid options: `seed`: invalid type: string "seven"/],
+      ["wrong type", reg({ seed: "seven" }), /^invalid options: `seed`: invalid type: string "seven", expected a whole number, 0 or more$/],
       ["wrong type after a right one", reg({ icp: "point", icpMaxIterations: 1.5 }), /^invalid options: `icpMaxIterations`: invalid type: floating point `1.5`/],
       ["three rows", reg({ initialTransform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]] }), /^invalid options: initialTransform has 3 rows; expected/],
       ["sixteen strings", reg({ initialTransform: new Array(16).fill("1") }), /^invalid options: initialTransform\[0\] is a string/],
