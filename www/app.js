@@ -469,7 +469,7 @@ function showResult(r, truth = null) {
     }),
   );
   const t = json.timings;
-  const verdict = confidenceWords(r.confidence);
+  const verdict = confidenceWords(r.confidence, (r.alternatives ?? []).length);
   $("verdict").textContent = verdict.words;
   $("verdict").dataset.level = verdict.level;
   const d = fmt(r.maxCorrespondenceDistance, 3);

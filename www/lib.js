@@ -221,14 +221,17 @@ export function posesOf(result) {
  * A result's `confidence` (the engine's estimate, in [0, 1], that the answer is right) in words:
  * `{ words, level }`, `level` one of `"right"` (>= 0.8), `"uncertain"` (>= 0.5) and `"wrong"`
  * (below 0.5, where the engine also warns; it warns at 0.5 too when another pose fits about as
- * well), e.g. `"likely right (confidence 0.93)"`.
+ * well), e.g. `"likely right (confidence 0.93)"`. Below 0.8 with `alternatives` (the number of
+ * other poses that fit about as well), "ambiguous": the answer may be right, or one of them.
  */
-export function confidenceWords(confidence) {
+export function confidenceWords(confidence, alternatives = 0) {
   if (!Number.isFinite(confidence)) return { words: "unknown confidence", level: "uncertain" };
   const figure = `(confidence ${confidence.toFixed(2)})`;
   if (confidence >= 0.8) return { words: `likely right ${figure}`, level: "right" };
-  if (confidence >= 0.5) return { words: `uncertain ${figure}`, level: "uncertain" };
-  return { words: `likely wrong ${figure}`, level: "wrong" };
+  const level = confidence >= 0.5 ? "uncertain" : "wrong";
+  // other poses fit about as well (a symmetric shape): the answer may be right, or one of them
+  if (alternatives > 0) return { words: `ambiguous ${figure}: ${alternatives} other pose${alternatives === 1 ? "" : "s"} fit about as well`, level };
+  return { words: `${confidence >= 0.5 ? "uncertain" : "likely wrong"} ${figure}`, level };
 }
 
 /**

@@ -193,8 +193,8 @@ test("aligns two uploaded scans with a known transform", { timeout: TIMEOUT * 2 
   assert.equal(typeof result.evidence.overlapReverse, "number");
   assert.ok(result.startsRefined >= 1, `startsRefined ${result.startsRefined}`);
   const verdict = (await page.textContent("#verdict")).trim();
-  assert.equal(verdict, confidenceWords(result.confidence).words);
-  assert.match(verdict, /^(likely right|uncertain|likely wrong) \(confidence [01]\.\d\d\)$/);
+  assert.equal(verdict, confidenceWords(result.confidence, result.alternatives.length).words);
+  assert.match(verdict, /^(likely right|uncertain|likely wrong|ambiguous) \(confidence [01]\.\d\d\)/);
   assert.match(await page.textContent("#units-help"), /your scans' own units/);
   // Each of fitness and inlier RMSE comes with its explanation, in the scan's units.
   const figures = await page.$$eval("#figures dt", (dts) => dts.map((dt) => [dt.textContent, dt.nextElementSibling.textContent]));
@@ -211,6 +211,10 @@ test("confidence in words: thresholds at 0.8 and 0.5", () => {
   assert.deepEqual(confidenceWords(0.8), { words: "likely right (confidence 0.80)", level: "right" });
   assert.deepEqual(confidenceWords(0.62), { words: "uncertain (confidence 0.62)", level: "uncertain" });
   assert.deepEqual(confidenceWords(0.12), { words: "likely wrong (confidence 0.12)", level: "wrong" });
+  // with look-alike poses, below 0.8: ambiguous, the level still by the figure
+  assert.deepEqual(confidenceWords(0.25, 2), { words: "ambiguous (confidence 0.25): 2 other poses fit about as well", level: "wrong" });
+  assert.deepEqual(confidenceWords(0.5, 1), { words: "ambiguous (confidence 0.50): 1 other pose fit about as well", level: "uncertain" });
+  assert.deepEqual(confidenceWords(0.9, 1), { words: "likely right (confidence 0.90)", level: "right" });
   assert.equal(confidenceWords(undefined).level, "uncertain");
 });
 
@@ -466,6 +470,7 @@ test("a symmetric box: the other poses that fit as well are offered, and picking
   assert.equal(error, "", `unexpected #error: ${error}`);
   assert.equal(result.shown, "answer");
   assert.ok(result.alternatives.length >= 1, "a box fits itself turned: the result offers other poses");
+  if (result.confidence < 0.8) assert.match(await page.textContent("#verdict"), /^ambiguous \(confidence [\d.]+\): \d+ other poses? fit about as well$/);
   assert.ok(await page.isVisible("#alternatives"));
   const buttons = page.locator("#alternatives-poses button");
   assert.equal(await buttons.count(), 1 + result.alternatives.length);
