@@ -37,7 +37,8 @@ export type RegisterOptions = {
   /**
    * ICP's final maximum correspondence distance, in the clouds' units. Default: 2.5% of the
    * clouds' shared half-extent. ICP runs coarse to fine at 4x, 2x and 1x this distance;
-   * `fitness` and `inlierRmse` are measured at 1x. Must be > 0.
+   * `fitness` and `inlierRmse` are measured at 1x. Must be > 0, and at most the clouds'
+   * shared half-extent (beyond it every point pairs with one, whatever the pose).
    */
   maxCorrespondenceDistance?: number | null,
   /**
@@ -49,7 +50,8 @@ export type RegisterOptions = {
   icpMaxIterations?: number,
   /**
    * Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
-   * correspondence distance. `0` uses the full clouds. Must be >= 0.
+   * correspondence distance. `0` uses the full clouds. Must be >= 0, and at most the clouds'
+   * shared half-extent.
    */
   voxelSize?: number | null,
   /**

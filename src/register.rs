@@ -50,7 +50,8 @@ pub struct Options {
     pub network: bool,
     /// ICP's final maximum correspondence distance, in the clouds' units. Default: 2.5% of the
     /// clouds' shared half-extent. ICP runs coarse to fine at 4x, 2x and 1x this distance;
-    /// `fitness` and `inlierRmse` are measured at 1x. Must be > 0.
+    /// `fitness` and `inlierRmse` are measured at 1x. Must be > 0, and at most the clouds'
+    /// shared half-extent (beyond it every point pairs with one, whatever the pose).
     pub max_correspondence_distance: Option<f64>,
     /// Iteration cap of each of the three ICP stages. Default 30; at most 10000. The answer's
     /// final stage, when it has not converged within the cap, runs on for up to three more
@@ -59,7 +60,8 @@ pub struct Options {
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub icp_max_iterations: u32,
     /// Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
-    /// correspondence distance. `0` uses the full clouds. Must be >= 0.
+    /// correspondence distance. `0` uses the full clouds. Must be >= 0, and at most the clouds'
+    /// shared half-extent.
     pub voxel_size: Option<f64>,
     /// An initial guess of `T_target_source` (rigid, the clouds' units); the network then
     /// estimates the remaining motion from there, and of two answers that fit about as well, the

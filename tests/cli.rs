@@ -456,7 +456,8 @@ fn register_writes_the_aligned_source() {
         dir.join("v.obj").to_str().unwrap(),
     ]);
     let stderr = String::from_utf8_lossy(&pcd_to_obj.stderr);
-    assert!(stderr.contains("v.obj .pcd (the source moved as it is) or .ply (its points), for"), "{stderr}");
+    assert!(stderr.contains("v.obj is not a name it can write for"), "{stderr}");
+    assert!(stderr.contains("name a .pcd (the source moved as it is) or .ply (its points) file"), "{stderr}");
     // a LAZ source comes back as LAZ (to a .laz name; a .las name is refused, and the other way)
     let laz = "fixtures/formats/simple.laz";
     let laz_out = dir.join("simple-aligned.laz");
@@ -466,7 +467,7 @@ fn register_writes_the_aligned_source() {
     let bytes = std::fs::read(root.join(laz)).unwrap();
     assert_eq!(std::fs::read(&laz_out).unwrap(), arps::io::transform_las(&bytes, &matrix(&v)).unwrap());
     for (source, name, message) in
-        [(laz, "x.las", "x.las .laz (the source moved as it is) or .ply"), (las, "x.laz", "x.laz .las (the source")]
+        [(laz, "x.las", "name a .laz (the source moved as it is) or .ply"), (las, "x.laz", "name a .las (the source")]
     {
         let out = arps(&["register", source, las, "--aligned", dir.join(name).to_str().unwrap()]);
         let stderr = String::from_utf8_lossy(&out.stderr);
@@ -482,11 +483,21 @@ fn register_writes_the_aligned_source() {
     let as_input = format!("{}/../wasm/target.ply", root.join("fixtures/any").display());
     let several = dir.join("all.ply");
     let twice = dir.join("{stem}.ply");
+    // a hard link to an input is that input
+    let copy = dir.join("copy.ply");
+    std::fs::copy(root.join(a), &copy).unwrap();
+    let link = dir.join("link.ply");
+    std::fs::remove_file(&link).ok();
+    std::fs::hard_link(&copy, &link).unwrap();
+    let copied = std::fs::read(&copy).unwrap();
+    let no_folder = dir.join("no-such-folder").join("out.ply");
     for (args, message) in [
         (vec!["register", a, target, "--aligned", &as_input], "is an input file"),
+        (vec!["register", copy.to_str().unwrap(), target, "--aligned", link.to_str().unwrap()], "is an input file"),
+        (vec!["register", a, target, "--aligned", no_folder.to_str().unwrap()], "the folder"),
         (vec!["register", a, b, target, "--aligned", several.to_str().unwrap()], "must hold {stem}"),
         (vec!["register", a, a, target, "--aligned", twice.to_str().unwrap()], "would both be written to"),
-        (vec!["register", a, target, "--aligned", dir.join("aligned.las").to_str().unwrap()], "aligned.las .ply, for"),
+        (vec!["register", a, target, "--aligned", dir.join("aligned.las").to_str().unwrap()], "name a .ply file"),
     ] {
         let out = arps(&args);
         assert!(!out.status.success() && out.stdout.is_empty(), "{args:?}");
@@ -494,6 +505,7 @@ fn register_writes_the_aligned_source() {
         assert!(stderr.contains(message) && stderr.lines().count() == 1, "{args:?}: {stderr}");
     }
     assert_eq!(std::fs::read(root.join(target)).unwrap(), before, "the target file is untouched");
+    assert_eq!(std::fs::read(&copy).unwrap(), copied, "the linked input is untouched");
     assert!(!several.exists() && !dir.join("source.ply").exists());
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -119,6 +119,19 @@ fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
             "maxCorrespondenceDistance",
         ),
         (good.clone(), good.clone(), Options { voxel_size: Some(-0.1), ..Options::default() }, "voxelSize"),
+        // beyond the clouds' size: every point would pair with one, whatever the pose
+        (
+            good.clone(),
+            good.clone(),
+            Options { max_correspondence_distance: Some(1e30), ..Options::default() },
+            "maxCorrespondenceDistance = 1000000000000000000000000000000 is more than the clouds' largest half-extent",
+        ),
+        (
+            good.clone(),
+            good.clone(),
+            Options { voxel_size: Some(1e6), ..Options::default() },
+            "voxelSize = 1000000 is more than",
+        ),
         (
             good.clone(),
             good.clone(),

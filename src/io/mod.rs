@@ -303,7 +303,12 @@ pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOption
                 crate::cloud::MIN_POINTS
             )));
         }
-        crate::limits::check_file_points(format.name(), n as u64)?;
+        if n > crate::limits::MAX_FILE_POINTS {
+            return Err(Error::InvalidOption(format!(
+                "surfacePoints = {n} is more than the {} points a cloud read from a file may hold",
+                crate::limits::MAX_FILE_POINTS
+            )));
+        }
     }
     let faces = if options.surface_points.is_some() { Faces::IfAny } else { Faces::Skip };
     let raw = read_format(bytes, format, faces, options.scan)?;

@@ -74,8 +74,22 @@ pub(crate) fn initial_transform(options: &Options) -> Result<Matrix4<f64>> {
 /// The final ICP distance and the ICP voxel size in normalised units, for a normalisation of
 /// scale `s` (user units per normalised unit).
 pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
+    // beyond the clouds' largest half-extent (1 in normalised units) every point pairs with
+    // one whatever the pose: a fit, and a confidence, that say nothing
+    let too_far = |name: &str, v: f64| {
+        Error::InvalidOption(format!(
+            "{name} = {v} is more than the clouds' largest half-extent ({s}): every point would pair with one, \
+             whatever the pose (the default distance is {} of it)",
+            DEFAULT_MAX_CORRESPONDENCE
+        ))
+    };
     let d_final = match options.max_correspondence_distance {
-        Some(d) if d.is_finite() && d > 0.0 => d / s,
+        Some(d) if d.is_finite() && d > 0.0 => {
+            if d / s > 1.0 {
+                return Err(too_far("maxCorrespondenceDistance", d));
+            }
+            d / s
+        }
         Some(d) => {
             return Err(Error::InvalidOption(format!("maxCorrespondenceDistance = {d} must be a positive number")))
         }
@@ -85,6 +99,9 @@ pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
         // Voxels below a millionth of the clouds' half-extent cannot merge distinct f32 points
         // meaningfully (and would saturate the grid keys): treat them as "no voxelisation".
         Some(v) if v.is_finite() && v >= 0.0 => {
+            if v / s > 1.0 {
+                return Err(too_far("voxelSize", v));
+            }
             if v / s < 1e-6 {
                 0.0
             } else {

@@ -114,7 +114,7 @@ pub struct EvalArgs {
     /// ground truth's refinement; by default they are left out.
     #[arg(long)]
     keep_support: bool,
-    /// Run only these methods, comma-separated [default: all seven].
+    /// Run only these methods, comma-separated [default: all ten].
     #[arg(long, value_enum, value_delimiter = ',')]
     methods: Option<Vec<Method>>,
 }
@@ -567,12 +567,20 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
     out!(
         "  ICP from the ground truth (the refinement of a perfect start, the most any one start can give): recall {truth_recall:.4}"
     );
+    // (a share of no answers, NaN: "no wrong answers")
+    let share = |v: f64, what: &str| {
+        if v.is_nan() {
+            format!("no {what} answers")
+        } else {
+            format!("{v:.3} of {what} answers")
+        }
+    };
     for m in &per_method {
         out!(
-            "  {}: confidence < 0.5 on {} of wrong answers, {} of right answers",
+            "  {}: confidence < 0.5 on {}, {}",
             m.name,
-            num(m.wrong_doubted, 3),
-            num(m.right_doubted, 3)
+            share(m.wrong_doubted, "wrong"),
+            share(m.right_doubted, "right")
         );
     }
     for m in per_method.iter().filter(|m| m.with_alternatives > 0) {

@@ -228,8 +228,8 @@ fn moves_as_it_is(source: &Path, path: &Path) -> bool {
 
 /// Where `--aligned PATTERN` writes the aligned `source`: `{stem}` replaced by the source file's
 /// name without its extension. Refuses a path that does not say what is written (the source's
-/// own format when it can be moved as it is, or `.ply`) or that is one of the `inputs` (the same
-/// file, however named).
+/// own format when it can be moved as it is, or `.ply`), that is one of the `inputs` (the same
+/// file, however named: through a link too), or whose folder does not exist.
 fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathBuf, String> {
     let stem = source.file_stem().map(|s| s.to_string_lossy()).unwrap_or_default();
     let path = PathBuf::from(pattern.to_string_lossy().replace("{stem}", &stem));
@@ -242,16 +242,36 @@ fn aligned_path(pattern: &Path, source: &Path, inputs: &[&Path]) -> Result<PathB
             }
             _ => ".ply".to_string(),
         };
-        return Err(format!("--aligned: name {} {what}, for {}", path.display(), source.display()));
+        return Err(format!(
+            "--aligned: {} is not a name it can write for {}: name a {what} file",
+            path.display(),
+            source.display()
+        ));
     }
-    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => a == b,
-    };
-    if let Some(input) = inputs.iter().find(|input| same(&path, input)) {
+    if let Some(input) = inputs.iter().find(|input| same_file(&path, input)) {
         return Err(format!("--aligned: {} is an input file ({}); name another file", path.display(), input.display()));
     }
+    let folder = path.parent().filter(|p| !p.as_os_str().is_empty());
+    if let Some(folder) = folder.filter(|f| !f.is_dir()) {
+        return Err(format!("--aligned: the folder {} does not exist", folder.display()));
+    }
     Ok(path)
+}
+
+/// True when `a` and `b` name the same file: the same path once resolved, or (on Unix) the same
+/// file through another hard link.
+fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(x), Ok(y)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+            return x.dev() == y.dev() && x.ino() == y.ino();
+        }
+    }
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    }
 }
 
 /// Writes the source moved by `r`'s answer to `path`: to a path of the source's own format, the
@@ -277,7 +297,15 @@ fn write_aligned(
     } else {
         io::write_ply_binary(&cloud.transformed(&r.T_target_source))
     };
-    std::fs::write(path, out).map_err(|e| format!("--aligned: {}: {e}", path.display()))
+    // written beside it, then renamed over it: a file it replaces (a link to an input, say) is
+    // never half written or written through
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let partial = path.with_file_name(format!(".{name}.{}.partial", std::process::id()));
+    let written = std::fs::write(&partial, out).and_then(|()| std::fs::rename(&partial, path));
+    written.map_err(|e| {
+        let _ = std::fs::remove_file(&partial);
+        format!("--aligned: {}: {e}", path.display())
+    })
 }
 
 /// Registers each source onto the target (see [`RegisterArgs`]).
