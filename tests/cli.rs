@@ -175,8 +175,21 @@ fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
     std::fs::write(&tiny, b"0 0 0\n1 0 0\n0 1 0\n").unwrap();
     let broken = broken.to_str().unwrap();
     let tiny = tiny.to_str().unwrap();
+    let nan = dir.join("nan.xyz");
+    let rows: String = (0..40)
+        .map(|i| format!("{} {} {}\n", i % 7, i / 7, if i == 5 { "nan".into() } else { (i % 3).to_string() }))
+        .collect();
+    std::fs::write(&nan, rows).unwrap();
+    let nan = nan.to_str().unwrap();
     let (src, tgt) = ("fixtures/wasm/source.ply", "fixtures/wasm/target.ply");
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 9] = [
+        // the engine's options named by this command's flags
+        (&["register", nan, tgt], "(drop such points with --drop-non-finite)"),
+        (&["register", src, tgt, "--initial-transform", "1,0,0"], "--initial-transform: expected 16 numbers"),
+        (
+            &["register", src, tgt, "--initial-transform", "2,0,0,0,0,2,0,0,0,0,2,0,0,0,0,1"],
+            "initialTransform is not rigid",
+        ),
         (&["register", "does-not-exist.ply", "fixtures/wasm/target.ply"], "does-not-exist.ply"),
         (&["register", src, tgt, "--icp-max-iterations", "20000"], "icpMaxIterations = 20000 is more than 10000"),
         (&["register", broken, "fixtures/wasm/target.ply", "--json"], "PLY parse error"),
@@ -192,6 +205,26 @@ fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
         assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
         assert!(err.starts_with("arps: ") && err.contains(hint), "{args:?}: {err}");
     }
+}
+
+/// `--initial-transform` (16 numbers, row by row) with `--starts initial`: ICP from that guess
+/// alone, here the answer of a first run, which it keeps.
+#[test]
+fn register_starts_from_an_initial_transform() {
+    let (src, tgt) = ("fixtures/wasm/source.ply", "fixtures/wasm/target.ply");
+    let answer = |args: &[&str]| {
+        let out = arps(args);
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        let r: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
+        r
+    };
+    let first = answer(&["register", src, tgt, "--json"]);
+    let rows = arps::transform::to_rows(&first.T_target_source);
+    let guess = rows.iter().flatten().map(|v| format!("{v}")).collect::<Vec<_>>().join(",");
+    let again = answer(&["register", src, tgt, "--json", "--starts", "initial", "--initial-transform", &guess]);
+    assert_eq!(again.start, arps::Start::Initial);
+    let turn = arps::transform::rotation_error_deg(&again.T_target_source, &first.T_target_source);
+    assert!(turn < 0.5, "{turn} degrees from the first answer");
 }
 
 #[test]

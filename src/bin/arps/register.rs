@@ -64,6 +64,11 @@ pub struct RegisterArgs {
     /// level: the answer then only turns the source about it (`Options::up`).
     #[arg(long, value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
     up: Option<Vec<f64>>,
+    /// An initial guess of the transform (`Options::initial_transform`): 16 numbers, comma-separated,
+    /// the 4x4 row by row (r00,r01,r02,tx,r10,...,0,0,0,1), rigid to 1e-3; with `--starts initial`
+    /// ICP starts from it alone.
+    #[arg(long, value_delimiter = ',', num_args = 1, allow_hyphen_values = true, value_name = "R00,R01,...")]
+    initial_transform: Option<Vec<f64>>,
     /// Drop NaN/Inf points instead of failing.
     #[arg(long)]
     drop_non_finite: bool,
@@ -204,13 +209,22 @@ fn print_registration(
             t.icp_ms
         );
         for w in &r.warnings {
-            out!("warning: {w}");
+            out!("warning: {}", in_flags(w));
         }
         if let Some(path) = aligned {
             out!("wrote the aligned source to {path}");
         }
     }
     Ok(())
+}
+
+/// `message` (the engine's, which names its options) with the options this command sets by a
+/// flag named by that flag.
+fn in_flags(message: &str) -> String {
+    message
+        .replace("the non-finite option set to drop", "--drop-non-finite")
+        .replace("the outliers option set to keep", "--keep-outliers")
+        .replace("the supportPlane option set to keep", "--keep-support")
 }
 
 /// True when `path` names a file of `source`'s own format that `io::transform_file` moves as it
@@ -322,6 +336,7 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         starts,
         search,
         up,
+        initial_transform,
         drop_non_finite,
         keep_outliers,
         keep_support,
@@ -368,7 +383,15 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
     let mut t0 = std::time::Instant::now();
     let reading = io::ReadOptions { surface_points, seed, scan: source_scan };
     let reading_target = io::ReadOptions { scan: target_scan, ..reading };
+    let initial_transform = match initial_transform.as_deref() {
+        None => None,
+        Some(v) if v.len() == 16 => Some(std::array::from_fn(|r| std::array::from_fn(|c| v[4 * r + c]))),
+        Some(v) => {
+            return Err(format!("--initial-transform: expected 16 numbers (a 4x4, row by row), got {}", v.len()))
+        }
+    };
     let options = Options {
+        initial_transform,
         icp: match icp {
             IcpArg::Point => IcpKind::Point,
             IcpArg::Plane => IcpKind::Plane,
@@ -413,8 +436,9 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         t0 = std::time::Instant::now();
         match outcome {
             Ok(r) => print_registration(&r, time_ms, json, named, output.as_ref().map(|p| p.display().to_string()))?,
-            Err(e) if !several => return Err(e),
+            Err(e) if !several => return Err(in_flags(&e)),
             Err(e) => {
+                let e = in_flags(&e);
                 failed += 1;
                 if json {
                     out!("{}", serde_json::json!({ "source": named, "error": e }));
