@@ -140,6 +140,13 @@ fn register_reads_one_scan_of_an_e57_file() {
     let at = nalgebra::Point3::new(512_350.0, 4_123_456.0, 87.0);
     let moved = (r.T_target_source.transform_point(&at) - at).norm();
     assert!(moved < 0.05, "the scan moved by {moved}: {}", r.T_target_source);
+    // the human report says how far the scan's centre moves, where the translation (that of the
+    // far (0, 0, 0)) is large
+    let human = arps(&["register", e57, e57, "--source-scan", "1"]);
+    let text = String::from_utf8_lossy(&human.stdout);
+    let line = text.lines().find(|l| l.starts_with("the source's centre moves by")).expect("a centre line");
+    let by: f64 = line.split_whitespace().nth(5).unwrap().parse().unwrap();
+    assert!(by < 0.05, "{text}");
     // saved to an .e57 name: an E57 file of that scan alone, moved
     let dir = std::env::temp_dir().join(format!("arps-cli-scan-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

@@ -161,6 +161,7 @@ fn print_registration(
     json: bool,
     source: Option<String>,
     aligned: Option<String>,
+    far_centre: Option<[f64; 3]>,
 ) -> Result<(), String> {
     if let Some(source) = source.as_ref().filter(|_| !json) {
         out!("source {source}");
@@ -179,6 +180,14 @@ fn print_registration(
             transform::rotation_angle_deg(&r.T_target_source),
             transform::translation(&r.T_target_source).norm()
         );
+        if let Some(c) = far_centre {
+            // far from (0, 0, 0) (a map grid) the translation is that of a far point
+            let moved = r.T_target_source.transform_point(&nalgebra::Point3::from(c)) - nalgebra::Point3::from(c);
+            out!(
+                "the source's centre moves by {:.6} (the translation above is that of (0, 0, 0), far from it)",
+                moved.norm()
+            );
+        }
         out!(
             "fitness {:.4} (within {:.4}), inlier RMSE {:.6}, ICP from the {} start, {} iterations ({})",
             r.fitness,
@@ -216,6 +225,15 @@ fn print_registration(
         }
     }
     Ok(())
+}
+
+/// The centre of `cloud`'s bounds, in its frame, when it lies farther from (0, 0, 0) than ten
+/// times the cloud's size (map-grid coordinates), else `None`.
+fn far_centre(cloud: &arps::PointCloud) -> Option<[f64; 3]> {
+    let (lo, hi) = cloud.bounds();
+    let c: [f64; 3] = std::array::from_fn(|k| cloud.origin[k] + (lo[k] as f64 + hi[k] as f64) / 2.0);
+    let size = 2.0 * cloud.half_extent();
+    (nalgebra::Vector3::from(c).norm() > 10.0 * size).then_some(c)
 }
 
 /// `message` (the engine's, which names its options) with the options this command sets by a
@@ -431,11 +449,13 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
             if let (Some(path), Some(bytes)) = (output, bytes) {
                 write_aligned(source, &bytes, &reading, &src, scale.as_ref(), &r, path)?;
             }
-            Ok(r)
+            Ok((r, far_centre(&src)))
         });
         t0 = std::time::Instant::now();
         match outcome {
-            Ok(r) => print_registration(&r, time_ms, json, named, output.as_ref().map(|p| p.display().to_string()))?,
+            Ok((r, centre)) => {
+                print_registration(&r, time_ms, json, named, output.as_ref().map(|p| p.display().to_string()), centre)?
+            }
             Err(e) if !several => return Err(in_flags(&e)),
             Err(e) => {
                 let e = in_flags(&e);
