@@ -126,15 +126,7 @@ fn pose_edit(
 
 /// `xml` with each of the (disjoint) `edits`' ranges replaced by its text.
 fn edited(xml: &str, mut edits: Vec<(std::ops::Range<usize>, String)>) -> String {
-    // in the file's order (an insertion sort: a few entries; the library's sorts weigh kilobytes
-    // of WebAssembly)
-    for i in 1..edits.len() {
-        let mut j = i;
-        while j > 0 && edits[j - 1].0.start > edits[j].0.start {
-            edits.swap(j - 1, j);
-            j -= 1;
-        }
-    }
+    super::util::in_text_order(&mut edits, |e| e.0.start);
     let mut out = String::with_capacity(xml.len() + 512 * edits.len());
     let mut at = 0;
     for (range, text) in edits {

@@ -187,16 +187,9 @@ fn trim_zeros_len(s: &[u8]) -> usize {
 }
 
 /// Appends `line` with the byte ranges `edits` replaced by their values in `style`, every other
-/// byte as it was. `edits` (a few per line) do not overlap; they are put in order here (an
-/// insertion sort: the library's sorts would add kilobytes to the WebAssembly module for this).
+/// byte as it was. `edits` (a few per line) do not overlap; they are put in order here.
 fn splice(line: &[u8], edits: &mut [(Range<usize>, f64, NumberStyle)], out: &mut Vec<u8>) {
-    for i in 1..edits.len() {
-        let mut j = i;
-        while j > 0 && edits[j - 1].0.start > edits[j].0.start {
-            edits.swap(j - 1, j);
-            j -= 1;
-        }
-    }
+    super::util::in_text_order(edits, |e| e.0.start);
     let mut at = 0;
     for (range, v, style) in edits {
         out.extend_from_slice(&line[at..range.start]);

@@ -132,6 +132,19 @@ pub(crate) fn fan(poly: &[u32], out: &mut Vec<[u32; 3]>) {
     }
 }
 
+/// Puts `edits` (each replacing a byte range of a text) in the text's order, by the start of each
+/// one's range (`start`): an insertion sort, for the few edits of a line or an XML section (the
+/// library's sorts would add kilobytes to the WebAssembly module for this).
+pub(crate) fn in_text_order<T>(edits: &mut [T], start: impl Fn(&T) -> usize) {
+    for i in 1..edits.len() {
+        let mut j = i;
+        while j > 0 && start(&edits[j - 1]) > start(&edits[j]) {
+            edits.swap(j - 1, j);
+            j -= 1;
+        }
+    }
+}
+
 /// Splits a text line into tokens separated by whitespace, commas or semicolons (empty tokens
 /// dropped).
 pub(crate) fn split_fields(line: &str) -> impl Iterator<Item = &str> {
