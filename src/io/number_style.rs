@@ -101,12 +101,10 @@ impl NumberStyle {
         let start = out.len();
         if !self.exponent && write_fixed(v, d, out) {
             if self.varied && d > 0 {
-                // trailing zeros (and a bare point) left out, a bare "-0" too
+                // trailing zeros (and a bare point) left out (no "-0" to mend: write_fixed gives
+                // a value that rounds to zero no sign)
                 let end = start + trim_zeros_len(&out[start..]);
                 out.truncate(end);
-                if out[start..] == *b"-0" {
-                    out.remove(start);
-                }
             }
             return;
         }
