@@ -221,10 +221,14 @@ pub(super) fn vlrs<'a>(bytes: &'a [u8], h: &Header) -> Result<Vec<Vlr<'a>>> {
 /// The LASzip VLR's data, among the variable length records after the header, and where the
 /// whole record (its header and data) lies in the file.
 pub(super) fn laszip_vlr<'a>(bytes: &'a [u8], h: &Header) -> Result<(&'a [u8], std::ops::Range<usize>)> {
-    vlrs(bytes, h)?
-        .into_iter()
+    laszip_among(bytes, &vlrs(bytes, h)?)
+}
+
+/// [`laszip_vlr`] among the file's records `all` ([`vlrs`]).
+pub(super) fn laszip_among<'a>(bytes: &'a [u8], all: &[Vlr]) -> Result<(&'a [u8], std::ops::Range<usize>)> {
+    all.iter()
         .find(|v| v.user == LASZIP_USER && v.record == LASZIP_RECORD)
-        .map(|v| (&bytes[v.range.start + VLR_HEADER..v.range.end], v.range))
+        .map(|v| (&bytes[v.range.start + VLR_HEADER..v.range.end], v.range.clone()))
         .ok_or_else(|| err("the point data format is marked compressed (LAZ), but the file has no LASzip record"))
 }
 

@@ -7,7 +7,7 @@
 //! byte offsets) comes back as a plain LAZ file: its `copc` VLR and EVLR are left out, since the
 //! moved points neither lie in that octree nor at those offsets.
 
-use super::las::{append_tail, err, laszip_vlr, vlrs, Header, BOUNDS_AT, MIN_RECORD, OFFSETS_AT, VLR_HEADER};
+use super::las::{append_tail, err, laszip_among, vlrs, Header, BOUNDS_AT, MIN_RECORD, OFFSETS_AT, VLR_HEADER};
 use crate::Result;
 use laz::laszip::{LasZipCompressor, LazItemRecordBuilder, LazVlr, LazVlrBuilder};
 use std::io::Cursor;
@@ -32,7 +32,8 @@ pub(super) fn compressed(laz: &[u8], h_laz: &Header, las: &[u8]) -> Result<Vec<u
     let records = h.records(las)?;
     let laz_err = |e: laz::LasZipError| err(format!("the points cannot be compressed: {e}"));
     let io_err = |e: std::io::Error| err(format!("the points cannot be compressed: {e}"));
-    let (vlr_data, vlr_range) = laszip_vlr(laz, h_laz)?;
+    let all = vlrs(laz, h_laz)?;
+    let (vlr_data, vlr_range) = laszip_among(laz, &all)?;
     let original = LazVlr::from_buffer(vlr_data).map_err(laz_err)?;
     let fixed = CHUNKED.contains(&u16::from_le_bytes([vlr_data[0], vlr_data[1]]))
         && !original.uses_variable_size_chunks()
@@ -49,7 +50,6 @@ pub(super) fn compressed(laz: &[u8], h_laz: &Header, las: &[u8]) -> Result<Vec<u
 
     // the LAZ file's header and VLRs, its LASzip record's data replaced, COPC's left out (and
     // what lies between the last of them and the points kept)
-    let all = vlrs(laz, h_laz)?;
     let copc = all.iter().any(|v| v.user == COPC_USER);
     let vlrs_end = all.last().map_or(h_laz.vlrs_at, |v| v.range.end);
     let mut out = Vec::with_capacity(h_laz.offset + payload.len() + records.len() / 4);
