@@ -230,10 +230,9 @@ fn print_registration(
 /// The centre of `cloud`'s bounds, in its frame, when it lies farther from (0, 0, 0) than ten
 /// times the cloud's size (map-grid coordinates), else `None`.
 fn far_centre(cloud: &arps::PointCloud) -> Option<[f64; 3]> {
-    let (lo, hi) = cloud.bounds();
-    let c: [f64; 3] = std::array::from_fn(|k| cloud.origin[k] + (lo[k] as f64 + hi[k] as f64) / 2.0);
-    let size = 2.0 * cloud.half_extent();
-    (nalgebra::Vector3::from(c).norm() > 10.0 * size).then_some(c)
+    let (centre, half) = arps::cloud::JointNormalization::box_of(cloud);
+    let c: [f64; 3] = std::array::from_fn(|k| cloud.origin[k] + centre[k]);
+    (nalgebra::Vector3::from(c).norm() > 10.0 * 2.0 * half).then_some(c)
 }
 
 /// `message` (the engine's, which names its options) with the options this command sets by a
