@@ -183,19 +183,26 @@ fn text_lists_keep_colours_turn_unnamed_normals_and_follow_a_change_of_unit() {
     assert_eq!(moved, "1.5e3 2.0e3 -3.0e2\n");
 }
 
-#[test]
-fn obj_keeps_faces_and_texture_and_turns_normals() {
-    let m = tilted_motion();
-    let bytes = format_fixture("fuze.obj");
-    let moved = transform_file(&bytes, "fuze.obj", &m).unwrap();
-    let (before, after) = (read_mesh(&bytes, "fuze.obj").unwrap(), read_mesh(&moved, "fuze.obj").unwrap());
+/// The mesh fixture `name` moved by `m` as it is: the same faces, every vertex within `tol` of the
+/// file's own moved, as many lines; returns the file and the moved one as text.
+fn moved_mesh(name: &str, m: &Matrix4<f64>, tol: f64) -> (String, String) {
+    let bytes = format_fixture(name);
+    let moved = transform_file(&bytes, name, m).unwrap();
+    let (before, after) = (read_mesh(&bytes, name).unwrap(), read_mesh(&moved, name).unwrap());
     assert_eq!(before.triangles, after.triangles);
     for (p, q) in before.vertices.iter().zip(&after.vertices) {
-        let want = apply(&m, p.map(f64::from));
-        assert!((0..3).all(|k| (q[k] as f64 - want[k]).abs() < 1e-5), "{q:?} vs {want:?}");
+        let want = apply(m, p.map(f64::from));
+        assert!((0..3).all(|k| (q[k] as f64 - want[k]).abs() < tol), "{q:?} vs {want:?}");
     }
     let (a, b) = (String::from_utf8(bytes).unwrap(), String::from_utf8(moved).unwrap());
     assert_eq!(a.lines().count(), b.lines().count());
+    (a, b)
+}
+
+#[test]
+fn obj_keeps_faces_and_texture_and_turns_normals() {
+    let m = tilted_motion();
+    let (a, b) = moved_mesh("fuze.obj", &m, 1e-5);
     let mut normals = 0;
     for (x, y) in a.lines().zip(b.lines()) {
         if x.starts_with("vn ") {
@@ -214,16 +221,7 @@ fn obj_keeps_faces_and_texture_and_turns_normals() {
 fn off_keeps_faces_and_colours_turns_normals_and_follows_split_records() {
     let m = tilted_motion();
     // ballA.off (ModelNet's layout): 1,900 vertices, 3,796 faces
-    let bytes = format_fixture("ballA.off");
-    let moved = transform_file(&bytes, "ballA.off", &m).unwrap();
-    let (before, after) = (read_mesh(&bytes, "a.off").unwrap(), read_mesh(&moved, "a.off").unwrap());
-    assert_eq!(before.triangles, after.triangles);
-    for (p, q) in before.vertices.iter().zip(&after.vertices) {
-        let want = apply(&m, p.map(f64::from));
-        assert!((0..3).all(|k| (q[k] as f64 - want[k]).abs() < 1e-4), "{q:?} vs {want:?}");
-    }
-    let (a, b) = (String::from_utf8(bytes).unwrap(), String::from_utf8(moved).unwrap());
-    assert_eq!(a.lines().count(), b.lines().count());
+    let (a, b) = moved_mesh("ballA.off", &m, 1e-4);
     assert!(a.lines().zip(b.lines()).skip(1902).all(|(x, y)| x == y), "the faces are kept");
     // NOFF with a colour after the normal, a comment, and a vertex split over two lines
     let noff = "NOFF\n# made\n3 1 0\n1.0 0.0 0.0 0.0 0.0 1.0 255\n0.0 1.0\n 0.0 1.0 0.0 0.0 7\n0.0 0.0 1.0 0.6 0.8 0.0 9\n3 0 1 2\n";
