@@ -443,8 +443,9 @@ export type ReadOptions = {
   seed?: number | bigint,
   /**
    * For an E57 file, which holds one point cloud per scan: only this one (0-based, in the
-   * file's order), placed by its pose. An index beyond the file's scans is an error; other
-   * formats are read as they are. Unset (the default): every scan, as one cloud.
+   * file's order), placed by its pose. An index beyond the file's scans is an error, and so is
+   * setting it for a file of another format (one cloud, nothing to choose: `list_scans` gives
+   * an empty list). Unset (the default): every scan, as one cloud.
    */
   scan?: number | null,
 };

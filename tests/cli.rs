@@ -170,6 +170,14 @@ fn register_reads_one_scan_of_an_e57_file() {
     let bad = arps(&["register", e57, e57, "--target-scan", "2"]);
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(!bad.status.success() && err.contains("scan = 2, but the E57 file holds 2 scans"), "{err}");
+    // a scan chosen in a file of one cloud is refused, the flag named
+    let ply = "fixtures/scans/velodyne-small.ply";
+    for (flag, args) in [("--source-scan", [ply, e57]), ("--target-scan", [e57, ply])] {
+        let bad = arps(&["register", args[0], args[1], flag, "1"]);
+        let err = String::from_utf8_lossy(&bad.stderr);
+        assert!(!bad.status.success(), "{flag}: {err}");
+        assert!(err.contains(&format!("{ply}: invalid option: {flag} (1) chooses among an E57 file's scans")), "{err}");
+    }
 }
 
 #[test]

@@ -61,10 +61,17 @@ fn one_scan_of_several_is_read_alone_and_a_scan_beyond_them_is_an_error() {
     assert_eq!(scans, vec![named(1), named(2)]);
     assert!(list_scans(&bytes[..bytes.len() / 2], name).is_err(), "half a file");
     assert_eq!(list_scans(&fixture("scans", "velodyne-small.ply"), "v.ply").unwrap(), vec![], "one cloud");
-    // other formats are read as they are
+    // a file of another format holds one cloud: a scan chosen in it is refused, read and moved
     let ply = fixture("scans", "velodyne-small.ply");
-    let with = read_point_cloud_with(&ply, "v.ply", &ReadOptions { scan: Some(5), ..ReadOptions::default() });
-    assert_eq!(with.unwrap(), read_point_cloud(&ply, "v.ply").unwrap());
+    for k in [0, 5] {
+        let options = ReadOptions { scan: Some(k), ..ReadOptions::default() };
+        let e = read_point_cloud_with(&ply, "v.ply", &options).unwrap_err().to_string();
+        assert!(e.contains(&format!("the scan option ({k})")) && e.contains("a PLY file holds one cloud"), "{e}");
+        let moved = arps::io::transform_file_with(&ply, "v.ply", &nalgebra::Matrix4::identity(), &options);
+        assert_eq!(moved.unwrap_err().to_string(), e);
+    }
+    let unset = read_point_cloud_with(&ply, "v.ply", &ReadOptions::default());
+    assert_eq!(unset.unwrap(), read_point_cloud(&ply, "v.ply").unwrap());
 }
 
 #[test]

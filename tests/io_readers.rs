@@ -157,6 +157,26 @@ fn sniffing_without_extension_matches_extension() {
     }
 }
 
+/// A file saved under another format's extension is read as what its signature says (a PLY file
+/// named `.txt`, an E57 file named `.ply`, ...); a file without one goes by its extension.
+#[test]
+fn a_signature_overrules_the_extension() {
+    for (name, format, as_name) in [
+        ("fuze_binary.ply", Format::Ply, "scan.txt"),
+        ("fuze_ascii.ply", Format::Ply, "scan.pcd"),
+        ("simple.laz", Format::Las, "points.xyz"),
+        ("velodyne_two_scans.e57", Format::E57, "scan.ply"),
+        ("velodyne_2000_ascii.pcd", Format::Pcd, "cloud.ply"),
+        ("ballA.off", Format::Off, "ballA.xyz"),
+    ] {
+        let bytes = fixture(name);
+        assert_eq!(detect_format(&bytes, as_name).unwrap(), format, "{name} as {as_name}");
+        assert_eq!(read_point_cloud(&bytes, as_name).unwrap(), read(name), "{name} as {as_name}");
+    }
+    // without a signature the extension rules: an OBJ file named .xyz is taken for rows of numbers
+    assert_eq!(detect_format(&fixture("fuze.obj"), "fuze.xyz").unwrap(), Format::Xyz);
+}
+
 #[test]
 fn extensions_are_case_insensitive() {
     let cases = [

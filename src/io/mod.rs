@@ -153,11 +153,17 @@ impl Format {
     }
 }
 
-/// Tells the format of a file: from the file name's extension (`.ply .pcd .xyz .pts .txt .csv
-/// .obj .off .stl .las .laz .e57`, case-insensitive) when it has a known one, else sniffed from
-/// the content (`ply` magic; `LASF` and `ASTM-E57` signatures; `# .PCD` / `VERSION` / `FIELDS`; an `OFF` header;
-/// binary STL by its size rule or `solid ... facet`; OBJ `v` lines; else rows of numbers).
+/// Tells the format of a file: by its signature when it starts with one (`ply` magic; `LASF`
+/// and `ASTM-E57` signatures; PCD's `# .PCD` comment; an `OFF` header), whatever its name says, so that a file
+/// saved under another format's extension (a PLY file named `.txt`) is still read as what it is;
+/// else from the file name's extension (`.ply .pcd .xyz .pts .txt .csv .obj .off .stl .las .laz
+/// .e57`, case-insensitive) when it has a known one; else sniffed from the content (the
+/// signatures; a PCD `VERSION` / `FIELDS` line; binary STL by its size rule or
+/// `solid ... facet`; OBJ `v` lines; else rows of numbers).
 pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
+    if let Some(f) = signature(bytes) {
+        return Ok(f);
+    }
     if let Some(f) = Format::from_file_name(file_name) {
         return Ok(f);
     }
@@ -178,7 +184,10 @@ pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
     })
 }
 
-fn sniff(bytes: &[u8]) -> Option<Format> {
+/// The format a file's first bytes name beyond doubt: PLY's `ply` line, LAS's `LASF`, E57's
+/// `ASTM-E57`, PCD's `# .PCD` comment line, OFF's header keyword (`OFF`, `COFF`, ...) as its
+/// first word. No file of another format starts so.
+fn signature(bytes: &[u8]) -> Option<Format> {
     let first = bytes.split(|&b| b == b'\n').next().unwrap_or_default().trim_ascii();
     if first == b"ply" {
         return Some(Format::Ply);
@@ -188,6 +197,19 @@ fn sniff(bytes: &[u8]) -> Option<Format> {
     }
     if bytes.starts_with(b"ASTM-E57") {
         return Some(Format::E57);
+    }
+    if first.starts_with(b"# .PCD") {
+        return Some(Format::Pcd);
+    }
+    if off::sniff(bytes) {
+        return Some(Format::Off);
+    }
+    None
+}
+
+fn sniff(bytes: &[u8]) -> Option<Format> {
+    if let Some(f) = signature(bytes) {
+        return Some(f);
     }
     // PCD: a "# .PCD" comment or a VERSION / FIELDS line before anything else.
     for line in bytes[..bytes.len().min(4096)].split(|&b| b == b'\n').take(20) {
@@ -205,9 +227,6 @@ fn sniff(bytes: &[u8]) -> Option<Format> {
     }
     if stl::sniff(bytes) {
         return Some(Format::Stl);
-    }
-    if off::sniff(bytes) {
-        return Some(Format::Off);
     }
     if obj::sniff(bytes) {
         return Some(Format::Obj);
@@ -259,8 +278,9 @@ pub struct ReadOptions {
     #[cfg_attr(feature = "ts", ts(type = "number | bigint", optional = nullable))]
     pub seed: u64,
     /// For an E57 file, which holds one point cloud per scan: only this one (0-based, in the
-    /// file's order), placed by its pose. An index beyond the file's scans is an error; other
-    /// formats are read as they are. Unset (the default): every scan, as one cloud.
+    /// file's order), placed by its pose. An index beyond the file's scans is an error, and so is
+    /// setting it for a file of another format (one cloud, nothing to choose: [`list_scans`] gives
+    /// an empty list). Unset (the default): every scan, as one cloud.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub scan: Option<usize>,
 }
@@ -290,6 +310,18 @@ pub fn list_scans(bytes: &[u8], file_name: &str) -> Result<Vec<ScanInfo>> {
     }
 }
 
+/// Refuses [`ReadOptions::scan`] for a file of one cloud (every format but E57), where it
+/// would choose nothing: a caller who sets it expects one scan of several.
+pub(crate) fn check_scan(format: Format, scan: Option<usize>) -> Result<()> {
+    match scan {
+        Some(k) if format != Format::E57 => Err(Error::InvalidOption(format!(
+            "the scan option ({k}) chooses among an E57 file's scans; a {} file holds one cloud: leave it unset",
+            format.name()
+        ))),
+        _ => Ok(()),
+    }
+}
+
 /// [`read_point_cloud`], with a mesh's surface sampled when `options.surface_points` is set
 /// ([`ReadOptions`]): the points are drawn in `f64` from the file's own vertices, so large
 /// coordinates keep their shape as the vertices do. Fails with a clear error for a count out of
@@ -310,6 +342,7 @@ pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOption
             )));
         }
     }
+    check_scan(format, options.scan)?;
     let faces = if options.surface_points.is_some() { Faces::IfAny } else { Faces::Skip };
     let raw = read_format(bytes, format, faces, options.scan)?;
     crate::limits::check_file_points(format.name(), raw.vertices.len() as u64)?;

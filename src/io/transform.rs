@@ -36,10 +36,13 @@ pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result
 /// [`transform_file`] for the cloud that [`read_point_cloud_with`](super::read_point_cloud_with)
 /// reads with `options`: with [`ReadOptions::scan`] set, an E57 file's scan alone, as an E57
 /// file of its own (its points' and images' pages copied as they are, the XML listing only them,
-/// their poses moved; an error for a scan beyond the file's); every other file as
+/// their poses moved; an error for a scan beyond the file's, or set for a file of another
+/// format); every other file as
 /// [`transform_file`] moves it (a mesh read as points over its surface is moved as the mesh).
 pub fn transform_file_with(bytes: &[u8], file_name: &str, m: &Matrix4<f64>, options: &ReadOptions) -> Result<Vec<u8>> {
-    match detect_format(bytes, file_name)? {
+    let format = detect_format(bytes, file_name)?;
+    super::check_scan(format, options.scan)?;
+    match format {
         Format::Ply => super::transform_ply(bytes, m),
         Format::Pcd => super::transform_pcd(bytes, m),
         Format::Xyz => super::transform_text(bytes, m),

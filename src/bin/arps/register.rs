@@ -136,7 +136,8 @@ struct JsonOutput<'a> {
 }
 
 fn read_cloud(path: &Path, options: &io::ReadOptions) -> Result<arps::PointCloud, String> {
-    io::read_path_with(path, options).map_err(|e| format!("{}: {e}", path.display()))
+    io::read_path_with(path, options)
+        .map_err(|e| format!("{}: {}", path.display(), e.to_string().replace("the scan option", "--target-scan")))
 }
 
 /// A source file read once: its cloud (as [`read_cloud`] reads it), and its bytes when `keep`
@@ -146,7 +147,8 @@ fn read_source(
     options: &io::ReadOptions,
     keep: bool,
 ) -> Result<(arps::PointCloud, Option<Vec<u8>>), String> {
-    let at = |e: arps::Error| format!("{}: {e}", path.display());
+    let at =
+        |e: arps::Error| format!("{}: {}", path.display(), e.to_string().replace("the scan option", "--source-scan"));
     let bytes = io::read_file(path).map_err(at)?;
     let cloud = io::read_point_cloud_with(&bytes, &io::file_name(path), options).map_err(at)?;
     Ok((cloud, keep.then_some(bytes)))
