@@ -43,8 +43,8 @@ export interface FromUrlOptions {
 export declare namespace Registrar {
   /**
    * A registrar on the package's default model: the one `await init()` fetched (or, in Node, the
-   * package's `models/arps-web.safetensors`, read from disk on first use). Throws an `Error` if
-   * it is not loaded (`init()` not awaited yet, or called with `{ model: false }`).
+   * package's `models/arps-web.safetensors`, read from disk on first use). In the browser, throws
+   * an `Error` if it is not loaded (`init()` not awaited yet, or called with `{ model: false }`).
    */
   function withDefaultModel(): Registrar;
   /**

@@ -46,9 +46,13 @@ export default async function init(options) {
   } else if (model !== false && model !== null) {
     bytes = modelBytes(model);
   }
-  const [exports, modelData] = await Promise.all([engine, bytes]);
-  if (modelData) api.setDefaultModel(modelData, what);
-  return exports;
+  // both settled before either error is thrown: a model that cannot be fetched rejects only once
+  // the engine is loaded, so that a caller's fallback (Registrar.fromBytes, say) can use it at once
+  const [loaded, fetched] = await Promise.allSettled([engine, bytes]);
+  if (loaded.status === "rejected") throw loaded.reason;
+  if (fetched.status === "rejected") throw fetched.reason;
+  if (fetched.value) api.setDefaultModel(fetched.value, what);
+  return loaded.value;
 }
 
 /**

@@ -12,7 +12,8 @@ import type {
 
 /**
  * Progress of a request, in order: `"loading"` (fetching and compiling the engine and the
- * model, first request only), `"preparing"` (inputs received, registration starting),
+ * model: reported to `createWorkerRegistrar`'s `onProgress`, and to a request only when it
+ * starts a replacement worker, after an abort, a crash or a trap), `"preparing"` (inputs received, registration starting),
  * `"network"` and `"refining"` (the network, then ICP, as the engine starts them),
  * `"done"` (the result is on its way).
  */
@@ -167,6 +168,12 @@ export interface WorkerRegistrar {
     readOptions?: ReadOptions | null,
     request?: { transfer?: boolean; signal?: AbortSignal },
   ): Promise<Uint8Array>;
+  /**
+   * Gives back the memory of the target the worker's registrar keeps prepared for the next
+   * `register` onto the same points (see `Registrar.forgetTarget` in arps.d.ts); the next
+   * registration prepares its target afresh.
+   */
+  forgetTarget(request?: { signal?: AbortSignal }): Promise<void>;
   /** Stops the worker; pending and later requests reject. */
   terminate(): void;
 }

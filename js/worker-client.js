@@ -236,6 +236,9 @@ export async function createWorkerRegistrar(options = {}) {
       misplacedRequest("transformFile", readOptions, "fifth");
       return (await ask({ type: "move", bytes, fileName, matrix, options: readOptions }, [bytes], req)).bytes;
     },
+    async forgetTarget(req = {}) {
+      await ask({ type: "forget" }, [], req);
+    },
     terminate() {
       terminated = true;
       if (current) retire(current, new Error("arps worker: terminated"));

@@ -13,6 +13,7 @@
 //   { id, type: "write", cloud }            writePly: the PLY file's bytes
 //   { id, type: "move", bytes, fileName, matrix, options }  transformFile: the moved file's bytes
 //   { id, type: "scans", bytes, fileName }  listScans: an E57 file's scans
+//   { id, type: "forget" }                  forgetTarget: the kept target's memory given back
 // Replies (worker -> main), with the request's `id`:
 //   { id, type: "progress", stage }         stage: "loading" | "preparing" | "network" | "refining" | "done"
 //   { id, type: "ready", provenance, modelConfig }
@@ -21,6 +22,7 @@
 //   { id, type: "read", cloud }             cloud.points buffer transferred (read and transform)
 //   { id, type: "written", bytes }          bytes (Uint8Array) buffer transferred
 //   { id, type: "scans", scans }            ScanInfo[]
+//   { id, type: "forgotten" }               the kept target dropped (nothing loaded: nothing to drop)
 //   { id, type: "error", message, name, code? }   code: "ARPS_TRAPPED" | "ARPS_UNUSABLE" after a trap
 import init, { listScans, Registrar, parsePointCloud, readPointCloud, transformFile, transformPointCloud, writePly } from "./arps.js";
 
@@ -103,6 +105,12 @@ async function handle(msg) {
       await load(id);
       const bytes = transformFile(msg.bytes, msg.fileName, msg.matrix, msg.options);
       post({ id, type: "written", bytes }, [bytes.buffer]);
+      return;
+    }
+    case "forget": {
+      // a worker that has not loaded holds no target: nothing to load for it
+      if (registrar) registrar.forgetTarget();
+      post({ id, type: "forgotten" });
       return;
     }
     default:

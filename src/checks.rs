@@ -30,9 +30,37 @@ pub fn initial_distance(t_initial_n: &Matrix4<f64>) -> Result<()> {
     if d.is_finite() && d <= MAX_INITIAL_DISTANCE {
         Ok(())
     } else {
+        let far = if d.is_finite() { format!("{} cloud sizes", crate::error::num(d)) } else { "infinitely far".into() };
         Err(Error::InvalidOption(format!(
-            "the initial guess (initialTransform, or the identity in the caller's frame) puts the source {d:.3e} cloud sizes away from the target, more than the {MAX_INITIAL_DISTANCE:e} the engine computes with: give an initialTransform that brings the clouds near each other"
+            "the initial guess (initialTransform, or the identity in the caller's frame) puts the source {far} away from the target, more than the {MAX_INITIAL_DISTANCE:e} cloud sizes the engine computes with: give an initialTransform that brings the clouds near each other"
         )))
+    }
+}
+
+/// The spacing of `f32` values at a cloud's farthest coordinate, as a fraction of its largest
+/// half-extent, beyond which the cloud gets a warning ([`f32_rounding`]): its points were
+/// rounded to a grid coarser than a ten-thousandth of its size before the engine saw them.
+pub const F32_ROUNDING_WARNING: f64 = 1e-4;
+
+/// Warns (into `warnings`; `what` names the cloud) when the `f32` offsets of a cloud with box
+/// `[lo, hi]` lie so far from zero for its size that `f32` holds them only to a step of more than
+/// [`F32_ROUNDING_WARNING`] of its half-extent: a cloud far from zero (a map grid) given as `f32`
+/// (`PointCloud::new`, a `Float32Array`) has lost those digits already, and the answer can be as
+/// coarse. A cloud built from `f64` (or read from a file) is stored as offsets from an origin
+/// near it and is never warned.
+pub fn f32_rounding(what: &str, lo: [f32; 3], hi: [f32; 3], warnings: &mut Vec<String>) {
+    let half = crate::cloud::half_extent_of(lo, hi);
+    let far = lo.iter().chain(&hi).fold(0.0f64, |m, v| m.max((*v as f64).abs()));
+    let step = far * f32::EPSILON as f64;
+    if half > 0.0 && step > F32_ROUNDING_WARNING * half {
+        warnings.push(format!(
+            "the {what}'s coordinates lie up to {} from zero for a cloud of largest half-extent {}: as f32 they \
+             are rounded to steps of about {}, and the answer can be as coarse; pass them as f64 (a Float64Array, \
+             readPointCloud's {{ points, origin }}, PointCloud::from_points_f64)",
+            crate::error::num(far),
+            crate::error::num(half),
+            crate::error::num(step)
+        ));
     }
 }
 

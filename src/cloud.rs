@@ -205,7 +205,7 @@ impl PointCloud {
     fn check(&self, what: &str, min_points: usize, bad: Option<usize>) -> Result<()> {
         if let Some(i) = bad {
             return Err(Error::InvalidCloud(format!(
-                "{what} point {i} has a non-finite coordinate {:?} (drop such points with the non-finite option set to drop)",
+                "{what} point {i} has a non-finite coordinate {:?} (drop such points with `nonFinite: \"drop\"`)",
                 self.points[i]
             )));
         }

@@ -48,3 +48,51 @@ impl Error {
 
 /// `Result` with the crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// A number as messages write it: four significant digits without trailing zeros (`0.025`,
+/// `1234`, `0.3333`), in exponent form when it is below 1e-3 or at least 1e6 (`1.5e-7`,
+/// `2.5e300`), so that a tiny or huge value reads as what it is, neither `0.000` nor three
+/// hundred digits; `inf`, `-inf` and `NaN` as they are.
+pub(crate) fn num(x: f64) -> String {
+    if !x.is_finite() || x == 0.0 {
+        return if x == 0.0 { "0".into() } else { format!("{x}") };
+    }
+    let trim = |s: String| match s.find('.') {
+        Some(_) => s.trim_end_matches('0').trim_end_matches('.').to_string(),
+        None => s,
+    };
+    let a = x.abs();
+    if (1e-3..1e6).contains(&a) {
+        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
+        trim(format!("{x:.decimals$}"))
+    } else {
+        let s = format!("{x:.3e}");
+        let (mantissa, exponent) = s.split_once('e').unwrap_or((&s, "0"));
+        format!("{}e{exponent}", trim(mantissa.to_string()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::num;
+
+    #[test]
+    fn numbers_in_messages_read_as_what_they_are() {
+        for (x, s) in [
+            (0.0, "0"),
+            (0.025, "0.025"),
+            (1234.0, "1234"),
+            (1.0 / 3.0, "0.3333"),
+            (-2.5, "-2.5"),
+            (999_999.0, "999999"),
+            (1e6, "1e6"),
+            (1.5e-7, "1.5e-7"),
+            (1e300, "1e300"),
+            (1.0937500400699987e28, "1.094e28"),
+            (f64::INFINITY, "inf"),
+            (f64::NAN, "NaN"),
+        ] {
+            assert_eq!(num(x), s, "{x}");
+        }
+    }
+}

@@ -280,7 +280,7 @@ fn test(points: &[[f32; 3]], sample: &[[f32; 3]], reach: f64, c: Candidate) -> O
 /// points.
 pub fn warning(what: &str, dropped: usize, total: usize) -> String {
     format!(
-        "left out a plane of {dropped} of the {what}'s {total} points ({:.1}%) that the rest of it stands on (a table or floor under a scanned object); the supportPlane option set to keep keeps it",
+        "left out a plane of {dropped} of the {what}'s {total} points ({:.1}%) that the rest of it stands on (a table or floor under a scanned object); `supportPlane: \"keep\"` keeps it",
         100.0 * dropped as f64 / total.max(1) as f64
     )
 }

@@ -306,6 +306,9 @@ fn detection_and_kind_errors() {
     has(&e, &["no file name was given", "scan.ply"]);
     has(&mesh_err(b"1 2 3\n", "a.xyz"), &["XYZ", "points only"]);
     has(&mesh_err(format!("{PCD_HEAD}DATA ascii\n1 2 3\n4 5 6\n").as_bytes(), "a.pcd"), &["PCD", "points only"]);
-    // The extension wins over the content: a PCD named .ply is a PLY error.
-    has(&cloud_err(format!("{PCD_HEAD}DATA ascii\n").as_bytes(), "a.ply"), &["PLY", "'ply' magic"]);
+    // A signature wins over the extension: a PCD named .ply is read, and fails, as PCD; without
+    // one the extension rules: a PCD header without its `# .PCD` line, named .ply, is no PLY.
+    has(&cloud_err(format!("{PCD_HEAD}DATA ascii\n").as_bytes(), "a.ply"), &["PCD", "the file ends after 0 of the 2 points"]);
+    let unsigned = PCD_HEAD.lines().filter(|l| !l.starts_with('#')).collect::<Vec<_>>().join("\n");
+    has(&cloud_err(format!("{unsigned}\nDATA ascii\n").as_bytes(), "a.ply"), &["PLY", "'ply' magic"]);
 }

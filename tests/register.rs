@@ -229,3 +229,25 @@ fn clouds_in_different_units_get_a_warning() {
         r.warnings
     );
 }
+
+/// A cloud far from zero given as f32 has lost its digits before the engine sees it: the result
+/// says so. The same points given as f64 keep them, and get no such warning.
+#[test]
+fn f32_coordinates_far_from_zero_get_a_warning() {
+    let (source, target) = (bumpy_surface(1500, 0.0), bumpy_surface(1500, 0.2));
+    let far = [500_000.0f64, 4_000_000.0, 0.0];
+    let shifted = |c: &PointCloud| -> Vec<[f64; 3]> {
+        c.points.iter().map(|p| [0, 1, 2].map(|a| p[a] as f64 + far[a])).collect()
+    };
+    let as_f32 = |c: &PointCloud| PointCloud::new(shifted(c).iter().map(|p| p.map(|v| v as f32)).collect());
+    let as_f64 = |c: &PointCloud| PointCloud::from_points_f64(&shifted(c));
+    let rounded = |w: &String| w.contains("as f32 they are rounded to steps of about");
+    let r = registrar().register(&as_f64(&source), &as_f64(&target), &Options::default()).unwrap();
+    assert!(!r.warnings.iter().any(rounded), "{:?}", r.warnings);
+    let r = registrar().register(&as_f32(&source), &as_f64(&target), &Options::default()).unwrap();
+    let w: Vec<_> = r.warnings.iter().filter(|w| rounded(w)).collect();
+    assert!(w.len() == 1 && w[0].contains("the source's coordinates lie up to 4e6 from zero"), "{:?}", r.warnings);
+    // near zero, f32 holds them: no warning
+    let r = registrar().register(&source, &target, &Options::default()).unwrap();
+    assert!(!r.warnings.iter().any(rounded), "{:?}", r.warnings);
+}

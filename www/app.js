@@ -536,7 +536,7 @@ function showResult(r, truth = null) {
   const hints = r.warnings.some((w) => /differ in size/.test(w))
     ? ["Different units? Say which under Units (with the scans): the source is then scaled into the target's unit."]
     : [];
-  const warnings = r.warnings.map((w) => w.replace(/; the (outliers|supportPlane) option set to keep keeps (them|it)$/, ""));
+  const warnings = r.warnings.map((w) => w.replace(/; `(outliers|supportPlane): "keep"` keeps (them|it)$/, ""));
   $("warnings").replaceChildren(
     ...[...warnings, ...hints].map((w) => {
       const li = document.createElement("li");

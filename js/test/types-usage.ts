@@ -103,6 +103,8 @@ export async function inAWorker(source: Float32Array, target: Float32Array): Pro
   const fromWorker = await arps.register(cloud, points, { search: "exhaustive" });
   if (fromWorker.confidence < 0.5) console.warn(fromWorker.warnings, fromWorker.evidence.ambiguity);
   const ply: Uint8Array = await arps.writePly(await arps.transformPointCloud(cloud, fromWorker.T_target_source), { transfer: true });
+  const forgotten: void = await arps.forgetTarget({ signal: controller.signal });
+  void forgotten;
   arps.terminate();
   return points.length + surface.length + ply.length ? result.T_target_source : result.T_target_source_network;
 }

@@ -5,6 +5,7 @@
 //! [`crate::pipeline::prepare`] once the normalisation is known.
 
 use super::starts;
+use crate::error::num;
 use crate::model::Model;
 use crate::refine;
 use crate::register::{Options, MAX_NETWORK_POINTS};
@@ -78,8 +79,10 @@ pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
     // one whatever the pose: a fit, and a confidence, that say nothing
     let too_far = |name: &str, v: f64| {
         Error::InvalidOption(format!(
-            "{name} = {v} is more than the clouds' largest half-extent ({s}): every point would pair with one, \
+            "{name} = {} is more than the clouds' largest half-extent ({}): every point would pair with one, \
              whatever the pose (the default distance is {} of it)",
+            num(v),
+            num(s),
             DEFAULT_MAX_CORRESPONDENCE
         ))
     };
@@ -91,7 +94,10 @@ pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
             d / s
         }
         Some(d) => {
-            return Err(Error::InvalidOption(format!("maxCorrespondenceDistance = {d} must be a positive number")))
+            return Err(Error::InvalidOption(format!(
+                "maxCorrespondenceDistance = {} must be a finite number > 0",
+                num(d)
+            )))
         }
         None => DEFAULT_MAX_CORRESPONDENCE,
     };
@@ -108,7 +114,12 @@ pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
                 v / s
             }
         }
-        Some(v) => return Err(Error::InvalidOption(format!("voxelSize = {v} must be >= 0"))),
+        Some(v) => {
+            return Err(Error::InvalidOption(format!(
+                "voxelSize = {} must be a finite number >= 0 (0: no voxelisation)",
+                num(v)
+            )))
+        }
         None => d_final * 0.5,
     };
     Ok((d_final, voxel))

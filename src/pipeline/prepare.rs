@@ -13,6 +13,7 @@ use super::options::{self, Resolved};
 use super::target::{self, InputKey, PreparedTarget, Sizes};
 use super::upright::Upright;
 use crate::cloud::{JointNormalization, PointCloud, MIN_POINTS};
+use crate::error::num;
 use crate::outliers::{self, Outliers};
 use crate::register::Options;
 use crate::spacing::Spacing;
@@ -105,7 +106,10 @@ pub(crate) fn prepare(
     let size_ratio = size_source.max(size_target) / size_source.min(size_target);
     if size_ratio > SIZE_RATIO_WARNING {
         warnings.push(format!(
-            "the clouds differ in size by {size_ratio:.0}x (largest half-extents: source {size_source:.4}, target {size_target:.4}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres)"
+            "the clouds differ in size by {}x (largest half-extents: source {}, target {}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres)",
+            num(size_ratio.round()),
+            num(size_source),
+            num(size_target)
         ));
     }
     // The network sees the source already turned by the initial guess (its shift only moves
@@ -157,6 +161,8 @@ pub(crate) fn prepare(
 fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<(PointCloud, Vec<String>)> {
     let mut cloud = cloud.into_owned().into_validated(what, MIN_POINTS, options.non_finite)?;
     let mut warnings = Vec::new();
+    let (lo, hi) = cloud.bounds();
+    checks::f32_rounding(what, lo, hi, &mut warnings);
     // the two tests' sample, shared while the cloud is unchanged
     let mut spacing = None;
     if options.outliers == Outliers::Drop {

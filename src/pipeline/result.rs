@@ -80,7 +80,8 @@ fn verdict_warning(confidence: f64, evidence: &Evidence, fitness: f64, distance:
         k => format!("; {k} other poses fit about as well (a symmetric shape?)"),
     };
     Some(format!(
-        "low confidence {confidence:.2}: the alignment may be wrong (fitness {fitness:.2} within {distance:.3}, reverse overlap {:.2}{others})",
+        "low confidence {confidence:.2}: the alignment may be wrong (fitness {fitness:.2} within {}, reverse overlap {:.2}{others})",
+        crate::error::num(distance),
         evidence.overlap_reverse
     ))
 }

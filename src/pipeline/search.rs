@@ -34,7 +34,8 @@
 //! on ([`Starts::voted_pose`]: an answer slid along a wall, or onto the next of a row of alike
 //! parts, has the rotation right and the translation not) is refined like one more start, and
 //! replaces the answer when it fits clearly better. With no start refined at all, the network's
-//! estimate (the initial transform with the network off), unrefined, and a warning.
+//! estimate (the initial transform with the network off), unrefined, with a warning and its
+//! confidence at most [`UNREFINED_CONFIDENCE`].
 
 use super::prepare::Prepared;
 use super::starts::{self, Starts, Step};
@@ -312,15 +313,16 @@ pub(crate) fn search(
     }
     // no start at all (only global ones, and the descriptors matched too little): the first
     // start the options name, unrefined
-    let (candidate, probed) = match best {
-        Some((c, probed, _)) => (c, probed),
+    let (candidate, probed, refined_any) = match best {
+        Some((c, probed, _)) => (c, probed, true),
         None => {
             let t = level(if options.network { builder.t_net_n() } else { p.t_initial });
             let probed = judge(&t);
             let e = probed.evidence;
+            let answer = if options.network { "the network's estimate" } else { "the initial transform" };
             warnings.push(match upright {
-                Some(_) => format!("no refined start ended upright (within {UP_TOLERANCE_DEG} degrees of `up`), or the global descriptors matched too little: the answer is the network's estimate, levelled"),
-                None => "no start could be refined (the global descriptors matched too little): the answer is the network's estimate".into(),
+                Some(_) => format!("no refined start ended upright (within {UP_TOLERANCE_DEG} degrees of `up`), or the global descriptors matched too little: the answer is {answer}, levelled, unrefined"),
+                None => format!("no start could be refined (the global descriptors matched too little): the answer is {answer}, unrefined"),
             });
             let c = Candidate {
                 start: estimate,
@@ -330,13 +332,34 @@ pub(crate) fn search(
                 iterations: 0,
                 converged: false,
             };
-            (c, probed)
+            (c, probed, false)
         }
     };
     let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined);
+    // an answer no refinement reached: the evidence that calibrates the confidence is that of
+    // refined answers, and this one was not even a start's end
+    let confidence = if refined_any { confidence } else { confidence.min(UNREFINED_CONFIDENCE) };
+    // a refinement of the caller's guess alone that ended at another pose (the probes turned it
+    // over): the caller asked to refine that guess, so the result says how far it moved
+    if options.initial_transform.is_some()
+        && kinds == [Start::Initial]
+        && refined_any
+        && !confidence::same_pose(&candidate.T_target_source, &p.t_initial)
+    {
+        let turn = crate::transform::rotation_error_deg(&candidate.T_target_source, &p.t_initial);
+        warnings.push(format!(
+            "the answer turns {turn:.1} degrees from initialTransform, the one start: the confidence's probes found a pose \
+             turned from the refined guess that fits better (a symmetric shape's look-alike, or a guess that was off)"
+        ));
+    }
     let alternatives = refine_alternatives(target_index, &p.icp_src.points, &candidate, &poses, &how);
     Ok(Chosen { candidate, evidence, confidence, starts_refined, alternatives })
 }
+
+/// The most confidence an answer that no start's refinement reached can have (the network's
+/// estimate or the initial transform, unrefined, when no start could be refined or none ended
+/// upright): below the line of the low-confidence warning.
+pub(crate) const UNREFINED_CONFIDENCE: f64 = 0.25;
 
 /// The final verdict on the answer `c` judged by the probe (`probed`): its evidence, with the
 /// other answers the search `refined` that fit about as well counted as alternatives

@@ -50,7 +50,8 @@ enum Command {
     Bench(bench::BenchArgs),
     /// Evaluate a pair set (pairs.tsv) side by side: network, network + ICP, network + multi-start ICP (the
     /// default), multi-start ICP without the network, ICP from identity, ICP from centroids, untrained
-    /// network + ICP; prints MRE, MTE, Recall, RRE, RTE, ms/pair.
+    /// network + ICP, FPFH + RANSAC + ICP, FPFH + RANSAC + network + ICP, the exhaustive multi-start
+    /// search; prints MRE, MTE, Recall, RRE, RTE, ms/pair.
     Eval(eval::EvalArgs),
     /// Compare two `arps eval --json` results on the same pairs: recall, the pairs only one side
     /// registers, and an exact McNemar p-value, per method.

@@ -241,9 +241,9 @@ fn far_centre(cloud: &arps::PointCloud) -> Option<[f64; 3]> {
 /// flag named by that flag.
 fn in_flags(message: &str) -> String {
     message
-        .replace("the non-finite option set to drop", "--drop-non-finite")
-        .replace("the outliers option set to keep", "--keep-outliers")
-        .replace("the supportPlane option set to keep", "--keep-support")
+        .replace("`nonFinite: \"drop\"`", "--drop-non-finite")
+        .replace("`outliers: \"keep\"`", "--keep-outliers")
+        .replace("`supportPlane: \"keep\"`", "--keep-support")
 }
 
 /// True when `path` names a file of `source`'s own format that `io::transform_file` moves as it
