@@ -21,8 +21,8 @@ export type CloudInput = Float32Array | Float64Array | number[] | CloudWithOrigi
 export interface CloudWithOrigin {
   /** Packed xyz offsets from `origin`, `[x0, y0, z0, x1, ...]`. */
   points: Float32Array;
-  /** `[x, y, z]`, in your units (float64). */
-  origin: ArrayLike<number>;
+  /** `[x, y, z]`, in your units (float64): an array or a typed array of 3 finite numbers. */
+  origin: readonly number[] | Float64Array | Float32Array;
 }
 
 /** How a weights file was made (its `provenance` metadata); `kind: "random"` means untrained. */

@@ -137,11 +137,11 @@ function cloudArg(v, what) {
   const kind = typedArrayKind(v);
   if (kind === "Float32Array") {
     const len = checkLength(taLength.call(v), what);
-    return { points: new Float32Array(taBuffer.call(v), taByteOffset.call(v), len), origin: null };
+    return { points: viewOf(Float32Array, what, taBuffer.call(v), taByteOffset.call(v), len), origin: null };
   }
   if (kind === "Float64Array") {
     const len = checkLength(taLength.call(v), what);
-    return centred(new Float64Array(taBuffer.call(v), taByteOffset.call(v), len));
+    return centred(viewOf(Float64Array, what, taBuffer.call(v), taByteOffset.call(v), len));
   }
   if (kind === undefined && isPlainArray(v)) {
     const len = checkLength(readLength(v, what), what);
@@ -196,17 +196,45 @@ function originArg(o, what) {
   return plain;
 }
 
-/** f64 points -> f32 points relative to their bounding-box centre, and that centre. */
+/** f64 points -> f32 points relative to the centre of their bulk (strays left out), and that centre. */
+/** The largest finite float32. */
+const F32_MAX = 3.4028234663852886e38;
+
 function centred(p) {
+  const n = p.length - (p.length % 3);
+  // The bulk of the points, as the engine's PointCloud::from_points_f64 finds it: within 64
+  // spreads (half the 10th-90th percentile range of an even sample, the largest over the axes)
+  // of the sample's median; a stray point (a survey's (0, 0, 0)) would otherwise pull the
+  // centre away, and every other point's offset from it would lose its digits in float32.
+  const count = n / 3;
+  const step = Math.max(1, Math.ceil(count / 4096));
+  const median = [0, 0, 0];
+  let spread = 0;
+  for (let k = 0; k < 3; k++) {
+    const v = [];
+    for (let i = 0; i < count; i += step) {
+      const x = p[3 * i + k];
+      if (Number.isFinite(x) && Math.abs(x) <= F32_MAX) v.push(x);
+    }
+    if (v.length === 0) continue;
+    v.sort((a, b) => a - b);
+    const at = (q) => v[Math.round((v.length - 1) * q)];
+    median[k] = at(0.5);
+    spread = Math.max(spread, (at(0.9) - at(0.1)) / 2);
+  }
+  const reach = 64 * Math.max(spread, Math.max(...median.map(Math.abs)) * 1e-9);
   const lo = [Infinity, Infinity, Infinity];
   const hi = [-Infinity, -Infinity, -Infinity];
-  const n = p.length - (p.length % 3);
   for (let i = 0; i < n; i += 3) {
-    for (let k = 0; k < 3; k++) {
-      const x = p[i + k];
-      if (x < lo[k]) lo[k] = x;
-      if (x > hi[k]) hi[k] = x; // NaN compares false: skipped here, reported by the engine
-    }
+    const x = p[i], y = p[i + 1], z = p[i + 2];
+    // NaN compares false: skipped here, reported by the engine
+    if (!(Math.abs(x - median[0]) <= reach && Math.abs(y - median[1]) <= reach && Math.abs(z - median[2]) <= reach)) continue;
+    if (x < lo[0]) lo[0] = x;
+    if (x > hi[0]) hi[0] = x;
+    if (y < lo[1]) lo[1] = y;
+    if (y > hi[1]) hi[1] = y;
+    if (z < lo[2]) lo[2] = z;
+    if (z > hi[2]) hi[2] = z;
   }
   const origin = lo.map((l, k) => (Number.isFinite(l) && Number.isFinite(hi[k]) ? (l + hi[k]) / 2 : 0));
   const out = new Float32Array(p.length);
@@ -233,14 +261,26 @@ function readLength(v, what) {
   return len;
 }
 
+/**
+ * `new Ctor(...args)`, a view of the caller's memory; a buffer that was transferred away (to a
+ * worker, say: detached) is an `Error` naming the argument, not the engine's `TypeError`.
+ */
+function viewOf(Ctor, what, ...args) {
+  try {
+    return new Ctor(...args);
+  } catch (e) {
+    fail(`${what}: its buffer cannot be read (${messageOf(e)}): it was transferred away (to a worker, say) and is detached`);
+  }
+}
+
 /** A byte buffer argument (file contents, weights) -> a clean `Uint8Array` view. */
 function bytesArg(v, what) {
   const kind = typedArrayKind(v);
   let view;
   if (kind !== undefined) {
-    view = new Uint8Array(taBuffer.call(v), taByteOffset.call(v), taByteLength.call(v));
+    view = viewOf(Uint8Array, what, taBuffer.call(v), taByteOffset.call(v), taByteLength.call(v));
   } else if (isArrayBuffer(v)) {
-    view = new Uint8Array(v);
+    view = viewOf(Uint8Array, what, v);
   } else if ((view = dataViewBytes(v)) === undefined) {
     fail(`${what}: expected a Uint8Array or an ArrayBuffer, got ${describe(v)}`);
   }

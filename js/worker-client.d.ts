@@ -98,9 +98,11 @@ export interface WorkerRegistrar {
    * Rejects with an `Error` carrying the
    * engine's message; the registrar stays usable. After a wasm trap (an engine bug or out of
    * memory) the error has `code: "ARPS_TRAPPED"`, and the worker is replaced: the next request
-   * starts a fresh one. Nothing is retried behind your back. A `source`/`target` that cannot be
-   * sent (`postMessage` throws, e.g. a function in the options) rejects with an `Error` named
-   * `"DataCloneError"`.
+   * starts a fresh one. Nothing is retried behind your back. The inputs are copied (or, with
+   * `transfer`, transferred) during the call, as `postMessage` does, so the caller may refill
+   * its arrays once it returns. A `source`/`target` that cannot be sent (`postMessage` throws,
+   * e.g. a function in the options) rejects with an `Error` named as what was thrown
+   * (`"DataCloneError"`; `"TypeError"` for a buffer that cannot be transferred).
    */
   register(
     source: CloudInput,

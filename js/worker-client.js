@@ -90,9 +90,7 @@ export async function createWorkerRegistrar(options = {}) {
       } catch (e) {
         // Nothing reached the worker (e.g. a DataCloneError): this request alone fails.
         w.pending.delete(id);
-        const err = new Error(`arps worker: the request cannot be sent to the worker (${e?.name ?? "Error"}: ${e?.message ?? e})`, { cause: e });
-        if (e?.name) err.name = e.name;
-        reject(err);
+        reject(unsendable(e));
       }
     });
     return { id, promise };
@@ -148,7 +146,12 @@ export async function createWorkerRegistrar(options = {}) {
       retire(w, new Error(`arps worker: ${message}`));
     });
     w.ready = send(w, { type: "init", wasm, model, weights }, { onProgress }).promise;
-    w.ready.catch((e) => retire(w, e));
+    w.ready.then(
+      () => {
+        w.loaded = true;
+      },
+      (e) => retire(w, e),
+    );
     return w;
   };
 
@@ -163,6 +166,21 @@ export async function createWorkerRegistrar(options = {}) {
 
   const request = (message, { onProgress, transfer = [], signal } = {}) => {
     if (signal?.aborted) return Promise.reject(abortError(signal));
+    // A loaded worker gets the request now, so its inputs are copied (or transferred) as the call
+    // is made, as postMessage does: a caller may refill its arrays once the call returns. While
+    // a worker loads (the first, or a replacement to start), the inputs are copied now and the
+    // copy is sent once it is ready.
+    const now = current && current.loaded && !current.dead && !terminated ? current : null;
+    let payload = message;
+    let moved = transfer;
+    if (!now) {
+      try {
+        payload = structuredClone(message, { transfer });
+        moved = [];
+      } catch (e) {
+        return Promise.reject(unsendable(e));
+      }
+    }
     return new Promise((resolve, reject) => {
       let w = null;
       let id = 0;
@@ -188,13 +206,15 @@ export async function createWorkerRegistrar(options = {}) {
         fn(value);
       };
       signal?.addEventListener("abort", onAbort, { once: true });
-      live(onProgress).then((ready) => {
+      const go = (ready) => {
         if (done) return; // aborted while the worker was loading: do not send
         w = ready;
-        const sent = send(w, message, { onProgress, transfer });
+        const sent = send(w, payload, { onProgress, transfer: moved });
         id = sent.id;
         sent.promise.then(settle(resolve), settle(reject));
-      }, settle(reject));
+      };
+      if (now) go(now);
+      else live(onProgress).then(go, settle(reject));
     });
   };
 
@@ -254,6 +274,17 @@ function misplacedRequest(what, readOptions, place = "fourth") {
   if (readOptions && typeof readOptions === "object" && ("transfer" in readOptions || "signal" in readOptions)) {
     throw new Error(`${what}: the request options (transfer, signal) come ${place}, after the read options (e.g. { surfacePoints })`);
   }
+}
+
+/**
+ * The rejection of a request that cannot be sent (postMessage or the copy threw): an `Error`
+ * named as what was thrown (`DataCloneError`; `TypeError` for a buffer that cannot be
+ * transferred), that error as its `cause`.
+ */
+function unsendable(e) {
+  const err = new Error(`arps worker: the request cannot be sent to the worker (${e?.name ?? "Error"}: ${e?.message ?? e})`, { cause: e });
+  if (e?.name) err.name = e.name;
+  return err;
 }
 
 /** The rejection of an aborted request: a `DOMException` named `AbortError`. */

@@ -95,11 +95,12 @@ impl PointCloud {
 
     /// From `f64` points in the caller's frame, keeping their shape: when the cloud is far from
     /// zero relative to its size (more than [`RECENTER_RATIO`] times), the origin becomes the
-    /// `f64` bounding-box centre of the points finite in `f32` and the offsets are stored as `f32`;
-    /// otherwise the origin is zero and the points are stored as they are. Non-finite points stay
+    /// `f64` bounding-box centre of its bulk (the points finite in `f32`, strays far from the rest
+    /// left out of the box: [`STRAY_SPREADS`]) and the offsets are stored as `f32`; otherwise the
+    /// origin is zero and the points are stored as they are. Non-finite points stay
     /// non-finite ([`PointCloud::validated`] deals with them).
     pub fn from_points_f64(points: &[[f64; 3]]) -> Self {
-        let origin = choose_origin(points.iter().copied());
+        let origin = choose_origin(points.len(), |i| points[i]);
         let cloud = points.iter().map(|p| [0, 1, 2].map(|a| (p[a] - origin[a]) as f32)).collect();
         Self { points: cloud, origin }
     }
@@ -115,7 +116,7 @@ impl PointCloud {
             )));
         }
         let triples = || flat.chunks_exact(3).map(|c| [c[0], c[1], c[2]]);
-        let origin = choose_origin(triples());
+        let origin = choose_origin(flat.len() / 3, |i| [flat[3 * i], flat[3 * i + 1], flat[3 * i + 2]]);
         let points = triples().map(|p| [0, 1, 2].map(|a| (p[a] - origin[a]) as f32)).collect();
         Ok(Self { points, origin })
     }
@@ -250,11 +251,31 @@ impl PointCloud {
     /// A copy with every point mapped by the rigid (or similarity) transform `m`, in the
     /// caller's frame. With origin zero the points are mapped and the origin stays zero; otherwise
     /// the origin is mapped in `f64` and the offsets by `m`'s linear part, so large coordinates
-    /// keep their shape.
+    /// keep their shape. To save or draw a cloud in another frame, [`PointCloud::placed`] also
+    /// keeps the digits of a cloud near zero moved far from it.
     pub fn transformed(&self, m: &Matrix4<f64>) -> PointCloud {
         let (map, origin) = self.mapping(m);
         let apply = crate::transform::mapping(&map);
         PointCloud::with_origin(self.points.iter().map(|&p| apply(p)).collect(), origin)
+    }
+
+    /// The cloud placed by the rigid (or similarity) transform `m` into another frame, for
+    /// output (saving it, drawing it there): [`PointCloud::transformed`], except that a cloud
+    /// with origin zero that `m` moves far from zero for its size (its translation more than
+    /// [`RECENTER_RATIO`] times the cloud's half-extent, a local scan placed on a map grid) gets
+    /// that translation as its origin, in `f64`, and its points turned by `m`'s linear part as
+    /// offsets from it: the placed points keep their digits, where [`PointCloud::transformed`]
+    /// would round them to `f32` at the map's magnitude.
+    pub fn placed(&self, m: &Matrix4<f64>) -> PointCloud {
+        let t = m.fixed_view::<3, 1>(0, 3);
+        let far = t.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+        if !self.origin_is_zero() || !(far > RECENTER_RATIO * self.half_extent()) || !far.is_finite() {
+            return self.transformed(m);
+        }
+        let mut linear = *m;
+        linear.fixed_view_mut::<3, 1>(0, 3).fill(0.0);
+        let apply = crate::transform::mapping(&linear);
+        PointCloud::with_origin(self.points.iter().map(|&p| apply(p)).collect(), [t[0], t[1], t[2]])
     }
 
     /// [`PointCloud::transformed`], mapping the points where they are: the same cloud, bit for
@@ -307,24 +328,62 @@ pub(crate) fn grow_box<T: PartialOrd + Copy>(lo: &mut [T; 3], hi: &mut [T; 3], p
 /// they would be anyway).
 const MAX_OFFSET: f64 = 1e37;
 
-/// The origin [`PointCloud::from_points_f64`] picks: the bounding-box centre of the points that
-/// are finite in `f32` when it is more than [`RECENTER_RATIO`] times the cloud's half-extent from zero (and that
-/// half-extent fits `f32`), else zero.
-fn choose_origin(points: impl Iterator<Item = [f64; 3]>) -> [f64; 3] {
+/// Points of the even sample that [`choose_origin`] takes its median and spread from.
+const ORIGIN_SAMPLE: usize = 4096;
+
+/// How far from the bulk of a cloud, in spreads, a point is a stray that [`choose_origin`] leaves
+/// out of the box it centres on: the spread is half the distance between the 10th and the 90th
+/// percentile of a sample, the largest over the axes. A stray return, or a point written as
+/// (0, 0, 0) in a survey of map-grid coordinates, would otherwise pull the box's centre away from
+/// every other point, and their offsets from it would lose their digits in `f32`.
+pub const STRAY_SPREADS: f64 = 64.0;
+
+/// The origin [`PointCloud::from_points_f64`] picks for the `n` points `point(i)`: the
+/// bounding-box centre of its bulk, when that centre is more than [`RECENTER_RATIO`] times the
+/// bulk's half-extent from zero (and the whole cloud's half-extent fits `f32`), else zero. The
+/// bulk: the points finite in `f32` within [`STRAY_SPREADS`] spreads of the median of an even
+/// sample (every such point, in a cloud without strays).
+fn choose_origin(n: usize, point: impl Fn(usize) -> [f64; 3]) -> [f64; 3] {
+    // the points that are finite as f32 (a coordinate beyond f32's range is infinite either way)
+    let usable = |p: &[f64; 3]| p.iter().all(|v| v.abs() <= f32::MAX as f64);
+    let step = n.div_ceil(ORIGIN_SAMPLE).max(1);
+    let sample: Vec<[f64; 3]> = (0..n).step_by(step).map(&point).filter(usable).collect();
+    if sample.is_empty() {
+        return [0.0; 3];
+    }
+    let mut median = [0.0; 3];
+    let mut spread = 0.0f64;
+    for a in 0..3 {
+        let mut v: Vec<f64> = sample.iter().map(|p| p[a]).collect();
+        v.sort_unstable_by(f64::total_cmp);
+        let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+        median[a] = at(0.5);
+        spread = spread.max((at(0.9) - at(0.1)) * 0.5);
+    }
+    // (a cloud whose sample sits on one point: every point within a tiny reach of it is bulk)
+    let reach = STRAY_SPREADS * spread.max(median.iter().fold(0.0f64, |m, c| m.max(c.abs())) * 1e-9);
     let mut lo = [f64::INFINITY; 3];
     let mut hi = [f64::NEG_INFINITY; 3];
-    // the points that are finite as f32 (a coordinate beyond f32's range is infinite either way)
-    for p in points.filter(|p| p.iter().all(|v| v.abs() <= f32::MAX as f64)) {
-        grow_box(&mut lo, &mut hi, &p);
+    let (mut all_lo, mut all_hi) = (lo, hi);
+    for i in 0..n {
+        let p = point(i);
+        if !usable(&p) {
+            continue;
+        }
+        grow_box(&mut all_lo, &mut all_hi, &p);
+        if (0..3).all(|a| (p[a] - median[a]).abs() <= reach) {
+            grow_box(&mut lo, &mut hi, &p);
+        }
     }
     if !lo[0].is_finite() {
         return [0.0; 3];
     }
     let center = [0, 1, 2].map(|a| lo[a] * 0.5 + hi[a] * 0.5);
     let half = (0..3).map(|a| (hi[a] - lo[a]) * 0.5).fold(0.0, f64::max);
+    let whole = (0..3).map(|a| (all_hi[a] - all_lo[a]) * 0.5).fold(0.0, f64::max);
     let far = center.iter().fold(0.0f64, |m, c| m.max(c.abs()));
-    // offsets from the centre are at most `half`: recentring needs them to fit f32
-    if far > RECENTER_RATIO * half && half < MAX_OFFSET {
+    // offsets from the centre are at most the whole cloud's extent: recentring needs them to fit f32
+    if far > RECENTER_RATIO * half && whole < MAX_OFFSET {
         center
     } else {
         [0.0; 3]
@@ -468,6 +527,22 @@ mod tests {
         assert_eq!(wild.origin, [5e6, 4e6, 1.0]);
         assert_eq!(wild.points[0], [0.0; 3]);
         assert!(wild.points[1][2] == f32::INFINITY && wild.points[2][1] == f32::NEG_INFINITY);
+        // a stray point (a survey's (0, 0, 0), a return kilometres off) does not pull the origin away
+        // from the rest: their offsets keep their digits
+        let survey: Vec<[f64; 3]> = (0..300)
+            .map(|i| [512_345.0 + (i % 17) as f64 * 0.61, 4_123_456.0 + (i % 13) as f64 * 0.73, 87.0 + (i % 7) as f64 * 0.3])
+            .collect();
+        for stray in [[0.0, 0.0, 0.0], [512_345.0, 4_123_456.0, 9e7], [-3e7, 4_123_456.0, 87.0]] {
+            let mut points = survey.clone();
+            points.insert(150, stray);
+            let c = PointCloud::from_points_f64(&points);
+            let (lo, hi) = (c.origin, [c.origin[0] - 512_345.0, c.origin[1] - 4_123_456.0, c.origin[2] - 87.0]);
+            assert!(hi.iter().all(|d| (0.0..12.0).contains(d)), "origin {lo:?} for stray {stray:?}");
+            for (i, p) in points.iter().enumerate().filter(|(i, _)| *i != 150) {
+                assert!((0..3).all(|a| (c.point_f64(i)[a] - p[a]).abs() < 1e-5), "point {i}: {:?}", c.point_f64(i));
+            }
+            assert!((0..3).all(|a| (c.point_f64(150)[a] - stray[a]).abs() < 8.0), "the stray, as f32 holds it");
+        }
         // near zero, nothing changes: origin zero, the points as given
         let near = PointCloud::from_points_f64(&[[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]);
         assert_eq!((near.origin, near.points.clone()), ([0.0; 3], vec![[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]));

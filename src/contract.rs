@@ -127,6 +127,27 @@ pub mod initial_transform {
     }
 }
 
+/// Serde for [`crate::Options::up`] (`Option<[f64; 3]>`): three numbers, read strictly. A list
+/// of another length is an error in every reader (serde-wasm-bindgen reads a fixed-size array
+/// by its first elements and would let a fourth through unseen).
+pub mod up {
+    use serde::{de, Deserialize, Deserializer, Serialize, Serializer};
+
+    /// Writes `None` as `null`, a direction as its three numbers.
+    pub fn serialize<S: Serializer>(up: &Option<[f64; 3]>, serializer: S) -> Result<S::Ok, S::Error> {
+        up.serialize(serializer)
+    }
+
+    /// Reads `null` as `None`, a list of exactly three numbers as the direction.
+    pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Option<[f64; 3]>, D::Error> {
+        match Option::<Vec<f64>>::deserialize(deserializer)? {
+            None => Ok(None),
+            Some(v) if v.len() == 3 => Ok(Some([v[0], v[1], v[2]])),
+            Some(v) => Err(de::Error::custom(format!("expected 3 numbers [x, y, z], got {}", v.len()))),
+        }
+    }
+}
+
 /// A [`ModelConfig`] as the contract shows it: its serde JSON (the weights file's snake_case
 /// keys) with every key in camelCase (`n_points` -> `nPoints`); values are left alone.
 pub fn model_config_json(config: &ModelConfig) -> serde_json::Value {

@@ -103,6 +103,7 @@ pub struct Options {
     /// rejected, and look-alikes tilted further do not count as alternatives. It is the same
     /// direction in both clouds' frames, whatever `initialTransform` says. Default: none (any
     /// rotation). Three finite numbers, not all zero (any length).
+    #[serde(with = "crate::contract::up")]
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub up: Option<[f64; 3]>,
     /// The transforms ICP starts from, in order of preference. Each is refined coarse to fine
@@ -180,8 +181,10 @@ pub struct Options {
     /// global stage has run, the answer's rotation with the translation the descriptor matches
     /// agree on for it is refined as one more start when that translation is another one, and
     /// replaces the answer when it fits more than 10% better (an answer slid along a wall, its
-    /// rotation right). `"exhaustive"` refines every start, without those last stages. The
-    /// result's `startsRefined` says how many were refined.
+    /// rotation right). `"exhaustive"` refines every start, in the same stages (the starts for
+    /// unsure answers in their place in `starts`), each stage's best judged as above, without
+    /// the stops and without those last stages. The result's `startsRefined` says how many were
+    /// refined.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub search: Search,
 }
@@ -209,7 +212,9 @@ pub enum Search {
     /// start and more.
     #[default]
     Adaptive,
-    /// Every start is refined and the best returned (slower, never stops early).
+    /// Every start is refined and the best returned (slower, never stops early): the adaptive
+    /// search's stages of the starts, each stage's best judged by the probes as there (so both
+    /// count the same look-alikes as alternatives), all of them run, without its last stages.
     Exhaustive,
 }
 

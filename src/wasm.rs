@@ -213,7 +213,7 @@ pub fn transform_point_cloud(
     let m = matrix_arg(matrix)?;
     let m = crate::transform::nearest_rigid(&m).map_err(|e| JsError::new(&format!("matrix is not rigid: {e}")))?;
     let cloud = cloud_arg(&cloud, "cloud")?;
-    cloud_object(&cloud.transformed(&m))
+    cloud_object(&cloud.placed(&m))
 }
 
 /// A cloud as a binary little-endian PLY file (`x`, `y`, `z` per vertex): `double` coordinates

@@ -83,6 +83,11 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
         return r.register(a, t);
       }, /^source: reading element 4 threw: Error: boom/],
       ["over the points limit", () => r.register(new Float32Array(3 * MAX_POINTS + 3), t), /^source has 16000001 points, more than the 16000000 a registration accepts per cloud .*downsample it first/],
+      ["a detached buffer", () => {
+        const gone = new Float32Array(s);
+        structuredClone(gone.buffer, { transfer: [gone.buffer] });
+        return r.register(gone, t);
+      }, /^source: its buffer cannot be read .* detached/],
     ];
     for (const [label, fn, re] of cases) rejects(r, label, fn, re);
     // The array-like that leaked 482 MB per call and trapped on the 9th: rejected every time.
@@ -224,6 +229,20 @@ test("large coordinates: Float64Array or { points, origin } in, T_target_source 
   check(fromTruth, "initialTransform in the caller's frame");
   // Without origins, float32 cannot hold these coordinates (0.25-0.5 units apart near 4e6).
   const lossy = r.register(Float32Array.from(s64), Float32Array.from(t64));
+  assert.ok(lossy.warnings.some((w) => /^the source's coordinates lie up to .* as f32 they are rounded to steps of about/.test(w)), JSON.stringify(lossy.warnings));
+  // A stray point far from the rest (a survey's (0, 0, 0)) does not cost the others their digits.
+  check(r.register(Float64Array.from([...s64, 0, 0, 0]), t64), "Float64Array with a stray (0, 0, 0)");
+  // A cloud near zero placed far from it (a local scan onto a map grid) keeps its digits too.
+  const local = source();
+  const placed = arps.transformPointCloud(local, truthColMajor);
+  let off = 0;
+  for (let i = 0; i < local.length; i += 3) {
+    for (let k = 0; k < 3; k++) {
+      const want = rows[k][0] * local[i] + rows[k][1] * local[i + 1] + rows[k][2] * local[i + 2] + rows[k][3];
+      off = Math.max(off, Math.abs(placed.origin[k] + placed.points[i + k] - want));
+    }
+  }
+  assert.ok(off < 1e-5, `placed on the map grid to ${off}`);
   const at = (res) => errorAtClouds(res.T_target_source).tr.toExponential(2);
   console.log(`large coordinates, translation error at the clouds: as Float32Array ${at(lossy)}, as Float64Array ${at(r.register(s64, t64))}`);
   // A file with double coordinates, read keeping its precision: { points, origin } registers as is.
@@ -326,12 +345,18 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     rejects(r, "not a cloud", () => arps.transformPointCloud("points", T), /^cloud: expected a Float32Array/);
 
     // how far the points of `moved` (a file named `name`) are from those of `file` moved by T
-    // through transformPointCloud (in f64, each beside its origin)
-    const apartFrom = (file, moved, name) => {
+    // through transformPointCloud (in f64, each beside its origin), beyond what a float32 field
+    // holds at their magnitude when `float32` (a file of float coordinates near zero, moved onto
+    // the map grid, holds them to a float32 step there; transformPointCloud keeps every digit)
+    const apartFrom = (file, moved, name, float32 = false) => {
       const want = arps.transformPointCloud(arps.readPointCloud(file, name), T);
       const got = arps.readPointCloud(moved, name);
       let apart = 0;
-      for (let i = 0; i < got.points.length; i++) apart = Math.max(apart, Math.abs(got.origin[i % 3] + got.points[i] - (want.origin[i % 3] + want.points[i])));
+      for (let i = 0; i < got.points.length; i++) {
+        const w = want.origin[i % 3] + want.points[i];
+        const step = float32 ? Math.abs(w) * 2 ** -23 : 0;
+        apart = Math.max(apart, Math.abs(got.origin[i % 3] + got.points[i] - w) - step);
+      }
       return apart;
     };
     // transformFile on a PLY: the file moved as it is (a fragment with normals, colours and faces): the
@@ -341,7 +366,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     assert.ok(movedPly instanceof Uint8Array && movedPly.length === frag.length);
     const body = frag.indexOf("end_header\n") + 11;
     assert.deepEqual(movedPly.subarray(0, body), new Uint8Array(frag.subarray(0, body)));
-    let apart = apartFrom(frag, movedPly, "f.ply");
+    let apart = apartFrom(frag, movedPly, "f.ply", true);
     assert.ok(apart < 1e-4, `transformFile's PLY points ${apart} from transformPointCloud's`);
     for (const i of [0, 999, 1999]) assert.deepEqual(movedPly.subarray(body + i * 27 + 24, body + i * 27 + 27), new Uint8Array(frag.subarray(body + i * 27 + 24, body + i * 27 + 27)), `colour ${i}`);
     rejects(r, "transformFile: not a PLY", () => arps.transformFile(new Uint8Array([1, 2, 3]), "a.ply", T), /PLY/);
@@ -364,7 +389,9 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     const movedLaz = arps.transformFile(laz, "simple.laz", T);
     assert.ok(movedLaz[104] & 0x80 && movedLaz.length < movedLas.length * 0.6, "LAZ moved as LAZ");
     assert.deepEqual(arps.readPointCloud(movedLaz, "a.laz"), arps.readPointCloud(movedLas, "a.las"), "LAZ's points");
-    rejects(r, "transformFile: not LAS", () => arps.transformFile(frag, "a.las", T), /LASF/);
+    rejects(r, "transformFile: not LAS", () => arps.transformFile(new Uint8Array(400), "a.las", T), /LASF/);
+    // a file under another format's name goes by its signature: a PLY named .las is moved as PLY
+    assert.deepEqual(arps.transformFile(frag, "a.las", T), movedPly);
     // a PCD (x y z normal_x normal_y normal_z rgb) moved as it is: its points those
     // transformPointCloud gives, its header and colours kept; the names canTransform accepts
     const pcd = readFileSync(path.join(root, "fixtures", "formats", "cloud_bin_0_binary.pcd"));
@@ -373,7 +400,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     assert.ok(movedPcd.length === pcd.length);
     assert.deepEqual(movedPcd.subarray(0, pcdBody), new Uint8Array(pcd.subarray(0, pcdBody)), "the PCD header");
     assert.deepEqual(movedPcd.subarray(pcdBody + 24, pcdBody + 28), new Uint8Array(pcd.subarray(pcdBody + 24, pcdBody + 28)), "a colour");
-    apart = apartFrom(pcd, movedPcd, "c.pcd");
+    apart = apartFrom(pcd, movedPcd, "c.pcd", true);
     assert.ok(apart < 1e-4, `transformFile's PCD points ${apart} from transformPointCloud's`);
     assert.deepEqual(["a.ply", "b.PCD", "c.pts", "d.csv", "e.obj", "f.stl", "g.las", "h.laz", "i.e57", "j.off", "k.dxf"].map(arps.canTransform), [true, true, true, true, true, true, true, true, true, true, false]);
     rejects(r, "transformFile: no format", () => arps.transformFile(new Uint8Array(8), "drawing.dxf", T), /cannot tell the format/);

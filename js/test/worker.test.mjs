@@ -107,6 +107,11 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     assert.equal(so.points.length, 0, "a { points, origin } source's points transferred");
     assert.equal(to.points.length, 0, "a { points, origin } target's points transferred");
     assert.deepEqual(res3.T_target_source, res.T_target_source);
+    // The inputs are taken during the call: an array refilled once it returns changes nothing.
+    const scratch = target();
+    const pending = arps.register(source(), scratch);
+    scratch.fill(0);
+    assert.deepEqual((await pending).T_target_source, res.T_target_source);
     // The kept target given back: the next registration prepares it afresh, the same answer.
     assert.equal(await arps.forgetTarget(), undefined);
     assert.deepEqual((await arps.register(source(), target())).T_target_source, res.T_target_source);

@@ -53,29 +53,31 @@ pub(crate) enum Step {
     Unsure(Vec<Start>),
 }
 
-/// The stages of the search: all of `kinds` at once ([`Search::Exhaustive`]), or the first
-/// start alone, then the others in their order, grouped into runs of local and of global starts,
-/// then the last stage of blind starts, and last, in one stage of their own, the starts for
-/// unsure answers ([`Start::is_for_unsure`]) ([`Search::Adaptive`]; with the default starts: the
-/// network's; the global ones; the other local ones; the blind ones; the network's rotations).
+/// The stages of the search: the first start alone, then the others in their order, grouped into
+/// runs of local and of global starts; for [`Search::Adaptive`] then the last stage of blind
+/// starts, and last, in one stage of their own, the starts for unsure answers
+/// ([`Start::is_for_unsure`]) (with the default starts: the network's; the global ones; the
+/// other local ones; the blind ones; the network's rotations). [`Search::Exhaustive`] runs the
+/// same stages of `kinds`, the starts for unsure answers among them in their order, every one
+/// of them: each stage's best is judged as in the adaptive search, so both count the same
+/// look-alikes as alternatives.
 pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Step> {
-    match search {
-        Search::Exhaustive => vec![Step::Listed(kinds.to_vec())],
-        Search::Adaptive => {
-            let (unsure, kinds): (Vec<Start>, Vec<Start>) = kinds.iter().partition(|k| k.is_for_unsure());
-            let mut stages: Vec<Vec<Start>> = kinds.iter().take(1).map(|&k| vec![k]).collect();
-            for &k in kinds.iter().skip(1) {
-                let joins = stages.len() > 1 && stages.last().is_some_and(|l| l[0].is_global() == k.is_global());
-                match stages.last_mut() {
-                    Some(last) if joins => last.push(k),
-                    _ => stages.push(vec![k]),
-                }
-            }
-            let blind = (!stages.is_empty()).then_some(Step::Blind);
-            let unsure = (!unsure.is_empty()).then_some(Step::Unsure(unsure));
-            stages.into_iter().map(Step::Listed).chain(blind).chain(unsure).collect()
+    let (unsure, kinds): (Vec<Start>, Vec<Start>) = match search {
+        Search::Adaptive => kinds.iter().partition(|k| k.is_for_unsure()),
+        Search::Exhaustive => (Vec::new(), kinds.to_vec()),
+    };
+    let mut stages: Vec<Vec<Start>> = kinds.iter().take(1).map(|&k| vec![k]).collect();
+    for &k in kinds.iter().skip(1) {
+        let joins = stages.len() > 1 && stages.last().is_some_and(|l| l[0].is_global() == k.is_global());
+        match stages.last_mut() {
+            Some(last) if joins => last.push(k),
+            _ => stages.push(vec![k]),
         }
     }
+    let adaptive = search == Search::Adaptive;
+    let blind = (adaptive && !stages.is_empty()).then_some(Step::Blind);
+    let unsure = (!unsure.is_empty()).then_some(Step::Unsure(unsure));
+    stages.into_iter().map(Step::Listed).chain(blind).chain(unsure).collect()
 }
 
 /// Whether the adaptive search's last stage ([`Step::Blind`]) adds the 24 blind rotations to its
@@ -337,7 +339,11 @@ mod tests {
             [with_blind(&[&[Network], &[Rotations]]), vec![Step::Unsure(vec![RotationsNetwork])]].concat()
         );
         assert_eq!(stages(&[RotationsNetwork], Search::Adaptive), vec![Step::Unsure(vec![RotationsNetwork])]);
-        assert_eq!(stages(&default, Search::Exhaustive), listed(&[&default]));
+        // the exhaustive search: the same stages, every start in them, none for unsure answers alone
+        assert_eq!(
+            stages(&default, Search::Exhaustive),
+            listed(&[&[Network], &[Global], &[Centroids, Initial, Turned, TurnedInitial, RotationsNetwork]])
+        );
         assert!(stages(&[], Search::Adaptive).is_empty());
     }
 

@@ -328,7 +328,7 @@ fn write_aligned(
         io::transform_file_with(bytes, &io::file_name(file), &m, reading)
             .map_err(|e| format!("--aligned: {}: {e}", file.display()))?
     } else {
-        io::write_ply_binary(&cloud.transformed(&r.T_target_source))
+        io::write_ply_binary(&cloud.placed(&r.T_target_source))
     };
     // written beside it, then renamed over it: a file it replaces (a link to an input, say) is
     // never half written or written through
