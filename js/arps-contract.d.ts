@@ -177,8 +177,10 @@ export type RegisterOptions = {
    * global stage has run, the answer's rotation with the translation the descriptor matches
    * agree on for it is refined as one more start when that translation is another one, and
    * replaces the answer when it fits more than 10% better (an answer slid along a wall, its
-   * rotation right). `"exhaustive"` refines every start, without those last stages. The
-   * result's `startsRefined` says how many were refined.
+   * rotation right). `"exhaustive"` refines every start, in the same stages (the starts for
+   * unsure answers in their place in `starts`), each stage's best judged as above, without
+   * the stops and without those last stages. The result's `startsRefined` says how many were
+   * refined.
    */
   search?: RegistrationSearch,
 };

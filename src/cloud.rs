@@ -269,7 +269,8 @@ impl PointCloud {
     pub fn placed(&self, m: &Matrix4<f64>) -> PointCloud {
         let t = m.fixed_view::<3, 1>(0, 3);
         let far = t.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        if !self.origin_is_zero() || !(far > RECENTER_RATIO * self.half_extent()) || !far.is_finite() {
+        let far_from_points = far.is_finite() && far > RECENTER_RATIO * self.half_extent();
+        if !self.origin_is_zero() || !far_from_points {
             return self.transformed(m);
         }
         let mut linear = *m;
@@ -530,7 +531,9 @@ mod tests {
         // a stray point (a survey's (0, 0, 0), a return kilometres off) does not pull the origin away
         // from the rest: their offsets keep their digits
         let survey: Vec<[f64; 3]> = (0..300)
-            .map(|i| [512_345.0 + (i % 17) as f64 * 0.61, 4_123_456.0 + (i % 13) as f64 * 0.73, 87.0 + (i % 7) as f64 * 0.3])
+            .map(|i| {
+                [512_345.0 + (i % 17) as f64 * 0.61, 4_123_456.0 + (i % 13) as f64 * 0.73, 87.0 + (i % 7) as f64 * 0.3]
+            })
             .collect();
         for stray in [[0.0, 0.0, 0.0], [512_345.0, 4_123_456.0, 9e7], [-3e7, 4_123_456.0, 87.0]] {
             let mut points = survey.clone();

@@ -104,7 +104,7 @@ pub struct Options {
     /// direction in both clouds' frames, whatever `initialTransform` says. Default: none (any
     /// rotation). Three finite numbers, not all zero (any length).
     #[serde(with = "crate::contract::up")]
-    #[cfg_attr(feature = "ts", ts(optional = nullable))]
+    #[cfg_attr(feature = "ts", ts(as = "Option<[f64; 3]>", optional = nullable))]
     pub up: Option<[f64; 3]>,
     /// The transforms ICP starts from, in order of preference. Each is refined coarse to fine
     /// against the same prepared target and the best is returned (the result's `start` says

@@ -308,7 +308,10 @@ fn detection_and_kind_errors() {
     has(&mesh_err(format!("{PCD_HEAD}DATA ascii\n1 2 3\n4 5 6\n").as_bytes(), "a.pcd"), &["PCD", "points only"]);
     // A signature wins over the extension: a PCD named .ply is read, and fails, as PCD; without
     // one the extension rules: a PCD header without its `# .PCD` line, named .ply, is no PLY.
-    has(&cloud_err(format!("{PCD_HEAD}DATA ascii\n").as_bytes(), "a.ply"), &["PCD", "the file ends after 0 of the 2 points"]);
+    has(
+        &cloud_err(format!("{PCD_HEAD}DATA ascii\n").as_bytes(), "a.ply"),
+        &["PCD", "the file ends after 0 of the 2 points"],
+    );
     let unsigned = PCD_HEAD.lines().filter(|l| !l.starts_with('#')).collect::<Vec<_>>().join("\n");
     has(&cloud_err(format!("{unsigned}\nDATA ascii\n").as_bytes(), "a.ply"), &["PLY", "'ply' magic"]);
 }
