@@ -332,7 +332,7 @@ const MAX_OFFSET: f64 = 1e37;
 /// Points of the even sample that [`choose_origin`] takes its median and spread from.
 const ORIGIN_SAMPLE: usize = 4096;
 
-/// How far from the bulk of a cloud, in spreads, a point is a stray that [`choose_origin`] leaves
+/// How far from the bulk of a cloud, in spreads, a point is a stray that [`PointCloud::from_points_f64`] leaves
 /// out of the box it centres on: the spread is half the distance between the 10th and the 90th
 /// percentile of a sample, the largest over the axes. A stray return, or a point written as
 /// (0, 0, 0) in a survey of map-grid coordinates, would otherwise pull the box's centre away from
