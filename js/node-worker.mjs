@@ -3,10 +3,14 @@
 // worker.js the `self.postMessage` / `self.addEventListener("message")` it expects, queues the
 // messages that arrive before worker.js has run, and, for an "init" request, reads from disk what
 // it does not carry (Node's fetch cannot read file: URLs): arps_bg.wasm next to this file, the
-// default model models/arps-web.safetensors (unless `weights` replace it), and `weights` given as
-// a file: URL.
+// default model models/arps-web.safetensors (unless `weights` replace it), and `wasm`, `model` or
+// `weights` given as a file: URL or a path (as Registrar.fromUrl reads them in Node).
 import { parentPort } from "node:worker_threads";
 import { readFile } from "node:fs/promises";
+
+/** A string naming a file on disk: a `file:` URL, or a path (no scheme; `C:\` is a path). */
+const onDisk = (v) => typeof v === "string" && (v.startsWith("file:") || !/^[a-z][a-z0-9+.-]+:/i.test(v));
+const fromDisk = (v) => readFile(v.startsWith("file:") ? new URL(v) : v);
 
 const listeners = [];
 const queued = [];
@@ -29,8 +33,15 @@ const deliver = async (data) => {
       modelBytes ??= readFile(new URL("./models/arps-web.safetensors", import.meta.url));
       data = { ...data, model: await modelBytes };
     }
-    if (typeof data.weights === "string" && data.weights.startsWith("file:")) {
-      data = { ...data, weights: await readFile(new URL(data.weights)) };
+    for (const key of ["wasm", "model", "weights"]) {
+      if (!onDisk(data[key])) continue;
+      try {
+        data = { ...data, [key]: await fromDisk(data[key]) };
+      } catch (e) {
+        // the load fails as a fetch would: an error naming the file, for createWorkerRegistrar
+        parentPort.postMessage({ id: data.id, type: "error", message: `arps worker: reading ${key} ${data[key]} failed: ${e?.message ?? e}`, name: "Error" });
+        return;
+      }
     }
   }
   for (const fn of listeners) fn({ data });

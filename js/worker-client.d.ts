@@ -39,13 +39,14 @@ export interface CreateWorkerRegistrarOptions {
   /**
    * Where the default model comes from (fetched by the worker in parallel with the engine): a URL
    * (string or `URL`; relative ones resolve against `worker.js`), a `Response` or the bytes.
-   * Default: `models/arps-web.safetensors` next to the package's `arps.js` (in Node, read from disk).
+   * Default: `models/arps-web.safetensors` next to the package's `arps.js`. In Node, it and a
+   * path or `file:` URL given are read from disk.
    */
   model?: string | URL | Response | ArrayBuffer | Uint8Array;
   /**
    * Custom weights instead of the default model: the bytes of an arps `.safetensors` file (copied
-   * to the worker) or its URL (string or `URL`, fetched by the worker; in Node `file:` URLs are
-   * read from disk). Rejects with an `Error` naming the URL and HTTP status if the download fails.
+   * to the worker) or its URL (string or `URL`, fetched by the worker; in Node paths and `file:`
+   * URLs are read from disk). Rejects with an `Error` naming the URL and HTTP status if the download fails.
    */
   weights?: ArrayBuffer | Uint8Array | string | URL;
   /**

@@ -88,11 +88,13 @@ fn one_scan_alone_is_a_file_of_its_own() {
     let tiny = format_fixture("tiny_spherical.e57");
     let moved = transform_file_with(&tiny, "tiny.e57", &m, &scan(0)).unwrap();
     assert_moved_as(&tiny, &ReadOptions::default(), &moved, &ReadOptions::default(), &m);
-    // a scan beyond the file's; the option is for E57 files (others move as they are)
+    // a scan beyond the file's; the option is for E57 files (a file of one cloud refuses it)
     let e = transform_file_with(&bytes, "two.e57", &m, &scan(2)).unwrap_err().to_string();
     assert!(e.contains("scan = 2, but the E57 file holds 2 scans (0 to 1)"), "{e}");
-    let ply = common::format_fixture("cloud_bin_0_binary.pcd");
-    assert_eq!(transform_file_with(&ply, "a.pcd", &m, &scan(3)).unwrap(), transform_file(&ply, "a.pcd", &m).unwrap());
+    let pcd = common::format_fixture("cloud_bin_0_binary.pcd");
+    let e = transform_file_with(&pcd, "a.pcd", &m, &scan(3)).unwrap_err().to_string();
+    assert!(e.contains("the scan option (3) chooses among an E57 file's scans; a PCD file holds one cloud"), "{e}");
+    assert!(transform_file_with(&pcd, "a.pcd", &m, &ReadOptions::default()).unwrap() == transform_file(&pcd, "a.pcd", &m).unwrap());
 }
 
 /// An E57 file written by the e57 crate: two scans of `n` points each (x, y, z as doubles), each

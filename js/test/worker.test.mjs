@@ -291,3 +291,17 @@ test("worker: the default worker under Node (worker_threads, .wasm read from dis
     arps.terminate();
   }
 });
+
+test("worker: under Node, model and weights given as paths or file: URLs are read from disk", async () => {
+  const file = path.join(root, "models", "web.safetensors");
+  for (const options of [{ weights: file }, { model: file }, { model: pathToFileURL(file).href }, { model: pathToFileURL(file) }]) {
+    const arps = await createWorkerRegistrar(options);
+    try {
+      assert.equal(arps.modelConfig.preset, "web", JSON.stringify(options));
+      assert.ok(errors((await arps.register(source(), target())).T_target_source).rot < 1);
+    } finally {
+      arps.terminate();
+    }
+  }
+  await assert.rejects(createWorkerRegistrar({ weights: path.join(root, "no-such.safetensors") }), /reading weights .*no-such\.safetensors failed/);
+});
