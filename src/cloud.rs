@@ -308,6 +308,22 @@ impl PointCloud {
     }
 }
 
+impl From<Vec<[f32; 3]>> for PointCloud {
+    /// [`PointCloud::new`]: the points as they are, origin zero (give coordinates far from zero
+    /// as `f64`: `From<&[[f64; 3]]>`).
+    fn from(points: Vec<[f32; 3]>) -> Self {
+        PointCloud::new(points)
+    }
+}
+
+impl From<&[[f64; 3]]> for PointCloud {
+    /// [`PointCloud::from_points_f64`]: offsets from an origin near the points when they lie far
+    /// from zero, so they keep their digits.
+    fn from(points: &[[f64; 3]]) -> Self {
+        PointCloud::from_points_f64(points)
+    }
+}
+
 /// Widens the box `[lo, hi]` to hold `p`, axis by axis; a NaN coordinate leaves that axis as it
 /// was. Comparisons, not `f32::min`/`max`: those ignore NaN, which wasm's `f32.min` does not, so
 /// in wasm they are a call per coordinate.

@@ -94,7 +94,10 @@ fn one_scan_alone_is_a_file_of_its_own() {
     let pcd = common::format_fixture("cloud_bin_0_binary.pcd");
     let e = transform_file_with(&pcd, "a.pcd", &m, &scan(3)).unwrap_err().to_string();
     assert!(e.contains("the scan option (3) chooses among an E57 file's scans; a PCD file holds one cloud"), "{e}");
-    assert!(transform_file_with(&pcd, "a.pcd", &m, &ReadOptions::default()).unwrap() == transform_file(&pcd, "a.pcd", &m).unwrap());
+    assert!(
+        transform_file_with(&pcd, "a.pcd", &m, &ReadOptions::default()).unwrap()
+            == transform_file(&pcd, "a.pcd", &m).unwrap()
+    );
 }
 
 /// An E57 file written by the e57 crate: two scans of `n` points each (x, y, z as doubles), each

@@ -239,8 +239,8 @@ fn f32_coordinates_far_from_zero_get_a_warning() {
     let shifted = |c: &PointCloud| -> Vec<[f64; 3]> {
         c.points.iter().map(|p| [0, 1, 2].map(|a| p[a] as f64 + far[a])).collect()
     };
-    let as_f32 = |c: &PointCloud| PointCloud::new(shifted(c).iter().map(|p| p.map(|v| v as f32)).collect());
-    let as_f64 = |c: &PointCloud| PointCloud::from_points_f64(&shifted(c));
+    let as_f32 = |c: &PointCloud| PointCloud::from(shifted(c).iter().map(|p| p.map(|v| v as f32)).collect::<Vec<_>>());
+    let as_f64 = |c: &PointCloud| PointCloud::from(shifted(c).as_slice());
     let rounded = |w: &String| w.contains("as f32 they are rounded to steps of about");
     let r = registrar().register(&as_f64(&source), &as_f64(&target), &Options::default()).unwrap();
     assert!(!r.warnings.iter().any(rounded), "{:?}", r.warnings);
