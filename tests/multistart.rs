@@ -452,21 +452,19 @@ fn an_answer_still_unsure_after_every_stage_gets_a_last_stage() {
     }
 }
 
-/// `fixtures/any` pairs 3 and 4 (a bowl and a cone): every named start ends in a wrong pose that
-/// the verdict does not doubt (confidence above 0.5, below the stop), as the exhaustive search
-/// shows; the adaptive search's last stage, which runs whenever no stage reached the stop, finds
-/// the truth among more global hypotheses.
+/// `fixtures/any` pair 4 (a cone): every named start ends in a wrong pose below the stop, as the
+/// exhaustive search shows (its verdict, 0.49, counts the look-alikes of every stage); the
+/// adaptive search's last stage, which runs whenever no stage reached the stop, finds the truth
+/// among more global hypotheses, confidently. (Pair 3, a bowl, was one too until the exhaustive
+/// search judged each stage's best as the adaptive one does: a probe now turns one onto the
+/// truth.)
 #[test]
 fn an_answer_below_the_stop_after_every_stage_gets_a_last_stage_too() {
     let mut reg = Registrar::with_default_model().unwrap();
-    for index in [3, 4] {
+    for index in [4] {
         let (r, all) = last_stage_pair(&mut reg, index, Start::Global);
-        assert!(
-            all.confidence > 0.5 && all.confidence < STOP_CONFIDENCE,
-            "pair {index}: confidence {}",
-            all.confidence
-        );
-        assert!(r.confidence > all.confidence, "pair {index}: confidence {}", r.confidence);
+        assert!(all.confidence < STOP_CONFIDENCE, "pair {index}: confidence {}", all.confidence);
+        assert!(r.confidence > 0.5 && r.confidence > all.confidence, "pair {index}: confidence {}", r.confidence);
     }
 }
 

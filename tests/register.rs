@@ -124,13 +124,13 @@ fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
             good.clone(),
             good.clone(),
             Options { max_correspondence_distance: Some(1e30), ..Options::default() },
-            "maxCorrespondenceDistance = 1000000000000000000000000000000 is more than the clouds' largest half-extent",
+            "maxCorrespondenceDistance = 1e30 is more than the clouds' largest half-extent",
         ),
         (
             good.clone(),
             good.clone(),
             Options { voxel_size: Some(1e6), ..Options::default() },
-            "voxelSize = 1000000 is more than",
+            "voxelSize = 1e6 is more than",
         ),
         (
             good.clone(),
