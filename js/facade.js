@@ -208,16 +208,14 @@ function centred(p) {
   // centre away, and every other point's offset from it would lose its digits in float32.
   const count = n / 3;
   const step = Math.max(1, Math.ceil(count / 4096));
+  // (a point counts when all three coordinates are finite in float32, as in the engine)
+  const usable = (i) => [0, 1, 2].every((k) => Math.abs(p[i + k]) <= F32_MAX);
+  const sample = [];
+  for (let i = 0; i < count; i += step) if (usable(3 * i)) sample.push(3 * i);
   const median = [0, 0, 0];
   let spread = 0;
-  for (let k = 0; k < 3; k++) {
-    const v = [];
-    for (let i = 0; i < count; i += step) {
-      const x = p[3 * i + k];
-      if (Number.isFinite(x) && Math.abs(x) <= F32_MAX) v.push(x);
-    }
-    if (v.length === 0) continue;
-    v.sort((a, b) => a - b);
+  for (let k = 0; k < 3 && sample.length > 0; k++) {
+    const v = sample.map((i) => p[i + k]).sort((a, b) => a - b);
     const at = (q) => v[Math.round((v.length - 1) * q)];
     median[k] = at(0.5);
     spread = Math.max(spread, (at(0.9) - at(0.1)) / 2);
@@ -229,6 +227,7 @@ function centred(p) {
     const x = p[i], y = p[i + 1], z = p[i + 2];
     // NaN compares false: skipped here, reported by the engine
     if (!(Math.abs(x - median[0]) <= reach && Math.abs(y - median[1]) <= reach && Math.abs(z - median[2]) <= reach)) continue;
+    if (!usable(i)) continue;
     if (x < lo[0]) lo[0] = x;
     if (x > hi[0]) hi[0] = x;
     if (y < lo[1]) lo[1] = y;

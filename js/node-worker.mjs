@@ -8,9 +8,13 @@
 import { parentPort } from "node:worker_threads";
 import { readFile } from "node:fs/promises";
 
-/** A string naming a file on disk: a `file:` URL, or a path (no scheme; `C:\` is a path). */
-const onDisk = (v) => typeof v === "string" && (v.startsWith("file:") || !/^[a-z][a-z0-9+.-]+:/i.test(v));
-const fromDisk = (v) => readFile(v.startsWith("file:") ? new URL(v) : v);
+/**
+ * A string naming a file on disk: a `file:` URL (any case), or a path, relative ones to the
+ * process's working folder (no URL scheme of two letters or more; `C:\\` is a path).
+ */
+const fileUrl = (v) => /^file:/i.test(v);
+const onDisk = (v) => typeof v === "string" && (fileUrl(v) || !/^[a-z][a-z0-9+.-]+:/i.test(v));
+const fromDisk = (v) => readFile(fileUrl(v) ? new URL(v) : v);
 
 const listeners = [];
 const queued = [];
@@ -34,7 +38,8 @@ const deliver = async (data) => {
       data = { ...data, model: await modelBytes };
     }
     for (const key of ["wasm", "model", "weights"]) {
-      if (!onDisk(data[key])) continue;
+      // (a model is not read when weights replace it)
+      if (!onDisk(data[key]) || (key === "model" && !none(data.weights))) continue;
       try {
         data = { ...data, [key]: await fromDisk(data[key]) };
       } catch (e) {

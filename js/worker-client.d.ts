@@ -112,8 +112,8 @@ export interface WorkerRegistrar {
     request?: WorkerRequestOptions,
   ): Promise<RegistrationResult>;
   /**
-   * Reads a point cloud from a file's bytes in the worker (format from the file name's
-   * extension, else sniffed; `readOptions.surfacePoints` samples a mesh's surface, see
+   * Reads a point cloud from a file's bytes in the worker (format from the file's signature,
+   * else its name's extension, else sniffed; `readOptions.surfacePoints` samples a mesh's surface, see
    * `ReadOptions`). Resolves to packed xyz.
    */
   parsePointCloud(

@@ -173,7 +173,7 @@ export async function createWorkerRegistrar(options = {}) {
     const now = current && current.loaded && !current.dead && !terminated ? current : null;
     let payload = message;
     let moved = transfer;
-    if (!now) {
+    if (!now && typeof structuredClone === "function") {
       try {
         payload = structuredClone(message, { transfer });
         moved = [];
@@ -257,6 +257,9 @@ export async function createWorkerRegistrar(options = {}) {
       return (await ask({ type: "move", bytes, fileName, matrix, options: readOptions }, [bytes], req)).bytes;
     },
     async forgetTarget(req = {}) {
+      // a worker not loaded (or none, after an abort, a crash or a trap) holds no target: no
+      // worker is started for nothing to forget
+      if (!current || !current.loaded || current.dead) return;
       await ask({ type: "forget" }, [], req);
     },
     terminate() {

@@ -30,7 +30,11 @@ pub fn initial_distance(t_initial_n: &Matrix4<f64>) -> Result<()> {
     if d.is_finite() && d <= MAX_INITIAL_DISTANCE {
         Ok(())
     } else {
-        let far = if d.is_finite() { format!("{} cloud sizes", crate::error::num(d)) } else { "infinitely far".into() };
+        let far = if d.is_finite() {
+            format!("{} cloud sizes", crate::error::num(d))
+        } else {
+            "at a non-finite distance".into()
+        };
         Err(Error::InvalidOption(format!(
             "the initial guess (initialTransform, or the identity in the caller's frame) puts the source {far} away from the target, more than the {MAX_INITIAL_DISTANCE:e} cloud sizes the engine computes with: give an initialTransform that brings the clouds near each other"
         )))
@@ -39,8 +43,10 @@ pub fn initial_distance(t_initial_n: &Matrix4<f64>) -> Result<()> {
 
 /// The spacing of `f32` values at a cloud's farthest coordinate, as a fraction of its largest
 /// half-extent, beyond which the cloud gets a warning ([`f32_rounding`]): its points were
-/// rounded to a grid coarser than a ten-thousandth of its size before the engine saw them.
-pub const F32_ROUNDING_WARNING: f64 = 1e-4;
+/// rounded to a grid coarser than 1% of the default correspondence distance (0.025 of the
+/// half-extent) before the engine saw them. (A 2 m car 1 km from zero is not warned; a 100 m
+/// scan on a map grid, 4e6 from zero, rounded to 0.25-0.5, is.)
+pub const F32_ROUNDING_WARNING: f64 = 2.5e-4;
 
 /// Warns (into `warnings`; `what` names the cloud) when the `f32` offsets of a cloud with box
 /// `[lo, hi]` lie so far from zero for its size that `f32` holds them only to a step of more than

@@ -260,23 +260,34 @@ impl PointCloud {
     }
 
     /// The cloud placed by the rigid (or similarity) transform `m` into another frame, for
-    /// output (saving it, drawing it there): [`PointCloud::transformed`], except that a cloud
-    /// with origin zero that `m` moves far from zero for its size (its translation more than
-    /// [`RECENTER_RATIO`] times the cloud's half-extent, a local scan placed on a map grid) gets
-    /// that translation as its origin, in `f64`, and its points turned by `m`'s linear part as
-    /// offsets from it: the placed points keep their digits, where [`PointCloud::transformed`]
-    /// would round them to `f32` at the map's magnitude.
+    /// output (saving it, drawing it there): [`PointCloud::transformed`], except for a cloud with
+    /// origin zero that `m` places so far from zero for its size that `f32` would round its
+    /// points there by more than [`crate::checks::F32_ROUNDING_WARNING`] of its half-extent (a
+    /// local scan placed on a map grid): it gets its box's centre, placed, as its origin, in
+    /// `f64`, and its points turned by `m`'s linear part about that centre as offsets from it, so
+    /// the placed points keep their digits.
     pub fn placed(&self, m: &Matrix4<f64>) -> PointCloud {
-        let t = m.fixed_view::<3, 1>(0, 3);
-        let far = t.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let far_from_points = far.is_finite() && far > RECENTER_RATIO * self.half_extent();
-        if !self.origin_is_zero() || !far_from_points {
+        let (lo, hi) = self.bounds();
+        let half = half_extent_of(lo, hi);
+        let centre = [0, 1, 2].map(|a| lo[a] as f64 * 0.5 + hi[a] as f64 * 0.5);
+        let landed = m.transform_point(&nalgebra::Point3::from(centre));
+        let far = landed.iter().fold(0.0f64, |a, v| a.max(v.abs())) + half;
+        let rounds = far.is_finite() && far * f32::EPSILON as f64 > crate::checks::F32_ROUNDING_WARNING * half;
+        if !self.origin_is_zero() || !rounds {
             return self.transformed(m);
         }
         let mut linear = *m;
         linear.fixed_view_mut::<3, 1>(0, 3).fill(0.0);
-        let apply = crate::transform::mapping(&linear);
-        PointCloud::with_origin(self.points.iter().map(|&p| apply(p)).collect(), [t[0], t[1], t[2]])
+        let (l, c) = (linear, centre);
+        let points = self
+            .points
+            .iter()
+            .map(|p| {
+                let q = l.transform_vector(&Vector3::new(p[0] as f64 - c[0], p[1] as f64 - c[1], p[2] as f64 - c[2]));
+                [q.x as f32, q.y as f32, q.z as f32]
+            })
+            .collect();
+        PointCloud::with_origin(points, [landed.x, landed.y, landed.z])
     }
 
     /// [`PointCloud::transformed`], mapping the points where they are: the same cloud, bit for
@@ -562,6 +573,20 @@ mod tests {
             }
             assert!((0..3).all(|a| (c.point_f64(150)[a] - stray[a]).abs() < 8.0), "the stray, as f32 holds it");
         }
+        // placed: a cloud near zero placed on a map grid keeps its digits (an origin there); placed
+        // nearby, it is transformed as it is
+        let local = cube(40);
+        let onto_map =
+            from_rotation_translation(&euler_xyz(0.3, -0.1, 0.2), &Vector3::new(512_345.6, 4_123_456.7, 87.0));
+        let placed = local.placed(&onto_map);
+        assert!(!placed.origin_is_zero());
+        for i in 0..local.len() {
+            let want = onto_map.transform_point(&nalgebra::Point3::from(local.point_f64(i)));
+            assert!((0..3).all(|a| (placed.point_f64(i)[a] - want[a]).abs() < 1e-6), "{:?}", placed.point_f64(i));
+        }
+        let nearby = from_rotation_translation(&euler_xyz(0.3, -0.1, 0.2), &Vector3::new(12.0, -3.0, 7.0));
+        assert_eq!(local.placed(&nearby), local.transformed(&nearby));
+        assert_eq!(c.placed(&onto_map), c.transformed(&onto_map), "an origin already: mapped in f64 as it is");
         // near zero, nothing changes: origin zero, the points as given
         let near = PointCloud::from_points_f64(&[[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]);
         assert_eq!((near.origin, near.points.clone()), ([0.0; 3], vec![[1.0, 2.0, 3.0], [1.5, 2.0, 3.0]]));

@@ -49,26 +49,28 @@ impl Error {
 /// `Result` with the crate's [`Error`].
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
-/// A number as messages write it: four significant digits without trailing zeros (`0.025`,
-/// `1234`, `0.3333`), in exponent form when it is below 1e-3 or at least 1e6 (`1.5e-7`,
-/// `2.5e300`), so that a tiny or huge value reads as what it is, neither `0.000` nor three
-/// hundred digits; `inf`, `-inf` and `NaN` as they are.
+/// A number as messages write it: rounded to four significant digits, without trailing zeros
+/// (`0.025`, `1235`, `123500`, `0.3333`), in exponent form when it rounds to below 1e-3 or to
+/// 1e6 or more (`1.5e-7`, `2.5e300`), so that a tiny or huge value reads as what it is, neither
+/// `0.000` nor three hundred digits; `inf`, `-inf` and `NaN` as they are.
 pub(crate) fn num(x: f64) -> String {
     if !x.is_finite() || x == 0.0 {
         return if x == 0.0 { "0".into() } else { format!("{x}") };
     }
-    let trim = |s: String| match s.find('.') {
+    let trim = |s: &str| match s.find('.') {
         Some(_) => s.trim_end_matches('0').trim_end_matches('.').to_string(),
-        None => s,
+        None => s.to_string(),
     };
-    let a = x.abs();
-    if (1e-3..1e6).contains(&a) {
-        let decimals = (3 - a.log10().floor() as i32).max(0) as usize;
-        trim(format!("{x:.decimals$}"))
+    // four significant digits first; the form follows the rounded value's exponent
+    let rounded = format!("{x:.3e}");
+    let (mantissa, exponent) = rounded.split_once('e').unwrap_or((&rounded, "0"));
+    let exponent: i32 = exponent.parse().unwrap_or(0);
+    if (-3..6).contains(&exponent) {
+        let value: f64 = rounded.parse().unwrap_or(x);
+        let decimals = (3 - exponent).max(0) as usize;
+        trim(&format!("{value:.decimals$}"))
     } else {
-        let s = format!("{x:.3e}");
-        let (mantissa, exponent) = s.split_once('e').unwrap_or((&s, "0"));
-        format!("{}e{exponent}", trim(mantissa.to_string()))
+        format!("{}e{exponent}", trim(mantissa))
     }
 }
 
@@ -84,7 +86,11 @@ mod tests {
             (1234.0, "1234"),
             (1.0 / 3.0, "0.3333"),
             (-2.5, "-2.5"),
-            (999_999.0, "999999"),
+            (123_456.7, "123500"),
+            (999_999.6, "1e6"),
+            (0.000_999_96, "0.001"),
+            (999.96, "1000"),
+            (-0.000_012_3, "-1.23e-5"),
             (1e6, "1e6"),
             (1.5e-7, "1.5e-7"),
             (1e300, "1e300"),

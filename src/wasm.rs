@@ -108,8 +108,9 @@ pub fn version() -> String {
 }
 
 /// Reads a point cloud from a file's bytes with the core readers (PLY, PCD, LAS/LAZ, E57,
-/// XYZ/PTS/CSV, OBJ, OFF, STL). The format comes from the file name's extension, else it is sniffed from the
-/// content; mesh formats give their
+/// XYZ/PTS/CSV, OBJ, OFF, STL). The format comes from the file's signature (`ply`, `LASF`,
+/// `ASTM-E57`, `# .PCD`, `OFF`) when it starts with one, else from its name's extension, else
+/// it is sniffed from the content; mesh formats give their
 /// vertices, or with `options.surfacePoints` that many points drawn uniformly over their surface
 /// (`ReadOptions`: what a CAD model should be read as). Returns packed xyz (`[x0, y0, z0, x1,
 /// ...]`). Throws on unreadable input and invalid options.
@@ -200,7 +201,9 @@ fn cloud_arg(value: &JsValue, what: &str) -> Result<PointCloud, JsError> {
 /// Maps a cloud by a rigid transform, e.g. a source by the `T_target_source` of its registration
 /// into the target's frame: returns `{ points, origin }` (what `register` and `writePly` take),
 /// the origin mapped in f64 and the offsets by the rotation, so map-grid coordinates keep their
-/// digits (a cloud without an origin is mapped as it is; any number of points). `matrix`: 16
+/// digits; a cloud without an origin is mapped as it is (origin zero), unless the matrix places
+/// it so far from zero that float32 would round it (a local scan placed on a map grid): then
+/// it gets an origin there too. Read the points as `origin + points[i]`. Any number of points. `matrix`: 16
 /// numbers, column-major (what a result's `T_target_source` and three.js `Matrix4.elements`
 /// hold), or (through the package's entry) four row-major rows; rigid to 1e-3 (a matrix written
 /// with a few decimals), and used as the rigid transform nearest it. Throws on a bad cloud or
@@ -246,7 +249,8 @@ pub fn list_scans(
 /// stored; rigid motions only) (see `canTransform`). Positions are mapped in f64 and written back as the file stored them (the
 /// property's type, the text's decimals, LAS's scaled integers with new offsets), normals turned,
 /// everything else kept (colours, intensity, classification, faces, other fields, the header).
-/// `fileName` says the format by its extension (else the content does). `matrix`: 16 numbers,
+/// `fileName` says the format by its extension, where the file does not start with a format's
+/// signature (else the content does). `matrix`: 16 numbers,
 /// column-major (or, through the package's entry, four row-major rows), a rigid transform or one
 /// times a uniform scale (a change of unit). `options`: the `ReadOptions` the cloud was read
 /// with; with `scan`, an E57 file's scan alone is saved, as an E57 file of its own (its points'

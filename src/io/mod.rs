@@ -250,8 +250,8 @@ fn read_format(bytes: &[u8], format: Format, faces: Faces, scan: Option<usize>) 
     }
 }
 
-/// Reads a point cloud from a file's bytes; the format comes from the file name's extension,
-/// else it is sniffed from the content (see [`detect_format`]). Mesh formats give their
+/// Reads a point cloud from a file's bytes; the format comes from the file's signature, else
+/// its name's extension, else it is sniffed from the content (see [`detect_format`]). Mesh formats give their
 /// vertices (STL corners merged by position); OBJ, OFF and STL files are parsed whole, so a bad
 /// face is an error here too, while a PLY file is read only up to its `vertex` element.
 /// Non-finite coordinates are kept as they are. [`read_point_cloud_with`] can sample a mesh's

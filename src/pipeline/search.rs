@@ -339,8 +339,9 @@ pub(crate) fn search(
     // an answer no refinement reached: the evidence that calibrates the confidence is that of
     // refined answers, and this one was not even a start's end
     let confidence = if refined_any { confidence } else { confidence.min(UNREFINED_CONFIDENCE) };
-    // a refinement of the caller's guess alone that ended at another pose (the probes turned it
-    // over): the caller asked to refine that guess, so the result says how far it moved
+    // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
+    // probes turned it over): the caller asked to refine that guess, so the result says how far
+    // it moved
     if options.initial_transform.is_some()
         && kinds == [Start::Initial]
         && refined_any
@@ -348,8 +349,8 @@ pub(crate) fn search(
     {
         let turn = crate::transform::rotation_error_deg(&candidate.T_target_source, &p.t_initial);
         warnings.push(format!(
-            "the answer turns {turn:.1} degrees from initialTransform, the one start: the confidence's probes found a pose \
-             turned from the refined guess that fits better (a symmetric shape's look-alike, or a guess that was off)"
+            "the answer turns {turn:.1} degrees from initialTransform, the one start: ICP from it, or a pose the \
+             confidence's probes turned it to, fit better there (a guess that was off, or a symmetric shape's look-alike)"
         ));
     }
     let alternatives = refine_alternatives(target_index, &p.icp_src.points, &candidate, &poses, &how);
