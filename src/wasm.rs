@@ -444,10 +444,7 @@ fn parse_object<T: serde::de::DeserializeOwned + Default>(options: JsValue, what
         // serde names the value but not its field: the field is the first that fails alone
         let message = e.to_string();
         let message = message.strip_prefix("Error: ").unwrap_or(&message);
-        // serde's integer types in words
-        let whole = "expected a whole number, 0 or more";
-        let message =
-            message.replace("expected u64", whole).replace("expected u32", whole).replace("expected usize", whole);
+        let message = readable_serde_message(message);
         let alone = |key: &JsValue| {
             let one = Object::new();
             Reflect::set(&one, key, &Reflect::get(&clean, key).unwrap_or(JsValue::UNDEFINED)).is_ok()
@@ -458,6 +455,44 @@ fn parse_object<T: serde::de::DeserializeOwned + Default>(options: JsValue, what
             None => JsError::new(&format!("invalid {what}: {message}")),
         }
     })
+}
+
+/// serde-wasm-bindgen's message in the contract's words: its integer and float types, the
+/// `JsValue(...)` it names a value by, the `TypeError` it meets where a list was expected (a
+/// string given for `up` or `starts`), and a hint for whole numbers from 2^53 on (a `bigint`).
+fn readable_serde_message(message: &str) -> String {
+    let whole = "expected a whole number, 0 or more";
+    let mut m = message
+        .replace("expected u64", whole)
+        .replace("expected u32", whole)
+        .replace("expected usize", whole)
+        .replace("expected f64", "expected a number")
+        .replace("TypeError: Reflect.get called on non-object", "invalid type: expected a list");
+    // `JsValue([1])` -> `[1]`
+    while let Some(at) = m.find("JsValue(") {
+        let inner_start = at + "JsValue(".len();
+        // its closing parenthesis (the value may hold others)
+        let mut depth = 1usize;
+        let close = m[inner_start..].char_indices().find(|&(_, c)| {
+            match c {
+                '(' => depth += 1,
+                ')' => depth -= 1,
+                _ => {}
+            }
+            depth == 0
+        });
+        let Some(end) = close.map(|(e, _)| inner_start + e) else { break };
+        let inner = m[inner_start..end].to_string();
+        m.replace_range(at..=end, &inner);
+    }
+    // a float that is a whole number from 2^53 on: JS numbers cannot hold such seeds exactly
+    if m.contains(whole) {
+        let big = m.split('`').nth(1).and_then(|v| v.parse::<f64>().ok()).is_some_and(|v| v >= 9_007_199_254_740_992.0);
+        if big {
+            m.push_str(" (from 2^53 on, give it as a bigint: 2n ** 53n)");
+        }
+    }
+    m
 }
 
 /// The (renamed) field names of a `Deserialize` struct: serde's derive passes them to

@@ -444,6 +444,17 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     expect_err(&mut r, &src, &tgt, options(r#"{"up": [0, 0, 0]}"#), "up = [0.0, 0.0, 0.0]");
     expect_err(&mut r, &src, &tgt, options(r#"{"up": [0, 1]}"#), "invalid options");
     expect_err(&mut r, &src, &tgt, options(r#"{"up": [0, 0, 1, 2]}"#), "`up`: expected 3 numbers [x, y, z], got 4");
+    // serde-wasm-bindgen's words made the contract's
+    expect_err(&mut r, &src, &tgt, options(r#"{"up": "z"}"#), "`up`: invalid type: expected a list");
+    expect_err(
+        &mut r,
+        &src,
+        &tgt,
+        options(r#"{"up": [[0, 0, 1]]}"#),
+        "`up`: invalid type: [0, 0, 1], expected a number",
+    );
+    expect_err(&mut r, &src, &tgt, options(r#"{"seed": [1]}"#), "`seed`: invalid type: [1], expected a whole number");
+    expect_err(&mut r, &src, &tgt, options(r#"{"seed": 9007199254740992}"#), "give it as a bigint");
     expect_err(&mut r, &src, &tgt, options("[1, 2]"), "expected a plain object");
     expect_err(&mut r, &src, &tgt, JsValue::from_f64(3.0), "expected a plain object");
     let scaled = r#"{"initialTransform": [[2,0,0,0],[0,2,0,0],[0,0,2,0],[0,0,0,1]]}"#;
