@@ -6,11 +6,11 @@
  * A point cloud, packed xyz `[x0, y0, z0, x1, ...]` (at least 16 finite points):
  * - a `Float32Array`, used as is;
  * - a `Float64Array`: for large coordinates (e.g. georeferenced scans). The engine works on
- *   float32 offsets from the cloud's bounding-box centre, and the result's `T_target_source` is
- *   mapped back in float64, exact in your frame;
+ *   float32 offsets from the centre of the cloud's bulk (a stray point far from the rest left
+ *   out of it), and the result's `T_target_source` is mapped back in float64, exact in your frame;
  * - `{ points, origin }`: float32 `points` relative to `origin` (`[x, y, z]`, float64), e.g. what
  *   `readPointCloud` returns; the result is in the frame of `points + origin`;
- * - an `Array` of numbers (copied into a `Float32Array`).
+ * - an `Array` of numbers: doubles, read as a `Float64Array` is.
  */
 export type CloudInput = Float32Array | Float64Array | number[] | CloudWithOrigin;
 

@@ -130,8 +130,9 @@ function coded(message, code, cause) {
  * A point cloud argument -> `{ points, origin }`: `points` a clean `Float32Array` view (same
  * memory, standard prototype) that the glue can copy safely, `origin` `null` or the f64 offset
  * that `points` are relative to. Accepts a `Float32Array` (as is), a `Float64Array` (the origin
- * is its bounding-box centre, so large coordinates keep their precision), an `Array` of numbers
- * (copied), or `{ points: Float32Array, origin: [x, y, z] }` (points relative to an origin).
+ * is the centre of its bulk, so large coordinates keep their precision), an `Array` of numbers
+ * (doubles: read as a `Float64Array`), or `{ points: Float32Array, origin: [x, y, z] }` (points
+ * relative to an origin).
  */
 function cloudArg(v, what) {
   const kind = typedArrayKind(v);
@@ -145,7 +146,8 @@ function cloudArg(v, what) {
   }
   if (kind === undefined && isPlainArray(v)) {
     const len = checkLength(readLength(v, what), what);
-    const out = new Float32Array(len);
+    // JS numbers are doubles: read as a Float64Array is (its digits kept far from zero)
+    const out = new Float64Array(len);
     for (let i = 0; i < len; i++) {
       let x;
       try {
@@ -156,7 +158,7 @@ function cloudArg(v, what) {
       if (typeof x !== "number") fail(`${what}: element ${i} is ${describe(x)}, expected a number`);
       out[i] = x;
     }
-    return { points: out, origin: null };
+    return centred(out);
   }
   if (kind === undefined && v !== null && typeof v === "object") {
     let points;

@@ -219,6 +219,8 @@ test("large coordinates: Float64Array or { points, origin } in, T_target_source 
     assert.ok(rot < 1 && tr < 0.02, `${label}: rotation ${rot} deg, translation error at the clouds ${tr}`);
   };
   check(r.register(s64, t64), "Float64Array");
+  // an Array of numbers holds doubles: read as a Float64Array is, its digits kept
+  check(r.register(Array.from(s64), Array.from(t64)), "Array of numbers");
   // The same clouds as f32 offsets beside their origins.
   const rel = (c, o) => Float32Array.from(c, (x, i) => x - o[i % 3]);
   check(r.register({ points: rel(s64, a), origin: a }, { points: rel(t64, b), origin: b }), "{ points, origin }");
