@@ -48,6 +48,13 @@ pub fn initial_distance(t_initial_n: &Matrix4<f64>) -> Result<()> {
 /// scan on a map grid, 4e6 from zero, rounded to 0.25-0.5, is.)
 pub const F32_ROUNDING_WARNING: f64 = 2.5e-4;
 
+/// True when `f32` holds coordinates up to `far` from zero only to a step of more than
+/// [`F32_ROUNDING_WARNING`] of a cloud's half-extent `half` (the rule of [`f32_rounding`] and of
+/// [`crate::PointCloud::placed`]); false for a non-finite `far`.
+pub fn f32_rounds(far: f64, half: f64) -> bool {
+    far.is_finite() && far * f32::EPSILON as f64 > F32_ROUNDING_WARNING * half
+}
+
 /// Warns (into `warnings`; `what` names the cloud) when the `f32` offsets of a cloud with box
 /// `[lo, hi]` lie so far from zero for its size that `f32` holds them only to a step of more than
 /// [`F32_ROUNDING_WARNING`] of its half-extent: a cloud far from zero (a map grid) given as `f32`
@@ -58,7 +65,7 @@ pub fn f32_rounding(what: &str, lo: [f32; 3], hi: [f32; 3], warnings: &mut Vec<S
     let half = crate::cloud::half_extent_of(lo, hi);
     let far = lo.iter().chain(&hi).fold(0.0f64, |m, v| m.max((*v as f64).abs()));
     let step = far * f32::EPSILON as f64;
-    if half > 0.0 && step > F32_ROUNDING_WARNING * half {
+    if half > 0.0 && f32_rounds(far, half) {
         warnings.push(format!(
             "the {what}'s coordinates lie up to {} from zero for a cloud of largest half-extent {}: as f32 they \
              are rounded to steps of about {}, and the answer can be as coarse; pass them as f64 (a Float64Array, \

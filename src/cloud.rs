@@ -272,8 +272,7 @@ impl PointCloud {
         let centre = [0, 1, 2].map(|a| lo[a] as f64 * 0.5 + hi[a] as f64 * 0.5);
         let landed = m.transform_point(&nalgebra::Point3::from(centre));
         let far = landed.iter().fold(0.0f64, |a, v| a.max(v.abs())) + half;
-        let rounds = far.is_finite() && far * f32::EPSILON as f64 > crate::checks::F32_ROUNDING_WARNING * half;
-        if !self.origin_is_zero() || !rounds {
+        if !self.origin_is_zero() || !crate::checks::f32_rounds(far, half) {
             return self.transformed(m);
         }
         let mut linear = *m;

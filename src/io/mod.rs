@@ -207,10 +207,9 @@ fn signature(bytes: &[u8]) -> Option<Format> {
     None
 }
 
+/// The format of a file without a [`signature`] nor a known extension, from its content
+/// ([`detect_format`] has looked for the signatures already).
 fn sniff(bytes: &[u8]) -> Option<Format> {
-    if let Some(f) = signature(bytes) {
-        return Some(f);
-    }
     // PCD: a "# .PCD" comment or a VERSION / FIELDS line before anything else.
     for line in bytes[..bytes.len().min(4096)].split(|&b| b == b'\n').take(20) {
         let l = line.trim_ascii();
