@@ -52,7 +52,18 @@ pub const F32_ROUNDING_WARNING: f64 = 2.5e-4;
 /// [`F32_ROUNDING_WARNING`] of a cloud's half-extent `half` (the rule of [`f32_rounding`] and of
 /// [`crate::PointCloud::placed`]); false for a non-finite `far`.
 pub fn f32_rounds(far: f64, half: f64) -> bool {
-    far.is_finite() && far * f32::EPSILON as f64 > F32_ROUNDING_WARNING * half
+    far.is_finite() && f32_step(far) > F32_ROUNDING_WARNING * half
+}
+
+/// The spacing of `f32` values at `far` from zero (the gap between two neighbours there: 0.5 at
+/// 5.4e6); 0 at zero, and not finite for a non-finite `far`.
+pub fn f32_step(far: f64) -> f64 {
+    let far = far.abs();
+    if far == 0.0 || !far.is_finite() {
+        return if far == 0.0 { 0.0 } else { f64::INFINITY };
+    }
+    // below f32's smallest normal its spacing is fixed
+    (far.log2().floor().max(-126.0) - 23.0).exp2()
 }
 
 /// Warns (into `warnings`; `what` names the cloud) when the `f32` offsets of a cloud with box
@@ -64,7 +75,7 @@ pub fn f32_rounds(far: f64, half: f64) -> bool {
 pub fn f32_rounding(what: &str, lo: [f32; 3], hi: [f32; 3], warnings: &mut Vec<String>) {
     let half = crate::cloud::half_extent_of(lo, hi);
     let far = lo.iter().chain(&hi).fold(0.0f64, |m, v| m.max((*v as f64).abs()));
-    let step = far * f32::EPSILON as f64;
+    let step = f32_step(far);
     if half > 0.0 && f32_rounds(far, half) {
         warnings.push(format!(
             "the {what}'s coordinates lie up to {} from zero for a cloud of largest half-extent {}: as f32 they \

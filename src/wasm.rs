@@ -206,15 +206,16 @@ fn cloud_arg(value: &JsValue, what: &str) -> Result<PointCloud, JsError> {
 /// it gets an origin there too. Read the points as `origin + points[i]`. Any number of points. `matrix`: 16
 /// numbers, column-major (what a result's `T_target_source` and three.js `Matrix4.elements`
 /// hold), or (through the package's entry) four row-major rows; rigid to 1e-3 (a matrix written
-/// with a few decimals), and used as the rigid transform nearest it. Throws on a bad cloud or
-/// matrix.
+/// with a few decimals), and applied as given. Throws on a bad cloud or matrix.
 #[wasm_bindgen(js_name = transformPointCloud, unchecked_return_type = "CloudWithOrigin")]
 pub fn transform_point_cloud(
     #[wasm_bindgen(unchecked_param_type = "CloudInput")] cloud: JsValue,
     #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
 ) -> Result<JsValue, JsError> {
     let m = matrix_arg(matrix)?;
-    let m = crate::transform::nearest_rigid(&m).map_err(|e| JsError::new(&format!("matrix is not rigid: {e}")))?;
+    // checked, then used as given: snapped onto a rotation about the frame's origin, a matrix
+    // written with a few decimals would move a cloud on a map grid by metres
+    crate::transform::nearest_rigid(&m).map_err(|e| JsError::new(&format!("matrix is not rigid: {e}")))?;
     let cloud = cloud_arg(&cloud, "cloud")?;
     cloud_object(&cloud.placed(&m))
 }

@@ -56,7 +56,7 @@ try {
   } else {
     console.log(`source ${files[0]}: ${source.points.length / 3} points; target ${files[1]}: ${target.points.length / 3} points`);
     console.log("T_target_source (maps source points into the target frame):");
-    for (const row of rows) console.log("  " + row.map((v) => v.toFixed(6).padStart(11)).join(" "));
+    for (const row of rows) console.log("  " + row.map((v) => v.toFixed(12).padStart(20)).join(" "));
     console.log(`confidence ${r.confidence.toFixed(3)} (the engine's estimate that the answer is right; below 0.5 it warns)`);
     console.log(`fitness ${r.fitness.toFixed(4)}  inlier RMSE ${r.inlierRmse.toPrecision(4)}  ` +
       `(max correspondence distance ${r.maxCorrespondenceDistance.toPrecision(4)})`);

@@ -74,11 +74,15 @@ pub(super) fn move_keyword_lines(
 ) -> Result<Vec<u8>> {
     // First pass: how the file writes its numbers.
     let mut styles = Styles::default();
-    each_triple(bytes, format, keywords, &mut |_, kind, toks, _| {
-        let style = if kind == Triple::Normal { &mut styles.normal } else { &mut styles.position };
-        toks.iter().for_each(|t| style.learn(t))
+    each_triple(bytes, format, keywords, &mut |_, kind, toks, v| {
+        if kind == Triple::Normal {
+            toks.iter().for_each(|t| styles.normal.learn(t));
+        } else {
+            toks.iter().for_each(|t| styles.position.learn(t));
+            styles.bound(v);
+        }
     })?;
-    let styles = styles.for_writing(motion.scale());
+    let styles = styles.for_writing(motion);
     // Second pass: the triples rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
     each_triple(bytes, format, keywords, &mut |line, kind, toks, v| {

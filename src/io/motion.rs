@@ -5,12 +5,15 @@ use crate::transform::RIGID_TOLERANCE;
 use crate::{Error, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
-/// `m`'s linear part as `s R` (`R` a rotation, `s > 0`), checked: finite, the bottom row
-/// `[0, 0, 0, 1]`, and `R` orthonormal to [`RIGID_TOLERANCE`]. As for the other transforms a
-/// caller gives (`transform::nearest_rigid`), `R` is then the rotation nearest it, and a scale
-/// within that tolerance of 1 (a rigid matrix written with a few decimals) is 1. Returns
-/// `(s R, R, t)`.
-fn similarity(m: &Matrix4<f64>) -> Result<(Matrix3<f64>, Matrix3<f64>, Vector3<f64>)> {
+/// `m` checked: finite, the bottom row `[0, 0, 0, 1]`, and its linear part `A` within
+/// [`RIGID_TOLERANCE`] of `s R` (`R` a rotation, `s > 0`). Returns `A`, `R`, `s` and `t`: `R` the
+/// rotation nearest `A / s` (what turns normals and poses), and `s` made 1 when it is within that
+/// tolerance of 1 (a rigid matrix written with a few decimals: no change of unit), as a
+/// [`Motion`]. Points are
+/// mapped by `A` itself, not by `s R`: snapping `A` onto a rotation would turn the points about
+/// the frame's origin, which on map-grid coordinates lies kilometres away, and move a survey by
+/// metres for a matrix off by 1e-4.
+fn similarity(m: &Matrix4<f64>) -> Result<Motion> {
     let bad = |why: &str| Err(Error::InvalidOption(format!("the transform is not rigid (or uniformly scaled): {why}")));
     if m.iter().any(|v| !v.is_finite()) {
         return bad("it has a non-finite entry");
@@ -29,22 +32,24 @@ fn similarity(m: &Matrix4<f64>) -> Result<(Matrix3<f64>, Matrix3<f64>, Vector3<f
     if (rotation.transpose() * rotation - Matrix3::identity()).abs().max() > RIGID_TOLERANCE {
         return bad("its linear part is not a rotation times one scale");
     }
-    // (a computed transform, rigid to 1e-9, is used bit for bit)
     let t = m.fixed_view::<3, 1>(0, 3).into_owned();
+    // (a computed transform, rigid to 1e-9, is used bit for bit)
     if (scale - 1.0).abs() <= 1e-9 && crate::transform::check_rigid(m, 1e-9).is_ok() {
-        return Ok((linear, linear, t));
+        return Ok(Motion { linear, rotation: linear, scale: 1.0, t });
     }
     let rotation = crate::rigid::nearest_rotation(&rotation);
     let scale = if (scale - 1.0).abs() <= RIGID_TOLERANCE { 1.0 } else { scale };
-    Ok((rotation * scale, rotation, t))
+    Ok(Motion { linear, rotation, scale, t })
 }
 
 /// A checked motion ([`similarity`]) that maps points and turns normals.
 pub(super) struct Motion {
-    /// `s R`.
+    /// `A`, the matrix's linear part (`s R` within [`RIGID_TOLERANCE`]).
     pub(super) linear: Matrix3<f64>,
     /// `R`.
     pub(super) rotation: Matrix3<f64>,
+    /// `s` (1 for a rigid matrix).
+    scale: f64,
     /// The translation.
     pub(super) t: Vector3<f64>,
 }
@@ -52,16 +57,15 @@ pub(super) struct Motion {
 impl Motion {
     /// `m` checked as [`similarity`] checks it.
     pub(super) fn new(m: &Matrix4<f64>) -> Result<Self> {
-        let (linear, rotation, t) = similarity(m)?;
-        Ok(Self { linear, rotation, t })
+        similarity(m)
     }
 
-    /// The uniform scale `s`.
+    /// The uniform scale `s` (exactly 1 for a matrix rigid to [`RIGID_TOLERANCE`]).
     pub(super) fn scale(&self) -> f64 {
-        self.linear.determinant().cbrt()
+        self.scale
     }
 
-    /// A point mapped: `s R p + t`.
+    /// A point mapped as the matrix maps it: `A p + t`.
     pub(super) fn point(&self, p: [f64; 3]) -> [f64; 3] {
         (self.linear * Vector3::from(p) + self.t).into()
     }
@@ -69,5 +73,70 @@ impl Motion {
     /// A normal turned: `R n`.
     pub(super) fn normal(&self, n: [f64; 3]) -> [f64; 3] {
         (self.rotation * Vector3::from(n)).into()
+    }
+}
+
+/// The axis-aligned bounds of the positions a file holds (f64, in the file's frame), taken in one
+/// at a time: what the moved positions need to be written to their precision.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Bounds([[f64; 2]; 3]);
+
+impl Default for Bounds {
+    fn default() -> Self {
+        Self([[f64::INFINITY, f64::NEG_INFINITY]; 3])
+    }
+}
+
+impl Bounds {
+    /// Takes in one position (one with a non-finite value is left out).
+    pub(super) fn add(&mut self, p: [f64; 3]) {
+        if p.iter().all(|v| v.is_finite()) {
+            for (b, v) in self.0.iter_mut().zip(p) {
+                *b = [b[0].min(v), b[1].max(v)];
+            }
+        }
+    }
+
+    /// The box's diagonal after `motion` (its scale times the box's own); 0 without a position.
+    pub(super) fn diagonal(&self, motion: &Motion) -> f64 {
+        self.0.iter().map(|[lo, hi]| (hi - lo).max(0.0).powi(2)).sum::<f64>().sqrt() * motion.scale.abs()
+    }
+
+    /// The largest value of a position moved by `motion` (it lies on a corner of the moved box);
+    /// 0 without a position.
+    pub(super) fn largest_moved(&self, motion: &Motion) -> f64 {
+        if self.0[0][0] > self.0[0][1] {
+            return 0.0;
+        }
+        let [x, y, z] = self.0;
+        (0..8)
+            .map(|k| motion.point([x[k & 1], y[(k >> 1) & 1], z[(k >> 2) & 1]]))
+            .fold(0.0f64, |a, p| p.iter().fold(a, |a, v| a.max(v.abs())))
+    }
+
+    /// The `f32` step at the largest moved position, when `f32` would round the moved positions
+    /// beyond [`crate::checks::F32_ROUNDING_WARNING`] of the moved box's largest half-extent (a
+    /// local scan placed on a map grid), the rule of [`crate::PointCloud::placed`]; else `None`.
+    pub(super) fn f32_rounds(&self, motion: &Motion) -> Option<f64> {
+        let half = self.0.iter().fold(0.0f64, |a, [lo, hi]| a.max((hi - lo) * 0.5)) * motion.scale.abs();
+        let far = self.largest_moved(motion);
+        (half > 0.0 && crate::checks::f32_rounds(far, half)).then(|| crate::checks::f32_step(far))
+    }
+}
+
+/// An error when `f32` would round the positions of a `format` file that stores them as `f32`,
+/// moved by `motion`, beyond [`Bounds::f32_rounds`]'s rule: such a file cannot hold them (a local
+/// scan moved onto a map grid), and writing it would move every point by up to half that step.
+pub(super) fn check_f32(bounds: &Bounds, motion: &Motion, format: &str) -> Result<()> {
+    match bounds.f32_rounds(motion) {
+        Some(step) => Err(Error::InvalidOption(format!(
+            "the transform moves this {format} file's points up to {} from zero, where its float32 coordinates hold \
+             them only to steps of {} (the cloud is {} across): save the moved points in double precision instead \
+             (a PLY: writePly(transformPointCloud(...)), or the CLI's --aligned with a .ply path)",
+            crate::error::num(bounds.largest_moved(motion)),
+            crate::error::num(step),
+            crate::error::num(bounds.diagonal(motion))
+        ))),
+        None => Ok(()),
     }
 }

@@ -5,6 +5,7 @@
 //! C's `%g` and C++ streams write: `0.11349`, `9.9999997e-05`), the same way, with as many
 //! significant digits.
 
+use super::motion::{Bounds, Motion};
 use std::ops::Range;
 
 /// The style learned from a file's tokens of one kind (coordinates, or normals).
@@ -37,14 +38,50 @@ pub(super) struct NumberStyle {
 pub(super) struct Styles {
     pub(super) position: NumberStyle,
     pub(super) normal: NumberStyle,
+    /// The positions' bounds, from [`Styles::bound`].
+    bounds: Bounds,
 }
 
+/// The coarsest step a moved position is written with, as a fraction of the cloud's diagonal:
+/// a file written with few decimals (a CAD cube's `1.0 0.0 1.0`) gets more once turned, since
+/// its values no longer fall on its grid, and rounding them back onto it would distort the shape
+/// (by up to 0.05 of a 2-unit cube's side at one decimal). A scan in millimetre steps over a few
+/// metres keeps its three decimals.
+const STEP_OF_DIAGONAL: f64 = 1e-3;
+
 impl Styles {
-    /// As the moved values are written: positions shifted by the motion's `scale` (a change of
-    /// unit), normals with at least six decimals.
-    pub(super) fn for_writing(self, scale: f64) -> Self {
-        Self { position: self.position.scaled(scale), normal: self.normal.at_least(6) }
+    /// Takes in one position (finite values only), whose bounds set the coarsest step the moved
+    /// positions are written with ([`STEP_OF_DIAGONAL`]).
+    pub(super) fn bound(&mut self, p: [f64; 3]) {
+        self.bounds.add(p);
     }
+
+    /// As the moved values are written by `motion`: positions shifted by its scale (a change of
+    /// unit), with at least the digits of a step of [`STEP_OF_DIAGONAL`] of the moved cloud's
+    /// diagonal (decimals, or in exponent form significant digits, for the largest moved value);
+    /// normals with at least six decimals.
+    pub(super) fn for_writing(self, motion: &Motion) -> Self {
+        let (diagonal, largest) = (self.bounds.diagonal(motion), self.bounds.largest_moved(motion));
+        let mut position = self.position.scaled(motion.scale());
+        let step = diagonal * STEP_OF_DIAGONAL;
+        if step.is_finite() && step > 0.0 && largest.is_finite() {
+            if position.exponent {
+                // significant digits that reach the step at the largest value
+                let digits = ((largest / step).log10().floor().max(0.0) as u32 + 1).min(MAX_DECIMALS as u32);
+                position.significant = position.significant.max(digits);
+                position.decimals = position.decimals.max(digits - 1);
+            } else if let Some(d) = decimals_for_step(step) {
+                position = position.at_least(d);
+            }
+        }
+        Self { position, normal: self.normal.at_least(6), bounds: self.bounds }
+    }
+}
+
+/// The fewest decimals whose step is at most `step` (none for a step that is not finite and
+/// positive: a single point, no point).
+fn decimals_for_step(step: f64) -> Option<u32> {
+    (step.is_finite() && step > 0.0).then(|| (-step.log10()).ceil().clamp(0.0, MAX_DECIMALS as f64) as u32)
 }
 
 /// The most decimals written: beyond 17 an `f64` has no more digits to give.

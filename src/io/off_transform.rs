@@ -27,11 +27,14 @@ pub(crate) fn transform_off(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let mut styles = Styles::default();
     let prefix = vertex_records(bytes, &mut |_, toks| {
         toks[..3].iter().for_each(|t| styles.position.learn(t));
+        if let Some(p) = triple(toks, 0) {
+            styles.bound(p);
+        }
         toks.iter().skip(3).take(3).for_each(|t| styles.normal.learn(t));
         Ok(())
     })?;
     let normals = prefix.contains('N');
-    let styles = styles.for_writing(motion.scale());
+    let styles = styles.for_writing(&motion);
     // Second pass: the values rewritten where they are, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
     vertex_records(bytes, &mut |_, toks| {

@@ -10,7 +10,7 @@
 //! so a file it refuses is refused here too.
 
 use super::lzf;
-use super::motion::Motion;
+use super::motion::{check_f32, Bounds, Motion};
 use super::number_style::{span, Rewrite, Styles};
 use super::pcd::{byte_offset, parse_header, Data, Header, F};
 use crate::{Error, Result};
@@ -50,12 +50,14 @@ pub fn transform_pcd(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
             h.records(bytes)?;
             let mut out = bytes.to_vec();
             let offset: Vec<usize> = (0..h.fields.len()).map(|f| h.body_at + byte_offset(&h.fields, f)).collect();
+            check_single(&out, &h, xyz, &motion, &|i, f| offset[f] + i * h.stride)?;
             move_values(&mut out, &h, xyz, normal, &motion, &|i, f| offset[f] + i * h.stride);
             Ok(out)
         }
         Data::Compressed => {
             let (mut raw, end) = h.decompress(bytes)?;
             let start: Vec<usize> = (0..h.fields.len()).map(|f| h.column_start(f)).collect();
+            check_single(&raw, &h, xyz, &motion, &|i, f| start[f] + i * h.fields[f].size)?;
             move_values(&mut raw, &h, xyz, normal, &motion, &|i, f| start[f] + i * h.fields[f].size);
             let packed = lzf::compress(&raw);
             let mut out = Vec::with_capacity(h.body_at + 8 + packed.len() + (bytes.len() - end));
@@ -67,6 +69,25 @@ pub fn transform_pcd(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
             Ok(out)
         }
     }
+}
+
+/// An error when the `xyz` fields are `float` (SIZE 4) and would round the points moved by
+/// `motion` ([`check_f32`]); `at` as for [`move_values`].
+fn check_single(
+    buf: &[u8],
+    h: &Header,
+    xyz: [usize; 3],
+    motion: &Motion,
+    at: &dyn Fn(usize, usize) -> usize,
+) -> Result<()> {
+    if xyz.iter().all(|&k| h.fields[k].size == 8) {
+        return Ok(());
+    }
+    let mut bounds = Bounds::default();
+    for i in 0..h.n_points as usize {
+        bounds.add([0, 1, 2].map(|a| h.fields[xyz[a]].read_f64(&buf[at(i, xyz[a])..])));
+    }
+    check_f32(&bounds, motion, "binary PCD")
 }
 
 /// Each point's `xyz` fields in `buf` moved and its `normal` fields turned, in their own type;
@@ -115,14 +136,14 @@ fn move_ascii(
     // First pass: how the file writes its numbers.
     let mut styles = Styles::default();
     h.ascii_rows(bytes, &mut |n, _, toks| {
-        parse(n, toks, xyz, xyz_at)?;
+        styles.bound(parse(n, toks, xyz, xyz_at)?);
         xyz_at.iter().for_each(|&k| styles.position.learn(toks[k]));
         if let Some(at) = normal_at {
             at.iter().for_each(|&k| styles.normal.learn(toks[k]));
         }
         Ok(())
     })?;
-    let styles = styles.for_writing(motion.scale());
+    let styles = styles.for_writing(motion);
     // Second pass: the point lines rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
     let mut edits = Vec::with_capacity(6);

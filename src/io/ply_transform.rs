@@ -6,10 +6,13 @@
 //! Binary files are copied and the vertex records rewritten in place; ASCII files get their
 //! vertex lines rewritten (values separated by one space) and every other line as it was. Values
 //! are computed in f64 and written back in the property's own type: a `float` file stays `float`
-//! (its own precision), a `double` file keeps every digit. The header and the elements before the
+//! (its own precision), a `double` file keeps every digit; except where `float` would round the
+//! moved positions beyond [`crate::checks::F32_ROUNDING_WARNING`] of the cloud's size (a local
+//! scan moved onto a map grid: steps of 0.5 at 5.4e6), where `x`, `y` and `z` become `double`
+//! (in the header and in every vertex), the rest of the file as it was. The header and the elements before the
 //! vertices are read by the PLY reader's own parser, so a file it refuses is refused here too.
 
-use super::motion::Motion;
+use super::motion::{Bounds, Motion};
 use super::ply::{
     parse_header, read_ascii_element, read_binary_element, Element, Encoding, Kind, Out, Scalar, Want, F,
 };
@@ -22,6 +25,8 @@ use nalgebra::Matrix4;
 struct Layout {
     position: [usize; 3],
     normal: Option<[usize; 3]>,
+    /// The positions are written as `double` (declared so by [`widened_header`]).
+    widened: bool,
 }
 
 /// The vertex element's layout; an error when x, y or z is missing, not a floating-point
@@ -49,7 +54,7 @@ fn layout(el: &Element) -> Result<Layout> {
         (Some(x), Some(y), Some(z)) if float(x) && float(y) && float(z) => Some([x, y, z]),
         _ => None,
     };
-    Ok(Layout { position, normal })
+    Ok(Layout { position, normal, widened: false })
 }
 
 /// The PLY file `bytes` with its vertices moved by `m` (`T_target_source`: a rigid transform, or
@@ -65,6 +70,7 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let layout = layout(vertex)?;
     let position = |p| motion.point(p);
     let normal = |n| motion.normal(n);
+    let single = layout.position.iter().any(|&i| matches!(vertex.props[i].kind, Kind::Scalar(Scalar::F32)));
     match h.encoding {
         Encoding::Ascii => {
             let mut lines = Lines::at(bytes, h.body, h.last_line);
@@ -72,8 +78,27 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
                 read_ascii_element(&mut lines, el, Want::Skip, &mut Out::default())?;
             }
             let start = lines.offset();
+            // float positions: their bounds first, to see whether float holds them moved
+            let widen = single && {
+                let bounds = std::cell::Cell::new(Bounds::default());
+                let record = |p: [f64; 3]| {
+                    let mut b = bounds.get();
+                    b.add(p);
+                    bounds.set(b);
+                    p
+                };
+                let mut scratch = lines.clone();
+                move_ascii(bytes, &mut scratch, vertex, &layout, &record, &|n| n, &mut Vec::new())?;
+                bounds.get().f32_rounds(&motion).is_some()
+            };
             let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 4);
-            out.extend_from_slice(&bytes[..start]);
+            if widen {
+                out.extend_from_slice(&widened_header(&bytes[..h.body], vi, &layout, vertex));
+                out.extend_from_slice(&bytes[h.body..start]);
+            } else {
+                out.extend_from_slice(&bytes[..start]);
+            }
+            let layout = Layout { widened: widen, ..layout };
             move_ascii(bytes, &mut lines, vertex, &layout, &position, &normal, &mut out)?;
             out.extend_from_slice(&bytes[lines.offset()..]);
             Ok(out)
@@ -84,9 +109,120 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
             for el in &h.elements[..vi] {
                 read_binary_element(bytes, &mut pos, el, Want::Skip, big, &mut Out::default())?;
             }
+            let need = records_bytes(bytes.len(), pos, vertex)?;
+            if single && binary_bounds(&bytes[pos..pos + need], vertex, &layout, big).f32_rounds(&motion).is_some() {
+                let mut out = widened_header(&bytes[..h.body], vi, &layout, vertex);
+                out.extend_from_slice(&bytes[h.body..pos]);
+                widen_binary(&mut out, &bytes[pos..pos + need], vertex, &layout, big, &position, &normal);
+                out.extend_from_slice(&bytes[pos + need..]);
+                return Ok(out);
+            }
             let mut out = bytes.to_vec();
             move_binary(&mut out, pos, vertex, &layout, big, &position, &normal)?;
             Ok(out)
+        }
+    }
+}
+
+/// The header `header` (up to its body) with the vertex element's (the `vi`-th element's) `x`,
+/// `y` and `z` declared `double` (`float64` where the file named them `float32`), every other
+/// byte as it was.
+fn widened_header(header: &[u8], vi: usize, layout: &Layout, vertex: &Element) -> Vec<u8> {
+    let names: Vec<&str> = layout.position.iter().map(|&i| vertex.props[i].name.as_str()).collect();
+    let mut out = Vec::with_capacity(header.len() + 16);
+    let mut element = None::<usize>;
+    let mut seen = 0usize;
+    for line in header.split_inclusive(|&b| b == b'\n') {
+        let text = String::from_utf8_lossy(line);
+        let words: Vec<&str> = text.split_ascii_whitespace().collect();
+        match words.as_slice() {
+            ["element", ..] => {
+                element = Some(seen);
+                seen += 1;
+            }
+            ["property", ty @ ("float" | "float32"), name] if element == Some(vi) && names.contains(name) => {
+                let wide = if *ty == "float" { "double" } else { "float64" };
+                // the type word replaced where it stands, the spacing and line ending kept
+                let at = text.find(ty).unwrap_or(0);
+                out.extend_from_slice(text[..at].as_bytes());
+                out.extend_from_slice(wide.as_bytes());
+                out.extend_from_slice(text[at + ty.len()..].as_bytes());
+                continue;
+            }
+            _ => {}
+        }
+        out.extend_from_slice(line);
+    }
+    out
+}
+
+/// The bytes the vertex records take from byte `pos` of a file of `len` bytes; an error when they
+/// do not fit (a truncated file or a bad count).
+fn records_bytes(len: usize, pos: usize, el: &Element) -> Result<usize> {
+    let stride = el.fixed_size().unwrap_or(0);
+    let remaining = len - pos;
+    let need = usize::try_from(el.count).ok().and_then(|n| n.checked_mul(stride));
+    need.filter(|&need| need <= remaining).ok_or_else(|| {
+        Error::parse(
+            F,
+            format!(
+                "element 'vertex' declares {} records of {stride} bytes, but only {remaining} bytes follow (from byte offset {pos}): truncated file or bad count",
+                el.count
+            ),
+        )
+    })
+}
+
+/// The bounds of the positions of the vertex `records`.
+fn binary_bounds(records: &[u8], el: &Element, layout: &Layout, big: bool) -> Bounds {
+    let mut bounds = Bounds::default();
+    let stride = el.fixed_size().unwrap_or(0);
+    if stride == 0 {
+        return bounds;
+    }
+    let offsets = offsets(el);
+    let p = layout.position.map(|i| offsets[i]);
+    for record in records.chunks_exact(stride) {
+        bounds.add(p.map(|(off, s)| s.read_f64(&record[off..off + s.size()], big)));
+    }
+    bounds
+}
+
+/// Appends the vertex `records` to `out` moved, their positions widened to `double` (the other
+/// properties as they were, normals turned in their own type).
+fn widen_binary(
+    out: &mut Vec<u8>,
+    records: &[u8],
+    el: &Element,
+    layout: &Layout,
+    big: bool,
+    position: &dyn Fn([f64; 3]) -> [f64; 3],
+    normal: &dyn Fn([f64; 3]) -> [f64; 3],
+) {
+    let stride = el.fixed_size().unwrap_or(0);
+    if stride == 0 {
+        return;
+    }
+    let offsets = offsets(el);
+    let p = layout.position.map(|i| offsets[i]);
+    let n = layout.normal.map(|idx| idx.map(|i| offsets[i]));
+    out.reserve(records.len() + records.len() / stride * 12);
+    let mut scratch = vec![0u8; stride];
+    for record in records.chunks_exact(stride) {
+        let read = |slot: [(usize, Scalar); 3]| slot.map(|(off, s)| s.read_f64(&record[off..off + s.size()], big));
+        let moved = position(read(p));
+        scratch.copy_from_slice(record);
+        if let Some(n) = n {
+            let turned = normal(read(n));
+            for a in 0..3 {
+                put(&mut scratch, n[a], turned[a], big);
+            }
+        }
+        for (i, &(off, s)) in offsets.iter().enumerate() {
+            match layout.position.iter().position(|&k| k == i) {
+                Some(a) => out.extend_from_slice(&if big { moved[a].to_be_bytes() } else { moved[a].to_le_bytes() }),
+                None => out.extend_from_slice(&scratch[off..off + s.size()]),
+            }
         }
     }
 }
@@ -120,7 +256,7 @@ fn put(record: &mut [u8], (off, s): (usize, Scalar), v: f64, big: bool) {
     }
 }
 
-/// Rewrites the vertex records of `out` (a copy of the file) from byte `pos`.
+/// Rewrites the vertex records of `out` (a copy of the file) from byte `pos`, in place.
 fn move_binary(
     out: &mut [u8],
     pos: usize,
@@ -131,17 +267,7 @@ fn move_binary(
     normal: &dyn Fn([f64; 3]) -> [f64; 3],
 ) -> Result<()> {
     let stride = el.fixed_size().unwrap_or(0);
-    let remaining = out.len() - pos;
-    let need = usize::try_from(el.count).ok().and_then(|n| n.checked_mul(stride));
-    let Some(need) = need.filter(|&need| need <= remaining) else {
-        return Err(Error::parse(
-            F,
-            format!(
-                "element 'vertex' declares {} records of {stride} bytes, but only {remaining} bytes follow (from byte offset {pos}): truncated file or bad count",
-                el.count
-            ),
-        ));
-    };
+    let need = records_bytes(out.len(), pos, el)?;
     if stride == 0 {
         return Ok(());
     }
@@ -187,7 +313,13 @@ fn move_ascii(
     let types: Vec<Scalar> = el
         .props
         .iter()
-        .map(|p| if let Kind::Scalar(s) = p.kind { s } else { unreachable!("checked by layout") })
+        .enumerate()
+        .map(|(i, p)| match p.kind {
+            // widened positions are written as doubles (`widened_header` declares them so)
+            Kind::Scalar(_) if layout.widened && layout.position.contains(&i) => Scalar::F64,
+            Kind::Scalar(s) => s,
+            Kind::List { .. } => unreachable!("checked by layout"),
+        })
         .collect();
     let mut done = 0u64;
     while done < el.count {

@@ -40,6 +40,7 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
         for &c in &row.columns.xyz {
             styles.position.learn(row.fields[c]);
         }
+        styles.bound(row.point);
         match normal_columns(row, true).and_then(|c| values(row.fields, c).map(|n| (c, n))) {
             Some((normal, n)) => {
                 normal.iter().for_each(|&c| styles.normal.learn(row.fields[c]));
@@ -49,7 +50,7 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
         }
         Ok(())
     })?;
-    let styles = styles.for_writing(motion.scale());
+    let styles = styles.for_writing(&motion);
     // Second pass: the data rows rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
     let mut edits = Vec::with_capacity(6);

@@ -5,6 +5,7 @@ use crate::{Error, Result};
 
 /// Iterates the lines of a byte slice (split on `\n`, a trailing `\r` stripped), numbering them
 /// from 1, and remembers the byte offset of the next line (where a binary body starts).
+#[derive(Clone)]
 pub(crate) struct Lines<'a> {
     bytes: &'a [u8],
     pos: usize,

@@ -56,8 +56,9 @@ pub(crate) fn resolve(options: &Options, model: &Model) -> Result<Resolved> {
     Ok(Resolved { n_net })
 }
 
-/// The initial guess `T_target_source` in the caller's frame (identity when none is given), made
-/// exactly rigid ([`transform::nearest_rigid`]); an error when it is non-finite or not rigid.
+/// The initial guess `T_target_source` in the caller's frame (identity when none is given), as
+/// given; an error when it is non-finite or not rigid to [`transform::RIGID_TOLERANCE`]. It is
+/// made exactly rigid in the clouds' local frames ([`rigid_in_local_frames`]).
 pub(crate) fn initial_transform(options: &Options) -> Result<Matrix4<f64>> {
     Ok(match &options.initial_transform {
         Some(rows) => {
@@ -66,10 +67,33 @@ pub(crate) fn initial_transform(options: &Options) -> Result<Matrix4<f64>> {
                 return Err(Error::InvalidOption("initialTransform has a non-finite entry".into()));
             }
             transform::nearest_rigid(&m)
-                .map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?
+                .map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?;
+            m
         }
         None => Matrix4::identity(),
     })
+}
+
+/// The initial guess (checked by [`initial_transform`]) in the clouds' local frames, made exactly
+/// rigid there ([`transform::nearest_rigid`]: the nearest rotation, the translation kept). Its
+/// rotation is snapped about the source's origin, near its points: snapped in the caller's frame,
+/// about a map grid's origin kilometres away, a guess written with a few decimals would move the
+/// source by metres.
+pub(crate) fn rigid_in_local_frames(
+    init: &Matrix4<f64>,
+    origin_source: [f64; 3],
+    origin_target: [f64; 3],
+) -> Result<Matrix4<f64>> {
+    let local = crate::origin::to_local(init, origin_source, origin_target);
+    transform::nearest_rigid(&local).map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))
+}
+
+/// The distance the answer's evidence and confidence are measured at, in normalised units: the
+/// final ICP distance `d_final`, or the default one when that is smaller. The confidence is
+/// calibrated at the default; measured at a wider distance the caller chose, every pose would
+/// fit better and a wrong one pass for right.
+pub(crate) fn evidence_distance(d_final: f64) -> f64 {
+    d_final.min(DEFAULT_MAX_CORRESPONDENCE)
 }
 
 /// The final ICP distance and the ICP voxel size in normalised units, for a normalisation of

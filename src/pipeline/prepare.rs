@@ -18,7 +18,7 @@ use crate::outliers::{self, Outliers};
 use crate::register::Options;
 use crate::spacing::Spacing;
 use crate::support::{self, Support};
-use crate::{checks, limits, origin, sampling, transform, Result};
+use crate::{checks, limits, sampling, transform, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use std::borrow::Cow;
 
@@ -43,6 +43,8 @@ pub(crate) struct Prepared {
     pub src_n: PointCloud,
     /// The final ICP max correspondence distance.
     pub d_final: f64,
+    /// The distance of the answer's evidence ([`options::evidence_distance`]).
+    pub d_evidence: f64,
     /// The source points fed to the network.
     pub net_src: PointCloud,
     /// The voxelised source for ICP.
@@ -99,7 +101,7 @@ pub(crate) fn prepare(
     // so a guess that moves the source far keeps the source's shape.
     let (origin_source, origin_target) = (source.origin, summary.origin);
     let source = source.into_local();
-    let init_local = origin::to_local(&init, origin_source, origin_target);
+    let init_local = options::rigid_in_local_frames(&init, origin_source, origin_target)?;
     let rotate_init = transform::from_rotation_translation(&transform::rotation(&init_local), &Vector3::zeros());
     let shift = Matrix4::new_translation(&transform::translation(&init_local));
     let (size_source, size_target) = (source.half_extent(), summary.bounding.1);
@@ -151,7 +153,20 @@ pub(crate) fn prepare(
     limits::check_icp_points("source", src_n.len(), icp_src.len(), voxel_user)?;
     limits::check_icp_points("target", target.cloud.len(), target.icp.len(), voxel_user)?;
     let upright = Upright::of(options, &rotate_init);
-    Ok(Prepared { origin_source, rotate_init, upright, norm, t_initial, src_n, d_final, net_src, icp_src, target })
+    let d_evidence = options::evidence_distance(d_final);
+    Ok(Prepared {
+        origin_source,
+        rotate_init,
+        upright,
+        norm,
+        t_initial,
+        src_n,
+        d_final,
+        d_evidence,
+        net_src,
+        icp_src,
+        target,
+    })
 }
 
 /// `cloud` validated ([`PointCloud::validated`], `options.non_finite`); with [`Outliers::Drop`]

@@ -98,7 +98,7 @@ pub(crate) fn search(
         None => t,
     };
     let judge = |t: &Matrix4<f64>| {
-        confidence::probe(target_index, &source_index, &p.icp_src.points, t, d_final, options.icp, &admissible)
+        confidence::probe(target_index, &source_index, &p.icp_src.points, t, p.d_evidence, options.icp, &admissible)
     };
     // `c` is a better answer than `b`: it fits better (`refine::better`) and is another pose. A
     // start that only found the answer again (a hair better, perhaps) leaves it as it was judged:
@@ -318,17 +318,18 @@ pub(crate) fn search(
         None => {
             let t = level(if options.network { builder.t_net_n() } else { p.t_initial });
             let probed = judge(&t);
-            let e = probed.evidence;
             let answer = if options.network { "the network's estimate" } else { "the initial transform" };
             warnings.push(match upright {
                 Some(_) => format!("no refined start ended upright (within {UP_TOLERANCE_DEG} degrees of `up`), or the global descriptors matched too little: the answer is {answer}, levelled, unrefined"),
                 None => format!("no start could be refined (the global descriptors matched too little): the answer is {answer}, unrefined"),
             });
+            // its fitness at the final distance, as every answer's (the evidence's may be tighter)
+            let (fitness, inlier_rmse) = target_index.evaluate(&p.icp_src.points, &t, d_final);
             let c = Candidate {
                 start: estimate,
                 T_target_source: t,
-                fitness: e.fitness,
-                inlier_rmse: e.rmse_ratio * d_final,
+                fitness,
+                inlier_rmse,
                 iterations: 0,
                 converged: false,
             };
@@ -339,6 +340,23 @@ pub(crate) fn search(
     // an answer no refinement reached: the evidence that calibrates the confidence is that of
     // refined answers, and this one was not even a start's end
     let confidence = if refined_any { confidence } else { confidence.min(UNREFINED_CONFIDENCE) };
+    // a source within a few evidence distances of its centre fits wherever it touches the target's
+    // surface, turned or not: nothing in the fit confirms its pose (typically clouds in different
+    // units, the source the smaller)
+    let source_extent = p.src_n.half_extent();
+    let confidence = if source_extent < SMALL_SOURCE_DISTANCES * p.d_evidence {
+        let s = p.norm.scale;
+        warnings.push(format!(
+            "the source's half-extent ({}) is less than {SMALL_SOURCE_DISTANCES} times the distance the answer is judged at ({}): \
+             it fits about as well turned or moved over the target's surface, so the fit cannot confirm its pose \
+             (clouds in different units? else give a smaller maxCorrespondenceDistance)",
+            crate::error::num(source_extent * s),
+            crate::error::num(p.d_evidence * s)
+        ));
+        confidence.min(UNREFINED_CONFIDENCE)
+    } else {
+        confidence
+    };
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
     // probes turned it over): the caller asked to refine that guess, so the result says how far
     // it moved
@@ -361,6 +379,12 @@ pub(crate) fn search(
 /// estimate or the initial transform, unrefined, when no start could be refined or none ended
 /// upright): below the line of the low-confidence warning.
 pub(crate) const UNREFINED_CONFIDENCE: f64 = 0.25;
+
+/// A source whose largest half-extent is below this many evidence distances
+/// ([`super::options::evidence_distance`]) has an answer no fit can confirm, and its confidence is
+/// at most [`UNREFINED_CONFIDENCE`]: turned by 15 degrees about its centre, its farthest points
+/// move less than that distance (`1 / sin 15°` is 3.9).
+pub(crate) const SMALL_SOURCE_DISTANCES: f64 = 4.0;
 
 /// The final verdict on the answer `c` judged by the probe (`probed`): its evidence, with the
 /// other answers the search `refined` that fit about as well counted as alternatives

@@ -173,9 +173,9 @@ fn print_registration(
             .map_err(|e| format!("internal: {e}"))?;
         out!("{out}");
     } else {
-        out!("T_target_source (maps source points into the target frame):");
+        out!("T_target_source (maps source points into the target frame; to 12 decimals, --json for every digit):");
         for row in transform::to_rows(&r.T_target_source) {
-            out!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
+            out!("{}", matrix_row(&row));
         }
         out!(
             "rotation {:.3} deg, translation {:.6}",
@@ -208,7 +208,7 @@ fn print_registration(
                 a.inlier_rmse
             );
             for row in transform::to_rows(&a.T_target_source) {
-                out!("  {:>12.6} {:>12.6} {:>12.6} {:>12.6}", row[0], row[1], row[2], row[3]);
+                out!("{}", matrix_row(&row));
             }
         }
         let t = r.timings;
@@ -474,4 +474,10 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         return Err(format!("{failed} of {} sources failed", sources.len()));
     }
     Ok(())
+}
+
+/// One row of a printed 4x4, to 12 decimals: with fewer, a matrix copied from the terminal moves
+/// a survey on a map grid (coordinates near 5e6) by metres (1e-6 of its rotation is 5 there).
+fn matrix_row(row: &[f64; 4]) -> String {
+    row.iter().map(|v| format!("{:>20.12}", if *v == 0.0 { 0.0 } else { *v })).collect::<Vec<_>>().join(" ")
 }

@@ -1,0 +1,121 @@
+//! `io::transform_file` keeps the moved positions' precision: a `float` PLY moved onto a map grid
+//! gets `double` positions; a `float` PCD or STL that cannot hold them is refused; a text file
+//! written with few decimals (or C's `%g`) gets the digits its moved values need; and a matrix
+//! within the rigid tolerance maps the points where it puts them, not about a snapped rotation.
+
+use arps::io::{read_point_cloud, transform_file};
+mod common;
+use common::apply;
+use nalgebra::{Matrix4, Rotation3, Vector3};
+
+/// A local scan placed on a map grid: turned 30 degrees about z, then moved 5.4e6 away.
+fn onto_map() -> Matrix4<f64> {
+    Matrix4::new_translation(&Vector3::new(512_345.25, 5_412_345.5, 250.0))
+        * Rotation3::from_axis_angle(&Vector3::z_axis(), 30f64.to_radians()).to_homogeneous()
+}
+
+/// Eight points of a 2 x 1.5 x 1 box near zero (local scanner coordinates).
+fn box_points() -> Vec<[f64; 3]> {
+    (0..8).map(|k| [(k & 1) as f64 * 2.0 - 1.0, ((k >> 1) & 1) as f64 * 1.5 - 0.75, ((k >> 2) & 1) as f64]).collect()
+}
+
+/// Asserts that `moved` reads (as `name`) as `points` moved by `m`, to `tol`.
+fn assert_moved(moved: &[u8], name: &str, points: &[[f64; 3]], m: &Matrix4<f64>, tol: f64) {
+    let after = read_point_cloud(moved, name).unwrap();
+    assert_eq!(after.len(), points.len(), "{name}");
+    for (i, p) in points.iter().enumerate() {
+        let (want, got) = (apply(m, *p), after.point_f64(i));
+        assert!((0..3).all(|k| (got[k] - want[k]).abs() <= tol), "{name} point {i}: {got:?} vs {want:?}");
+    }
+}
+
+fn binary_ply(points: &[[f64; 3]]) -> Vec<u8> {
+    let header = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment local scan\nelement vertex {}\nproperty float x\nproperty float y\nproperty float z\nproperty uchar red\nend_header\n",
+        points.len()
+    );
+    let mut bytes = header.into_bytes();
+    for (i, p) in points.iter().enumerate() {
+        p.iter().for_each(|v| bytes.extend_from_slice(&(*v as f32).to_le_bytes()));
+        bytes.push(10 * i as u8);
+    }
+    bytes
+}
+
+#[test]
+fn a_float_ply_moved_onto_a_map_grid_gets_double_positions_and_keeps_the_rest() {
+    let (points, m) = (box_points(), onto_map());
+    let moved = transform_file(&binary_ply(&points), "scan.ply", &m).unwrap();
+    let text = String::from_utf8_lossy(&moved[..200]).to_string();
+    assert!(text.contains("property double x\nproperty double y\nproperty double z\nproperty uchar red\n"), "{text}");
+    assert!(text.contains("comment local scan\n"), "{text}");
+    assert_moved(&moved, "scan.ply", &points, &m, 1e-6);
+    // each record: three doubles and the colour byte, as it was
+    let body = &moved[moved.windows(11).position(|w| w == b"end_header\n").unwrap() + 11..];
+    assert_eq!(body.len(), 8 * 25);
+    assert!(body.chunks(25).enumerate().all(|(i, r)| r[24] == 10 * i as u8));
+    // ASCII: the header's types and the values' digits alike
+    let ascii: String = format!(
+        "ply\nformat ascii 1.0\nelement vertex 8\nproperty float32 x\nproperty float32 y\nproperty float32 z\nend_header\n{}",
+        points.iter().map(|p| format!("{} {} {}\n", p[0], p[1], p[2])).collect::<String>()
+    );
+    let moved = transform_file(ascii.as_bytes(), "scan.ply", &m).unwrap();
+    assert!(String::from_utf8_lossy(&moved).contains("property float64 x\n"));
+    assert_moved(&moved, "scan.ply", &points, &m, 1e-6);
+    // moved near zero, float holds it: the file stays float, byte for byte in size
+    let near = Rotation3::from_axis_angle(&Vector3::z_axis(), 0.5).to_homogeneous();
+    let bytes = binary_ply(&points);
+    let moved = transform_file(&bytes, "scan.ply", &near).unwrap();
+    assert_eq!(moved.len(), bytes.len());
+    assert_moved(&moved, "scan.ply", &points, &near, 1e-6);
+}
+
+#[test]
+fn a_float_pcd_or_stl_that_cannot_hold_the_moved_points_is_refused() {
+    let points = box_points();
+    let mut pcd = b"# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 8\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 8\nDATA binary\n".to_vec();
+    points.iter().flatten().for_each(|v| pcd.extend_from_slice(&(*v as f32).to_le_bytes()));
+    let e = transform_file(&pcd, "scan.pcd", &onto_map()).unwrap_err().to_string();
+    assert!(e.contains("float32 coordinates hold them only to steps of 0.5"), "{e}");
+    let mut stl = vec![0u8; 80];
+    stl.extend_from_slice(&1u32.to_le_bytes());
+    for v in [[0.0, 0.0, 1.0], points[0], points[1], points[2]] {
+        v.iter().for_each(|x| stl.extend_from_slice(&(*x as f32).to_le_bytes()));
+    }
+    stl.extend_from_slice(&[0, 0]);
+    let e = transform_file(&stl, "part.stl", &onto_map()).unwrap_err().to_string();
+    assert!(e.contains("binary STL file's points up to"), "{e}");
+}
+
+#[test]
+fn text_written_with_few_digits_gets_those_its_moved_values_need() {
+    // a CAD cube in one decimal: turned, its corners leave that grid
+    let cube = "OFF\n8 0 0\n0.0 0.0 0.0\n1.0 0.0 0.0\n0.0 1.0 0.0\n1.0 1.0 0.0\n0.0 0.0 1.0\n1.0 0.0 1.0\n0.0 1.0 1.0\n1.0 1.0 1.0\n";
+    let m = Rotation3::from_euler_angles(0.4, -0.7, 1.1).to_homogeneous();
+    let moved = transform_file(cube.as_bytes(), "cube.off", &m).unwrap();
+    let corners: Vec<[f64; 3]> =
+        (0..8).map(|k| [(k & 1) as f64, ((k >> 1) & 1) as f64, ((k >> 2) & 1) as f64]).collect();
+    // to 0.001 of the diagonal (half a step of three decimals), where one decimal was 0.05 off
+    assert_moved(&moved, "cube.off", &corners, &m, 5e-4 + 1e-12);
+    // C's %g with six significant digits, moved onto the map grid: 1 m steps there, so more digits
+    let g = "0.5 0.25 1\n-1.5 0.75 2.5e-05\n1.25 -0.5 0.125\n";
+    let points = [[0.5, 0.25, 1.0], [-1.5, 0.75, 2.5e-5], [1.25, -0.5, 0.125]];
+    let moved = transform_file(g.as_bytes(), "scan.xyz", &onto_map()).unwrap();
+    let diagonal = (2.75f64.powi(2) + 1.25f64.powi(2) + 1.0f64.powi(2)).sqrt();
+    assert_moved(&moved, "scan.xyz", &points, &onto_map(), diagonal * 1e-3);
+}
+
+#[test]
+fn a_nearly_rigid_matrix_maps_points_where_it_puts_them() {
+    // the map grid's scale factor (0.9996) and a rotation written with four decimals: within the
+    // rigid tolerance, and applied as given, not snapped about the frame's origin 5.4e6 away
+    let r = Rotation3::from_axis_angle(&Vector3::z_axis(), 20f64.to_radians()).into_inner();
+    let rounded = r.map(|v| (v * 1e4).round() / 1e4);
+    let mut m = Matrix4::identity();
+    m.fixed_view_mut::<3, 3>(0, 0).copy_from(&(rounded * 0.9996));
+    m.fixed_view_mut::<3, 1>(0, 3).copy_from(&Vector3::new(-2000.0, 1500.0, 3.0));
+    let survey = "Easting,Northing,Elevation\n512345.125,5412345.250,250.500\n512355.750,5412340.125,251.250\n512350.000,5412352.500,249.750\n";
+    let points = [[512345.125, 5412345.25, 250.5], [512355.75, 5412340.125, 251.25], [512350.0, 5412352.5, 249.75]];
+    let moved = transform_file(survey.as_bytes(), "survey.csv", &m).unwrap();
+    assert_moved(&moved, "survey.csv", &points, &m, 5e-4 + 1e-9);
+}
