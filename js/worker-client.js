@@ -40,8 +40,33 @@ async function nodeWorkerFactory() {
         }
       },
       terminate: () => void w.terminate(),
+      // (the client holds the process only while a request is in flight: `Pending`)
+      ref: () => w.ref(),
+      unref: () => w.unref(),
     };
   };
+}
+
+/**
+ * A worker's requests in flight, by id. A worker that can be unreferenced (Node's worker_threads)
+ * keeps the process alive only while it has some: a script that never calls `terminate()` still
+ * exits once its last answer is in.
+ */
+class Pending extends Map {
+  constructor(worker) {
+    super();
+    this.worker = worker;
+  }
+  set(id, request) {
+    super.set(id, request);
+    if (typeof this.worker.ref === "function") this.worker.ref();
+    return this;
+  }
+  delete(id) {
+    const had = super.delete(id);
+    if (this.size === 0 && typeof this.worker.unref === "function") this.worker.unref();
+    return had;
+  }
 }
 
 /**
@@ -102,7 +127,7 @@ export async function createWorkerRegistrar(options = {}) {
     else if (createWorker) worker = createWorker();
     else throw new Error("arps worker: the worker stopped and cannot be restarted (pass `createWorker` instead of `worker` to allow restarts)");
     first = false;
-    const w = { worker, pending: new Map(), dead: null, ready: null };
+    const w = { worker, pending: new Pending(worker), dead: null, ready: null };
     worker.addEventListener("message", (event) => {
       const msg = event.data;
       const p = msg && w.pending.get(msg.id);

@@ -30,12 +30,15 @@ use nalgebra::{Matrix3, Matrix6, Rotation3, SymmetricEigen, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
 
 /// The evidence behind [`confidence`], measured on the (voxelised) clouds under the answer, in
-/// multiples of the final max correspondence distance `d`.
+/// multiples of a distance `d`: the final max correspondence distance, or the default one (0.025
+/// of the clouds' largest half-extent, where the confidence is calibrated) when that is smaller,
+/// so that a wider distance the caller chose does not make every pose look right.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "camelCase")]
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationEvidence"))]
 pub struct Evidence {
-    /// Fraction of source points with a target point within `d` (the result's `fitness`).
+    /// Fraction of source points with a target point within `d` (the result's `fitness` when `d`
+    /// is the final distance).
     pub fitness: f64,
     /// The same within `d / 2`.
     pub fitness_tight: f64,

@@ -142,8 +142,9 @@ pub fn check_icp_points(what: &str, input: usize, icp: usize, voxel: f64) -> Res
     Err(Error::TooLarge(format!(
         "{what} keeps {icp} of its {input} points for ICP at {how}, more than the {max} that fit next to them \
          (about {ICP_BYTES_PER_POINT} bytes per ICP point and {INPUT_BYTES_PER_POINT} per input point, within {} MiB \
-         per call, for WebAssembly's 4 GiB memory): set a larger voxelSize (or leave it unset for the default), or \
-         downsample the cloud first",
+         per cloud, half of the {} MiB a call may use in WebAssembly's 4 GiB memory): set a larger voxelSize (or leave \
+         it unset for the default), or downsample the cloud first",
+        MAX_CALL_BYTES >> 21,
         MAX_CALL_BYTES >> 20,
     )))
 }

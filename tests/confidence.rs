@@ -314,6 +314,59 @@ fn an_answer_with_almost_no_overlap_is_not_confident() {
     assert!((confidence::confidence(&half) - 0.5).abs() < 1e-12);
 }
 
+/// A source shrunk a thousandfold (metres onto millimetres): it lies within a fraction of the
+/// correspondence distance wherever it is put on the target, so every answer fits it perfectly and
+/// nothing confirms the pose. The confidence is capped, with a warning that says why.
+#[test]
+fn a_source_smaller_than_the_distance_it_is_judged_at_is_not_confident() {
+    let (source, target, _) = fixture_pair(0);
+    let tiny = source.transformed(&Matrix4::new_scaling(1e-3));
+    let r = Registrar::with_default_model().unwrap().register(&tiny, &target, &Options::default()).unwrap();
+    assert!(r.confidence <= 0.25, "{}", r.confidence);
+    assert!(r.warnings.iter().any(|w| w.contains("is less than 4 times the distance the answer is judged at")), "{:?}", r.warnings);
+    // at its own size the same source is not warned so
+    let r = Registrar::with_default_model().unwrap().register(&source, &target, &Options::default()).unwrap();
+    assert!(!r.warnings.iter().any(|w| w.contains("the distance the answer is judged at")), "{:?}", r.warnings);
+}
+
+/// A wider `maxCorrespondenceDistance` than the default makes every pose fit better; the evidence
+/// is measured at the default distance all the same (the one the confidence is calibrated at), so
+/// the answer's `fitness` (at the wider distance) exceeds the evidence's, and a tighter distance
+/// than the default is measured at as given.
+#[test]
+fn the_evidence_is_measured_at_the_default_distance_or_a_tighter_one() {
+    let (source, target, _) = fixture_pair(1);
+    let mut reg = Registrar::with_default_model().unwrap();
+    let default = reg.register(&source, &target, &Options::default()).unwrap();
+    let d = default.max_correspondence_distance;
+    let wide = reg
+        .register(&source, &target, &Options { max_correspondence_distance: Some(4.0 * d), ..Options::default() })
+        .unwrap();
+    assert!(wide.fitness > wide.evidence.fitness + 0.05, "{} vs {}", wide.fitness, wide.evidence.fitness);
+    // the same pose on the same voxels, judged at two distances wider than the default: the same
+    // evidence, that of the default distance
+    let judged = |t: &Matrix4<f64>, k: f64| {
+        let opts = Options {
+            icp: IcpKind::Off,
+            max_correspondence_distance: Some(k * d),
+            voxel_size: Some(0.5 * d),
+            ..from_pose(t)
+        };
+        reg_eval(&source, &target, &opts)
+    };
+    let (at_2, at_4) = (judged(&wide.T_target_source, 2.0), judged(&wide.T_target_source, 4.0));
+    assert_eq!(at_2.evidence, at_4.evidence);
+    assert_eq!(at_2.confidence, at_4.confidence);
+    assert!(at_4.fitness > at_2.fitness, "{} vs {}", at_4.fitness, at_2.fitness);
+    // a tighter one than the default: measured there
+    let at_tight = judged(&wide.T_target_source, 0.5);
+    assert!(at_tight.evidence.fitness < at_2.evidence.fitness, "{:?}", at_tight.evidence);
+}
+
+fn reg_eval(source: &PointCloud, target: &PointCloud, opts: &Options) -> arps::Registration {
+    Registrar::with_default_model().unwrap().register(source, target, opts).unwrap()
+}
+
 /// CPU time of the evidence next to one ICP refinement of the same pair (`--ignored
 /// --nocapture` to see them; `BENCHMARK.md` quotes them).
 #[test]

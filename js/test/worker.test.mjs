@@ -305,3 +305,24 @@ test("worker: under Node, model and weights given as paths or file: URLs are rea
   }
   await assert.rejects(createWorkerRegistrar({ weights: path.join(root, "no-such.safetensors") }), /reading weights .*no-such\.safetensors failed/);
 });
+
+test("worker: under Node, a script that never calls terminate() exits once its answers are in", async () => {
+  const { execFile } = await import("node:child_process");
+  const script = `
+    const { createWorkerRegistrar } = await import(${JSON.stringify(pathToFileURL(path.join(pkg, "worker-client.js")).href)});
+    const arps = await createWorkerRegistrar();
+    const pts = new Float32Array(3 * 400).map((_, i) => Math.sin(i * 12.9898) * 0.5);
+    const r = await arps.register(pts, pts);
+    console.log("done " + r.T_target_source.length);
+  `;
+  const { mkdtempSync, writeFileSync } = await import("node:fs");
+  const { tmpdir } = await import("node:os");
+  const file = path.join(mkdtempSync(path.join(tmpdir(), "arps-exit-")), "never-terminates.mjs");
+  writeFileSync(file, script);
+  const { stdout } = await new Promise((resolve, reject) => {
+    execFile(process.execPath, [file], { timeout: 60_000 }, (e, stdout, stderr) =>
+      e ? reject(new Error(`${e.message} (killed: ${e.killed}) ${stderr}`)) : resolve({ stdout }),
+    );
+  });
+  assert.match(stdout, /done 16/);
+});
