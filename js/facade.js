@@ -311,10 +311,25 @@ function optionsArg(options) {
   if (typeof options !== "object" || isPlainArray(options) || typedArrayKind(options) !== undefined) {
     fail(`invalid options: expected a plain object (or undefined), got ${describe(options)}`);
   }
+  // a Map, Date, Set... holds no option as a property: it would mean the defaults, silently
+  let tag = "[object Object]";
+  try {
+    tag = Object.prototype.toString.call(options);
+  } catch {
+    /* a Proxy whose get trap throws: reading its options says so below */
+  }
+  if (tag !== "[object Object]") fail(`invalid options: expected a plain object (or undefined), got a ${tag.slice(8, -1)}`);
   let keys;
   try {
     keys = Object.keys(options);
+    // an option inherited from a prototype would be left out: say so rather than ignore it
+    for (const key in options) {
+      if (!Object.prototype.hasOwnProperty.call(options, key)) {
+        fail(`invalid options: \`${key}\` is inherited from a prototype; give options as the object's own properties`);
+      }
+    }
   } catch (e) {
+    if (e instanceof Error && e.message.startsWith("invalid options:")) throw e;
     fail(`invalid options: listing the options threw: ${messageOf(e)}`);
   }
   const out = {};

@@ -125,6 +125,9 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       ["a number", reg(3), /^invalid options: expected a plain object \(or undefined\), got a number/],
       ["an array", reg([1, 2]), /^invalid options: expected a plain object.*got an Array/],
       ["a string", reg("fast"), /^invalid options: expected a plain object/],
+      ["a Map", reg(new Map([["icp", "bogus"]])), /^invalid options: expected a plain object \(or undefined\), got a Map$/],
+      ["a Date", reg(new Date(0)), /^invalid options: expected a plain object \(or undefined\), got a Date$/],
+      ["an inherited option", reg(Object.create({ icp: "bogus" })), /^invalid options: `icp` is inherited from a prototype/],
       ["a throwing top-level getter", reg({ get seed() { throw new Error("boom"); } }), /^invalid options: reading `seed` threw: Error: boom/],
       ["a Proxy whose ownKeys throws", reg(proxy({ ownKeys() { throw new Error("no keys"); } })), /^invalid options: listing the options threw: Error: no keys/],
       ["a Proxy whose get throws", reg(proxy({ get() { throw new Error("no get"); } })), /^invalid options: reading `icp` threw: Error: no get/],
@@ -361,16 +364,21 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       }
       return apart;
     };
-    // transformFile on a PLY: the file moved as it is (a fragment with normals, colours and faces): the
-    // same length and header, its points those transformPointCloud gives, its colours kept
+    // transformFile on a PLY: the file moved as it is (a fragment with normals, colours and faces):
+    // on the map grid float would round its points, so x, y and z become double (12 more bytes a
+    // vertex), the rest of the header as it was, its points those transformPointCloud gives, its
+    // colours kept
     const frag = readFileSync(path.join(root, "fixtures", "formats", "frag_115_2000_binary.ply"));
     const movedPly = arps.transformFile(frag, "frag.ply", T);
-    assert.ok(movedPly instanceof Uint8Array && movedPly.length === frag.length);
+    // ("float" to "double" three times in the header)
+    assert.ok(movedPly instanceof Uint8Array && movedPly.length === frag.length + 12 * 2000 + 3, `${movedPly.length} bytes`);
     const body = frag.indexOf("end_header\n") + 11;
-    assert.deepEqual(movedPly.subarray(0, body), new Uint8Array(frag.subarray(0, body)));
-    let apart = apartFrom(frag, movedPly, "f.ply", true);
-    assert.ok(apart < 1e-4, `transformFile's PLY points ${apart} from transformPointCloud's`);
-    for (const i of [0, 999, 1999]) assert.deepEqual(movedPly.subarray(body + i * 27 + 24, body + i * 27 + 27), new Uint8Array(frag.subarray(body + i * 27 + 24, body + i * 27 + 27)), `colour ${i}`);
+    const header = new TextDecoder().decode(frag.subarray(0, body)).replace(/property float ([xyz])\n/g, "property double $1\n");
+    assert.equal(new TextDecoder().decode(movedPly.subarray(0, header.length)), header);
+    let apart = apartFrom(frag, movedPly, "f.ply");
+    assert.ok(apart < 1e-6, `transformFile's PLY points ${apart} from transformPointCloud's`);
+    const at = header.length;
+    for (const i of [0, 999, 1999]) assert.deepEqual(movedPly.subarray(at + i * 39 + 36, at + i * 39 + 39), new Uint8Array(frag.subarray(body + i * 27 + 24, body + i * 27 + 27)), `colour ${i}`);
     rejects(r, "transformFile: not a PLY", () => arps.transformFile(new Uint8Array([1, 2, 3]), "a.ply", T), /PLY/);
     rejects(r, "transformFile: scaled along one axis", () => arps.transformFile(frag, "a.ply", T.map((v, i) => (i === 0 ? 2 * v : v))), /not rigid/);
     rejects(r, "transformFile: no matrix", () => arps.transformFile(frag, "a.ply"), /^matrix is undefined/);
@@ -394,16 +402,21 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     rejects(r, "transformFile: not LAS", () => arps.transformFile(new Uint8Array(400), "a.las", T), /LASF/);
     // a file under another format's name goes by its signature: a PLY named .las is moved as PLY
     assert.deepEqual(arps.transformFile(frag, "a.las", T), movedPly);
-    // a PCD (x y z normal_x normal_y normal_z rgb) moved as it is: its points those
-    // transformPointCloud gives, its header and colours kept; the names canTransform accepts
+    // a PCD (x y z normal_x normal_y normal_z rgb) moved as it is (near zero): its points those
+    // transformPointCloud gives, its header and colours kept; moved onto the map grid, where its
+    // float32 fields would round the points, refused; the names canTransform accepts
     const pcd = readFileSync(path.join(root, "fixtures", "formats", "cloud_bin_0_binary.pcd"));
-    const movedPcd = arps.transformFile(pcd, "cloud.pcd", T);
+    rejects(r, "transformFile: a float PCD onto the map grid", () => arps.transformFile(pcd, "cloud.pcd", T), /float32 coordinates hold them only to steps of 0\.03125/);
+    const movedPcd = arps.transformFile(pcd, "cloud.pcd", turn);
     const pcdBody = pcd.indexOf("DATA binary\n") + 12;
     assert.ok(movedPcd.length === pcd.length);
     assert.deepEqual(movedPcd.subarray(0, pcdBody), new Uint8Array(pcd.subarray(0, pcdBody)), "the PCD header");
     assert.deepEqual(movedPcd.subarray(pcdBody + 24, pcdBody + 28), new Uint8Array(pcd.subarray(pcdBody + 24, pcdBody + 28)), "a colour");
-    apart = apartFrom(pcd, movedPcd, "c.pcd", true);
-    assert.ok(apart < 1e-4, `transformFile's PCD points ${apart} from transformPointCloud's`);
+    const pcdWant = arps.transformPointCloud(arps.readPointCloud(pcd, "c.pcd"), turn);
+    const pcdGot = arps.readPointCloud(movedPcd, "c.pcd");
+    apart = 0;
+    for (let i = 0; i < pcdGot.points.length; i++) apart = Math.max(apart, Math.abs(pcdGot.origin[i % 3] + pcdGot.points[i] - pcdWant.origin[i % 3] - pcdWant.points[i]));
+    assert.ok(apart < 1e-5, `transformFile's PCD points ${apart} from transformPointCloud's`);
     assert.deepEqual(["a.ply", "b.PCD", "c.pts", "d.csv", "e.obj", "f.stl", "g.las", "h.laz", "i.e57", "j.off", "k.dxf"].map(arps.canTransform), [true, true, true, true, true, true, true, true, true, true, false]);
     rejects(r, "transformFile: no format", () => arps.transformFile(new Uint8Array(8), "drawing.dxf", T), /cannot tell the format/);
     // an E57 file's scans, by name and records; one chosen is read alone; the file moved by its
