@@ -323,7 +323,11 @@ fn a_source_smaller_than_the_distance_it_is_judged_at_is_not_confident() {
     let tiny = source.transformed(&Matrix4::new_scaling(1e-3));
     let r = Registrar::with_default_model().unwrap().register(&tiny, &target, &Options::default()).unwrap();
     assert!(r.confidence <= 0.25, "{}", r.confidence);
-    assert!(r.warnings.iter().any(|w| w.contains("is less than 4 times the distance the answer is judged at")), "{:?}", r.warnings);
+    assert!(
+        r.warnings.iter().any(|w| w.contains("is less than 4 times the distance the answer is judged at")),
+        "{:?}",
+        r.warnings
+    );
     // at its own size the same source is not warned so
     let r = Registrar::with_default_model().unwrap().register(&source, &target, &Options::default()).unwrap();
     assert!(!r.warnings.iter().any(|w| w.contains("the distance the answer is judged at")), "{:?}", r.warnings);

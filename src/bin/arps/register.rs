@@ -48,9 +48,18 @@ pub struct RegisterArgs {
     /// Points per cloud fed to the network (default: the model's N).
     #[arg(long)]
     network_points: Option<usize>,
-    /// Seed of the network's point sampling.
+    /// Seed of the registration's random choices (the network's point sampling, the global
+    /// stage's hypotheses; `Options::seed`).
     #[arg(long, default_value_t = 0)]
     seed: u64,
+    /// ICP's voxel size, in the clouds' units (`Options::voxel_size`; 0 keeps every point)
+    /// [default: half the final max correspondence distance].
+    #[arg(long, allow_negative_numbers = true)]
+    voxel_size: Option<f64>,
+    /// Leave the network out: ICP starts from the initial transform and the other starts
+    /// (`Options::network`).
+    #[arg(long)]
+    no_network: bool,
     /// Where ICP starts from, comma-separated, from network, centroids, initial, turned,
     /// turnedInitial, global, globalNetwork, rotations, rotationsNetwork; the best refinement by fitness wins
     /// [default: the engine's `Options::starts`].
@@ -85,6 +94,10 @@ pub struct RegisterArgs {
     /// point files are read as they are.
     #[arg(long)]
     surface_points: Option<usize>,
+    /// Seed of the surface sampling of `--surface-points` (`ReadOptions::seed`; the JS
+    /// package's read option `seed`), apart from `--seed`.
+    #[arg(long, default_value_t = 0)]
+    surface_seed: u64,
     /// Of a source E57 file holding several scans, only this one (0-based), placed by its
     /// pose (by default every scan, as one cloud); other formats are read as they are.
     #[arg(long)]
@@ -244,6 +257,11 @@ fn in_flags(message: &str) -> String {
         .replace("`nonFinite: \"drop\"`", "--drop-non-finite")
         .replace("`outliers: \"keep\"`", "--keep-outliers")
         .replace("`supportPlane: \"keep\"`", "--keep-support")
+        .replace("maxCorrespondenceDistance", "--max-correspondence-distance")
+        .replace("voxelSize", "--voxel-size")
+        .replace("icpMaxIterations", "--icp-max-iterations")
+        .replace("networkPoints", "--network-points")
+        .replace("initialTransform", "--initial-transform")
 }
 
 /// True when `path` names a file of `source`'s own format that `io::transform_file` moves as it
@@ -352,6 +370,8 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         icp_max_iterations,
         network_points,
         seed,
+        voxel_size,
+        no_network,
         starts,
         search,
         up,
@@ -360,6 +380,7 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         keep_outliers,
         keep_support,
         surface_points,
+        surface_seed,
         source_scan,
         target_scan,
         source_scale,
@@ -400,7 +421,7 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
     }
     let mut registrar = load_registrar(weights.as_deref())?;
     let mut t0 = std::time::Instant::now();
-    let reading = io::ReadOptions { surface_points, seed, scan: source_scan };
+    let reading = io::ReadOptions { surface_points, seed: surface_seed, scan: source_scan };
     let reading_target = io::ReadOptions { scan: target_scan, ..reading };
     let initial_transform = match initial_transform.as_deref() {
         None => None,
@@ -420,6 +441,8 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         icp_max_iterations: icp_max_iterations.unwrap_or(Options::default().icp_max_iterations),
         network_points,
         seed,
+        voxel_size,
+        network: !no_network,
         non_finite: if drop_non_finite { NonFinite::Drop } else { NonFinite::Error },
         outliers: if keep_outliers { Outliers::Keep } else { Outliers::Drop },
         support_plane: if keep_support { Support::Keep } else { Support::Drop },
