@@ -233,7 +233,8 @@ fn text_errors() {
     has(&cloud_err(b"x y z\n1 2 3\n4 5 6\n7 8\n", "a.xyz"), &["XYZ", "line 4", "at least 3 numbers"]);
     has(&cloud_err(b"1,2,3\n4,five,6\n", "a.csv"), &["line 2", "'five'"]);
     has(&cloud_err(b"x y z\n# nothing\n", "a.xyz"), &["no line with three numbers"]);
-    has(&cloud_err(b"", "a.txt"), &["no line with three numbers"]);
+    has(&cloud_err(b"", "a.txt"), &["XYZ parse error: the file is empty (0 bytes)"]);
+    has(&cloud_err(b"", "a.ply"), &["PLY parse error: the file is empty (0 bytes)"]);
     has(&cloud_err(b"1 2 3\n4 5 \xff\n", "a.xyz"), &["line 2", "UTF-8"]);
 }
 

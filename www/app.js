@@ -137,6 +137,8 @@ const loads = { source: 0, target: 0 }; // the latest load of each slot wins
 const loading = { source: false, target: false }; // a slot reading a file (Align waits)
 
 const count = (n) => n.toLocaleString("en");
+/** `n` points, in words ("1 point", "2,000 points"). */
+const points = (n) => `${count(n)} ${n === 1 ? "point" : "points"}`;
 
 /** An origin in words: its coordinates to a tenth of a unit. */
 const place = (origin) => `(${Array.from(origin, (v) => v.toLocaleString("en", { maximumFractionDigits: 1 })).join(", ")})`;
@@ -211,7 +213,7 @@ async function rescaleSource() {
 function showScans(which, scans, scan) {
   const select = $(`${which}-scan`);
   $(`${which}-scan-field`).hidden = scans.length < 2;
-  const name = (s, k) => `${k + 1}: ${s.name ?? `scan ${k + 1}`} (${count(s.records)} points)`;
+  const name = (s, k) => `${k + 1}: ${s.name ?? `scan ${k + 1}`} (${points(s.records)})`;
   select.replaceChildren(
     new Option(`all ${scans.length} scans`, "", scan === null, scan === null),
     ...scans.map((s, k) => new Option(name(s, k), String(k), k === scan, k === scan)),
@@ -242,13 +244,16 @@ async function loadFile(which, file, scan = null) {
     const options = { surfacePoints: MESH_SURFACE_POINTS, scan };
     const parsed = await arps.readPointCloud(bytes, file.name, options, { transfer: true });
     if (token !== loads[which]) return;
+    // (said now rather than at Align)
+    const n = parsed.points.length / 3;
+    if (n < 16) throw new Error(`it holds ${points(n)}; a registration needs at least 16`);
     if (/\.e57$/i.test(file.name)) {
       // an E57 file's scans, from its XML section (the bytes read again: the first went over)
       scans = await arps.listScans(new Uint8Array(await file.arrayBuffer()), file.name, { transfer: true });
       if (token !== loads[which]) return;
       showScans(which, scans, scan);
     }
-    $(`${which}-info`).textContent = `${file.name}: preparing ${count(parsed.points.length / 3)} points…`;
+    $(`${which}-info`).textContent = `${file.name}: preparing ${points(parsed.points.length / 3)}…`;
     const name = scan === null ? file.name : `${file.name}, scan ${scan + 1}`;
     const cloud = await readyCloud(parsed, name, which, token, file);
     if (token !== loads[which]) return dropCloud(cloud.key);
@@ -270,7 +275,7 @@ async function loadFile(which, file, scan = null) {
 
 /** What a slot says of its cloud (or that it has none). */
 function slotText(cloud) {
-  return cloud ? `${cloud.name} · ${count(cloud.count)} points${cloud.note ? ` · ${cloud.note}` : ""}` : "drop a file or click to choose";
+  return cloud ? `${cloud.name} · ${points(cloud.count)}${cloud.note ? ` · ${cloud.note}` : ""}` : "drop a file or click to choose";
 }
 
 /** Puts `cloud` (or nothing) in slot `which`: the store forgets the old one, the view draws the new. */
@@ -362,6 +367,8 @@ async function align() {
     showError(e.message);
     return;
   }
+  // a keyboard user's focus, which leaves the button while it is disabled, comes back to it
+  const focused = document.activeElement === $("align");
   state.busy = true;
   updateButtons();
   startProgress();
@@ -396,6 +403,7 @@ async function align() {
     state.busy = false;
     stopProgress();
     updateButtons();
+    if (focused && (document.activeElement === document.body || document.activeElement === null)) $("align").focus();
   }
 }
 
@@ -576,6 +584,7 @@ function showPoses(r) {
       b.type = "button";
       b.textContent = `${k === 0 ? "Answer" : `Alternative ${k}`} · fitness ${(p.fitness * 100).toFixed(1)}%`;
       b.classList.toggle("on", k === shownIndex(r));
+      b.setAttribute("aria-pressed", String(k === shownIndex(r)));
       b.addEventListener("click", () => showPose(k));
       return b;
     }),
@@ -642,7 +651,7 @@ async function downloadAligned() {
     const a = document.createElement("a");
     a.href = URL.createObjectURL(new Blob([bytes], { type: "application/octet-stream" }));
     const stem = (source.file?.name ?? source.name).replace(/\.[^.]*$/, "") + (scan === null ? "" : `-scan${scan + 1}`);
-    a.download = `${stem.replace(/[^\w.-]+/g, "_") || "source"}-aligned.${ext}`;
+    a.download = `${stem.replace(/[^\w.-]+/g, "_").replace(/^_+|_+$/g, "") || "source"}-aligned.${ext}`;
     document.body.append(a);
     a.click();
     a.remove();
@@ -656,8 +665,10 @@ async function downloadAligned() {
 
 function setView(which) {
   state.view = which === "after" && state.result ? "after" : "before";
-  $("view-before").classList.toggle("on", state.view === "before");
-  $("view-after").classList.toggle("on", state.view === "after");
+  for (const view of ["before", "after"]) {
+    $(`view-${view}`).classList.toggle("on", state.view === view);
+    $(`view-${view}`).setAttribute("aria-pressed", String(state.view === view));
+  }
   $("legend-aligned").hidden = state.view !== "after";
   $("legend-source").hidden = state.view === "after";
   view.show(state.view);

@@ -327,6 +327,9 @@ pub(crate) fn check_scan(format: Format, scan: Option<usize>) -> Result<()> {
 /// range, and for a mesh with no triangle of positive area.
 pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOptions) -> Result<PointCloud> {
     let format = detect_format(bytes, file_name)?;
+    if bytes.is_empty() {
+        return Err(Error::parse(format.name(), "the file is empty (0 bytes)"));
+    }
     if let Some(n) = options.surface_points {
         if n < crate::cloud::MIN_POINTS {
             return Err(Error::InvalidOption(format!(

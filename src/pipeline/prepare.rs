@@ -108,7 +108,7 @@ pub(crate) fn prepare(
     let size_ratio = size_source.max(size_target) / size_source.min(size_target);
     if size_ratio > SIZE_RATIO_WARNING {
         warnings.push(format!(
-            "the clouds differ in size by {}x (largest half-extents: source {}, target {}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres)",
+            "the clouds differ in size by {}x (largest half-extents: source {}, target {}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres); if they are not, multiply one cloud's coordinates by the factor between the units (1000 from metres to millimetres; the CLI's --source-scale does it for the source)",
             num(size_ratio.round()),
             num(size_source),
             num(size_target)
