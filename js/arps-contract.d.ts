@@ -95,9 +95,11 @@ export type RegisterOptions = {
    * upright pose (`[0, 0, 1]` for z-up data, `[0, 1, 0]` for three.js's y-up). The answer then
    * only turns the source about this axis, within `UP_TOLERANCE_DEG` of tilt for scans
    * levelled a little differently: every start is levelled first, answers tilted further are
-   * rejected, and look-alikes tilted further do not count as alternatives. It is the same
-   * direction in both clouds' frames, whatever `initialTransform` says. Default: none (any
-   * rotation). Three finite numbers, not all zero (any length).
+   * rejected, and look-alikes tilted further do not count as alternatives. When a rejected,
+   * tilted answer fits clearly better than the upright one, `up` probably does not hold: a
+   * warning says so and the confidence is at most 0.25. It is the same direction in both
+   * clouds' frames, whatever `initialTransform` says. Default: none (any rotation). Three
+   * finite numbers, not all zero (any length).
    */
   up?: [number, number, number] | null,
   /**
@@ -348,11 +350,14 @@ export type RegistrationTimings = {
 
 /**
  * The evidence behind `confidence`, measured on the (voxelised) clouds under the answer, in
- * multiples of the final max correspondence distance `d`.
+ * multiples of a distance `d`: the final max correspondence distance, or the default one (0.025
+ * of the clouds' largest half-extent, where the confidence is calibrated) when that is smaller,
+ * so that a wider distance the caller chose does not make every pose look right.
  */
 export type RegistrationEvidence = {
   /**
-   * Fraction of source points with a target point within `d` (the result's `fitness`).
+   * Fraction of source points with a target point within `d` (the result's `fitness` when `d`
+   * is the final distance).
    */
   fitness: number,
   /**

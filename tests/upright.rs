@@ -67,3 +67,21 @@ fn an_up_axis_that_is_not_a_direction_is_an_error() {
         assert!(tilt_deg(&r.T_target_source, axis.normalize()) <= arps::register::UP_TOLERANCE_DEG, "{up:?}");
     }
 }
+
+/// Clouds that do not share `up`: `fixtures/any` pair 1 (a bookshelf turned any way, its truth
+/// tilted far off z). With `up: z` every upright answer is wrong, and a tilted refinement fits
+/// clearly better: the result says `up` may not hold, and is not confident. Without `up`, no
+/// such warning.
+#[test]
+fn an_up_that_does_not_hold_is_doubted() {
+    let (source, target, truth) = fixture_pair_in("fixtures/any", 1);
+    let z = Vector3::z();
+    assert!(tilt_deg(&truth, z) > 45.0, "{}", tilt_deg(&truth, z));
+    let mut reg = Registrar::with_default_model().unwrap();
+    let r = reg.register(&source, &target, &Options { up: Some([0.0, 0.0, 1.0]), ..Options::default() }).unwrap();
+    assert!(r.confidence <= 0.25, "{}", r.confidence);
+    let warned = |w: &Vec<String>| w.iter().any(|w| w.contains("off `up` fits clearly better than the upright answer"));
+    assert!(warned(&r.warnings), "{:?}", r.warnings);
+    let free = reg.register(&source, &target, &Options::default()).unwrap();
+    assert!(!warned(&free.warnings), "{:?}", free.warnings);
+}

@@ -135,6 +135,9 @@ pub(crate) fn search(
     let mut best: Option<(Candidate, Probed, f64)> = None;
     let mut waiting: Option<Candidate> = None;
     let mut starts_refined = 0usize;
+    // with `up`: the best stage answer that ended tilted, which settles nothing but, fitting
+    // clearly better than the upright answer, says that `up` may not hold
+    let mut tilted: Option<Candidate> = None;
     let adaptive = options.search == Search::Adaptive;
     let kinds = starts::kinds(options);
     let has_global = kinds.iter().any(|k| k.is_global());
@@ -221,6 +224,9 @@ pub(crate) fn search(
         let Some(c) = refine::refine_best(target_index, &p.icp_src.points, &starts, &how) else { continue };
         // (with `up`, a stage whose best refined start ended tilted settles nothing)
         if !admits(&c.T_target_source) {
+            if tilted.as_ref().is_none_or(|t| c.fitness > t.fitness) {
+                tilted = Some(c);
+            }
             continue;
         }
         refined.push((c.T_target_source, c.fitness));
@@ -356,6 +362,22 @@ pub(crate) fn search(
         confidence.min(UNREFINED_CONFIDENCE)
     } else {
         confidence
+    };
+    // with `up`: a tilted pose that fits clearly better than the upright answer (the clouds were
+    // not both captured level, or not about that axis)
+    let confidence = match tilted.filter(|t| refined_any && refine::clearly_better(t, &candidate)) {
+        Some(t) => {
+            warnings.push(format!(
+                "a pose tilted {:.0} degrees off `up` fits clearly better than the upright answer (fitness {:.3} \
+                 against {:.3}): if the clouds were not both captured level within {UP_TOLERANCE_DEG} degrees of `up`, \
+                 leave `up` out",
+                tilt_deg(&t.T_target_source),
+                t.fitness,
+                candidate.fitness
+            ));
+            confidence.min(UNREFINED_CONFIDENCE)
+        }
+        None => confidence,
     };
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
     // probes turned it over): the caller asked to refine that guess, so the result says how far
