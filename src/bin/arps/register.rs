@@ -452,7 +452,6 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
             SearchArg::Adaptive => arps::Search::Adaptive,
             SearchArg::Exhaustive => arps::Search::Exhaustive,
         },
-        ..Options::default()
     };
     // the target is read once; the registrar keeps it prepared from one source to the next
     let tgt = read_cloud(&target, &reading_target)?;
