@@ -50,7 +50,8 @@ export type RegisterOptions = {
   icpMaxIterations?: number,
   /**
    * Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
-   * correspondence distance. `0` uses the full clouds. Must be >= 0, and at most the clouds'
+   * correspondence distance, or of the default distance when `max_correspondence_distance` is
+   * wider (the voxels the answer's evidence is measured on). `0` uses the full clouds. Must be >= 0, and at most the clouds'
    * shared half-extent.
    */
   voxelSize?: number | null,

@@ -60,7 +60,8 @@ pub struct Options {
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub icp_max_iterations: u32,
     /// Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
-    /// correspondence distance. `0` uses the full clouds. Must be >= 0, and at most the clouds'
+    /// correspondence distance, or of the default distance when `max_correspondence_distance` is
+    /// wider (the voxels the answer's evidence is measured on). `0` uses the full clouds. Must be >= 0, and at most the clouds'
     /// shared half-extent.
     pub voxel_size: Option<f64>,
     /// An initial guess of `T_target_source` (rigid, the clouds' units); the network then

@@ -126,7 +126,7 @@ fn files_without_points_are_errors() {
         assert!(!e.is_empty(), "{name}");
     }
     let e = read_point_cloud(b"", "empty.obj").unwrap_err().to_string();
-    assert!(e.contains("OBJ") && e.contains("no points"), "{e}");
+    assert!(e.contains("OBJ") && e.contains("the file is empty (0 bytes)"), "{e}");
     let e = read_point_cloud(b"# only a comment\ng group\n", "c.obj").unwrap_err().to_string();
     assert!(e.contains("no points"), "{e}");
     let e = read_point_cloud(

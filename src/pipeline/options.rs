@@ -144,7 +144,9 @@ pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
                 num(v)
             )))
         }
-        None => d_final * 0.5,
+        // half the evidence distance: a wider final distance than the default keeps the default's
+        // voxels, on which the answer's evidence is measured as it was calibrated
+        None => evidence_distance(d_final) * 0.5,
     };
     Ok((d_final, voxel))
 }

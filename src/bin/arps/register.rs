@@ -53,7 +53,8 @@ pub struct RegisterArgs {
     #[arg(long, default_value_t = 0)]
     seed: u64,
     /// ICP's voxel size, in the clouds' units (`Options::voxel_size`; 0 keeps every point)
-    /// [default: half the final max correspondence distance].
+    /// [default: half the final max correspondence distance, or of the default one when that is
+    /// smaller].
     #[arg(long, allow_negative_numbers = true)]
     voxel_size: Option<f64>,
     /// Leave the network out: ICP starts from the initial transform and the other starts
