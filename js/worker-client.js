@@ -257,15 +257,18 @@ export async function createWorkerRegistrar(options = {}) {
     provenance: ready.provenance,
     modelConfig: ready.modelConfig,
     async register(source, target, registerOptions, { onProgress, transfer = false, signal } = {}) {
+      inheritedOptions(registerOptions);
       const message = { type: "register", source, target, options: registerOptions };
       return (await ask(message, [source, target], { transfer, signal }, onProgress)).result;
     },
     async parsePointCloud(bytes, fileName, readOptions, req = {}) {
       misplacedRequest("parsePointCloud", readOptions);
+      inheritedOptions(readOptions);
       return (await ask({ type: "parse", bytes, fileName, options: readOptions }, [bytes], req)).points;
     },
     async readPointCloud(bytes, fileName, readOptions, req = {}) {
       misplacedRequest("readPointCloud", readOptions);
+      inheritedOptions(readOptions);
       return (await ask({ type: "read", bytes, fileName, options: readOptions }, [bytes], req)).cloud;
     },
     async transformPointCloud(cloud, matrix, req = {}) {
@@ -279,6 +282,7 @@ export async function createWorkerRegistrar(options = {}) {
     },
     async transformFile(bytes, fileName, matrix, readOptions, req = {}) {
       misplacedRequest("transformFile", readOptions, "fifth");
+      inheritedOptions(readOptions);
       return (await ask({ type: "move", bytes, fileName, matrix, options: readOptions }, [bytes], req)).bytes;
     },
     async forgetTarget(req = {}) {
@@ -292,6 +296,29 @@ export async function createWorkerRegistrar(options = {}) {
       if (current) retire(current, new Error("arps worker: terminated"));
     },
   };
+}
+
+/**
+ * Throws when `options` has an enumerable option inherited from a prototype: posting copies own
+ * properties only, so the worker would run without it (the engine's facade refuses it too; a
+ * `Map` or `Date` reaches the worker as one, and is refused there).
+ */
+function inheritedOptions(options) {
+  if (options === null || typeof options !== "object") return;
+  let inherited;
+  try {
+    for (const key in options) {
+      if (!Object.prototype.hasOwnProperty.call(options, key)) {
+        inherited = key;
+        break;
+      }
+    }
+  } catch {
+    return; // a Proxy that throws: the worker's copy says so
+  }
+  if (inherited !== undefined) {
+    throw new Error(`invalid options: \`${inherited}\` is inherited from a prototype; give options as the object's own properties`);
+  }
 }
 
 /**

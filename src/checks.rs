@@ -59,11 +59,16 @@ pub fn f32_rounds(far: f64, half: f64) -> bool {
 /// 5.4e6); 0 at zero, and not finite for a non-finite `far`.
 pub fn f32_step(far: f64) -> f64 {
     let far = far.abs();
-    if far == 0.0 || !far.is_finite() {
-        return if far == 0.0 { 0.0 } else { f64::INFINITY };
+    if !far.is_finite() {
+        return f64::INFINITY;
     }
-    // below f32's smallest normal its spacing is fixed
-    (far.log2().floor().max(-126.0) - 23.0).exp2()
+    if far == 0.0 {
+        return 0.0;
+    }
+    // 2^(e - 23) for `far` in [2^e, 2^(e+1)), from the f64's exponent bits (no libm); below
+    // f32's smallest normal its spacing is fixed (a subnormal f64 reads as e = -1023)
+    let e = ((far.to_bits() >> 52) & 0x7ff) as i64 - 1023;
+    f64::from_bits(((e.max(-126) - 23 + 1023) as u64) << 52)
 }
 
 /// Warns (into `warnings`; `what` names the cloud) when the `f32` offsets of a cloud with box
@@ -159,6 +164,18 @@ pub fn flat_pair(source: [f64; 3], target: [f64; 3], warnings: &mut Vec<String>)
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn f32_step_is_the_gap_between_neighbouring_f32_values() {
+        for v in [1.0f32, 3.7, 5.4e6, 1e-30, 3e38, 1e-40] {
+            let next = f32::from_bits(v.to_bits() + 1);
+            assert_eq!(f32_step(v as f64), (next - v) as f64, "{v}");
+            assert_eq!(f32_step(-(v as f64)), (next - v) as f64, "{v}");
+        }
+        assert_eq!(f32_step(5.4e6), 0.5);
+        assert_eq!(f32_step(0.0), 0.0);
+        assert!(f32_step(f64::NAN).is_infinite());
+    }
 
     #[test]
     fn spreads_tell_lines_planes_and_volumes() {

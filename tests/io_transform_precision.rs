@@ -103,6 +103,14 @@ fn text_written_with_few_digits_gets_those_its_moved_values_need() {
     let moved = transform_file(g.as_bytes(), "scan.xyz", &onto_map()).unwrap();
     let diagonal = (2.75f64.powi(2) + 1.25f64.powi(2) + 1.0f64.powi(2)).sqrt();
     assert_moved(&moved, "scan.xyz", &points, &onto_map(), diagonal * 1e-3);
+    // exponent form (`%.3e`), moved to 1.2e6: the last significant digit reaches the step (0.1% of
+    // the diagonal) there, so each value is within half a step
+    let e = "1.000e+00 2.000e+00 5.000e-01\n-3.000e+00 1.500e+00 2.500e+00\n4.000e+00 -2.500e+00 1.000e-01\n";
+    let points = [[1.0, 2.0, 0.5], [-3.0, 1.5, 2.5], [4.0, -2.5, 0.1]];
+    let far = Matrix4::new_translation(&Vector3::new(1.2e6, 0.0, 0.0));
+    let moved = transform_file(e.as_bytes(), "scan.xyz", &far).unwrap();
+    let diagonal = (7.0f64.powi(2) + 4.5f64.powi(2) + 2.4f64.powi(2)).sqrt();
+    assert_moved(&moved, "scan.xyz", &points, &far, diagonal * 1e-3 / 2.0 + 1e-9);
 }
 
 #[test]
@@ -118,4 +126,74 @@ fn a_nearly_rigid_matrix_maps_points_where_it_puts_them() {
     let points = [[512345.125, 5412345.25, 250.5], [512355.75, 5412340.125, 251.25], [512350.0, 5412352.5, 249.75]];
     let moved = transform_file(survey.as_bytes(), "survey.csv", &m).unwrap();
     assert_moved(&moved, "survey.csv", &points, &m, 5e-4 + 1e-9);
+}
+
+#[test]
+fn one_point_a_file_already_on_the_grid_and_double_axes_are_judged_as_they_are() {
+    // one point moved onto the map grid: float cannot hold it as the file did (0.1 there)
+    let one = "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0.1 0.2 0.3\n";
+    let m = onto_map();
+    let moved = transform_file(one.as_bytes(), "one.ply", &m).unwrap();
+    assert!(String::from_utf8_lossy(&moved).contains("property double y\n"));
+    assert_moved(&moved, "one.ply", &[[0.1, 0.2, 0.3]], &m, 1e-6);
+    // a float PCD already on the grid, moved by a metre: float holds it as the file did
+    let on_grid: Vec<[f64; 3]> = box_points().iter().map(|p| apply(&m, *p)).collect();
+    let header = |sizes: &str, types: &str| {
+        format!(
+            "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE {sizes}\nTYPE {types}\nCOUNT 1 1 1\nWIDTH 8\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 8\nDATA binary\n"
+        )
+        .into_bytes()
+    };
+    let mut pcd = header("4 4 4", "F F F");
+    on_grid.iter().flatten().for_each(|v| pcd.extend_from_slice(&(*v as f32).to_le_bytes()));
+    let step = Matrix4::new_translation(&Vector3::new(1.0, 0.0, 0.0));
+    let moved = transform_file(&pcd, "grid.pcd", &step).unwrap();
+    assert_eq!(moved.len(), pcd.len());
+    // x a double, y and z floats near zero: moved far along x only, it fits
+    let mut mixed = header("8 4 4", "F F F");
+    for p in box_points() {
+        mixed.extend_from_slice(&p[0].to_le_bytes());
+        mixed.extend_from_slice(&(p[1] as f32).to_le_bytes());
+        mixed.extend_from_slice(&(p[2] as f32).to_le_bytes());
+    }
+    let along_x = Matrix4::new_translation(&Vector3::new(5e6, 0.0, 0.0));
+    let moved = transform_file(&mixed, "mixed.pcd", &along_x).unwrap();
+    assert_moved(&moved, "mixed.pcd", &box_points(), &along_x, 1e-6);
+}
+
+#[test]
+fn a_ply_widens_its_vertex_positions_by_index_whatever_their_lines_hold() {
+    // a property line with an extra word, a comment naming a property, another element with x
+    let points = box_points();
+    let mut bytes = format!(
+        "ply\nformat binary_little_endian 1.0\ncomment property float x\nelement camera 1\nproperty float x\nelement vertex {}\nproperty float x extra\nproperty float y\nproperty float z\nend_header\n",
+        points.len()
+    )
+    .into_bytes();
+    bytes.extend_from_slice(&7.5f32.to_le_bytes());
+    points.iter().flatten().for_each(|v| bytes.extend_from_slice(&(*v as f32).to_le_bytes()));
+    let m = onto_map();
+    let moved = transform_file(&bytes, "scan.ply", &m).unwrap();
+    let text = String::from_utf8_lossy(&moved[..260]).to_string();
+    assert!(
+        text.contains("comment property float x\nelement camera 1\nproperty float x\nelement vertex 8\nproperty double x extra\nproperty double y\nproperty double z\n"),
+        "{text}"
+    );
+    assert_moved(&moved, "scan.ply", &points, &m, 1e-6);
+}
+
+#[test]
+fn an_e57_file_refuses_a_matrix_its_rigid_poses_would_apply_elsewhere() {
+    let e57 = common::format_fixture("velodyne_two_scans.e57");
+    let r = Rotation3::from_axis_angle(&Vector3::z_axis(), 20f64.to_radians()).into_inner();
+    let mut m = Matrix4::identity();
+    m.fixed_view_mut::<3, 3>(0, 0).copy_from(&r.map(|v| (v * 1e4).round() / 1e4));
+    let e = transform_file(&e57, "two.e57", &m).unwrap_err().to_string();
+    assert!(
+        e.contains("an E57 file's poses are rigid: this matrix is") && e.contains("save the points instead"),
+        "{e}"
+    );
+    // the exact rotation is stored as a pose
+    m.fixed_view_mut::<3, 3>(0, 0).copy_from(&r);
+    assert!(transform_file(&e57, "two.e57", &m).is_ok());
 }

@@ -326,3 +326,15 @@ test("worker: under Node, a script that never calls terminate() exits once its a
   });
   assert.match(stdout, /done 16/);
 });
+
+test("worker: options inherited from a prototype, or a Map, are refused, as by the engine's own API", async () => {
+  const arps = await createWorkerRegistrar();
+  try {
+    await assert.rejects(arps.register(source(), target(), Object.create({ icp: "point" })), /^Error: invalid options: `icp` is inherited from a prototype/);
+    await assert.rejects(arps.readPointCloud(sourcePly, "s.ply", Object.create({ surfacePoints: 100 })), /`surfacePoints` is inherited/);
+    await assert.rejects(arps.register(source(), target(), new Map([["icp", "point"]])), /expected a plain object \(or undefined\), got a Map/);
+    assert.equal((await arps.register(source(), target(), { icp: "point" })).T_target_source.length, 16);
+  } finally {
+    arps.terminate();
+  }
+});

@@ -166,6 +166,17 @@ fn prepare(bytes: &[u8], m: &Matrix4<f64>) -> Result<(String, UnitQuaternion<f64
             motion.scale()
         )));
     }
+    // a pose applies the nearest rotation about the file's origin, which on a map grid lies far
+    // from the points: a matrix only nearly rigid would move them where the matrix does not
+    let off = (motion.linear - motion.rotation).abs().max();
+    if off > 1e-9 {
+        return Err(Error::InvalidOption(format!(
+            "an E57 file's poses are rigid: this matrix is {} off the rotation nearest it (written with few decimals, \
+             or a scale near 1), which a pose would apply about the file's origin rather than where the points are; \
+             give it rigid to 1e-9 (a registration's T_target_source is), or save the points instead (as PLY)",
+            crate::error::num(off)
+        )));
+    }
     let reader = super::e57::open(bytes)?;
     let header = reader.header();
     if header.page_size != PAGE as u64 || header.phys_length != bytes.len() as u64 || !bytes.len().is_multiple_of(PAGE)

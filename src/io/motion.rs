@@ -102,33 +102,49 @@ impl Bounds {
         self.0.iter().map(|[lo, hi]| (hi - lo).max(0.0).powi(2)).sum::<f64>().sqrt() * motion.scale.abs()
     }
 
-    /// The largest value of a position moved by `motion` (it lies on a corner of the moved box);
-    /// 0 without a position.
-    pub(super) fn largest_moved(&self, motion: &Motion) -> f64 {
+    /// The largest value of a position moved by `motion` on each axis (it lies on a corner of the
+    /// moved box); 0 without a position.
+    fn largest_moved_per_axis(&self, motion: &Motion) -> [f64; 3] {
         if self.0[0][0] > self.0[0][1] {
-            return 0.0;
+            return [0.0; 3];
         }
         let [x, y, z] = self.0;
         (0..8)
             .map(|k| motion.point([x[k & 1], y[(k >> 1) & 1], z[(k >> 2) & 1]]))
-            .fold(0.0f64, |a, p| p.iter().fold(a, |a, v| a.max(v.abs())))
+            .fold([0.0f64; 3], |a, p| [0, 1, 2].map(|i| a[i].max(p[i].abs())))
     }
 
-    /// The `f32` step at the largest moved position, when `f32` would round the moved positions
-    /// beyond [`crate::checks::F32_ROUNDING_WARNING`] of the moved box's largest half-extent (a
-    /// local scan placed on a map grid), the rule of [`crate::PointCloud::placed`]; else `None`.
-    pub(super) fn f32_rounds(&self, motion: &Motion) -> Option<f64> {
+    /// The largest value of a position moved by `motion`; 0 without a position.
+    pub(super) fn largest_moved(&self, motion: &Motion) -> f64 {
+        self.largest_moved_per_axis(motion).into_iter().fold(0.0, f64::max)
+    }
+
+    /// The `f32` step at the largest moved value of the axes `single` marks (those the file stores
+    /// as `f32`), when `f32` would round the moved positions there: beyond
+    /// [`crate::checks::F32_ROUNDING_WARNING`] of the moved box's largest half-extent (the rule of
+    /// [`crate::PointCloud::placed`]; a local scan moved onto a map grid), and more coarsely than
+    /// the file's own values on those axes were (a file already on the grid keeps its own
+    /// precision); a cloud of no extent (one point) on the second condition alone. Else `None`.
+    pub(super) fn f32_rounds(&self, motion: &Motion, single: [bool; 3]) -> Option<f64> {
+        if self.0[0][0] > self.0[0][1] {
+            return None;
+        }
         let half = self.0.iter().fold(0.0f64, |a, [lo, hi]| a.max((hi - lo) * 0.5)) * motion.scale.abs();
-        let far = self.largest_moved(motion);
-        (half > 0.0 && crate::checks::f32_rounds(far, half)).then(|| crate::checks::f32_step(far))
+        let moved = self.largest_moved_per_axis(motion);
+        let marked = |v: [f64; 3]| (0..3).filter(|&i| single[i]).fold(0.0f64, |a, i| a.max(v[i]));
+        let far = marked(moved);
+        let own = crate::checks::f32_step(marked(self.0.map(|[lo, hi]| lo.abs().max(hi.abs()))));
+        let step = crate::checks::f32_step(far);
+        let loses = half <= 0.0 || crate::checks::f32_rounds(far, half);
+        (loses && step > own).then_some(step)
     }
 }
 
-/// An error when `f32` would round the positions of a `format` file that stores them as `f32`,
-/// moved by `motion`, beyond [`Bounds::f32_rounds`]'s rule: such a file cannot hold them (a local
+/// An error when `f32` would round the positions of a `format` file that stores them as `f32` (on
+/// the axes `single` marks), moved by `motion`, beyond [`Bounds::f32_rounds`]'s rule: such a file cannot hold them (a local
 /// scan moved onto a map grid), and writing it would move every point by up to half that step.
-pub(super) fn check_f32(bounds: &Bounds, motion: &Motion, format: &str) -> Result<()> {
-    match bounds.f32_rounds(motion) {
+pub(super) fn check_f32(bounds: &Bounds, motion: &Motion, single: [bool; 3], format: &str) -> Result<()> {
+    match bounds.f32_rounds(motion, single) {
         Some(step) => Err(Error::InvalidOption(format!(
             "the transform moves this {format} file's points up to {} from zero, where its float32 coordinates hold \
              them only to steps of {} (the cloud is {} across): save the moved points in double precision instead \

@@ -66,8 +66,10 @@ impl Styles {
         let step = diagonal * STEP_OF_DIAGONAL;
         if step.is_finite() && step > 0.0 && largest.is_finite() {
             if position.exponent {
-                // significant digits that reach the step at the largest value
-                let digits = ((largest / step).log10().floor().max(0.0) as u32 + 1).min(MAX_DECIMALS as u32);
+                // significant digits whose last reaches the step at the largest value: from the
+                // largest's leading digit down to the step's
+                let digits =
+                    (largest.log10().floor() - step.log10().floor() + 1.0).clamp(1.0, MAX_DECIMALS as f64) as u32;
                 position.significant = position.significant.max(digits);
                 position.decimals = position.decimals.max(digits - 1);
             } else if let Some(d) = decimals_for_step(step) {

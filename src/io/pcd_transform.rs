@@ -71,7 +71,7 @@ pub fn transform_pcd(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     }
 }
 
-/// An error when the `xyz` fields are `float` (SIZE 4) and would round the points moved by
+/// An error when the `xyz` fields that are `float` (SIZE 4) would round the points moved by
 /// `motion` ([`check_f32`]); `at` as for [`move_values`].
 fn check_single(
     buf: &[u8],
@@ -80,14 +80,15 @@ fn check_single(
     motion: &Motion,
     at: &dyn Fn(usize, usize) -> usize,
 ) -> Result<()> {
-    if xyz.iter().all(|&k| h.fields[k].size == 8) {
+    let single = xyz.map(|k| h.fields[k].size == 4);
+    if !single.contains(&true) {
         return Ok(());
     }
     let mut bounds = Bounds::default();
     for i in 0..h.n_points as usize {
         bounds.add([0, 1, 2].map(|a| h.fields[xyz[a]].read_f64(&buf[at(i, xyz[a])..])));
     }
-    check_f32(&bounds, motion, "binary PCD")
+    check_f32(&bounds, motion, single, "binary PCD")
 }
 
 /// Each point's `xyz` fields in `buf` moved and its `normal` fields turned, in their own type;

@@ -70,7 +70,7 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let layout = layout(vertex)?;
     let position = |p| motion.point(p);
     let normal = |n| motion.normal(n);
-    let single = layout.position.iter().any(|&i| matches!(vertex.props[i].kind, Kind::Scalar(Scalar::F32)));
+    let single = layout.position.map(|i| matches!(vertex.props[i].kind, Kind::Scalar(Scalar::F32)));
     match h.encoding {
         Encoding::Ascii => {
             let mut lines = Lines::at(bytes, h.body, h.last_line);
@@ -79,7 +79,7 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
             }
             let start = lines.offset();
             // float positions: their bounds first, to see whether float holds them moved
-            let widen = single && {
+            let widen = single.contains(&true) && {
                 let bounds = std::cell::Cell::new(Bounds::default());
                 let record = |p: [f64; 3]| {
                     let mut b = bounds.get();
@@ -89,11 +89,11 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
                 };
                 let mut scratch = lines.clone();
                 move_ascii(bytes, &mut scratch, vertex, &layout, &record, &|n| n, &mut Vec::new())?;
-                bounds.get().f32_rounds(&motion).is_some()
+                bounds.get().f32_rounds(&motion, single).is_some()
             };
             let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 4);
             if widen {
-                out.extend_from_slice(&widened_header(&bytes[..h.body], vi, &layout, vertex));
+                out.extend_from_slice(&widened_header(&bytes[..h.body], vi, &layout));
                 out.extend_from_slice(&bytes[h.body..start]);
             } else {
                 out.extend_from_slice(&bytes[..start]);
@@ -110,8 +110,9 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
                 read_binary_element(bytes, &mut pos, el, Want::Skip, big, &mut Out::default())?;
             }
             let need = records_bytes(bytes.len(), pos, vertex)?;
-            if single && binary_bounds(&bytes[pos..pos + need], vertex, &layout, big).f32_rounds(&motion).is_some() {
-                let mut out = widened_header(&bytes[..h.body], vi, &layout, vertex);
+            let bounds = || binary_bounds(&bytes[pos..pos + need], vertex, &layout, big);
+            if single.contains(&true) && bounds().f32_rounds(&motion, single).is_some() {
+                let mut out = widened_header(&bytes[..h.body], vi, &layout);
                 out.extend_from_slice(&bytes[h.body..pos]);
                 widen_binary(&mut out, &bytes[pos..pos + need], vertex, &layout, big, &position, &normal);
                 out.extend_from_slice(&bytes[pos + need..]);
@@ -125,29 +126,33 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
 }
 
 /// The header `header` (up to its body) with the vertex element's (the `vi`-th element's) `x`,
-/// `y` and `z` declared `double` (`float64` where the file named them `float32`), every other
-/// byte as it was.
-fn widened_header(header: &[u8], vi: usize, layout: &Layout, vertex: &Element) -> Vec<u8> {
-    let names: Vec<&str> = layout.position.iter().map(|&i| vertex.props[i].name.as_str()).collect();
+/// `y` and `z` (the properties `layout.position` indexes) declared `double` (`float64` where the
+/// file named them `float32`), every other byte as it was: each `property` line of that element is
+/// counted, so a property's extra words, a duplicate name or a comment cannot mislead it.
+fn widened_header(header: &[u8], vi: usize, layout: &Layout) -> Vec<u8> {
     let mut out = Vec::with_capacity(header.len() + 16);
-    let mut element = None::<usize>;
-    let mut seen = 0usize;
+    // (the element a line belongs to, and the index of a property line within it)
+    let (mut element, mut property) = (None::<usize>, 0usize);
+    let mut elements = 0usize;
     for line in header.split_inclusive(|&b| b == b'\n') {
-        let text = String::from_utf8_lossy(line);
-        let words: Vec<&str> = text.split_ascii_whitespace().collect();
-        match words.as_slice() {
-            ["element", ..] => {
-                element = Some(seen);
-                seen += 1;
+        let mut words = line.split(u8::is_ascii_whitespace).filter(|w| !w.is_empty());
+        match words.next() {
+            Some(b"element") => {
+                (element, property) = (Some(elements), 0);
+                elements += 1;
             }
-            ["property", ty @ ("float" | "float32"), name] if element == Some(vi) && names.contains(name) => {
-                let wide = if *ty == "float" { "double" } else { "float64" };
-                // the type word replaced where it stands, the spacing and line ending kept
-                let at = text.find(ty).unwrap_or(0);
-                out.extend_from_slice(text[..at].as_bytes());
-                out.extend_from_slice(wide.as_bytes());
-                out.extend_from_slice(text[at + ty.len()..].as_bytes());
-                continue;
+            Some(b"property") if element == Some(vi) => {
+                let index = property;
+                property += 1;
+                // the type word replaced where it stands (checked by `layout`: a float)
+                if let Some(ty) = words.next().filter(|_| layout.position.contains(&index)) {
+                    let at = ty.as_ptr() as usize - line.as_ptr() as usize;
+                    let wide: &[u8] = if ty == b"float32" { b"float64" } else { b"double" };
+                    out.extend_from_slice(&line[..at]);
+                    out.extend_from_slice(wide);
+                    out.extend_from_slice(&line[at + ty.len()..]);
+                    continue;
+                }
             }
             _ => {}
         }

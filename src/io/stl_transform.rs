@@ -32,7 +32,7 @@ pub(crate) fn transform_stl(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     for rec in bytes[84..84 + 50 * n].chunks_exact(50) {
         (1..4).for_each(|k| bounds.add(corner(rec, k)));
     }
-    check_f32(&bounds, &motion, "binary STL")?;
+    check_f32(&bounds, &motion, [true; 3], "binary STL")?;
     let mut out = bytes.to_vec();
     for rec in out[84..84 + 50 * n].chunks_exact_mut(50) {
         for k in 0..4 {
