@@ -142,8 +142,14 @@ impl Bounds {
 
 /// An error when `f32` would round the positions of a `format` file that stores them as `f32` (on
 /// the axes `single` marks), moved by `motion`, beyond [`Bounds::f32_rounds`]'s rule: such a file cannot hold them (a local
-/// scan moved onto a map grid), and writing it would move every point by up to half that step.
+/// scan moved onto a map grid), and writing it would move every point by up to half that step. A
+/// cloud of no extent is never refused.
 pub(super) fn check_f32(bounds: &Bounds, motion: &Motion, single: [bool; 3], format: &str) -> Result<()> {
+    // a cloud of no extent (one point, or one place) has no size to lose digits against: moved
+    // anywhere, float32 holds it to its usual seven digits
+    if bounds.0.iter().all(|[lo, hi]| hi <= lo) {
+        return Ok(());
+    }
     match bounds.f32_rounds(motion, single) {
         Some(step) => Err(Error::InvalidOption(format!(
             "the transform moves this {format} file's points up to {} from zero, where its float32 coordinates hold \
