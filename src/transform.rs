@@ -132,12 +132,18 @@ pub fn check_rigid(m: &Matrix4<f64>, tol: f64) -> Result<(), String> {
 /// file) are within it, and are used as the rigid transform nearest them ([`nearest_rigid`]).
 pub const RIGID_TOLERANCE: f64 = 1e-3;
 
+/// Checks that `m` is within [`RIGID_TOLERANCE`] of rigid (the matrices [`nearest_rigid`]
+/// accepts), for a caller that applies it as given: an error saying what is off.
+pub fn check_near_rigid(m: &Matrix4<f64>) -> Result<(), String> {
+    check_rigid(m, RIGID_TOLERANCE).map_err(|e| format!("{e}, beyond {RIGID_TOLERANCE:e}"))
+}
+
 /// The rigid transform nearest `m`: the rotation nearest its rotation block (its polar factor),
 /// its translation, the bottom row `[0, 0, 0, 1]`; `m` itself when it is rigid to 1e-9 (a
 /// computed transform, used bit for bit). An error saying what is off when `m` is further than
 /// [`RIGID_TOLERANCE`] from rigid (or not finite).
 pub fn nearest_rigid(m: &Matrix4<f64>) -> Result<Matrix4<f64>, String> {
-    check_rigid(m, RIGID_TOLERANCE).map_err(|e| format!("{e}, beyond {RIGID_TOLERANCE:e}"))?;
+    check_near_rigid(m)?;
     if check_rigid(m, 1e-9).is_ok() {
         return Ok(*m);
     }

@@ -215,7 +215,7 @@ pub fn transform_point_cloud(
     let m = matrix_arg(matrix)?;
     // checked, then used as given: snapped onto a rotation about the frame's origin, a matrix
     // written with a few decimals would move a cloud on a map grid by metres
-    crate::transform::nearest_rigid(&m).map_err(|e| JsError::new(&format!("matrix is not rigid: {e}")))?;
+    crate::transform::check_near_rigid(&m).map_err(|e| JsError::new(&format!("matrix is not rigid: {e}")))?;
     let cloud = cloud_arg(&cloud, "cloud")?;
     cloud_object(&cloud.placed(&m))
 }

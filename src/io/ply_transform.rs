@@ -88,7 +88,7 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
                     p
                 };
                 let mut scratch = lines.clone();
-                move_ascii(bytes, &mut scratch, vertex, &layout, &record, &|n| n, &mut Vec::new())?;
+                move_ascii(bytes, &mut scratch, vertex, &layout, &record, &|n| n, None)?;
                 bounds.get().f32_rounds(&motion, single).is_some()
             };
             let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 4);
@@ -99,7 +99,7 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
                 out.extend_from_slice(&bytes[..start]);
             }
             let layout = Layout { widened: widen, ..layout };
-            move_ascii(bytes, &mut lines, vertex, &layout, &position, &normal, &mut out)?;
+            move_ascii(bytes, &mut lines, vertex, &layout, &position, &normal, Some(&mut out))?;
             out.extend_from_slice(&bytes[lines.offset()..]);
             Ok(out)
         }
@@ -305,7 +305,8 @@ fn text(v: f64, s: Scalar) -> String {
 }
 
 /// Copies the vertex lines from `lines` (over `bytes`) to `out`, each with its position and normal
-/// rewritten (blank lines as they are, each line's own terminator kept).
+/// rewritten (blank lines as they are, each line's own terminator kept). Without `out`, only reads
+/// them (checked) and passes their positions to `position` (a first pass that takes their bounds).
 fn move_ascii(
     bytes: &[u8],
     lines: &mut Lines,
@@ -313,7 +314,7 @@ fn move_ascii(
     layout: &Layout,
     position: &dyn Fn([f64; 3]) -> [f64; 3],
     normal: &dyn Fn([f64; 3]) -> [f64; 3],
-    out: &mut Vec<u8>,
+    mut out: Option<&mut Vec<u8>>,
 ) -> Result<()> {
     let types: Vec<Scalar> = el
         .props
@@ -339,7 +340,9 @@ fn move_ascii(
         let line = utf8_line(F, n, raw)?;
         let mut tokens: Vec<String> = line.split_ascii_whitespace().map(str::to_string).collect();
         if tokens.is_empty() {
-            out.extend_from_slice(raw);
+            if let Some(out) = out.as_deref_mut() {
+                out.extend_from_slice(raw);
+            }
         } else {
             if tokens.len() < types.len() {
                 return Err(Error::parse(
@@ -359,16 +362,20 @@ fn move_ascii(
                 Some(idx) => Some((idx, normal(read(&tokens, idx)?))),
                 None => None,
             };
-            let (position, normal) = (Some((layout.position, moved)), turned);
-            for (idx, values) in [position, normal].into_iter().flatten() {
-                for (i, v) in idx.into_iter().zip(values) {
-                    tokens[i] = text(v, types[i]);
+            if let Some(out) = out.as_deref_mut() {
+                let (position, normal) = (Some((layout.position, moved)), turned);
+                for (idx, values) in [position, normal].into_iter().flatten() {
+                    for (i, v) in idx.into_iter().zip(values) {
+                        tokens[i] = text(v, types[i]);
+                    }
                 }
+                out.extend_from_slice(tokens.join(" ").as_bytes());
             }
-            out.extend_from_slice(tokens.join(" ").as_bytes());
             done += 1;
         }
-        out.extend_from_slice(&bytes[terminator]);
+        if let Some(out) = out.as_deref_mut() {
+            out.extend_from_slice(&bytes[terminator]);
+        }
     }
     Ok(())
 }

@@ -66,7 +66,7 @@ pub(crate) fn initial_transform(options: &Options) -> Result<Matrix4<f64>> {
             if m.iter().any(|v| !v.is_finite()) {
                 return Err(Error::InvalidOption("initialTransform has a non-finite entry".into()));
             }
-            transform::nearest_rigid(&m)
+            transform::check_near_rigid(&m)
                 .map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?;
             m
         }
