@@ -8,7 +8,10 @@
 //! survey's `PointID,Easting,Northing,Elevation` reads its coordinates, not its point numbers;
 //! otherwise the first three numbers of a row are x, y, z. Other columns (intensity, colour,
 //! normals) are ignored. Blank lines and `#` / `//` comments are skipped anywhere. After data has
-//! started, a row without numbers in its coordinate columns is an error naming its line.
+//! started, a row without numbers in its coordinate columns is an error naming its line. A row
+//! whose commas all sit between digits, without a decimal point, and whose values are separated by
+//! whitespace or semicolons (`1,5 2,5 3,5`) is an error too: decimal commas, which the comma
+//! separator would silently split into other values.
 
 use super::util::{parse_f64, show, split_fields, utf8_line, Lines};
 use crate::{Error, Result};
@@ -98,6 +101,17 @@ pub(crate) fn scan<'a>(bytes: &'a [u8], visit: &mut dyn FnMut(&Row<'a, '_>) -> R
         fields.clear();
         fields.extend(split_fields(line));
         match values(&fields, columns.xyz) {
+            Some(_) if decimal_commas(line) => {
+                return Err(Error::parse(
+                    F,
+                    format!(
+                        "line {n}: {} has commas between digits and other separators between its values: numbers \
+                         written with decimal commas (1,5 for 1.5) or thousands separators, which would be read as \
+                         separate values; write the numbers with a decimal point (and no thousands separators) first",
+                        show(line.trim())
+                    ),
+                ))
+            }
             Some(point) => {
                 started = true;
                 visit(&Row { line, fields: &fields, columns, point })?;
@@ -110,6 +124,19 @@ pub(crate) fn scan<'a>(bytes: &'a [u8], visit: &mut dyn FnMut(&Row<'a, '_>) -> R
         return Err(Error::parse(F, "no line with three numbers (x y z) found: not a text point list"));
     }
     Ok(())
+}
+
+/// True when `line` has commas only between digits, no decimal point, and whitespace or
+/// semicolons between its values (`1,5 2,5 3,5`, `1,5;2,5;3,5`): numbers written with decimal
+/// commas (or thousands separators), which the comma separator would split into other values. A
+/// comma-separated line (`1,2,3`, `1.5, 2.5, 3.5`, `1,2,3,Big tree`) is not.
+fn decimal_commas(line: &str) -> bool {
+    let b = line.trim().as_bytes();
+    if !b.contains(&b',') || b.contains(&b'.') || !b.iter().any(|&c| c == b';' || c.is_ascii_whitespace()) {
+        return false;
+    }
+    let digit = |i: Option<usize>| i.and_then(|i| b.get(i)).is_some_and(u8::is_ascii_digit);
+    b.iter().enumerate().filter(|(_, &c)| c == b',').all(|(i, _)| digit(i.checked_sub(1)) && digit(Some(i + 1)))
 }
 
 /// The error for a row after the data started whose coordinates are not all numbers.
@@ -189,5 +216,23 @@ mod tests {
         assert!(e.contains("columns [2, 3, 4]"), "{e}");
         // Unnamed: the first three numbers, as before.
         assert_eq!(read(b"12\n1 2 3 9 9 9\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+    }
+
+    #[test]
+    fn decimal_commas_are_refused_not_split() {
+        for text in [&b"1,5 2,5 3,5\n"[..], b"x;y;z\n1,5;2,5;3,5\n", b"1,5\t2,5\t3,5\n", b"1 2 3\n1 000,5 2 3\n"] {
+            let e = read(text).unwrap_err().to_string();
+            assert!(e.contains("decimal commas"), "{e}");
+        }
+        let e = read(b"1.5 2.5 3.5\n4 5 6\n1,5 2,5 3,5\n").unwrap_err().to_string();
+        assert!(e.contains("line 3"), "{e}");
+        // comma-separated values, with or without spaces, decimal points or labels
+        assert_eq!(read(b"1,2,3\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        assert_eq!(read(b"1.5, 2.5, 3.5\n").unwrap(), vec![[1.5, 2.5, 3.5]]);
+        assert_eq!(read(b"1,2,3,Big tree\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        assert_eq!(read(b"1;2;3\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        assert_eq!(read(b"1,5,2,5,3,5\n").unwrap(), vec![[1.0, 5.0, 2.0]]);
+        // a header line is not data
+        assert_eq!(read(b"Created 30,11 2026\n1 2 3\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
     }
 }
