@@ -194,6 +194,15 @@ mod tests {
     }
 
     #[test]
+    fn strays_whose_distances_overflow_f32_are_left_out() {
+        // a stray at 2e19 and a sensor's f32::MAX "no return": squared distances to them overflow
+        let mut points = sheet(3_050);
+        points.push([2e19, 0.0, 0.0]);
+        points.push([0.0, f32::MAX, 0.0]);
+        assert_eq!(far_outliers(&points), vec![3_050, 3_051]);
+    }
+
+    #[test]
     fn a_cluster_far_away_is_not_isolated() {
         // two patches far apart (two objects): both stay
         let mut points = sheet(3_050);

@@ -21,7 +21,7 @@ pub struct Spacing {
     /// The sample's k-d tree.
     pub index: KdIndex,
     /// Per sample point, the distance to its [`NEIGHBOUR`]th nearest other sample point (the
-    /// farthest found when the sample has fewer).
+    /// farthest when the sample has fewer; infinite when the distances overflow `f32`).
     pub reach: Vec<f32>,
     /// The median reach: the sample's spacing (infinite for an empty sample).
     pub median: f32,
@@ -33,12 +33,18 @@ impl Spacing {
         let sample = even_sample(points, SAMPLE);
         let index = KdIndex::new(&sample);
         let mut out = Vec::with_capacity(NEIGHBOUR + 1);
-        // the nearest found is the point itself
+        // the nearest found is the point itself; a point so far from the others that their squared
+        // distances overflow f32 (a stray at 1e20, a sensor's f32::MAX for "no return") finds only
+        // itself, and its reach is infinite
+        let wanted = (NEIGHBOUR + 1).min(sample.len());
         let reach: Vec<f32> = sample
             .iter()
             .map(|q| {
                 index.knn_into(q, NEIGHBOUR + 1, &mut out);
-                out.last().map_or(f32::INFINITY, |e| e.1.sqrt())
+                match out.last() {
+                    Some(e) if out.len() == wanted => e.1.sqrt(),
+                    _ => f32::INFINITY,
+                }
             })
             .collect();
         let median = if reach.is_empty() {
@@ -69,5 +75,12 @@ mod tests {
         assert_eq!(Spacing::of(&big).sample.len(), SAMPLE);
         let empty = Spacing::of(&[]);
         assert!(empty.sample.is_empty() && empty.median.is_infinite());
+        // a point whose squared distances to the others overflow f32 has an infinite reach
+        let mut strays = grid.clone();
+        strays.push([1e20, 0.0, 0.0]);
+        strays.push([0.0, 3e38, 0.0]);
+        let s = Spacing::of(&strays);
+        assert!(s.reach[1600].is_infinite() && s.reach[1601].is_infinite(), "{:?}", &s.reach[1600..]);
+        assert_eq!(s.median, 0.5);
     }
 }

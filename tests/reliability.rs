@@ -169,3 +169,17 @@ fn compressed_bodies_over_the_decoding_budget_are_refused() {
     assert!(matches!(e, Error::TooLarge(_)), "{e}");
     assert!(e.to_string().contains("1204000000 uncompressed bytes"), "{e}");
 }
+
+/// Strays so far out that squared distances to them overflow f32 (a sensor's f32::MAX for "no
+/// return") are left out like nearer ones, where they made the cloud "collinear".
+#[test]
+fn strays_beyond_f32_squares_are_left_out() {
+    let mut reg = registrar();
+    let target = bumpy_surface(1500, 0.3).transformed(&motion([5.0, -3.0, 4.0], [0.05, 0.0, -0.02]));
+    let mut points = bumpy_surface(1500, 0.0).points;
+    points.push([2e20, 0.0, 0.0]);
+    points.push([0.0, f32::MAX, 0.0]);
+    let r = reg.register(&PointCloud::new(points), &target, &Options::default()).unwrap();
+    assert!(r.warnings.iter().any(|w| w.contains("left out 2 of the source's 1502 points")), "{:?}", r.warnings);
+    assert!(r.T_target_source.iter().all(|v| v.is_finite()));
+}
