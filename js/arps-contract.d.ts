@@ -25,7 +25,8 @@ export type RegisterOptions = {
   /**
    * Refinement after the network: `"plane"` (point-to-plane ICP, target normals; the
    * default), `"point"` (point-to-point ICP) or `"off"` (the network + GMR estimate is the
-   * answer).
+   * answer). When both clouds are flat, `"plane"` runs point-to-point: every normal is the
+   * plane's, and a point-to-plane fit could not move within it.
    */
   icp?: IcpKind,
   /**
@@ -42,7 +43,8 @@ export type RegisterOptions = {
    */
   maxCorrespondenceDistance?: number | null,
   /**
-   * Iteration cap of each of the three ICP stages. Default 30; at most 10000. The answer's
+   * Iteration cap of each of the three ICP stages. Default 30; at least 1, at most 10000
+   * (`icp: "off"` leaves ICP out). The answer's
    * final stage, when it has not converged within the cap, runs on for up to three more
    * rounds of as many while it still moves (a slow fit is not judged where the cap cut it;
    * `icpConverged` says whether it converged).
@@ -51,8 +53,9 @@ export type RegisterOptions = {
   /**
    * Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
    * correspondence distance, or of the default distance when `max_correspondence_distance` is
-   * wider (the voxels the answer's evidence is measured on). `0` uses the full clouds. Must be >= 0, and at most the clouds'
-   * shared half-extent.
+   * wider (the voxels the answer's evidence is measured on). `0` uses the full clouds, as does
+   * a size below a millionth of the clouds' shared half-extent. Must be >= 0, and at most the
+   * clouds' shared half-extent.
    */
   voxelSize?: number | null,
   /**
@@ -396,9 +399,10 @@ export type RegistrationEvidence = {
   ambiguity: number,
   /**
    * How many distinct poses (more than 15 degrees apart) fit at least 0.9 as well as the
-   * answer, among those probes or, when more, among the other answers the search refined (its
-   * stages' best answers and the probes' better poses): with `k` alternatives the answer is one
-   * of `k + 1` about equally good poses.
+   * answer, among those probes (and, for a part of a target round about one of its axes, the
+   * answer turned a third and a quarter about it) or, when more, among the other answers the
+   * search refined (its stages' best answers and the probes' better poses): with `k`
+   * alternatives the answer is one of `k + 1` about equally good poses.
    */
   alternatives: number,
   /**

@@ -206,7 +206,8 @@ impl PointCloud {
     fn check(&self, what: &str, min_points: usize, bad: Option<usize>) -> Result<()> {
         if let Some(i) = bad {
             return Err(Error::InvalidCloud(format!(
-                "{what} point {i} has a non-finite coordinate {:?} (drop such points with `nonFinite: \"drop\"`)",
+                "{what} point {i} has a non-finite coordinate {:?} (NaN, infinite, or too large for f32's range, \
+                 3.4e38; drop such points with `nonFinite: \"drop\"`)",
                 self.points[i]
             )));
         }

@@ -4,8 +4,10 @@
 //! person who passed the input: they say what was wrong and where (a point index, a line number, a
 //! byte offset, a tensor name), so the same text can be shown in a terminal or thrown as a JS `Error`.
 
-/// Everything that can go wrong in arps.
+/// Everything that can go wrong in arps. New kinds may be added (it is `#[non_exhaustive]`):
+/// a `match` on it needs a `_` arm.
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// A point cloud that cannot be registered: empty, too few points, non-finite coordinates,
     /// a flat buffer whose length is not a multiple of 3, or a degenerate extent.

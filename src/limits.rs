@@ -138,7 +138,11 @@ pub fn check_icp_points(what: &str, input: usize, icp: usize, voxel: f64) -> Res
     if icp <= max {
         return Ok(());
     }
-    let how = if voxel > 0.0 { format!("voxelSize {voxel}") } else { "voxelSize 0 (every point)".to_string() };
+    let how = if voxel > 0.0 {
+        format!("voxelSize {voxel}")
+    } else {
+        "voxelSize 0 (every point; a size below a millionth of the clouds' half-extent counts as 0)".to_string()
+    };
     Err(Error::TooLarge(format!(
         "{what} keeps {icp} of its {input} points for ICP at {how}, more than the {max} that fit next to them \
          (about {ICP_BYTES_PER_POINT} bytes per ICP point and {INPUT_BYTES_PER_POINT} per input point, within {} MiB \

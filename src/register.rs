@@ -40,7 +40,8 @@ pub struct Options {
     pub seed: u64,
     /// Refinement after the network: `"plane"` (point-to-plane ICP, target normals; the
     /// default), `"point"` (point-to-point ICP) or `"off"` (the network + GMR estimate is the
-    /// answer).
+    /// answer). When both clouds are flat, `"plane"` runs point-to-point: every normal is the
+    /// plane's, and a point-to-plane fit could not move within it.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub icp: IcpKind,
     /// Run the network. Default `true`. With `false` the coarse estimate is `initialTransform`
@@ -53,7 +54,8 @@ pub struct Options {
     /// `fitness` and `inlierRmse` are measured at 1x. Must be > 0, and at most the clouds'
     /// shared half-extent (beyond it every point pairs with one, whatever the pose).
     pub max_correspondence_distance: Option<f64>,
-    /// Iteration cap of each of the three ICP stages. Default 30; at most 10000. The answer's
+    /// Iteration cap of each of the three ICP stages. Default 30; at least 1, at most 10000
+    /// (`icp: "off"` leaves ICP out). The answer's
     /// final stage, when it has not converged within the cap, runs on for up to three more
     /// rounds of as many while it still moves (a slow fit is not judged where the cap cut it;
     /// `icpConverged` says whether it converged).
@@ -61,8 +63,9 @@ pub struct Options {
     pub icp_max_iterations: u32,
     /// Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
     /// correspondence distance, or of the default distance when `max_correspondence_distance` is
-    /// wider (the voxels the answer's evidence is measured on). `0` uses the full clouds. Must be >= 0, and at most the clouds'
-    /// shared half-extent.
+    /// wider (the voxels the answer's evidence is measured on). `0` uses the full clouds, as does
+    /// a size below a millionth of the clouds' shared half-extent. Must be >= 0, and at most the
+    /// clouds' shared half-extent.
     pub voxel_size: Option<f64>,
     /// An initial guess of `T_target_source` (rigid, the clouds' units); the network then
     /// estimates the remaining motion from there, and of two answers that fit about as well, the
@@ -423,6 +426,12 @@ pub struct Alternative {
 /// registered onto one model or map prepare it once. It holds the normalised target (12 bytes a
 /// point) and ICP's voxelised copy with its k-d tree and normals until the next registration onto
 /// another target, or [`Registrar::forget_target`].
+///
+/// A registration runs on the calling thread; the engine starts no threads of its own. A
+/// `Registrar` is `Send` and `Sync`: a batch job can give each thread its own (each holds its own
+/// copy of the model's weights), or move one between threads; [`Registrar::register`]
+/// takes `&mut self`, so threads that share one take turns (a `Mutex`). The same input and
+/// options give the same result on any thread.
 pub struct Registrar {
     model: Model,
     weights_provenance: serde_json::Value,
@@ -431,6 +440,12 @@ pub struct Registrar {
     /// The last target prepared ([`crate::pipeline::target`]).
     target: Option<Box<PreparedTarget>>,
 }
+
+// what the docs promise a batch job: a registrar moves to and is shared between threads
+const _: fn() = || {
+    fn send_sync<T: Send + Sync>() {}
+    send_sync::<Registrar>();
+};
 
 /// Most points per cloud the network may be given: attention costs grow with its square
 /// (4096 points take seconds in WebAssembly; the shipped model was trained on 256, then 128).

@@ -138,6 +138,7 @@ fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
             Options { icp_max_iterations: 1_000_000, ..Options::default() },
             "icpMaxIterations",
         ),
+        (good.clone(), good.clone(), Options { icp_max_iterations: 0, ..Options::default() }, "icpMaxIterations = 0"),
         (
             good.clone(),
             good.clone(),

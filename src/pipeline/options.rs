@@ -37,6 +37,12 @@ pub(crate) fn resolve(options: &Options, model: &Model) -> Result<Resolved> {
             options.icp_max_iterations
         )));
     }
+    // 0 would refine nothing yet judge the starts as if refined (`icp: "off"` says so)
+    if options.icp_max_iterations == 0 {
+        return Err(Error::InvalidOption(
+            "icpMaxIterations = 0: each ICP stage needs at least 1 iteration (icp: \"off\" leaves ICP out)".into(),
+        ));
+    }
     refine::check_starts(&options.starts)?;
     // the starts that run with these options (`starts::kinds`: without the network,
     // "rotationsNetwork" is left out)
