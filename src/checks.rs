@@ -76,8 +76,9 @@ pub fn f32_step(far: f64) -> f64 {
 /// [`F32_ROUNDING_WARNING`] of its half-extent: a cloud far from zero (a map grid) given as `f32`
 /// (`PointCloud::new`, a `Float32Array`) has lost those digits already, and the answer can be as
 /// coarse. A cloud built from `f64` (or read from a file) is stored as offsets from an origin
-/// near it and is never warned.
-pub fn f32_rounding(what: &str, lo: [f32; 3], hi: [f32; 3], warnings: &mut Vec<String>) {
+/// near it and is never warned. Returns that step (the spacing of `f32` values at the cloud's
+/// farthest coordinate, in its units; 0 for a cloud at zero), warned or not.
+pub fn f32_rounding(what: &str, lo: [f32; 3], hi: [f32; 3], warnings: &mut Vec<String>) -> f64 {
     let half = crate::cloud::half_extent_of(lo, hi);
     let far = lo.iter().chain(&hi).fold(0.0f64, |m, v| m.max((*v as f64).abs()));
     let step = f32_step(far);
@@ -91,6 +92,7 @@ pub fn f32_rounding(what: &str, lo: [f32; 3], hi: [f32; 3], warnings: &mut Vec<S
             crate::error::num(step)
         ));
     }
+    step
 }
 
 /// Ratio of a cloud's second principal spread to its first (standard deviations along the
@@ -152,13 +154,20 @@ pub fn not_collinear(what: &str, points: &[[f32; 3]], warnings: &mut Vec<String>
     Ok(s)
 }
 
-/// Warns when both clouds are flat (see [`FLAT_RATIO`]), given their principal spreads.
-pub fn flat_pair(source: [f64; 3], target: [f64; 3], warnings: &mut Vec<String>) {
-    if source[2] / source[0] < FLAT_RATIO && target[2] / target[0] < FLAT_RATIO {
-        warnings.push(
-            "both clouds are flat: sliding within the plane and turning about its normal are held only by the clouds' outlines, so check the result".into(),
-        );
+/// Warns when both clouds are flat (see [`FLAT_RATIO`]), given their principal spreads, and
+/// says whether they are: point-to-plane ICP then runs point-to-point, since every normal is the
+/// plane's and a point-to-plane fit cannot move within it (`icp` says whether ICP runs at all, for
+/// the warning).
+pub fn flat_pair(source: [f64; 3], target: [f64; 3], icp: bool, warnings: &mut Vec<String>) -> bool {
+    let flat = source[2] / source[0] < FLAT_RATIO && target[2] / target[0] < FLAT_RATIO;
+    if flat {
+        let how = if icp { " (ICP ran point-to-point, which pairs the outlines)" } else { "" };
+        warnings.push(format!(
+            "both clouds are flat: sliding within the plane and turning about its normal are held only by the clouds' \
+             outlines{how}, so check the result"
+        ));
     }
+    flat
 }
 
 #[cfg(test)]
@@ -189,13 +198,16 @@ mod tests {
         let mut w = Vec::new();
         let s = not_collinear("source", &plane, &mut w).unwrap();
         assert!(w.is_empty());
-        flat_pair(s, s, &mut w);
+        assert!(flat_pair(s, s, true, &mut w));
         assert_eq!(w.len(), 1);
+        assert!(w[0].contains("ICP ran point-to-point"), "{w:?}");
+        let mut w = Vec::new();
+        assert!(flat_pair(s, s, false, &mut w) && !w[0].contains("ICP"), "{w:?}");
         let cube: Vec<[f32; 3]> =
             (0..1000).map(|i| [(i % 10) as f32, (i / 10 % 10) as f32, (i / 100) as f32]).collect();
         let c = principal_spreads(&cube);
         let mut w = Vec::new();
-        flat_pair(s, c, &mut w);
+        assert!(!flat_pair(s, c, true, &mut w));
         assert!(w.is_empty());
         assert!(finite_transform(&Matrix4::identity(), "x").is_ok());
         assert!(finite_transform(&(Matrix4::identity() * f64::NAN), "x").is_err());

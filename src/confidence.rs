@@ -10,8 +10,9 @@
 //! `1 / k`, however well it fits. So the evidence also looks for such poses: the answer turned
 //! about the principal axes of the moved source (and the diagonals between them), of the
 //! target points it overlaps and, for a part of the target (a scan onto a model), of the whole
-//! target through its centroid, and along the motion its point-to-plane fit constrains least,
-//! each refined by a short ICP ([`Evidence::ambiguity`], [`Evidence::alternatives`]), and the
+//! target through its centroid (by a third and a quarter turn too about an axis the target is
+//! round about: a 3- or 4-fold symmetry), and along the motion its point-to-plane fit constrains
+//! least, each refined by a short ICP ([`Evidence::ambiguity`], [`Evidence::alternatives`]), and the
 //! answer slid along that motion without refinement ([`Evidence::slide`]: a surface of revolution
 //! turned about its axis, a plane shifted in itself). The confidence is low on such answers,
 //! right or wrong.
@@ -62,9 +63,10 @@ pub struct Evidence {
     /// degrees). Near 1 or above: the answer may fit and still not be unique.
     pub ambiguity: f64,
     /// How many distinct poses (more than 15 degrees apart) fit at least 0.9 as well as the
-    /// answer, among those probes or, when more, among the other answers the search refined (its
-    /// stages' best answers and the probes' better poses): with `k` alternatives the answer is one
-    /// of `k + 1` about equally good poses.
+    /// answer, among those probes (and, for a part of a target round about one of its axes, the
+    /// answer turned a third and a quarter about it) or, when more, among the other answers the
+    /// search refined (its stages' best answers and the probes' better poses): with `k`
+    /// alternatives the answer is one of `k + 1` about equally good poses.
     pub alternatives: f64,
     /// Fitness after sliding the answer along the motion its point-to-plane fit constrains
     /// least (the weakest eigenvector of the fit's 6x6 information matrix, scaled to move the
@@ -201,11 +203,24 @@ pub fn probe(
 }
 
 /// The answer's reverse overlap ([`Evidence::overlap_reverse`]) below this fraction of its
-/// fitness: the source is a part of the target (a scan onto a model, where the ratio is about the
-/// share of the model the scan covers; between two partial views of one overlap it is near 1), and
-/// the probes also turn the answer about the target's own principal axes through its centroid
-/// ([`turns`]; `BENCHMARK.md`, "A scan on the model's other end").
-const PART_OVERLAP: f64 = 0.6;
+/// fitness: the source is a part of the target (a scan onto a model, where the ratio grows with
+/// the share of the model the scan covers: 0.3-0.6 for a crop of 40-60% of it, 0.64-0.81 for one
+/// view of a whole part; between two partial views of one overlap it is 0.89 or more on 99% of
+/// the validation pairs), and the probes also turn the answer about the target's own principal
+/// axes through its centroid ([`turns`]; `BENCHMARK.md`, "A scan on the model's other end", "One
+/// view of a symmetric part").
+const PART_OVERLAP: f64 = 0.85;
+/// A principal axis of the whole target about which its spread is round, the spreads along the
+/// other two within this fraction of each other (a rocket's fins, a square block, a wing nut's
+/// hub), may be an axis of a 3- or 4-fold symmetry: when the source is a part of the target, the
+/// probes also turn the answer about it by [`ROUND_TURNS`].
+const ROUND_SPREAD: f64 = 0.1;
+/// The turns about a round axis of the target ([`ROUND_SPREAD`]), degrees: a quarter and a third
+/// of a turn find the look-alike of a 4-fold and of a 3-fold symmetry (the half turn is probed on
+/// every axis already). They count look-alikes only: a pose they find that fits better is not
+/// searched from ([`Probed::better`]), nor does it raise [`Evidence::ambiguity`], since on such
+/// a shape a turn fits better or worse by the noise of the scan alone.
+const ROUND_TURNS: [f64; 2] = [90.0, 120.0];
 /// Points of the probes ([`Evidence::ambiguity`], [`Evidence::slide`]).
 pub const PROBE_POINTS: usize = 512;
 /// A probe pose that ends within this many degrees of the answer has fallen back onto it; two
@@ -258,8 +273,9 @@ struct Turned {
 /// wrong answer of elongated shapes), each through the moved sample's centroid; when the source
 /// is a `part` of the target ([`PART_OVERLAP`]), a half turn about each principal axis of the
 /// whole target through the target's centroid (a scan of one end of a symmetric model fits as
-/// well on its other end); then the `extra` starts (the turns along the least constrained motion,
-/// [`screw_turns`]). `answer` is `t` on `sample`. A probe that comes back onto the answer, or
+/// well on its other end), and [`ROUND_TURNS`] about each of its round axes ([`ROUND_SPREAD`]),
+/// which count look-alikes only; then the `extra` starts (the turns along the least constrained
+/// motion, [`screw_turns`]). `answer` is `t` on `sample`. A probe that comes back onto the answer, or
 /// onto where an earlier probe was after the same stage ([`coincide`]), stops there and counts
 /// for nothing: it would end where that pose did. A probe that fits too little after its `4 d` or
 /// `2 d` stage ([`PROBE_CUT`]), or early in it ([`PROBE_GIVE_UP`]), stops there too.
@@ -285,7 +301,7 @@ fn turns(
     }
     let (c, axes) = principal_axes(sample, t);
     // (degrees, axis, a point on the axis)
-    let mut probes: Vec<(f64, Vector3<f64>, Vector3<f64>)> = Vec::with_capacity(19);
+    let mut probes: Vec<(f64, Vector3<f64>, Vector3<f64>)> = Vec::with_capacity(22);
     for degrees in TURNS {
         probes.extend((0..3).map(|k| (degrees, axes.column(k).into_owned(), c)));
     }
@@ -297,9 +313,18 @@ fn turns(
     if let Some(target_axes) = overlap_axes(target, sample, t, 2.0 * d) {
         probes.extend((0..3).map(|k| (180.0, target_axes.column(k).into_owned(), c)));
     }
+    // the turns that count look-alikes only: about the whole target's round axes
+    let mut round_turns: Vec<(f64, Vector3<f64>, Vector3<f64>)> = Vec::new();
     if part {
-        let (tc, target_axes) = principal_axes(&even_sample(target.points(), PROBE_POINTS), &Matrix4::identity());
+        let whole = even_sample(target.points(), PROBE_POINTS);
+        let (tc, target_axes, spreads) = principal_axes_spreads(&whole, &Matrix4::identity());
         probes.extend((0..3).map(|k| (180.0, target_axes.column(k).into_owned(), tc)));
+        for k in 0..3 {
+            let (a, b) = (spreads[(k + 1) % 3], spreads[(k + 2) % 3]);
+            if (a - b).abs() <= ROUND_SPREAD * a.max(b) {
+                round_turns.extend(ROUND_TURNS.map(|degrees| (degrees, target_axes.column(k).into_owned(), tc)));
+            }
+        }
     }
     // with a shared up axis, the turns about it (the others tilt the answer, and are not counted)
     let up_turns = match admissible {
@@ -311,13 +336,15 @@ fn turns(
         let r = Rotation3::from_axis_angle(&axis, degrees.to_radians()).into_inner();
         from_rotation_translation(&r, &(pivot - r * pivot)) * t
     };
-    // (start, whether it first goes through the wide stage): the half turns and the screw turns
-    // do, since their axes are only estimates of the true one
-    let starts: Vec<(Matrix4<f64>, bool)> = probes
+    // (start, whether it first goes through the wide stage, whether a better pose it finds is
+    // searched from): the half turns, the screw turns and the round turns go through the wide
+    // stage, since their axes are only estimates of the true one
+    let starts: Vec<(Matrix4<f64>, bool, bool)> = probes
         .into_iter()
-        .map(|p| (turn(p), p.0 == 180.0))
-        .chain(up_turns.into_iter().map(|p| (turn(p), true)))
-        .chain(extra.iter().map(|&m| (m, true)))
+        .map(|p| (turn(p), p.0 == 180.0, true))
+        .chain(up_turns.into_iter().map(|p| (turn(p), true, true)))
+        .chain(extra.iter().map(|&m| (m, true, true)))
+        .chain(round_turns.into_iter().map(|p| (turn(p), true, false)))
         .collect();
     // a stage's ICP at `factor * d`; where the answer's fitness there is `base_at` (> 0: the
     // stages that cut), a probe far below it gives up early
@@ -332,7 +359,7 @@ fn turns(
     // each stage stops the probe when it cannot come near the answer's fit at that distance
     let stages = [(4.0, base_coarse), (2.0, base_loose), (1.0, 0.0)];
     // a start tilted far off a shared up axis would end tilted, where it cannot count
-    for (start, wide) in starts.into_iter().filter(|(s, _)| admissible.may_start(s)) {
+    for (start, wide, searched) in starts.into_iter().filter(|(s, _, _)| admissible.may_start(s)) {
         // each probe's stages warm-start each other's searches
         let mut partners = Partners::default();
         let mut path = [None; 3];
@@ -360,7 +387,7 @@ fn turns(
             continue;
         }
         let ratio = target.evaluate_warm(sample, &alt, d, &mut partners).0 / base;
-        if ratio > out.best_ratio {
+        if searched && ratio > out.best_ratio {
             out.best_ratio = ratio;
             out.best = Some(alt);
         }
@@ -436,11 +463,18 @@ fn overlap_axes(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, radiu
 
 /// The centroid of `sample` moved by `t`, and its principal axes (the columns).
 fn principal_axes(sample: &[[f32; 3]], t: &Matrix4<f64>) -> (Vector3<f64>, Matrix3<f64>) {
+    let (c, axes, _) = principal_axes_spreads(sample, t);
+    (c, axes)
+}
+
+/// [`principal_axes`] with the variance along each axis (the eigenvalues, in the axes' order).
+fn principal_axes_spreads(sample: &[[f32; 3]], t: &Matrix4<f64>) -> (Vector3<f64>, Matrix3<f64>, Vector3<f64>) {
     let moved: Vec<Vector3<f64>> = sample.iter().map(|&p| Vector3::from(apply(t, p).map(|v| v as f64))).collect();
     let n = moved.len() as f64;
     let c = moved.iter().fold(Vector3::zeros(), |a, p| a + p) / n;
     let cov = moved.iter().fold(Matrix3::zeros(), |a, p| a + (p - c) * (p - c).transpose()) / n;
-    (c, SymmetricEigen::new(cov).eigenvectors)
+    let e = SymmetricEigen::new(cov);
+    (c, e.eigenvectors, e.eigenvalues)
 }
 
 /// The least constrained motion of a fit: a screw about the axis `w` (radians per unit) with the

@@ -333,6 +333,81 @@ fn a_source_smaller_than_the_distance_it_is_judged_at_is_not_confident() {
     assert!(!r.warnings.iter().any(|w| w.contains("the distance the answer is judged at")), "{:?}", r.warnings);
 }
 
+/// `n` points drawn over the surface of a triangular frustum (a base triangle of circumradius 1,
+/// its top 0.45, 1.2 high): its only symmetries turn it by a third about its axis (z) or mirror it,
+/// so one view of it fits as well turned by 120 degrees about z, and by no half turn.
+fn frustum_surface(n: usize, seed: u64) -> PointCloud {
+    let corner = |k: usize, r: f64, z: f64| {
+        let a = (90.0 + 120.0 * k as f64).to_radians();
+        format!("{} {} {}", r * a.cos(), r * a.sin(), z)
+    };
+    let mut off = String::from("OFF\n6 8 0\n");
+    for k in 0..3 {
+        off += &(corner(k, 1.0, 0.0) + "\n");
+    }
+    for k in 0..3 {
+        off += &(corner(k, 0.45, 1.2) + "\n");
+    }
+    off += "3 0 2 1\n3 3 4 5\n";
+    for k in 0..3 {
+        let j = (k + 1) % 3;
+        off += &format!("3 {k} {j} {}\n3 {k} {} {}\n", j + 3, j + 3, k + 3);
+    }
+    let options = arps::io::ReadOptions { surface_points: Some(n), seed, ..Default::default() };
+    arps::io::read_point_cloud_with(off.as_bytes(), "frustum.off", &options).unwrap()
+}
+
+/// One view of a part onto the whole model, where the part is a triangular frustum (a 3-fold
+/// symmetry and no 2-fold one): the answer is the truth or the truth turned by a third, which fit
+/// alike, so it is not confident, and the other is among its alternatives.
+#[test]
+#[allow(non_snake_case)]
+fn a_view_of_a_three_fold_symmetric_model_is_one_of_its_look_alikes() {
+    let target = frustum_surface(12_000, 1);
+    let whole = frustum_surface(6_000, 2);
+    // the half seen from (1, 0.3, 0.2): the source, moved by a known transform
+    let view = Vector3::new(1.0, 0.3, 0.2).normalize();
+    let seen: Vec<[f32; 3]> = whole
+        .points
+        .iter()
+        .copied()
+        .filter(|p| Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64 - 0.5).dot(&view) > 0.0)
+        .collect();
+    let T_target_source = from_rotation_translation(
+        &Rotation3::from_euler_angles(0.7, -0.4, 2.2).into_inner(),
+        &Vector3::new(0.3, -0.2, 0.5),
+    );
+    let source = PointCloud::new(seen).transformed(&arps::transform::rigid_inverse(&T_target_source));
+    let r = Registrar::with_default_model().unwrap().register(&source, &target, &Options::default()).unwrap();
+    assert!(r.confidence <= 0.5, "{} {:?}", r.confidence, r.evidence);
+    let poses: Vec<Matrix4<f64>> =
+        std::iter::once(r.T_target_source).chain(r.alternatives.iter().map(|a| a.T_target_source)).collect();
+    let errors: Vec<f64> = poses.iter().map(|t| arps::transform::rotation_error_deg(t, &T_target_source)).collect();
+    assert!(errors.iter().any(|&e| e < 3.0), "{errors:?}");
+    assert!(errors.iter().any(|&e| (e - 120.0).abs() < 5.0), "{errors:?}");
+}
+
+/// Clouds given as `f32` far from zero (a map grid) were rounded to a grid before the engine saw
+/// them; where its step exceeds the distance the answer is judged at, the fit cannot confirm the
+/// pose, and the confidence is capped with a warning that says why. Nearer zero (a finer grid) it
+/// is not.
+#[test]
+fn clouds_rounded_coarser_than_the_distance_they_are_judged_at_are_not_confident() {
+    let (source, target, _) = fixture_pair(0);
+    let h = source.half_extent().max(target.half_extent());
+    let moved = |c: &PointCloud, far: f64| {
+        PointCloud::new((0..c.len()).map(|i| c.point_f64(i).map(|v| (v + far * h) as f32)).collect())
+    };
+    let mut reg = Registrar::with_default_model().unwrap();
+    // 1e6 half-extents from zero: f32's step there is 1/16 of a half-extent, the default distance 1/40
+    let r = reg.register(&moved(&source, 1e6), &moved(&target, 1e6), &Options::default()).unwrap();
+    assert!(r.confidence <= 0.25, "{}", r.confidence);
+    assert!(r.warnings.iter().any(|w| w.contains("were rounded to steps of about")), "{:?}", r.warnings);
+    // 1e3 half-extents from zero: a step of 1/16384 of one
+    let r = reg.register(&moved(&source, 1e3), &moved(&target, 1e3), &Options::default()).unwrap();
+    assert!(!r.warnings.iter().any(|w| w.contains("were rounded to steps of about")), "{:?}", r.warnings);
+}
+
 /// A wider `maxCorrespondenceDistance` than the default makes every pose fit better; the evidence
 /// is measured at the default distance all the same (the one the confidence is calibrated at), so
 /// the answer's `fitness` (at the wider distance) exceeds the evidence's, and a tighter distance

@@ -14,6 +14,7 @@ use super::target::{self, InputKey, PreparedTarget, Sizes};
 use super::upright::Upright;
 use crate::cloud::{JointNormalization, PointCloud, MIN_POINTS};
 use crate::error::num;
+use crate::icp::IcpKind;
 use crate::outliers::{self, Outliers};
 use crate::register::Options;
 use crate::spacing::Spacing;
@@ -41,10 +42,16 @@ pub(crate) struct Prepared {
     pub t_initial: Matrix4<f64>,
     /// The normalised, turned source.
     pub src_n: PointCloud,
+    /// The ICP the search runs: the options', but point-to-point for point-to-plane on two flat
+    /// clouds ([`checks::flat_pair`]).
+    pub icp: IcpKind,
     /// The final ICP max correspondence distance.
     pub d_final: f64,
     /// The distance of the answer's evidence ([`options::evidence_distance`]).
     pub d_evidence: f64,
+    /// The coarser of the steps the two clouds' `f32` coordinates were rounded to
+    /// ([`checks::f32_rounding`]; 0 for clouds near zero).
+    pub rounding: f64,
     /// The source points fed to the network.
     pub net_src: PointCloud,
     /// The voxelised source for ICP.
@@ -58,7 +65,7 @@ pub(crate) struct Prepared {
 enum Given<'a> {
     /// With the caller's target, which a kept target at another scale is prepared from again.
     Kept(Box<PreparedTarget>, Cow<'a, PointCloud>),
-    Validated(PointCloud, Vec<String>),
+    Validated(PointCloud, Vec<String>, f64),
 }
 
 /// Validates, normalises and samples the pair (see the module docs); `kept` is a target prepared
@@ -78,22 +85,24 @@ pub(crate) fn prepare(
     // another target's is dropped before anything is allocated
     let input = InputKey::of(&target, options.non_finite, options.outliers, options.support_plane);
     let kept = kept.filter(|k| k.input == input);
-    let (source, source_warnings) = checked("source", source, options)?;
+    let (source, source_warnings, source_rounding) = checked("source", source, options)?;
     warnings.extend(source_warnings);
     let given = match kept {
         Some(k) => Given::Kept(k, target),
         None => {
-            let (t, target_warnings) = checked("target", target, options)?;
-            Given::Validated(t, target_warnings)
+            let (t, target_warnings, rounding) = checked("target", target, options)?;
+            Given::Validated(t, target_warnings, rounding)
         }
     };
     let spreads_source = checks::not_collinear("source", &source.points, warnings)?;
     let summary = match &given {
         Given::Kept(k, _) => k.summary.clone(),
-        Given::Validated(t, target_warnings) => target::summary(t, target_warnings.clone())?,
+        Given::Validated(t, target_warnings, rounding) => target::summary(t, target_warnings.clone(), *rounding)?,
     };
     warnings.extend(summary.warnings.iter().cloned());
-    checks::flat_pair(spreads_source, summary.spreads, warnings);
+    // on a flat pair a point-to-plane fit cannot move within the plane (every normal is its normal)
+    let flat = checks::flat_pair(spreads_source, summary.spreads, options.icp != IcpKind::Off, warnings);
+    let icp = if flat && options.icp == IcpKind::Plane { IcpKind::Point } else { options.icp };
     let init = options::initial_transform(options)?;
     // From here the pipeline works on each cloud's f32 offsets from its f64 origin (the local
     // frames); the caller's initial guess moves into them in f64: `Tr(-o_t) * init * Tr(o_s)`.
@@ -139,7 +148,7 @@ pub(crate) fn prepare(
             let local = checked("target", target, options)?.0.into_local();
             Box::new(PreparedTarget::new(input, summary, sizes, local, &norm))
         }
-        Given::Validated(t, _) => Box::new(PreparedTarget::new(input, summary, sizes, t.into_local(), &norm)),
+        Given::Validated(t, _, _) => Box::new(PreparedTarget::new(input, summary, sizes, t.into_local(), &norm)),
     };
     for (what, len) in [("source", src_n.len()), ("target", target.cloud.len())] {
         if len < n_net {
@@ -154,6 +163,7 @@ pub(crate) fn prepare(
     limits::check_icp_points("target", target.cloud.len(), target.icp.len(), voxel_user)?;
     let upright = Upright::of(options, &rotate_init);
     let d_evidence = options::evidence_distance(d_final);
+    let rounding = source_rounding.max(target.summary.rounding) / norm.scale;
     Ok(Prepared {
         origin_source,
         rotate_init,
@@ -161,8 +171,10 @@ pub(crate) fn prepare(
         norm,
         t_initial,
         src_n,
+        icp,
         d_final,
         d_evidence,
+        rounding,
         net_src,
         icp_src,
         target,
@@ -171,13 +183,14 @@ pub(crate) fn prepare(
 
 /// `cloud` validated ([`PointCloud::validated`], `options.non_finite`); with [`Outliers::Drop`]
 /// without its far outliers ([`outliers::drop_far_with`]); then with [`Support::Drop`] without the
-/// support plane it stands on ([`support::find`]); with a warning for each that left points out.
+/// support plane it stands on ([`support::find`]); with a warning for each that left points out,
+/// and the step its `f32` coordinates are rounded to ([`checks::f32_rounding`], its units).
 /// `what` names the cloud in messages.
-fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<(PointCloud, Vec<String>)> {
+fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<(PointCloud, Vec<String>, f64)> {
     let mut cloud = cloud.into_owned().into_validated(what, MIN_POINTS, options.non_finite)?;
     let mut warnings = Vec::new();
     let (lo, hi) = cloud.bounds();
-    checks::f32_rounding(what, lo, hi, &mut warnings);
+    let rounding = checks::f32_rounding(what, lo, hi, &mut warnings);
     // the two tests' sample, shared while the cloud is unchanged
     let mut spacing = None;
     if options.outliers == Outliers::Drop {
@@ -197,7 +210,7 @@ fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<
             cloud = cloud.without(&plane.indices);
         }
     }
-    Ok((cloud, warnings))
+    Ok((cloud, warnings, rounding))
 }
 
 #[cfg(test)]

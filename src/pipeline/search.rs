@@ -35,8 +35,9 @@
 //! parts, has the rotation right and the translation not) is refined like one more start, and
 //! replaces the answer when it fits clearly better. With no start refined at all, the network's
 //! estimate (the initial transform with the network off), unrefined, with a warning and its
-//! confidence at most [`UNREFINED_CONFIDENCE`].
+//! confidence at most [`caps::UNREFINED_CONFIDENCE`].
 
+use super::caps;
 use super::prepare::Prepared;
 use super::starts::{self, Starts, Step};
 use crate::confidence::{self, Evidence, Probed};
@@ -81,8 +82,7 @@ pub(crate) fn search(
     let target_index = p.target.index();
     // the network's estimate, or with the network off the initial transform (`starts::kinds`)
     let estimate = if options.network { Start::Network } else { Start::Initial };
-    let how =
-        Refinement { kind: options.icp, d_final, max_iterations: options.icp_max_iterations, estimate: Some(estimate) };
+    let how = Refinement { kind: p.icp, d_final, max_iterations: options.icp_max_iterations, estimate: Some(estimate) };
     let source_index = IcpTarget::new(&p.icp_src.points, false);
     // with `up`: every start levelled, and only upright answers, probe poses and alternatives
     let upright = p.upright;
@@ -98,7 +98,7 @@ pub(crate) fn search(
         None => t,
     };
     let judge = |t: &Matrix4<f64>| {
-        confidence::probe(target_index, &source_index, &p.icp_src.points, t, p.d_evidence, options.icp, &admissible)
+        confidence::probe(target_index, &source_index, &p.icp_src.points, t, p.d_evidence, p.icp, &admissible)
     };
     // `c` is a better answer than `b`: it fits better (`refine::better`) and is another pose. A
     // start that only found the answer again (a hair better, perhaps) leaves it as it was judged:
@@ -122,7 +122,7 @@ pub(crate) fn search(
     // its evidence and confidence, and how many probe poses were refined
     let judged = |c: Candidate, refined: &mut Vec<(Matrix4<f64>, f64)>| {
         // with ICP off the first start is the answer, unrefined: the probe only judges it
-        let (c, probed, extra) = if options.icp == IcpKind::Off {
+        let (c, probed, extra) = if p.icp == IcpKind::Off {
             (c, judge(&c.T_target_source), 0)
         } else {
             settle(c, &judge, |t| refine_one(c.start, t, refined), &improves)
@@ -157,7 +157,7 @@ pub(crate) fn search(
             && has_global
             && !reached_global
             && !global_stage
-            && options.icp != IcpKind::Off
+            && p.icp != IcpKind::Off
             && matches!(step, Step::Listed(_));
         if !matches!(step, Step::Listed(_)) {
             if let Some(w) = waiting.take() {
@@ -172,7 +172,7 @@ pub(crate) fn search(
                 // the global hypotheses, against the answer so far: the best, and those that come
                 // near its fit
                 match waiting.or(best.as_ref().map(|b| b.0)) {
-                    Some(so_far) if global_stage && adaptive && options.icp != IcpKind::Off => {
+                    Some(so_far) if global_stage && adaptive && p.icp != IcpKind::Off => {
                         let screen = refine::Screen {
                             T_target_source: &so_far.T_target_source,
                             fit: GLOBAL_SCREEN_FIT,
@@ -185,7 +185,7 @@ pub(crate) fn search(
                 }
             }
             // no stage stopped the search (the loop breaks at STOP_CONFIDENCE)
-            Step::Blind if adaptive && options.icp != IcpKind::Off && best.is_some() => {
+            Step::Blind if adaptive && p.icp != IcpKind::Off && best.is_some() => {
                 // blind starts, most of which land nowhere: a short run each picks those refined
                 let rotations = starts::blind_rotations(&kinds, nearly_sure);
                 let more = builder.more(&kinds, rotations, model, workspace)?;
@@ -210,7 +210,7 @@ pub(crate) fn search(
             }
             Step::Unsure(stage) => builder.build(stage, model, workspace)?,
         };
-        if options.icp == IcpKind::Off {
+        if p.icp == IcpKind::Off {
             // nothing is refined or compared: the first start is the answer
             starts.truncate(1);
         }
@@ -303,9 +303,7 @@ pub(crate) fn search(
     // the translation the global stage's matches agree on for its rotation, refined like a
     // start, replaces it when it fits clearly better
     let voted = match &best {
-        Some((c, _, _)) if adaptive && options.icp != IcpKind::Off => {
-            builder.voted_pose(&c.T_target_source).map(|t| (*c, t))
-        }
+        Some((c, _, _)) if adaptive && p.icp != IcpKind::Off => builder.voted_pose(&c.T_target_source).map(|t| (*c, t)),
         _ => None,
     };
     if let Some((c, t)) = voted {
@@ -343,42 +341,11 @@ pub(crate) fn search(
         }
     };
     let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined);
-    // an answer no refinement reached: the evidence that calibrates the confidence is that of
-    // refined answers, and this one was not even a start's end
-    let confidence = if refined_any { confidence } else { confidence.min(UNREFINED_CONFIDENCE) };
-    // a source within a few evidence distances of its centre fits wherever it touches the target's
-    // surface, turned or not: nothing in the fit confirms its pose (typically clouds in different
-    // units, the source the smaller)
-    let source_extent = p.src_n.half_extent();
-    let confidence = if source_extent < SMALL_SOURCE_DISTANCES * p.d_evidence {
-        let s = p.norm.scale;
-        warnings.push(format!(
-            "the source's half-extent ({}) is less than {SMALL_SOURCE_DISTANCES} times the distance the answer is judged at ({}): \
-             it fits about as well turned or moved over the target's surface, so the fit cannot confirm its pose \
-             (clouds in different units? else give a smaller maxCorrespondenceDistance)",
-            crate::error::num(source_extent * s),
-            crate::error::num(p.d_evidence * s)
-        ));
-        confidence.min(UNREFINED_CONFIDENCE)
-    } else {
-        confidence
-    };
-    // with `up`: a tilted pose that fits clearly better than the upright answer (the clouds were
-    // not both captured level, or not about that axis)
-    let confidence = match tilted.filter(|t| refined_any && refine::clearly_better(t, &candidate)) {
-        Some(t) => {
-            warnings.push(format!(
-                "a pose tilted {:.0} degrees off `up` fits clearly better than the upright answer (fitness {:.3} \
-                 against {:.3}): if the clouds were not both captured level within {UP_TOLERANCE_DEG} degrees of `up`, \
-                 leave `up` out",
-                tilt_deg(&t.T_target_source),
-                t.fitness,
-                candidate.fitness
-            ));
-            confidence.min(UNREFINED_CONFIDENCE)
-        }
-        None => confidence,
-    };
+    // with `up`: a tilted pose that fits clearly better than the upright answer
+    let tilted = tilted
+        .filter(|t| refined_any && refine::clearly_better(t, &candidate))
+        .map(|t| caps::Tilted { tilt_deg: tilt_deg(&t.T_target_source), fitness: t.fitness });
+    let confidence = caps::cap(p, confidence, refined_any, tilted, candidate.fitness, warnings);
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
     // probes turned it over): the caller asked to refine that guess, so the result says how far
     // it moved
@@ -396,17 +363,6 @@ pub(crate) fn search(
     let alternatives = refine_alternatives(target_index, &p.icp_src.points, &candidate, &poses, &how);
     Ok(Chosen { candidate, evidence, confidence, starts_refined, alternatives })
 }
-
-/// The most confidence an answer that no start's refinement reached can have (the network's
-/// estimate or the initial transform, unrefined, when no start could be refined or none ended
-/// upright): below the line of the low-confidence warning.
-pub(crate) const UNREFINED_CONFIDENCE: f64 = 0.25;
-
-/// A source whose largest half-extent is below this many evidence distances
-/// ([`super::options::evidence_distance`]) has an answer no fit can confirm, and its confidence is
-/// at most [`UNREFINED_CONFIDENCE`]: turned by 15 degrees about its centre, its farthest points
-/// move less than that distance (`1 / sin 15°` is 3.9).
-pub(crate) const SMALL_SOURCE_DISTANCES: f64 = 4.0;
 
 /// The final verdict on the answer `c` judged by the probe (`probed`): its evidence, with the
 /// other answers the search `refined` that fit about as well counted as alternatives

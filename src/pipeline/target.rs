@@ -70,6 +70,8 @@ pub(crate) struct TargetSummary {
     pub spreads: [f64; 3],
     /// The warnings its checks gave (points left out, a nearly collinear target).
     pub warnings: Vec<String>,
+    /// The step its `f32` coordinates are rounded to (`checks::f32_rounding`, its units).
+    pub rounding: f64,
 }
 
 /// What the prepared target depends on besides the target: the normalisation's scale (the
@@ -96,11 +98,11 @@ fn icp_cloud(cloud: &PointCloud, sizes: &Sizes) -> PointCloud {
 
 /// The summary of the validated `target` (its origin not yet dropped); an error when it is
 /// collinear. `warnings`: what its checks said (`prepare::checked`), kept among its warnings.
-pub(crate) fn summary(target: &PointCloud, warnings: Vec<String>) -> Result<TargetSummary> {
+pub(crate) fn summary(target: &PointCloud, warnings: Vec<String>, rounding: f64) -> Result<TargetSummary> {
     let mut warnings = warnings;
     let spreads = checks::not_collinear("target", &target.points, &mut warnings)?;
     let bounding = JointNormalization::box_of(target);
-    Ok(TargetSummary { origin: target.origin, bounding, spreads, warnings })
+    Ok(TargetSummary { origin: target.origin, bounding, spreads, warnings, rounding })
 }
 
 /// The target prepared for the network, ICP and the global hypotheses (normalised units), with

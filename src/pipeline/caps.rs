@@ -1,0 +1,97 @@
+//! Stage 5, last step: the limits on the answer's confidence that its evidence cannot show.
+//!
+//! The confidence ([`crate::confidence::confidence`]) is calibrated on how refined answers fit.
+//! Some answers fit well for reasons that say nothing about their pose: the answer was never
+//! refined, the source is too small for the distance the fit is judged at, its coordinates were
+//! rounded to a grid as coarse as that distance, or a tilted pose fits clearly better than the
+//! upright one `up` asked for. [`cap`] holds the confidence of such an answer at
+//! [`UNREFINED_CONFIDENCE`], below the line of the low-confidence warning, and says why in a
+//! warning.
+
+use super::prepare::Prepared;
+use crate::error::num;
+use crate::register::UP_TOLERANCE_DEG;
+
+/// The most confidence an answer that no start's refinement reached can have (the network's
+/// estimate or the initial transform, unrefined, when no start could be refined or none ended
+/// upright), and an answer under any other of [`cap`]'s limits: below the line of the
+/// low-confidence warning.
+pub(crate) const UNREFINED_CONFIDENCE: f64 = 0.25;
+
+/// A source whose largest half-extent is below this many evidence distances
+/// ([`super::options::evidence_distance`]) has an answer no fit can confirm, and its confidence is
+/// at most [`UNREFINED_CONFIDENCE`]: turned by 15 degrees about its centre, its farthest points
+/// move less than that distance (`1 / sin 15°` is 3.9).
+pub(crate) const SMALL_SOURCE_DISTANCES: f64 = 4.0;
+
+/// Clouds whose `f32` coordinates were rounded to a grid coarser than this many evidence
+/// distances (given as `f32` far from zero: [`Prepared::rounding`]) have an answer no fit can
+/// confirm, and its confidence is at most [`UNREFINED_CONFIDENCE`]: every point was moved by up to
+/// half that step before the engine saw it, as far as the fit is judged at.
+pub(crate) const ROUNDING_DISTANCES: f64 = 1.0;
+
+/// With `up`: a pose tilted off it that fits clearly better than the upright answer.
+pub(crate) struct Tilted {
+    /// How far it tilts the source's up off the target's, degrees.
+    pub tilt_deg: f64,
+    /// Its fitness.
+    pub fitness: f64,
+}
+
+/// The answer's `confidence` (its fitness `fitness`) held at [`UNREFINED_CONFIDENCE`], with a
+/// warning naming the reason, when no start was refined (`refined_any` false: the warning was
+/// given where the answer was chosen), when the source is smaller than
+/// [`SMALL_SOURCE_DISTANCES`] evidence distances, when the clouds were rounded to steps of more
+/// than [`ROUNDING_DISTANCES`] evidence distances, or when a `tilted` pose fits clearly better
+/// than the upright answer.
+pub(crate) fn cap(
+    p: &Prepared,
+    confidence: f64,
+    refined_any: bool,
+    tilted: Option<Tilted>,
+    fitness: f64,
+    warnings: &mut Vec<String>,
+) -> f64 {
+    let mut capped = !refined_any;
+    let s = p.norm.scale;
+    // a source within a few evidence distances of its centre fits wherever it touches the target's
+    // surface, turned or not: nothing in the fit confirms its pose (typically clouds in different
+    // units, the source the smaller)
+    let source_extent = p.src_n.half_extent();
+    if source_extent < SMALL_SOURCE_DISTANCES * p.d_evidence {
+        warnings.push(format!(
+            "the source's half-extent ({}) is less than {SMALL_SOURCE_DISTANCES} times the distance the answer is judged at ({}): \
+             it fits about as well turned or moved over the target's surface, so the fit cannot confirm its pose \
+             (clouds in different units? else give a smaller maxCorrespondenceDistance)",
+            num(source_extent * s),
+            num(p.d_evidence * s)
+        ));
+        capped = true;
+    }
+    // clouds given as f32 far from zero: their points sit on a grid as coarse as the fit's distance
+    if p.rounding > ROUNDING_DISTANCES * p.d_evidence {
+        warnings.push(format!(
+            "the clouds' coordinates were rounded to steps of about {} (f32 far from zero), more than the distance \
+             the answer is judged at ({}): the fit cannot confirm the pose; pass the coordinates as f64",
+            num(p.rounding * s),
+            num(p.d_evidence * s)
+        ));
+        capped = true;
+    }
+    // with `up`: a tilted pose that fits clearly better than the upright answer (the clouds were
+    // not both captured level, or not about that axis)
+    if let Some(t) = tilted {
+        warnings.push(format!(
+            "a pose tilted {:.0} degrees off `up` fits clearly better than the upright answer (fitness {:.3} \
+             against {:.3}): if the clouds were not both captured level within {UP_TOLERANCE_DEG} degrees of `up`, \
+             leave `up` out",
+            t.tilt_deg, t.fitness, fitness
+        ));
+        capped = true;
+    }
+    if capped {
+        confidence.min(UNREFINED_CONFIDENCE)
+    } else {
+        confidence
+    }
+}
