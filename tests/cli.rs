@@ -199,7 +199,7 @@ fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
     let (src, tgt) = ("fixtures/wasm/source.ply", "fixtures/wasm/target.ply");
     let cases: [(&[&str], &str); 10] = [
         // the engine's options named by this command's flags
-        (&["register", nan, tgt], "(drop such points with --drop-non-finite)"),
+        (&["register", nan, tgt], "; drop such points with --drop-non-finite)"),
         (&["register", src, tgt, "--initial-transform", "1,0,0"], "--initial-transform: expected 16 numbers"),
         (
             &["register", src, tgt, "--initial-transform", "2,0,0,0,0,2,0,0,0,0,2,0,0,0,0,1"],
