@@ -4,7 +4,7 @@
 // engine's fromBytes.
 
 /** A model file: its URL, a `Request`, a `Response`, or its bytes. */
-export type ModelSource = string | URL | Request | Response | BufferSource;
+export type ModelSource = string | URL | Request | Response | ArrayBuffer | ArrayBufferView;
 
 /** Options of `init()`. */
 export interface InitOptions {
@@ -32,7 +32,7 @@ export default function init(options?: InitOptions | InitInput | Promise<InitInp
  * `init` synchronously, from the engine's bytes or compiled module; `model`: the default model's
  * bytes (nothing is fetched: without it, `Registrar.withDefaultModel()` throws).
  */
-export function initSync(options: { module: SyncInitInput; model?: BufferSource } | SyncInitInput): InitOutput;
+export function initSync(options: { module: SyncInitInput; model?: ArrayBuffer | ArrayBufferView } | SyncInitInput): InitOutput;
 
 /** Options of `Registrar.fromUrl`. */
 export interface FromUrlOptions {

@@ -491,10 +491,24 @@ export async function modelBytes(source, signal, readUrl) {
       throw new Error(`arps: fetching the model ${url} failed: ${messageOf(e)}`, { cause: e });
     }
   }
+  const where = response.url || url || "(a Response)";
   if (!response.ok) {
-    fail(`arps: fetching the model ${response.url || url || "(a Response)"} failed: HTTP ${response.status} ${response.statusText}`.trimEnd());
+    fail(`arps: fetching the model ${where} failed: HTTP ${response.status} ${response.statusText}`.trimEnd());
   }
-  return new Uint8Array(await response.arrayBuffer());
+  const bytes = new Uint8Array(await response.arrayBuffer());
+  if (looksLikeHtml(bytes)) {
+    fail(`arps: the model ${where} is an HTML page, not an arps weights file: the server has no file at that path and answered with a page (a dev server's index page, a 404 page); check the URL`);
+  }
+  return bytes;
+}
+
+/**
+ * True when `bytes` start like an HTML page (`<!doctype`, `<html`, `<head`, `<body`, `<!--`,
+ * after whitespace or a byte-order mark) where a binary file was expected.
+ */
+export function looksLikeHtml(bytes) {
+  const head = String.fromCharCode(...bytes.subarray(0, 64));
+  return /^(\ufeff|\u00ef\u00bb\u00bf)?\s*<(!doctype|html|head|body|!--)/i.test(head);
 }
 
 /**

@@ -30,10 +30,31 @@ function initArgs(options) {
  */
 export default async function init(options) {
   const { moduleOrPath, model } = initArgs(options);
-  const engine = glueInit(moduleOrPath === undefined ? undefined : { module_or_path: moduleOrPath }).then((exports) => {
-    ready = true;
-    return exports;
-  });
+  const engine = glueInit(moduleOrPath === undefined ? undefined : { module_or_path: moduleOrPath }).then(
+    (exports) => {
+      ready = true;
+      return exports;
+    },
+    (e) => {
+      // a server that has no file at the engine's URL often answers with a page (200, HTML)
+      if (e instanceof WebAssembly.CompileError && /magic/.test(e.message)) {
+        const which =
+          moduleOrPath === undefined
+            ? "arps_bg.wasm (next to the package's arps.js)"
+            : typeof moduleOrPath === "string" || moduleOrPath instanceof URL
+              ? String(moduleOrPath)
+              : (moduleOrPath instanceof Response && moduleOrPath.url) || "given to init()";
+        throw new Error(
+          `arps: the engine ${which} is not WebAssembly (${e.message}): the server answered with something else, ` +
+            "often a page for a path it does not have. Under Vite's dev server, exclude the package from " +
+            'dependency pre-bundling (vite.config: optimizeDeps: { exclude: ["arps"] }); otherwise pass the URL ' +
+            "arps_bg.wasm is served at as init({ module_or_path })",
+          { cause: e },
+        );
+      }
+      throw e;
+    },
+  );
   let bytes = null;
   let what = "the model given to init()";
   if (model === true) {

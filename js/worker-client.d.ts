@@ -117,7 +117,7 @@ export interface WorkerRegistrar {
    * `ReadOptions`). Resolves to packed xyz.
    */
   parsePointCloud(
-    bytes: Uint8Array | ArrayBuffer,
+    bytes: ArrayBuffer | ArrayBufferView,
     fileName: string,
     readOptions?: ReadOptions | null,
     request?: { transfer?: boolean; signal?: AbortSignal },
@@ -128,7 +128,7 @@ export interface WorkerRegistrar {
    * `register` takes the object as is.
    */
   readPointCloud(
-    bytes: Uint8Array | ArrayBuffer,
+    bytes: ArrayBuffer | ArrayBufferView,
     fileName: string,
     readOptions?: ReadOptions | null,
     request?: { transfer?: boolean; signal?: AbortSignal },
@@ -152,7 +152,7 @@ export interface WorkerRegistrar {
    * formats): choose one, then `readPointCloud(bytes, fileName, { scan: K })`.
    */
   listScans(
-    bytes: Uint8Array | ArrayBuffer,
+    bytes: ArrayBuffer | ArrayBufferView,
     fileName: string,
     request?: { transfer?: boolean; signal?: AbortSignal },
   ): Promise<ScanInfo[]>;
@@ -165,7 +165,7 @@ export interface WorkerRegistrar {
    * transformPointCloud(cloud, T))`).
    */
   transformFile(
-    bytes: Uint8Array | ArrayBuffer,
+    bytes: ArrayBuffer | ArrayBufferView,
     fileName: string,
     matrix: ArrayLike<number> | number[][],
     readOptions?: ReadOptions | null,

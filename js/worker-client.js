@@ -167,7 +167,15 @@ export async function createWorkerRegistrar(options = {}) {
       // A worker that failed to load or crashed: its pending requests reject; the next request
       // starts a new worker.
       if (event && typeof event.preventDefault === "function") event.preventDefault();
-      const message = (event && (event.message || (event.error && event.error.message))) || "worker failed";
+      const given = event && (event.message || (event.error && event.error.message));
+      // a script that never loaded (a 404, a page served in its place) reports no message
+      const message =
+        given ||
+        (w.loaded
+          ? "worker failed"
+          : "the worker failed to start: its script (worker.js next to worker-client.js) did not load or run. " +
+            "Under Vite's dev server, exclude the package from dependency pre-bundling " +
+            '(vite.config: optimizeDeps: { exclude: ["arps"] }), or pass createWorker');
       retire(w, new Error(`arps worker: ${message}`));
     });
     w.ready = send(w, { type: "init", wasm, model, weights }, { onProgress }).promise;

@@ -17,7 +17,7 @@
 // Replies (worker -> main), with the request's `id`:
 //   { id, type: "progress", stage }         stage: "loading" | "preparing" | "network" | "refining" | "done"
 //   { id, type: "ready", provenance, modelConfig }
-//   { id, type: "result", result }          the matrices' buffers transferred
+//   { id, type: "result", result }          the result, copied (plain arrays: small)
 //   { id, type: "parsed", points }          points (Float32Array) buffer transferred
 //   { id, type: "read", cloud }             cloud.points buffer transferred (read and transform)
 //   { id, type: "written", bytes }          bytes (Uint8Array) buffer transferred

@@ -116,7 +116,7 @@ pub fn version() -> String {
 /// ...]`). Throws on unreadable input and invalid options.
 #[wasm_bindgen(js_name = parsePointCloud)]
 pub fn parse_point_cloud(
-    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    #[wasm_bindgen(unchecked_param_type = "ArrayBuffer | ArrayBufferView")] bytes: &[u8],
     #[wasm_bindgen(js_name = "fileName")] file_name: &str,
     #[wasm_bindgen(unchecked_optional_param_type = "ReadOptions | null")] options: Option<JsValue>,
 ) -> Result<Vec<f32>, JsError> {
@@ -133,7 +133,7 @@ pub fn parse_point_cloud(
 /// input and invalid options.
 #[wasm_bindgen(js_name = readPointCloud, unchecked_return_type = "CloudWithOrigin")]
 pub fn read_point_cloud(
-    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    #[wasm_bindgen(unchecked_param_type = "ArrayBuffer | ArrayBufferView")] bytes: &[u8],
     #[wasm_bindgen(js_name = "fileName")] file_name: &str,
     #[wasm_bindgen(unchecked_optional_param_type = "ReadOptions | null")] options: Option<JsValue>,
 ) -> Result<JsValue, JsError> {
@@ -236,7 +236,7 @@ pub fn write_ply(#[wasm_bindgen(unchecked_param_type = "CloudInput")] cloud: JsV
 /// be read.
 #[wasm_bindgen(js_name = listScans, unchecked_return_type = "ScanInfo[]")]
 pub fn list_scans(
-    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    #[wasm_bindgen(unchecked_param_type = "ArrayBuffer | ArrayBufferView")] bytes: &[u8],
     #[wasm_bindgen(js_name = fileName)] file_name: &str,
 ) -> Result<JsValue, JsError> {
     let scans = crate::io::list_scans(bytes, file_name).map_err(js_err)?;
@@ -260,7 +260,7 @@ pub fn list_scans(
 /// cannot be stored, a matrix that is not rigid (or uniformly scaled), and invalid options.
 #[wasm_bindgen(js_name = transformFile)]
 pub fn transform_file(
-    #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+    #[wasm_bindgen(unchecked_param_type = "ArrayBuffer | ArrayBufferView")] bytes: &[u8],
     #[wasm_bindgen(js_name = fileName)] file_name: &str,
     #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] matrix: &[f64],
     #[wasm_bindgen(unchecked_optional_param_type = "ReadOptions | null")] options: Option<JsValue>,
@@ -301,7 +301,7 @@ impl Registrar {
     /// Throws if the bytes are not a valid arps weights file.
     #[wasm_bindgen(js_name = fromBytes)]
     pub fn from_bytes(
-        #[wasm_bindgen(unchecked_param_type = "BufferSource")] bytes: &[u8],
+        #[wasm_bindgen(unchecked_param_type = "ArrayBuffer | ArrayBufferView")] bytes: &[u8],
     ) -> Result<Registrar, JsError> {
         let mut inner = crate::Registrar::from_bytes(bytes).map_err(js_err)?;
         inner.set_clock(Some(js_clock()));

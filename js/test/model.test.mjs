@@ -32,6 +32,9 @@ async function server() {
   const s = http.createServer((req, res) => {
     if (req.url === "/models/arps-web.safetensors") {
       res.writeHead(200, { "content-type": "application/octet-stream" }).end(model);
+    } else if (req.url === "/spa/model.safetensors") {
+      // a dev server's fallback: its index page for a path it does not have
+      res.writeHead(200, { "content-type": "text/html" }).end("<!doctype html>\n<html><body>app</body></html>");
     } else if (req.url === "/garbage.safetensors") {
       res.writeHead(200).end("definitely not safetensors");
     } else if (req.url === "/slow.safetensors") {
@@ -46,7 +49,19 @@ async function server() {
   return s;
 }
 
-// First in this file (so the engine is not instantiated yet in this process): a bare `init()`
+// Before anything instantiates the engine in this process (the glue module is shared), so that
+// init() fetches it: an engine answered by a page fails saying so, and init() works later.
+test("web build: an engine answered by an HTML page rejects init() saying so, with the dev server's fix", async () => {
+  const arps = await webEntry();
+  const page = new Response("<!doctype html><html><body>app</body></html>", { headers: { "content-type": "text/html" } });
+  await assert.rejects(arps.default({ module_or_path: page, model: false }), (e) => {
+    assert.match(e.message, /^arps: the engine .* is not WebAssembly \(/);
+    assert.match(e.message, /optimizeDeps: \{ exclude: \["arps"\] \}/);
+    return true;
+  });
+});
+
+// First to load the engine (so it is not instantiated yet in this process): a bare `init()`
 // fetches the engine and the default model next to arps.js, in parallel, through `fetch`.
 test("web build: init() fetches arps_bg.wasm and models/arps-web.safetensors next to it", async () => {
   const arps = await webEntry();
@@ -117,6 +132,10 @@ test("web build: init({ model: false }), withDefaultModel before and after, from
     await assert.rejects(
       arps.Registrar.fromUrl(`${s.base}/garbage.safetensors`),
       new RegExp(`^Error: arps: ${s.base}/garbage\\.safetensors is not a valid arps weights file \\(weights: not a valid safetensors file`),
+    );
+    await assert.rejects(
+      arps.Registrar.fromUrl(`${s.base}/spa/model.safetensors`),
+      new RegExp(`^Error: arps: the model ${s.base}/spa/model\\.safetensors is an HTML page, not an arps weights file`),
     );
     await assert.rejects(arps.Registrar.fromUrl(42), /^Error: fromUrl: expected a URL \(string or URL\), got a number$/);
     await assert.rejects(arps.Registrar.fromUrl("http://127.0.0.1:1/x.safetensors"), /^Error: arps: fetching the model http:\/\/127\.0\.0\.1:1\/x\.safetensors failed: TypeError/);

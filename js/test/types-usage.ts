@@ -82,6 +82,10 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   // A file moved as it is, in its own format (colours, normals and faces kept).
   const movedFile: Uint8Array = transformFile(new Uint8Array(), "scan.pcd", result.T_target_source);
   const movedSurvey: Uint8Array = canTransform("survey.las") ? transformFile(new Uint8Array(), "survey.las", result.T_target_source) : new Uint8Array();
+  // the package's own bytes read back (TypeScript 5.7+ types them Uint8Array<ArrayBufferLike>), and a DataView
+  parsePointCloud(bytes, "aligned.ply");
+  readPointCloud(transformFile(movedFile, "scan.pcd", result.T_target_source), "scan.pcd");
+  parsePointCloud(new DataView(bytes.buffer), "aligned.ply");
   const scans: ScanInfo[] = listScans(new Uint8Array(), "scan.e57");
   const firstName: string | null = scans[0]?.name ?? null;
   // @ts-expect-error the file's name comes second
@@ -96,6 +100,7 @@ export async function inAWorker(source: Float32Array, target: Float32Array): Pro
   const result = await arps.register(source, target, { icp: "point" }, { onProgress: (s) => void s, transfer: true, signal: controller.signal });
   await createWorkerRegistrar({ createWorker: () => new Worker(new URL("./worker.js", import.meta.url), { type: "module" }) });
   const points: Float32Array = await arps.parsePointCloud(new Uint8Array(), "cloud.pcd");
+  await arps.parsePointCloud(new DataView(new ArrayBuffer(8)), "cloud.pcd");
   const surface: Float32Array = await arps.parsePointCloud(new Uint8Array(), "model.stl", { surfacePoints: 50_000 }, { transfer: true });
   // @ts-expect-error the request comes after the read options
   await arps.parsePointCloud(new Uint8Array(), "model.stl", { surfacePoints: 50_000, transfer: true });

@@ -50,8 +50,9 @@ $("align").addEventListener("click", async () => {
     );
     status(`done in ${(performance.now() - t0).toFixed(0)} ms (confidence ${r.confidence.toFixed(2)})`);
     // The source saved in the target's frame, in the worker, offered as a download: its own file
-    // moved as it is (colours, normals, attributes kept), or, for a format
-    // that cannot be (E57, OFF), its points moved (the origin in f64) and written as PLY.
+    // moved as it is (colours, normals, attributes kept), or, for a file that cannot be (a float
+    // STL or PCD moved too far for float32, a name without an extension), its points moved (the
+    // origin in f64) and written as PLY.
     let ext = /\.([a-z0-9]+)$/i.exec(files[0].name)?.[1].toLowerCase();
     const own = new Uint8Array(await files[0].arrayBuffer());
     let bytes = ext ? await arps.transformFile(own, files[0].name, m, null, { transfer: true }).catch(() => null) : null;
