@@ -69,8 +69,10 @@ export type RegisterOptions = {
    */
   initialTransform?: ArrayLike<number> | number[][] | null,
   /**
-   * What to do with points that have a NaN or infinite coordinate: `"error"` (an error naming
-   * the first bad point; the default) or `"drop"` (ignore them, e.g. PCD "no return" points).
+   * What to do with points that have a NaN or infinite coordinate, or one beyond 1e18 from the
+   * cloud's origin (where the engine's `f32` distances overflow: a sensor's `f32::MAX` for "no
+   * return"): `"error"` (an error naming the first bad point; the default) or `"drop"` (ignore
+   * them, e.g. PCD "no return" points).
    */
   nonFinite?: NonFinite,
   /**
@@ -207,7 +209,8 @@ export type RegistrationSearch = "adaptive" | "exhaustive";
 export type IcpKind = "off" | "point" | "plane";
 
 /**
- * What to do with points that have a NaN or infinite coordinate.
+ * What to do with points that have a NaN or infinite coordinate, or one beyond
+ * `MAX_COORDINATE` (1e18) from the cloud's origin.
  */
 export type NonFinite = "error" | "drop";
 

@@ -37,7 +37,8 @@ export default async function init(options) {
     },
     (e) => {
       // a server that has no file at the engine's URL often answers with a page (200, HTML)
-      if (e instanceof WebAssembly.CompileError && /magic/.test(e.message)) {
+      // (V8 and SpiderMonkey say "magic word"/"magic number", JavaScriptCore "doesn't start with '\0asm'")
+      if (e instanceof WebAssembly.CompileError && /magic|\\0asm|start with/i.test(e.message)) {
         const which =
           moduleOrPath === undefined
             ? "arps_bg.wasm (next to the package's arps.js)"

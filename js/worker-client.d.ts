@@ -32,23 +32,23 @@ export interface WorkerLike {
 export interface CreateWorkerRegistrarOptions {
   /**
    * Where the engine's `.wasm` comes from: a URL (string or `URL`), a `Response`, the bytes
-   * (`ArrayBuffer` / `Uint8Array`) or a compiled `WebAssembly.Module`. Default: `arps_bg.wasm`
+   * (`ArrayBuffer` or a view of one) or a compiled `WebAssembly.Module`. Default: `arps_bg.wasm`
    * next to the package's `arps.js` (what bundlers resolve through `new URL(..., import.meta.url)`).
    */
-  wasm?: string | URL | Response | BufferSource | WebAssembly.Module;
+  wasm?: string | URL | Response | ArrayBuffer | ArrayBufferView | WebAssembly.Module;
   /**
    * Where the default model comes from (fetched by the worker in parallel with the engine): a URL
    * (string or `URL`; relative ones resolve against `worker.js`), a `Response` or the bytes.
    * Default: `models/arps-web.safetensors` next to the package's `arps.js`. In Node, it and a
    * path or `file:` URL given are read from disk.
    */
-  model?: string | URL | Response | ArrayBuffer | Uint8Array;
+  model?: string | URL | Response | ArrayBuffer | ArrayBufferView;
   /**
    * Custom weights instead of the default model: the bytes of an arps `.safetensors` file (copied
    * to the worker) or its URL (string or `URL`, fetched by the worker; in Node paths and `file:`
    * URLs are read from disk). Rejects with an `Error` naming the URL and HTTP status if the download fails.
    */
-  weights?: ArrayBuffer | Uint8Array | string | URL;
+  weights?: ArrayBuffer | ArrayBufferView | string | URL;
   /**
    * A worker to use first instead of starting `worker.js` from this package. When it stops (a
    * crash, a trap, an aborted request), later requests start a replacement with `createWorker`,

@@ -52,12 +52,18 @@ pub(crate) fn bounds_of(points: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
     (lo, hi)
 }
 
-/// Whether every coordinate of `p` is finite.
+/// The largest coordinate a point may have (its offset from the cloud's origin): beyond it the
+/// squared distances the engine computes in `f32` overflow (a sensor's `f32::MAX` for "no
+/// return"), and [`NonFinite`] treats the point as it treats a NaN.
+pub const MAX_COORDINATE: f32 = 1e18;
+
+/// Whether every coordinate of `p` is finite and within [`MAX_COORDINATE`].
 fn is_finite(p: &[f32; 3]) -> bool {
-    p[0].is_finite() && p[1].is_finite() && p[2].is_finite()
+    p.iter().all(|v| v.abs() <= MAX_COORDINATE)
 }
 
-/// What to do with points that have a NaN or infinite coordinate.
+/// What to do with points that have a NaN or infinite coordinate, or one beyond
+/// [`MAX_COORDINATE`] (1e18) from the cloud's origin.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "camelCase")]
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "NonFinite"))]
@@ -205,11 +211,18 @@ impl PointCloud {
     /// reported) is `bad`: that point, fewer than `min_points` points, or zero extent is an error.
     fn check(&self, what: &str, min_points: usize, bad: Option<usize>) -> Result<()> {
         if let Some(i) = bad {
-            return Err(Error::InvalidCloud(format!(
-                "{what} point {i} has a non-finite coordinate {:?} (NaN, infinite, or too large for f32's range, \
-                 3.4e38; drop such points with `nonFinite: \"drop\"`)",
-                self.points[i]
-            )));
+            let p = self.points[i];
+            return Err(Error::InvalidCloud(if p.iter().all(|v| v.is_finite()) {
+                format!(
+                    "{what} point {i} has a coordinate beyond 1e18 from the cloud's origin ({p:?}), where distances \
+                     overflow f32 (a sensor's f32::MAX for \"no return\"?): drop such points with `nonFinite: \"drop\"`"
+                )
+            } else {
+                format!(
+                    "{what} point {i} has a non-finite coordinate {p:?} (NaN, infinite, or too large for f32's range, \
+                     3.4e38; drop such points with `nonFinite: \"drop\"`)"
+                )
+            }));
         }
         if self.len() < min_points {
             return Err(Error::InvalidCloud(format!(

@@ -210,17 +210,17 @@ pub fn probe(
 /// axes through its centroid ([`turns`]; `BENCHMARK.md`, "A scan on the model's other end", "One
 /// view of a symmetric part").
 const PART_OVERLAP: f64 = 0.85;
-/// A principal axis of the whole target about which its spread is round, the spreads along the
-/// other two within this fraction of each other (a rocket's fins, a square block, a wing nut's
-/// hub), may be an axis of a 3- or 4-fold symmetry: when the source is a part of the target, the
-/// probes also turn the answer about it by [`ROUND_TURNS`].
+/// A principal axis of the whole target about which it is round, the variances along the other
+/// two within this fraction of each other (a rocket's fins, a square block), may be an axis of a
+/// 3- or 4-fold symmetry: when the source is a part of the target, the probes also turn the answer
+/// about it by [`ROUND_TURNS`].
 const ROUND_SPREAD: f64 = 0.1;
 /// The turns about a round axis of the target ([`ROUND_SPREAD`]), degrees: a quarter and a third
-/// of a turn find the look-alike of a 4-fold and of a 3-fold symmetry (the half turn is probed on
-/// every axis already). They count look-alikes only: a pose they find that fits better is not
+/// of a turn both ways find the look-alikes of a 4-fold and of a 3-fold symmetry (the half turn
+/// is probed on every axis already), so that the answer is counted one of four or of three. They count look-alikes only: a pose they find that fits better is not
 /// searched from ([`Probed::better`]), nor does it raise [`Evidence::ambiguity`], since on such
 /// a shape a turn fits better or worse by the noise of the scan alone.
-const ROUND_TURNS: [f64; 2] = [90.0, 120.0];
+const ROUND_TURNS: [f64; 4] = [90.0, -90.0, 120.0, -120.0];
 /// Points of the probes ([`Evidence::ambiguity`], [`Evidence::slide`]).
 pub const PROBE_POINTS: usize = 512;
 /// A probe pose that ends within this many degrees of the answer has fallen back onto it; two

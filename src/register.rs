@@ -77,8 +77,10 @@ pub struct Options {
     #[serde(with = "crate::contract::initial_transform")]
     #[cfg_attr(feature = "ts", ts(type = "ArrayLike<number> | number[][] | null", optional = nullable))]
     pub initial_transform: Option<[[f64; 4]; 4]>,
-    /// What to do with points that have a NaN or infinite coordinate: `"error"` (an error naming
-    /// the first bad point; the default) or `"drop"` (ignore them, e.g. PCD "no return" points).
+    /// What to do with points that have a NaN or infinite coordinate, or one beyond 1e18 from the
+    /// cloud's origin (where the engine's `f32` distances overflow: a sensor's `f32::MAX` for "no
+    /// return"): `"error"` (an error naming the first bad point; the default) or `"drop"` (ignore
+    /// them, e.g. PCD "no return" points).
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub non_finite: NonFinite,
     /// What to do with points that lie far out from the rest of their cloud (stray returns,

@@ -170,16 +170,25 @@ fn compressed_bodies_over_the_decoding_budget_are_refused() {
     assert!(e.to_string().contains("1204000000 uncompressed bytes"), "{e}");
 }
 
-/// Strays so far out that squared distances to them overflow f32 (a sensor's f32::MAX for "no
-/// return") are left out like nearer ones, where they made the cloud "collinear".
+/// Points so far out that squared distances to them overflow f32 (beyond 1e18 from the origin: a
+/// sensor's f32::MAX for "no return", here 30 of them) are refused like NaN, naming the first, or
+/// dropped with `nonFinite: "drop"`, where they made the cloud "collinear"; what is left registers
+/// as the clean cloud does.
 #[test]
-fn strays_beyond_f32_squares_are_left_out() {
+fn points_beyond_f32_squares_are_refused_or_dropped_like_nan() {
+    use arps::NonFinite;
     let mut reg = registrar();
     let target = bumpy_surface(1500, 0.3).transformed(&motion([5.0, -3.0, 4.0], [0.05, 0.0, -0.02]));
-    let mut points = bumpy_surface(1500, 0.0).points;
+    let clean = bumpy_surface(1500, 0.0).points;
+    let mut points = clean.clone();
     points.push([2e20, 0.0, 0.0]);
-    points.push([0.0, f32::MAX, 0.0]);
-    let r = reg.register(&PointCloud::new(points), &target, &Options::default()).unwrap();
-    assert!(r.warnings.iter().any(|w| w.contains("left out 2 of the source's 1502 points")), "{:?}", r.warnings);
-    assert!(r.T_target_source.iter().all(|v| v.is_finite()));
+    points.extend(std::iter::repeat_n([0.0, f32::MAX, 0.0], 30));
+    let source = PointCloud::new(points);
+    let e = reg.register(&source, &target, &Options::default()).unwrap_err().to_string();
+    assert!(e.contains("source point 1500 has a coordinate beyond 1e18"), "{e}");
+    let drop = Options { non_finite: NonFinite::Drop, ..Options::default() };
+    let r = reg.register(&source, &target, &drop).unwrap();
+    let c = reg.register(&PointCloud::new(clean), &target, &drop).unwrap();
+    assert_eq!((r.T_target_source, r.confidence), (c.T_target_source, c.confidence));
+    assert!(!r.warnings.iter().any(|w| w.contains("rounded")), "{:?}", r.warnings);
 }

@@ -9,9 +9,9 @@
 //! otherwise the first three numbers of a row are x, y, z. Other columns (intensity, colour,
 //! normals) are ignored. Blank lines and `#` / `//` comments are skipped anywhere. After data has
 //! started, a row without numbers in its coordinate columns is an error naming its line. A row
-//! whose commas all sit between digits, without a decimal point, and whose values are separated by
-//! whitespace or semicolons (`1,5 2,5 3,5`) is an error too: decimal commas, which the comma
-//! separator would silently split into other values.
+//! whose values, separated by whitespace or semicolons, are numbers written with decimal commas or
+//! thousands separators (`1,5 2,5 3,5`, `1,000.5`) is an error too: the comma separator would
+//! silently split them into other values.
 
 use super::util::{parse_f64, show, split_fields, utf8_line, Lines};
 use crate::{Error, Result};
@@ -105,9 +105,9 @@ pub(crate) fn scan<'a>(bytes: &'a [u8], visit: &mut dyn FnMut(&Row<'a, '_>) -> R
                 return Err(Error::parse(
                     F,
                     format!(
-                        "line {n}: {} has commas between digits and other separators between its values: numbers \
-                         written with decimal commas (1,5 for 1.5) or thousands separators, which would be read as \
-                         separate values; write the numbers with a decimal point (and no thousands separators) first",
+                        "line {n}: {} holds numbers written with decimal commas (1,5 for 1.5) or thousands \
+                         separators, which the comma separator would read as separate values: write the numbers \
+                         with a decimal point (and no thousands separators) first",
                         show(line.trim())
                     ),
                 ))
@@ -126,17 +126,47 @@ pub(crate) fn scan<'a>(bytes: &'a [u8], visit: &mut dyn FnMut(&Row<'a, '_>) -> R
     Ok(())
 }
 
-/// True when `line` has commas only between digits, no decimal point, and whitespace or
-/// semicolons between its values (`1,5 2,5 3,5`, `1,5;2,5;3,5`): numbers written with decimal
-/// commas (or thousands separators), which the comma separator would split into other values. A
-/// comma-separated line (`1,2,3`, `1.5, 2.5, 3.5`, `1,2,3,Big tree`) is not.
+/// True when `line`, split at whitespace and semicolons, holds a number written with a decimal
+/// comma (`1,5`, `-0,25e3`) or thousands separators (`1,000`, `12,345.5`), and no other token with
+/// a comma: numbers the comma separator would silently split into other values (`1,5 2,5 3,5`,
+/// `1,5;2,5;3,5`). Comma-separated values (`1,2,3`, `1.5, 2.5, 3.5`, `1,2,3,2024-01-01 12:00`,
+/// `1 2 3 255,0,0`) are not.
 fn decimal_commas(line: &str) -> bool {
-    let b = line.trim().as_bytes();
-    if !b.contains(&b',') || b.contains(&b'.') || !b.iter().any(|&c| c == b';' || c.is_ascii_whitespace()) {
-        return false;
+    let mut any = false;
+    for t in line.split(|c: char| c.is_ascii_whitespace() || c == ';').filter(|t| t.contains(',')) {
+        if !(comma_decimal(t) || thousands(t)) {
+            return false;
+        }
+        any = true;
     }
-    let digit = |i: Option<usize>| i.and_then(|i| b.get(i)).is_some_and(u8::is_ascii_digit);
-    b.iter().enumerate().filter(|(_, &c)| c == b',').all(|(i, _)| digit(i.checked_sub(1)) && digit(Some(i + 1)))
+    any
+}
+
+/// `[+-]digits,digits[e[+-]digits]`: a number with a decimal comma.
+fn comma_decimal(t: &str) -> bool {
+    let t = t.strip_prefix(['+', '-']).unwrap_or(t);
+    let (mantissa, exponent) = match t.find(['e', 'E']) {
+        Some(i) => (&t[..i], Some(&t[i + 1..])),
+        None => (t, None),
+    };
+    let digits = |s: &str| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit());
+    let exponent_ok = exponent.is_none_or(|e| digits(e.strip_prefix(['+', '-']).unwrap_or(e)));
+    mantissa.split_once(',').is_some_and(|(a, b)| digits(a) && digits(b)) && exponent_ok
+}
+
+/// `[+-]d[d[d]],ddd[,ddd...][.digits]`: a number with thousands separators.
+fn thousands(t: &str) -> bool {
+    let t = t.strip_prefix(['+', '-']).unwrap_or(t);
+    let (int, frac) = t.split_once('.').unwrap_or((t, "0"));
+    let mut groups = int.split(',');
+    let first = groups.next().unwrap_or("");
+    let digits = |s: &str| s.bytes().all(|b| b.is_ascii_digit());
+    (1..=3).contains(&first.len())
+        && digits(first)
+        && int.contains(',')
+        && groups.all(|g| g.len() == 3 && digits(g))
+        && !frac.is_empty()
+        && digits(frac)
 }
 
 /// The error for a row after the data started whose coordinates are not all numbers.
@@ -220,7 +250,14 @@ mod tests {
 
     #[test]
     fn decimal_commas_are_refused_not_split() {
-        for text in [&b"1,5 2,5 3,5\n"[..], b"x;y;z\n1,5;2,5;3,5\n", b"1,5\t2,5\t3,5\n", b"1 2 3\n1 000,5 2 3\n"] {
+        for text in [
+            &b"1,5 2,5 3,5\n"[..],
+            b"x;y;z\n1,5;2,5;3,5\n",
+            b"1,5\t2,5\t3,5\n",
+            b"1 2 3\n1 000,5 2 3\n",
+            b"-1,5e-3 2,5 3,5 12.03.2024\n",
+            b"1,000.5 2,000.5 3,000.5\n",
+        ] {
             let e = read(text).unwrap_err().to_string();
             assert!(e.contains("decimal commas"), "{e}");
         }
@@ -232,6 +269,12 @@ mod tests {
         assert_eq!(read(b"1,2,3,Big tree\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
         assert_eq!(read(b"1;2;3\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
         assert_eq!(read(b"1,5,2,5,3,5\n").unwrap(), vec![[1.0, 5.0, 2.0]]);
+        // comma-separated values beside a field with spaces, a note, a colour
+        assert_eq!(read(b"x,y,z,time\n1,2,3,2024-01-01 12:00:00\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        assert_eq!(read(b"1,2,3 # note\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        assert_eq!(read(b"1 2 3 255,0,0\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        assert_eq!(read(b"1\t2\t3\tOak, big\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        assert_eq!(read(b"1e-3,2e-3,3e-3\n").unwrap(), vec![[1e-3, 2e-3, 3e-3]]);
         // a header line is not data
         assert_eq!(read(b"Created 30,11 2026\n1 2 3\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
     }

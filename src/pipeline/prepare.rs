@@ -50,7 +50,7 @@ pub(crate) struct Prepared {
     /// The distance of the answer's evidence ([`options::evidence_distance`]).
     pub d_evidence: f64,
     /// The coarser of the steps the two clouds' `f32` coordinates were rounded to
-    /// ([`checks::f32_rounding`]; 0 for clouds near zero).
+    /// ([`checks::f32_rounding`]; 0 for clouds near zero), in normalised units.
     pub rounding: f64,
     /// The source points fed to the network.
     pub net_src: PointCloud,
@@ -184,13 +184,12 @@ pub(crate) fn prepare(
 /// `cloud` validated ([`PointCloud::validated`], `options.non_finite`); with [`Outliers::Drop`]
 /// without its far outliers ([`outliers::drop_far_with`]); then with [`Support::Drop`] without the
 /// support plane it stands on ([`support::find`]); with a warning for each that left points out,
-/// and the step its `f32` coordinates are rounded to ([`checks::f32_rounding`], its units).
+/// and the step the `f32` coordinates of the points kept are rounded to ([`checks::f32_rounding`],
+/// its units).
 /// `what` names the cloud in messages.
 fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<(PointCloud, Vec<String>, f64)> {
     let mut cloud = cloud.into_owned().into_validated(what, MIN_POINTS, options.non_finite)?;
     let mut warnings = Vec::new();
-    let (lo, hi) = cloud.bounds();
-    let rounding = checks::f32_rounding(what, lo, hi, &mut warnings);
     // the two tests' sample, shared while the cloud is unchanged
     let mut spacing = None;
     if options.outliers == Outliers::Drop {
@@ -210,6 +209,9 @@ fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<
             cloud = cloud.without(&plane.indices);
         }
     }
+    // the points kept (a stray left out, far from zero, rounds nothing that is registered)
+    let (lo, hi) = cloud.bounds();
+    let rounding = checks::f32_rounding(what, lo, hi, &mut warnings);
     Ok((cloud, warnings, rounding))
 }
 
