@@ -301,6 +301,22 @@ function fileNameArg(v) {
 }
 
 /**
+ * The first enumerable key of `options` inherited from a prototype (an option that copying own
+ * properties, or posting to a worker, would leave out), or `undefined`. A Proxy's trap may throw.
+ */
+export function inheritedOption(options) {
+  for (const key in options) {
+    if (!Object.prototype.hasOwnProperty.call(options, key)) return key;
+  }
+  return undefined;
+}
+
+/** The error message for an option `key` inherited from a prototype. */
+export function inheritedMessage(key) {
+  return `invalid options: \`${key}\` is inherited from a prototype; give options as the object's own properties`;
+}
+
+/**
  * Options -> plain data (own enumerable string keys; arrays and typed arrays copied to arrays;
  * nested depth at most 3). Every read of the caller's object happens here, in a try, so a
  * throwing getter or Proxy trap becomes an `Error` naming the option. Shapes are checked by
@@ -323,11 +339,8 @@ function optionsArg(options) {
   try {
     keys = Object.keys(options);
     // an option inherited from a prototype would be left out: say so rather than ignore it
-    for (const key in options) {
-      if (!Object.prototype.hasOwnProperty.call(options, key)) {
-        fail(`invalid options: \`${key}\` is inherited from a prototype; give options as the object's own properties`);
-      }
-    }
+    const inherited = inheritedOption(options);
+    if (inherited !== undefined) fail(inheritedMessage(inherited));
   } catch (e) {
     if (e instanceof Error && e.message.startsWith("invalid options:")) throw e;
     fail(`invalid options: listing the options threw: ${messageOf(e)}`);

@@ -10,6 +10,8 @@
 // crashes, when the engine in it traps, and when a request is aborted: the requests it had in
 // flight reject, nothing is retried behind the caller's back, and the client keeps working.
 
+import { inheritedMessage, inheritedOption } from "./facade.js";
+
 /** Progress stages, in order. */
 export const STAGES = Object.freeze(["loading", "preparing", "network", "refining", "done"]);
 
@@ -315,18 +317,11 @@ function inheritedOptions(options) {
   if (options === null || typeof options !== "object") return;
   let inherited;
   try {
-    for (const key in options) {
-      if (!Object.prototype.hasOwnProperty.call(options, key)) {
-        inherited = key;
-        break;
-      }
-    }
+    inherited = inheritedOption(options);
   } catch {
     return; // a Proxy that throws: the worker's copy says so
   }
-  if (inherited !== undefined) {
-    throw new Error(`invalid options: \`${inherited}\` is inherited from a prototype; give options as the object's own properties`);
-  }
+  if (inherited !== undefined) throw new Error(inheritedMessage(inherited));
 }
 
 /**

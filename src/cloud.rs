@@ -58,7 +58,7 @@ pub(crate) fn bounds_of(points: &[[f32; 3]]) -> ([f32; 3], [f32; 3]) {
 pub const MAX_COORDINATE: f32 = 1e18;
 
 /// Whether every coordinate of `p` is finite and within [`MAX_COORDINATE`].
-fn is_finite(p: &[f32; 3]) -> bool {
+fn is_usable(p: &[f32; 3]) -> bool {
     p.iter().all(|v| v.abs() <= MAX_COORDINATE)
 }
 
@@ -179,11 +179,11 @@ impl PointCloud {
     /// error; so is a cloud whose points all coincide. `what` names the cloud in messages
     /// (`"source"`, `"target"`).
     pub fn validated(&self, what: &str, min_points: usize, non_finite: NonFinite) -> Result<PointCloud> {
-        match (self.points.iter().position(|p| !is_finite(p)), non_finite) {
+        match (self.points.iter().position(|p| !is_usable(p)), non_finite) {
             // only the finite points are copied
             (Some(_), NonFinite::Drop) => {
                 let cloud =
-                    PointCloud { points: self.points.iter().copied().filter(is_finite).collect(), origin: self.origin };
+                    PointCloud { points: self.points.iter().copied().filter(is_usable).collect(), origin: self.origin };
                 cloud.check(what, min_points, None)?;
                 Ok(cloud)
             }
@@ -198,9 +198,9 @@ impl PointCloud {
     /// [`PointCloud::validated`], keeping the cloud's own points (without a copy of a large one).
     pub fn into_validated(self, what: &str, min_points: usize, non_finite: NonFinite) -> Result<PointCloud> {
         let mut cloud = self;
-        let mut bad = cloud.points.iter().position(|p| !is_finite(p));
+        let mut bad = cloud.points.iter().position(|p| !is_usable(p));
         if bad.is_some() && non_finite == NonFinite::Drop {
-            cloud.points.retain(is_finite);
+            cloud.points.retain(is_usable);
             bad = None;
         }
         cloud.check(what, min_points, bad)?;

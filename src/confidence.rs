@@ -217,9 +217,10 @@ const PART_OVERLAP: f64 = 0.85;
 const ROUND_SPREAD: f64 = 0.1;
 /// The turns about a round axis of the target ([`ROUND_SPREAD`]), degrees: a quarter and a third
 /// of a turn both ways find the look-alikes of a 4-fold and of a 3-fold symmetry (the half turn
-/// is probed on every axis already), so that the answer is counted one of four or of three. They count look-alikes only: a pose they find that fits better is not
-/// searched from ([`Probed::better`]), nor does it raise [`Evidence::ambiguity`], since on such
-/// a shape a turn fits better or worse by the noise of the scan alone.
+/// is probed on every axis already), so that the answer is counted one of four or of three. They
+/// count look-alikes only: a pose they find that fits better is not searched from
+/// ([`Probed::better`]), nor does it raise [`Evidence::ambiguity`], since on such a shape a turn
+/// fits better or worse by the noise of the scan alone.
 const ROUND_TURNS: [f64; 4] = [90.0, -90.0, 120.0, -120.0];
 /// Points of the probes ([`Evidence::ambiguity`], [`Evidence::slide`]).
 pub const PROBE_POINTS: usize = 512;
@@ -301,7 +302,7 @@ fn turns(
     }
     let (c, axes) = principal_axes(sample, t);
     // (degrees, axis, a point on the axis)
-    let mut probes: Vec<(f64, Vector3<f64>, Vector3<f64>)> = Vec::with_capacity(22);
+    let mut probes: Vec<(f64, Vector3<f64>, Vector3<f64>)> = Vec::with_capacity(19);
     for degrees in TURNS {
         probes.extend((0..3).map(|k| (degrees, axes.column(k).into_owned(), c)));
     }
