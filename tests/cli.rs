@@ -69,7 +69,7 @@ fn icp_kinds_and_human_output() {
 /// `T_target_source`.
 #[test]
 fn register_lists_the_poses_that_fit_as_well() {
-    let dir = std::env::temp_dir().join(format!("arps-cli-box-{}", std::process::id()));
+    let dir = common::scratch("cli-box");
     std::fs::create_dir_all(&dir).unwrap();
     let gt = common::motion([0.0, 0.0, 30.0], [0.4, -0.2, 0.1]);
     let source = arps::PointCloud::new(common::box_grid::box_grid(0.05, 0.0));
@@ -100,7 +100,7 @@ fn register_lists_the_poses_that_fit_as_well() {
 /// onto it with a far better fit than onto its vertices.
 #[test]
 fn register_reads_a_mesh_as_its_surface() {
-    let dir = std::env::temp_dir().join(format!("arps-cli-mesh-{}", std::process::id()));
+    let dir = common::scratch("cli-mesh");
     std::fs::create_dir_all(&dir).unwrap();
     let model = "fixtures/formats/angle_block_binary_solid.stl";
     let bytes = std::fs::read(model).unwrap();
@@ -148,7 +148,7 @@ fn register_reads_one_scan_of_an_e57_file() {
     let by: f64 = line.split_whitespace().nth(5).unwrap().parse().unwrap();
     assert!(by < 0.05, "{text}");
     // saved to an .e57 name: an E57 file of that scan alone, moved
-    let dir = std::env::temp_dir().join(format!("arps-cli-scan-{}", std::process::id()));
+    let dir = common::scratch("cli-scan");
     std::fs::create_dir_all(&dir).unwrap();
     let path = dir.join("scan2-aligned.e57");
     let out = arps(&["register", e57, e57, "--source-scan", "1", "--json", "--aligned", path.to_str().unwrap()]);
@@ -182,7 +182,7 @@ fn register_reads_one_scan_of_an_e57_file() {
 
 #[test]
 fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
-    let dir = std::env::temp_dir().join(format!("arps-cli-{}", std::process::id()));
+    let dir = common::scratch("cli");
     std::fs::create_dir_all(&dir).unwrap();
     let broken = dir.join("broken.ply");
     std::fs::write(&broken, b"ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nend_header\n1\n2\n").unwrap();
@@ -307,7 +307,7 @@ fn a_closed_stdout_ends_quietly() {
 /// refuses other bit widths with one line on stderr.
 #[test]
 fn quantize_writes_each_precision_and_refuses_others() {
-    let dir = std::env::temp_dir().join(format!("arps-quantize-{}", std::process::id()));
+    let dir = common::scratch("quantize");
     std::fs::create_dir_all(&dir).unwrap();
     let input = "fuzz/seeds/weights_from_bytes/tiny_f32.safetensors";
     let original = arps::Weights::from_bytes(&std::fs::read(input).unwrap()).unwrap();
@@ -395,7 +395,7 @@ fn register_takes_several_sources_onto_one_target() {
 /// each refused before anything is registered.
 #[test]
 fn register_writes_the_aligned_source() {
-    let dir = std::env::temp_dir().join(format!("arps-cli-aligned-{}", std::process::id()));
+    let dir = common::scratch("cli-aligned");
     std::fs::create_dir_all(&dir).unwrap();
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let matrix = |v: &serde_json::Value| {
@@ -565,7 +565,7 @@ fn register_writes_the_aligned_source() {
 /// is not a finite number > 0 is refused.
 #[test]
 fn register_scales_a_source_in_another_unit() {
-    let dir = std::env::temp_dir().join(format!("arps-cli-scale-{}", std::process::id()));
+    let dir = common::scratch("cli-scale");
     std::fs::create_dir_all(&dir).unwrap();
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
     let target = arps::io::read_path(&root.join("fixtures/wasm/target.ply")).unwrap();

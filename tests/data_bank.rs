@@ -2,13 +2,13 @@
 //! a reason, split by shape name.
 #![cfg(feature = "cli")]
 
+mod common;
 use arps::data::bank::{check_mesh, load_dir, split_of};
 use arps::data::Split;
 use arps::io::Mesh;
 
-fn temp_dir(tag: &str) -> std::path::PathBuf {
-    let d = std::env::temp_dir().join(format!("arps-bank-{tag}-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
+fn temp_dir(tag: &str) -> common::scratch::Scratch {
+    let d = common::scratch(&format!("bank-{tag}"));
     std::fs::create_dir_all(d.join("sub/deeper")).unwrap();
     d
 }

@@ -2,6 +2,7 @@
 //! generated set.
 #![cfg(feature = "cli")]
 
+mod common;
 use std::path::Path;
 use std::process::Command;
 
@@ -30,7 +31,8 @@ fn arps(args: &[&str]) -> (bool, String, String) {
 #[test]
 fn eval_prints_the_table_for_every_method_on_the_fixture_pairs() {
     let manifest = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/pairs/pairs.tsv");
-    let svg = std::env::temp_dir().join(format!("arps-eval-{}.svg", std::process::id()));
+    let scratch = common::scratch("eval");
+    let svg = scratch.join("curves.svg");
     let (ok, out, err) = arps(&["eval", manifest.to_str().unwrap(), "--limit", "6", "--svg", svg.to_str().unwrap()]);
     assert!(ok, "stdout:\n{out}\nstderr:\n{err}");
     assert!(out.contains("6 pairs"), "{out}");
@@ -121,7 +123,7 @@ fn eval_perturb_angle_is_validated() {
 
 #[test]
 fn make_pairs_writes_a_set_that_eval_reads() {
-    let dir = std::env::temp_dir().join(format!("arps-make-pairs-{}", std::process::id()));
+    let dir = common::scratch("make-pairs");
     let _ = std::fs::remove_dir_all(&dir);
     let (ok, out, err) =
         arps(&["make-pairs", "--out", dir.to_str().unwrap(), "--count", "3", "--seed", "5", "--procedural-only"]);
@@ -159,7 +161,7 @@ fn make_pairs_writes_a_set_that_eval_reads() {
 /// rotation reaches past 90 degrees; ranges outside [0, 180] are refused with a clear error.
 #[test]
 fn make_pairs_makes_any_pose_pairs_and_checks_the_range() {
-    let dir = std::env::temp_dir().join(format!("arps-any-pose-{}", std::process::id()));
+    let dir = common::scratch("any-pose");
     let _ = std::fs::remove_dir_all(&dir);
     let d = dir.to_str().unwrap();
     let (ok, out, err) = arps(&[
@@ -195,7 +197,7 @@ fn make_pairs_makes_any_pose_pairs_and_checks_the_range() {
 /// exactly the pairs of those parameters, and sizes out of range are refused.
 #[test]
 fn make_pairs_dense_points_sets_the_shared_samples() {
-    let dir = std::env::temp_dir().join(format!("arps-dense-points-{}", std::process::id()));
+    let dir = common::scratch("dense-points");
     let d = dir.to_str().unwrap();
     let src = arps::data::ShapeSource::procedural();
     let mut shared = Vec::new();
@@ -233,7 +235,7 @@ fn make_pairs_dense_points_sets_the_shared_samples() {
 /// crop's 2,870 samples and 1,200 noisy copies of them).
 #[test]
 fn make_pairs_large_clouds_repeat_no_sample() {
-    let dir = std::env::temp_dir().join(format!("arps-large-dense-{}", std::process::id()));
+    let dir = common::scratch("large-dense");
     let _ = std::fs::remove_dir_all(&dir);
     let d = dir.to_str().unwrap();
     let (ok, out, err) =
@@ -257,7 +259,7 @@ fn make_pairs_large_clouds_repeat_no_sample() {
 /// whole shape and `--target-points` its size; the scan's samples are then all the model's.
 #[test]
 fn make_pairs_makes_scans_onto_a_model() {
-    let dir = std::env::temp_dir().join(format!("arps-scan-model-{}", std::process::id()));
+    let dir = common::scratch("scan-model");
     let _ = std::fs::remove_dir_all(&dir);
     let d = dir.to_str().unwrap();
     let args = ["--count", "2", "--seed", "3", "--procedural-only", "--points", "512", "--target-points", "2048"];
@@ -341,8 +343,8 @@ fn made_with_extra(
 /// leaves them out, `--keep-outliers` keeps them.
 #[test]
 fn make_pairs_adds_stray_returns_that_eval_leaves_out() {
-    let dir = std::env::temp_dir().join(format!("arps-stray-{}", std::process::id()));
-    let clean = std::env::temp_dir().join(format!("arps-stray-clean-{}", std::process::id()));
+    let dir = common::scratch("stray");
+    let clean = common::scratch("stray-clean");
     let args = ["--count", "2", "--seed", "4", "--procedural-only"];
     for (_, s, _, _) in made_with_extra(&dir, &clean, &args, &["--stray", "0.05", "--target-stray", "0.1"], (51, 102)) {
         // the strays spread over the cube of half-side 3 (the shape fits [-1, 1]^3)
@@ -377,9 +379,9 @@ fn make_pairs_adds_stray_returns_that_eval_leaves_out() {
 /// on out, `--keep-support` keeps it.
 #[test]
 fn make_pairs_adds_support_planes_that_eval_leaves_out() {
-    let dir = std::env::temp_dir().join(format!("arps-support-{}", std::process::id()));
-    let moved = std::env::temp_dir().join(format!("arps-support-moved-{}", std::process::id()));
-    let clean = std::env::temp_dir().join(format!("arps-support-clean-{}", std::process::id()));
+    let dir = common::scratch("support");
+    let moved = common::scratch("support-moved");
+    let clean = common::scratch("support-clean");
     let args = ["--count", "2", "--seed", "5", "--procedural-only", "--max-tilt", "0"];
     let support = ["--support", "0.5", "--target-support", "0.25"];
     let with_moved = made_with_extra(&moved, &clean, &args, &[&support[..], &["--support-moved"]].concat(), (512, 256));
@@ -407,7 +409,7 @@ fn make_pairs_adds_support_planes_that_eval_leaves_out() {
         (Some(0.5), Some(0.25))
     );
     // a plane in the sources only: the default leaves it out, --keep-support keeps it
-    let only = std::env::temp_dir().join(format!("arps-support-only-{}", std::process::id()));
+    let only = common::scratch("support-only");
     let _ = std::fs::remove_dir_all(&only);
     let (ok, out, err) =
         arps(&[&["make-pairs", "--out", only.to_str().unwrap(), "--support", "0.5"][..], &args].concat());
@@ -441,7 +443,7 @@ fn eval_accepts_a_ground_truth_rounded_to_a_few_digits() {
     for f in [1, 2] {
         fields[f] = fixtures.join(&fields[f]).display().to_string();
     }
-    let dir = std::env::temp_dir().join(format!("arps-eval-rounded-{}", std::process::id()));
+    let dir = common::scratch("eval-rounded");
     std::fs::create_dir_all(&dir).unwrap();
     let manifest = dir.join("pairs.tsv");
     std::fs::write(&manifest, format!("{header}\n{}\n", fields.join("\t"))).unwrap();

@@ -4,14 +4,15 @@
 //! uninterrupted run of the same total steps); `export` writes weights the engine loads and
 //! `arps info` describes.
 
+mod common;
 use arps::train::run::{checkpoint, log};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("arps-train-test-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    d
+/// A run directory for the trainer to create: a path inside a fresh scratch directory, removed
+/// with it.
+fn dir(name: &str) -> common::scratch::Scratch {
+    common::scratch(&format!("train-test-{name}"))
 }
 
 fn train(run: &Path, extra: &[&str]) {

@@ -4,6 +4,7 @@
 //! correspondences), workers split batches round-robin, the validation stream holds the
 //! validation pairs, broken streams are refused, and a packed bank round-trips.
 
+mod common;
 use arps::data::bank::{Bank, NamedMesh};
 use arps::io::Mesh;
 use arps::train::losses::correspondences;
@@ -176,7 +177,7 @@ fn packed_bank_round_trips() {
 fn gzipped_logs_read_like_plain_ones() {
     use arps::train::run::log;
     use std::io::Write;
-    let dir = std::env::temp_dir().join(format!("arps-gz-log-{}", std::process::id()));
+    let dir = common::scratch("gz-log");
     std::fs::create_dir_all(&dir).unwrap();
     let text = "{\"kind\":\"start\",\"step\":0}\nnot json\n{\"kind\":\"end\",\"step\":5}\n";
     let mut gz = flate2::write::GzEncoder::new(Vec::new(), flate2::Compression::default());

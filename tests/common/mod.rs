@@ -6,6 +6,10 @@ use arps::PointCloud;
 use nalgebra::{Matrix4, Vector3};
 
 pub mod box_grid;
+#[cfg(not(target_arch = "wasm32"))]
+pub mod scratch;
+#[cfg(not(target_arch = "wasm32"))]
+pub use scratch::scratch;
 
 /// `n` points on a bumpy, asymmetric closed surface (about 2 units across), from a low-discrepancy
 /// sequence: deterministic, no RNG.
