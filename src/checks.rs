@@ -71,15 +71,32 @@ pub fn f32_step(far: f64) -> f64 {
     f64::from_bits(((e.max(-126) - 23 + 1023) as u64) << 52)
 }
 
-/// Warns (into `warnings`; `what` names the cloud) when the `f32` offsets of a cloud with box
-/// `[lo, hi]` lie so far from zero for its size that `f32` holds them only to a step of more than
-/// [`F32_ROUNDING_WARNING`] of its half-extent: a cloud far from zero (a map grid) given as `f32`
-/// (`PointCloud::new`, a `Float32Array`) has lost those digits already, and the answer can be as
-/// coarse. A cloud built from `f64` (or read from a file) is stored as offsets from an origin
-/// near it and is never warned. Returns that step (the spacing of `f32` values at the cloud's
-/// farthest coordinate, in its units; 0 for a cloud at zero), warned or not.
-pub fn f32_rounding(what: &str, lo: [f32; 3], hi: [f32; 3], warnings: &mut Vec<String>) -> f64 {
+/// Warns (into `warnings`; `what` names the cloud) when the cloud's points sit on a grid coarser
+/// than [`F32_ROUNDING_WARNING`] of its largest half-extent because they were `f32` values far
+/// from zero: a cloud given as `f32` far from zero (a map grid; `PointCloud::new`, a
+/// `Float32Array`), or read from a file that stores them as 32-bit floats ([`stored_f32_step`]:
+/// the reader's `f64` offsets from a nearby origin keep that grid). Either has lost those digits
+/// already, and the answer can be as coarse. Returns that step (the spacing of `f32` values at
+/// the cloud's farthest coordinate, in its units; 0 for a cloud at zero, or one stored as offsets
+/// whose points are not on such a grid), warned or not.
+pub fn f32_rounding(what: &str, cloud: &crate::PointCloud, warnings: &mut Vec<String>) -> f64 {
+    let (lo, hi) = cloud.bounds();
     let half = crate::cloud::half_extent_of(lo, hi);
+    if !cloud.origin_is_zero() {
+        let (step, far) = stored_f32_step(cloud);
+        if half > 0.0 && step > F32_ROUNDING_WARNING * half {
+            warnings.push(format!(
+                "the {what}'s coordinates lie up to {} from zero for a cloud of largest half-extent {}, on the grid \
+                 of 32-bit floats there (a file that stores them as float?): they were rounded to steps of about {} \
+                 before they were read, and the answer can be as coarse; store them as double, or as offsets from a \
+                 nearby origin",
+                crate::error::num(far),
+                crate::error::num(half),
+                crate::error::num(step)
+            ));
+        }
+        return step;
+    }
     let far = lo.iter().chain(&hi).fold(0.0f64, |m, v| m.max((*v as f64).abs()));
     let step = f32_step(far);
     if half > 0.0 && f32_rounds(far, half) {
@@ -93,6 +110,43 @@ pub fn f32_rounding(what: &str, lo: [f32; 3], hi: [f32; 3], warnings: &mut Vec<S
         ));
     }
     step
+}
+
+/// Points of a cloud [`stored_f32_step`] looks at, evenly spread.
+const STORED_F32_SAMPLE: usize = 256;
+
+/// For a cloud stored as `f32` offsets from an `f64` origin: the step of the `f32` grid its points
+/// sit on in the caller's frame, and how far from zero its farthest coordinate lies. A file that
+/// stores coordinates far from zero as 32-bit floats (a PLY `float`, a PCD `F 4`) gives values
+/// on that grid (0.5 apart at 5.4e6), which the reader's offsets keep to within their own `f32`
+/// rounding; `f64` values are on it only by chance (one coordinate in a few thousand at 5.4e6).
+/// Per axis, when every one of [`STORED_F32_SAMPLE`] points evenly spread has its coordinate on
+/// the grid (within the offsets' rounding, and that grid at least 8 times as coarse), that axis's
+/// step counts; the largest counts. `(0, far)` when no axis is on such a grid.
+pub fn stored_f32_step(cloud: &crate::PointCloud) -> (f64, f64) {
+    let (lo, hi) = cloud.bounds();
+    let n = cloud.points.len();
+    let mut far = 0.0f64;
+    let mut step = 0.0f64;
+    for a in 0..3 {
+        let (l, h) = (cloud.origin[a] + lo[a] as f64, cloud.origin[a] + hi[a] as f64);
+        let far_a = l.abs().max(h.abs());
+        far = far.max(far_a);
+        // how far the offsets' own f32 rounding may move a value; the grid must be much coarser
+        let slack = f32_step((lo[a] as f64).abs().max((hi[a] as f64).abs()));
+        let grid = f32_step(far_a);
+        if n == 0 || !far_a.is_finite() || grid < 8.0 * slack {
+            continue;
+        }
+        let on_grid = (0..n).step_by(n.div_ceil(STORED_F32_SAMPLE).max(1)).all(|i| {
+            let v = cloud.origin[a] + cloud.points[i][a] as f64;
+            (v - (v as f32) as f64).abs() <= slack
+        });
+        if on_grid {
+            step = step.max(grid);
+        }
+    }
+    (step, far)
 }
 
 /// Ratio of a cloud's second principal spread to its first (standard deviations along the
@@ -173,6 +227,32 @@ pub fn flat_pair(source: [f64; 3], target: [f64; 3], icp: bool, warnings: &mut V
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_cloud_read_from_f32_values_far_from_zero_is_on_their_grid() {
+        // values a file stored as float at a northing of 5.4e6 (steps of 0.5), read in f64
+        let f32_values: Vec<[f64; 3]> = (0..500)
+            .map(|i| {
+                let t = i as f64 * 0.37;
+                [t.sin() * 20.0, (5.4e6 + t.cos() * 20.0) as f32 as f64, t * 0.1]
+            })
+            .collect();
+        let cloud = crate::PointCloud::from_points_f64(&f32_values);
+        let (step, far) = stored_f32_step(&cloud);
+        assert_eq!(step, 0.5);
+        assert!((far - 5.4e6).abs() < 30.0, "{far}");
+        let mut warnings = Vec::new();
+        assert_eq!(f32_rounding("source", &cloud, &mut warnings), 0.5);
+        assert!(warnings.len() == 1 && warnings[0].contains("grid of 32-bit floats"), "{warnings:?}");
+        // the same points in f64: not on the grid, no warning
+        let exact: Vec<[f64; 3]> =
+            f32_values.iter().map(|p| [p[0], p[1] + 0.123_456_7 * (p[0] / 20.0), p[2]]).collect();
+        let cloud = crate::PointCloud::from_points_f64(&exact);
+        assert_eq!(stored_f32_step(&cloud).0, 0.0);
+        let mut warnings = Vec::new();
+        assert_eq!(f32_rounding("source", &cloud, &mut warnings), 0.0);
+        assert!(warnings.is_empty(), "{warnings:?}");
+    }
 
     #[test]
     fn f32_step_is_the_gap_between_neighbouring_f32_values() {

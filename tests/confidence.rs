@@ -418,6 +418,34 @@ fn clouds_rounded_coarser_than_the_distance_they_are_judged_at_are_not_confident
     assert_eq!(r.confidence, near.confidence);
 }
 
+/// A file that stores coordinates far from zero as 32-bit floats gives values on f32's grid there,
+/// which the reader keeps in f64 as offsets from a nearby origin: the rounding happened before the
+/// engine saw them all the same, and the answer is capped with a warning that names the file's
+/// floats. The same clouds given in f64 are not.
+#[test]
+fn clouds_read_from_32_bit_floats_far_from_zero_are_not_confident() {
+    let (source, target, _) = fixture_pair(0);
+    let h = source.half_extent().max(target.half_extent());
+    // 1e6 half-extents from zero, on y only (as a map grid's northing)
+    let stored = |c: &PointCloud, f32_file: bool| {
+        let points: Vec<[f64; 3]> = (0..c.len())
+            .map(|i| {
+                let p = c.point_f64(i);
+                let y = p[1] + 1e6 * h;
+                [p[0], if f32_file { y as f32 as f64 } else { y }, p[2]]
+            })
+            .collect();
+        PointCloud::from_points_f64(&points)
+    };
+    let mut reg = Registrar::with_default_model().unwrap();
+    let r = reg.register(&stored(&source, true), &stored(&target, true), &Options::default()).unwrap();
+    assert!(r.confidence <= 0.25, "{}", r.confidence);
+    assert!(r.warnings.iter().any(|w| w.contains("on the grid of 32-bit floats")), "{:?}", r.warnings);
+    let r = reg.register(&stored(&source, false), &stored(&target, false), &Options::default()).unwrap();
+    assert!(!r.warnings.iter().any(|w| w.contains("rounded")), "{:?}", r.warnings);
+    assert!(r.confidence > 0.5, "{}", r.confidence);
+}
+
 /// A wider `maxCorrespondenceDistance` than the default makes every pose fit better; the evidence
 /// is measured at the default distance all the same (the one the confidence is calibrated at), so
 /// the answer's `fitness` (at the wider distance) exceeds the evidence's, and a tighter distance

@@ -72,7 +72,8 @@ pub(crate) fn cap(
     if p.rounding > ROUNDING_DISTANCES * p.d_evidence {
         warnings.push(format!(
             "the clouds' coordinates were rounded to steps of about {} (f32 far from zero), more than the distance \
-             the answer is judged at ({}): the fit cannot confirm the pose; pass the coordinates as f64",
+             the answer is judged at ({}): the fit cannot confirm the pose; give the coordinates as f64 (a Float64Array, or a file that \
+             stores doubles)",
             num(p.rounding * s),
             num(p.d_evidence * s)
         ));

@@ -210,8 +210,7 @@ fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<
         }
     }
     // the points kept (a stray left out, far from zero, rounds nothing that is registered)
-    let (lo, hi) = cloud.bounds();
-    let rounding = checks::f32_rounding(what, lo, hi, &mut warnings);
+    let rounding = checks::f32_rounding(what, &cloud, &mut warnings);
     Ok((cloud, warnings, rounding))
 }
 
