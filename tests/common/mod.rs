@@ -9,6 +9,7 @@ pub mod box_grid;
 #[cfg(not(target_arch = "wasm32"))]
 pub mod scratch;
 #[cfg(not(target_arch = "wasm32"))]
+#[allow(unused_imports)] // not every test crate writes files
 pub use scratch::scratch;
 
 /// `n` points on a bumpy, asymmetric closed surface (about 2 units across), from a low-discrepancy
