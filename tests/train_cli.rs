@@ -6,7 +6,7 @@
 
 mod common;
 use arps::train::run::{checkpoint, log};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::Command;
 
 /// A run directory for the trainer to create: a path inside a fresh scratch directory, removed
