@@ -34,3 +34,6 @@ node_modules/.bin/tsc -p js/test
 
 step "pkg/examples/node-register.mjs"
 node pkg/examples/node-register.mjs fixtures/wasm/source.ply fixtures/wasm/target.ply
+# a mesh read as its surface, in other units (the example's reading flags)
+node pkg/examples/node-register.mjs fixtures/formats/angle_block_binary_solid.stl fixtures/formats/angle_block_binary_solid.stl \
+  --surface-points 5000 --source-scale 1 --drop-non-finite --json > /dev/null

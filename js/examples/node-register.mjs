@@ -1,8 +1,13 @@
 #!/usr/bin/env node
 // Registers two point-cloud files in Node and prints T_target_source.
-//   node node_modules/arps/examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] [--json] [--aligned OUT]
+//   node node_modules/arps/examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive]
+//     [--surface-points N] [--source-scale F] [--up X,Y,Z] [--drop-non-finite] [--json] [--aligned OUT]
 // SOURCE and TARGET are any format the readers know (PLY, PCD, LAS/LAZ, E57, XYZ/PTS/CSV, OBJ,
 // OFF, STL), read with their coordinates kept (map-grid surveys too: `readPointCloud`).
+// --surface-points N reads a mesh (a CAD model) as N points drawn over its surface, not its
+// vertices; --source-scale F multiplies the source by F (a scan in metres onto a model in
+// millimetres: 1000); --up is the `up` option; --drop-non-finite drops NaN points (an organised
+// PCD's "no return" points) where they are an error by default.
 // --aligned OUT writes the source moved into the target's frame: the source file itself, moved
 // (`transformFile`: every attribute kept), when OUT has the source's extension, else its points as binary PLY (`transformPointCloud`, `writePly`).
 // It imports "arps" as an app that installed the package does (inside the package, Node resolves
@@ -13,7 +18,8 @@ import init, { canTransform, Registrar, readPointCloud, transformFile, transform
 
 function usage(message) {
   if (message) console.error(`node-register: ${message}`);
-  console.error("usage: node examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] [--json] [--aligned OUT]");
+  console.error("usage: node examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive] " +
+    "[--surface-points N] [--source-scale F] [--up X,Y,Z] [--drop-non-finite] [--json] [--aligned OUT]");
   process.exit(2);
 }
 
@@ -22,20 +28,31 @@ const files = [];
 const options = {};
 let json = false;
 let aligned = null;
+let surfacePoints = null;
+let sourceScale = 1;
+const number = (flag, value) => {
+  const v = Number(value ?? usage(`${flag} needs a value`));
+  return Number.isFinite(v) && v > 0 ? v : usage(`${flag} must be a positive number, got ${value}`);
+};
 for (let i = 0; i < args.length; i++) {
   if (args[i] === "--json") json = true;
   else if (args[i] === "--icp") options.icp = args[++i] ?? usage("--icp needs a value");
   else if (args[i] === "--search") options.search = args[++i] ?? usage("--search needs a value");
   else if (args[i] === "--aligned") aligned = args[++i] ?? usage("--aligned needs a path");
+  else if (args[i] === "--surface-points") surfacePoints = number("--surface-points", args[++i]);
+  else if (args[i] === "--source-scale") sourceScale = number("--source-scale", args[++i]);
+  else if (args[i] === "--up") options.up = (args[++i] ?? usage("--up needs X,Y,Z")).split(",").map(Number);
+  else if (args[i] === "--drop-non-finite") options.nonFinite = "drop";
   else if (args[i].startsWith("--")) usage(`unknown flag ${args[i]}`);
   else files.push(args[i]);
 }
 if (files.length !== 2) usage();
-// --aligned: the source's own format (moved as it is) or .ply (its points), said before registering
+// --aligned: the source's own format (moved as it is) or .ply (its points), said before registering;
+// a scaled source is written as its points (the file itself can only be moved rigidly)
 const ext = (f) => path.extname(f).slice(1).toLowerCase();
-const own = aligned !== null && canTransform(files[0]) && ext(aligned) === ext(files[0]);
+const own = aligned !== null && sourceScale === 1 && canTransform(files[0]) && ext(aligned) === ext(files[0]);
 if (aligned !== null && !own && ext(aligned) !== "ply") {
-  const moved = canTransform(files[0]) ? ` or .${ext(files[0])} (the source moved as it is)` : "";
+  const moved = canTransform(files[0]) && sourceScale === 1 ? ` or .${ext(files[0])} (the source moved as it is)` : "";
   usage(`--aligned: name ${aligned} .ply (the source's points)${moved}`);
 }
 
@@ -43,7 +60,13 @@ try {
   await init(); // a no-op under Node; loads the .wasm in a browser
   // { points, origin }: float32 offsets from a float64 origin, which register takes as is; the
   // answer is in the files' own frames
-  const [source, target] = files.map((f) => readPointCloud(readFileSync(f), path.basename(f)));
+  const read = { surfacePoints };
+  const [source, target] = files.map((f) => readPointCloud(readFileSync(f), path.basename(f), read));
+  if (sourceScale !== 1) {
+    // into the target's unit: the answer and --aligned are then in it
+    source.points = source.points.map((v) => v * sourceScale);
+    source.origin = source.origin.map((v) => v * sourceScale);
+  }
   const registrar = Registrar.withDefaultModel();
   const t0 = performance.now();
   const r = registrar.register(source, target, options);
