@@ -109,6 +109,21 @@ export type RegisterOptions = {
    */
   up?: [number, number, number] | null,
   /**
+   * The share of the source that lies on the target once aligned, when the caller knows it:
+   * `1` for a scan of an object onto a complete model of it (a CAD part read as its surface),
+   * or a frame onto a map that covers everything the frame sees; less where the source also
+   * holds what the target lacks (clutter around the part, people in the frame, what lies beyond
+   * the map's edge). Default: none (unknown, as between two partial views, which may overlap by
+   * any share). With it, an answer under which clearly less of the source lies near the target
+   * (its share within twice the distance the answer is judged at, `evidence.fitnessLoose`,
+   * below `sourceOverlap - 0.15`) is not taken as sure: the adaptive search goes on as for an
+   * unsure answer, and when the answer still falls short its confidence is at most 0.25, with a
+   * warning that gives the share (the wrong model, a mirror-image export, a scale or unit
+   * error, points the target lacks left in the source, or a pose the search did not find). A
+   * number in (0, 1].
+   */
+  sourceOverlap?: number | null,
+  /**
    * The transforms ICP starts from, in order of preference. Each is refined coarse to fine
    * against the same prepared target and the best is returned (the result's `start` says
    * which): the highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier

@@ -9,6 +9,7 @@
 //! warning.
 
 use super::prepare::Prepared;
+use crate::confidence::Evidence;
 use crate::error::num;
 use crate::register::UP_TOLERANCE_DEG;
 
@@ -30,6 +31,29 @@ pub(crate) const SMALL_SOURCE_DISTANCES: f64 = 4.0;
 /// half that step before the engine saw it, as far as the fit is judged at.
 pub(crate) const ROUNDING_DISTANCES: f64 = 1.0;
 
+/// With `sourceOverlap`: how far below it the share of the source within twice the evidence
+/// distance ([`Evidence::fitness_loose`]) may fall before the answer falls short of it. Right
+/// answers of scans onto their complete models keep 0.92 or more of the scan there (noise up to
+/// 0.3 mm on a 35-100 mm part, a print 3% small, the table left out; `BENCHMARK.md`, "A scan
+/// onto its model: `sourceOverlap`").
+pub(crate) const OVERLAP_SLACK: f64 = 0.15;
+
+/// With `sourceOverlap` (`source_overlap`): the share of the source near the target under the
+/// answer whose evidence is `e`, when it falls short of the declared share by more than
+/// [`OVERLAP_SLACK`]; `None` when it does not, or when no share was declared.
+pub(crate) fn short_of_overlap(e: &Evidence, source_overlap: Option<f64>) -> Option<f64> {
+    source_overlap.filter(|share| e.fitness_loose < share - OVERLAP_SLACK).map(|_| e.fitness_loose)
+}
+
+/// `confidence` held at [`UNREFINED_CONFIDENCE`] when the answer whose evidence is `e` falls short
+/// of `sourceOverlap` ([`short_of_overlap`]): what the search goes by, so that it goes on.
+pub(crate) fn within_overlap(confidence: f64, e: &Evidence, source_overlap: Option<f64>) -> f64 {
+    match short_of_overlap(e, source_overlap) {
+        Some(_) => confidence.min(UNREFINED_CONFIDENCE),
+        None => confidence,
+    }
+}
+
 /// With `up`: a pose tilted off it that fits clearly better than the upright answer.
 pub(crate) struct Tilted {
     /// How far it tilts the source's up off the target's, degrees.
@@ -43,12 +67,14 @@ pub(crate) struct Tilted {
 /// given where the answer was chosen), when the source is smaller than
 /// [`SMALL_SOURCE_DISTANCES`] evidence distances, when the clouds were rounded to steps of more
 /// than [`ROUNDING_DISTANCES`] evidence distances, or when a `tilted` pose fits clearly better
-/// than the upright answer.
+/// than the upright answer, or when `short` (the share of the source near the target, when it
+/// falls short of the declared `sourceOverlap`, the second: [`short_of_overlap`]).
 pub(crate) fn cap(
     p: &Prepared,
     confidence: f64,
     refined_any: bool,
     tilted: Option<Tilted>,
+    short: Option<(f64, f64)>,
     fitness: f64,
     warnings: &mut Vec<String>,
 ) -> f64 {
@@ -87,6 +113,18 @@ pub(crate) fn cap(
              against {:.3}): if the clouds were not both captured level within {UP_TOLERANCE_DEG} degrees of `up`, \
              leave `up` out",
             t.tilt_deg, t.fitness, fitness
+        ));
+        capped = true;
+    }
+    // with `sourceOverlap`: less of the source lies on the target than the caller knows does
+    if let Some((share, declared)) = short {
+        warnings.push(format!(
+            "only {:.0}% of the source lies within {} of the target under the answer, where sourceOverlap says {:.0}%: \
+             the wrong model, a mirror-image export (one axis flipped), a scale or unit error, points the target \
+             lacks (a table or clutter left in the source), or a pose the search did not find",
+            100.0 * share,
+            num(2.0 * p.d_evidence * s),
+            100.0 * declared
         ));
         capped = true;
     }

@@ -59,6 +59,15 @@ pub(crate) fn resolve(options: &Options, model: &Model) -> Result<Resolved> {
             )));
         }
     }
+    if let Some(share) = options.source_overlap {
+        if !(share > 0.0 && share <= 1.0) {
+            return Err(Error::InvalidOption(format!(
+                "sourceOverlap = {} must be a number in (0, 1]: the share of the source that lies on the target once aligned \
+                 (1 for a scan onto a complete model of it)",
+                crate::error::num(share)
+            )));
+        }
+    }
     Ok(Resolved { n_net })
 }
 

@@ -127,7 +127,8 @@ pub(crate) fn search(
         } else {
             settle(c, &judge, |t| refine_one(c.start, t, refined), &improves)
         };
-        let confidence = confidence::confidence(&probed.evidence);
+        let confidence =
+            caps::within_overlap(confidence::confidence(&probed.evidence), &probed.evidence, options.source_overlap);
         ((c, probed, confidence), extra)
     };
     // the answer so far, judged; and a better one that waits for the global stage unjudged
@@ -345,7 +346,8 @@ pub(crate) fn search(
     let tilted = tilted
         .filter(|t| refined_any && refine::clearly_better(t, &candidate))
         .map(|t| caps::Tilted { tilt_deg: tilt_deg(&t.T_target_source), fitness: t.fitness });
-    let confidence = caps::cap(p, confidence, refined_any, tilted, candidate.fitness, warnings);
+    let short = caps::short_of_overlap(&evidence, options.source_overlap).zip(options.source_overlap);
+    let confidence = caps::cap(p, confidence, refined_any, tilted, short, candidate.fitness, warnings);
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
     // probes turned it over): the caller asked to refine that guess, so the result says how far
     // it moved

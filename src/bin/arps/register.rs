@@ -74,6 +74,11 @@ pub struct RegisterArgs {
     /// level: the answer then only turns the source about it (`Options::up`).
     #[arg(long, value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
     up: Option<Vec<f64>>,
+    /// The share of the source that lies on the target once aligned, when known (1 for a scan
+    /// onto a complete model of it): an answer that covers clearly less is not taken as sure
+    /// (`Options::source_overlap`).
+    #[arg(long, value_name = "SHARE")]
+    source_overlap: Option<f64>,
     /// An initial guess of the transform (`Options::initial_transform`): 16 numbers, comma-separated,
     /// the 4x4 row by row (r00,r01,r02,tx,r10,...,0,0,0,1), rigid to 1e-3; with `--starts initial`
     /// ICP starts from it alone.
@@ -376,6 +381,7 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         starts,
         search,
         up,
+        source_overlap,
         initial_transform,
         drop_non_finite,
         keep_outliers,
@@ -448,6 +454,7 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         outliers: if keep_outliers { Outliers::Keep } else { Outliers::Drop },
         support_plane: if keep_support { Support::Keep } else { Support::Drop },
         up,
+        source_overlap,
         starts: starts.unwrap_or_else(|| Options::default().starts),
         search: match search {
             SearchArg::Adaptive => arps::Search::Adaptive,
