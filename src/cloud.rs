@@ -211,15 +211,16 @@ impl PointCloud {
     /// reported) is `bad`: that point, fewer than `min_points` points, or zero extent is an error.
     fn check(&self, what: &str, min_points: usize, bad: Option<usize>) -> Result<()> {
         if let Some(i) = bad {
-            let p = self.points[i];
+            // in the caller's frame (the offsets from the origin are internal)
+            let (p, given) = (self.points[i], self.point_f64(i));
             return Err(Error::InvalidCloud(if p.iter().all(|v| v.is_finite()) {
                 format!(
-                    "{what} point {i} has a coordinate beyond 1e18 from the cloud's origin ({p:?}), where distances \
+                    "{what} point {i} has a coordinate beyond 1e18 from the cloud's origin ({given:?}), where distances \
                      overflow f32 (a sensor's f32::MAX for \"no return\"?): drop such points with `nonFinite: \"drop\"`"
                 )
             } else {
                 format!(
-                    "{what} point {i} has a non-finite coordinate {p:?} (NaN, infinite, or too large for f32's range, \
+                    "{what} point {i} has a non-finite coordinate {given:?} (NaN, infinite, or too large for f32's range, \
                      3.4e38; drop such points with `nonFinite: \"drop\"`)"
                 )
             }));

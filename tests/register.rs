@@ -153,6 +153,18 @@ fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
             },
             "initialTransform",
         ),
+        // a rigid motion given transposed (the other order of its 16 numbers): the message says so
+        (
+            good.clone(),
+            good.clone(),
+            Options {
+                initial_transform: Some(arps::transform::to_rows(
+                    &motion([10.0, 20.0, 30.0], [0.5, -1.0, 2.0]).transpose(),
+                )),
+                ..Options::default()
+            },
+            "its transpose is rigid",
+        ),
     ];
     let expected = reg.register(&good, &good, &Options::default()).unwrap();
     for (s, t, o, hint) in cases {
@@ -162,8 +174,22 @@ fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
         let again = reg.register(&good, &good, &Options::default()).unwrap();
         assert_eq!(again.T_target_source, expected.T_target_source);
     }
-    // dropping non-finite points is an explicit choice
-    assert!(reg.register(&nan, &good, &Options { non_finite: NonFinite::Drop, ..Options::default() }).is_ok());
+    // dropping non-finite points is an explicit choice, and the answer counts them
+    let r = reg.register(&nan, &good, &Options { non_finite: NonFinite::Drop, ..Options::default() }).unwrap();
+    assert!(
+        r.warnings.iter().any(|w| w.contains("left out 1 of the source's 600 points: a non-finite")),
+        "{:?}",
+        r.warnings
+    );
+    // a bad point is named by its coordinates in the caller's frame, not by an offset
+    let far = PointCloud::from_points_f64(
+        &(0..600)
+            .map(|i| good.point_f64(i))
+            .map(|p| [p[0] + 5e5, p[1] + 4e6, if p[0] > 0.9 { f64::NAN } else { p[2] }])
+            .collect::<Vec<_>>(),
+    );
+    let e = reg.register(&far, &good, &Options::default()).unwrap_err().to_string();
+    assert!(e.contains("non-finite coordinate [500") && e.contains(", 400"), "{e}");
 }
 
 #[test]

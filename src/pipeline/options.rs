@@ -81,8 +81,18 @@ pub(crate) fn initial_transform(options: &Options) -> Result<Matrix4<f64>> {
             if m.iter().any(|v| !v.is_finite()) {
                 return Err(Error::InvalidOption("initialTransform has a non-finite entry".into()));
             }
-            transform::check_near_rigid(&m)
-                .map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))?;
+            transform::check_near_rigid(&m).map_err(|e| {
+                // a rigid matrix given in the other order (a row-major list read column-major, or
+                // the JSON's column-major list given to the CLI row by row)
+                let transposed = transform::check_near_rigid(&m.transpose()).is_ok();
+                let hint = if transposed {
+                    ": its transpose is rigid, so its 16 numbers may be in the other order (JS and JSON: column-major, \
+                     as three.js; the CLI's --initial-transform: row by row)"
+                } else {
+                    ""
+                };
+                Error::InvalidOption(format!("initialTransform is not rigid: {e}{hint}"))
+            })?;
             m
         }
         None => Matrix4::identity(),

@@ -188,8 +188,16 @@ pub(crate) fn prepare(
 /// its units).
 /// `what` names the cloud in messages.
 fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<(PointCloud, Vec<String>, f64)> {
+    let given = cloud.len();
     let mut cloud = cloud.into_owned().into_validated(what, MIN_POINTS, options.non_finite)?;
     let mut warnings = Vec::new();
+    if cloud.len() < given {
+        warnings.push(format!(
+            "left out {} of the {what}'s {given} points: a non-finite coordinate (NaN, infinite) or one beyond 1e18 \
+             (`nonFinite: \"drop\"`)",
+            given - cloud.len()
+        ));
+    }
     // the two tests' sample, shared while the cloud is unchanged
     let mut spacing = None;
     if options.outliers == Outliers::Drop {
