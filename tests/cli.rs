@@ -118,6 +118,9 @@ fn register_reads_a_mesh_as_its_surface() {
     let vertices = fit(&[]);
     assert!(arps::transform::rotation_error_deg(&surface.T_target_source, &gt) < 1.0, "{}", surface.T_target_source);
     assert!(surface.fitness > 0.8 && vertices.fitness < 0.2, "{} against {}", surface.fitness, vertices.fitness);
+    // read as its vertices, the model is named in a warning that points to --surface-points
+    let said = |r: &arps::Registration| r.warnings.iter().any(|w| w.contains("is a mesh, read as its vertices"));
+    assert!(said(&vertices) && !said(&surface), "{:?} / {:?}", vertices.warnings, surface.warnings);
     let bad = arps(&["register", scan_path.to_str().unwrap(), model, "--surface-points", "3"]);
     assert!(
         !bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("surfacePoints = 3 is fewer than 16")

@@ -159,6 +159,35 @@ fn read_cloud(path: &Path, options: &io::ReadOptions) -> Result<arps::PointCloud
         .map_err(|e| format!("{}: {}", path.display(), e.to_string().replace("the scan option", "--target-scan")))
 }
 
+/// A warning when the file at `path` is a mesh (STL, OBJ or OFF by its name, a PLY whose header
+/// declares faces) and so was read as its vertices: a CAD model's vertices sit on its edges and
+/// corners, not over its surface, which `--surface-points N` reads.
+fn read_as_vertices(path: &Path) -> Option<String> {
+    let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+    let mesh = match ext.as_str() {
+        "stl" | "obj" | "off" => true,
+        // a PLY's header, within its first 64 KiB: `element face N` with N > 0
+        "ply" => {
+            let mut head = vec![0u8; 1 << 16];
+            let n = std::io::Read::read(&mut std::fs::File::open(path).ok()?, &mut head).ok()?;
+            let text = String::from_utf8_lossy(&head[..n]);
+            let header = text.split("end_header").next().unwrap_or("");
+            header.lines().any(|l| {
+                let w: Vec<&str> = l.split_whitespace().collect();
+                w.len() == 3 && w[0] == "element" && w[1] == "face" && w[2].parse::<u64>().is_ok_and(|k| k > 0)
+            })
+        }
+        _ => false,
+    };
+    mesh.then(|| {
+        format!(
+            "{} is a mesh, read as its vertices, which sit on its edges and corners rather than over its surface: \
+             --surface-points N reads N points over its surface (what a CAD model should be read as)",
+            path.display()
+        )
+    })
+}
+
 /// A source file read once: its cloud (as [`read_cloud`] reads it), and its bytes when `keep`
 /// (what `--aligned` moves as it is).
 fn read_source(
@@ -463,6 +492,9 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
     };
     // the target is read once; the registrar keeps it prepared from one source to the next
     let tgt = read_cloud(&target, &reading_target)?;
+    // a mesh read as its vertices (no --surface-points): said with each answer
+    let vertices_warning = |path: &Path| (surface_points.is_none()).then(|| read_as_vertices(path)).flatten();
+    let target_vertices = vertices_warning(&target);
     let several = sources.len() > 1;
     let mut failed = 0usize;
     for (source, output) in sources.iter().zip(&outputs) {
@@ -484,7 +516,8 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         });
         t0 = std::time::Instant::now();
         match outcome {
-            Ok((r, centre)) => {
+            Ok((mut r, centre)) => {
+                r.warnings.extend(vertices_warning(source).into_iter().chain(target_vertices.clone()));
                 print_registration(&r, time_ms, json, named, output.as_ref().map(|p| p.display().to_string()), centre)?
             }
             Err(e) if !several => return Err(in_flags(&e)),
