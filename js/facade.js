@@ -658,12 +658,15 @@ export function makeApi(glue, isReady, env = {}) {
       if (shifted && o?.initialTransform != null) {
         o.initialTransform = Array.from(shift(toColumnMajor(o.initialTransform), os.map((x) => -x), ot.map((x) => -x)));
       }
-      // What the callback throws reaches the engine as a plain Error (its message read here).
+      // What the callback throws reaches the engine as a plain Error (its message read here); the
+      // call's error then carries the thrown value itself as its `cause`, as the worker client's does.
+      let thrown = null;
       const progress = onProgress
         ? (stage) => {
             try {
               onProgress(stage);
             } catch (e) {
+              thrown ??= { value: e };
               throw new Error(e instanceof Error ? readMessage(e) : messageOf(e));
             }
           }
@@ -672,6 +675,9 @@ export function makeApi(glue, isReady, env = {}) {
       let r;
       try {
         r = guarded("register", () => inner.register(s.points, t.points, o, progress));
+      } catch (e) {
+        if (thrown !== null && e instanceof Error) e.cause = thrown.value;
+        throw e;
       } finally {
         this.#busy = false;
       }

@@ -316,7 +316,8 @@ impl Registrar {
     /// is a plain `RegistrationResult`, the same object as `arps register --json` prints.
     /// `onProgress`, if given, is called with each `RegistrationStage` (`"preparing"`,
     /// `"network"`, `"refining"`) as it starts (stages that do not run are skipped); if it throws,
-    /// the registration still completes and then the call throws that error.
+    /// the registration still completes and then the call throws an `Error` ("onProgress threw:
+    /// ...") whose `cause` is the value thrown (the package's facade sets it).
     #[wasm_bindgen(unchecked_return_type = "RegistrationResult")]
     pub fn register(
         &mut self,

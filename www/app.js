@@ -326,6 +326,8 @@ function readOptions() {
   const options = { icp: $("icp").value, search: $("search").value };
   const up = $("up").value;
   if (up !== "") options.up = up.split(",").map(Number);
+  const share = $("source-overlap").value;
+  if (share !== "") options.sourceOverlap = Number(share);
   const dist = $("max-distance").value.trim();
   if (dist !== "") {
     const d = Number(dist);

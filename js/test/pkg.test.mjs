@@ -48,6 +48,10 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     throws(() => r.register(s, t, { search: "thorough" }), /invalid options: .*thorough.*adaptive.*exhaustive/);
     throws(() => arps.Registrar.fromBytes(new Uint8Array([1, 2, 3])), /^weights: /);
     throws(() => arps.parsePointCloud(new Uint8Array([0, 1, 2, 3]), "x.unknownext"), /./);
+    throws(() => r.register(s, t, { sourceOverlap: 0 }), /sourceOverlap = 0 must be a number in \(0, 1\]/);
+    // what onProgress throws is the error's cause, itself (an AbortError stays one)
+    const stop = new DOMException("stop", "AbortError");
+    assert.throws(() => r.register(s, t, {}, () => { throw stop; }), (e) => /^onProgress threw: stop/.test(e.message) && e.cause === stop);
     r.free();
   });
 

@@ -315,16 +315,21 @@ test("worker: under Node, a script that never calls terminate() exits once its a
     const r = await arps.register(pts, pts);
     console.log("done " + r.T_target_source.length);
   `;
-  const { mkdtempSync, writeFileSync } = await import("node:fs");
+  const { mkdtempSync, rmSync, writeFileSync } = await import("node:fs");
   const { tmpdir } = await import("node:os");
-  const file = path.join(mkdtempSync(path.join(tmpdir(), "arps-exit-")), "never-terminates.mjs");
+  const dir = mkdtempSync(path.join(tmpdir(), "arps-exit-"));
+  const file = path.join(dir, "never-terminates.mjs");
   writeFileSync(file, script);
-  const { stdout } = await new Promise((resolve, reject) => {
-    execFile(process.execPath, [file], { timeout: 60_000 }, (e, stdout, stderr) =>
-      e ? reject(new Error(`${e.message} (killed: ${e.killed}) ${stderr}`)) : resolve({ stdout }),
-    );
-  });
-  assert.match(stdout, /done 16/);
+  try {
+    const { stdout } = await new Promise((resolve, reject) => {
+      execFile(process.execPath, [file], { timeout: 60_000 }, (e, stdout, stderr) =>
+        e ? reject(new Error(`${e.message} (killed: ${e.killed}) ${stderr}`)) : resolve({ stdout }),
+      );
+    });
+    assert.match(stdout, /done 16/);
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
 });
 
 test("worker: options inherited from a prototype, or a Map, are refused, as by the engine's own API", async () => {

@@ -540,6 +540,17 @@ test("a scan in metres onto a target in millimetres: the units said, it aligns i
   assert.ok(e.rotationDeg < 5, `rotation error ${e.rotationDeg} deg`);
   assert.ok(e.translation < 250, `translation error ${e.translation} mm`);
   assert.ok(!result.warnings.some((w) => /differ in size/.test(w)), JSON.stringify(result.warnings));
+  // "Source on target: all" passes sourceOverlap 1: the street scans are two partial views (84% of
+  // the source lies near the target), so the answer is flagged, its share said.
+  await page.selectOption("#source-overlap", "1");
+  try {
+    ({ result, error } = await alignAndWait());
+    assert.equal(error, "", `unexpected #error: ${error}`);
+    assert.ok(result.warnings.some((w) => /of the source lies within .* sourceOverlap says 100%/.test(w)), JSON.stringify(result.warnings));
+    assert.ok(result.confidence <= 0.25, String(result.confidence));
+  } finally {
+    await page.selectOption("#source-overlap", "");
+  }
   // Back to the same unit: the source as read again.
   await page.selectOption("#target-unit", "1");
   await page.waitForFunction(() => !/scaled/.test(document.getElementById("source-info").textContent), null, { timeout: TIMEOUT });
