@@ -113,7 +113,7 @@ pub fn f32_rounding(what: &str, cloud: &crate::PointCloud, warnings: &mut Vec<St
 }
 
 /// Points of a cloud [`stored_f32_step`] looks at, evenly spread.
-const STORED_F32_SAMPLE: usize = 256;
+pub const STORED_F32_SAMPLE: usize = 256;
 
 /// For a cloud stored as `f32` offsets from an `f64` origin: the step of the `f32` grid its points
 /// sit on in the caller's frame, and how far from zero its farthest coordinate lies. A file that
