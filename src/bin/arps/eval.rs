@@ -106,6 +106,11 @@ pub struct EvalArgs {
     /// method but the ground truth's refinement.
     #[arg(long, value_delimiter = ',', num_args = 1, allow_hyphen_values = true)]
     up: Option<Vec<f64>>,
+    /// The share of each pair's source that lies on its target once aligned (`Options::source_overlap`;
+    /// 1 for pairs whose source is a part of the target, `make-pairs --target-keep 1`), for every
+    /// method but the ground truth's refinement.
+    #[arg(long, value_name = "SHARE")]
+    source_overlap: Option<f64>,
     /// Keep the points that lie far out from the rest of their cloud (`Options::outliers` set to
     /// keep), for every method and the ground truth's refinement; by default they are left out.
     #[arg(long)]
@@ -363,7 +368,13 @@ pub fn run(a: EvalArgs) -> Result<(), String> {
             alternatives: Vec::new(),
         };
         for &m in &methods {
-            let options = Options { up, outliers, support_plane, ..m.options(&source, &target, &starts) };
+            let options = Options {
+                up,
+                outliers,
+                support_plane,
+                source_overlap: a.source_overlap,
+                ..m.options(&source, &target, &starts)
+            };
             let reg = if m == Method::UntrainedIcp { &mut untrained } else { &mut trained };
             // each method pays for preparing the target, as a call on its own would
             reg.forget_target();

@@ -503,7 +503,13 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
             None => (src, bytes),
         });
         let outcome = read.and_then(|(src, bytes)| {
-            let r = registrar.register(&src, &tgt, &options).map_err(|e| e.to_string())?;
+            // a cloud the engine refuses is named by its file
+            let r = registrar.register(&src, &tgt, &options).map_err(|e| match &e {
+                arps::Error::InvalidCloud(m) => {
+                    format!("{}: {e}", if m.starts_with("target") { target.display() } else { source.display() })
+                }
+                _ => e.to_string(),
+            })?;
             Ok((src, bytes, r))
         });
         let time_ms = t0.elapsed().as_secs_f64() * 1e3;
