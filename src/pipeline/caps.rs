@@ -3,8 +3,10 @@
 //! The confidence ([`crate::confidence::confidence`]) is calibrated on how refined answers fit.
 //! Some answers fit well for reasons that say nothing about their pose: the answer was never
 //! refined, the source is too small for the distance the fit is judged at, its coordinates were
-//! rounded to a grid as coarse as that distance, or a tilted pose fits clearly better than the
-//! upright one `up` asked for. [`cap`] holds the confidence of such an answer at
+//! rounded to a grid as coarse as that distance, a tilted pose fits clearly better than the
+//! upright one `up` asked for, or clearly less of the source lies on the target than the caller
+//! said does (`sourceOverlap`, [`short_of_overlap`]: also what the search goes by,
+//! [`within_overlap`]). [`cap`] holds the confidence of such an answer at
 //! [`UNREFINED_CONFIDENCE`], below the line of the low-confidence warning, and says why in a
 //! warning.
 
@@ -67,8 +69,8 @@ pub(crate) struct Tilted {
 /// given where the answer was chosen), when the source is smaller than
 /// [`SMALL_SOURCE_DISTANCES`] evidence distances, when the clouds were rounded to steps of more
 /// than [`ROUNDING_DISTANCES`] evidence distances, or when a `tilted` pose fits clearly better
-/// than the upright answer, or when `short` (the share of the source near the target, when it
-/// falls short of the declared `sourceOverlap`, the second: [`short_of_overlap`]).
+/// than the upright answer, or when `short` is set: the share of the source near the target and
+/// the declared `sourceOverlap` it falls short of ([`short_of_overlap`]).
 pub(crate) fn cap(
     p: &Prepared,
     confidence: f64,

@@ -35,7 +35,9 @@
 //! parts, has the rotation right and the translation not) is refined like one more start, and
 //! replaces the answer when it fits clearly better. With no start refined at all, the network's
 //! estimate (the initial transform with the network off), unrefined, with a warning and its
-//! confidence at most [`caps::UNREFINED_CONFIDENCE`].
+//! confidence at most [`caps::UNREFINED_CONFIDENCE`]. With `sourceOverlap`, an answer under which
+//! clearly less of the source lies on the target than that share counts as unsure at every stage
+//! ([`caps::within_overlap`]), so the search goes on past it.
 
 use super::caps;
 use super::prepare::Prepared;
