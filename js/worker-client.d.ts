@@ -79,8 +79,9 @@ export interface WorkerRequestOptions {
    */
   transfer?: boolean;
   /**
-   * Cancels the request: when it aborts, the promise rejects at once with a `DOMException`
-   * named `"AbortError"`. The engine cannot be interrupted mid-call, so the worker is stopped
+   * Cancels the request: when it aborts, the promise rejects at once with the signal's reason,
+   * as `fetch` does (a `DOMException` named `"AbortError"` from `abort()`, `"TimeoutError"` from
+   * `AbortSignal.timeout`, or the value given to `abort(reason)`). The engine cannot be interrupted mid-call, so the worker is stopped
    * (other requests in flight on it reject with an `Error` saying so) and the next request
    * starts a new one (paying the `"loading"` stage again).
    */

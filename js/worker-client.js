@@ -345,11 +345,14 @@ function unsendable(e) {
   return err;
 }
 
-/** The rejection of an aborted request: a `DOMException` named `AbortError`. */
+/**
+ * The rejection of an aborted request, as `fetch` rejects: the signal's reason (a `DOMException`
+ * named `AbortError` from `abort()`, `TimeoutError` from `AbortSignal.timeout`, or the value given
+ * to `abort(reason)`), else a `DOMException` named `AbortError`.
+ */
 function abortError(signal) {
   const reason = signal.reason;
-  if (reason instanceof DOMException && reason.name === "AbortError") return reason;
-  return new DOMException("arps worker: the request was aborted", "AbortError");
+  return reason !== undefined ? reason : new DOMException("arps worker: the request was aborted", "AbortError");
 }
 
 function uniqueBuffers(views) {

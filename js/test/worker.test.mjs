@@ -212,6 +212,12 @@ test("worker: abort mid-refinement rejects within 300 ms with an AbortError, the
     console.log(`abort: refining began ${(abortedAt - started).toFixed(0)} ms in; rejected ${latency.toFixed(1)} ms after abort()`);
     // An already-aborted signal rejects at once, without starting anything.
     await assert.rejects(arps.register(source(), target(), {}, { signal: AbortSignal.abort() }), { name: "AbortError" });
+    // the signal's own reason, as fetch rejects: a timeout's TimeoutError, a reason given
+    const mine = new Error("superseded by a newer frame");
+    await assert.rejects(arps.register(source(), target(), {}, { signal: AbortSignal.abort(mine) }), (e) => e === mine);
+    const timeout = AbortSignal.timeout(0);
+    await new Promise((r) => setTimeout(r, 20));
+    await assert.rejects(arps.register(source(), target(), {}, { signal: timeout }), { name: "TimeoutError" });
     // Aborted while the replacement worker is still loading the engine: rejects at once too.
     const c2 = new AbortController();
     let loadingAbortAt = 0;
