@@ -121,6 +121,13 @@ fn register_reads_a_mesh_as_its_surface() {
     // read as its vertices, the model is named in a warning that points to --surface-points
     let said = |r: &arps::Registration| r.warnings.iter().any(|w| w.contains("is a mesh, read as its vertices"));
     assert!(said(&vertices) && !said(&surface), "{:?} / {:?}", vertices.warnings, surface.warnings);
+    // a point list saved as OBJ (`v` lines, no faces) is not called a mesh
+    let obj: String = scan.points.iter().map(|p| format!("v {} {} {}\n", p[0], p[1], p[2])).collect();
+    let obj_path = dir.join("points.obj");
+    std::fs::write(&obj_path, obj).unwrap();
+    let out = arps(&["register", obj_path.to_str().unwrap(), model, "--surface-points", "20000", "--json"]);
+    let r: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(!said(&r), "{:?}", r.warnings);
     let bad = arps(&["register", scan_path.to_str().unwrap(), model, "--surface-points", "3"]);
     assert!(
         !bad.status.success() && String::from_utf8_lossy(&bad.stderr).contains("surfacePoints = 3 is fewer than 16")

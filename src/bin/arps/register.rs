@@ -159,24 +159,35 @@ fn read_cloud(path: &Path, options: &io::ReadOptions) -> Result<arps::PointCloud
         .map_err(|e| format!("{}: {}", path.display(), e.to_string().replace("the scan option", "--target-scan")))
 }
 
-/// A warning when the file at `path` is a mesh (STL, OBJ or OFF by its name, a PLY whose header
-/// declares faces) and so was read as its vertices: a CAD model's vertices sit on its edges and
-/// corners, not over its surface, which `--surface-points N` reads.
+/// A warning when the file at `path` is a mesh with faces and so was read as its vertices (an
+/// STL; an OBJ with an `f` line; an OFF or a PLY whose header counts faces): a CAD model's
+/// vertices sit on its edges and corners, not over its surface, which `--surface-points N` reads.
+/// A point list saved as OBJ, OFF or PLY gets none.
 fn read_as_vertices(path: &Path) -> Option<String> {
     let ext = path.extension()?.to_str()?.to_ascii_lowercase();
+    // a header: the file's first 64 KiB
+    let head = || -> Option<String> {
+        let mut head = vec![0u8; 1 << 16];
+        let n = std::io::Read::read(&mut std::fs::File::open(path).ok()?, &mut head).ok()?;
+        Some(String::from_utf8_lossy(&head[..n]).into_owned())
+    };
     let mesh = match ext.as_str() {
-        "stl" | "obj" | "off" => true,
-        // a PLY's header, within its first 64 KiB: `element face N` with N > 0
-        "ply" => {
-            let mut head = vec![0u8; 1 << 16];
-            let n = std::io::Read::read(&mut std::fs::File::open(path).ok()?, &mut head).ok()?;
-            let text = String::from_utf8_lossy(&head[..n]);
-            let header = text.split("end_header").next().unwrap_or("");
-            header.lines().any(|l| {
-                let w: Vec<&str> = l.split_whitespace().collect();
-                w.len() == 3 && w[0] == "element" && w[1] == "face" && w[2].parse::<u64>().is_ok_and(|k| k > 0)
-            })
-        }
+        "stl" => true,
+        // faces follow the vertices: the whole file
+        "obj" => std::fs::read(path).ok()?.split(|&b| b == b'\n').any(|l| l.trim_ascii_start().starts_with(b"f ")),
+        // `OFF`, then (past comments) `vertices faces edges`
+        "off" => head()?
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty() && !l.starts_with('#'))
+            .nth(1)
+            .and_then(|l| l.split_whitespace().nth(1)?.parse::<u64>().ok())
+            .is_some_and(|faces| faces > 0),
+        // `element face N` with N > 0
+        "ply" => head()?.split("end_header").next().unwrap_or("").lines().any(|l| {
+            let w: Vec<&str> = l.split_whitespace().collect();
+            w.len() == 3 && w[0] == "element" && w[1] == "face" && w[2].parse::<u64>().is_ok_and(|k| k > 0)
+        }),
         _ => false,
     };
     mesh.then(|| {
