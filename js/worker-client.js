@@ -200,7 +200,7 @@ export async function createWorkerRegistrar(options = {}) {
   };
 
   const request = (message, { onProgress, transfer = [], signal } = {}) => {
-    if (signal?.aborted) return Promise.reject(abortError(signal));
+    if (signal?.aborted) return Promise.reject(abortReason(signal));
     // A loaded worker gets the request now, so its inputs are copied (or transferred) as the call
     // is made, as postMessage does: a caller may refill its arrays once the call returns. While
     // a worker loads (the first, or a replacement to start), the inputs are copied now and the
@@ -223,7 +223,7 @@ export async function createWorkerRegistrar(options = {}) {
       const onAbort = () => {
         if (done) return;
         done = true;
-        const aborted = abortError(signal);
+        const aborted = abortReason(signal);
         reject(aborted);
         // Still loading: nothing was sent, the new worker stays for the next request. Sent: the
         // engine cannot be interrupted mid-call, so the whole worker stops; other requests it
@@ -350,7 +350,7 @@ function unsendable(e) {
  * named `AbortError` from `abort()`, `TimeoutError` from `AbortSignal.timeout`, or the value given
  * to `abort(reason)`), else a `DOMException` named `AbortError`.
  */
-function abortError(signal) {
+function abortReason(signal) {
   const reason = signal.reason;
   return reason !== undefined ? reason : new DOMException("arps worker: the request was aborted", "AbortError");
 }

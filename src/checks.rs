@@ -83,7 +83,7 @@ pub fn f32_rounding(what: &str, cloud: &crate::PointCloud, warnings: &mut Vec<St
     let (lo, hi) = cloud.bounds();
     let half = crate::cloud::half_extent_of(lo, hi);
     if !cloud.origin_is_zero() {
-        let (step, far) = stored_f32_step(cloud);
+        let (step, far) = stored_step(cloud, lo, hi);
         if half > 0.0 && step > F32_ROUNDING_WARNING * half {
             warnings.push(format!(
                 "the {what}'s coordinates lie up to {} from zero for a cloud of largest half-extent {}, on the grid \
@@ -125,6 +125,11 @@ pub const STORED_F32_SAMPLE: usize = 256;
 /// step counts; the largest counts. `(0, far)` when no axis is on such a grid.
 pub fn stored_f32_step(cloud: &crate::PointCloud) -> (f64, f64) {
     let (lo, hi) = cloud.bounds();
+    stored_step(cloud, lo, hi)
+}
+
+/// [`stored_f32_step`] of a cloud whose offsets' bounds are `[lo, hi]` (taken once by the caller).
+fn stored_step(cloud: &crate::PointCloud, lo: [f32; 3], hi: [f32; 3]) -> (f64, f64) {
     let n = cloud.points.len();
     let mut far = 0.0f64;
     let mut step = 0.0f64;

@@ -41,10 +41,10 @@ pub(crate) const ROUNDING_DISTANCES: f64 = 1.0;
 pub(crate) const OVERLAP_SLACK: f64 = 0.15;
 
 /// With `sourceOverlap` (`source_overlap`): the share of the source near the target under the
-/// answer whose evidence is `e`, when it falls short of the declared share by more than
-/// [`OVERLAP_SLACK`]; `None` when it does not, or when no share was declared.
-pub(crate) fn short_of_overlap(e: &Evidence, source_overlap: Option<f64>) -> Option<f64> {
-    source_overlap.filter(|share| e.fitness_loose < share - OVERLAP_SLACK).map(|_| e.fitness_loose)
+/// answer whose evidence is `e`, and the declared share, when the first falls short of the second
+/// by more than [`OVERLAP_SLACK`]; `None` when it does not, or when no share was declared.
+pub(crate) fn short_of_overlap(e: &Evidence, source_overlap: Option<f64>) -> Option<(f64, f64)> {
+    source_overlap.filter(|share| e.fitness_loose < share - OVERLAP_SLACK).map(|share| (e.fitness_loose, share))
 }
 
 /// `confidence` held at [`UNREFINED_CONFIDENCE`] when the answer whose evidence is `e` falls short
@@ -69,8 +69,8 @@ pub(crate) struct Tilted {
 /// given where the answer was chosen), when the source is smaller than
 /// [`SMALL_SOURCE_DISTANCES`] evidence distances, when the clouds were rounded to steps of more
 /// than [`ROUNDING_DISTANCES`] evidence distances, or when a `tilted` pose fits clearly better
-/// than the upright answer, or when `short` is set: the share of the source near the target and
-/// the declared `sourceOverlap` it falls short of ([`short_of_overlap`]).
+/// than the upright answer, or when `short` is set ([`short_of_overlap`]: the share of the source
+/// near the target and the declared `sourceOverlap` it falls short of).
 pub(crate) fn cap(
     p: &Prepared,
     confidence: f64,

@@ -348,7 +348,7 @@ pub(crate) fn search(
     let tilted = tilted
         .filter(|t| refined_any && refine::clearly_better(t, &candidate))
         .map(|t| caps::Tilted { tilt_deg: tilt_deg(&t.T_target_source), fitness: t.fitness });
-    let short = caps::short_of_overlap(&evidence, options.source_overlap).zip(options.source_overlap);
+    let short = caps::short_of_overlap(&evidence, options.source_overlap);
     let confidence = caps::cap(p, confidence, refined_any, tilted, short, candidate.fitness, warnings);
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
     // probes turned it over): the caller asked to refine that guess, so the result says how far
