@@ -207,7 +207,7 @@ fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
     std::fs::write(&nan, rows).unwrap();
     let nan = nan.to_str().unwrap();
     let (src, tgt) = ("fixtures/wasm/source.ply", "fixtures/wasm/target.ply");
-    let cases: [(&[&str], &str); 10] = [
+    let cases: [(&[&str], &str); 11] = [
         // the engine's options named by this command's flags
         (&["register", nan, tgt], "; drop such points with --drop-non-finite)"),
         (&["register", src, tgt, "--initial-transform", "1,0,0"], "--initial-transform: expected 16 numbers"),
@@ -223,6 +223,7 @@ fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
         (&["register", "fixtures/wasm/source.ply", "fixtures/wasm/target.ply", "--weights", broken], "weights"),
         (&["info", "fixtures/wasm/source.ply"], "weights"),
         (&["register", src, tgt, "--voxel-size", "-1"], "--voxel-size = -1"),
+        (&["register", src, tgt, "--source-overlap", "2"], "--source-overlap = 2 must be a number in (0, 1]"),
     ];
     for (args, hint) in cases {
         let out = arps(args);

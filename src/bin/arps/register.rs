@@ -308,6 +308,7 @@ fn in_flags(message: &str) -> String {
         .replace("icpMaxIterations", "--icp-max-iterations")
         .replace("networkPoints", "--network-points")
         .replace("initialTransform", "--initial-transform")
+        .replace("sourceOverlap", "--source-overlap")
 }
 
 /// True when `path` names a file of `source`'s own format that `io::transform_file` moves as it
