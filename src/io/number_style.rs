@@ -131,6 +131,17 @@ impl NumberStyle {
         Self { decimals: self.decimals.max(decimals), ..self }
     }
 
+    /// This style with a decimal point in every value (in exponent form, in the mantissa) and no
+    /// digits trimmed: `48,-50` could be read as a number with a decimal comma, `48.0,-50.0` not.
+    pub(super) fn with_point(self) -> Self {
+        if self.exponent {
+            let decimals = self.decimals.max(self.significant.saturating_sub(1)).max(1);
+            Self { plain: false, decimals, ..self }
+        } else {
+            Self { decimals: self.decimals.max(1), varied: false, ..self }
+        }
+    }
+
     /// Appends `v` in this style: with its decimals; in exponent form (`1.018757e+02`, the
     /// exponent as the file wrote its exponents) when the file used exponents only; as C's `%g`
     /// writes it with the file's most significant digits when it used both. A value that rounds
@@ -283,10 +294,28 @@ impl<'a> Rewrite<'a> {
 
     /// `line` (a sub-slice of the file, after the lines rewritten before) with `edits` spliced in.
     pub(super) fn line(&mut self, line: &str, edits: &mut [(Range<usize>, f64, NumberStyle)]) {
+        self.line_if(line, edits, &|_| true);
+    }
+
+    /// As [`Rewrite::line`] when `accept` takes the rewritten line; false (nothing written)
+    /// otherwise.
+    pub(super) fn line_if(
+        &mut self,
+        line: &str,
+        edits: &mut [(Range<usize>, f64, NumberStyle)],
+        accept: &dyn Fn(&[u8]) -> bool,
+    ) -> bool {
         let start = line.as_ptr() as usize - self.bytes.as_ptr() as usize;
+        let before = self.out.len();
         self.out.extend_from_slice(&self.bytes[self.copied..start]);
+        let at = self.out.len();
         splice(line.as_bytes(), edits, &mut self.out);
+        if !accept(&self.out[at..]) {
+            self.out.truncate(before);
+            return false;
+        }
         self.copied = start + line.len();
+        true
     }
 
     /// `token` (a sub-slice of the file, after what was rewritten before) replaced by `v` in

@@ -10,7 +10,7 @@
 //! normals) are ignored. Blank lines and `#` / `//` comments are skipped anywhere. After data has
 //! started, a row without numbers in its coordinate columns is an error naming its line. A row
 //! whose values, separated by whitespace or semicolons, are numbers written with decimal commas or
-//! thousands separators (`1,5 2,5 3,5`, `1,000.5`) is an error too: the comma separator would
+//! thousands separators (`1,5 2,5 3,5`, `1,000.5 2,000.5 3,000.5`) is an error too: the comma separator would
 //! silently split them into other values.
 
 use super::util::{parse_f64, show, split_fields, utf8_line, Lines};
@@ -126,20 +126,25 @@ pub(crate) fn scan<'a>(bytes: &'a [u8], visit: &mut dyn FnMut(&Row<'a, '_>) -> R
     Ok(())
 }
 
-/// True when `line`, split at whitespace and semicolons, holds a number written with a decimal
-/// comma (`1,5`, `-0,25e3`) or thousands separators (`1,000`, `12,345.5`), and no other token with
-/// a comma: numbers the comma separator would silently split into other values (`1,5 2,5 3,5`,
-/// `1,5;2,5;3,5`). Comma-separated values (`1,2,3`, `1.5, 2.5, 3.5`, `1,2,3,2024-01-01 12:00`,
-/// `1 2 3 255,0,0`) are not.
-fn decimal_commas(line: &str) -> bool {
-    let mut any = false;
-    for t in line.split(|c: char| c.is_ascii_whitespace() || c == ';').filter(|t| t.contains(',')) {
-        if !(comma_decimal(t) || thousands(t)) {
-            return false;
+/// True when `line`, split at whitespace and semicolons into at least two numbers, holds a number
+/// written with a decimal comma (`1,5`, `-0,25e3`) or thousands separators (`1,000`, `12,345.5`),
+/// and no other token with a comma: numbers the comma separator would silently split into other
+/// values (`1,5 2,5 3,5`, `1,5;2,5;3,5`). Comma-separated values (`1,2,3`, `12,345,678`,
+/// `1.5, 2.5, 3.5`, `1,2,3,2024-01-01 12:00`, `1 2 3 255,0,0`) are not.
+pub(crate) fn decimal_commas(line: &str) -> bool {
+    let (mut any, mut numbers) = (false, 0);
+    for t in line.split(|c: char| c.is_ascii_whitespace() || c == ';').filter(|t| !t.is_empty()) {
+        if t.contains(',') {
+            if !(comma_decimal(t) || thousands(t)) {
+                return false;
+            }
+            any = true;
+            numbers += 1;
+        } else if t.parse::<f64>().is_ok() {
+            numbers += 1;
         }
-        any = true;
     }
-    any
+    any && numbers >= 2
 }
 
 /// `[+-]digits,digits[e[+-]digits]`: a number with a decimal comma.
@@ -257,6 +262,7 @@ mod tests {
             b"1 2 3\n1 000,5 2 3\n",
             b"-1,5e-3 2,5 3,5 12.03.2024\n",
             b"1,000.5 2,000.5 3,000.5\n",
+            b"1,5 2,5\n",
         ] {
             let e = read(text).unwrap_err().to_string();
             assert!(e.contains("decimal commas"), "{e}");
@@ -275,6 +281,10 @@ mod tests {
         assert_eq!(read(b"1 2 3 255,0,0\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
         assert_eq!(read(b"1\t2\t3\tOak, big\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
         assert_eq!(read(b"1e-3,2e-3,3e-3\n").unwrap(), vec![[1e-3, 2e-3, 3e-3]]);
+        // one token of integers in groups of three is three values, not one number with
+        // thousands separators (which would leave the row without y and z)
+        assert_eq!(read(b"12,345,678\n").unwrap(), vec![[12.0, 345.0, 678.0]]);
+        assert_eq!(read(b"-12,345,678 # a note\n").unwrap(), vec![[-12.0, 345.0, 678.0]]);
         // a header line is not data
         assert_eq!(read(b"Created 30,11 2026\n1 2 3\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
     }

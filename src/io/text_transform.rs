@@ -12,8 +12,9 @@
 
 use super::motion::Motion;
 use super::number_style::{span, Rewrite, Styles};
-use super::text::{scan, values, Row};
-use crate::Result;
+use super::text::{decimal_commas, scan, values, Row};
+use super::util::show;
+use crate::{Error, Result};
 use nalgebra::{Matrix4, Vector3};
 
 /// How far from 1 a normal's length may be (values rounded to a few decimals).
@@ -68,8 +69,47 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
                 edits.extend(columns.iter().zip(n).map(|(&c, v)| (span(row.line, row.fields[c]), v, styles.normal)));
             }
         }
-        out.line(row.line, &mut edits);
+        // A row whose rewritten values the reader would take for numbers with decimal commas
+        // (`48 -50,34` from `1.5e0 0.,75`: values joined by a comma in a whitespace-separated
+        // row) gets a decimal point in each; one still read so is refused.
+        let readable = |l: &[u8]| std::str::from_utf8(l).is_ok_and(|l| !decimal_commas(l));
+        if !out.line_if(row.line, &mut edits, &readable) {
+            edits.iter_mut().for_each(|e| e.2 = e.2.with_point());
+            if !out.line_if(row.line, &mut edits, &readable) {
+                return Err(Error::parse(
+                    "XYZ",
+                    format!("{}: its moved values would read as numbers with decimal commas", show(row.line.trim())),
+                ));
+            }
+        }
         Ok(())
     })?;
     Ok(out.finish())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::io::text::read;
+
+    #[test]
+    fn values_joined_by_a_comma_in_a_spaced_row_stay_readable() {
+        // (found by fuzzing) `0.,75` is y and z; moved, `-50,34` would read as one number with a
+        // decimal comma
+        let file = b"0.5 y.0 0.0 1.0\n1.5e0 0.,75 5e0 0.75 2.0 0.6 0.8 0.0\n";
+        let turn = nalgebra::Rotation3::from_euler_angles(0.3, -1.1, 2.0).to_homogeneous();
+        let m = Matrix4::new_translation(&Vector3::new(1.5, -2.0, 0.25)) * turn;
+        let moved = transform_text(file, &m).unwrap();
+        let (before, after) = (read(file).unwrap(), read(&moved).unwrap());
+        assert_eq!(before.len(), after.len());
+        let expected = m.transform_point(&before[0].into());
+        // (written with the file's two significant digits)
+        for k in 0..3 {
+            assert!((after[0][k] - expected[k]).abs() < 0.5, "{:?} {expected}", after[0]);
+        }
+        assert!(String::from_utf8_lossy(&moved).contains(" -5.0e1,3.4e1 "), "{}", String::from_utf8_lossy(&moved));
+        // comma-separated integers stay as they were written
+        let moved = transform_text(b"1,2,3\n100000,0,0\n", &Matrix4::new_translation(&Vector3::new(12.0, 0.0, 0.0)));
+        assert_eq!(String::from_utf8(moved.unwrap()).unwrap(), "13,2,3\n100012,0,0\n");
+    }
 }
