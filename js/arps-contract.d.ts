@@ -327,7 +327,8 @@ export type RegistrationResult = {
   /**
    * Other poses that fit about as well as `T_target_source` (at least 0.9 of its fitness when
    * found, by the confidence's probes or by the search, more than 15 degrees from it and from
-   * each other), each refined like the answer, the best fitting first; empty when the fit is
+   * each other, or as turned but placing the source more than 0.2 of the clouds' half-extent
+   * away: a facade's next window bay), each refined like the answer, the best fitting first; empty when the fit is
    * unique. On a symmetric shape the right pose is often one of these rather than the answer,
    * and nothing in the clouds tells them apart: an application can offer them to its user.
    * `evidence.alternatives` counts those of the probes or of the search, whichever found more
@@ -412,12 +413,14 @@ export type RegistrationEvidence = {
    * scan onto a model, which may fit as well on the model's other end), and 60 degrees both
    * ways along the least constrained motion of `Evidence::slide` (when that slide is at least
    * 0.5), each refined by a short ICP; 0 when every one fell back onto the answer (within 15
-   * degrees). Near 1 or above: the answer may fit and still not be unique.
+   * degrees and 0.2 of the clouds' half-extent). Near 1 or above: the answer may fit and still
+   * not be unique.
    */
   ambiguity: number,
   /**
-   * How many distinct poses (more than 15 degrees apart) fit at least 0.9 as well as the
-   * answer, among those probes (and, for a part of a target round about one of its axes, the
+   * How many distinct poses (more than 15 degrees apart, or putting the source's centre more
+   * than 0.2 of the clouds' half-extent apart: a repeating structure's next element) fit at
+   * least 0.9 as well as the answer, among those probes (and, for a part of a target round about one of its axes, the
    * answer turned a third and a quarter about it) or, when more, among the other answers the
    * search refined (its stages' best answers and the probes' better poses): with `k`
    * alternatives the answer is one of `k + 1` about equally good poses.

@@ -25,7 +25,7 @@ use crate::icp::{GiveUp, IcpKind, IcpParams, IcpTarget, Partners};
 use crate::refine::{coincide, even_sample, SCREEN_POINTS};
 use crate::register::UP_TOLERANCE_DEG;
 use crate::transform::rigid_inverse;
-use crate::transform::{apply, from_rotation_translation, rotation_error_deg};
+use crate::transform::{apply, from_rotation_translation, rotation_error_deg, translation_error};
 use nalgebra::Matrix4;
 use nalgebra::{Matrix3, Matrix6, Rotation3, SymmetricEigen, Vector3, Vector6};
 use serde::{Deserialize, Serialize};
@@ -60,10 +60,12 @@ pub struct Evidence {
     /// scan onto a model, which may fit as well on the model's other end), and 60 degrees both
     /// ways along the least constrained motion of [`Evidence::slide`] (when that slide is at least
     /// 0.5), each refined by a short ICP; 0 when every one fell back onto the answer (within 15
-    /// degrees). Near 1 or above: the answer may fit and still not be unique.
+    /// degrees and 0.2 of the clouds' half-extent). Near 1 or above: the answer may fit and still
+    /// not be unique.
     pub ambiguity: f64,
-    /// How many distinct poses (more than 15 degrees apart) fit at least 0.9 as well as the
-    /// answer, among those probes (and, for a part of a target round about one of its axes, the
+    /// How many distinct poses (more than 15 degrees apart, or putting the source's centre more
+    /// than 0.2 of the clouds' half-extent apart: a repeating structure's next element) fit at
+    /// least 0.9 as well as the answer, among those probes (and, for a part of a target round about one of its axes, the
     /// answer turned a third and a quarter about it) or, when more, among the other answers the
     /// search refined (its stages' best answers and the probes' better poses): with `k`
     /// alternatives the answer is one of `k + 1` about equally good poses.
@@ -224,9 +226,14 @@ const ROUND_SPREAD: f64 = 0.1;
 const ROUND_TURNS: [f64; 4] = [90.0, -90.0, 120.0, -120.0];
 /// Points of the probes ([`Evidence::ambiguity`], [`Evidence::slide`]).
 pub const PROBE_POINTS: usize = 512;
-/// A probe pose that ends within this many degrees of the answer has fallen back onto it; two
-/// alternatives this close are one.
+/// A probe pose that ends within this many degrees of the answer, and within
+/// [`SAME_POSE_SHIFT`] of its place, has fallen back onto it; two alternatives this close are one.
 const SAME_POSE_DEGREES: f64 = 15.0;
+/// How far apart (normalised units: the clouds' shared half-extent is 1) two poses within
+/// [`SAME_POSE_DEGREES`] put the source's centre and still are one: the evaluation's recall
+/// threshold. Farther, the same turn is another place (a facade's next window bay, the same
+/// stretch of a corridor further on).
+const SAME_POSE_SHIFT: f64 = 0.2;
 /// The turns of the ambiguity probe, degrees, about each principal axis of the moved source.
 const TURNS: [f64; 3] = [180.0, 90.0, -90.0];
 /// An alternative fitting at least this fraction of the answer's fitness counts in
@@ -384,7 +391,7 @@ fn turns(
             continue;
         }
         let alt = at;
-        if rotation_error_deg(&alt, t) <= SAME_POSE_DEGREES || !admissible.admits(&alt) {
+        if same_pose(&alt, t) || !admissible.admits(&alt) {
             continue;
         }
         let ratio = target.evaluate_warm(sample, &alt, d, &mut partners).0 / base;
@@ -401,10 +408,10 @@ fn turns(
 
 /// Raises `e.alternatives` to the number of poses among `others` (refined answers of a search,
 /// each `T_target_source` with its fitness) that fit at least 0.9 (`ALTERNATIVE_FIT`) as well as
-/// the answer `T_target_source` (fitness `fitness`, measured like theirs) and turn more than 15
-/// degrees (`SAME_POSE_DEGREES`) away from it and from each other, when that number is higher,
-/// and adds those poses to `poses` (the probes' alternatives, [`Probed::alternatives`]) where
-/// they are more than 15 degrees from every pose there; none when the answer fits nothing
+/// the answer `T_target_source` (fitness `fitness`, measured like theirs) and are other poses
+/// than it and than each other ([`same_pose`]), when that number is higher, and adds those poses
+/// to `poses` (the probes' alternatives, [`Probed::alternatives`]) where they are other poses
+/// than every pose there; none when the answer fits nothing
 /// (`fitness` 0). The probes turn the answer about a few
 /// axes; a search that refined starts from unrelated poses (global hypotheses, turned starts)
 /// finds look-alikes about other axes too. The count stays the larger of the two sets' (what the
@@ -434,14 +441,16 @@ pub fn count_search_alternatives(
     }
 }
 
-/// Whether the poses `a` and `b` (`T_target_source`) are one as alternatives count them: at most
-/// 15 degrees (`SAME_POSE_DEGREES`) apart.
+/// Whether the poses `a` and `b` (`T_target_source`, normalised units, so that the translation
+/// is where the source's centre goes) are one as alternatives count them: at most 15 degrees
+/// (`SAME_POSE_DEGREES`) apart, and putting the source's centre at most 0.2 (`SAME_POSE_SHIFT`)
+/// apart.
 pub fn same_pose(a: &Matrix4<f64>, b: &Matrix4<f64>) -> bool {
-    rotation_error_deg(a, b) <= SAME_POSE_DEGREES
+    rotation_error_deg(a, b) <= SAME_POSE_DEGREES && translation_error(a, b) <= SAME_POSE_SHIFT
 }
 
 /// Adds `pose` to the alternatives `counted` of the answer `T_target_source` when it is another
-/// pose: more than [`SAME_POSE_DEGREES`] from the answer and from each pose counted already.
+/// pose than the answer and than each pose counted already ([`same_pose`]).
 #[allow(non_snake_case)]
 fn count_if_new(counted: &mut Vec<Matrix4<f64>>, T_target_source: &Matrix4<f64>, pose: Matrix4<f64>) {
     let other = |a: &Matrix4<f64>| !same_pose(a, &pose);

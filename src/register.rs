@@ -405,7 +405,8 @@ pub struct Registration {
     pub starts_refined: usize,
     /// Other poses that fit about as well as `T_target_source` (at least 0.9 of its fitness when
     /// found, by the confidence's probes or by the search, more than 15 degrees from it and from
-    /// each other), each refined like the answer, the best fitting first; empty when the fit is
+    /// each other, or as turned but placing the source more than 0.2 of the clouds' half-extent
+    /// away: a facade's next window bay), each refined like the answer, the best fitting first; empty when the fit is
     /// unique. On a symmetric shape the right pose is often one of these rather than the answer,
     /// and nothing in the clouds tells them apart: an application can offer them to its user.
     /// `evidence.alternatives` counts those of the probes or of the search, whichever found more

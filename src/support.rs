@@ -17,7 +17,8 @@
 //! - at least [`MIN_SHARE`] of the sample lies on it and [`MIN_REST`] off it (an object stands
 //!   on it: a cloud that is nearly all one plane is a flat object or a wall);
 //! - all but [`OTHER_SIDE`] of the points off it lie on one side (the object stands on it; a
-//!   plane through the middle of a shape is part of the shape);
+//!   plane through the middle of a shape is part of the shape), strays aside ([`STRAY_REACH`]:
+//!   they neither count here nor widen the footprint below);
 //! - at least [`BEYOND`] of its points lie outside the footprint of the points off it (their
 //!   bounding rectangle in the plane), at least [`SIDE_SHARE`] of them beyond each of at least
 //!   [`SIDES`] of its sides: it reaches out beyond what stands on it, as a table does, and as a
@@ -77,6 +78,13 @@ pub const MIN_REST: f64 = 0.1;
 
 /// Most share of the points off the plane that may lie on its other side.
 pub const OTHER_SIDE: f64 = 0.03;
+
+/// A sample point whose reach ([`Spacing::reach`]) is more than this many times the sample's
+/// median is a stray (a flying pixel at a depth edge, a stray return): the points off the plane
+/// are judged without them, since an even sample keeps nearly every stray of a dense scan while
+/// thinning its surfaces (0.2% of a phone capture's points scattered along its view rays put
+/// more than [`OTHER_SIDE`] of the sample's off-plane points under its floor).
+pub const STRAY_REACH: f32 = 3.0;
 
 /// Least share of the plane's points outside the footprint of the points off it.
 pub const BEYOND: f64 = 0.3;
@@ -204,12 +212,15 @@ pub fn find_with(points: &[[f32; 3]], spacing: &Spacing) -> Option<SupportPlane>
             distinct.push(c);
         }
     }
-    distinct.iter().find_map(|c| test(points, sample, reach, *c))
+    // the sample points that stand among others (not strays), which judge the points off a plane
+    let settled: Vec<bool> = spacing.reach.iter().map(|&r| r <= STRAY_REACH * spacing.median).collect();
+    distinct.iter().find_map(|c| test(points, sample, &settled, reach, *c))
 }
 
 /// `c`'s plane refitted, if it is a support of `points` (see the module docs); `sample` is their
-/// even sample and `reach` its median reach.
-fn test(points: &[[f32; 3]], sample: &[[f32; 3]], reach: f64, c: Candidate) -> Option<SupportPlane> {
+/// even sample, `settled` whether each sample point is not a stray ([`STRAY_REACH`]), and `reach`
+/// the sample's median reach.
+fn test(points: &[[f32; 3]], sample: &[[f32; 3]], settled: &[bool], reach: f64, c: Candidate) -> Option<SupportPlane> {
     let (mut plane, band) = (c.plane, c.band);
     // refit to the points in its band, twice
     for _ in 0..2 {
@@ -218,8 +229,13 @@ fn test(points: &[[f32; 3]], sample: &[[f32; 3]], reach: f64, c: Candidate) -> O
         plane = Plane { point: c, normal: axes.column(0).into_owned() };
     }
     let on: Vec<[f32; 3]> = sample.iter().copied().filter(|p| plane.distance(p).abs() <= band).collect();
-    let off: Vec<(f64, [f32; 3])> =
-        sample.iter().map(|p| (plane.distance(p), *p)).filter(|(d, _)| d.abs() > 2.0 * band).collect();
+    let off: Vec<(f64, [f32; 3])> = sample
+        .iter()
+        .zip(settled)
+        .filter(|(_, &settled)| settled)
+        .map(|(p, _)| (plane.distance(p), *p))
+        .filter(|(d, _)| d.abs() > 2.0 * band)
+        .collect();
     let n = sample.len() as f64;
     if (on.len() as f64) < MIN_SHARE * n || (off.len() as f64) < MIN_REST * n {
         return None;
@@ -342,6 +358,27 @@ mod tests {
         let kept = PointCloud::with_origin(points, [1.0, 2.0, 3.0]).without(&plane.indices);
         assert_eq!(kept.origin, [1.0, 2.0, 3.0]);
         assert!(kept.len() > 2_800 && kept.points.iter().all(|p| p[2] > 0.0));
+    }
+
+    #[test]
+    fn strays_under_the_table_do_not_hide_it() {
+        // a depth camera's flying pixels: 1% of the points pushed 5-60 cm on along the view
+        // rays from a camera above, some of them under the table
+        let mut points = block(3_000, [0.3, 0.2, 0.25], false, 14);
+        points.extend(table(1_500, 1.0, 15));
+        let (camera, mut r) = (Vector3::new(0.0, -1.5, 1.5), stream(16));
+        let strays: Vec<[f32; 3]> = (0..45)
+            .map(|k| {
+                let p = points[k * 97 % points.len()];
+                let p = Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64);
+                let q = p + (p - camera).normalize() * (0.325 + 0.275 * r() as f64);
+                [q.x as f32, q.y as f32, q.z as f32]
+            })
+            .collect();
+        assert!(strays.iter().filter(|p| p[2] < -0.05).count() >= 10);
+        points.extend(strays);
+        let plane = find(&points).expect("a support plane");
+        assert!(plane.normal[2] > 0.99, "{:?}", plane.normal);
     }
 
     #[test]

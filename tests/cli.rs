@@ -82,7 +82,7 @@ fn register_lists_the_poses_that_fit_as_well() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("alternative 1 (fits about as well): fitness"), "{text}");
-    assert!(text.contains("fit about as well (a symmetric shape?)"), "{text}");
+    assert!(text.contains("fit about as well (a symmetric or repeating shape?)"), "{text}");
     let out = arps(&["register", src, tgt, "--json"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
@@ -613,8 +613,15 @@ fn register_scales_a_source_in_another_unit() {
     let want = r.T_target_source.transform_point(&nalgebra::Point3::new(1000.0 * p[0], 1000.0 * p[1], 1000.0 * p[2]));
     let got = written.point_f64(7);
     assert!((0..3).all(|k| (got[k] - want[k]).abs() < 1e-2), "{got:?} vs {want:?}");
+    // the JSON says the answer maps the scaled points, and by what factor
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(json["sourceScale"], 1000.0, "{json}");
+    let text = arps(&["register", src, tgt, "--source-scale", "1000"]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("multiplied by 1000 (--source-scale)"));
 
     let out = arps(&["register", src, tgt, "--json"]);
+    let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(json.get("sourceScale").is_none(), "{json}");
     let r: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
     assert!(r.warnings.iter().any(|w| w.contains("differ in size by 10")), "{:?}", r.warnings);
     for bad in ["0", "-2", "NaN", "inf"] {

@@ -76,8 +76,8 @@ fn verdict_warning(confidence: f64, evidence: &Evidence, fitness: f64, distance:
     // the evidence of another pose fitting as well, when there is some
     let others = match evidence.alternatives as usize {
         0 => String::new(),
-        1 => "; another pose fits about as well (a symmetric shape?)".to_string(),
-        k => format!("; {k} other poses fit about as well (a symmetric shape?)"),
+        1 => "; another pose fits about as well (a symmetric or repeating shape?)".to_string(),
+        k => format!("; {k} other poses fit about as well (a symmetric or repeating shape?)"),
     };
     Some(format!(
         "low confidence {confidence:.2}: the alignment may be wrong (fitness {fitness:.2} within {}, reverse overlap {:.2}{others})",

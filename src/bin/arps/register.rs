@@ -113,7 +113,9 @@ pub struct RegisterArgs {
     target_scan: Option<usize>,
     /// Multiply every source point by this factor after reading, when the source is in
     /// another unit than the target (e.g. 1000 for a scan in metres onto a model in
-    /// millimetres): the answer, and `--aligned`, are then in the target's unit.
+    /// millimetres): the answer, and `--aligned`, are then in the target's unit. The printed
+    /// `T_target_source` maps the scaled points (a point `p` of the file goes to
+    /// `T_target_source (FACTOR p)`); `--json` gives the factor as `sourceScale`.
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     source_scale: Option<f64>,
     /// Write each source, moved by its answer into the target's frame, to PATH. To a PATH of the
@@ -150,6 +152,9 @@ struct JsonOutput<'a> {
     /// Where the aligned source was written (`--aligned`).
     #[serde(skip_serializing_if = "Option::is_none")]
     aligned: Option<String>,
+    /// `--source-scale`: `T_target_source` maps the source's points multiplied by it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    source_scale: Option<f64>,
     /// Reading both files and registering, in-process (model loading excluded), milliseconds.
     wall_ms: f64,
 }
@@ -215,7 +220,7 @@ fn read_source(
 
 /// Prints one registration of `arps register`: the text report, or one JSON line (`--json`);
 /// `source` names the source when several were given, `aligned` where the moved source was
-/// written (`--aligned`).
+/// written (`--aligned`), `source_scale` the `--source-scale` its points were multiplied by.
 fn print_registration(
     r: &arps::Registration,
     time_ms: f64,
@@ -223,16 +228,25 @@ fn print_registration(
     source: Option<String>,
     aligned: Option<String>,
     far_centre: Option<[f64; 3]>,
+    source_scale: Option<f64>,
 ) -> Result<(), String> {
     if let Some(source) = source.as_ref().filter(|_| !json) {
         out!("source {source}");
     }
     if json {
-        let out = serde_json::to_string(&JsonOutput { source, result: r, aligned, wall_ms: time_ms })
+        let out = serde_json::to_string(&JsonOutput { source, result: r, aligned, source_scale, wall_ms: time_ms })
             .map_err(|e| format!("internal: {e}"))?;
         out!("{out}");
     } else {
-        out!("T_target_source (maps source points into the target frame; to 12 decimals, --json for every digit):");
+        match source_scale {
+            Some(f) => out!(
+                "T_target_source (maps the source's points multiplied by {f} (--source-scale) into the target frame; to \
+                 12 decimals, --json for every digit):"
+            ),
+            None => {
+                out!("T_target_source (maps source points into the target frame; to 12 decimals, --json for every digit):")
+            }
+        }
         for row in transform::to_rows(&r.T_target_source) {
             out!("{}", matrix_row(&row));
         }
@@ -536,7 +550,8 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         match outcome {
             Ok((mut r, centre)) => {
                 r.warnings.extend(vertices_warning(source).into_iter().chain(target_vertices.clone()));
-                print_registration(&r, time_ms, json, named, output.as_ref().map(|p| p.display().to_string()), centre)?
+                let aligned = output.as_ref().map(|p| p.display().to_string());
+                print_registration(&r, time_ms, json, named, aligned, centre, source_scale)?
             }
             Err(e) if !several => return Err(in_flags(&e)),
             Err(e) => {
