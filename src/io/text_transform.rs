@@ -72,7 +72,7 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
         // A row whose rewritten values the reader would take for numbers with decimal commas
         // (`48 -50,34` from `1.5e0 0.,75`: values joined by a comma in a whitespace-separated
         // row) gets a decimal point in each; one still read so is refused.
-        let readable = |l: &[u8]| std::str::from_utf8(l).is_ok_and(|l| !decimal_commas(l));
+        let readable = |l: &[u8]| !l.contains(&b',') || std::str::from_utf8(l).is_ok_and(|l| !decimal_commas(l));
         if !out.line_if(row.line, &mut edits, &readable) {
             edits.iter_mut().for_each(|e| e.2 = e.2.with_point());
             if !out.line_if(row.line, &mut edits, &readable) {
