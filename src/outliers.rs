@@ -75,14 +75,13 @@ pub fn far_outliers(points: &[[f32; 3]]) -> Vec<usize> {
 
 /// [`far_outliers`] with the sample of `points` already made (`spacing`, [`Spacing::of`] them).
 pub fn far_outliers_with(points: &[[f32; 3]], spacing: &Spacing) -> Vec<usize> {
-    let Spacing { sample, reach, median, .. } = spacing;
+    let Spacing { sample, median, .. } = spacing;
     let median = *median;
     if sample.len() <= NEIGHBOUR || !(median > 0.0 && median.is_finite()) {
         return Vec::new();
     }
-    let limit = ISOLATION * median;
     let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
-    for (p, _) in sample.iter().zip(reach).filter(|(_, r)| **r <= limit) {
+    for p in spacing.settled(ISOLATION) {
         grow_box(&mut lo, &mut hi, p);
     }
     let margin = MARGIN * median;

@@ -28,6 +28,13 @@ pub struct Spacing {
 }
 
 impl Spacing {
+    /// The sample points whose reach is at most `factor` times the median: those that stand
+    /// among others, not isolated strays.
+    pub fn settled(&self, factor: f32) -> impl Iterator<Item = &[f32; 3]> + '_ {
+        let limit = factor * self.median;
+        self.sample.iter().zip(&self.reach).filter(move |(_, &r)| r <= limit).map(|(p, _)| p)
+    }
+
     /// The sample of `points`, its tree and reaches.
     pub fn of(points: &[[f32; 3]]) -> Self {
         let sample = even_sample(points, SAMPLE);

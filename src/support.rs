@@ -213,14 +213,20 @@ pub fn find_with(points: &[[f32; 3]], spacing: &Spacing) -> Option<SupportPlane>
         }
     }
     // the sample points that stand among others (not strays), which judge the points off a plane
-    let settled: Vec<bool> = spacing.reach.iter().map(|&r| r <= STRAY_REACH * spacing.median).collect();
+    let settled: Vec<[f32; 3]> = spacing.settled(STRAY_REACH).copied().collect();
     distinct.iter().find_map(|c| test(points, sample, &settled, reach, *c))
 }
 
 /// `c`'s plane refitted, if it is a support of `points` (see the module docs); `sample` is their
-/// even sample, `settled` whether each sample point is not a stray ([`STRAY_REACH`]), and `reach`
+/// even sample, `settled` those of its points that are not strays ([`STRAY_REACH`]), and `reach`
 /// the sample's median reach.
-fn test(points: &[[f32; 3]], sample: &[[f32; 3]], settled: &[bool], reach: f64, c: Candidate) -> Option<SupportPlane> {
+fn test(
+    points: &[[f32; 3]],
+    sample: &[[f32; 3]],
+    settled: &[[f32; 3]],
+    reach: f64,
+    c: Candidate,
+) -> Option<SupportPlane> {
     let (mut plane, band) = (c.plane, c.band);
     // refit to the points in its band, twice
     for _ in 0..2 {
@@ -229,13 +235,8 @@ fn test(points: &[[f32; 3]], sample: &[[f32; 3]], settled: &[bool], reach: f64, 
         plane = Plane { point: c, normal: axes.column(0).into_owned() };
     }
     let on: Vec<[f32; 3]> = sample.iter().copied().filter(|p| plane.distance(p).abs() <= band).collect();
-    let off: Vec<(f64, [f32; 3])> = sample
-        .iter()
-        .zip(settled)
-        .filter(|(_, &settled)| settled)
-        .map(|(p, _)| (plane.distance(p), *p))
-        .filter(|(d, _)| d.abs() > 2.0 * band)
-        .collect();
+    let off: Vec<(f64, [f32; 3])> =
+        settled.iter().map(|p| (plane.distance(p), *p)).filter(|(d, _)| d.abs() > 2.0 * band).collect();
     let n = sample.len() as f64;
     if (on.len() as f64) < MIN_SHARE * n || (off.len() as f64) < MIN_REST * n {
         return None;
