@@ -81,9 +81,10 @@ export interface WorkerRequestOptions {
   /**
    * Cancels the request: when it aborts, the promise rejects at once with the signal's reason,
    * as `fetch` does (a `DOMException` named `"AbortError"` from `abort()`, `"TimeoutError"` from
-   * `AbortSignal.timeout`, or the value given to `abort(reason)`). The engine cannot be interrupted mid-call, so the worker is stopped
-   * (other requests in flight on it reject with an `Error` saying so) and the next request
-   * starts a new one (paying the `"loading"` stage again).
+   * `AbortSignal.timeout`, or the value given to `abort(reason)`). Requests run one at a time,
+   * in call order: one that waits behind another is dropped alone. The engine cannot be
+   * interrupted mid-call, so aborting the running request stops the worker, and the requests
+   * waiting go to a new one (paying the `"loading"` stage again).
    */
   signal?: AbortSignal;
 }

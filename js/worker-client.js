@@ -6,9 +6,11 @@
 //   const result = await arps.register(source, target, { icp: "plane" }, { onProgress: console.log, signal });
 //   mesh.matrix.fromArray(result.T_target_source);
 //
-// One worker at a time. It is replaced by a fresh one (started on the next request) when it
-// crashes, when the engine in it traps, and when a request is aborted: the requests it had in
-// flight reject, nothing is retried behind the caller's back, and the client keeps working.
+// One worker at a time, one request at a time on it (the others wait in call order). It is
+// replaced by a fresh one (started on the next request) when it crashes, when the engine in it
+// traps, and when the request it runs is aborted: that request rejects, nothing is retried
+// behind the caller's back, the requests waiting go to the new worker, and the client keeps
+// working. A request aborted while it waits is dropped alone.
 
 import { inheritedMessage, inheritedOption } from "./facade.js";
 
@@ -199,13 +201,27 @@ export async function createWorkerRegistrar(options = {}) {
     return w;
   };
 
+  // Requests run one at a time, in call order: each waits in `queue` until the one before it
+  // has answered. A request aborted while it waits is dropped from the queue alone; an aborted
+  // request that runs stops the worker, and the requests waiting behind it go to the next one.
+  const queue = [];
+  let running = false;
+  const pump = () => {
+    if (running || queue.length === 0) return;
+    running = true;
+    queue.shift().run().finally(() => {
+      running = false;
+      pump();
+    });
+  };
+
   const request = (message, { onProgress, transfer = [], signal } = {}) => {
     if (signal?.aborted) return Promise.reject(abortReason(signal));
-    // A loaded worker gets the request now, so its inputs are copied (or transferred) as the call
-    // is made, as postMessage does: a caller may refill its arrays once the call returns. While
-    // a worker loads (the first, or a replacement to start), the inputs are copied now and the
-    // copy is sent once it is ready.
-    const now = current && current.loaded && !current.dead && !terminated ? current : null;
+    // A request sent now has its inputs copied (or transferred) as the call is made, as
+    // postMessage does: a caller may refill its arrays once the call returns. One that waits
+    // (another request runs, or the worker loads) has them copied now, and the copy is sent
+    // when its turn comes.
+    const now = !running && queue.length === 0 && current && current.loaded && !current.dead && !terminated;
     let payload = message;
     let moved = transfer;
     if (!now && typeof structuredClone === "function") {
@@ -220,15 +236,17 @@ export async function createWorkerRegistrar(options = {}) {
       let w = null;
       let id = 0;
       let done = false;
+      const job = {};
       const onAbort = () => {
         if (done) return;
         done = true;
-        const aborted = abortReason(signal);
-        reject(aborted);
-        // Still loading: nothing was sent, the new worker stays for the next request. Sent: the
-        // engine cannot be interrupted mid-call, so the whole worker stops; other requests it
-        // had in flight reject too (they did not complete); the next request starts afresh.
+        reject(abortReason(signal));
+        const waiting = queue.indexOf(job);
+        if (waiting >= 0) queue.splice(waiting, 1);
+        // Sent: the engine cannot be interrupted mid-call, so the worker stops (a request that
+        // waited, or whose worker was still loading, was never sent: the worker stays).
         if (w && id) {
+          const aborted = abortReason(signal);
           retire(w, aborted, (other) =>
             other === id ? aborted : new Error("arps worker: stopped to cancel another request; this request did not complete, send it again"),
           );
@@ -241,15 +259,22 @@ export async function createWorkerRegistrar(options = {}) {
         fn(value);
       };
       signal?.addEventListener("abort", onAbort, { once: true });
+      // its turn: the live worker (started and loaded if there is none), then the request; a
+      // loaded worker gets it at once (synchronously when it is sent as the call is made)
       const go = (ready) => {
-        if (done) return; // aborted while the worker was loading: do not send
+        if (done) return undefined; // aborted while the worker was loading: not sent
         w = ready;
         const sent = send(w, payload, { onProgress, transfer: moved });
         id = sent.id;
-        sent.promise.then(settle(resolve), settle(reject));
+        return sent.promise.then(settle(resolve), settle(reject));
       };
-      if (now) go(now);
-      else live(onProgress).then(go, settle(reject));
+      job.run = () => {
+        if (done) return Promise.resolve();
+        const loaded = current && current.loaded && !current.dead && !terminated ? current : null;
+        return loaded ? Promise.resolve(go(loaded)) : live(onProgress).then(go, settle(reject));
+      };
+      queue.push(job);
+      pump();
     });
   };
 
@@ -369,7 +394,9 @@ function uniqueBuffers(views) {
       }
     }
     const b = ArrayBuffer.isView(v) ? v.buffer : v instanceof ArrayBuffer ? v : null;
-    if (b && !out.includes(b)) out.push(b);
+    // a SharedArrayBuffer is shared, not transferred (and cannot be)
+    const shared = typeof SharedArrayBuffer === "function" && b instanceof SharedArrayBuffer;
+    if (b && !shared && !out.includes(b)) out.push(b);
   }
   return out;
 }

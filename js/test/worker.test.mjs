@@ -243,6 +243,45 @@ test("worker: abort mid-refinement rejects within 300 ms with an AbortError, the
   }
 });
 
+test("worker: a request aborted while it waits behind another is dropped alone; the running one completes", async () => {
+  const arps = await createWorkerRegistrar({ createWorker: nodeWorker, wasm, model });
+  const before = nodeWorker.started;
+  try {
+    // one tab's long request runs; another tab's waits behind it and is cancelled
+    const s = upsampled(source(), 20);
+    const t = upsampled(target(), 20);
+    let refining = false;
+    const long = arps.register(s, t, { voxelSize: 0 }, { onProgress: (stage) => (refining ||= stage === "refining") });
+    const controller = new AbortController();
+    const stages = [];
+    const waiting = arps.register(source(), target(), {}, { signal: controller.signal, onProgress: (stage) => stages.push(stage) });
+    const third = arps.register(source(), target());
+    while (!refining) await new Promise((r) => setTimeout(r, 5));
+    controller.abort();
+    await assert.rejects(waiting, { name: "AbortError" });
+    assert.deepEqual(stages, [], "the waiting request never started");
+    assert.ok(errors((await long).T_target_source).rot < 1, "the running request completes");
+    assert.ok(errors((await third).T_target_source).rot < 1, "the request behind the aborted one runs");
+    assert.equal(nodeWorker.started, before, "the worker was kept");
+    // A running request aborted: the worker stops, and a request waiting behind it goes to the next.
+    const c2 = new AbortController();
+    let refining2 = false;
+    const running = arps.register(s, t, { voxelSize: 0 }, { signal: c2.signal, onProgress: (stage) => (refining2 ||= stage === "refining") });
+    const behind = arps.register(source(), target());
+    while (!refining2) await new Promise((r) => setTimeout(r, 5));
+    c2.abort();
+    await assert.rejects(running, { name: "AbortError" });
+    assert.ok(errors((await behind).T_target_source).rot < 1, "the waiting request ran on a new worker");
+    assert.equal(nodeWorker.started, before + 1);
+    // a cloud on a SharedArrayBuffer is shared, not transferred, when `transfer` is asked
+    const shared = new Float32Array(new SharedArrayBuffer(source().byteLength));
+    shared.set(source());
+    assert.ok(errors((await arps.register(shared, target(), {}, { transfer: true })).T_target_source).rot < 1);
+  } finally {
+    arps.terminate();
+  }
+});
+
 test("worker: after a trap reported by the worker, the client replaces it and retries nothing", async () => {
   // Stand-in workers speaking worker.js's protocol: the first reports a trap (as worker.js does
   // with the facade's ARPS_TRAPPED error), the next ones answer normally.
