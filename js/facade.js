@@ -173,6 +173,12 @@ function cloudArg(v, what) {
       cloud.origin = originArg(origin, what);
       return cloud;
     }
+    if (points !== undefined) {
+      fail(
+        `${what}.points: expected a Float32Array (a cloud object's points are f32 offsets from its origin; ` +
+          `pass absolute coordinates as a Float64Array cloud itself); got ${describe(points)}`,
+      );
+    }
   }
   return fail(
     `${what}: expected a Float32Array (or Float64Array) of packed xyz [x0, y0, z0, x1, ...], or { points: Float32Array, origin: [x, y, z] }; got ${describe(v)}`,

@@ -133,21 +133,24 @@ pub fn icp_copies_fit(input: usize, icp: usize) -> bool {
 /// voxelisation (`voxel`, in the caller's units; 0 for none) and the two do not fit its half of
 /// the call's budget ([`max_icp_points`]); `what` names it. Checked before ICP builds anything
 /// on those points.
-pub fn check_icp_points(what: &str, input: usize, icp: usize, voxel: f64) -> Result<()> {
+pub fn check_icp_points(what: &str, input: usize, icp: usize, voxel: f64, default: bool) -> Result<()> {
     let max = max_icp_points(input);
     if icp <= max {
         return Ok(());
     }
-    let how = if voxel > 0.0 {
-        format!("voxelSize {voxel}")
+    let (how, fix) = if voxel > 0.0 {
+        // a surface keeps points as the square of the voxel shrinks: a size this much larger fits
+        let fits = voxel * (icp as f64 / max.max(1) as f64).sqrt() * 1.1;
+        let default = if default { " (the default: the cloud may fill a volume rather than a surface)" } else { "" };
+        (format!("voxelSize {voxel}{default}"), format!("set voxelSize to {fits:.3e} or more"))
     } else {
-        "voxelSize 0 (every point; a size below a millionth of the clouds' half-extent counts as 0)".to_string()
+        let how = "voxelSize 0 (every point; a size below a millionth of the clouds' half-extent counts as 0)";
+        (how.to_string(), "set a larger voxelSize (or leave it unset for the default)".to_string())
     };
     Err(Error::TooLarge(format!(
         "{what} keeps {icp} of its {input} points for ICP at {how}, more than the {max} that fit next to them \
          (about {ICP_BYTES_PER_POINT} bytes per ICP point and {INPUT_BYTES_PER_POINT} per input point, within {} MiB \
-         per cloud, half of the {} MiB a call may use in WebAssembly's 4 GiB memory): set a larger voxelSize (or leave \
-         it unset for the default), or downsample the cloud first",
+         per cloud, half of the {} MiB a call may use in WebAssembly's 4 GiB memory): {fix}, or downsample the cloud first",
         MAX_CALL_BYTES >> 21,
         MAX_CALL_BYTES >> 20,
     )))
@@ -209,21 +212,25 @@ mod tests {
     #[test]
     fn icp_points_share_the_budget_with_the_input() {
         // nothing thinned: the old full-cloud limit (128 bytes a point) still fits
-        assert!(check_icp_points("source", 8_000_000, 8_000_000, 0.0).is_ok());
+        assert!(check_icp_points("source", 8_000_000, 8_000_000, 0.0, false).is_ok());
         assert_eq!(max_icp_points(0), (1 << 30) / ICP_BYTES_PER_POINT as usize);
         // the most input points leave room for a few million ICP points, not for all of them
         let max = max_icp_points(MAX_POINTS_PER_CLOUD);
         assert!(max > 1_000_000 && max < MAX_POINTS_PER_CLOUD, "{max}");
-        assert!(check_icp_points("target", MAX_POINTS_PER_CLOUD, max, 0.001).is_ok());
-        let e = check_icp_points("target", MAX_POINTS_PER_CLOUD, MAX_POINTS_PER_CLOUD, 0.0).unwrap_err().to_string();
+        assert!(check_icp_points("target", MAX_POINTS_PER_CLOUD, max, 0.001, false).is_ok());
+        let e = check_icp_points("target", MAX_POINTS_PER_CLOUD, MAX_POINTS_PER_CLOUD, 0.0, false).unwrap_err().to_string();
         assert!(
             e.contains("target keeps 16000000 of its 16000000")
                 && e.contains("voxelSize 0")
                 && e.contains(&max.to_string()),
             "{e}"
         );
-        let e = check_icp_points("source", 12_000_000, 9_000_000, 0.25).unwrap_err().to_string();
-        assert!(e.contains("voxelSize 0.25") && e.contains("larger voxelSize"), "{e}");
+        let e = check_icp_points("source", 12_000_000, 9_000_000, 0.25, false).unwrap_err().to_string();
+        let fits = 0.25 * (9_000_000.0 / max_icp_points(12_000_000) as f64).sqrt() * 1.1;
+        assert!(e.contains("voxelSize 0.25 keeps") && e.contains(&format!("set voxelSize to {fits:.3e} or more")), "{e}");
+        // the default voxel size is named as such, with what makes it keep too many
+        let e = check_icp_points("source", 12_000_000, 9_000_000, 0.25, true).unwrap_err().to_string();
+        assert!(e.contains("voxelSize 0.25 (the default: the cloud may fill a volume"), "{e}");
         // an input past every budget leaves room for none
         assert_eq!(max_icp_points(usize::MAX / 64), 0);
     }

@@ -75,6 +75,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       ["a string", () => r.register("1 2 3", t), /^source: expected a Float32Array/],
       ["an array-like claiming 1.2e9 elements", () => r.register({ length: 1.2e9 }, t), /^source: expected a Float32Array.*got an object/],
       ["a Proxy of a Float32Array", () => r.register(new Proxy(s, {}), t), /^source: expected a Float32Array.*got an object/],
+      ["a cloud object whose points are a Float64Array", () => r.register({ points: Float64Array.from(s), origin: [0, 0, 0] }, t), /^source\.points: expected a Float32Array .*got a Float64Array/],
       ["an Int32Array", () => r.register(new Int32Array(s.length), t), /^source: expected a Float32Array.*got an Int32Array/],
       ["an Array with a string", () => r.register([...s.subarray(0, 59), "x"], t), /^source: element 59 is a string/],
       ["an Array with a throwing getter", () => {
@@ -271,7 +272,7 @@ test("large coordinates: Float64Array or { points, origin } in, T_target_source 
   // Bad origins.
   rejects(r, "origin of 2", () => r.register({ points: source(), origin: [1, 2] }, t64), /^source: origin must be 3 finite numbers/);
   rejects(r, "NaN origin", () => r.register(s64, { points: target(), origin: [0, NaN, 0] }), /^target: origin must be 3 finite numbers/);
-  rejects(r, "points not f32", () => r.register({ points: [1, 2, 3], origin: a }, t64), /^source: expected a Float32Array/);
+  rejects(r, "points not f32", () => r.register({ points: [1, 2, 3], origin: a }, t64), /^source\.points: expected a Float32Array .*got an Array/);
   r.free();
 });
 

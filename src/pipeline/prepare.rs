@@ -159,8 +159,9 @@ pub(crate) fn prepare(
     let icp_src = sampling::voxel_downsample(&src_n, voxel as f32);
     // what ICP keeps must fit next to the inputs before its k-d trees and normals are built
     let voxel_user = voxel * norm.scale;
-    limits::check_icp_points("source", src_n.len(), icp_src.len(), voxel_user)?;
-    limits::check_icp_points("target", target.cloud.len(), target.icp.len(), voxel_user)?;
+    let default = options.voxel_size.is_none();
+    limits::check_icp_points("source", src_n.len(), icp_src.len(), voxel_user, default)?;
+    limits::check_icp_points("target", target.cloud.len(), target.icp.len(), voxel_user, default)?;
     let upright = Upright::of(options, &rotate_init);
     let d_evidence = options::evidence_distance(d_final);
     let rounding = source_rounding.max(target.summary.rounding) / norm.scale;
