@@ -101,7 +101,11 @@ export type RegisterOptions = {
    * upright pose (`[0, 0, 1]` for z-up data, `[0, 1, 0]` for three.js's y-up). The answer then
    * only turns the source about this axis, within `UP_TOLERANCE_DEG` of tilt for scans
    * levelled a little differently: every start is levelled first, answers tilted further are
-   * rejected, and look-alikes tilted further do not count as alternatives. When a rejected,
+   * rejected, and look-alikes tilted further do not count as alternatives; the answer turned
+   * a quarter and a half turn about up, each placed where the global descriptors' matches
+   * agree, is refined too (a box-like room captured from another spot fits its turns about as
+   * well), and counts as an alternative or replaces the answer when it fits about as well or
+   * clearly better. When a rejected,
    * tilted answer fits clearly better than the upright one, `up` probably does not hold: a
    * warning says so and the confidence is at most 0.25. It is the same direction in both
    * clouds' frames, whatever `initialTransform` says. Default: none (any rotation). Three
@@ -420,8 +424,9 @@ export type RegistrationEvidence = {
   /**
    * How many distinct poses (more than 15 degrees apart, or putting the source's centre more
    * than 0.2 of the clouds' half-extent apart: a repeating structure's next element) fit at
-   * least 0.9 as well as the answer, among those probes (and, for a part of a target round about one of its axes, the
-   * answer turned a third and a quarter about it) or, when more, among the other answers the
+   * least 0.9 as well as the answer, among those probes (and the answer turned a quarter, a
+   * third and a fifth about an axis the source, or for a part the whole target, is round
+   * about) or, when more, among the other answers the
    * search refined (its stages' best answers and the probes' better poses): with `k`
    * alternatives the answer is one of `k + 1` about equally good poses.
    */

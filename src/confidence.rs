@@ -10,8 +10,9 @@
 //! `1 / k`, however well it fits. So the evidence also looks for such poses: the answer turned
 //! about the principal axes of the moved source (and the diagonals between them), of the
 //! target points it overlaps and, for a part of the target (a scan onto a model), of the whole
-//! target through its centroid (by a third and a quarter turn too about an axis the target is
-//! round about: a 3- or 4-fold symmetry), and along the motion its point-to-plane fit constrains
+//! target through its centroid (by a quarter, a third and a fifth of a turn too about an axis the
+//! source or the target is round about: a 3-, 4- or 5-fold symmetry), and along the motion its
+//! point-to-plane fit constrains
 //! least, each refined by a short ICP ([`Evidence::ambiguity`], [`Evidence::alternatives`]), and the
 //! answer slid along that motion without refinement ([`Evidence::slide`]: a surface of revolution
 //! turned about its axis, a plane shifted in itself). The confidence is low on such answers,
@@ -65,8 +66,9 @@ pub struct Evidence {
     pub ambiguity: f64,
     /// How many distinct poses (more than 15 degrees apart, or putting the source's centre more
     /// than 0.2 of the clouds' half-extent apart: a repeating structure's next element) fit at
-    /// least 0.9 as well as the answer, among those probes (and, for a part of a target round about one of its axes, the
-    /// answer turned a third and a quarter about it) or, when more, among the other answers the
+    /// least 0.9 as well as the answer, among those probes (and the answer turned a quarter, a
+    /// third and a fifth about an axis the source, or for a part the whole target, is round
+    /// about) or, when more, among the other answers the
     /// search refined (its stages' best answers and the probes' better poses): with `k`
     /// alternatives the answer is one of `k + 1` about equally good poses.
     pub alternatives: f64,
@@ -186,7 +188,10 @@ pub fn probe(
     // it (a scan onto a model), which may fit as well on the target's other end
     let part = overlap_reverse < PART_OVERLAP * fitness;
     let extra = screw_turns(screw, T_target_source);
-    let turned = turns(target, &probe, T_target_source, d, answer, kind, &extra, admissible, part);
+    // the moved source's spreads on all its sample points: a round axis is told from sampling
+    // noise better than on the probe points
+    let shape = principal_axes_spreads(&source, T_target_source);
+    let turned = turns(target, &probe, T_target_source, d, answer, kind, &extra, admissible, part, shape);
     let (ambiguity, alternatives) = (turned.best_ratio.min(2.0), turned.alternatives.len() as f64);
     let (fitness_tight, fitness_loose, fitness_coarse) = (f(0.5), f(2.0), f(4.0));
     let evidence = Evidence {
@@ -212,18 +217,18 @@ pub fn probe(
 /// axes through its centroid ([`turns`]; `BENCHMARK.md`, "A scan on the model's other end", "One
 /// view of a symmetric part").
 const PART_OVERLAP: f64 = 0.85;
-/// A principal axis of the whole target about which it is round, the variances along the other
-/// two within this fraction of each other (a rocket's fins, a square block), may be an axis of a
-/// 3- or 4-fold symmetry: when the source is a part of the target, the probes also turn the answer
-/// about it by [`ROUND_TURNS`].
+/// A principal axis about which a cloud is round, the variances along the other two within this
+/// fraction of each other (a rocket's fins, a square block, three spokes), may be an axis of a 3-,
+/// 4- or 5-fold symmetry: the probes also turn the answer by [`ROUND_TURNS`] about such an axis of
+/// the moved source and, when the source is a part of the target, of the whole target.
 const ROUND_SPREAD: f64 = 0.1;
-/// The turns about a round axis of the target ([`ROUND_SPREAD`]), degrees: a quarter and a third
-/// of a turn both ways find the look-alikes of a 4-fold and of a 3-fold symmetry (the half turn
-/// is probed on every axis already), so that the answer is counted one of four or of three. They
+/// The turns about a round axis ([`ROUND_SPREAD`]), degrees: a quarter, a third and a fifth of a
+/// turn both ways find the look-alikes of a 4-, 3- and 5-fold symmetry (the half turn is probed
+/// on every axis already), so that the answer is counted one of four, three or five. They
 /// count look-alikes only: a pose they find that fits better is not searched from
 /// ([`Probed::better`]), nor does it raise [`Evidence::ambiguity`], since on such a shape a turn
 /// fits better or worse by the noise of the scan alone.
-const ROUND_TURNS: [f64; 4] = [90.0, -90.0, 120.0, -120.0];
+const ROUND_TURNS: [f64; 6] = [90.0, -90.0, 120.0, -120.0, 72.0, -72.0];
 /// Points of the probes ([`Evidence::ambiguity`], [`Evidence::slide`]).
 pub const PROBE_POINTS: usize = 512;
 /// A probe pose that ends within this many degrees of the answer, and within
@@ -281,8 +286,9 @@ struct Turned {
 /// wrong answer of elongated shapes), each through the moved sample's centroid; when the source
 /// is a `part` of the target ([`PART_OVERLAP`]), a half turn about each principal axis of the
 /// whole target through the target's centroid (a scan of one end of a symmetric model fits as
-/// well on its other end), and [`ROUND_TURNS`] about each of its round axes ([`ROUND_SPREAD`]),
-/// which count look-alikes only; then the `extra` starts (the turns along the least constrained
+/// well on its other end); [`ROUND_TURNS`] about each round axis ([`ROUND_SPREAD`]) of the moved
+/// source (its `shape`: centroid, axes and spreads on all its sample points) and, for a part, of
+/// the whole target, which count look-alikes only; then the `extra` starts (the turns along the least constrained
 /// motion, [`screw_turns`]). `answer` is `t` on `sample`. A probe that comes back onto the answer, or
 /// onto where an earlier probe was after the same stage ([`coincide`]), stops there and counts
 /// for nothing: it would end where that pose did. A probe that fits too little after its `4 d` or
@@ -300,6 +306,7 @@ fn turns(
     extra: &[Matrix4<f64>],
     admissible: &Admissible,
     part: bool,
+    (source_c, source_axes, source_spreads): (Vector3<f64>, Matrix3<f64>, Vector3<f64>),
 ) -> Turned {
     let AnswerOnProbe { fitness: base, mut partners } = answer;
     let mut out = Turned { best_ratio: 0.0, best: None, alternatives: Vec::new() };
@@ -321,18 +328,23 @@ fn turns(
     if let Some(target_axes) = overlap_axes(target, sample, t, 2.0 * d) {
         probes.extend((0..3).map(|k| (180.0, target_axes.column(k).into_owned(), c)));
     }
-    // the turns that count look-alikes only: about the whole target's round axes
+    // the turns that count look-alikes only: about the round axes of the moved source (a whole
+    // object of 3- or 5-fold symmetry) and, for a part, of the whole target
     let mut round_turns: Vec<(f64, Vector3<f64>, Vector3<f64>)> = Vec::new();
-    if part {
-        let whole = even_sample(target.points(), PROBE_POINTS);
-        let (tc, target_axes, spreads) = principal_axes_spreads(&whole, &Matrix4::identity());
-        probes.extend((0..3).map(|k| (180.0, target_axes.column(k).into_owned(), tc)));
+    let mut round_axes = |axes: &Matrix3<f64>, spreads: &Vector3<f64>, pivot: Vector3<f64>| {
         for k in 0..3 {
             let (a, b) = (spreads[(k + 1) % 3], spreads[(k + 2) % 3]);
             if (a - b).abs() <= ROUND_SPREAD * a.max(b) {
-                round_turns.extend(ROUND_TURNS.map(|degrees| (degrees, target_axes.column(k).into_owned(), tc)));
+                round_turns.extend(ROUND_TURNS.map(|degrees| (degrees, axes.column(k).into_owned(), pivot)));
             }
         }
+    };
+    round_axes(&source_axes, &source_spreads, source_c);
+    if part {
+        let whole = even_sample(target.points(), PROBE_POINTS);
+        let (tc, target_axes, target_spreads) = principal_axes_spreads(&whole, &Matrix4::identity());
+        probes.extend((0..3).map(|k| (180.0, target_axes.column(k).into_owned(), tc)));
+        round_axes(&target_axes, &target_spreads, tc);
     }
     // with a shared up axis, the turns about it (the others tilt the answer, and are not counted)
     let up_turns = match admissible {

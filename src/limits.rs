@@ -142,7 +142,7 @@ pub fn check_icp_points(what: &str, input: usize, icp: usize, voxel: f64, defaul
         // a surface keeps points as the square of the voxel shrinks: a size this much larger fits
         let fits = voxel * (icp as f64 / max.max(1) as f64).sqrt() * 1.1;
         let default = if default { " (the default: the cloud may fill a volume rather than a surface)" } else { "" };
-        (format!("voxelSize {voxel}{default}"), format!("set voxelSize to {fits:.3e} or more"))
+        (format!("voxelSize {voxel}{default}"), format!("set voxelSize to {} or more", three_digits(fits)))
     } else {
         let how = "voxelSize 0 (every point; a size below a millionth of the clouds' half-extent counts as 0)";
         (how.to_string(), "set a larger voxelSize (or leave it unset for the default)".to_string())
@@ -154,6 +154,12 @@ pub fn check_icp_points(what: &str, input: usize, icp: usize, voxel: f64, defaul
         MAX_CALL_BYTES >> 21,
         MAX_CALL_BYTES >> 20,
     )))
+}
+
+/// `v` (positive) with three significant digits, in fixed notation.
+fn three_digits(v: f64) -> String {
+    let decimals = (2.0 - v.log10().floor()).clamp(0.0, 20.0) as usize;
+    format!("{v:.decimals$}")
 }
 
 /// Fails with [`Error::TooLarge`] when a file declares or holds more than [`MAX_FILE_POINTS`]
@@ -218,7 +224,8 @@ mod tests {
         let max = max_icp_points(MAX_POINTS_PER_CLOUD);
         assert!(max > 1_000_000 && max < MAX_POINTS_PER_CLOUD, "{max}");
         assert!(check_icp_points("target", MAX_POINTS_PER_CLOUD, max, 0.001, false).is_ok());
-        let e = check_icp_points("target", MAX_POINTS_PER_CLOUD, MAX_POINTS_PER_CLOUD, 0.0, false).unwrap_err().to_string();
+        let e =
+            check_icp_points("target", MAX_POINTS_PER_CLOUD, MAX_POINTS_PER_CLOUD, 0.0, false).unwrap_err().to_string();
         assert!(
             e.contains("target keeps 16000000 of its 16000000")
                 && e.contains("voxelSize 0")
@@ -227,10 +234,18 @@ mod tests {
         );
         let e = check_icp_points("source", 12_000_000, 9_000_000, 0.25, false).unwrap_err().to_string();
         let fits = 0.25 * (9_000_000.0 / max_icp_points(12_000_000) as f64).sqrt() * 1.1;
-        assert!(e.contains("voxelSize 0.25 keeps") && e.contains(&format!("set voxelSize to {fits:.3e} or more")), "{e}");
+        assert!(
+            e.contains("voxelSize 0.25 keeps")
+                && e.contains(&format!("set voxelSize to {} or more", three_digits(fits))),
+            "{e}"
+        );
         // the default voxel size is named as such, with what makes it keep too many
         let e = check_icp_points("source", 12_000_000, 9_000_000, 0.25, true).unwrap_err().to_string();
         assert!(e.contains("voxelSize 0.25 (the default: the cloud may fill a volume"), "{e}");
+        assert_eq!(
+            (three_digits(0.0123456), three_digits(2.5), three_digits(1234.5)),
+            ("0.0123".into(), "2.50".into(), "1235".into())
+        );
         // an input past every budget leaves room for none
         assert_eq!(max_icp_points(usize::MAX / 64), 0);
     }

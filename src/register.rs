@@ -106,7 +106,11 @@ pub struct Options {
     /// upright pose (`[0, 0, 1]` for z-up data, `[0, 1, 0]` for three.js's y-up). The answer then
     /// only turns the source about this axis, within [`UP_TOLERANCE_DEG`] of tilt for scans
     /// levelled a little differently: every start is levelled first, answers tilted further are
-    /// rejected, and look-alikes tilted further do not count as alternatives. When a rejected,
+    /// rejected, and look-alikes tilted further do not count as alternatives; the answer turned
+    /// a quarter and a half turn about up, each placed where the global descriptors' matches
+    /// agree, is refined too (a box-like room captured from another spot fits its turns about as
+    /// well), and counts as an alternative or replaces the answer when it fits about as well or
+    /// clearly better. When a rejected,
     /// tilted answer fits clearly better than the upright one, `up` probably does not hold: a
     /// warning says so and the confidence is at most 0.25. It is the same direction in both
     /// clouds' frames, whatever `initialTransform` says. Default: none (any rotation). Three

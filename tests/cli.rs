@@ -624,6 +624,18 @@ fn register_scales_a_source_in_another_unit() {
     assert!(json.get("sourceScale").is_none(), "{json}");
     let r: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
     assert!(r.warnings.iter().any(|w| w.contains("differ in size by 10")), "{:?}", r.warnings);
+    // `--min-confidence`: the unscaled source (fits anywhere, at most 0.25) fails the batch after
+    // its answer is printed; the scaled one passes; a bound outside [0, 1] is refused
+    let out = arps(&["register", src, tgt, "--json", "--min-confidence", "0.5"]);
+    assert!(!out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
+    assert!(serde_json::from_slice::<arps::Registration>(&out.stdout).unwrap().confidence < 0.5);
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("1 of 1 answers have a confidence below --min-confidence 0.5")
+    );
+    let out = arps(&["register", src, tgt, "--source-scale", "1000", "--min-confidence", "0.5"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let out = arps(&["register", src, tgt, "--min-confidence", "2"]);
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--min-confidence: expected a number in [0, 1]"));
     for bad in ["0", "-2", "NaN", "inf"] {
         let out = arps(&["register", src, tgt, "--source-scale", bad]);
         assert!(!out.status.success() && out.stdout.is_empty(), "{bad}");

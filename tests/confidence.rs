@@ -389,6 +389,29 @@ fn a_view_of_a_three_fold_symmetric_model_is_one_of_its_look_alikes() {
     assert!(r.confidence <= 0.34, "{} {:?}", r.confidence, r.evidence);
 }
 
+/// Two whole samplings of a 3-fold symmetric object (the triangular frustum): the answer is the
+/// truth or the truth turned by a third either way, which fit alike. Neither cloud is a part of
+/// the other, so the look-alikes are found by turning the answer about the source's own round axis.
+#[test]
+#[allow(non_snake_case)]
+fn a_whole_three_fold_symmetric_object_is_one_of_its_look_alikes() {
+    // twice as tall: its spread along the axis is not that across it
+    let tall = |c: PointCloud| PointCloud::new(c.points.iter().map(|p| [p[0], p[1], 2.0 * p[2]]).collect());
+    let target = tall(frustum_surface(8_000, 1));
+    let T_target_source = from_rotation_translation(
+        &Rotation3::from_euler_angles(-1.1, 0.5, 0.8).into_inner(),
+        &Vector3::new(-0.2, 0.4, 0.1),
+    );
+    let source = tall(frustum_surface(6_000, 2)).transformed(&arps::transform::rigid_inverse(&T_target_source));
+    let r = Registrar::with_default_model().unwrap().register(&source, &target, &Options::default()).unwrap();
+    let poses: Vec<Matrix4<f64>> =
+        std::iter::once(r.T_target_source).chain(r.alternatives.iter().map(|a| a.T_target_source)).collect();
+    let errors: Vec<f64> = poses.iter().map(|t| arps::transform::rotation_error_deg(t, &T_target_source)).collect();
+    assert!(errors.iter().any(|&e| e < 3.0), "{errors:?}");
+    assert_eq!(errors.iter().filter(|&&e| (e - 120.0).abs() < 5.0).count(), 2, "{errors:?}");
+    assert!(r.confidence <= 0.34, "{} {:?}", r.confidence, r.evidence);
+}
+
 /// Clouds given as `f32` far from zero (a map grid) were rounded to a grid before the engine saw
 /// them; where its step exceeds the distance the answer is judged at, the fit cannot confirm the
 /// pose, and the confidence is capped with a warning that says why. Nearer zero (a finer grid) it

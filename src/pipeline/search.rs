@@ -302,14 +302,24 @@ pub(crate) fn search(
         let (b, extra) = judged(w, &mut refined);
         (best, starts_refined) = (Some(b), starts_refined + extra);
     }
-    // a slid answer, its rotation right and its translation not (a wall matched to the next one):
-    // the translation the global stage's matches agree on for its rotation, refined like a
-    // start, replaces it when it fits clearly better
-    let voted = match &best {
-        Some((c, _, _)) if adaptive && p.icp != IcpKind::Off => builder.voted_pose(&c.T_target_source).map(|t| (*c, t)),
-        _ => None,
+    // poses placed where the global stage's matches agree for a rotation, each refined like one
+    // more start, noted among the refined answers (an alternative when it fits about as well)
+    // and replacing the answer when it fits clearly better: the answer's own rotation (a slid
+    // answer, its rotation right and its translation not: a wall matched to the next one) and,
+    // with `up`, the answer turned a quarter and a half turn about up (a box-like room captured
+    // from another spot fits its turns about as well as the truth, and the probes, which turn
+    // the answer about its own centre, cannot move it that far)
+    let placed: Vec<Matrix4<f64>> = match &best {
+        Some((c, _, _)) if adaptive && p.icp != IcpKind::Off => {
+            let t = &c.T_target_source;
+            let pivot = t.transform_point(&Point3::from(centroid)).coords;
+            let turned = upright.iter().flat_map(|u| UP_TURNS_VOTED.map(|deg| u.turned(t, deg, &pivot)));
+            std::iter::once(*t).chain(turned).filter_map(|r| builder.voted_pose(&r)).collect()
+        }
+        _ => Vec::new(),
     };
-    if let Some((c, t)) = voted {
+    for t in placed {
+        let Some(c) = best.as_ref().map(|b| b.0) else { break };
         starts_refined += 1;
         if let Some(r) = refine_one(c.start, t, &mut refined) {
             if refine::clearly_better(&r, &c) && improves(&c, &r) {
@@ -440,6 +450,11 @@ const NEARLY_SURE_SCREEN_FIT: f64 = 0.95;
 /// that the descriptors find the answer again is evidence ([`AGREED_CONFIDENCE`]). At 0.8 and 0.9
 /// the search lost pairs (`BENCHMARK.md`, "Starts screened against the answer").
 const GLOBAL_SCREEN_FIT: f64 = 0.7;
+
+/// With `up`, the turns about it (degrees) of the answer that are refined with the translation
+/// the global stage's matches agree on for each ([`Starts::voted_pose`]): the look-alikes of a
+/// box-like room (see [`search`]).
+const UP_TURNS_VOTED: [f64; 3] = [90.0, 180.0, -90.0];
 
 /// Most better poses of the confidence probe that [`settle`] refines in a row.
 const MAX_PROBE_STARTS: usize = 4;

@@ -45,6 +45,15 @@ impl Upright {
         moved.angle(&self.target_up).to_degrees()
     }
 
+    /// `T_target_source` turned `degrees` about up, through where it puts the source's point
+    /// `pivot` (that point stays where it was).
+    #[allow(non_snake_case)]
+    pub(crate) fn turned(&self, T_target_source: &Matrix4<f64>, degrees: f64, pivot: &Vector3<f64>) -> Matrix4<f64> {
+        let s = Rotation3::from_axis_angle(&self.target_up, degrees.to_radians()).into_inner();
+        let t = transform::translation(T_target_source);
+        transform::from_rotation_translation(&(s * transform::rotation(T_target_source)), &(s * (t - pivot) + pivot))
+    }
+
     /// `T_target_source` levelled: turned by the smallest rotation that brings the source's up
     /// onto the target's, about `pivot` (where the pose puts the source's centroid, so that the
     /// source stays where the pose put it). An upright pose is returned unchanged; a pose that

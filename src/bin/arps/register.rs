@@ -118,6 +118,10 @@ pub struct RegisterArgs {
     /// `T_target_source (FACTOR p)`); `--json` gives the factor as `sourceScale`.
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     source_scale: Option<f64>,
+    /// Exit with status 1 (after printing every answer) when an answer's confidence is below C,
+    /// for unattended batches: stderr says how many were.
+    #[arg(long, value_name = "C", allow_negative_numbers = true)]
+    min_confidence: Option<f64>,
     /// Write each source, moved by its answer into the target's frame, to PATH. To a PATH of the
     /// source's own format (PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, LAZ, E57), the source
     /// file as itself, moved: every attribute kept (colours, intensity, other
@@ -446,9 +450,13 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         source_scan,
         target_scan,
         source_scale,
+        min_confidence,
         aligned,
         json,
     } = args;
+    if let Some(c) = min_confidence.filter(|c| !(0.0..=1.0).contains(c)) {
+        return Err(format!("--min-confidence: expected a number in [0, 1], got {c}"));
+    }
     let up = up.map(|v| up_axis(&v)).transpose()?;
     let scale = match source_scale {
         Some(s) if !(s.is_finite() && s > 0.0) => {
@@ -523,6 +531,7 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
     let target_vertices = vertices_warning(&target);
     let several = sources.len() > 1;
     let mut failed = 0usize;
+    let mut unsure = 0usize;
     for (source, output) in sources.iter().zip(&outputs) {
         let read = read_source(source, &reading, output.is_some()).map(|(src, bytes)| match &scale {
             Some(m) => (src.into_transformed(m), bytes),
@@ -551,6 +560,7 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
             Ok((mut r, centre)) => {
                 r.warnings.extend(vertices_warning(source).into_iter().chain(target_vertices.clone()));
                 let aligned = output.as_ref().map(|p| p.display().to_string());
+                unsure += usize::from(min_confidence.is_some_and(|c| r.confidence < c));
                 print_registration(&r, time_ms, json, named, aligned, centre, source_scale)?
             }
             Err(e) if !several => return Err(in_flags(&e)),
@@ -568,6 +578,9 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
     }
     if failed > 0 {
         return Err(format!("{failed} of {} sources failed", sources.len()));
+    }
+    if let (Some(c), true) = (min_confidence, unsure > 0) {
+        return Err(format!("{unsure} of {} answers have a confidence below --min-confidence {c}", sources.len()));
     }
     Ok(())
 }
