@@ -33,7 +33,8 @@
 //! global stage has run, the answer's rotation with the translation its descriptor matches agree
 //! on ([`Starts::voted_pose`]: an answer slid along a wall, or onto the next of a row of alike
 //! parts, has the rotation right and the translation not) is refined like one more start, and
-//! replaces the answer when it fits clearly better. With no start refined at all, the network's
+//! replaces the answer when it fits clearly better; with `up`, so are its quarter and half turns
+//! about up ([`UP_TURNS_VOTED`]), each with the translation the matches agree on for it. With no start refined at all, the network's
 //! estimate (the initial transform with the network off), unrefined, with a warning and its
 //! confidence at most [`caps::UNREFINED_CONFIDENCE`]. With `sourceOverlap`, an answer under which
 //! clearly less of the source lies on the target than that share counts as unsure at every stage

@@ -45,8 +45,8 @@ impl Upright {
         moved.angle(&self.target_up).to_degrees()
     }
 
-    /// `T_target_source` turned `degrees` about up, through where it puts the source's point
-    /// `pivot` (that point stays where it was).
+    /// `T_target_source` turned `degrees` about up through `pivot`, a point of the target frame
+    /// (where the pose puts the source's centroid, so that the source turns in place).
     #[allow(non_snake_case)]
     pub(crate) fn turned(&self, T_target_source: &Matrix4<f64>, degrees: f64, pivot: &Vector3<f64>) -> Matrix4<f64> {
         let s = Rotation3::from_axis_angle(&self.target_up, degrees.to_radians()).into_inner();
