@@ -416,7 +416,7 @@ export type RegistrationEvidence = {
    * when the source covers a much smaller share of the target than the target of the source (a
    * scan onto a model, which may fit as well on the model's other end), and 60 degrees both
    * ways along the least constrained motion of `Evidence::slide` (when that slide is at least
-   * 0.5), each refined by a short ICP; 0 when every one fell back onto the answer (within 15
+   * 0.3), each refined by a short ICP; 0 when every one fell back onto the answer (within 15
    * degrees and 0.2 of the clouds' half-extent). Near 1 or above: the answer may fit and still
    * not be unique.
    */
