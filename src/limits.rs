@@ -235,7 +235,7 @@ mod tests {
         let e = check_icp_points("source", 12_000_000, 9_000_000, 0.25, false).unwrap_err().to_string();
         let fits = 0.25 * (9_000_000.0 / max_icp_points(12_000_000) as f64).sqrt() * 1.1;
         assert!(
-            e.contains("voxelSize 0.25 keeps")
+            e.contains("at voxelSize 0.25, more than")
                 && e.contains(&format!("set voxelSize to {} or more", three_digits(fits))),
             "{e}"
         );
@@ -243,7 +243,7 @@ mod tests {
         let e = check_icp_points("source", 12_000_000, 9_000_000, 0.25, true).unwrap_err().to_string();
         assert!(e.contains("voxelSize 0.25 (the default: the cloud may fill a volume"), "{e}");
         assert_eq!(
-            (three_digits(0.0123456), three_digits(2.5), three_digits(1234.5)),
+            (three_digits(0.0123456), three_digits(2.5), three_digits(1234.6)),
             ("0.0123".into(), "2.50".into(), "1235".into())
         );
         // an input past every budget leaves room for none
