@@ -215,13 +215,16 @@ export async function createWorkerRegistrar(options = {}) {
     });
   };
 
+  /** The live worker when it is loaded and usable, else null. */
+  const loadedWorker = () => (current && current.loaded && !current.dead && !terminated ? current : null);
+
   const request = (message, { onProgress, transfer = [], signal } = {}) => {
     if (signal?.aborted) return Promise.reject(abortReason(signal));
     // A request sent now has its inputs copied (or transferred) as the call is made, as
     // postMessage does: a caller may refill its arrays once the call returns. One that waits
     // (another request runs, or the worker loads) has them copied now, and the copy is sent
     // when its turn comes.
-    const now = !running && queue.length === 0 && current && current.loaded && !current.dead && !terminated;
+    const now = !running && queue.length === 0 && loadedWorker();
     let payload = message;
     let moved = transfer;
     if (!now && typeof structuredClone === "function") {
@@ -240,13 +243,13 @@ export async function createWorkerRegistrar(options = {}) {
       const onAbort = () => {
         if (done) return;
         done = true;
-        reject(abortReason(signal));
+        const aborted = abortReason(signal);
+        reject(aborted);
         const waiting = queue.indexOf(job);
         if (waiting >= 0) queue.splice(waiting, 1);
         // Sent: the engine cannot be interrupted mid-call, so the worker stops (a request that
         // waited, or whose worker was still loading, was never sent: the worker stays).
         if (w && id) {
-          const aborted = abortReason(signal);
           retire(w, aborted, (other) =>
             other === id ? aborted : new Error("arps worker: stopped to cancel another request; this request did not complete, send it again"),
           );
@@ -270,7 +273,7 @@ export async function createWorkerRegistrar(options = {}) {
       };
       job.run = () => {
         if (done) return Promise.resolve();
-        const loaded = current && current.loaded && !current.dead && !terminated ? current : null;
+        const loaded = loadedWorker();
         return loaded ? Promise.resolve(go(loaded)) : live(onProgress).then(go, settle(reject));
       };
       queue.push(job);
