@@ -24,6 +24,10 @@
 //!   [`SIDES`] of its sides: it reaches out beyond what stands on it, as a table does, and as a
 //!   box's bottom face, the floor of a room between its walls or the ground of a street do not.
 //!
+//! - at least [`MIDDLE_SHARE`] of its points lie near its middle ([`MIDDLE`]): a table's points
+//!   gather there, as one layer with noise does, while the two faces of a sheet thinner than the
+//!   band (a panel's model, both faces sampled) lie in two layers with hardly a point between.
+//!
 //! The points of the whole cloud within the plane's fitted thickness are its points.
 
 use crate::cloud::MIN_POINTS;
@@ -95,6 +99,13 @@ pub const SIDE_SHARE: f64 = 0.05;
 /// Fewest of the footprint's four sides the plane must reach beyond: a table seen around the
 /// object, not the bottom of a shape whose walls were cut on one side.
 pub const SIDES: usize = 3;
+
+/// A plane's points near its middle: nearer it than this share of their median distance to it.
+pub const MIDDLE: f64 = 0.25;
+
+/// Least share of a plane's points near its middle ([`MIDDLE`]): one noisy layer has 13% there
+/// (Gaussian noise; 12.5% uniform), the two faces of a sheet none.
+pub const MIDDLE_SHARE: f64 = 0.04;
 
 /// A support plane found in a cloud ([`find`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -279,12 +290,17 @@ fn test(
     if (beyond as f64) < BEYOND * on.len() as f64 || open_sides < SIDES {
         return None;
     }
-    // the thickness from the spread of the plane's sample points about it (scanner noise), at
-    // most the band it was found in
+    // one layer, not a sheet's two faces: some of its points near its middle
     let mut residual: Vec<f64> = on.iter().map(|p| plane.distance(p).abs()).collect();
     let mid = residual.len() / 2;
-    let (_, mad, _) = residual.select_nth_unstable_by(mid, f64::total_cmp);
-    let half_thickness = (4.0 * 1.4826 * *mad).clamp(0.25 * band, band);
+    let mad = *residual.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let middle = residual.iter().filter(|&&r| r < MIDDLE * mad).count();
+    if (middle as f64) < MIDDLE_SHARE * on.len() as f64 {
+        return None;
+    }
+    // the thickness from the spread of the plane's sample points about it (scanner noise), at
+    // most the band it was found in
+    let half_thickness = (4.0 * 1.4826 * mad).clamp(0.25 * band, band);
     let indices: Vec<usize> =
         (0..points.len()).filter(|&i| plane.distance(&points[i]).abs() <= half_thickness).collect();
     if points.len() - indices.len() < MIN_POINTS {
@@ -396,6 +412,22 @@ mod tests {
         // a table beside the object on one side only (the floor of a cut-open shape)
         let mut points = block(3_000, [0.3, 0.2, 0.25], false, 7);
         points.extend(table(1_500, 1.0, 8).into_iter().map(|p| [p[0].abs() * 0.6 + 0.3, p[1] * 0.2, p[2]]));
+        assert_eq!(find(&points), None);
+    }
+
+    #[test]
+    fn a_sheet_with_both_faces_is_not_a_support() {
+        // a thin panel's model (both faces, closer than the band) with a box standing on it: the
+        // box on one face of a table would be dropped, but this plane is two layers
+        let mut points = block(3_000, [0.3, 0.2, 0.25], false, 17);
+        let mut top = table(1_500, 1.0, 18);
+        top.iter_mut().for_each(|p| p[2] = -0.006 + p[2] * 0.1);
+        points.extend(top);
+        let mut bottom = table(1_500, 1.0, 19);
+        bottom.iter_mut().for_each(|p| p[2] = -0.016 + p[2] * 0.1);
+        let one_face = find(&points).expect("one face is a table");
+        assert!(one_face.normal[2] > 0.99, "{:?}", one_face.normal);
+        points.extend(bottom);
         assert_eq!(find(&points), None);
     }
 
