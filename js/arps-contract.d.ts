@@ -123,8 +123,10 @@ export type RegisterOptions = {
    * below `sourceOverlap - 0.15`) is not taken as sure: the adaptive search goes on as for an
    * unsure answer, and when the answer still falls short its confidence is at most 0.25, with a
    * warning that gives the share (the wrong model, a mirror-image export, a scale or unit
-   * error, points the target lacks left in the source, or a pose the search did not find). A
-   * number in (0, 1].
+   * error, points the target lacks left in the source, or a pose the search did not find).
+   * With it, the source's mirror images are also refined from the answer: when one fits
+   * clearly better, the confidence is at most 0.25, with a warning (a mirrored part, an export
+   * with one axis flipped). A number in (0, 1].
    */
   sourceOverlap?: number | null,
   /**

@@ -484,7 +484,7 @@ fn overlap_axes(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, radiu
 }
 
 /// The centroid of `sample` moved by `t`, and its principal axes (the columns).
-fn principal_axes(sample: &[[f32; 3]], t: &Matrix4<f64>) -> (Vector3<f64>, Matrix3<f64>) {
+pub(crate) fn principal_axes(sample: &[[f32; 3]], t: &Matrix4<f64>) -> (Vector3<f64>, Matrix3<f64>) {
     let (c, axes, _) = principal_axes_spreads(sample, t);
     (c, axes)
 }

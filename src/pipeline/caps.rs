@@ -4,15 +4,17 @@
 //! Some answers fit well for reasons that say nothing about their pose: the answer was never
 //! refined, the source is too small for the distance the fit is judged at, its coordinates were
 //! rounded to a grid as coarse as that distance, a tilted pose fits clearly better than the
-//! upright one `up` asked for, or clearly less of the source lies on the target than the caller
+//! upright one `up` asked for, clearly less of the source lies on the target than the caller
 //! said does (`sourceOverlap`, [`short_of_overlap`]: also what the search goes by,
-//! [`within_overlap`]). [`cap`] holds the confidence of such an answer at
+//! [`within_overlap`]), or a mirror image of the source fits clearly better
+//! ([`super::mirror`]). [`cap`] holds the confidence of such an answer at
 //! [`UNREFINED_CONFIDENCE`], below the line of the low-confidence warning, and says why in a
 //! warning.
 
 use super::prepare::Prepared;
 use crate::confidence::Evidence;
 use crate::error::num;
+use crate::refine::Candidate;
 use crate::register::UP_TOLERANCE_DEG;
 
 /// The most confidence an answer that no start's refinement reached can have (the network's
@@ -64,22 +66,33 @@ pub(crate) struct Tilted {
     pub fitness: f64,
 }
 
-/// The answer's `confidence` (its fitness `fitness`) held at [`UNREFINED_CONFIDENCE`], with a
-/// warning naming the reason, when no start was refined (`refined_any` false: the warning was
-/// given where the answer was chosen), when the source is smaller than
-/// [`SMALL_SOURCE_DISTANCES`] evidence distances, when the clouds were rounded to steps of more
-/// than [`ROUNDING_DISTANCES`] evidence distances, or when a `tilted` pose fits clearly better
-/// than the upright answer, or when `short` is set ([`short_of_overlap`]: the share of the source
-/// near the target and the declared `sourceOverlap` it falls short of).
+/// What the search found against its answer, for [`cap`].
+pub(crate) struct Doubts {
+    /// Whether any start was refined (false: the answer is a start, unrefined).
+    pub refined_any: bool,
+    /// With `up`: a tilted pose that fits clearly better than the upright answer.
+    pub tilted: Option<Tilted>,
+    /// With `sourceOverlap`: the share of the source near the target and the declared share it
+    /// falls short of ([`short_of_overlap`]).
+    pub short: Option<(f64, f64)>,
+    /// A mirror image of the source that fits clearly better ([`super::mirror::fits_better`]).
+    pub mirrored: Option<Candidate>,
+}
+
+/// The confidence of the `answer` held at [`UNREFINED_CONFIDENCE`], with a warning naming the
+/// reason, when no start was refined (the warning was given where the answer was chosen), when
+/// the source is smaller than [`SMALL_SOURCE_DISTANCES`] evidence distances, when the clouds were
+/// rounded to steps of more than [`ROUNDING_DISTANCES`] evidence distances, or when one of the
+/// other [`Doubts`] holds.
 pub(crate) fn cap(
     p: &Prepared,
     confidence: f64,
-    refined_any: bool,
-    tilted: Option<Tilted>,
-    short: Option<(f64, f64)>,
-    fitness: f64,
+    answer: &Candidate,
+    doubts: Doubts,
     warnings: &mut Vec<String>,
 ) -> f64 {
+    let Doubts { refined_any, tilted, short, mirrored } = doubts;
+    let fitness = answer.fitness;
     let mut capped = !refined_any;
     let s = p.norm.scale;
     // a source within a few evidence distances of its centre fits wherever it touches the target's
@@ -127,6 +140,19 @@ pub(crate) fn cap(
             100.0 * share,
             num(2.0 * p.d_evidence * s),
             100.0 * declared
+        ));
+        capped = true;
+    }
+    // a mirror image of the source fits clearly better: the clouds are mirror images of each other
+    if let Some(m) = mirrored {
+        warnings.push(format!(
+            "a mirror image of the source fits the target clearly better than the answer (fitness {:.3}, inlier RMSE {} \
+             against {:.3}, {}): one cloud is probably a mirror image of the other (a left part for a right one, a \
+             file with one axis flipped), which no rigid motion aligns",
+            m.fitness,
+            num(m.inlier_rmse * s),
+            fitness,
+            num(answer.inlier_rmse * s)
         ));
         capped = true;
     }

@@ -9,13 +9,15 @@
 //! 4. [`starts`]: the stages of the search and the candidate starts of each ([`starts::Starts`]).
 //! 5. [`search`]: the adaptive or exhaustive refinement of the starts, with the confidence stop,
 //!    and the other poses that fit about as well ([`search::Chosen`]); [`caps`] holds down the
-//!    confidence of answers whose fit cannot confirm their pose.
+//!    confidence of answers whose fit cannot confirm their pose, and of answers a mirror image of
+//!    the source fits clearly better than ([`mirror`]).
 //!    With `up` ([`crate::Options::up`]), [`upright`] levels its starts and rules out tilted
 //!    answers and look-alikes.
 //! 6. [`result`]: the chosen answer and its alternatives mapped back to the caller's frame and
 //!    units, checked, with its warnings ([`crate::Registration`]).
 
 pub(crate) mod caps;
+pub(crate) mod mirror;
 pub(crate) mod network;
 pub(crate) mod options;
 pub(crate) mod prepare;

@@ -41,6 +41,7 @@
 //! ([`caps::within_overlap`]), so the search goes on past it.
 
 use super::caps;
+use super::mirror;
 use super::prepare::Prepared;
 use super::starts::{self, Starts, Step};
 use crate::confidence::{self, Evidence, Probed};
@@ -360,7 +361,13 @@ pub(crate) fn search(
         .filter(|t| refined_any && refine::clearly_better(t, &candidate))
         .map(|t| caps::Tilted { tilt_deg: tilt_deg(&t.T_target_source), fitness: t.fitness });
     let short = caps::short_of_overlap(&evidence, options.source_overlap);
-    let confidence = caps::cap(p, confidence, refined_any, tilted, short, candidate.fitness, warnings);
+    // with `sourceOverlap` (a scan onto its model, where a mirrored part or export is a common
+    // mistake): a mirror image of the source that fits clearly better
+    let mirrored = (refined_any && p.icp != IcpKind::Off && options.source_overlap.is_some())
+        .then(|| mirror::fits_better(target_index, &p.icp_src.points, &candidate, &how, &admits))
+        .flatten();
+    let doubts = caps::Doubts { refined_any, tilted, short, mirrored };
+    let confidence = caps::cap(p, confidence, &candidate, doubts, warnings);
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
     // probes turned it over): the caller asked to refine that guess, so the result says how far
     // it moved

@@ -119,7 +119,8 @@ pub struct RegisterArgs {
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     source_scale: Option<f64>,
     /// Exit with status 1 (after printing every answer) when an answer's confidence is below C,
-    /// for unattended batches: stderr says how many were.
+    /// for unattended batches: stderr says how many were. An answer another pose fits about as
+    /// well as is held at 0.5 exactly: a C above 0.5 fails it.
     #[arg(long, value_name = "C", allow_negative_numbers = true)]
     min_confidence: Option<f64>,
     /// Write each source, moved by its answer into the target's frame, to PATH. To a PATH of the
