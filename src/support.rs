@@ -24,9 +24,12 @@
 //!   [`SIDES`] of its sides: it reaches out beyond what stands on it, as a table does, and as a
 //!   box's bottom face, the floor of a room between its walls or the ground of a street do not.
 //!
-//! - at least [`MIDDLE_SHARE`] of its points lie near its middle ([`MIDDLE`]): a table's points
-//!   gather there, as one layer with noise does, while the two faces of a sheet thinner than the
-//!   band (a panel's model, both faces sampled) lie in two layers with hardly a point between.
+//! - it is one layer, not a face of a sheet (a panel's model, both faces sampled): at least
+//!   [`MIDDLE_SHARE`] of its points lie near its middle ([`MIDDLE`]), where a table's points
+//!   gather, as one layer with noise does, while two faces within its band lie in two layers with
+//!   hardly a point between; and fewer than [`SECOND_LAYER`] as many sample points lie just beside
+//!   its band (within twice it), where a sheet's other face lies and only the rim of what stands
+//!   on a table does.
 //!
 //! The points of the whole cloud within the plane's fitted thickness are its points.
 
@@ -106,6 +109,10 @@ pub const MIDDLE: f64 = 0.25;
 /// Least share of a plane's points near its middle ([`MIDDLE`]): one noisy layer has 13% there
 /// (Gaussian noise; 12.5% uniform), the two faces of a sheet none.
 pub const MIDDLE_SHARE: f64 = 0.04;
+
+/// Most sample points just beside a plane's band (farther than the band, within twice it), as a
+/// share of the plane's own: more is a second layer, the other face of a sheet.
+pub const SECOND_LAYER: f64 = 0.5;
 
 /// A support plane found in a cloud ([`find`]).
 #[derive(Clone, Debug, PartialEq)]
@@ -250,6 +257,11 @@ fn test(
         settled.iter().map(|p| (plane.distance(p), *p)).filter(|(d, _)| d.abs() > 2.0 * band).collect();
     let n = sample.len() as f64;
     if (on.len() as f64) < MIN_SHARE * n || (off.len() as f64) < MIN_REST * n {
+        return None;
+    }
+    // a second layer just beside it: the other face of a sheet
+    let beside = sample.iter().filter(|p| (band..=2.0 * band).contains(&plane.distance(p).abs())).count();
+    if beside as f64 >= SECOND_LAYER * on.len() as f64 {
         return None;
     }
     // the rest on one side: the normal turned towards it
@@ -429,6 +441,21 @@ mod tests {
         assert!(one_face.normal[2] > 0.99, "{:?}", one_face.normal);
         points.extend(bottom);
         assert_eq!(find(&points), None);
+    }
+
+    #[test]
+    fn a_face_of_a_sheet_is_not_a_support() {
+        // a box on a panel's model whose faces lie farther apart than the plane's band (0.01
+        // here): its top face passes as a table until the bottom one lies just beside it
+        let mut points = block(3_000, [0.3, 0.2, 0.25], false, 20);
+        points.extend(table(1_500, 1.0, 21));
+        let c = |points: &[[f32; 3]]| {
+            let plane = Plane { point: Vector3::zeros(), normal: Vector3::z() };
+            test(points, points, points, 0.05, Candidate { plane, band: 0.01, count: 0 })
+        };
+        assert!(c(&points).is_some());
+        points.extend(table(1_500, 1.0, 22).into_iter().map(|p| [p[0], p[1], -0.015 + p[2]]));
+        assert_eq!(c(&points), None);
     }
 
     #[test]
