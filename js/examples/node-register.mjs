@@ -47,12 +47,12 @@ for (let i = 0; i < args.length; i++) {
   else files.push(args[i]);
 }
 if (files.length !== 2) usage();
-// --aligned: the source's own format (moved as it is) or .ply (its points), said before registering;
-// a scaled source is written as its points (the file itself can only be moved rigidly)
+// --aligned: the source's own format (moved as it is; scaled too with --source-scale) or .ply (its
+// points), said before registering
 const ext = (f) => path.extname(f).slice(1).toLowerCase();
-const own = aligned !== null && sourceScale === 1 && canTransform(files[0]) && ext(aligned) === ext(files[0]);
+const own = aligned !== null && canTransform(files[0]) && ext(aligned) === ext(files[0]);
 if (aligned !== null && !own && ext(aligned) !== "ply") {
-  const moved = canTransform(files[0]) && sourceScale === 1 ? ` or .${ext(files[0])} (the source moved as it is)` : "";
+  const moved = canTransform(files[0]) ? ` or .${ext(files[0])} (the source moved as it is)` : "";
   usage(`--aligned: name ${aligned} .ply (the source's points)${moved}`);
 }
 
@@ -94,8 +94,11 @@ try {
   registrar.free();
   if (aligned) {
     // the source file itself moved when OUT names its own format, else its points as PLY
+    // the file's own points are not scaled yet: the answer after the scale (column-major: the
+    // first three columns times it)
+    const fileMatrix = r.T_target_source.map((v, i) => (i < 12 ? v * sourceScale : v));
     const bytes = own
-      ? transformFile(readFileSync(files[0]), path.basename(files[0]), r.T_target_source)
+      ? transformFile(readFileSync(files[0]), path.basename(files[0]), fileMatrix)
       : writePly(transformPointCloud(source, r.T_target_source));
     writeFileSync(aligned, bytes);
     if (!json) console.log(`wrote the aligned source to ${aligned} (${own ? "the source file moved" : "its points, as PLY"})`);
