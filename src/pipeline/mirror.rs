@@ -4,9 +4,9 @@
 //! No rigid motion aligns a part with its mirror image (a left bracket with the right one's model, a
 //! file exported with one axis flipped), yet the best rigid fit of a nearly symmetric part (a
 //! tooth, a bone, a bracket) can fit about as well as the truth would at a loose distance. With
-//! `sourceOverlap` (a scan onto its model, where that mistake is common; the check costs about a
-//! fifth of a small pair's time), the source's mirror images, placed where the answer placed the
-//! source, are refined like a start; one that fits clearly better than the answer
+//! `sourceOverlap` (a scan onto its model, where that mistake is common; the check costs a quarter
+//! to a third of a small pair's time), the source's mirror images, placed where the answer placed
+//! the source, are refined like a start; one that fits clearly better than the answer
 //! ([`fits_better`]) tells that the clouds are mirror images of each other, and
 //! [`super::caps::cap`] holds the answer's confidence down.
 
@@ -42,7 +42,6 @@ pub(crate) const MIRROR_RMSE_SLACK: f64 = 1.02;
 /// placed by the answer's `T_target_source` and refined like a start ([`refine::refine_best`])
 /// with `how`, when it fits clearly better than the `answer` ([`clearly_better`]) and `admits`
 /// its pose; `None` otherwise. Its figures are at the final distance, as the answer's.
-#[inline(never)]
 pub(crate) fn fits_better(
     target: &IcpTarget,
     source: &[[f32; 3]],
