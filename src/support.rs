@@ -22,8 +22,7 @@
 //! - at least [`BEYOND`] of its points lie outside the footprint of the points off it (their
 //!   bounding rectangle in the plane), at least [`SIDE_SHARE`] of them beyond each of at least
 //!   [`SIDES`] of its sides: it reaches out beyond what stands on it, as a table does, and as a
-//!   box's bottom face, the floor of a room between its walls or the ground of a street do not.
-//!
+//!   box's bottom face, the floor of a room between its walls or the ground of a street do not;
 //! - it is one layer, not a face of a sheet (a panel's model, both faces sampled): at least
 //!   [`MIDDLE_SHARE`] of its points lie near its middle ([`MIDDLE`]), where a table's points
 //!   gather, as one layer with noise does, while two faces within its band lie in two layers with
