@@ -13,6 +13,7 @@
 use crate::confidence;
 use crate::icp::IcpTarget;
 use crate::refine::{self, Candidate, Refinement};
+use crate::transform;
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
 /// The mirror image fits clearly better ([`clearly_better`]) when, with about as many of its
@@ -75,7 +76,5 @@ fn clearly_better(m: &Candidate, answer: &Candidate) -> bool {
 /// The half turn about the line through `c` along the unit vector `u`.
 fn half_turn(u: &Vector3<f64>, c: &Vector3<f64>) -> Matrix4<f64> {
     let r = 2.0 * u * u.transpose() - Matrix3::identity();
-    let mut m = r.to_homogeneous();
-    m.fixed_view_mut::<3, 1>(0, 3).copy_from(&(c - r * c));
-    m
+    transform::from_rotation_translation(&r, &(c - r * c))
 }
