@@ -26,6 +26,17 @@ fn obj_quads_are_fan_triangulated() {
 }
 
 #[test]
+fn obj_lines_ending_in_a_backslash_continue_on_the_next() {
+    let cube = cube();
+    // a face and a vertex split over lines (CRLF on one), a comment ending in a backslash kept apart
+    let split = CUBE_OBJ
+        .replace("f 1 4 3 2\n", "f 1 4 \\\n  3 \\\r\n 2\n")
+        .replace("v -0.5 0.5 0.5\n", "# not continued \\\nv -0.5 \\\n0.5 0.5\n");
+    let m = read_mesh(split.as_bytes(), "cube.obj").unwrap();
+    assert_eq!((m.vertices, m.triangles), (cube.vertices, cube.triangles));
+}
+
+#[test]
 fn off_variants_read_the_same_cube() {
     let cube = cube();
     let verts: String = cube.vertices.iter().map(|v| format!("{} {} {}\n", v[0], v[1], v[2])).collect();

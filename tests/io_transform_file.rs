@@ -218,6 +218,21 @@ fn obj_keeps_faces_and_texture_and_turns_normals() {
 }
 
 #[test]
+fn obj_with_continued_lines_keeps_a_continued_face_and_refuses_a_continued_vertex() {
+    let m = tilted_motion();
+    let obj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 2 \\\n 3\nf 1 3 4\n";
+    let moved = String::from_utf8(transform_file(obj.as_bytes(), "a.obj", &m).unwrap()).unwrap();
+    let lines: Vec<&str> = moved.lines().collect();
+    assert_eq!(lines[4..], ["f 1 2 \\", " 3", "f 1 3 4"]);
+    let p = apply(&m, [1.0, 0.0, 0.0]);
+    let second: Vec<f64> = lines[1].split_whitespace().skip(1).map(|t| t.parse().unwrap()).collect();
+    assert!((0..3).all(|k| (second[k] - p[k]).abs() < 0.05 + 1e-9), "{second:?} vs {p:?}");
+    let split = obj.replace("v 1 0 0\n", "v 1 \\\n 0 0\n");
+    let err = transform_file(split.as_bytes(), "a.obj", &m).unwrap_err().to_string();
+    assert!(err.contains("line 2") && err.contains("continued"), "{err}");
+}
+
+#[test]
 fn off_keeps_faces_and_colours_turns_normals_and_follows_split_records() {
     let m = tilted_motion();
     // ballA.off (ModelNet's layout): 1,900 vertices, 3,796 faces

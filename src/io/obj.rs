@@ -1,5 +1,6 @@
 //! Wavefront OBJ: `v` lines and `f` lines (`i`, `i/t`, `i//n`, `i/t/n`, negative = relative).
-//! Everything else (normals, texture coordinates, groups, materials) is ignored.
+//! A line ending in `\` continues on the next (a comment does not). Everything else (normals, texture coordinates,
+//! groups, materials) is ignored.
 //!
 //! An own reader rather than `tobj`: only positions and face indices are needed, and errors
 //! here name the line.
@@ -7,6 +8,7 @@
 use super::util::{check_index, fan, parse_f64, parse_int, utf8_line, Lines};
 use super::Raw;
 use crate::{Error, Result};
+use std::borrow::Cow;
 
 pub(crate) const F: &str = "OBJ";
 
@@ -15,7 +17,8 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
     // Faces are resolved at the end (positive indices may point forward); keep the line.
     let mut faces: Vec<(usize, usize, usize)> = Vec::new(); // (line, start in `corners`, len)
     let mut corners: Vec<i64> = Vec::new();
-    for (n, raw) in Lines::new(bytes) {
+    for (n, raw) in Statements(Lines::new(bytes)) {
+        let raw = &*raw;
         let trimmed = raw.trim_ascii_start();
         let is = |kw: &[u8]| trimmed.starts_with(kw) && trimmed.get(kw.len()).is_none_or(|b| b.is_ascii_whitespace());
         if is(b"v") {
@@ -74,6 +77,43 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
         fan(&poly, &mut triangles);
     }
     Ok(Raw { vertices, triangles })
+}
+
+/// The file's statements: its lines, a line ending in `\` (not a comment) joined to the next (with a space in
+/// place of the backslash), each numbered by its first line.
+struct Statements<'a>(Lines<'a>);
+
+impl<'a> Iterator for Statements<'a> {
+    type Item = (usize, Cow<'a, [u8]>);
+
+    fn next(&mut self) -> Option<Self::Item> {
+        let (n, first) = self.0.next()?;
+        let Some(mut head) = continued(first) else {
+            return Some((n, Cow::Borrowed(first)));
+        };
+        let mut joined = Vec::new();
+        loop {
+            joined.extend_from_slice(head);
+            joined.push(b' ');
+            let Some((_, line)) = self.0.next() else { break };
+            match continued(line) {
+                Some(h) => head = h,
+                None => {
+                    joined.extend_from_slice(line);
+                    break;
+                }
+            }
+        }
+        Some((n, Cow::Owned(joined)))
+    }
+}
+
+/// The line without its continuation backslash, when it ends in one and is not a comment.
+pub(crate) fn continued(line: &[u8]) -> Option<&[u8]> {
+    if line.trim_ascii_start().starts_with(b"#") {
+        return None;
+    }
+    line.trim_ascii_end().strip_suffix(b"\\")
 }
 
 /// True when the first non-comment lines look like OBJ statements.
