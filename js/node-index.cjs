@@ -1,6 +1,8 @@
 // CommonJS entry of the Node build (pkg/node/arps.js): the facade (facade.cjs) over the raw
-// wasm-bindgen glue (arps_glue.js, which loads ../arps_bg.wasm, the web build's, from disk on
-// require). The same API as the web build. The default model is ../models/arps-web.safetensors,
+// wasm-bindgen glue (arps_glue.js, which loads ../arps_bg.wasm, the web build's, from disk when
+// it is required). The glue is required on the first call, not on import: a server-side bundle
+// (Next.js, webpack `target: "node"`) that includes the package but never calls it on the server
+// imports it without the .wasm beside it. The same API as the web build. The default model is ../models/arps-web.safetensors,
 // read from disk when `Registrar.withDefaultModel()` first needs it; `Registrar.fromUrl` reads
 // `file:` URLs from disk and fetches the others. `init` and `initSync` need not be called; they
 // take the same options as the web build's (`{ model }` sets another default model).
@@ -10,8 +12,28 @@
 const fs = require("node:fs");
 const path = require("node:path");
 const { fileURLToPath } = require("node:url");
-const glue = require("./arps_glue.js");
 const { makeApi, modelBytes } = require("./facade.cjs");
+
+const WASM = path.join(__dirname, "..", "arps_bg.wasm");
+let loaded;
+/** The glue, required on first use; a .wasm that is not where the glue looks is a clear error. */
+function loadGlue() {
+  if (loaded === undefined) {
+    try {
+      loaded = require("./arps_glue.js");
+    } catch (e) {
+      if (e?.code !== "ENOENT") throw e;
+      throw new Error(
+        `arps: its WebAssembly file is not at ${WASM} (${e.message}). A bundler that copied the package's ` +
+          "JavaScript into a server bundle left it behind: keep the package out of the server bundle (Next.js " +
+          '`serverExternalPackages: ["arps"]`, webpack `externals`), or import it only in client code',
+        { cause: e },
+      );
+    }
+  }
+  return loaded;
+}
+const glue = new Proxy({}, { get: (_, key) => loadGlue()[key] });
 
 const DEFAULT_MODEL = path.join(__dirname, "..", "models", "arps-web.safetensors");
 
@@ -52,8 +74,8 @@ module.exports = {
   listScans: api.listScans,
   version: api.version,
   /**
-   * Nothing to do in Node (the engine is ready on require; the default model is read from disk on
-   * first use); `init({ model })` with a URL, path or bytes sets another default model.
+   * Nothing to do in Node (the engine loads on the first call; the default model is read from
+   * disk on first use); `init({ model })` with a URL, path or bytes sets another default model.
    */
   default: async (options) => {
     const model = modelOption(options);

@@ -1,6 +1,6 @@
 // ESM entry of the Node build: the same API as the web build (`await init()` then `Registrar`,
 // `parsePointCloud`, `readPointCloud`, `transformPointCloud`, `writePly`, `transformFile`, `canTransform`, `listScans`, `version`). It re-exports the CommonJS entry (./arps.js: the facade over the
-// glue that loads its .wasm synchronously from disk), so `init` and `initSync` just return.
+// glue that loads its .wasm synchronously from disk on the first call), so `init` and `initSync` just return.
 import { createRequire } from "node:module";
 
 const require = createRequire(import.meta.url);
@@ -9,7 +9,7 @@ const arps = require("./arps.js");
 export const { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly, transformFile, canTransform, listScans, version } =
   arps;
 
-/** Nothing to do in Node (the engine is ready on import); `init({ model })` sets another default model. */
+/** Nothing to do in Node (the engine loads on the first call); `init({ model })` sets another default model. */
 export default async function init(options) {
   await arps.default(options);
   return arps;

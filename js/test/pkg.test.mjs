@@ -142,6 +142,26 @@ test("package.json exports resolve for import and require under Node", () => {
   }
 });
 
+test("the Node build imports without its .wasm beside it (a server bundle), and says so when called", () => {
+  // what a bundler that copies the JavaScript into a server bundle leaves: node/ without ../arps_bg.wasm
+  const dir = mkdtempSync(path.join(os.tmpdir(), "arps-ssr-"));
+  try {
+    mkdirSync(path.join(dir, "node"));
+    for (const f of ["arps.js", "arps_glue.js", "facade.cjs", "index.mjs", "package.json"]) {
+      writeFileSync(path.join(dir, "node", f), readFileSync(path.join(pkg, "node", f)));
+    }
+    const run = (code) => JSON.parse(execFileSync(process.execPath, ["--input-type=module", "-e", code], { cwd: dir, encoding: "utf8" }));
+    const out = run(`import * as arps from "./node/index.mjs";
+      let error = "";
+      try { arps.version(); } catch (e) { error = e.message; }
+      console.log(JSON.stringify({ registrar: typeof arps.Registrar, error }));`);
+    assert.equal(out.registrar, "function", "imported without the .wasm");
+    assert.match(out.error, /its WebAssembly file is not at .*arps_bg\.wasm.*serverExternalPackages/);
+  } finally {
+    rmSync(dir, { recursive: true, force: true });
+  }
+});
+
 test("package files: what npm would publish, and nothing else", () => {
   const out = execFileSync("npm", ["pack", "--dry-run", "--json"], { cwd: pkg, encoding: "utf8" });
   const files = JSON.parse(out)[0].files.map((f) => f.path).sort();
