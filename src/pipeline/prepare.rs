@@ -152,7 +152,10 @@ pub(crate) fn prepare(
     };
     for (what, len) in [("source", src_n.len()), ("target", target.cloud.len())] {
         if len < n_net {
-            warnings.push(format!("{what} has {len} points, fewer than the network's {n_net}: some were used twice"));
+            warnings.push(format!(
+                "{what} has {len} points, fewer than the {n_net} the network takes: it saw some of them twice (the \
+                 network's estimate is only a start; the answer is refined on every point)"
+            ));
         }
     }
     let net_src = sampling::network_sample(&src_n, n_net, options.seed);
