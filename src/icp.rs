@@ -545,6 +545,14 @@ impl IcpTarget {
         (inliers as f64 / source.len() as f64, (sum2 / inliers as f64).sqrt())
     }
 
+    /// The distance from target point `j` to its nearest other target point (infinite when it
+    /// has none): the cloud's spacing there.
+    pub(crate) fn spacing_at(&self, j: usize) -> f64 {
+        let mut out = Vec::with_capacity(2);
+        self.index.knn_into(&self.points[j], 2, &mut out);
+        out.iter().find(|(i, _)| *i != j).map_or(f64::INFINITY, |(_, d2)| (*d2 as f64).sqrt())
+    }
+
     /// The target point nearest to `q` (target frame) if it is closer than `max_distance`
     /// (strictly): its index into [`IcpTarget::points`].
     pub fn nearest_within(&self, q: &[f32; 3], max_distance: f64) -> Option<usize> {

@@ -68,8 +68,13 @@ pub struct Options {
     /// clouds' shared half-extent.
     pub voxel_size: Option<f64>,
     /// An initial guess of `T_target_source` (rigid, the clouds' units); the network then
-    /// estimates the remaining motion from there, and of two answers that fit about as well, the
-    /// one nearer the guess's rotation wins (see `starts`). Default: the identity. Either 16
+    /// estimates the remaining motion from there, the adaptive search refines the guess itself
+    /// (the `"initial"` start, when `starts` has it) with the first start, and of two answers that
+    /// fit about as well, the one nearer the guess's rotation wins (see `starts`). An answer that
+    /// turns more than 60 degrees away from the guess (`GUESS_TURN_DEG`) contradicts it: its
+    /// confidence is at most 0.25, with a warning (the guess was off, or the answer is a
+    /// look-alike: 30-100 probe points on a vertebra, turned over, fit 0.89-0.97 of them). Default:
+    /// the identity. Either 16
     /// numbers in **column-major** order (a previous result's `T_target_source`, a three.js
     /// `Matrix4.elements`; in JS also a `Float32Array` or `Float64Array`), or four **row-major**
     /// rows `[[r00, r01, r02, tx], [r10, r11, r12, ty], [r20, r21, r22, tz], [0, 0, 0, 1]]`. A
@@ -189,7 +194,8 @@ pub struct Options {
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub starts: Vec<Start>,
     /// How `starts` are searched. Default `"adaptive"`: in stages, stopping as soon as the best
-    /// answer's `confidence` reaches 0.95 (`STOP_CONFIDENCE`): the first start alone; then the
+    /// answer's `confidence` reaches 0.95 (`STOP_CONFIDENCE`): the first start alone (with
+    /// `initialTransform` given, and `"initial"` in `starts`, with that start); then the
     /// others in order, each run of local starts or of global ones (`"global"`,
     /// `"globalNetwork"`) one stage (with the default starts: the global ones, then the other
     /// local ones). When every stage has run without reaching 0.95 and `starts` has a global
@@ -209,7 +215,11 @@ pub struct Options {
     /// global stage has run, the answer's rotation with the translation the descriptor matches
     /// agree on for it is refined as one more start when that translation is another one, and
     /// replaces the answer when it fits more than 10% better (an answer slid along a wall, its
-    /// rotation right). `"exhaustive"` refines every start, in the same stages (the starts for
+    /// rotation right). Then, when most of the source lies on thin walls (another face parallel
+    /// to its own within ten final distances), the answer moved onto those other faces is
+    /// refined at the final distance, and replaces it when it fits better, its points no farther
+    /// (a one-view scan of sheet metal settled on the inner faces); one that fits alike comes
+    /// with a warning, as a flat sheet's two faces cannot be told apart. `"exhaustive"` refines every start, in the same stages (the starts for
     /// unsure answers in their place in `starts`), each stage's best judged as above, without
     /// the stops and without those last stages. The result's `startsRefined` says how many were
     /// refined.
@@ -276,6 +286,13 @@ pub const AGREED_CONFIDENCE: f64 = 0.5;
 /// degrees: enough for scans levelled a little differently (a phone's gravity estimate, a tripod
 /// off level), small against the half turns about a horizontal axis that it rules out.
 pub const UP_TOLERANCE_DEG: f64 = 10.0;
+
+/// With [`Options::initial_transform`], an answer that turns more than this many degrees away
+/// from it contradicts the guess (the guess was off, or the answer is a look-alike that fits a
+/// sparse or partial source about as well): its confidence is at most 0.25, with a warning. ICP's
+/// basin reaches 20-30 degrees and the `turnedInitial` starts 45 about the guess; a guess that
+/// close is what a caller gives one for.
+pub const GUESS_TURN_DEG: f64 = 60.0;
 
 /// When either cloud has at least this many points, [`Search::Adaptive`] does not stop before
 /// its global stage has run, however sure an earlier answer is: the confidence is calibrated on
@@ -585,7 +602,7 @@ impl Registrar {
         };
 
         progress(Stage::Refining);
-        let stages = starts::stages(&starts::kinds(options), options.search);
+        let stages = starts::stages(&starts::kinds(options), options.search, options.initial_transform.is_some());
         let mut builder = Starts::new(&prepared, t_net_n, options.seed, self.clock);
         let chosen =
             search::search(&prepared, &stages, &mut builder, options, &self.model, &mut self.workspace, &mut warnings)?;

@@ -6,16 +6,16 @@
 //! rounded to a grid as coarse as that distance, a tilted pose fits clearly better than the
 //! upright one `up` asked for, clearly less of the source lies on the target than the caller
 //! said does (`sourceOverlap`, [`short_of_overlap`]: also what the search goes by,
-//! [`within_overlap`]), or a mirror image of the source fits clearly better
-//! ([`super::mirror`]). [`cap`] holds the confidence of such an answer at
-//! [`UNREFINED_CONFIDENCE`], below the line of the low-confidence warning, and says why in a
-//! warning.
+//! [`within_overlap`]), a mirror image of the source fits clearly better ([`super::mirror`]), or
+//! the answer turns far from the caller's `initialTransform` ([`GUESS_TURN_DEG`]). [`cap`] holds
+//! the confidence of such an answer at [`UNREFINED_CONFIDENCE`], below the line of the
+//! low-confidence warning, and says why in a warning.
 
 use super::prepare::Prepared;
 use crate::confidence::Evidence;
 use crate::error::num;
 use crate::refine::Candidate;
-use crate::register::UP_TOLERANCE_DEG;
+use crate::register::{GUESS_TURN_DEG, UP_TOLERANCE_DEG};
 
 /// The most confidence an answer that no start's refinement reached can have (the network's
 /// estimate or the initial transform, unrefined, when no start could be refined or none ended
@@ -77,6 +77,9 @@ pub(crate) struct Doubts {
     pub short: Option<(f64, f64)>,
     /// A mirror image of the source that fits clearly better ([`super::mirror::fits_better`]).
     pub mirrored: Option<Candidate>,
+    /// With `initialTransform`: how far the answer turns from it, degrees, when more than
+    /// [`GUESS_TURN_DEG`] (30-100 probe points on a vertebra, turned over, fit 0.89-0.97 of them).
+    pub far_from_guess: Option<f64>,
 }
 
 /// The confidence of the `answer` held at [`UNREFINED_CONFIDENCE`], with a warning naming the
@@ -91,7 +94,7 @@ pub(crate) fn cap(
     doubts: Doubts,
     warnings: &mut Vec<String>,
 ) -> f64 {
-    let Doubts { refined_any, tilted, short, mirrored } = doubts;
+    let Doubts { refined_any, tilted, short, mirrored, far_from_guess } = doubts;
     let fitness = answer.fitness;
     let mut capped = !refined_any;
     let s = p.norm.scale;
@@ -153,6 +156,15 @@ pub(crate) fn cap(
             num(m.inlier_rmse * s),
             fitness,
             num(answer.inlier_rmse * s)
+        ));
+        capped = true;
+    }
+    // the answer contradicts the caller's guess
+    if let Some(turn) = far_from_guess {
+        warnings.push(format!(
+            "the answer turns {turn:.0} degrees away from initialTransform (more than {GUESS_TURN_DEG:.0}): either the \
+             guess was off, or the answer is a look-alike that fits about as well (a sparse or partial source turned \
+             over); check the guess, or leave it out if it is not one"
         ));
         capped = true;
     }

@@ -26,3 +26,4 @@ pub(crate) mod search;
 pub(crate) mod starts;
 pub(crate) mod target;
 pub(crate) mod upright;
+pub(crate) mod wall;

@@ -34,23 +34,29 @@
 //! on ([`Starts::voted_pose`]: an answer slid along a wall, or onto the next of a row of alike
 //! parts, has the rotation right and the translation not) is refined like one more start, and
 //! replaces the answer when it fits clearly better; with `up`, so are its quarter and half turns
-//! about up ([`UP_TURNS_VOTED`]), each with the translation the matches agree on for it. With no start refined at all, the network's
-//! estimate (the initial transform with the network off), unrefined, with a warning and its
-//! confidence at most [`caps::UNREFINED_CONFIDENCE`]. With `sourceOverlap`, an answer under which
-//! clearly less of the source lies on the target than that share counts as unsure at every stage
-//! ([`caps::within_overlap`]), so the search goes on past it.
+//! about up ([`UP_TURNS_VOTED`]), each with the translation the matches agree on for it. Then the
+//! answer moved onto the other faces of the thin walls the source lies on
+//! ([`wall::other_faces`]) is refined at the final distance, replacing the answer when it fits
+//! better ([`wall::fits_better`]) and moved again (up to [`wall::ROUNDS`] times), with a warning
+//! when it fits alike ([`wall::fits_alike`]).
+//! With no start refined at all, the network's estimate (the initial transform with the network
+//! off), unrefined, with a warning and its confidence at most [`caps::UNREFINED_CONFIDENCE`].
+//! With `sourceOverlap`, an answer under which clearly less of the source lies on the target than
+//! that share counts as unsure at every stage ([`caps::within_overlap`]), so the search goes on
+//! past it.
 
 use super::caps;
 use super::mirror;
 use super::prepare::Prepared;
 use super::starts::{self, Starts, Step};
+use super::wall;
 use crate::confidence::{self, Evidence, Probed};
 use crate::icp::{IcpKind, IcpTarget};
 use crate::model::{Model, ModelWorkspace};
 use crate::refine::{self, Candidate, Refinement, Start};
 use crate::register::{
-    Options, Search, AGREED_CONFIDENCE, GLOBAL_BEFORE_STOP_POINTS, NEARLY_SURE_CONFIDENCE, STOP_CONFIDENCE,
-    UNSURE_CONFIDENCE, UP_TOLERANCE_DEG,
+    Options, Search, AGREED_CONFIDENCE, GLOBAL_BEFORE_STOP_POINTS, GUESS_TURN_DEG, NEARLY_SURE_CONFIDENCE,
+    STOP_CONFIDENCE, UNSURE_CONFIDENCE, UP_TOLERANCE_DEG,
 };
 use crate::Result;
 use nalgebra::{Matrix4, Point3};
@@ -330,6 +336,44 @@ pub(crate) fn search(
             }
         }
     }
+    // the answer moved onto the other faces of the thin walls the source lies on, each refined
+    // at the final distance only (the wider stages pair points across the wall): one that fits
+    // better replaces the answer, and is moved again (a scan a wall off along two or three
+    // axes); one that fits alike is said in a warning
+    if let Some((c, _, _)) = best.as_ref().filter(|_| adaptive && p.icp != IcpKind::Off) {
+        let start = *c;
+        let capped = refine::even_sample(&p.icp_src.points, refine::REFINE_POINTS);
+        let (mut chosen, mut faces) = (start, vec![start]);
+        for _ in 0..wall::ROUNDS {
+            let from = chosen;
+            for t in wall::other_faces(target_index, &p.icp_src.points, &from.T_target_source, d_final) {
+                starts_refined += 1;
+                let r = refine::refine_final(target_index, &capped, start.start, &level(t), &how);
+                if admits(&r.T_target_source) {
+                    refined.push((r.T_target_source, r.fitness));
+                    faces.push(r);
+                    if wall::fits_better(&r, &chosen) && improves(&chosen, &r) {
+                        chosen = r;
+                    }
+                }
+            }
+            if chosen.T_target_source == from.T_target_source {
+                break;
+            }
+        }
+        let other = |r: &&Candidate| !refine::coincide(&r.T_target_source, &chosen.T_target_source, &capped, d_final);
+        if let Some(alike) = faces.iter().filter(other).find(|r| wall::fits_alike(r, &chosen)) {
+            let centre = Point3::from(centroid);
+            let shift = (chosen.T_target_source.transform_point(&centre)
+                - alike.T_target_source.transform_point(&centre))
+            .norm();
+            warnings.push(wall::alike_warning(shift * p.norm.scale, &chosen, alike));
+        }
+        if chosen.T_target_source != start.T_target_source {
+            let (b, extra) = judged(chosen, &mut refined);
+            (best, starts_refined) = (Some(b), starts_refined + extra);
+        }
+    }
     // no start at all (only global ones, and the descriptors matched too little): the first
     // start the options name, unrefined
     let (candidate, probed, refined_any) = match best {
@@ -366,17 +410,20 @@ pub(crate) fn search(
     let mirrored = (refined_any && p.icp != IcpKind::Off && options.source_overlap.is_some())
         .then(|| mirror::fits_better(target_index, &p.icp_src.points, &candidate, &how, &admits))
         .flatten();
-    let doubts = caps::Doubts { refined_any, tilted, short, mirrored };
+    // with the caller's guess: an answer that turns far from it
+    let turn = crate::transform::rotation_error_deg(&candidate.T_target_source, &p.t_initial);
+    let far_from_guess = (options.initial_transform.is_some() && turn > GUESS_TURN_DEG).then_some(turn);
+    let doubts = caps::Doubts { refined_any, tilted, short, mirrored, far_from_guess };
     let confidence = caps::cap(p, confidence, &candidate, doubts, warnings);
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
-    // probes turned it over): the caller asked to refine that guess, so the result says how far
-    // it moved
+    // probes turned it over), not so far as to contradict it: the caller asked to refine that
+    // guess, so the result says how far it moved
     if options.initial_transform.is_some()
         && kinds == [Start::Initial]
         && refined_any
+        && far_from_guess.is_none()
         && !confidence::same_pose(&candidate.T_target_source, &p.t_initial)
     {
-        let turn = crate::transform::rotation_error_deg(&candidate.T_target_source, &p.t_initial);
         warnings.push(format!(
             "the answer turns {turn:.1} degrees from initialTransform, the one start: ICP from it, or a pose the \
              confidence's probes turned it to, fit better there (a guess that was off, or a symmetric shape's look-alike)"

@@ -60,13 +60,20 @@ pub(crate) enum Step {
 /// other local ones; the blind ones; the network's rotations). [`Search::Exhaustive`] runs the
 /// same stages of `kinds`, the starts for unsure answers among them in their order, every one
 /// of them: each stage's best is judged as in the adaptive search, so both count the same
-/// look-alikes as alternatives.
-pub(crate) fn stages(kinds: &[Start], search: Search) -> Vec<Step> {
-    let (unsure, kinds): (Vec<Start>, Vec<Start>) = match search {
+/// look-alikes as alternatives. With a `guess` (the caller's `initialTransform`),
+/// [`Start::Initial`], when `kinds` has it, joins the first stage: the caller's guess is always
+/// refined, whatever stops the search (a global hypothesis can fit a sparse source about as well
+/// turned over, and look sure).
+pub(crate) fn stages(kinds: &[Start], search: Search, guess: bool) -> Vec<Step> {
+    let (unsure, mut kinds): (Vec<Start>, Vec<Start>) = match search {
         Search::Adaptive => kinds.iter().partition(|k| k.is_for_unsure()),
         Search::Exhaustive => (Vec::new(), kinds.to_vec()),
     };
     let mut stages: Vec<Vec<Start>> = kinds.iter().take(1).map(|&k| vec![k]).collect();
+    if guess && search == Search::Adaptive && kinds.iter().skip(1).any(|&k| k == Start::Initial) {
+        kinds.retain(|&k| k != Start::Initial);
+        stages[0].push(Start::Initial);
+    }
     for &k in kinds.iter().skip(1) {
         let joins = stages.len() > 1 && stages.last().is_some_and(|l| l[0].is_global() == k.is_global());
         match stages.last_mut() {
@@ -313,7 +320,7 @@ mod tests {
         let with_blind = |l: &[&[Start]]| [listed(l), vec![Step::Blind]].concat();
         let default = [Network, Global, Centroids, Initial, Turned, TurnedInitial, RotationsNetwork];
         assert_eq!(
-            stages(&default, Search::Adaptive),
+            stages(&default, Search::Adaptive, false),
             [
                 with_blind(&[&[Network], &[Global], &[Centroids, Initial, Turned, TurnedInitial]]),
                 vec![Step::Unsure(vec![RotationsNetwork])]
@@ -322,29 +329,45 @@ mod tests {
         );
         assert_eq!(crate::Options::default().starts, default.to_vec());
         assert_eq!(
-            stages(&[Network, Centroids, Initial, Global], Search::Adaptive),
+            stages(&[Network, Centroids, Initial, Global], Search::Adaptive, false),
             with_blind(&[&[Network], &[Centroids, Initial], &[Global]])
         );
         assert_eq!(
-            stages(&[Network, Global, Centroids, Turned], Search::Adaptive),
+            stages(&[Network, Global, Centroids, Turned], Search::Adaptive, false),
             with_blind(&[&[Network], &[Global], &[Centroids, Turned]])
         );
         assert_eq!(
-            stages(&[Global, GlobalNetwork, Initial], Search::Adaptive),
+            stages(&[Global, GlobalNetwork, Initial], Search::Adaptive, false),
             with_blind(&[&[Global], &[GlobalNetwork], &[Initial]])
         );
         // the starts for unsure answers come last, in a stage of their own, wherever named
         assert_eq!(
-            stages(&[RotationsNetwork, Network, Rotations], Search::Adaptive),
+            stages(&[RotationsNetwork, Network, Rotations], Search::Adaptive, false),
             [with_blind(&[&[Network], &[Rotations]]), vec![Step::Unsure(vec![RotationsNetwork])]].concat()
         );
-        assert_eq!(stages(&[RotationsNetwork], Search::Adaptive), vec![Step::Unsure(vec![RotationsNetwork])]);
+        assert_eq!(stages(&[RotationsNetwork], Search::Adaptive, false), vec![Step::Unsure(vec![RotationsNetwork])]);
         // the exhaustive search: the same stages, every start in them, none for unsure answers alone
         assert_eq!(
-            stages(&default, Search::Exhaustive),
+            stages(&default, Search::Exhaustive, false),
             listed(&[&[Network], &[Global], &[Centroids, Initial, Turned, TurnedInitial, RotationsNetwork]])
         );
-        assert!(stages(&[], Search::Adaptive).is_empty());
+        assert!(stages(&[], Search::Adaptive, false).is_empty());
+        // with the caller's guess, it is refined in the first stage
+        assert_eq!(
+            stages(&default, Search::Adaptive, true),
+            [
+                with_blind(&[&[Network, Initial], &[Global], &[Centroids, Turned, TurnedInitial]]),
+                vec![Step::Unsure(vec![RotationsNetwork])]
+            ]
+            .concat()
+        );
+        assert_eq!(stages(&[Initial, Global], Search::Adaptive, true), with_blind(&[&[Initial], &[Global]]));
+        assert_eq!(stages(&[Network, Global], Search::Adaptive, true), with_blind(&[&[Network], &[Global]]));
+        assert_eq!(
+            stages(&default, Search::Exhaustive, true),
+            stages(&default, Search::Exhaustive, false),
+            "the exhaustive search refines it anyway"
+        );
     }
 
     #[test]
