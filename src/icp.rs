@@ -555,6 +555,9 @@ impl IcpTarget {
 
     /// The target point nearest to `q` (target frame) if it is closer than `max_distance`
     /// (strictly): its index into [`IcpTarget::points`].
+    // one copy, not one per caller (the confidence's probes, the walls: none on ICP's own path),
+    // for the wasm engine's size
+    #[inline(never)]
     pub fn nearest_within(&self, q: &[f32; 3], max_distance: f64) -> Option<usize> {
         let max2 = max_distance * max_distance;
         let search2 = (max2 * (1.0 + 1e-5)) as f32;

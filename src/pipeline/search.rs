@@ -336,41 +336,27 @@ pub(crate) fn search(
             }
         }
     }
-    // the answer moved onto the other faces of the thin walls the source lies on, each refined
-    // at the final distance only (the wider stages pair points across the wall): one that fits
-    // better replaces the answer, and is moved again (a scan a wall off along two or three
-    // axes); one that fits alike is said in a warning
+    // the answer moved onto the other faces of the thin walls the source lies on: one that fits
+    // better replaces it; one that fits alike is said in a warning
     if let Some((c, _, _)) = best.as_ref().filter(|_| adaptive && p.icp != IcpKind::Off) {
         let start = *c;
         let capped = refine::even_sample(&p.icp_src.points, refine::REFINE_POINTS);
-        let (mut chosen, mut faces) = (start, vec![start]);
-        for _ in 0..wall::ROUNDS {
-            let from = chosen;
-            for t in wall::other_faces(target_index, &p.icp_src.points, &from.T_target_source, d_final) {
-                starts_refined += 1;
-                let r = refine::refine_final(target_index, &capped, start.start, &level(t), &how);
-                if admits(&r.T_target_source) {
-                    refined.push((r.T_target_source, r.fitness));
-                    faces.push(r);
-                    if wall::fits_better(&r, &chosen) && improves(&chosen, &r) {
-                        chosen = r;
-                    }
-                }
-            }
-            if chosen.T_target_source == from.T_target_source {
-                break;
-            }
-        }
-        let other = |r: &&Candidate| !refine::coincide(&r.T_target_source, &chosen.T_target_source, &capped, d_final);
-        if let Some(alike) = faces.iter().filter(other).find(|r| wall::fits_alike(r, &chosen)) {
-            let centre = Point3::from(centroid);
-            let shift = (chosen.T_target_source.transform_point(&centre)
-                - alike.T_target_source.transform_point(&centre))
-            .norm();
-            warnings.push(wall::alike_warning(shift * p.norm.scale, &chosen, alike));
-        }
-        if chosen.T_target_source != start.T_target_source {
-            let (b, extra) = judged(chosen, &mut refined);
+        let moved = wall::across_walls(
+            target_index,
+            &p.icp_src.points,
+            &capped,
+            start,
+            &how,
+            &level,
+            &admits,
+            &improves,
+            (centroid.into(), p.norm.scale),
+        );
+        starts_refined += moved.tried;
+        refined.extend(moved.refined.iter().map(|r| (r.T_target_source, r.fitness)));
+        warnings.extend(moved.warning);
+        if moved.chosen.T_target_source != start.T_target_source {
+            let (b, extra) = judged(moved.chosen, &mut refined);
             (best, starts_refined) = (Some(b), starts_refined + extra);
         }
     }

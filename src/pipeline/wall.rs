@@ -11,7 +11,7 @@
 
 use crate::error::num;
 use crate::icp::IcpTarget;
-use crate::refine::{self, Candidate};
+use crate::refine::{self, Candidate, Refinement};
 use crate::transform;
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
@@ -73,7 +73,7 @@ pub(crate) fn other_faces(
     let sample = refine::even_sample(source, SAMPLE);
     let points = target.points();
     let at = |j: usize| Vector3::from(points[j].map(|v| v as f64));
-    let normal = |j: usize| Vector3::from(target.normal(j).map(|v| v as f64));
+    let normal = |j: usize| normal_of(target, j);
     let step = STEP * d_final;
     let steps = (REACH / STEP) as usize;
     // the sample's points on the target, and the target's spacing there
@@ -87,8 +87,7 @@ pub(crate) fn other_faces(
     let matched = on.len();
     let mut spacings: Vec<f64> =
         on.iter().step_by((matched / SPACING_POINTS).max(1)).map(|&(_, j)| target.spacing_at(j)).collect();
-    spacings.sort_by(f64::total_cmp);
-    let spacing = spacings.get(spacings.len() / 2).copied().filter(|s| s.is_finite()).unwrap_or(0.0);
+    let spacing = median(&mut spacings).filter(|s| s.is_finite()).unwrap_or(0.0);
     let hit = (HIT * d_final).max(HIT_SPACING * spacing);
     // each point that sees another face: the unit direction to it and its distance
     let mut faces: Vec<(Vector3<f64>, f64)> = Vec::new();
@@ -128,16 +127,28 @@ pub(crate) fn other_faces(
     }
     let seen = walls.iter().map(|(_, thick)| thick.len()).sum::<usize>() as f64;
     walls.retain(|(_, thick)| thick.len() as f64 >= WALL_SHARE * seen);
-    walls.sort_by_key(|(_, thick)| std::cmp::Reverse(thick.len()));
+    walls.sort_unstable_by_key(|(_, thick)| std::cmp::Reverse(thick.len()));
     walls.truncate(MAX_WALLS);
     walls
         .iter_mut()
-        .map(|(w, thick)| {
-            thick.sort_by(f64::total_cmp);
-            let d = w.normalize() * thick[thick.len() / 2];
-            transform::from_rotation_translation(&Matrix3::identity(), &d) * t
+        .filter_map(|(w, thick)| {
+            let d = w.normalize() * median(thick)?;
+            Some(transform::from_rotation_translation(&Matrix3::identity(), &d) * t)
         })
         .collect()
+}
+
+/// The unit normal of target point `j`.
+// one copy of the normal's estimate, for the wasm engine's size
+#[inline(never)]
+fn normal_of(target: &IcpTarget, j: usize) -> Vector3<f64> {
+    Vector3::from(target.normal(j).map(|v| v as f64))
+}
+
+/// The median of `v` (its upper middle for an even count; `None` when empty), reordering it.
+fn median(v: &mut [f64]) -> Option<f64> {
+    let k = v.len() / 2;
+    (!v.is_empty()).then(|| *v.select_nth_unstable_by(k, f64::total_cmp).1)
 }
 
 /// A pose on another face fits alike when its fitness is within this fraction of the answer's...
@@ -171,6 +182,66 @@ pub(crate) fn alike_warning(shift: f64, answer: &Candidate, alike: &Candidate) -
         alike.fitness,
         answer.fitness
     )
+}
+
+/// What [`across_walls`] found.
+pub(crate) struct Across {
+    /// The answer: the one given, or a pose on other faces that fits better.
+    pub chosen: Candidate,
+    /// How many poses on other faces were refined.
+    pub tried: usize,
+    /// Those of them that `admits` said may count.
+    pub refined: Vec<Candidate>,
+    /// A warning when a pose on other faces fits alike ([`fits_alike`]).
+    pub warning: Option<String>,
+}
+
+/// The `answer` moved across the thin walls of the `target` the `source` lies on
+/// ([`other_faces`]), each pose `level`led and refined at the final distance only
+/// ([`refine::refine_final`] on the `capped` source: the wider stages pair points across the
+/// wall); one that fits better ([`fits_better`]) and `improves` on the answer replaces it and is
+/// moved again, up to [`ROUNDS`] times (a scan a wall off along two or three axes). A pose that
+/// fits alike gives a warning, its shift measured at the source's `centre` (`scale`: the clouds'
+/// units per normalised unit).
+// kept out of the search's one large function (the wasm engine's size)
+#[allow(clippy::too_many_arguments)]
+#[inline(never)]
+pub(crate) fn across_walls(
+    target: &IcpTarget,
+    source: &[[f32; 3]],
+    capped: &[[f32; 3]],
+    answer: Candidate,
+    how: &Refinement,
+    level: &dyn Fn(Matrix4<f64>) -> Matrix4<f64>,
+    admits: &dyn Fn(&Matrix4<f64>) -> bool,
+    improves: &dyn Fn(&Candidate, &Candidate) -> bool,
+    (centre, scale): (Vector3<f64>, f64),
+) -> Across {
+    let d_final = how.d_final;
+    let (mut chosen, mut refined, mut tried) = (answer, Vec::new(), 0);
+    for _ in 0..ROUNDS {
+        let from = chosen;
+        for t in other_faces(target, source, &from.T_target_source, d_final) {
+            let r = refine::refine_final(target, capped, answer.start, &level(t), how);
+            tried += 1;
+            if admits(&r.T_target_source) {
+                refined.push(r);
+                if fits_better(&r, &chosen) && improves(&chosen, &r) {
+                    chosen = r;
+                }
+            }
+        }
+        if chosen.T_target_source == from.T_target_source {
+            break;
+        }
+    }
+    let other = |r: &&Candidate| !refine::coincide(&r.T_target_source, &chosen.T_target_source, capped, d_final);
+    let warning =
+        std::iter::once(&answer).chain(&refined).filter(other).find(|r| fits_alike(r, &chosen)).map(|alike| {
+            let at = |c: &Candidate| c.T_target_source.transform_point(&centre.into());
+            alike_warning((at(&chosen) - at(alike)).norm() * scale, &chosen, alike)
+        });
+    Across { chosen, tried, refined, warning }
 }
 
 #[cfg(test)]
