@@ -35,6 +35,21 @@ function loadGlue() {
 }
 const glue = new Proxy({}, { get: (_, key) => loadGlue()[key] });
 
+/** The default model's bytes; a file that is not where it should be is a clear error (as the .wasm). */
+function readDefaultModel() {
+  try {
+    return fs.readFileSync(DEFAULT_MODEL);
+  } catch (e) {
+    if (e?.code !== "ENOENT") throw e;
+    throw new Error(
+      `the default model is not at ${DEFAULT_MODEL}: a bundler that copied the package's JavaScript into a server ` +
+        'bundle left it behind; keep the package out of the server bundle (Next.js `serverExternalPackages: ["arps"]`, ' +
+        "webpack `externals`), or import it only in client code",
+      { cause: e },
+    );
+  }
+}
+
 const DEFAULT_MODEL = path.join(__dirname, "..", "models", "arps-web.safetensors");
 
 /** `file:` URLs (and plain paths that are not URLs) are read from disk; `undefined`: fetch it. */
@@ -56,7 +71,7 @@ async function readUrl(url, signal) {
 }
 
 const api = makeApi(glue, () => true, {
-  readDefaultModel: () => fs.readFileSync(DEFAULT_MODEL),
+  readDefaultModel,
   readUrl,
 });
 

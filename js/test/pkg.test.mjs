@@ -152,11 +152,13 @@ test("the Node build imports without its .wasm beside it (a server bundle), and 
     }
     const run = (code) => JSON.parse(execFileSync(process.execPath, ["--input-type=module", "-e", code], { cwd: dir, encoding: "utf8" }));
     const out = run(`import * as arps from "./node/index.mjs";
-      let error = "";
+      let error = "", model = "";
       try { arps.version(); } catch (e) { error = e.message; }
-      console.log(JSON.stringify({ registrar: typeof arps.Registrar, error }));`);
+      try { arps.Registrar.withDefaultModel(); } catch (e) { model = e.message; }
+      console.log(JSON.stringify({ registrar: typeof arps.Registrar, error, model }));`);
     assert.equal(out.registrar, "function", "imported without the .wasm");
     assert.match(out.error, /its WebAssembly file is not at .*arps_bg\.wasm.*serverExternalPackages/);
+    assert.match(out.model, /serverExternalPackages/, "the default model, left behind too, says the same");
   } finally {
     rmSync(dir, { recursive: true, force: true });
   }
