@@ -1,6 +1,6 @@
 //! Wavefront OBJ: `v` lines and `f` lines (`i`, `i/t`, `i//n`, `i/t/n`, negative = relative).
-//! A line ending in `\` continues on the next (a comment does not). Everything else (normals, texture coordinates,
-//! groups, materials) is ignored.
+//! A line ending in `\` continues on the next (a comment does not). Everything else (normals,
+//! texture coordinates, groups, materials) is ignored.
 //!
 //! An own reader rather than `tobj`: only positions and face indices are needed, and errors
 //! here name the line.
@@ -79,8 +79,8 @@ pub(crate) fn read(bytes: &[u8]) -> Result<Raw> {
     Ok(Raw { vertices, triangles })
 }
 
-/// The file's statements: its lines, a line ending in `\` (not a comment) joined to the next (with a space in
-/// place of the backslash), each numbered by its first line.
+/// The file's statements: its lines, a line ending in `\` (not a comment) joined to the next
+/// (with a space in place of the backslash), each numbered by its first line.
 struct Statements<'a>(Lines<'a>);
 
 impl<'a> Iterator for Statements<'a> {

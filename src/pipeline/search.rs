@@ -340,11 +340,9 @@ pub(crate) fn search(
     // better replaces it; one that fits alike is said in a warning
     if let Some((c, _, _)) = best.as_ref().filter(|_| adaptive && p.icp != IcpKind::Off) {
         let start = *c;
-        let capped = refine::even_sample(&p.icp_src.points, refine::REFINE_POINTS);
         let moved = wall::across_walls(
             target_index,
             &p.icp_src.points,
-            &capped,
             start,
             &how,
             &level,

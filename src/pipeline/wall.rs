@@ -198,8 +198,8 @@ pub(crate) struct Across {
 
 /// The `answer` moved across the thin walls of the `target` the `source` lies on
 /// ([`other_faces`]), each pose `level`led and refined at the final distance only
-/// ([`refine::refine_final`] on the `capped` source: the wider stages pair points across the
-/// wall); one that fits better ([`fits_better`]) and `improves` on the answer replaces it and is
+/// ([`refine::refine_final`] on the source capped as for the answer: the wider stages pair
+/// points across the wall); one that fits better ([`fits_better`]) and `improves` on the answer replaces it and is
 /// moved again, up to [`ROUNDS`] times (a scan a wall off along two or three axes). A pose that
 /// fits alike gives a warning, its shift measured at the source's `centre` (`scale`: the clouds'
 /// units per normalised unit).
@@ -209,7 +209,6 @@ pub(crate) struct Across {
 pub(crate) fn across_walls(
     target: &IcpTarget,
     source: &[[f32; 3]],
-    capped: &[[f32; 3]],
     answer: Candidate,
     how: &Refinement,
     level: &dyn Fn(Matrix4<f64>) -> Matrix4<f64>,
@@ -218,6 +217,7 @@ pub(crate) fn across_walls(
     (centre, scale): (Vector3<f64>, f64),
 ) -> Across {
     let d_final = how.d_final;
+    let capped = &refine::even_sample(source, refine::REFINE_POINTS);
     let (mut chosen, mut refined, mut tried) = (answer, Vec::new(), 0);
     for _ in 0..ROUNDS {
         let from = chosen;
