@@ -191,6 +191,82 @@ def clouds():
             f.write(data)
 
 
+def glb(json_obj, bin_bytes):
+    """A GLB file of a JSON object and a binary chunk (both padded to 4 bytes)."""
+    import json
+
+    text = json.dumps(json_obj, separators=(",", ":")).encode()
+    text += b" " * (-len(text) % 4)
+    bin_bytes += b"\0" * (-len(bin_bytes) % 4)
+    body = struct.pack("<I4s", len(text), b"JSON") + text + struct.pack("<I4s", len(bin_bytes), b"BIN\0") + bin_bytes
+    return b"glTF" + struct.pack("<II", 2, 12 + len(body)) + body
+
+
+def gltf_seeds():
+    """Seeds of read_gltf: the tetrahedron as GLB (floats under a parent and a TRS child; int16
+    normalised positions, a strip, a sparse accessor, GPU instances) and as .gltf with an embedded
+    buffer; the Draco fixture whole (refused)."""
+    import base64
+
+    floats = b"".join(struct.pack("<3f", *p) for p in TET)
+    shorts = b"".join(struct.pack("<3h", *(round(c / 1.5 * 32767) for c in p)) + b"\0\0" for p in TET)
+    idx = b"".join(struct.pack("<3H", *f) for f in FACES)
+    strip = struct.pack("<6H", 0, 1, 2, 3, 0, 1)
+    sparse = struct.pack("<H", 2) + b"\0\0" + struct.pack("<3f", 0.0, 2.0, 0.0)
+    inst = b"".join(struct.pack("<3f", x, 0, 0) for x in (0, 3, 6))
+
+    def doc(position, indices, mode=4, node=None, views=()):
+        views = [
+            {"buffer": 0, "byteLength": 48},
+            {"buffer": 0, "byteOffset": 48, "byteLength": 32, "byteStride": 8},
+            {"buffer": 0, "byteOffset": 80, "byteLength": 24},
+            {"buffer": 0, "byteOffset": 104, "byteLength": 12},
+            {"buffer": 0, "byteOffset": 116, "byteLength": 16},
+            {"buffer": 0, "byteOffset": 132, "byteLength": 36},
+        ]
+        accessors = [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},
+            {"bufferView": 1, "componentType": 5122, "normalized": True, "count": 4, "type": "VEC3"},
+            {"bufferView": 2, "componentType": 5123, "count": 12, "type": "SCALAR"},
+            {"bufferView": 3, "componentType": 5123, "count": 6, "type": "SCALAR"},
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+             "sparse": {"count": 1, "indices": {"bufferView": 4, "componentType": 5123}, "values": {"bufferView": 4, "byteOffset": 4}}},
+            {"bufferView": 5, "componentType": 5126, "count": 3, "type": "VEC3"},
+        ]
+        prim = {"attributes": {"POSITION": position}, "mode": mode}
+        if indices is not None:
+            prim["indices"] = indices
+        child = node or {"mesh": 0, "rotation": [0, 0.3826834, 0, 0.9238795], "scale": [1, 1.5, 1]}
+        return {
+            "asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+            "nodes": [{"translation": [1, 2, 3], "children": [1]}, child],
+            "meshes": [{"primitives": [prim]}], "accessors": accessors, "bufferViews": views,
+            "buffers": [{"byteLength": 168}],
+        }
+
+    data = floats + shorts + idx + strip + sparse + inst
+    assert len(data) == 168, len(data)
+    seeds = {
+        "floats": glb(doc(0, 2), data),
+        "int16_normalised": glb(doc(1, 2), data),
+        "strip": glb(doc(0, 3, mode=5), data),
+        "sparse": glb(doc(4, 2), data),
+        "instanced": glb(doc(0, 2, node={"mesh": 0, "extensions": {"EXT_mesh_gpu_instancing": {"attributes": {"TRANSLATION": 5}}}}), data),
+        "draco": fixture_whole("fuze_draco.glb"),
+    }
+    embedded = doc(0, 2)
+    embedded["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(data).decode()
+    import json
+
+    seeds["embedded_gltf"] = json.dumps(embedded, indent=1).encode()
+    out = os.path.join(HERE, "seeds", "read_gltf")
+    os.makedirs(out, exist_ok=True)
+    for key, data in seeds.items():
+        with open(os.path.join(out, key), "wb") as f:
+            f.write(data)
+
+
 if __name__ == "__main__":
     main()
     clouds()
+    gltf_seeds()

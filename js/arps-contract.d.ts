@@ -65,7 +65,10 @@ export type RegisterOptions = {
    * fit about as well, the one nearer the guess's rotation wins (see `starts`). An answer that
    * turns more than 60 degrees away from the guess (`GUESS_TURN_DEG`) contradicts it: its
    * confidence is at most 0.25, with a warning (the guess was off, or the answer is a
-   * look-alike: 30-100 probe points on a vertebra, turned over, fit 0.89-0.97 of them). Default:
+   * look-alike: 30-100 probe points on a vertebra, turned over, fit 0.89-0.97 of them); and for
+   * an answer within that of the guess, poses that turn further from it are not counted as
+   * look-alikes (as `up` rules out tilted ones): a symmetric room's half turn does not hold a
+   * right answer at 0.5 when the guess says which way round it is. Default:
    * the identity. Either 16
    * numbers in **column-major** order (a previous result's `T_target_source`, a three.js
    * `Matrix4.elements`; in JS also a `Float32Array` or `Float64Array`), or four **row-major**
@@ -479,7 +482,7 @@ export type RegistrationAlternative = {
  */
 export type ReadOptions = {
   /**
-   * For a file with faces (OBJ, OFF, STL, PLY with a `face` element): this many points drawn
+   * For a file with faces (OBJ, OFF, STL, glTF/GLB, PLY with a `face` element): this many points drawn
    * uniformly over its surface instead of its vertices. A CAD model's vertices sit on its
    * edges and corners, and its flat faces have none, so a scan registers against its surface,
    * not its vertices. From 16 to 16,000,000; files without faces are read as they are. Unset

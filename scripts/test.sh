@@ -48,7 +48,7 @@ if cargo +nightly --version >/dev/null 2>&1 && cargo +nightly fuzz --version >/d
   (
     cd fuzz
     # (arps itself is built with debug assertions and overflow checks: fuzz/Cargo.toml)
-    for target in read_point_cloud read_e57 read_mesh transform_ply transform_las transform_file transform_e57 weights_from_bytes options_json model_config register_clouds; do
+    for target in read_point_cloud read_e57 read_mesh read_gltf transform_ply transform_las transform_file transform_e57 weights_from_bytes options_json model_config register_clouds; do
       mkdir -p "corpus/$target"
       cargo +nightly fuzz run -O "$target" "corpus/$target" "seeds/$target" -- \
         -max_total_time="${FUZZ_SMOKE_SECONDS:-5}" -max_len=8192 -malloc_limit_mb=256

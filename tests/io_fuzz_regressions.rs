@@ -85,6 +85,39 @@ fn mesh_target(data: &[u8]) -> Result<usize, String> {
     Ok(mesh.triangles.len())
 }
 
+/// The `read_gltf` fuzz target's body: `Ok(triangles)` or the error text.
+fn gltf_target(data: &[u8]) -> Result<usize, String> {
+    let name = if data.first() == Some(&b'{') { "a.gltf" } else { "a.glb" };
+    let mesh = arps::io::read_mesh(data, name).map_err(|e| e.to_string())?;
+    let n = mesh.vertices.len();
+    assert!(mesh.triangles.iter().flatten().all(|&i| (i as usize) < n));
+    let motion = nalgebra::Matrix4::new_translation(&nalgebra::Vector3::new(0.5, -2.0, 3.0))
+        * nalgebra::Rotation3::from_euler_angles(0.3, -0.2, 1.1).to_homogeneous();
+    if let Ok(moved) = arps::io::transform_file(data, name, &motion) {
+        let again = arps::io::read_mesh(&moved, name).expect("a moved file reads");
+        assert_eq!((again.vertices.len(), again.triangles.len()), (n, mesh.triangles.len()));
+    }
+    Ok(mesh.triangles.len())
+}
+
+#[test]
+fn gltf_seeds_read_and_regressions_do_not_panic() {
+    let seeds = inputs("seeds/read_gltf");
+    assert!(seeds.len() >= 7);
+    for (name, data) in seeds {
+        let r = gltf_target(&data);
+        match name.as_str() {
+            "draco" => assert!(r.unwrap_err().contains("KHR_draco_mesh_compression")),
+            "instanced" => assert_eq!(r, Ok(12), "three instances"),
+            _ => assert_eq!(r, Ok(4), "seed {name}"),
+        }
+    }
+    for (name, data) in inputs("regressions/read_gltf") {
+        let r = gltf_target(&data);
+        eprintln!("read_gltf {name}: {r:?}");
+    }
+}
+
 #[test]
 fn seeds_read() {
     let seeds = inputs("seeds/read_point_cloud");

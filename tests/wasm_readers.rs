@@ -74,6 +74,8 @@ fn ascii_and_binary_agree_and_meshes_give_vertices() {
         fixture!("angle_block_binary_solid.stl"),
         fixture!("cylinder_binary.stl"),
         fixture!("tray_bottom_150_ascii.stl"),
+        fixture!("fuze_trimesh.glb"),
+        fixture!("fuze_quantized.glb"),
     ] {
         let xyz = parse_point_cloud(bytes, name, None).map_err(message).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(xyz.len() >= 9 && xyz.len().is_multiple_of(3), "{name}: {} values", xyz.len());

@@ -22,7 +22,7 @@ import { MAX_DRAWN, createView } from "./view.js";
 
 const $ = (id) => document.getElementById(id);
 
-/** Points drawn over the surface of a mesh file (OBJ, OFF, STL, PLY with faces). */
+/** Points drawn over the surface of a mesh file (OBJ, OFF, STL, glTF/GLB, PLY with faces). */
 const MESH_SURFACE_POINTS = 200_000;
 
 // ---- state --------------------------------------------------------------------------------

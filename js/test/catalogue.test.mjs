@@ -118,6 +118,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       ["unknown field", reg({ icpMaxIteration: 3 }), /unknown field `icpMaxIteration`/],
       ["wrong enum", reg({ icp: "planar" }), /^invalid options: `icp`: unknown variant `planar`, expected one of/],
       ["wrong type", reg({ seed: "seven" }), /^invalid options: `seed`: invalid type: string "seven", expected a whole number, 0 or more$/],
+      ["negative count", reg({ icpMaxIterations: -1 }), /^invalid options: `icpMaxIterations`: invalid value: -1, expected a whole number, 0 or more$/],
       ["wrong type after a right one", reg({ icp: "point", icpMaxIterations: 1.5 }), /^invalid options: `icpMaxIterations`: invalid type: floating point `1.5`/],
       ["three rows", reg({ initialTransform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]] }), /^invalid options: initialTransform has 3 rows; expected/],
       ["sixteen strings", reg({ initialTransform: new Array(16).fill("1") }), /^invalid options: initialTransform\[0\] is a string/],
@@ -418,7 +419,20 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     apart = 0;
     for (let i = 0; i < pcdGot.points.length; i++) apart = Math.max(apart, Math.abs(pcdGot.origin[i % 3] + pcdGot.points[i] - pcdWant.origin[i % 3] - pcdWant.points[i]));
     assert.ok(apart < 1e-5, `transformFile's PCD points ${apart} from transformPointCloud's`);
-    assert.deepEqual(["a.ply", "b.PCD", "c.pts", "d.csv", "e.obj", "f.stl", "g.las", "h.laz", "i.e57", "j.off", "k.dxf"].map(arps.canTransform), [true, true, true, true, true, true, true, true, true, true, false]);
+    assert.deepEqual(["a.ply", "b.PCD", "c.pts", "d.csv", "e.obj", "f.stl", "g.las", "h.laz", "i.e57", "j.off", "k.glb", "l.GLTF", "m.dxf"].map(arps.canTransform), [true, true, true, true, true, true, true, true, true, true, true, true, false]);
+    // a GLB (trimesh's, its mesh under a node): read as placed, its surface sampled, moved as it
+    // is (its binary chunk kept) to transformPointCloud's points
+    const glb = readFileSync(path.join(root, "fixtures", "formats", "fuze_trimesh.glb"));
+    assert.equal(arps.parsePointCloud(glb, "fuze.glb").length, 3 * 664);
+    assert.equal(arps.parsePointCloud(glb, "fuze.glb", { surfacePoints: 1000 }).length, 3000);
+    const movedGlb = arps.transformFile(glb, "fuze.glb", turn);
+    assert.deepEqual(movedGlb.subarray(movedGlb.length - 7968), new Uint8Array(glb.subarray(glb.length - 7968)), "the GLB's positions, byte for byte");
+    const glbWant = arps.transformPointCloud(arps.readPointCloud(glb, "f.glb"), turn);
+    const glbGot = arps.readPointCloud(movedGlb, "f.glb");
+    apart = 0;
+    for (let i = 0; i < glbGot.points.length; i++) apart = Math.max(apart, Math.abs(glbGot.origin[i % 3] + glbGot.points[i] - glbWant.origin[i % 3] - glbWant.points[i]));
+    assert.ok(apart < 1e-5, `transformFile's GLB points ${apart} from transformPointCloud's`);
+    rejects(r, "parsePointCloud: a Draco GLB", () => arps.parsePointCloud(readFileSync(path.join(root, "fixtures", "formats", "fuze_draco.glb")), "d.glb"), /KHR_draco_mesh_compression/);
     rejects(r, "transformFile: no format", () => arps.transformFile(new Uint8Array(8), "drawing.dxf", T), /cannot tell the format/);
     // an E57 file's scans, by name and records; one chosen is read alone; the file moved by its
     // scans' poses reads as transformPointCloud's points

@@ -10,6 +10,7 @@
 //! | [`Format::Stl`] | `.stl` | ascii and binary (also binary files whose header starts with `solid`) |
 //! | [`Format::Las`] | `.las .laz` | LAS 1.0 to 1.4, point formats 0 to 10; LAZ (LASzip) compressed |
 //! | [`Format::E57`] | `.e57` | every point cloud placed by its pose; Cartesian or spherical; invalid points left out |
+//! | [`Format::Gltf`] | `.glb .gltf` | glTF 2.0: the scene's meshes placed by their nodes; quantised, interleaved, sparse, GPU-instanced; buffers in the file (not Draco or meshopt compressed) |
 //!
 //! Readers are written for hostile input: malformed files give an [`Error::Parse`] saying what
 //! and where (line number, byte offset, element name), never a panic, and no reservation is
@@ -21,7 +22,7 @@
 //! model's vertices sit on its edges and corners, so a scan registers against its surface.
 //!
 //! A registered source is saved in the target's frame as the file it was, moved
-//! ([`transform_file`]: PLY, PCD, text lists, OBJ, OFF, STL, LAS, E57; everything else in the file kept), or
+//! ([`transform_file`]: PLY, PCD, text lists, OBJ, OFF, STL, LAS, E57, glTF; everything else in the file kept), or
 //! as its points ([`write_ply_binary`] of [`PointCloud::transformed`]).
 //!
 //! Coordinates are read as precisely as the file holds them (`double` properties and text in
@@ -33,6 +34,8 @@ use crate::{Error, Result};
 
 mod e57;
 mod e57_transform;
+mod gltf;
+mod gltf_transform;
 mod keyword_lines;
 mod las;
 mod las_transform;
@@ -56,7 +59,7 @@ mod text_transform;
 mod transform;
 mod util;
 
-/// A triangle mesh (vertices and triangles), as read from OBJ/OFF/STL/PLY.
+/// A triangle mesh (vertices and triangles), as read from OBJ/OFF/STL/PLY/glTF.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
     /// Vertex positions.
@@ -114,6 +117,9 @@ pub enum Format {
     Las,
     /// ASTM E57, the exchange format of terrestrial and handheld laser scanners.
     E57,
+    /// glTF 2.0, binary (`.glb`) or JSON (`.gltf`): the web's 3D scene format, exported by
+    /// phone-capture apps and CAD viewers. Y-up, in metres.
+    Gltf,
 }
 
 impl Format {
@@ -128,6 +134,7 @@ impl Format {
             Format::Stl => "STL",
             Format::Las => "LAS",
             Format::E57 => "E57",
+            Format::Gltf => "glTF",
         }
     }
 
@@ -143,22 +150,23 @@ impl Format {
             "stl" => Format::Stl,
             "las" | "laz" => Format::Las,
             "e57" => Format::E57,
+            "glb" | "gltf" => Format::Gltf,
             _ => return None,
         })
     }
 
-    /// True for formats that carry faces (OBJ, OFF, STL, PLY).
+    /// True for formats that carry faces (OBJ, OFF, STL, PLY, glTF).
     pub fn has_faces(self) -> bool {
         !matches!(self, Format::Pcd | Format::Xyz | Format::Las | Format::E57)
     }
 }
 
-/// Tells the format of a file: by its signature when it starts with one (`ply` magic; `LASF`
-/// and `ASTM-E57` signatures; PCD's `# .PCD` comment; an `OFF` header), whatever its name says, so that a file
+/// Tells the format of a file: by its signature when it starts with one (`ply` magic; `LASF`,
+/// `ASTM-E57` and `glTF` signatures; PCD's `# .PCD` comment; an `OFF` header), whatever its name says, so that a file
 /// saved under another format's extension (a PLY file named `.txt`) is still read as what it is;
 /// else from the file name's extension (`.ply .pcd .xyz .pts .txt .csv .obj .off .stl .las .laz
-/// .e57`, case-insensitive) when it has a known one; else sniffed from the content (the
-/// signatures; a PCD `VERSION` / `FIELDS` line; binary STL by its size rule or
+/// .e57 .glb .gltf`, case-insensitive) when it has a known one; else sniffed from the content (the
+/// signatures; a glTF JSON object; a PCD `VERSION` / `FIELDS` line; binary STL by its size rule or
 /// `solid ... facet`; OBJ `v` lines; else rows of numbers).
 pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
     if let Some(f) = signature(bytes) {
@@ -168,7 +176,7 @@ pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
         return Ok(f);
     }
     sniff(bytes).ok_or_else(|| {
-        const KNOWN: &str = "and the content does not look like PLY, LAS, E57, PCD, OFF, STL, OBJ or a text list of points";
+        const KNOWN: &str = "and the content does not look like PLY, LAS, E57, glTF, PCD, OFF, STL, OBJ or a text list of points";
         let message = if file_name.is_empty() {
             format!(
                 "cannot tell the format: no file name was given (pass the file's name, e.g. \"scan.ply\", \
@@ -176,7 +184,7 @@ pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
             )
         } else {
             format!(
-                "cannot tell the format of '{}': the extension is not one of .ply .pcd .xyz .pts .txt .csv .obj .off .stl .las .laz .e57, {KNOWN}",
+                "cannot tell the format of '{}': the extension is not one of .ply .pcd .xyz .pts .txt .csv .obj .off .stl .las .laz .e57 .glb .gltf, {KNOWN}",
                 file_name.chars().take(200).collect::<String>()
             )
         };
@@ -185,7 +193,7 @@ pub fn detect_format(bytes: &[u8], file_name: &str) -> Result<Format> {
 }
 
 /// The format a file's first bytes name beyond doubt: PLY's `ply` line, LAS's `LASF`, E57's
-/// `ASTM-E57`, PCD's `# .PCD` comment line, OFF's header keyword (`OFF`, `COFF`, ...) as its
+/// `ASTM-E57`, glTF's `glTF`, PCD's `# .PCD` comment line, OFF's header keyword (`OFF`, `COFF`, ...) as its
 /// first word. No file of another format starts so.
 fn signature(bytes: &[u8]) -> Option<Format> {
     let first = bytes.split(|&b| b == b'\n').next().unwrap_or_default().trim_ascii();
@@ -197,6 +205,9 @@ fn signature(bytes: &[u8]) -> Option<Format> {
     }
     if bytes.starts_with(b"ASTM-E57") {
         return Some(Format::E57);
+    }
+    if gltf::is_glb(bytes) {
+        return Some(Format::Gltf);
     }
     if first.starts_with(b"# .PCD") {
         return Some(Format::Pcd);
@@ -210,6 +221,9 @@ fn signature(bytes: &[u8]) -> Option<Format> {
 /// The format of a file without a [`signature`] nor a known extension, from its content
 /// ([`detect_format`] has looked for the signatures already).
 fn sniff(bytes: &[u8]) -> Option<Format> {
+    if gltf::sniff_json(bytes) {
+        return Some(Format::Gltf);
+    }
     // PCD: a "# .PCD" comment or a VERSION / FIELDS line before anything else.
     for line in bytes[..bytes.len().min(4096)].split(|&b| b == b'\n').take(20) {
         let l = line.trim_ascii();
@@ -246,6 +260,7 @@ fn read_format(bytes: &[u8], format: Format, faces: Faces, scan: Option<usize>) 
         Format::Stl => stl::read(bytes),
         Format::Las => las::read(bytes).map(|vertices| Raw { vertices, triangles: Vec::new() }),
         Format::E57 => e57::read(bytes, scan).map(|vertices| Raw { vertices, triangles: Vec::new() }),
+        Format::Gltf => gltf::read(bytes, faces),
     }
 }
 
@@ -265,7 +280,7 @@ pub fn read_point_cloud(bytes: &[u8], file_name: &str) -> Result<PointCloud> {
 #[serde(rename_all = "camelCase", default, deny_unknown_fields)]
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "ReadOptions"))]
 pub struct ReadOptions {
-    /// For a file with faces (OBJ, OFF, STL, PLY with a `face` element): this many points drawn
+    /// For a file with faces (OBJ, OFF, STL, glTF/GLB, PLY with a `face` element): this many points drawn
     /// uniformly over its surface instead of its vertices. A CAD model's vertices sit on its
     /// edges and corners, and its flat faces have none, so a scan registers against its surface,
     /// not its vertices. From 16 to 16,000,000; files without faces are read as they are. Unset
@@ -360,7 +375,7 @@ pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOption
     }
 }
 
-/// Reads a triangle mesh (OBJ, OFF, STL, or PLY with a `face` element) from a file's bytes;
+/// Reads a triangle mesh (OBJ, OFF, STL, glTF/GLB, or PLY with a `face` element) from a file's bytes;
 /// polygons are fan-triangulated, faces with fewer than three corners are dropped, and an
 /// out-of-range vertex index is an error.
 pub fn read_mesh(bytes: &[u8], file_name: &str) -> Result<Mesh> {

@@ -1,7 +1,7 @@
 //! A file moved as it is, whatever its format: the mover of the format the file is in
 //! ([`transform_ply`](super::transform_ply), [`transform_las`](super::transform_las),
 //! [`transform_pcd`](super::transform_pcd), [`transform_text`](super::transform_text), and those
-//! of OBJ, OFF, STL and E57), so that a registered scan can be saved in the target's frame in its own
+//! of OBJ, OFF, STL, E57 and glTF), so that a registered scan can be saved in the target's frame in its own
 //! format, with everything the registration did not read (colours, intensity, normals, faces,
 //! other fields).
 
@@ -10,10 +10,11 @@ use crate::Result;
 use nalgebra::Matrix4;
 
 /// The extensions of the files [`transform_file`] moves as they are.
-const MOVABLE: &[&str] = &["ply", "pcd", "xyz", "pts", "txt", "csv", "obj", "off", "stl", "las", "laz", "e57"];
+const MOVABLE: &[&str] =
+    &["ply", "pcd", "xyz", "pts", "txt", "csv", "obj", "off", "stl", "las", "laz", "e57", "glb", "gltf"];
 
 /// True when a file of this name is one [`transform_file`] moves as it is: PLY, PCD, text point
-/// lists (XYZ, PTS, TXT, CSV), OBJ, OFF, STL, LAS, LAZ and E57 by their
+/// lists (XYZ, PTS, TXT, CSV), OBJ, OFF, STL, LAS, LAZ, E57 and glTF (GLB) by their
 /// extension (case-insensitive). False for unknown extensions: save such a source's points
 /// moved instead ([`super::write_ply_binary`] of
 /// [`PointCloud::transformed`](crate::PointCloud::transformed)).
@@ -26,7 +27,8 @@ pub fn can_transform(file_name: &str) -> bool {
 /// transform, or one times a uniform scale for a change of unit) and its normals turned,
 /// everything else kept as it was: see each format's mover for what that means. A LAZ file comes
 /// back as LAZ, its points compressed again; an E57 file keeps its points as
-/// stored and gets new poses (rigid motions only). Errors: a file its reader
+/// stored and gets new poses (rigid motions only); a glTF file gets the motion as a new parent of
+/// its top nodes, its buffers unchanged. Errors: a file its reader
 /// refuses, coordinates stored as integers where the moved ones cannot be stored, a transform
 /// that is not rigid (or uniformly scaled).
 pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result<Vec<u8>> {
@@ -54,5 +56,6 @@ pub fn transform_file_with(bytes: &[u8], file_name: &str, m: &Matrix4<f64>, opti
             None => super::e57_transform::transform_e57(bytes, m),
         },
         Format::Off => super::off_transform::transform_off(bytes, m),
+        Format::Gltf => super::gltf_transform::transform_gltf(bytes, m),
     }
 }

@@ -28,7 +28,7 @@ enum IcpArg {
 /// The options of `arps register`.
 #[derive(Args)]
 pub struct RegisterArgs {
-    /// Source cloud(s) (PLY, PCD, LAS/LAZ, E57, XYZ/PTS/CSV, OBJ, OFF, STL).
+    /// Source cloud(s) (PLY, PCD, LAS/LAZ, E57, XYZ/PTS/CSV, OBJ, OFF, STL, glTF/GLB).
     #[arg(required = true, num_args = 1..)]
     sources: Vec<PathBuf>,
     /// Target cloud.
@@ -95,7 +95,7 @@ pub struct RegisterArgs {
     /// left out, with a warning: `Options::support_plane`).
     #[arg(long)]
     keep_support: bool,
-    /// Read a mesh file (OBJ, OFF, STL, PLY with faces) as this many points drawn uniformly
+    /// Read a mesh file (OBJ, OFF, STL, glTF/GLB, PLY with faces) as this many points drawn uniformly
     /// over its surface instead of its vertices (a CAD model's vertices sit on its edges);
     /// point files are read as they are.
     #[arg(long)]
@@ -124,7 +124,7 @@ pub struct RegisterArgs {
     #[arg(long, value_name = "C", allow_negative_numbers = true)]
     min_confidence: Option<f64>,
     /// Write each source, moved by its answer into the target's frame, to PATH. To a PATH of the
-    /// source's own format (PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, LAZ, E57), the source
+    /// source's own format (PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, LAZ, E57, GLB), the source
     /// file as itself, moved: every attribute kept (colours, intensity, other
     /// fields and columns, faces, LAS's header updated), normals turned, coordinates stored as the
     /// file stored them (an E57 file's scans by their poses; with `--source-scan`, an E57 file of
@@ -394,7 +394,7 @@ fn same_file(a: &Path, b: &Path) -> bool {
 /// Writes the source moved by `r`'s answer to `path`: to a path of the source's own format, the
 /// source file (`bytes`, the file `file` as read for registering) as itself, moved
 /// (`io::transform_file_with` and the options it was read with, `reading`: PLY, PCD, text lists,
-/// OBJ, OFF, STL, LAS, LAZ, E57, one scan of an E57 file as an E57 file of that scan; every
+/// OBJ, OFF, STL, LAS, LAZ, E57, glTF, one scan of an E57 file as an E57 file of that scan; every
 /// attribute kept, normals turned); else (a `.ply` path) as the points read (`cloud`, already scaled) in binary PLY
 /// (`io::write_ply_binary`). `scale` is the `--source-scale` applied before registering.
 fn write_aligned(

@@ -1,0 +1,531 @@
+//! glTF 2.0: binary `.glb` files, and JSON `.gltf` files whose buffers are embedded (`data:`
+//! URIs). The default scene's meshes are placed by their nodes' transforms (a `matrix`, or
+//! `translation`, `rotation`, `scale`, composed down the node tree, and the instances of
+//! `EXT_mesh_gpu_instancing`) in `f64`; every primitive's `POSITION`s are points, and its
+//! triangles (mode 4; strips and fans triangulated) the faces; point and line primitives give
+//! points only. Positions of any component type, normalised or not (`KHR_mesh_quantization`),
+//! interleaved or not, and sparse accessors are read. A mesh compressed by Draco or meshopt is
+//! refused, naming the extension, and so is a buffer kept in another file. glTF's frame is Y-up,
+//! in metres.
+
+use super::{Faces, Raw};
+use crate::limits::MAX_FILE_POINTS;
+use crate::{Error, Result};
+use base64::Engine as _;
+use nalgebra::{Matrix4, Quaternion, UnitQuaternion, Vector3};
+use serde_json::Value;
+use std::borrow::Cow;
+
+pub(crate) const F: &str = "glTF";
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+const CHUNK_BIN: u32 = 0x004E_4942;
+
+fn err(message: impl Into<String>) -> Error {
+    Error::parse(F, message)
+}
+
+fn u32_at(bytes: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
+}
+
+/// True for a binary glTF file (its `glTF` magic).
+pub(crate) fn is_glb(bytes: &[u8]) -> bool {
+    bytes.starts_with(b"glTF")
+}
+
+/// True for a JSON glTF file: an object whose first kilobytes name its `"asset"`.
+pub(crate) fn sniff_json(bytes: &[u8]) -> bool {
+    let head = &bytes[..bytes.len().min(4096)];
+    let head = head.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(head);
+    head.trim_ascii_start().starts_with(b"{") && head.windows(7).any(|w| w == b"\"asset\"")
+}
+
+/// A glTF file taken apart: its JSON, the binary chunk of a GLB file, and where the JSON chunk
+/// of a GLB file ends (the next chunk's first byte; 0 for a JSON file).
+pub(crate) struct Container<'a> {
+    pub(crate) json: Value,
+    pub(crate) bin: Option<&'a [u8]>,
+    pub(crate) glb_json_end: usize,
+    pub(crate) glb_length: usize,
+}
+
+/// Splits a GLB file into its chunks, or parses a JSON file.
+pub(crate) fn open(bytes: &[u8]) -> Result<Container<'_>> {
+    if !is_glb(bytes) {
+        let text = bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes);
+        return Ok(Container { json: parse_json(text)?, bin: None, glb_json_end: 0, glb_length: 0 });
+    }
+    if bytes.len() < 20 {
+        return Err(err(format!(
+            "a GLB file needs a 12-byte header and a JSON chunk, but the file has {} bytes",
+            bytes.len()
+        )));
+    }
+    let version = u32_at(bytes, 4);
+    if version != 2 {
+        return Err(err(format!("the GLB header says version {version}: only glTF 2.0 is read")));
+    }
+    let length = u32_at(bytes, 8) as usize;
+    if length > bytes.len() {
+        return Err(err(format!(
+            "the GLB header declares {length} bytes, but the file has {} (is it truncated?)",
+            bytes.len()
+        )));
+    }
+    let (mut json, mut bin, mut json_end) = (None, None, 0);
+    let mut at = 12;
+    while at + 8 <= length {
+        let (len, kind) = (u32_at(bytes, at) as usize, u32_at(bytes, at + 4));
+        let start = at + 8;
+        let end = start.checked_add(len).filter(|&e| e <= length).ok_or_else(|| {
+            err(format!("the chunk at byte {at} declares {len} bytes, past the file's {length} (is it truncated?)"))
+        })?;
+        match kind {
+            CHUNK_JSON if at == 12 => {
+                json = Some(&bytes[start..end]);
+                json_end = end;
+            }
+            CHUNK_BIN if bin.is_none() && json.is_some() => bin = Some(&bytes[start..end]),
+            _ => {}
+        }
+        at = end;
+    }
+    let json = json.ok_or_else(|| err("the GLB file's first chunk is not its JSON"))?;
+    Ok(Container { json: parse_json(json)?, bin, glb_json_end: json_end, glb_length: length })
+}
+
+fn parse_json(text: &[u8]) -> Result<Value> {
+    // (from a str, as the model's metadata is parsed: one parser in the engine)
+    let text = std::str::from_utf8(text).map_err(|e| err(format!("its JSON is not UTF-8: {e}")))?;
+    let json: Value = serde_json::from_str(text).map_err(|e| err(format!("its JSON is malformed: {e}")))?;
+    if !json.is_object() {
+        return Err(err("its JSON is not an object"));
+    }
+    Ok(json)
+}
+
+/// `v[key]` as an array (empty when absent or not an array).
+pub(crate) fn list<'v>(v: &'v Value, key: &str) -> &'v [Value] {
+    v.get(key).and_then(Value::as_array).map_or(&[], Vec::as_slice)
+}
+
+/// `v[key]` as an index or count, `None` when absent; an error when it is not one.
+pub(crate) fn index(v: &Value, key: &str, what: &str) -> Result<Option<usize>> {
+    match v.get(key) {
+        None => Ok(None),
+        Some(x) => x
+            .as_u64()
+            .and_then(|i| usize::try_from(i).ok())
+            .map(Some)
+            .ok_or_else(|| err(format!("{what}'s {key} is not a non-negative integer"))),
+    }
+}
+
+fn required(v: &Value, key: &str, what: &str) -> Result<usize> {
+    index(v, key, what)?.ok_or_else(|| err(format!("{what} has no {key}")))
+}
+
+/// Item `i` of the file's `key` list (`"accessors"`, ...), or an error naming what refers to it.
+fn item<'v>(json: &'v Value, key: &str, i: usize, what: &str) -> Result<&'v Value> {
+    let all = list(json, key);
+    all.get(i).ok_or_else(|| err(format!("{what} refers to {key}[{i}], but the file has {}", all.len())))
+}
+
+/// `v[key]` as `N` numbers, or `default` when absent.
+fn numbers<const N: usize>(v: &Value, key: &str, default: [f64; N], what: &str) -> Result<[f64; N]> {
+    let Some(x) = v.get(key) else { return Ok(default) };
+    let bad = || err(format!("{what}'s {key} is not {N} numbers"));
+    let a = x.as_array().filter(|a| a.len() == N).ok_or_else(bad)?;
+    let mut out = [0.0; N];
+    for (o, x) in out.iter_mut().zip(a) {
+        *o = x.as_f64().ok_or_else(bad)?;
+    }
+    Ok(out)
+}
+
+/// The file's buffers, decoded: a GLB file's binary chunk, or embedded base64 `data:` URIs.
+fn buffers<'a>(c: &Container<'a>) -> Result<Vec<Cow<'a, [u8]>>> {
+    let mut out = Vec::new();
+    for (i, b) in list(&c.json, "buffers").iter().enumerate() {
+        let bytes = match b.get("uri").and_then(Value::as_str) {
+            None => match c.bin {
+                Some(bin) if i == 0 => Cow::Borrowed(bin),
+                _ => return Err(err(format!("buffers[{i}] has no uri, and it is not a GLB file's first buffer"))),
+            },
+            Some(uri) if uri.starts_with("data:") => {
+                let data = uri
+                    .split_once(";base64,")
+                    .map(|(_, d)| d)
+                    .ok_or_else(|| err(format!("buffers[{i}] is a data URI without base64 data")))?;
+                let decoded = base64::engine::general_purpose::STANDARD
+                    .decode(data)
+                    .map_err(|e| err(format!("buffers[{i}]'s base64 data is malformed: {e}")))?;
+                Cow::Owned(decoded)
+            }
+            Some(uri) => {
+                return Err(err(format!(
+                    "buffers[{i}] is another file ('{}'), which cannot be read from this one's bytes: \
+                     save the model as one .glb file, or as .gltf with embedded buffers",
+                    uri.chars().take(200).collect::<String>()
+                )))
+            }
+        };
+        out.push(bytes);
+    }
+    Ok(out)
+}
+
+/// The numeric type of an accessor's components.
+#[derive(Clone, Copy)]
+enum Component {
+    I8,
+    U8,
+    I16,
+    U16,
+    U32,
+    F32,
+}
+
+impl Component {
+    fn from_code(code: usize, what: &str) -> Result<Self> {
+        Ok(match code {
+            5120 => Self::I8,
+            5121 => Self::U8,
+            5122 => Self::I16,
+            5123 => Self::U16,
+            5125 => Self::U32,
+            5126 => Self::F32,
+            _ => return Err(err(format!("{what} has componentType {code}, not one glTF defines"))),
+        })
+    }
+
+    fn size(self) -> usize {
+        match self {
+            Self::I8 | Self::U8 => 1,
+            Self::I16 | Self::U16 => 2,
+            Self::U32 | Self::F32 => 4,
+        }
+    }
+
+    /// The component at `b` (its first byte), scaled to [-1, 1] or [0, 1] when `normalized`.
+    fn get(self, b: &[u8], normalized: bool) -> f64 {
+        let (v, max) = match self {
+            Self::I8 => (b[0] as i8 as f64, 127.0),
+            Self::U8 => (b[0] as f64, 255.0),
+            Self::I16 => (i16::from_le_bytes([b[0], b[1]]) as f64, 32767.0),
+            Self::U16 => (u16::from_le_bytes([b[0], b[1]]) as f64, 65535.0),
+            Self::U32 => return u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+            Self::F32 => return f32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f64,
+        };
+        if normalized {
+            (v / max).max(-1.0)
+        } else {
+            v
+        }
+    }
+}
+
+/// What the readers of accessors need: the JSON and the decoded buffers.
+struct Doc<'j, 'a> {
+    json: &'j Value,
+    buffers: Vec<Cow<'a, [u8]>>,
+}
+
+impl Doc<'_, '_> {
+    /// The bytes of buffer view `v`, and its stride (`None`: tightly packed).
+    fn view(&self, v: usize, what: &str) -> Result<(&[u8], Option<usize>)> {
+        let view = item(self.json, "bufferViews", v, what)?;
+        let vw = format!("bufferViews[{v}]");
+        if view.get("extensions").and_then(|e| e.get("EXT_meshopt_compression")).is_some() {
+            return Err(compressed("EXT_meshopt_compression"));
+        }
+        let buffer = required(view, "buffer", &vw)?;
+        let data = self
+            .buffers
+            .get(buffer)
+            .ok_or_else(|| err(format!("{vw} refers to buffers[{buffer}], but the file has {}", self.buffers.len())))?;
+        let offset = index(view, "byteOffset", &vw)?.unwrap_or(0);
+        let length = required(view, "byteLength", &vw)?;
+        let bytes = offset.checked_add(length).and_then(|end| data.get(offset..end)).ok_or_else(|| {
+            err(format!("{vw} (bytes {offset} to {offset}+{length}) lies outside its buffer of {} bytes", data.len()))
+        })?;
+        Ok((bytes, index(view, "byteStride", &vw)?))
+    }
+
+    /// Accessor `a` as `comps` numbers per element, flattened; `what` names its use in errors.
+    fn values(&self, a: usize, comps: usize, what: &str) -> Result<Vec<f64>> {
+        let acc = item(self.json, "accessors", a, what)?;
+        let aw = format!("accessors[{a}] ({what})");
+        let kind = acc.get("type").and_then(Value::as_str).unwrap_or("");
+        let have = match kind {
+            "SCALAR" => 1,
+            "VEC2" => 2,
+            "VEC3" => 3,
+            "VEC4" | "MAT2" => 4,
+            "MAT3" => 9,
+            "MAT4" => 16,
+            _ => 0,
+        };
+        if have != comps {
+            return Err(err(format!("{aw} has type '{kind}', where {comps} components per element are expected")));
+        }
+        let component = Component::from_code(required(acc, "componentType", &aw)?, &aw)?;
+        let normalized = acc.get("normalized").and_then(Value::as_bool).unwrap_or(false);
+        let count = required(acc, "count", &aw)?;
+        let element = comps * component.size();
+        let mut out = match index(acc, "bufferView", &aw)? {
+            Some(v) => {
+                let (bytes, stride) = self.view(v, &aw)?;
+                let stride = stride.unwrap_or(element);
+                let offset = index(acc, "byteOffset", &aw)?.unwrap_or(0);
+                if stride < element {
+                    return Err(err(format!(
+                        "{aw}: its view's byteStride {stride} is less than an element's {element} bytes"
+                    )));
+                }
+                let need = (count as u64).saturating_sub(1) * stride as u64 + element as u64 + offset as u64;
+                if count > 0 && need > bytes.len() as u64 {
+                    return Err(err(format!(
+                        "{aw}: {count} elements of {element} bytes every {stride} from byte {offset} need {need} bytes, \
+                         but its view has {}",
+                        bytes.len()
+                    )));
+                }
+                let mut out = Vec::with_capacity(count * comps);
+                for k in 0..count {
+                    let at = offset + k * stride;
+                    for c in 0..comps {
+                        let b = at + c * component.size();
+                        out.push(component.get(&bytes[b..b + component.size()], normalized));
+                    }
+                }
+                out
+            }
+            None if count <= MAX_FILE_POINTS => vec![0.0; count * comps],
+            None => return Err(err(format!("{aw} has {count} elements and no data"))),
+        };
+        if let Some(sparse) = acc.get("sparse") {
+            self.sparse(sparse, &mut out, comps, component, normalized, &aw)?;
+        }
+        Ok(out)
+    }
+
+    /// Applies an accessor's sparse substitutions to its values `out`.
+    fn sparse(
+        &self,
+        sparse: &Value,
+        out: &mut [f64],
+        comps: usize,
+        component: Component,
+        normalized: bool,
+        aw: &str,
+    ) -> Result<()> {
+        let sw = format!("{aw}'s sparse");
+        let n = required(sparse, "count", &sw)?;
+        let (Some(indices), Some(values)) = (sparse.get("indices"), sparse.get("values")) else {
+            return Err(err(format!("{sw} lacks its indices or values")));
+        };
+        let index_kind = Component::from_code(required(indices, "componentType", &sw)?, &sw)?;
+        let read = |part: &Value, size: usize| -> Result<&[u8]> {
+            let (bytes, _) = self.view(required(part, "bufferView", &sw)?, &sw)?;
+            let offset = index(part, "byteOffset", &sw)?.unwrap_or(0);
+            offset
+                .checked_add(n.saturating_mul(size))
+                .and_then(|end| bytes.get(offset..end))
+                .ok_or_else(|| err(format!("{sw}: {n} entries of {size} bytes from byte {offset} overrun their view")))
+        };
+        let at = read(indices, index_kind.size())?;
+        let element = comps * component.size();
+        let vals = read(values, element)?;
+        let elements = out.len() / comps.max(1);
+        for k in 0..n {
+            let i = index_kind.get(&at[k * index_kind.size()..], false) as usize;
+            let slot = out
+                .get_mut(i * comps..(i + 1) * comps)
+                .ok_or_else(|| err(format!("{sw}: index {i} is beyond the accessor's {elements} elements")))?;
+            for (c, s) in slot.iter_mut().enumerate() {
+                let b = k * element + c * component.size();
+                *s = component.get(&vals[b..], normalized);
+            }
+        }
+        Ok(())
+    }
+}
+
+fn compressed(extension: &str) -> Error {
+    err(format!(
+        "the model is compressed with {extension}, which arps does not decode: save it without that compression \
+         (e.g. in Blender, or `gltf-transform copy` after decoding)"
+    ))
+}
+
+/// A node's own transform: its `matrix` (column-major), else translation * rotation * scale.
+fn local(node: &Value, what: &str) -> Result<Matrix4<f64>> {
+    if node.get("matrix").is_some() {
+        let m = numbers::<16>(node, "matrix", [0.0; 16], what)?;
+        return Ok(Matrix4::from_column_slice(&m));
+    }
+    let [tx, ty, tz] = numbers(node, "translation", [0.0; 3], what)?;
+    let [x, y, z, w] = numbers(node, "rotation", [0.0, 0.0, 0.0, 1.0], what)?;
+    let [sx, sy, sz] = numbers(node, "scale", [1.0; 3], what)?;
+    Ok(trs(Vector3::new(tx, ty, tz), Quaternion::new(w, x, y, z), Vector3::new(sx, sy, sz)))
+}
+
+/// `T * R * S`; a zero quaternion turns nothing.
+fn trs(t: Vector3<f64>, q: Quaternion<f64>, s: Vector3<f64>) -> Matrix4<f64> {
+    let r = if q.norm() > 0.0 { UnitQuaternion::from_quaternion(q).to_homogeneous() } else { Matrix4::identity() };
+    Matrix4::new_translation(&t) * r * Matrix4::new_nonuniform_scaling(&s)
+}
+
+/// The nodes at the top of the scene read: the `scene`'s (else the first scene's) nodes, or, in
+/// a file without scenes, every node that is no other node's child.
+pub(crate) fn roots(json: &Value) -> Result<Vec<usize>> {
+    let scenes = list(json, "scenes");
+    let scene = index(json, "scene", "the file")?.or(if scenes.is_empty() { None } else { Some(0) });
+    let nodes = list(json, "nodes");
+    let Some(s) = scene else {
+        let mut child = vec![false; nodes.len()];
+        for node in nodes {
+            for c in list(node, "children") {
+                if let Some(c) = c.as_u64().and_then(|c| child.get_mut(c as usize)) {
+                    *c = true;
+                }
+            }
+        }
+        return Ok((0..nodes.len()).filter(|&i| !child[i]).collect());
+    };
+    let scene = item(json, "scenes", s, "the file's scene")?;
+    list(scene, "nodes")
+        .iter()
+        .map(|n| n.as_u64().map(|n| n as usize).ok_or_else(|| err(format!("scenes[{s}]'s nodes are not indices"))))
+        .collect()
+}
+
+/// The instance transforms of a node's `EXT_mesh_gpu_instancing`, or the identity alone.
+fn instances(doc: &Doc, node: &Value, what: &str) -> Result<Vec<Matrix4<f64>>> {
+    let Some(ext) = node.get("extensions").and_then(|e| e.get("EXT_mesh_gpu_instancing")) else {
+        return Ok(vec![Matrix4::identity()]);
+    };
+    let attrs = ext.get("attributes").cloned().unwrap_or(Value::Null);
+    let read = |name: &str, comps: usize| -> Result<Option<Vec<f64>>> {
+        index(&attrs, name, what)?.map(|a| doc.values(a, comps, &format!("{what}'s instance {name}"))).transpose()
+    };
+    let (t, r, s) = (read("TRANSLATION", 3)?, read("ROTATION", 4)?, read("SCALE", 3)?);
+    let n = [t.as_ref().map(|v| v.len() / 3), r.as_ref().map(|v| v.len() / 4), s.as_ref().map(|v| v.len() / 3)];
+    let count = n.iter().flatten().copied().min().unwrap_or(0);
+    if n.iter().flatten().any(|&k| k != count) {
+        return Err(err(format!("{what}'s instance attributes differ in count")));
+    }
+    Ok((0..count)
+        .map(|k| {
+            let v3 = |v: &Option<Vec<f64>>, d: f64| {
+                v.as_ref().map_or(Vector3::repeat(d), |v| Vector3::new(v[3 * k], v[3 * k + 1], v[3 * k + 2]))
+            };
+            let q = r.as_ref().map_or(Quaternion::identity(), |v| {
+                Quaternion::new(v[4 * k + 3], v[4 * k], v[4 * k + 1], v[4 * k + 2])
+            });
+            trs(v3(&t, 0.0), q, v3(&s, 1.0))
+        })
+        .collect())
+}
+
+/// Reads the default scene's meshes, placed (see the module docs); triangles unless `faces` is
+/// [`Faces::Skip`]. `limit` bounds the triangles (a mesh placed by many nodes repeats its own).
+pub(crate) fn read(bytes: &[u8], faces: Faces) -> Result<Raw> {
+    let c = open(bytes)?;
+    for ext in list(&c.json, "extensionsRequired").iter().filter_map(Value::as_str) {
+        if ext == "KHR_draco_mesh_compression" || ext.contains("meshopt_compression") {
+            return Err(compressed(ext));
+        }
+    }
+    let doc = Doc { json: &c.json, buffers: buffers(&c)? };
+    let nodes = list(&c.json, "nodes");
+    let mut seen = vec![false; nodes.len()];
+    let mut stack: Vec<(usize, Matrix4<f64>)> =
+        roots(&c.json)?.into_iter().rev().map(|n| (n, Matrix4::identity())).collect();
+    let (mut vertices, mut triangles) = (Vec::new(), Vec::new());
+    let triangle_limit = bytes.len().max(1 << 20);
+    while let Some((n, parent)) = stack.pop() {
+        let nw = format!("nodes[{n}]");
+        let node = item(&c.json, "nodes", n, "a scene or node")?;
+        if std::mem::replace(&mut seen[n], true) {
+            return Err(err(format!("{nw} is reached twice (a node has one parent, and the tree no cycle)")));
+        }
+        let world = parent * local(node, &nw)?;
+        if let Some(m) = index(node, "mesh", &nw)? {
+            let mesh = item(&c.json, "meshes", m, &nw)?;
+            for place in instances(&doc, node, &nw)? {
+                let at = world * place;
+                for (p, prim) in list(mesh, "primitives").iter().enumerate() {
+                    let pw = format!("meshes[{m}].primitives[{p}]");
+                    primitive(&doc, prim, &pw, &at, faces, &mut vertices, &mut triangles)?;
+                    if triangles.len() > triangle_limit {
+                        return Err(Error::TooLarge(format!(
+                            "the {F} file's scene holds more than {triangle_limit} triangles once its meshes are placed"
+                        )));
+                    }
+                }
+            }
+        }
+        for child in list(node, "children").iter().rev() {
+            let child = child.as_u64().map(|c| c as usize).filter(|&c| c < nodes.len());
+            let child = child.ok_or_else(|| err(format!("{nw}'s children are not indices of its nodes")))?;
+            stack.push((child, world));
+        }
+    }
+    Ok(Raw { vertices, triangles })
+}
+
+/// Appends a primitive's points, placed by `at`, and its triangles.
+fn primitive(
+    doc: &Doc,
+    prim: &Value,
+    pw: &str,
+    at: &Matrix4<f64>,
+    faces: Faces,
+    vertices: &mut Vec<[f64; 3]>,
+    triangles: &mut Vec<[u32; 3]>,
+) -> Result<()> {
+    if prim.get("extensions").and_then(|e| e.get("KHR_draco_mesh_compression")).is_some() {
+        return Err(compressed("KHR_draco_mesh_compression"));
+    }
+    let Some(position) = index(prim.get("attributes").unwrap_or(&Value::Null), "POSITION", pw)? else {
+        return Ok(()); // nothing to draw
+    };
+    let xyz = doc.values(position, 3, &format!("{pw} POSITION"))?;
+    let count = xyz.len() / 3;
+    let base = vertices.len();
+    crate::limits::check_file_points(F, (base + count) as u64)?;
+    vertices.extend(xyz.chunks_exact(3).map(|p| {
+        let q = at * nalgebra::Vector4::new(p[0], p[1], p[2], 1.0);
+        [q.x, q.y, q.z]
+    }));
+    let mode = index(prim, "mode", pw)?.unwrap_or(4);
+    if faces == Faces::Skip || !(4..=6).contains(&mode) {
+        return Ok(());
+    }
+    let order: Vec<usize> = match index(prim, "indices", pw)? {
+        Some(a) => {
+            let raw = doc.values(a, 1, &format!("{pw} indices"))?;
+            let mut order = Vec::with_capacity(raw.len());
+            for i in raw {
+                if !(i >= 0.0 && (i as usize) < count) {
+                    return Err(err(format!("{pw}: vertex index {i} is out of range ({count} vertices)")));
+                }
+                order.push(i as usize);
+            }
+            order
+        }
+        None => (0..count).collect(),
+    };
+    let tri = |a: usize, b: usize, c: usize| [a, b, c].map(|i| (base + order[i]) as u32);
+    match mode {
+        4 => triangles.extend((0..order.len() / 3).map(|k| tri(3 * k, 3 * k + 1, 3 * k + 2))),
+        5 => {
+            triangles
+                .extend((2..order.len()).map(|k| if k % 2 == 0 { tri(k - 2, k - 1, k) } else { tri(k - 2, k, k - 1) }))
+        }
+        _ => triangles.extend((2..order.len()).map(|k| tri(0, k - 1, k))),
+    }
+    Ok(())
+}
