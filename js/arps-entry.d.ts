@@ -15,7 +15,8 @@ export interface InitOptions {
    * engine. `true` (the default): `models/arps-web.safetensors` next to the package's entry (a
    * bundler emits it as an asset; browsers cache it like any static file); a URL, `Request`,
    * `Response` or bytes: that file; `false`: none (only `Registrar.fromBytes`/`fromUrl` will be
-   * used). In Node the default model is read from disk when first needed, whatever this says.
+   * used). In Node the package's default model is read from disk when first needed: a URL, path or
+   * bytes given here replace it, `true` and `false` change nothing.
    */
   model?: boolean | ModelSource | Promise<ModelSource>;
 }
@@ -24,15 +25,17 @@ export interface InitOptions {
  * Loads and instantiates the engine and, in parallel, the default model (see `InitOptions`). Call
  * once and await it before anything else (in Node it need not be called). Rejects with an `Error`
  * that names the URL and the HTTP status when the model cannot be fetched, or that says the file
- * is not a valid arps weights file. Passing the engine's `InitInput` directly still works.
+ * is not a valid arps weights file. Passing the engine's `InitInput` directly still works. What it
+ * resolves to is not part of the API (it differs between the web and the Node builds): await it,
+ * then use the package's exports.
  */
-export default function init(options?: InitOptions | InitInput | Promise<InitInput>): Promise<InitOutput>;
+export default function init(options?: InitOptions | InitInput | Promise<InitInput>): Promise<unknown>;
 
 /**
  * `init` synchronously, from the engine's bytes or compiled module; `model`: the default model's
  * bytes (nothing is fetched: without it, `Registrar.withDefaultModel()` throws).
  */
-export function initSync(options: { module: SyncInitInput; model?: ArrayBuffer | ArrayBufferView } | SyncInitInput): InitOutput;
+export function initSync(options: { module: SyncInitInput; model?: ArrayBuffer | ArrayBufferView } | SyncInitInput): unknown;
 
 /** Options of `Registrar.fromUrl`. */
 export interface FromUrlOptions {

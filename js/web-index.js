@@ -53,6 +53,17 @@ export default async function init(options) {
           { cause: e },
         );
       }
+      // Node's fetch cannot read file: URLs ("fetch failed"): the web build run under Node
+      const where = moduleOrPath === undefined ? new URL("./arps_bg.wasm", import.meta.url) : moduleOrPath;
+      if (e instanceof TypeError && String(where).startsWith("file:")) {
+        throw new Error(
+          `arps: cannot fetch the engine ${where} (${e.message}${e.cause?.message ? `: ${e.cause.message}` : ""}): ` +
+            "this is the package's web build, which fetches its files, and this runtime's fetch cannot read file: URLs. " +
+            'Under Node import "arps" (its exports give Node the Node build, which reads them from disk), ' +
+            "or pass the engine's bytes: init({ module_or_path: bytes })",
+          { cause: e },
+        );
+      }
       throw e;
     },
   );

@@ -110,7 +110,7 @@ export interface WorkerRegistrar {
   register(
     source: CloudInput,
     target: CloudInput,
-    options?: RegisterOptions,
+    options?: RegisterOptions | null,
     request?: WorkerRequestOptions,
   ): Promise<RegistrationResult>;
   /**
@@ -160,7 +160,7 @@ export interface WorkerRegistrar {
   ): Promise<ScanInfo[]>;
   /**
    * A file moved as it is, in its own format, in the worker (see `transformFile` in arps.d.ts:
-   * PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, LAZ, E57 by its poses; every attribute
+   * PLY, PCD, XYZ/PTS/TXT/CSV, OBJ, OFF, STL, LAS, LAZ, E57 by its poses, glTF/GLB; every attribute
    * kept, normals turned): e.g. a registered source's file by its `T_target_source`. `readOptions`:
    * those the cloud was read with (`{ scan: K }`: an E57 file's scan alone, as an E57 file of its
    * own). Rejects for a format it cannot tell (save its points: `writePly(await

@@ -17,11 +17,11 @@ import { inheritedMessage, inheritedOption } from "./facade.js";
 /** Progress stages, in order. */
 export const STAGES = Object.freeze(["loading", "preparing", "network", "refining", "done"]);
 
-/** The default worker where there is a DOM Worker (browsers, Deno, bundlers). */
+/** The default worker where there is a DOM Worker (browsers, bundlers). */
 const domWorker = () => new Worker(new URL("./worker.js", import.meta.url), { type: "module", name: "arps" });
 
 /**
- * The default worker under Node (no DOM Worker): a worker_threads Worker running node-worker.mjs,
+ * The default worker under Node (no DOM Worker) and Deno: a worker_threads Worker running node-worker.mjs,
  * behind the DOM Worker methods the client uses. An exit reports as an error, so a crashed
  * worker's requests reject.
  */
@@ -79,8 +79,9 @@ class Pending extends Map {
  */
 export async function createWorkerRegistrar(options = {}) {
   const given = options.worker ?? null;
-  const createWorker =
-    options.createWorker ?? (given ? null : typeof Worker === "function" ? domWorker : await nodeWorkerFactory());
+  // (Deno has a DOM Worker, but one that cannot be unreferenced: its worker_threads Worker can)
+  const dom = typeof Worker === "function" && typeof globalThis.Deno !== "object";
+  const createWorker = options.createWorker ?? (given ? null : dom ? domWorker : await nodeWorkerFactory());
   // A Response body can be read once; a restarted worker needs the bytes again. URLs travel as
   // strings (a URL object cannot be posted).
   const portable = async (v) => {

@@ -108,8 +108,8 @@ pub fn version() -> String {
 }
 
 /// Reads a point cloud from a file's bytes with the core readers (PLY, PCD, LAS/LAZ, E57,
-/// XYZ/PTS/CSV, OBJ, OFF, STL). The format comes from the file's signature (`ply`, `LASF`,
-/// `ASTM-E57`, `# .PCD`, `OFF`) when it starts with one, else from its name's extension, else
+/// XYZ/PTS/CSV, OBJ, OFF, STL, glTF/GLB). The format comes from the file's signature (`ply`,
+/// `LASF`, `ASTM-E57`, `glTF`, `# .PCD`, `OFF`) when it starts with one, else from its name's extension, else
 /// it is sniffed from the content; mesh formats give their
 /// vertices, or with `options.surfacePoints` that many points drawn uniformly over their surface
 /// (`ReadOptions`: what a CAD model should be read as). Returns packed xyz (`[x0, y0, z0, x1,
@@ -246,8 +246,9 @@ pub fn list_scans(
 
 /// A file moved as it is, in its own format, e.g. a registered source by its result's
 /// `T_target_source`: PLY, PCD, text lists (XYZ, PTS, TXT, CSV), OBJ, OFF, STL, LAS, LAZ
-/// (compressed again) and E57 (its scans' poses moved, its points kept as
-/// stored; rigid motions only) (see `canTransform`). Positions are mapped in f64 and written back as the file stored them (the
+/// (compressed again), E57 (its scans' poses moved, its points kept as
+/// stored; rigid motions only) and glTF/GLB (a new parent node above its top nodes, its buffers
+/// kept) (see `canTransform`). Positions are mapped in f64 and written back as the file stored them (the
 /// property's type, the text's decimals, LAS's scaled integers with new offsets), normals turned,
 /// everything else kept (colours, intensity, classification, faces, other fields, the header).
 /// `fileName` says the format by its extension, where the file does not start with a format's
@@ -489,9 +490,13 @@ fn readable_serde_message(message: &str) -> String {
     }
     // a float that is a whole number from 2^53 on: JS numbers cannot hold such seeds exactly
     if m.contains(whole) {
-        let big = m.split('`').nth(1).and_then(|v| v.parse::<f64>().ok()).is_some_and(|v| v >= 9_007_199_254_740_992.0);
-        if big {
+        let value = m.split('`').nth(1).and_then(|v| v.parse::<f64>().ok());
+        if value.is_some_and(|v| v >= 9_007_199_254_740_992.0) {
             m.push_str(" (from 2^53 on, give it as a bigint: 2n ** 53n)");
+        }
+        // a negative whole number reaches serde as a float: say what is wrong with it, its sign
+        if let Some(v) = value.filter(|v| *v < 0.0 && v.fract() == 0.0) {
+            m = format!("invalid value: {v}, {whole}");
         }
     }
     m
