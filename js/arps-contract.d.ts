@@ -68,7 +68,9 @@ export type RegisterOptions = {
    * look-alike: 30-100 probe points on a vertebra, turned over, fit 0.89-0.97 of them); and for
    * an answer within that of the guess, poses that turn further from it are not counted as
    * look-alikes (as `up` rules out tilted ones): a symmetric room's half turn does not hold a
-   * right answer at 0.5 when the guess says which way round it is. Default:
+   * right answer at 0.5 when the guess says which way round it is. An answer that puts the
+   * source farther than half its size from where the guess puts it comes with a warning (a
+   * look-alike elsewhere, when the guess placed it). Default:
    * the identity. Either 16
    * numbers in **column-major** order (a previous result's `T_target_source`, a three.js
    * `Matrix4.elements`; in JS also a `Float32Array` or `Float64Array`), or four **row-major**

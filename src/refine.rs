@@ -212,7 +212,7 @@ pub fn shortlist(
     let sample = even_sample(source, SHORTLIST_POINTS);
     let params = IcpParams {
         max_iterations: SHORTLIST_ITERATIONS,
-        ..IcpParams::new(how.kind.or_point(), SCHEDULE[0] * how.d_final)
+        ..IcpParams::new(how.kind.or_point(), SCHEDULE[0] * how.d_coarse)
     };
     let (bar, keep_best) = match screen {
         Some(s) => (s.fit * target.align(&sample, s.T_target_source, &params).fitness, s.keep_best),
@@ -232,7 +232,9 @@ pub fn shortlist(
     kept.into_iter().map(|i| starts[i]).collect()
 }
 
-/// ICP runs coarse to fine at these multiples of the final max correspondence distance.
+/// ICP runs coarse to fine at these multiples of the final max correspondence distance (of
+/// [`Refinement::d_coarse`], then halving down to the final distance, when the caller's final
+/// distance is tighter than the default: [`Refinement::stages`]).
 pub const SCHEDULE: [f64; 3] = [4.0, 2.0, 1.0];
 
 /// Damping ([`IcpParams::damping`]) of a second run of the widest ICP stage ([`SCHEDULE`]'s
@@ -264,12 +266,45 @@ pub struct Refinement {
     pub kind: IcpKind,
     /// The final max correspondence distance, in the clouds' units.
     pub d_final: f64,
+    /// The distance the stages start from: the first is [`SCHEDULE`]'s first multiple of it. At
+    /// least `d_final`; larger when the caller's final distance is tighter than the default one,
+    /// so that the starts travel as far as at the default (a tight distance sets the precision,
+    /// not how far the search reaches), then halve down to `d_final` ([`Refinement::stages`]);
+    /// [`refine_starts`] then also refines every start through [`SCHEDULE`] alone, and the fit
+    /// chooses.
+    pub d_coarse: f64,
     /// Iteration cap of each ICP stage.
     pub max_iterations: u32,
     /// The start that is an estimate of the answer, not a guess (the pipeline's: the network's, or
     /// with the network off the initial transform), if any: it takes the widest stage plainly,
     /// damped ([`WIDE_DAMPING`]) and not at all (the closer stages only), as three candidates.
     pub estimate: Option<Start>,
+}
+
+impl Refinement {
+    /// A refinement at the final distance `d_final` whose stages start from `d_coarse` (the
+    /// larger of the two: [`Refinement::d_coarse`]); no estimate.
+    pub fn new(kind: IcpKind, d_final: f64, d_coarse: f64, max_iterations: u32) -> Self {
+        Self { kind, d_final, d_coarse: d_coarse.max(d_final), max_iterations, estimate: None }
+    }
+
+    /// The stages, as multiples of `d_final`: [`SCHEDULE`] when `d_coarse` is `d_final`; else
+    /// [`SCHEDULE`] times `d_coarse / d_final`, then halving down to 1 (the last stage a
+    /// half-step or less after the one before).
+    pub fn stages(&self) -> Vec<f64> {
+        let r = self.d_coarse / self.d_final;
+        let mut stages: Vec<f64> = SCHEDULE.iter().map(|f| f * r).collect();
+        let mut f = r;
+        while f > 1.0 {
+            f = (f / 2.0).max(1.0);
+            // a last step shorter than a quarter of the halving is merged into the final stage
+            if f < 1.25 {
+                f = 1.0;
+            }
+            stages.push(f);
+        }
+        stages
+    }
 }
 
 /// One start after refinement, scored at the final distance.
@@ -391,14 +426,16 @@ pub fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
     (0..n).map(|i| points[i * points.len() / n]).collect()
 }
 
-/// Refines every start with coarse-to-fine ICP against one prepared target ([`SCHEDULE`] times
-/// `how.d_final`, each stage capped at `how.max_iterations`; `how.estimate` takes the widest stage
+/// Refines every start with coarse-to-fine ICP against one prepared target ([`Refinement::stages`]:
+/// [`SCHEDULE`] times `how.d_final` unless the final distance is tighter than the coarse one,
+/// each stage capped at `how.max_iterations`; `how.estimate` takes the widest stage
 /// plainly, damped ([`WIDE_DAMPING`]) and not at all, as three candidates) and scores
-/// each result at `how.d_final`.
+/// each result at `how.d_final`. With a coarse distance above the final one, the starts are
+/// refined a second time through [`SCHEDULE`] alone, and those candidates follow the first ones.
 ///
 /// The starts advance stage by stage together; before each stage a start that has come within
 /// [`MERGE_FRACTION`] of `how.d_final` of an earlier one (largest displacement of a source point) is
-/// dropped, so the result has one candidate per distinct basin, in the order of `starts`; after
+/// dropped, so each run has one candidate per distinct basin, in the order of `starts`; after
 /// each coarse stage a start below [`CUT_BEHIND`] of the best fitness at that stage's distance is
 /// dropped too. With
 /// [`IcpKind::Off`] nothing moves: every start is scored as it is.
@@ -408,7 +445,15 @@ pub fn refine_starts(
     starts: &[(Start, Matrix4<f64>)],
     how: &Refinement,
 ) -> Vec<Candidate> {
-    refine_stages(target, source, starts, how, &SCHEDULE)
+    let mut all = refine_stages(target, source, starts, how, &how.stages());
+    if how.d_coarse > how.d_final {
+        // and through the caller's own schedule alone: a start already near the answer (a guess
+        // placed by hand) can be pulled off it by the wide stages in a scene of repeated
+        // structure (a corridor's walls paired with the next ones), where the starts that must
+        // travel need them; the fit at the final distance chooses ([`choose`])
+        all.extend(refine_stages(target, source, starts, how, &SCHEDULE));
+    }
+    all
 }
 
 /// [`refine_starts`] with the given stages (multiples of `how.d_final`) instead of [`SCHEDULE`].
@@ -419,7 +464,7 @@ fn refine_stages(
     how: &Refinement,
     schedule: &[f64],
 ) -> Vec<Candidate> {
-    let Refinement { kind, d_final, max_iterations, estimate } = *how;
+    let Refinement { kind, d_final, max_iterations, estimate, .. } = *how;
     // each start with its points' partners in the previous stage (warm-starts the next)
     let mut live: Vec<(Candidate, Partners)> = starts
         .iter()
@@ -436,11 +481,12 @@ fn refine_stages(
         })
         .collect();
     if kind != IcpKind::Off {
-        for &factor in schedule {
+        for (k, &factor) in schedule.iter().enumerate() {
             merge_coincident(&mut live, source, MERGE_FRACTION * d_final);
             let params = IcpParams { max_iterations, ..IcpParams::new(kind, d_final * factor) };
             let mut wide = vec![Wide::Plain; live.len()];
-            if factor >= SCHEDULE[0] {
+            // (the widest stage of a coarse-to-fine schedule, not a final stage run alone)
+            if k == 0 && schedule.len() > 1 {
                 (live, wide) = with_estimate_twins(live, estimate);
             }
             for ((c, partners), &wide) in live.iter_mut().zip(&wide) {
@@ -593,4 +639,21 @@ pub fn choose(candidates: &[Candidate]) -> Option<usize> {
         }
     }
     chosen
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_tight_final_distance_starts_at_the_default_and_halves_down() {
+        let stages = |d_final: f64, d_coarse: f64| Refinement::new(IcpKind::Plane, d_final, d_coarse, 30).stages();
+        assert_eq!(stages(0.025, 0.025), SCHEDULE.to_vec(), "at the default: the schedule");
+        assert_eq!(stages(0.05, 0.025), SCHEDULE.to_vec(), "wider than the default: the schedule");
+        assert_eq!(stages(0.025 / 8.0, 0.025), vec![32.0, 16.0, 8.0, 4.0, 2.0, 1.0]);
+        assert_eq!(stages(0.025 / 3.0, 0.025), vec![12.0, 6.0, 3.0, 1.5, 1.0]);
+        let s = stages(0.025 / 2.2, 0.025);
+        assert_eq!(s.len(), 4, "{s:?}: the step below 1.25 merged into the final stage");
+        assert_eq!(s[3], 1.0);
+    }
 }

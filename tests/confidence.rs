@@ -526,7 +526,7 @@ fn evidence_cost() {
         let (sn, gt_n) = (&s, gt);
         let target = IcpTarget::new(&t.points, true);
         let source_index = IcpTarget::new(&sn.points, false);
-        let how = arps::refine::Refinement { kind: IcpKind::Plane, d_final: d, max_iterations: 30, estimate: None };
+        let how = arps::refine::Refinement::new(IcpKind::Plane, d, d, 30);
         let start = turn_about(Vector3::new(1.0, 0.5, 0.2), 10.0, Vector3::zeros()) * gt_n;
         let (mut icp, mut ev) = (Vec::new(), Vec::new());
         for _ in 0..5 {

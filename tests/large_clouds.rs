@@ -62,7 +62,7 @@ fn normals_are_estimated_only_where_icp_needs_them_and_equal_the_eager_ones() {
     assert_eq!(target.normals_estimated(), 0);
     let truth = motion([3.0, -2.0, 1.0], [0.02, 0.0, -0.01]);
     let source = PointCloud::new(refine::even_sample(&cloud, 1000)).transformed(&rigid_inverse(&truth)).points;
-    let how = Refinement { kind: IcpKind::Plane, d_final: 0.03, max_iterations: 30, estimate: None };
+    let how = Refinement::new(IcpKind::Plane, 0.03, 0.03, 30);
     let c = refine::refine_best(&target, &source, &[(Start::Initial, nalgebra::Matrix4::identity())], &how).unwrap();
     assert!(rotation_error_deg(&c.T_target_source, &truth) < 0.05, "{}", c.T_target_source);
     let used = target.normals_estimated();
@@ -85,7 +85,7 @@ fn refinement_of_a_large_source_is_capped_and_recovers_the_motion() {
     let truth = motion([8.0, -6.0, 5.0], [0.05, -0.04, 0.03]);
     let source = PointCloud::new(cloud.clone()).transformed(&rigid_inverse(&truth)).points;
     assert!(source.len() > 10 * refine::REFINE_POINTS);
-    let how = Refinement { kind: IcpKind::Plane, d_final: 0.02, max_iterations: 30, estimate: None };
+    let how = Refinement::new(IcpKind::Plane, 0.02, 0.02, 30);
     let one = [(Start::Network, nalgebra::Matrix4::identity())];
     let c = refine::refine_best(&target, &source, &one, &how).unwrap();
     assert!(rotation_error_deg(&c.T_target_source, &truth) < 0.05, "{}", c.T_target_source);

@@ -20,7 +20,7 @@ fn untrained() -> Registrar {
 
 /// Coarse-to-fine refinement of `kind` to `d`, 30 iterations per stage (the engine's default).
 fn how(kind: IcpKind, d: f64) -> Refinement {
-    Refinement { kind, d_final: d, max_iterations: 30, estimate: None }
+    Refinement::new(kind, d, d, 30)
 }
 
 fn starts(list: &[Start]) -> Options {
@@ -388,7 +388,7 @@ fn the_answer_runs_on_past_the_cap_until_it_converges() {
     let (target, source, truth) = surface_pair();
     let d = 0.05;
     let start = motion([12.0, -6.0, 4.0], [0.06, 0.03, 0.0]) * truth;
-    let capped = Refinement { kind: IcpKind::Point, d_final: d, max_iterations: 3, estimate: None };
+    let capped = Refinement::new(IcpKind::Point, d, d, 3);
     let cut = refine::refine_starts(&target, &source, &[(Start::Network, start)], &capped)[0];
     assert!(!cut.converged, "precondition: the cap cuts the plain schedule short: {cut:?}");
     let best = refine::refine_best(&target, &source, &[(Start::Network, start)], &capped).unwrap();

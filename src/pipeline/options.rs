@@ -121,6 +121,14 @@ pub(crate) fn evidence_distance(d_final: f64) -> f64 {
     d_final.min(DEFAULT_MAX_CORRESPONDENCE)
 }
 
+/// The distance the search's ICP stages start from ([`crate::refine::Refinement::d_coarse`]), in
+/// normalised units: the final distance `d_final`, or the default one when that is larger. A
+/// tight final distance sets how precisely the answer fits; the starts still travel as far as
+/// at the default, then the stages halve down to it.
+pub(crate) fn coarse_distance(d_final: f64) -> f64 {
+    d_final.max(DEFAULT_MAX_CORRESPONDENCE)
+}
+
 /// The final ICP distance and the ICP voxel size in normalised units, for a normalisation of
 /// scale `s` (user units per normalised unit).
 pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {

@@ -92,14 +92,17 @@ pub(crate) fn search(
     let target_index = p.target.index();
     // the network's estimate, or with the network off the initial transform (`starts::kinds`)
     let estimate = if options.network { Start::Network } else { Start::Initial };
-    let how = Refinement { kind: p.icp, d_final, max_iterations: options.icp_max_iterations, estimate: Some(estimate) };
+    let how = Refinement {
+        estimate: Some(estimate),
+        ..Refinement::new(p.icp, d_final, super::options::coarse_distance(d_final), options.icp_max_iterations)
+    };
     let source_index = IcpTarget::new(&p.icp_src.points, false);
     // with `up`: every start levelled, and only upright answers, probe poses and alternatives
     let upright = p.upright;
     let tilt_deg = |t: &Matrix4<f64>| upright.map_or(0.0, |u| u.tilt_deg(t));
-    let admissible = match &upright {
-        Some(u) => confidence::Admissible::Upright { up: u.up().into_inner(), tilt_deg: &tilt_deg },
-        None => confidence::Admissible::Any,
+    let admissible = confidence::Admissible {
+        up: upright.map(|u| (u.up().into_inner(), &tilt_deg as confidence::TiltDeg)),
+        guess: options.initial_transform.is_some().then_some(p.t_initial),
     };
     let admits = |t: &Matrix4<f64>| admissible.admits(t);
     let centroid = p.src_n.centroid();
@@ -383,6 +386,8 @@ pub(crate) fn search(
             (c, probed, false)
         }
     };
+    // (the search's answers that the caller's guess rules out are no look-alikes either)
+    refined.retain(|(t, _)| admissible.counts(t, &candidate.T_target_source));
     let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined);
     // with `up`: a tilted pose that fits clearly better than the upright answer
     let tilted = tilted
@@ -397,6 +402,22 @@ pub(crate) fn search(
     // with the caller's guess: an answer that turns far from it
     let turn = crate::transform::rotation_error_deg(&candidate.T_target_source, &p.t_initial);
     let far_from_guess = (options.initial_transform.is_some() && turn > GUESS_TURN_DEG).then_some(turn);
+    // ... or that puts the source farther from where the guess puts it than half the source's
+    // size (`GUESS_SHIFT`): a look-alike elsewhere (a repeated room, the next bay) when the guess
+    // placed it
+    if options.initial_transform.is_some() {
+        let c = Point3::from(centroid);
+        let shift = (candidate.T_target_source.transform_point(&c) - p.t_initial.transform_point(&c)).norm();
+        let size = p.src_n.half_extent();
+        if shift > GUESS_SHIFT * size {
+            warnings.push(format!(
+                "the answer puts the source {} from where initialTransform puts it, {:.1} times the source's half-extent: \
+                 if the guess placed it, the answer may be a look-alike elsewhere (a repeated room, the next bay)",
+                crate::error::num(shift * p.norm.scale),
+                shift / size
+            ));
+        }
+    }
     let doubts = caps::Doubts { refined_any, tilted, short, mirrored, far_from_guess };
     let confidence = caps::cap(p, confidence, &candidate, doubts, warnings);
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
@@ -416,6 +437,13 @@ pub(crate) fn search(
     let alternatives = refine_alternatives(target_index, &p.icp_src.points, &candidate, &poses, &how);
     Ok(Chosen { candidate, evidence, confidence, starts_refined, alternatives })
 }
+
+/// With [`Options::initial_transform`], an answer that puts the source's centroid farther than
+/// this fraction of the source's largest half-extent from where the guess puts it gets a warning
+/// (no cap: a guess may give the rotation alone). A BIM user's scan of two rooms and a corridor,
+/// placed on the plan 30 degrees and 1.4 m off, came back in the identical rooms 8.8 m away (0.65
+/// of its half-extent) at 0.996 without a word.
+const GUESS_SHIFT: f64 = 0.5;
 
 /// The final verdict on the answer `c` judged by the probe (`probed`): its evidence, with the
 /// other answers the search `refined` that fit about as well counted as alternatives
