@@ -24,7 +24,7 @@
 
 use crate::icp::{GiveUp, IcpKind, IcpParams, IcpTarget, Partners};
 use crate::refine::{coincide, even_sample, SCREEN_POINTS};
-use crate::register::{GUESS_TURN_DEG, UP_TOLERANCE_DEG};
+use crate::register::UP_TOLERANCE_DEG;
 use crate::transform::rigid_inverse;
 use crate::transform::{apply, from_rotation_translation, rotation_error_deg, translation_error};
 use nalgebra::Matrix4;
@@ -96,7 +96,7 @@ pub fn evidence(
     d: f64,
     kind: IcpKind,
 ) -> Evidence {
-    probe(target, source_index, source, T_target_source, d, kind, &Admissible::default()).evidence
+    probe(target, source_index, source, T_target_source, d, kind, &Admissible::Any).evidence
 }
 
 /// [`evidence`] together with the poses its turned probes found: the best different one, when it
@@ -115,42 +115,37 @@ pub struct Probed {
     pub alternatives: Vec<Matrix4<f64>>,
 }
 
-/// How far a pose tilts the source's up off the target's, degrees ([`Admissible::up`]).
-pub type TiltDeg<'a> = &'a dyn Fn(&Matrix4<f64>) -> f64;
-
-/// Which poses the probes may find, and which count as look-alikes: with a shared up axis (the
-/// registration's `up` option) only those that keep it; with the caller's guess
-/// (`initialTransform`), for an answer that agrees with it, only look-alikes that agree too.
-#[derive(Default)]
-pub struct Admissible<'a> {
-    /// With a shared up axis: the axis (target frame) the probes also turn the answer about
-    /// (every 45 degrees), since the turns about other axes tilt it; and how far a pose tilts the
-    /// source's up off the target's, degrees (at most [`UP_TOLERANCE_DEG`] admitted).
-    pub up: Option<(Vector3<f64>, TiltDeg<'a>)>,
-    /// The caller's guess, in the frames of the poses judged: a pose that turns more than
-    /// [`GUESS_TURN_DEG`] from it contradicts it, and is no look-alike of an answer that does not
-    /// ([`Admissible::counts`]).
-    pub guess: Option<Matrix4<f64>>,
+/// Which poses the probes may find: any, or only those that keep a shared up axis (the
+/// registration's `up` option).
+pub enum Admissible<'a> {
+    /// Every pose.
+    Any,
+    /// Poses that keep a shared up axis, within [`UP_TOLERANCE_DEG`].
+    Upright {
+        /// The axis (target frame) the probes also turn the answer about (every 45 degrees), since
+        /// the turns about other axes tilt it.
+        up: Vector3<f64>,
+        /// How far a pose tilts the source's up off the target's, degrees.
+        tilt_deg: &'a dyn Fn(&Matrix4<f64>) -> f64,
+    },
 }
 
 impl Admissible<'_> {
-    /// Whether the pose `t` may be an answer or a probe's pose (with a shared up axis: tilted at
-    /// most [`UP_TOLERANCE_DEG`]).
+    /// Whether the pose `t` may be counted (with a shared up axis: tilted at most
+    /// [`UP_TOLERANCE_DEG`]).
     pub fn admits(&self, t: &Matrix4<f64>) -> bool {
-        self.up.as_ref().is_none_or(|(_, tilt_deg)| tilt_deg(t) <= UP_TOLERANCE_DEG)
-    }
-
-    /// Whether the pose `alt` counts as a look-alike of the answer `answer`: admitted, and, with a
-    /// guess that the answer agrees with (turns at most [`GUESS_TURN_DEG`] from), agreeing with it
-    /// too. What the caller knows rules out the others, as `up` rules out tilted ones.
-    pub fn counts(&self, alt: &Matrix4<f64>, answer: &Matrix4<f64>) -> bool {
-        let agrees = |t: &Matrix4<f64>| self.guess.is_none_or(|g| rotation_error_deg(t, &g) <= GUESS_TURN_DEG);
-        self.admits(alt) && (agrees(alt) || !agrees(answer))
+        match self {
+            Admissible::Any => true,
+            Admissible::Upright { tilt_deg, .. } => tilt_deg(t) <= UP_TOLERANCE_DEG,
+        }
     }
 
     /// Whether a probe may start from `t`: tilted so far, its ICP would not come back upright.
     fn may_start(&self, t: &Matrix4<f64>) -> bool {
-        self.up.as_ref().is_none_or(|(_, tilt_deg)| tilt_deg(t) <= PROBE_START_TILT_DEG)
+        match self {
+            Admissible::Any => true,
+            Admissible::Upright { tilt_deg, .. } => tilt_deg(t) <= PROBE_START_TILT_DEG,
+        }
     }
 }
 
@@ -197,7 +192,7 @@ pub fn probe(
     // noise better than on the probe points
     let shape = principal_axes_spreads(&source, T_target_source);
     let turned = turns(target, &probe, T_target_source, d, answer, kind, &extra, admissible, part, shape);
-    let (ambiguity, alternatives) = (turned.counted_ratio.min(2.0), turned.alternatives.len() as f64);
+    let (ambiguity, alternatives) = (turned.best_ratio.min(2.0), turned.alternatives.len() as f64);
     let (fitness_tight, fitness_loose, fitness_coarse) = (f(0.5), f(2.0), f(4.0));
     let evidence = Evidence {
         fitness,
@@ -277,8 +272,6 @@ struct AnswerOnProbe {
 struct Turned {
     /// The best different pose's fitness over the answer's (0: none).
     best_ratio: f64,
-    /// The same among the poses that count as look-alikes ([`Admissible::counts`]).
-    counted_ratio: f64,
     /// That pose.
     best: Option<Matrix4<f64>>,
     /// Distinct poses fitting at least [`ALTERNATIVE_FIT`] as well as the answer.
@@ -316,7 +309,7 @@ fn turns(
     (source_c, source_axes, source_spreads): (Vector3<f64>, Matrix3<f64>, Vector3<f64>),
 ) -> Turned {
     let AnswerOnProbe { fitness: base, mut partners } = answer;
-    let mut out = Turned { best_ratio: 0.0, counted_ratio: 0.0, best: None, alternatives: Vec::new() };
+    let mut out = Turned { best_ratio: 0.0, best: None, alternatives: Vec::new() };
     let base_loose = target.evaluate_warm(sample, t, 2.0 * d, &mut partners).0;
     if base <= 0.0 || sample.len() < 3 {
         return out;
@@ -354,9 +347,9 @@ fn turns(
         round_axes(&target_axes, &target_spreads, tc);
     }
     // with a shared up axis, the turns about it (the others tilt the answer, and are not counted)
-    let up_turns = match admissible.up {
-        Some((up, _)) => UP_TURNS.map(|degrees| (degrees, up, c)).to_vec(),
-        None => Vec::new(),
+    let up_turns = match admissible {
+        Admissible::Upright { up, .. } => UP_TURNS.map(|degrees| (degrees, *up, c)).to_vec(),
+        Admissible::Any => Vec::new(),
     };
     let turn = |(degrees, axis, pivot): (f64, Vector3<f64>, Vector3<f64>)| {
         let axis = nalgebra::Unit::new_normalize(axis);
@@ -417,13 +410,6 @@ fn turns(
         if searched && ratio > out.best_ratio {
             out.best_ratio = ratio;
             out.best = Some(alt);
-        }
-        // (a better pose is searched from all the same: it may be the answer)
-        if !admissible.counts(&alt, t) {
-            continue;
-        }
-        if searched {
-            out.counted_ratio = out.counted_ratio.max(ratio);
         }
         if ratio >= ALTERNATIVE_FIT {
             count_if_new(&mut out.alternatives, t, alt);

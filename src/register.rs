@@ -73,10 +73,8 @@ pub struct Options {
     /// fit about as well, the one nearer the guess's rotation wins (see `starts`). An answer that
     /// turns more than 60 degrees away from the guess (`GUESS_TURN_DEG`) contradicts it: its
     /// confidence is at most 0.25, with a warning (the guess was off, or the answer is a
-    /// look-alike: 30-100 probe points on a vertebra, turned over, fit 0.89-0.97 of them); and for
-    /// an answer within that of the guess, poses that turn further from it are not counted as
-    /// look-alikes (as `up` rules out tilted ones): a symmetric room's half turn does not hold a
-    /// right answer at 0.5 when the guess says which way round it is. An answer that puts the
+    /// look-alike: 30-100 probe points on a vertebra, turned over, fit 0.89-0.97 of them). An
+    /// answer that puts the
     /// source farther than half its size from where the guess puts it comes with a warning (a
     /// look-alike elsewhere, when the guess placed it). Default:
     /// the identity. Either 16

@@ -100,9 +100,9 @@ pub(crate) fn search(
     // with `up`: every start levelled, and only upright answers, probe poses and alternatives
     let upright = p.upright;
     let tilt_deg = |t: &Matrix4<f64>| upright.map_or(0.0, |u| u.tilt_deg(t));
-    let admissible = confidence::Admissible {
-        up: upright.map(|u| (u.up().into_inner(), &tilt_deg as confidence::TiltDeg)),
-        guess: options.initial_transform.is_some().then_some(p.t_initial),
+    let admissible = match &upright {
+        Some(u) => confidence::Admissible::Upright { up: u.up().into_inner(), tilt_deg: &tilt_deg },
+        None => confidence::Admissible::Any,
     };
     let admits = |t: &Matrix4<f64>| admissible.admits(t);
     let centroid = p.src_n.centroid();
@@ -386,8 +386,6 @@ pub(crate) fn search(
             (c, probed, false)
         }
     };
-    // (the search's answers that the caller's guess rules out are no look-alikes either)
-    refined.retain(|(t, _)| admissible.counts(t, &candidate.T_target_source));
     let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined);
     // with `up`: a tilted pose that fits clearly better than the upright answer
     let tilted = tilted
