@@ -271,7 +271,7 @@ pub fn transform_file(
 }
 
 /// True when `transformFile` moves a file of this name as it is: `.ply .pcd .xyz .pts .txt .csv
-/// .obj .off .stl .las .laz .e57` (case-insensitive). False for
+/// .obj .off .stl .las .laz .e57 .glb .gltf` (case-insensitive). False for
 /// other names: save such a source as `writePly(transformPointCloud(cloud, T))`.
 #[wasm_bindgen(js_name = canTransform)]
 pub fn can_transform(#[wasm_bindgen(js_name = fileName)] file_name: &str) -> bool {

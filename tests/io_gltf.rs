@@ -203,7 +203,7 @@ fn broken_files_are_refused_with_what_is_wrong() {
         (square(4, &[0, 1, 2, 0, 2, 9], false), "vertex index 9 is out of range (4 vertices)"),
         (b"glTF\x01\0\0\0\x14\0\0\0\0\0\0\0JSON".to_vec(), "version 1"),
         (b"{\"asset\": {\"version\": \"2.0\"}, \"buffers\": [{\"uri\": \"scene.bin\", \"byteLength\": 4}]}".to_vec(), "'scene.bin'"),
-        (b"{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"children\": [1]}, {\"children\": [0]}], \"scenes\": [{\"nodes\": [0]}]}".to_vec(), "reached twice"),
+        (b"{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"children\": [1]}, {\"children\": [0]}], \"scenes\": [{\"nodes\": [0]}]}".to_vec(), "cycle"),
         (b"{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [{\"mesh\": 3}]}".to_vec(), "meshes[3]"),
         (b"{\"asset\": {\"version\": \"2.0\"".to_vec(), "malformed"),
     ];
@@ -271,4 +271,132 @@ fn a_file_without_scenes_moves_its_top_nodes() {
             assert!(close(q, &want), "{q:?} vs {want:?}");
         }
     }
+}
+
+/// A unit square (4 float positions, two triangles) whose mesh node is moved by (100, 0, 0), with
+/// `extra` merged into the mesh's primitive, node and file (JSON objects) and `more` appended to
+/// the binary chunk after the square's 48 + 12 bytes.
+fn square_with(prim: serde_json::Value, node: serde_json::Value, file: serde_json::Value, more: &[u8]) -> Vec<u8> {
+    let mut bin: Vec<u8> = [[0f32, 0., 0.], [1., 0., 0.], [1., 1., 0.], [0., 1., 0.]]
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    bin.extend([0u16, 1, 2, 0, 2, 3].iter().flat_map(|i| i.to_le_bytes()));
+    bin.extend(more);
+    let mut p = serde_json::json!({"attributes": {"POSITION": 0}, "indices": 1});
+    p.as_object_mut().unwrap().extend(prim.as_object().unwrap().clone());
+    let mut n = serde_json::json!({"mesh": 0, "translation": [100, 0, 0]});
+    n.as_object_mut().unwrap().extend(node.as_object().unwrap().clone());
+    let mut json = serde_json::json!({
+        "asset": {"version": "2.0"},
+        "scenes": [{"nodes": [0]}],
+        "nodes": [n],
+        "meshes": [{"primitives": [p]}],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3"},
+            {"bufferView": 1, "componentType": 5123, "count": 6, "type": "SCALAR"}
+        ],
+        "bufferViews": [{"buffer": 0, "byteLength": 48}, {"buffer": 0, "byteOffset": 48, "byteLength": 12}],
+        "buffers": [{"byteLength": 60 + more.len()}]
+    });
+    for (k, v) in file.as_object().unwrap() {
+        match json[k.as_str()].as_array_mut() {
+            Some(list) => list.extend(v.as_array().unwrap().iter().cloned()),
+            None => json[k.as_str()] = v.clone(),
+        }
+    }
+    glb(&json, &bin)
+}
+
+#[test]
+fn morph_targets_take_their_default_weights() {
+    // a target that lifts vertex 2 by 1, at the mesh's weight 0.5 (the node's 0.25 wins when set)
+    let lift: Vec<u8> = [[0f32, 0., 0.], [0., 0., 0.], [0., 0., 1.], [0., 0., 0.]]
+        .iter()
+        .flatten()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let file = || {
+        serde_json::json!({
+            "accessors": [{"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC3"}],
+            "bufferViews": [{"buffer": 0, "byteOffset": 60, "byteLength": 48}]
+        })
+    };
+    let targets = serde_json::json!({"targets": [{"POSITION": 2}]});
+    let mut bytes = square_with(targets.clone(), serde_json::json!({}), file(), &lift);
+    let m = read_mesh(&bytes, "m.glb").unwrap();
+    assert_eq!(m.vertices[2], [101., 1., 0.], "no weights: the base mesh");
+    let with_weights = |node: serde_json::Value, mesh_weights: f64| {
+        let b = square_with(targets.clone(), node, file(), &lift);
+        let len = u32::from_le_bytes(b[12..16].try_into().unwrap()) as usize;
+        let mut json: serde_json::Value = serde_json::from_slice(&b[20..20 + len]).unwrap();
+        json["meshes"][0]["weights"] = serde_json::json!([mesh_weights]);
+        glb(&json, &b[28 + len..])
+    };
+    bytes = with_weights(serde_json::json!({}), 0.5);
+    assert_eq!(read_mesh(&bytes, "m.glb").unwrap().vertices[2], [101., 1., 0.5], "the mesh's weight");
+    bytes = with_weights(serde_json::json!({"weights": [0.25]}), 0.5);
+    assert_eq!(read_mesh(&bytes, "m.glb").unwrap().vertices[2], [101., 1., 0.25], "the node's weight");
+}
+
+#[test]
+fn skinned_meshes_are_posed_by_their_joints_not_their_node() {
+    // two joints: one moved by (5, 0, 0), one turned a quarter about z at (0, 1, 0); vertices 0
+    // and 1 follow the first, 2 the second, 3 half of each; the mesh node's (100, 0, 0) ignored
+    let mut more: Vec<u8> =
+        [[0u8, 0, 0, 0], [0, 0, 0, 0], [1, 0, 0, 0], [0, 1, 0, 0]].iter().flatten().copied().collect();
+    more.extend(
+        [[1f32, 0., 0., 0.], [1., 0., 0., 0.], [1., 0., 0., 0.], [0.5, 0.5, 0., 0.]]
+            .iter()
+            .flatten()
+            .flat_map(|v| v.to_le_bytes()),
+    );
+    // the second joint's inverse bind matrix: its bind pose at (0, 1, 0)
+    let ibm: [f32; 16] = [1., 0., 0., 0., 0., 1., 0., 0., 0., 0., 1., 0., 0., -1., 0., 1.];
+    more.extend(Matrix4::<f32>::identity().as_slice().iter().chain(&ibm).flat_map(|v| v.to_le_bytes()));
+    let file = serde_json::json!({
+        "accessors": [
+            {"bufferView": 2, "componentType": 5121, "count": 4, "type": "VEC4"},
+            {"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC4"},
+            {"bufferView": 4, "componentType": 5126, "count": 2, "type": "MAT4"}
+        ],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 60, "byteLength": 16},
+            {"buffer": 0, "byteOffset": 76, "byteLength": 64},
+            {"buffer": 0, "byteOffset": 140, "byteLength": 128}
+        ],
+        "nodes": [
+            {"translation": [5, 0, 0]},
+            {"translation": [0, 1, 0], "rotation": [0, 0, std::f64::consts::FRAC_1_SQRT_2, std::f64::consts::FRAC_1_SQRT_2]}
+        ],
+        "skins": [{"joints": [1, 2], "inverseBindMatrices": 4}]
+    });
+    let prim = serde_json::json!({"attributes": {"POSITION": 0, "JOINTS_0": 2, "WEIGHTS_0": 3}});
+    let bytes = square_with(prim, serde_json::json!({"skin": 0}), file, &more);
+    let m = read_mesh(&bytes, "s.glb").unwrap();
+    let near = |a: [f32; 3], b: [f32; 3]| (0..3).all(|k| (a[k] - b[k]).abs() < 1e-6);
+    assert!(near(m.vertices[0], [5., 0., 0.]) && near(m.vertices[1], [6., 0., 0.]), "{:?}", m.vertices);
+    // (1, 1, 0) is (1, 0, 0) from the second joint's bind pose: turned a quarter, (0, 1, 0) from it
+    assert!(near(m.vertices[2], [0., 2., 0.]), "{:?}", m.vertices);
+    // (0, 1, 0): the first joint puts it at (5, 1, 0), the second leaves it at (0, 1, 0)
+    assert!(near(m.vertices[3], [2.5, 1., 0.]), "{:?}", m.vertices);
+}
+
+#[test]
+fn draco_used_but_not_required_reads_the_uncompressed_data() {
+    let draco = serde_json::json!({"extensions": {"KHR_draco_mesh_compression": {"bufferView": 0, "attributes": {"POSITION": 0}}}});
+    let used = serde_json::json!({"extensionsUsed": ["KHR_draco_mesh_compression"]});
+    let m = read_mesh(&square_with(draco, serde_json::json!({}), used, &[]), "d.glb").unwrap();
+    assert_eq!(m.vertices.len(), 4);
+    assert_eq!(m.vertices[2], [101., 1., 0.]);
+}
+
+#[test]
+fn a_default_scene_without_meshes_says_so() {
+    let other = serde_json::json!({"scene": 1, "scenes": [{"nodes": []}]});
+    let e = read_mesh(&square_with(serde_json::json!({}), serde_json::json!({}), other, &[]), "e.glb")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("default scene draws none of its 1 meshes"), "{e}");
 }

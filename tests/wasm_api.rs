@@ -428,7 +428,13 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     expect_err(&mut r, &src, &tgt, options(r#"{"icpMaxIteration": 10}"#), "unknown field `icpMaxIteration`");
     expect_err(&mut r, &src, &tgt, options(r#"{"icp": "planar"}"#), "invalid options: `icp`: unknown variant `planar`");
     expect_err(&mut r, &src, &tgt, options(r#"{"seed": "seven"}"#), "invalid options: `seed`: invalid type");
-    expect_err(&mut r, &src, &tgt, options(r#"{"icp": "point", "seed": -1}"#), "invalid options: `seed`: invalid type");
+    expect_err(
+        &mut r,
+        &src,
+        &tgt,
+        options(r#"{"icp": "point", "seed": -1}"#),
+        "invalid options: `seed`: invalid value: -1",
+    );
     expect_err(&mut r, &src, &tgt, options(r#"{"networkPoints": 2}"#), "networkPoints = 2");
     expect_err(&mut r, &src, &tgt, options(r#"{"icpMaxIterations": 100000}"#), "icpMaxIterations");
     expect_err(&mut r, &src, &tgt, options(r#"{"maxCorrespondenceDistance": -1}"#), "maxCorrespondenceDistance");

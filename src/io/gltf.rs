@@ -1,11 +1,13 @@
 //! glTF 2.0: binary `.glb` files, and JSON `.gltf` files whose buffers are embedded (`data:`
 //! URIs). The default scene's meshes are placed by their nodes' transforms (a `matrix`, or
 //! `translation`, `rotation`, `scale`, composed down the node tree, and the instances of
-//! `EXT_mesh_gpu_instancing`) in `f64`; every primitive's `POSITION`s are points, and its
-//! triangles (mode 4; strips and fans triangulated) the faces; point and line primitives give
-//! points only. Positions of any component type, normalised or not (`KHR_mesh_quantization`),
+//! `EXT_mesh_gpu_instancing`) in `f64`, morph targets at their default weights, skinned meshes
+//! posed by their joints (their node's own transform ignored, as glTF says); every primitive's
+//! `POSITION`s are points, and its triangles (mode 4; strips and fans triangulated) the faces;
+//! point and line primitives give points only (and nothing to a surface sample). Positions of any component type, normalised or not (`KHR_mesh_quantization`),
 //! interleaved or not, and sparse accessors are read. A mesh compressed by Draco or meshopt is
-//! refused, naming the extension, and so is a buffer kept in another file. glTF's frame is Y-up,
+//! refused, naming the extension, unless the file holds it uncompressed too (the extension used,
+//! not required); so is a buffer kept in another file. glTF's frame is Y-up,
 //! in metres.
 
 use super::{Faces, Raw};
@@ -440,24 +442,32 @@ pub(crate) fn read(bytes: &[u8], faces: Faces) -> Result<Raw> {
     }
     let doc = Doc { json: &c.json, buffers: buffers(&c)? };
     let nodes = list(&c.json, "nodes");
+    // every node's place in the scene (joints may lie outside the scene's tree), then the meshes
+    // of the scene's nodes, in the tree's order
+    let world = world_transforms(&c.json)?;
     let mut seen = vec![false; nodes.len()];
-    let mut stack: Vec<(usize, Matrix4<f64>)> =
-        roots(&c.json)?.into_iter().rev().map(|n| (n, Matrix4::identity())).collect();
+    let mut stack: Vec<usize> = roots(&c.json)?.into_iter().rev().collect();
     let (mut vertices, mut triangles) = (Vec::new(), Vec::new());
     let triangle_limit = bytes.len().max(1 << 20);
-    while let Some((n, parent)) = stack.pop() {
+    while let Some(n) = stack.pop() {
         let nw = format!("nodes[{n}]");
         let node = item(&c.json, "nodes", n, "a scene or node")?;
         if std::mem::replace(&mut seen[n], true) {
             return Err(err(format!("{nw} is reached twice (a node has one parent, and the tree no cycle)")));
         }
-        let world = parent * local(node, &nw)?;
         if let Some(m) = index(node, "mesh", &nw)? {
             let mesh = item(&c.json, "meshes", m, &nw)?;
-            for place in instances(&doc, node, &nw)? {
-                let at = world * place;
+            // morph targets' default weights: the node's, else the mesh's
+            let weights = if node.get("weights").is_some() { list(node, "weights") } else { list(mesh, "weights") };
+            let weights: Vec<f64> = weights.iter().map(|w| w.as_f64().unwrap_or(0.0)).collect();
+            let places = match index(node, "skin", &nw)? {
+                Some(s) => vec![Place::Skin(skin(&doc, &world, s, &nw)?)],
+                None => instances(&doc, node, &nw)?.into_iter().map(|i| Place::Rigid(world[n] * i)).collect(),
+            };
+            for place in &places {
                 for (p, prim) in list(mesh, "primitives").iter().enumerate() {
                     let pw = format!("meshes[{m}].primitives[{p}]");
+                    let at = Placing { place, fallback: &world[n], weights: &weights };
                     primitive(&doc, prim, &pw, &at, faces, &mut vertices, &mut triangles)?;
                     if triangles.len() > triangle_limit {
                         return Err(Error::TooLarge(format!(
@@ -469,11 +479,84 @@ pub(crate) fn read(bytes: &[u8], faces: Faces) -> Result<Raw> {
         }
         for child in list(node, "children").iter().rev() {
             let child = child.as_u64().map(|c| c as usize).filter(|&c| c < nodes.len());
-            let child = child.ok_or_else(|| err(format!("{nw}'s children are not indices of its nodes")))?;
-            stack.push((child, world));
+            stack.push(child.ok_or_else(|| err(format!("{nw}'s children are not indices of its nodes")))?);
         }
     }
+    if vertices.is_empty() && !list(&c.json, "meshes").is_empty() {
+        return Err(err(format!(
+            "its default scene draws none of its {} meshes (another scene may: arps reads the default one)",
+            list(&c.json, "meshes").len()
+        )));
+    }
     Ok(Raw { vertices, triangles })
+}
+
+/// Every node's world transform (its ancestors' times its own); a node in a cycle is an error.
+fn world_transforms(json: &Value) -> Result<Vec<Matrix4<f64>>> {
+    let nodes = list(json, "nodes");
+    let mut parent = vec![None; nodes.len()];
+    for (i, node) in nodes.iter().enumerate() {
+        for c in list(node, "children").iter().filter_map(Value::as_u64) {
+            if let Some(p) = parent.get_mut(c as usize) {
+                *p = Some(i);
+            }
+        }
+    }
+    let mut world: Vec<Option<Matrix4<f64>>> = vec![None; nodes.len()];
+    for start in 0..nodes.len() {
+        if world[start].is_some() {
+            continue;
+        }
+        // up to the nearest ancestor already placed, then down again
+        let mut chain = vec![start];
+        while let Some(p) = parent[*chain.last().unwrap_or(&start)].filter(|&p| world[p].is_none()) {
+            if chain.len() > nodes.len() {
+                return Err(err(format!("nodes[{start}]'s ancestors form a cycle")));
+            }
+            chain.push(p);
+        }
+        for &n in chain.iter().rev() {
+            if world[n].is_none() {
+                let above = parent[n].and_then(|p| world[p]).unwrap_or_else(Matrix4::identity);
+                world[n] = Some(above * local(&nodes[n], &format!("nodes[{n}]"))?);
+            }
+        }
+    }
+    Ok(world.into_iter().map(|w| w.unwrap_or_else(Matrix4::identity)).collect())
+}
+
+/// How a mesh is placed: rigidly (its node, an instance), or by a skin's joints.
+enum Place {
+    Rigid(Matrix4<f64>),
+    /// Each joint's world transform times its inverse bind matrix.
+    Skin(Vec<Matrix4<f64>>),
+}
+
+/// A primitive's placing: its mesh's place, the node's transform for a skinned primitive without
+/// joints, and the morph targets' weights.
+struct Placing<'a> {
+    place: &'a Place,
+    fallback: &'a Matrix4<f64>,
+    weights: &'a [f64],
+}
+
+/// The joint matrices of skin `s`: each joint's world transform times its inverse bind matrix.
+fn skin(doc: &Doc, world: &[Matrix4<f64>], s: usize, what: &str) -> Result<Vec<Matrix4<f64>>> {
+    let skin = item(doc.json, "skins", s, what)?;
+    let sw = format!("skins[{s}]");
+    let joints: Vec<usize> = list(skin, "joints")
+        .iter()
+        .map(|j| j.as_u64().map(|j| j as usize).filter(|&j| j < world.len()))
+        .collect::<Option<_>>()
+        .ok_or_else(|| err(format!("{sw}'s joints are not indices of its nodes")))?;
+    let inverse = match index(skin, "inverseBindMatrices", &sw)? {
+        Some(a) => doc.values(a, 16, &format!("{sw} inverseBindMatrices"))?,
+        None => Matrix4::<f64>::identity().as_slice().repeat(joints.len()),
+    };
+    if inverse.len() != 16 * joints.len() {
+        return Err(err(format!("{sw} has {} joints but {} inverse bind matrices", joints.len(), inverse.len() / 16)));
+    }
+    Ok(joints.iter().zip(inverse.chunks_exact(16)).map(|(&j, m)| world[j] * Matrix4::from_column_slice(m)).collect())
 }
 
 /// Appends a primitive's points, placed by `at`, and its triangles.
@@ -481,25 +564,62 @@ fn primitive(
     doc: &Doc,
     prim: &Value,
     pw: &str,
-    at: &Matrix4<f64>,
+    at: &Placing,
     faces: Faces,
     vertices: &mut Vec<[f64; 3]>,
     triangles: &mut Vec<[u32; 3]>,
 ) -> Result<()> {
-    if prim.get("extensions").and_then(|e| e.get("KHR_draco_mesh_compression")).is_some() {
-        return Err(compressed("KHR_draco_mesh_compression"));
-    }
-    let Some(position) = index(prim.get("attributes").unwrap_or(&Value::Null), "POSITION", pw)? else {
+    let attributes = prim.get("attributes").unwrap_or(&Value::Null);
+    let Some(position) = index(attributes, "POSITION", pw)? else {
         return Ok(()); // nothing to draw
     };
-    let xyz = doc.values(position, 3, &format!("{pw} POSITION"))?;
+    // Draco: the extension used, not required, leaves the data uncompressed too (accessors with
+    // views); without them there is nothing to read
+    let draco = prim.get("extensions").and_then(|e| e.get("KHR_draco_mesh_compression")).is_some();
+    let stored =
+        |a: usize| doc.json.get("accessors").and_then(|l| l.get(a)).is_some_and(|a| a.get("bufferView").is_some());
+    if draco && !stored(position) {
+        return Err(compressed("KHR_draco_mesh_compression"));
+    }
+    let mut xyz = doc.values(position, 3, &format!("{pw} POSITION"))?;
     let count = xyz.len() / 3;
+    // morph targets at their default weights
+    for (k, target) in list(prim, "targets").iter().enumerate() {
+        let w = at.weights.get(k).copied().unwrap_or(0.0);
+        if let (Some(a), true) = (index(target, "POSITION", pw)?, w != 0.0) {
+            let d = doc.values(a, 3, &format!("{pw} morph target {k}"))?;
+            if d.len() != xyz.len() {
+                return Err(err(format!("{pw}: morph target {k} has {} positions, not {count}", d.len() / 3)));
+            }
+            xyz.iter_mut().zip(&d).for_each(|(x, d)| *x += w * d);
+        }
+    }
     let base = vertices.len();
     crate::limits::check_file_points(F, (base + count) as u64)?;
-    vertices.extend(xyz.chunks_exact(3).map(|p| {
-        let q = at * nalgebra::Vector4::new(p[0], p[1], p[2], 1.0);
+    let moved = |m: &Matrix4<f64>, p: &[f64]| {
+        let q = m * nalgebra::Vector4::new(p[0], p[1], p[2], 1.0);
         [q.x, q.y, q.z]
-    }));
+    };
+    match (at.place, index(attributes, "JOINTS_0", pw)?, index(attributes, "WEIGHTS_0", pw)?) {
+        (Place::Skin(joints), Some(j), Some(w)) => {
+            let (j, w) = (doc.values(j, 4, &format!("{pw} JOINTS_0"))?, doc.values(w, 4, &format!("{pw} WEIGHTS_0"))?);
+            if j.len() != 4 * count || w.len() != 4 * count {
+                return Err(err(format!("{pw}: JOINTS_0 and WEIGHTS_0 do not have one entry per vertex")));
+            }
+            for (i, p) in xyz.chunks_exact(3).enumerate() {
+                let mut m = Matrix4::zeros();
+                for k in 4 * i..4 * i + 4 {
+                    let joint = joints.get(j[k] as usize).ok_or_else(|| {
+                        err(format!("{pw}: vertex {i} names joint {}, beyond its skin's {}", j[k], joints.len()))
+                    })?;
+                    m += joint * w[k];
+                }
+                vertices.push(moved(&m, p));
+            }
+        }
+        (Place::Skin(_), _, _) => vertices.extend(xyz.chunks_exact(3).map(|p| moved(at.fallback, p))),
+        (Place::Rigid(m), _, _) => vertices.extend(xyz.chunks_exact(3).map(|p| moved(m, p))),
+    }
     let mode = index(prim, "mode", pw)?.unwrap_or(4);
     if faces == Faces::Skip || !(4..=6).contains(&mode) {
         return Ok(());
