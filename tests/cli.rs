@@ -11,9 +11,10 @@ fn arps(args: &[&str]) -> std::process::Output {
 }
 
 /// `--json` prints the engine's result as the contract says (`arps::contract`): camelCase fields,
-/// the transform as 16 column-major numbers, plus the CLI's `wallMs`; it parses back into an
+/// the transform as 16 column-major numbers, plus the CLI's `wallMs` and the `source` path (as
+/// with several sources, so that a batch reads one shape); it parses back into an
 /// `arps::Registration` that equals the library's answer on the same pair, and has exactly the
-/// library result's fields (and `wallMs`).
+/// library result's fields (and `wallMs`, `source`).
 #[test]
 fn register_json_is_the_engines_result() {
     let out = arps(&["register", "fixtures/wasm/source.ply", "fixtures/wasm/target.ply", "--json"]);
@@ -31,6 +32,7 @@ fn register_json_is_the_engines_result() {
     assert!(v["icpIterations"].as_u64().is_some() && v["icpConverged"].is_boolean(), "{v}");
     assert!(v["timings"]["totalMs"].as_f64().is_some() && v["evidence"]["fitnessTight"].as_f64().is_some(), "{v}");
     assert!(v["fitness"].as_f64().unwrap() > 0.5);
+    assert_eq!(v["source"], "fixtures/wasm/source.ply", "{v}");
 
     let parsed: arps::Registration = serde_json::from_str(stdout.trim()).unwrap();
     let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
@@ -40,7 +42,7 @@ fn register_json_is_the_engines_result() {
         .register(&read("fixtures/wasm/source.ply"), &read("fixtures/wasm/target.ply"), &arps::Options::default())
         .unwrap();
     let mut expected: Vec<String> = serde_json::to_value(&lib).unwrap().as_object().unwrap().keys().cloned().collect();
-    expected.push("wallMs".into());
+    expected.extend(["wallMs".into(), "source".into()]);
     expected.sort();
     let mut got: Vec<String> = v.as_object().unwrap().keys().cloned().collect();
     got.sort();

@@ -137,9 +137,9 @@ pub struct RegisterArgs {
     aligned: Option<PathBuf>,
     /// Print exactly one JSON object on stdout: the engine's result (`arps::Registration`), fields
     /// camelCase, transforms as 16 column-major numbers, like the JS API's result; plus
-    /// `wallMs`, the milliseconds of reading both files and registering. With several sources,
-    /// one such line per source (JSON Lines), each with its `source` path (reading the target
-    /// counts in the first's `wallMs`), or `{"source", "error"}` for one that failed.
+    /// `wallMs`, the milliseconds of reading both files and registering, and `source`, the
+    /// source's path. With several sources, one such line per source (JSON Lines; reading the
+    /// target counts in the first's `wallMs`), or `{"source", "error"}` for one that failed.
     #[arg(long)]
     json: bool,
 }
@@ -149,7 +149,7 @@ pub struct RegisterArgs {
 #[derive(serde::Serialize)]
 #[serde(rename_all = "camelCase")]
 struct JsonOutput<'a> {
-    /// The source's path, when several were given.
+    /// The source's path.
     #[serde(skip_serializing_if = "Option::is_none")]
     source: Option<String>,
     #[serde(flatten)]
@@ -224,7 +224,7 @@ fn read_source(
 }
 
 /// Prints one registration of `arps register`: the text report, or one JSON line (`--json`);
-/// `source` names the source when several were given, `aligned` where the moved source was
+/// `source` names the source (in the text report, given when several were), `aligned` where the moved source was
 /// written (`--aligned`), `source_scale` the `--source-scale` its points were multiplied by.
 fn print_registration(
     r: &arps::Registration,
@@ -549,7 +549,8 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
             Ok((src, bytes, r))
         });
         let time_ms = t0.elapsed().as_secs_f64() * 1e3;
-        let named = several.then(|| source.display().to_string());
+        // (the JSON names every source, the text report only one of several)
+        let named = (several || json).then(|| source.display().to_string());
         let outcome = outcome.and_then(|(src, bytes, r)| {
             if let (Some(path), Some(bytes)) = (output, bytes) {
                 write_aligned(source, &bytes, &reading, &src, scale.as_ref(), &r, path)?;
