@@ -2,10 +2,11 @@
 // wasm-bindgen glue (arps_glue.js, which loads ../arps_bg.wasm, the web build's, from disk when
 // it is required). The glue is required on the first call, not on import: a server-side bundle
 // (Next.js, webpack `target: "node"`) that includes the package but never calls it on the server
-// imports it without the .wasm beside it. The same API as the web build. The default model is ../models/arps-web.safetensors,
-// read from disk when `Registrar.withDefaultModel()` first needs it; `Registrar.fromUrl` reads
-// `file:` URLs from disk and fetches the others. `init` and `initSync` need not be called; they
-// take the same options as the web build's (`{ model }` sets another default model).
+// imports it without the .wasm beside it. The same API as the web build. The default model is
+// ../models/arps-web.safetensors, read from disk when `Registrar.withDefaultModel()` first needs
+// it; `Registrar.fromUrl` reads `file:` URLs from disk and fetches the others. `init` and
+// `initSync` need not be called; they take the same options as the web build's (`{ model }` sets
+// another default model).
 // `init`/`initSync` return this module's public exports, never the raw glue (whose reset hook
 // would break the facade).
 "use strict";
@@ -15,6 +16,11 @@ const { fileURLToPath } = require("node:url");
 const { makeApi, modelBytes } = require("./facade.cjs");
 
 const WASM = path.join(__dirname, "..", "arps_bg.wasm");
+/** What to do about a file a server bundle left behind (the .wasm, the default model). */
+const LEFT_BEHIND =
+  "a bundler that copied the package's JavaScript into a server bundle left it behind: " +
+  'keep the package out of the server bundle (Next.js `serverExternalPackages: ["arps"]`, ' +
+  "webpack `externals`), or import it only in client code";
 let loaded;
 /** The glue, required on first use; a .wasm that is not where the glue looks is a clear error. */
 function loadGlue() {
@@ -23,12 +29,7 @@ function loadGlue() {
       loaded = require("./arps_glue.js");
     } catch (e) {
       if (e?.code !== "ENOENT") throw e;
-      throw new Error(
-        `arps: its WebAssembly file is not at ${WASM} (${e.message}). A bundler that copied the package's ` +
-          "JavaScript into a server bundle left it behind: keep the package out of the server bundle (Next.js " +
-          '`serverExternalPackages: ["arps"]`, webpack `externals`), or import it only in client code',
-        { cause: e },
-      );
+      throw new Error(`arps: its WebAssembly file is not at ${WASM} (${e.message}): ${LEFT_BEHIND}`, { cause: e });
     }
   }
   return loaded;
@@ -41,12 +42,7 @@ function readDefaultModel() {
     return fs.readFileSync(DEFAULT_MODEL);
   } catch (e) {
     if (e?.code !== "ENOENT") throw e;
-    throw new Error(
-      `the default model is not at ${DEFAULT_MODEL}: a bundler that copied the package's JavaScript into a server ` +
-        'bundle left it behind; keep the package out of the server bundle (Next.js `serverExternalPackages: ["arps"]`, ' +
-        "webpack `externals`), or import it only in client code",
-      { cause: e },
-    );
+    throw new Error(`the default model is not at ${DEFAULT_MODEL}: ${LEFT_BEHIND}`, { cause: e });
   }
 }
 
