@@ -4,12 +4,14 @@
 //! `EXT_mesh_gpu_instancing`) in `f64`, morph targets at their default weights, skinned meshes
 //! posed by their joints (their node's own transform ignored, as glTF says); every primitive's
 //! `POSITION`s are points, and its triangles (mode 4; strips and fans triangulated) the faces;
-//! point and line primitives give points only (and nothing to a surface sample). Positions of any component type, normalised or not (`KHR_mesh_quantization`),
-//! interleaved or not, and sparse accessors are read. A mesh compressed by Draco or meshopt is
+//! point and line primitives give points only (and nothing to a surface sample). Positions of
+//! any component type, normalised or not (`KHR_mesh_quantization`), interleaved or not, and
+//! sparse accessors are read. A mesh compressed by Draco or meshopt is
 //! refused, naming the extension, unless the file holds it uncompressed too (the extension used,
 //! not required); so is a buffer kept in another file. glTF's frame is Y-up,
 //! in metres.
 
+use super::util::u32_at;
 use super::{Faces, Raw};
 use crate::limits::MAX_FILE_POINTS;
 use crate::{Error, Result};
@@ -24,10 +26,6 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 
 fn err(message: impl Into<String>) -> Error {
     Error::parse(F, message)
-}
-
-fn u32_at(bytes: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes([bytes[at], bytes[at + 1], bytes[at + 2], bytes[at + 3]])
 }
 
 /// True for a binary glTF file (its `glTF` magic).
@@ -384,17 +382,8 @@ fn trs(t: Vector3<f64>, q: Quaternion<f64>, s: Vector3<f64>) -> Matrix4<f64> {
 pub(crate) fn roots(json: &Value) -> Result<Vec<usize>> {
     let scenes = list(json, "scenes");
     let scene = index(json, "scene", "the file")?.or(if scenes.is_empty() { None } else { Some(0) });
-    let nodes = list(json, "nodes");
     let Some(s) = scene else {
-        let mut child = vec![false; nodes.len()];
-        for node in nodes {
-            for c in list(node, "children") {
-                if let Some(c) = c.as_u64().and_then(|c| child.get_mut(c as usize)) {
-                    *c = true;
-                }
-            }
-        }
-        return Ok((0..nodes.len()).filter(|&i| !child[i]).collect());
+        return Ok(parents(json).iter().enumerate().filter(|(_, p)| p.is_none()).map(|(i, _)| i).collect());
     };
     let scene = item(json, "scenes", s, "the file's scene")?;
     list(scene, "nodes")
@@ -432,7 +421,8 @@ fn instances(doc: &Doc, node: &Value, what: &str) -> Result<Vec<Matrix4<f64>>> {
 }
 
 /// Reads the default scene's meshes, placed (see the module docs); triangles unless `faces` is
-/// [`Faces::Skip`]. `limit` bounds the triangles (a mesh placed by many nodes repeats its own).
+/// [`Faces::Skip`], at most as many as the file has bytes (or 2^20) once placed (a mesh placed by
+/// many nodes repeats its own).
 pub(crate) fn read(bytes: &[u8], faces: Faces) -> Result<Raw> {
     let c = open(bytes)?;
     for ext in list(&c.json, "extensionsRequired").iter().filter_map(Value::as_str) {
@@ -491,8 +481,8 @@ pub(crate) fn read(bytes: &[u8], faces: Faces) -> Result<Raw> {
     Ok(Raw { vertices, triangles })
 }
 
-/// Every node's world transform (its ancestors' times its own); a node in a cycle is an error.
-fn world_transforms(json: &Value) -> Result<Vec<Matrix4<f64>>> {
+/// Each node's parent (the last node that lists it among its children), `None` for a top node.
+fn parents(json: &Value) -> Vec<Option<usize>> {
     let nodes = list(json, "nodes");
     let mut parent = vec![None; nodes.len()];
     for (i, node) in nodes.iter().enumerate() {
@@ -502,6 +492,13 @@ fn world_transforms(json: &Value) -> Result<Vec<Matrix4<f64>>> {
             }
         }
     }
+    parent
+}
+
+/// Every node's world transform (its ancestors' times its own); a node in a cycle is an error.
+fn world_transforms(json: &Value) -> Result<Vec<Matrix4<f64>>> {
+    let nodes = list(json, "nodes");
+    let parent = parents(json);
     let mut world: Vec<Option<Matrix4<f64>>> = vec![None; nodes.len()];
     for start in 0..nodes.len() {
         if world[start].is_some() {
@@ -576,9 +573,7 @@ fn primitive(
     // Draco: the extension used, not required, leaves the data uncompressed too (accessors with
     // views); without them there is nothing to read
     let draco = prim.get("extensions").and_then(|e| e.get("KHR_draco_mesh_compression")).is_some();
-    let stored =
-        |a: usize| doc.json.get("accessors").and_then(|l| l.get(a)).is_some_and(|a| a.get("bufferView").is_some());
-    if draco && !stored(position) {
+    if draco && doc.json["accessors"][position].get("bufferView").is_none() {
         return Err(compressed("KHR_draco_mesh_compression"));
     }
     let mut xyz = doc.values(position, 3, &format!("{pw} POSITION"))?;

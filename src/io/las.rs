@@ -10,7 +10,7 @@
 //! That crate trusts the file's chunk table and layer sizes, so they are checked here first: a
 //! count that the bytes could not hold is an error, not an allocation or a panic.
 
-use super::util::bounded_capacity;
+use super::util::{bounded_capacity, u32_at};
 use crate::{Error, Result};
 use laz::laszip::{ChunkTable, LasZipDecompressor, LazItemType, LazVlr};
 use laz::DecompressionSelection;
@@ -49,10 +49,6 @@ pub(super) fn err(message: impl Into<String>) -> Error {
 
 fn u16_at(b: &[u8], at: usize) -> u16 {
     u16::from_le_bytes([b[at], b[at + 1]])
-}
-
-fn u32_at(b: &[u8], at: usize) -> u32 {
-    u32::from_le_bytes(b[at..at + 4].try_into().expect("4 bytes"))
 }
 
 fn u64_at(b: &[u8], at: usize) -> u64 {

@@ -9,17 +9,14 @@ use super::{detect_format, Format, ReadOptions};
 use crate::Result;
 use nalgebra::Matrix4;
 
-/// The extensions of the files [`transform_file`] moves as they are.
-const MOVABLE: &[&str] =
-    &["ply", "pcd", "xyz", "pts", "txt", "csv", "obj", "off", "stl", "las", "laz", "e57", "glb", "gltf"];
-
 /// True when a file of this name is one [`transform_file`] moves as it is: PLY, PCD, text point
 /// lists (XYZ, PTS, TXT, CSV), OBJ, OFF, STL, LAS, LAZ, E57 and glTF (GLB) by their
-/// extension (case-insensitive). False for unknown extensions: save such a source's points
+/// extension (case-insensitive): every format the readers know ([`Format::from_file_name`]).
+/// False for unknown extensions: save such a source's points
 /// moved instead ([`super::write_ply_binary`] of
 /// [`PointCloud::transformed`](crate::PointCloud::transformed)).
 pub fn can_transform(file_name: &str) -> bool {
-    file_name.rsplit_once('.').is_some_and(|(_, ext)| MOVABLE.contains(&ext.to_ascii_lowercase().as_str()))
+    Format::from_file_name(file_name).is_some()
 }
 
 /// The file `bytes` (named `file_name`, whose extension, or else whose content, says the format:

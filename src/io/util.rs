@@ -3,6 +3,11 @@
 
 use crate::{Error, Result};
 
+/// The little-endian `u32` at byte `at` of `b` (the caller has checked that four bytes are there).
+pub(crate) fn u32_at(b: &[u8], at: usize) -> u32 {
+    u32::from_le_bytes(b[at..at + 4].try_into().expect("4 bytes"))
+}
+
 /// Iterates the lines of a byte slice (split on `\n`, a trailing `\r` stripped), numbering them
 /// from 1, and remembers the byte offset of the next line (where a binary body starts).
 #[derive(Clone)]
