@@ -10,7 +10,7 @@
 //! | [`Format::Stl`] | `.stl` | ascii and binary (also binary files whose header starts with `solid`) |
 //! | [`Format::Las`] | `.las .laz` | LAS 1.0 to 1.4, point formats 0 to 10; LAZ (LASzip) compressed |
 //! | [`Format::E57`] | `.e57` | every point cloud placed by its pose; Cartesian or spherical; invalid points left out |
-//! | [`Format::Gltf`] | `.glb .gltf` | glTF 2.0: the scene's meshes placed by their nodes; quantised, interleaved, sparse, GPU-instanced; buffers in the file (not Draco or meshopt compressed) |
+//! | [`Format::Gltf`] | `.glb .gltf` | glTF 2.0: the default scene's meshes placed by their nodes, skins and morph targets applied; quantised, interleaved, sparse, GPU-instanced; buffers in the file (Draco or meshopt compressed only when it holds the data uncompressed too) |
 //!
 //! Readers are written for hostile input: malformed files give an [`Error::Parse`] saying what
 //! and where (line number, byte offset, element name), never a panic, and no reservation is
