@@ -73,7 +73,8 @@ export type RegisterOptions = {
    * numbers in **column-major** order (a previous result's `T_target_source`, a three.js
    * `Matrix4.elements`; in JS also a `Float32Array` or `Float64Array`), or four **row-major**
    * rows `[[r00, r01, r02, tx], [r10, r11, r12, ty], [r20, r21, r22, tz], [0, 0, 0, 1]]`. A
-   * non-rigid or non-finite matrix is an error. (In Rust: four row-major rows.)
+   * non-rigid or non-finite matrix is an error; with `sourceScale`, its 3x3 part is a rotation
+   * times that factor, as the result's is. (In Rust: four row-major rows.)
    */
   initialTransform?: ArrayLike<number> | number[][] | null,
   /**
@@ -137,6 +138,18 @@ export type RegisterOptions = {
    * with one axis flipped). A number in (0, 1].
    */
   sourceOverlap?: number | null,
+  /**
+   * The factor that takes the source's coordinates into the target's unit, when they differ:
+   * `1000` for a scan in metres onto a model in millimetres, `0.001` the other way, `0.0254`
+   * for inches onto metres. The source's points are multiplied by it before anything else;
+   * every distance (`maxCorrespondenceDistance`, `voxelSize`, the result's `inlierRmse`) is then
+   * in the target's unit. `T_target_source` (the result's, its alternatives' and
+   * `initialTransform`) still maps the source's points **as given** into the target frame: its
+   * 3x3 part is the rotation times this factor, so three.js's `matrix.fromArray` places the
+   * source object and `transformFile` moves the source's file as they are. Default: none (the
+   * same unit, a factor of 1). A finite number > 0.
+   */
+  sourceScale?: number | null,
   /**
    * The transforms ICP starts from, in order of preference. Each is refined coarse to fine
    * against the same prepared target and the best is returned (the result's `start` says
@@ -276,7 +289,8 @@ export type RegistrationStage = "preparing" | "network" | "refining";
 export type RegistrationResult = {
   /**
    * The answer, `T_target_source`: the rigid transform that maps source points into the
-   * target frame (`p_target = R p_source + t`), in the clouds' units, after ICP. In JS and
+   * target frame (`p_target = R p_source + t`), in the clouds' units, after ICP (with the
+   * options' `sourceScale` `s`, `p_target = s R p_source + t`: the source as given). In JS and
    * JSON 16 numbers in **column-major** order (element (row r, col c) at index `c * 4 + r`),
    * ready for three.js: `sourceObject.matrix.fromArray(result.T_target_source)`.
    */

@@ -691,6 +691,7 @@ export function makeApi(glue, isReady, env = {}) {
         // Back to the caller's frame, in f64: T = T(ot) T_local T(-os).
         r.T_target_source = shift(r.T_target_source, os, ot);
         r.T_target_source_network = shift(r.T_target_source_network, os, ot);
+        for (const a of r.alternatives) a.T_target_source = shift(a.T_target_source, os, ot);
       }
       return r;
     }

@@ -136,7 +136,7 @@ export interface WorkerRegistrar {
     request?: { transfer?: boolean; signal?: AbortSignal },
   ): Promise<CloudWithOrigin>;
   /**
-   * Moves a cloud by a rigid 4x4 in the worker, its origin in f64 (see `transformPointCloud` in
+   * Moves a cloud by a rigid 4x4 (or one times a uniform scale) in the worker, its origin in f64 (see `transformPointCloud` in
    * arps.d.ts): e.g. a registered source by its result's `T_target_source` into the target's frame.
    */
   transformPointCloud(

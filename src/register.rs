@@ -81,7 +81,8 @@ pub struct Options {
     /// numbers in **column-major** order (a previous result's `T_target_source`, a three.js
     /// `Matrix4.elements`; in JS also a `Float32Array` or `Float64Array`), or four **row-major**
     /// rows `[[r00, r01, r02, tx], [r10, r11, r12, ty], [r20, r21, r22, tz], [0, 0, 0, 1]]`. A
-    /// non-rigid or non-finite matrix is an error. (In Rust: four row-major rows.)
+    /// non-rigid or non-finite matrix is an error; with `sourceScale`, its 3x3 part is a rotation
+    /// times that factor, as the result's is. (In Rust: four row-major rows.)
     #[serde(with = "crate::contract::initial_transform")]
     #[cfg_attr(feature = "ts", ts(type = "ArrayLike<number> | number[][] | null", optional = nullable))]
     pub initial_transform: Option<[[f64; 4]; 4]>,
@@ -142,6 +143,17 @@ pub struct Options {
     /// with one axis flipped). A number in (0, 1].
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub source_overlap: Option<f64>,
+    /// The factor that takes the source's coordinates into the target's unit, when they differ:
+    /// `1000` for a scan in metres onto a model in millimetres, `0.001` the other way, `0.0254`
+    /// for inches onto metres. The source's points are multiplied by it before anything else;
+    /// every distance (`maxCorrespondenceDistance`, `voxelSize`, the result's `inlierRmse`) is then
+    /// in the target's unit. `T_target_source` (the result's, its alternatives' and
+    /// `initialTransform`) still maps the source's points **as given** into the target frame: its
+    /// 3x3 part is the rotation times this factor, so three.js's `matrix.fromArray` places the
+    /// source object and `transformFile` moves the source's file as they are. Default: none (the
+    /// same unit, a factor of 1). A finite number > 0.
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
+    pub source_scale: Option<f64>,
     /// The transforms ICP starts from, in order of preference. Each is refined coarse to fine
     /// against the same prepared target and the best is returned (the result's `start` says
     /// which): the highest `fitness`, ties going to the lower `inlierRmse`, then to the earlier
@@ -321,6 +333,7 @@ impl Default for Options {
             support_plane: Support::Drop,
             up: None,
             source_overlap: None,
+            source_scale: None,
             starts: vec![
                 Start::Network,
                 Start::Global,
@@ -383,7 +396,8 @@ pub struct Timings {
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationResult"))]
 pub struct Registration {
     /// The answer, `T_target_source`: the rigid transform that maps source points into the
-    /// target frame (`p_target = R p_source + t`), in the clouds' units, after ICP. In JS and
+    /// target frame (`p_target = R p_source + t`), in the clouds' units, after ICP (with the
+    /// options' `sourceScale` `s`, `p_target = s R p_source + t`: the source as given). In JS and
     /// JSON 16 numbers in **column-major** order (element (row r, col c) at index `c * 4 + r`),
     /// ready for three.js: `sourceObject.matrix.fromArray(result.T_target_source)`.
     #[serde(rename = "T_target_source", with = "crate::contract::column_major")]

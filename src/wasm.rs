@@ -198,15 +198,17 @@ fn cloud_arg(value: &JsValue, what: &str) -> Result<PointCloud, JsError> {
     }
 }
 
-/// Maps a cloud by a rigid transform, e.g. a source by the `T_target_source` of its registration
+/// Maps a cloud by a rigid transform (or one times a uniform scale: a result's `T_target_source`
+/// with the option `sourceScale`), e.g. a source by the `T_target_source` of its registration
 /// into the target's frame: returns `{ points, origin }` (what `register` and `writePly` take),
 /// the origin mapped in f64 and the offsets by the rotation, so map-grid coordinates keep their
 /// digits; a cloud without an origin is mapped as it is (origin zero), unless the matrix places
 /// it so far from zero that float32 would round it (a local scan placed on a map grid): then
 /// it gets an origin there too. Read the points as `origin + points[i]`. Any number of points. `matrix`: 16
 /// numbers, column-major (what a result's `T_target_source` and three.js `Matrix4.elements`
-/// hold), or (through the package's entry) four row-major rows; rigid to 1e-3 (a matrix written
-/// with a few decimals), and applied as given. Throws on a bad cloud or matrix.
+/// hold), or (through the package's entry) four row-major rows; rigid (or uniformly scaled) to
+/// 1e-3 (a matrix written with a few decimals), and applied as given. Throws on a bad cloud or
+/// matrix.
 #[wasm_bindgen(js_name = transformPointCloud, unchecked_return_type = "CloudWithOrigin")]
 pub fn transform_point_cloud(
     #[wasm_bindgen(unchecked_param_type = "CloudInput")] cloud: JsValue,
@@ -215,7 +217,10 @@ pub fn transform_point_cloud(
     let m = matrix_arg(matrix)?;
     // checked, then used as given: snapped onto a rotation about the frame's origin, a matrix
     // written with a few decimals would move a cloud on a map grid by metres
-    crate::transform::check_near_rigid(&m).map_err(|e| JsError::new(&format!("matrix is not rigid: {e}")))?;
+    crate::io::check_similarity(&m).map_err(|e| match e {
+        crate::Error::InvalidOption(m) => JsError::new(&m.replacen("the transform", "matrix", 1)),
+        e => JsError::new(&e.to_string()),
+    })?;
     let cloud = cloud_arg(&cloud, "cloud")?;
     cloud_object(&cloud.placed(&m))
 }

@@ -573,10 +573,11 @@ fn register_writes_the_aligned_source() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// `--source-scale F` multiplies the source by F after reading: a source in metres onto a target
-/// in millimetres registers with F = 1000 (the answer in millimetres: the truth's rotation, its
-/// translation times 1000), where without it the engine warns that the sizes differ; a factor that
-/// is not a finite number > 0 is refused.
+/// `--source-scale F` takes the source into the target's unit: a source in metres onto a target
+/// in millimetres registers with F = 1000 (the answer maps the file's points in metres into the
+/// target in millimetres: the truth's rotation times 1000, its translation times 1000), where
+/// without it the engine warns that the sizes differ; a factor that is not a finite number > 0 is
+/// refused.
 #[test]
 fn register_scales_a_source_in_another_unit() {
     let dir = common::scratch("cli-scale");
@@ -598,28 +599,35 @@ fn register_scales_a_source_in_another_unit() {
         m.fixed_view_mut::<3, 1>(0, 3).scale_mut(1000.0);
         m
     };
+    // its rigid part: the 3x3 part divided by the factor
+    let rigid = |m: &nalgebra::Matrix4<f64>| {
+        let mut m = *m;
+        m.fixed_view_mut::<3, 3>(0, 0).unscale_mut(1000.0);
+        m
+    };
     let aligned = dir.join("aligned.ply");
     let out = arps(&["register", src, tgt, "--source-scale", "1000", "--json", "--aligned", aligned.to_str().unwrap()]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let r: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
     let (rot, tr) = (
-        arps::transform::rotation_error_deg(&r.T_target_source, &truth),
+        arps::transform::rotation_error_deg(&rigid(&r.T_target_source), &truth),
         arps::transform::translation_error(&r.T_target_source, &truth),
     );
+    arps::transform::check_near_rigid(&rigid(&r.T_target_source)).unwrap();
     assert!(rot < 1.0 && tr < 20.0, "rotation error {rot} deg, translation error {tr} mm");
     assert!(!r.warnings.iter().any(|w| w.contains("differ in size")), "{:?}", r.warnings);
-    // the aligned source is in millimetres: the scaled source moved by the answer
+    // the aligned source is in millimetres: the file's points moved by the answer
     let written = arps::io::read_path(&aligned).unwrap();
     let source = arps::io::read_path(&root.join(src)).unwrap();
     let p = source.point_f64(7);
-    let want = r.T_target_source.transform_point(&nalgebra::Point3::new(1000.0 * p[0], 1000.0 * p[1], 1000.0 * p[2]));
+    let want = r.T_target_source.transform_point(&nalgebra::Point3::new(p[0], p[1], p[2]));
     let got = written.point_f64(7);
     assert!((0..3).all(|k| (got[k] - want[k]).abs() < 1e-2), "{got:?} vs {want:?}");
-    // the JSON says the answer maps the scaled points, and by what factor
+    // the JSON gives the factor; the text says what the matrix holds
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(json["sourceScale"], 1000.0, "{json}");
     let text = arps(&["register", src, tgt, "--source-scale", "1000"]);
-    assert!(String::from_utf8_lossy(&text.stdout).contains("multiplied by 1000 (--source-scale)"));
+    assert!(String::from_utf8_lossy(&text.stdout).contains("rotation times 1000 (--source-scale)"));
 
     let out = arps(&["register", src, tgt, "--json"]);
     let json: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();

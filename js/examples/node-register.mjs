@@ -5,7 +5,7 @@
 // SOURCE and TARGET are any format the readers know (PLY, PCD, LAS/LAZ, E57, XYZ/PTS/CSV, OBJ,
 // OFF, STL), read with their coordinates kept (map-grid surveys too: `readPointCloud`).
 // --surface-points N reads a mesh (a CAD model) as N points drawn over its surface, not its
-// vertices; --source-scale F multiplies the source by F (a scan in metres onto a model in
+// vertices; --source-scale F is the `sourceScale` option (a scan in metres onto a model in
 // millimetres: 1000); --up is the `up` option; --drop-non-finite drops NaN points (an organised
 // PCD's "no return" points) where they are an error by default.
 // --aligned OUT writes the source moved into the target's frame: the source file itself, moved
@@ -29,7 +29,6 @@ const options = {};
 let json = false;
 let aligned = null;
 let surfacePoints = null;
-let sourceScale = 1;
 const number = (flag, value) => {
   const v = Number(value ?? usage(`${flag} needs a value`));
   return Number.isFinite(v) && v > 0 ? v : usage(`${flag} must be a positive number, got ${value}`);
@@ -40,7 +39,7 @@ for (let i = 0; i < args.length; i++) {
   else if (args[i] === "--search") options.search = args[++i] ?? usage("--search needs a value");
   else if (args[i] === "--aligned") aligned = args[++i] ?? usage("--aligned needs a path");
   else if (args[i] === "--surface-points") surfacePoints = number("--surface-points", args[++i]);
-  else if (args[i] === "--source-scale") sourceScale = number("--source-scale", args[++i]);
+  else if (args[i] === "--source-scale") options.sourceScale = number("--source-scale", args[++i]);
   else if (args[i] === "--up") options.up = (args[++i] ?? usage("--up needs X,Y,Z")).split(",").map(Number);
   else if (args[i] === "--drop-non-finite") options.nonFinite = "drop";
   else if (args[i].startsWith("--")) usage(`unknown flag ${args[i]}`);
@@ -62,11 +61,6 @@ try {
   // answer is in the files' own frames
   const read = { surfacePoints };
   const [source, target] = files.map((f) => readPointCloud(readFileSync(f), path.basename(f), read));
-  if (sourceScale !== 1) {
-    // into the target's unit: the answer and --aligned are then in it
-    source.points = source.points.map((v) => v * sourceScale);
-    source.origin = source.origin.map((v) => v * sourceScale);
-  }
   const registrar = Registrar.withDefaultModel();
   const t0 = performance.now();
   const r = registrar.register(source, target, options);
@@ -94,11 +88,9 @@ try {
   registrar.free();
   if (aligned) {
     // the source file itself moved when OUT names its own format, else its points as PLY
-    // the file's own points are not scaled yet: the answer after the scale (column-major: the
-    // first three columns times it)
-    const fileMatrix = r.T_target_source.map((v, i) => (i < 12 ? v * sourceScale : v));
+    // (with --source-scale the answer maps the file's own points, in their unit, as well)
     const bytes = own
-      ? transformFile(readFileSync(files[0]), path.basename(files[0]), fileMatrix)
+      ? transformFile(readFileSync(files[0]), path.basename(files[0]), r.T_target_source)
       : writePly(transformPointCloud(source, r.T_target_source));
     writeFileSync(aligned, bytes);
     if (!json) console.log(`wrote the aligned source to ${aligned} (${own ? "the source file moved" : "its points, as PLY"})`);

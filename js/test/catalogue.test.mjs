@@ -199,6 +199,75 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
   });
 }
 
+test("sourceScale: a source in millimetres onto a target in metres; the answer maps the source as given", () => {
+  const r = nodeBuild.Registrar.withDefaultModel();
+  const mm = Float32Array.from(source(), (x) => x * 1000);
+  // the 3x3 part divided by the factor is the rotation; the translation is the truth's
+  const rigidOf = (m, f) => m.map((v, i) => (i < 12 && i % 4 < 3 ? v / f : v));
+  const res = r.register(mm, target(), { sourceScale: 0.001 });
+  const { rot, tr } = errors(rigidOf(res.T_target_source, 0.001));
+  assert.ok(rot < 1 && tr < 0.02, `rotation ${rot} deg, translation ${tr}`);
+  assert.ok(!res.warnings.some((w) => /differ in size/.test(w)), JSON.stringify(res.warnings));
+  // three.js-style: the matrix places the millimetre points in the target's metres
+  const truth = (p) => [0, 1, 2].map((k) => groundTruth[k][0] * p[0] + groundTruth[k][1] * p[1] + groundTruth[k][2] * p[2] + groundTruth[k][3]);
+  const placed = nodeBuild.transformPointCloud(mm, res.T_target_source);
+  const s = source();
+  for (const i of [0, 300, 600]) {
+    const want = truth([s[i], s[i + 1], s[i + 2]]);
+    const got = [0, 1, 2].map((k) => placed.origin[k] + placed.points[i + k]);
+    assert.ok(Math.hypot(...got.map((g, k) => g - want[k])) < 0.02, `point ${i / 3}: ${got} vs ${want}`);
+  }
+  // without the factor the sizes differ by 1000 and the engine says so
+  assert.ok(r.register(mm, target()).warnings.some((w) => /differ in size by \d+x.*the option sourceScale does it/.test(w)));
+  // a previous answer is a guess as it is; a rigid matrix is not one for a scaled source
+  const again = r.register(mm, target(), { sourceScale: 0.001, initialTransform: res.T_target_source, starts: ["initial"], network: false });
+  assert.ok(errors(rigidOf(again.T_target_source, 0.001)).rot < 1);
+  assert.throws(
+    () => r.register(mm, target(), { sourceScale: 0.001, initialTransform: rigidOf(res.T_target_source, 0.001) }),
+    /initialTransform is not rigid once its 3x3 part is divided by sourceScale \(0\.001\)/,
+  );
+  for (const bad of [0, -1, Infinity]) assert.throws(() => r.register(mm, target(), { sourceScale: bad }), /sourceScale = .* must be a finite number > 0/);
+  // far from zero too (the facade's origins): the same answer in the caller's frame
+  const a = [512345.25, 4123456.5, 87.125];
+  const farMm = Float64Array.from(mm, (x, i) => x + a[i % 3] * 1000);
+  const far = r.register(farMm, target(), { sourceScale: 0.001 });
+  const at = nodeBuild.transformPointCloud(Float64Array.from(mm.subarray(0, 3), (x, i) => x + a[i] * 1000), far.T_target_source);
+  const want = truth([s[0], s[1], s[2]]);
+  const got = [0, 1, 2].map((k) => at.origin[k] + at.points[k]);
+  assert.ok(Math.hypot(...got.map((g, k) => g - want[k])) < 0.02, `far: ${got} vs ${want}`);
+  r.free();
+});
+
+test("alternatives are in the caller's frame for clouds far from zero", () => {
+  const r = nodeBuild.Registrar.withDefaultModel();
+  // a box, 2 x 1 x 0.5: its half turns fit as well as the truth (deterministic samples)
+  let state = 12345;
+  const rand = () => ((state = (state * 1103515245 + 12345) % 2147483648) / 2147483648);
+  const box = (n) => {
+    const out = new Float64Array(n * 3);
+    const half = [1, 0.5, 0.25];
+    for (let i = 0; i < n; i++) {
+      const axis = Math.floor(rand() * 3);
+      const p = half.map((h) => (rand() * 2 - 1) * h);
+      p[axis] = rand() < 0.5 ? -half[axis] : half[axis];
+      out.set(p, i * 3);
+    }
+    return out;
+  };
+  const a = [512345.25, 4123456.5, 87.125];
+  const b = [512349.75, 4123450.25, 91.0];
+  const src = Float64Array.from(box(3000), (x, i) => x + a[i % 3]);
+  const tgt = Float64Array.from(box(3000), (x, i) => x + b[i % 3]);
+  const res = r.register(src, tgt);
+  assert.ok(res.alternatives.length >= 1, `alternatives: ${res.alternatives.length}`);
+  for (const m of [res.T_target_source, ...res.alternatives.map((alt) => alt.T_target_source)]) {
+    // each pose puts the source's centre (a) on the target's (b)
+    const c = [0, 1, 2].map((k) => m[k] * a[0] + m[4 + k] * a[1] + m[8 + k] * a[2] + m[12 + k] - b[k]);
+    assert.ok(Math.hypot(...c) < 0.1, `the centre lands ${Math.hypot(...c)} from the target's`);
+  }
+  r.free();
+});
+
 test("large coordinates: Float64Array or { points, origin } in, T_target_source exact in the caller's frame", () => {
   const arps = nodeBuild;
   const r = arps.Registrar.withDefaultModel();
@@ -332,7 +401,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     const T = res.T_target_source;
     rejects(r, "matrix of 15", () => arps.transformPointCloud(survey, T.slice(0, 15)), /^matrix has 15 elements; expected 16 numbers/);
     rejects(r, "no matrix", () => arps.transformPointCloud(survey), /^matrix is undefined/);
-    rejects(r, "scaled", () => arps.transformPointCloud(survey, T.map((v, i) => (i < 12 ? 2 * v : v))), /^matrix is not rigid/);
+    rejects(r, "stretched", () => arps.transformPointCloud(survey, T.map((v, i) => (i < 3 ? 2 * v : v))), /^matrix is not rigid \(or uniformly scaled\): its linear part/);
     rejects(r, "NaN matrix", () => arps.transformPointCloud(survey, T.map((v, i) => (i === 13 ? NaN : v))), /^matrix is not rigid/);
     // a rigid matrix written with four decimals (a benchmark's ground truth, a text file) is used
     // as the rigid transform nearest it, here and as an initial guess

@@ -394,6 +394,8 @@ pub fn write_ply_binary(cloud: &PointCloud) -> Vec<u8> {
 }
 
 pub use las_transform::transform_las;
+#[cfg_attr(not(target_arch = "wasm32"), allow(unused_imports))]
+pub(crate) use motion::check_similarity;
 pub use pcd_transform::transform_pcd;
 pub use ply_transform::transform_ply;
 pub use text_transform::transform_text;

@@ -42,6 +42,13 @@ fn similarity(m: &Matrix4<f64>) -> Result<Motion> {
     Ok(Motion { linear, rotation, scale, t })
 }
 
+/// `m` checked as a motion points may be moved by: rigid, or rigid times one uniform scale (a
+/// result's `T_target_source` with `sourceScale`); the error says why not.
+#[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
+pub(crate) fn check_similarity(m: &Matrix4<f64>) -> Result<()> {
+    similarity(m).map(|_| ())
+}
+
 /// A checked motion ([`similarity`]) that maps points and turns normals.
 pub(super) struct Motion {
     /// `A`, the matrix's linear part (`s R` within [`RIGID_TOLERANCE`]).

@@ -68,18 +68,37 @@ pub(crate) fn resolve(options: &Options, model: &Model) -> Result<Resolved> {
             )));
         }
     }
+    source_scale(options)?;
     Ok(Resolved { n_net })
 }
 
+/// The options' `sourceScale` (1 when unset); an error unless it is a finite number > 0.
+pub(crate) fn source_scale(options: &Options) -> Result<f64> {
+    match options.source_scale {
+        None => Ok(1.0),
+        Some(f) if f.is_finite() && f > 0.0 => Ok(f),
+        Some(f) => Err(Error::InvalidOption(format!(
+            "sourceScale = {} must be a finite number > 0: the factor from the source's unit to the target's \
+             (1000 for metres onto millimetres)",
+            num(f)
+        ))),
+    }
+}
+
 /// The initial guess `T_target_source` in the caller's frame (identity when none is given), as
-/// given; an error when it is non-finite or not rigid to [`transform::RIGID_TOLERANCE`]. It is
+/// given (for the source scaled by `sourceScale`: its 3x3 part divided by it); an error when it is non-finite or not rigid to [`transform::RIGID_TOLERANCE`]. It is
 /// made exactly rigid in the clouds' local frames ([`rigid_in_local_frames`]).
 pub(crate) fn initial_transform(options: &Options) -> Result<Matrix4<f64>> {
     Ok(match &options.initial_transform {
         Some(rows) => {
-            let m = transform::from_rows(rows);
+            let mut m = transform::from_rows(rows);
             if m.iter().any(|v| !v.is_finite()) {
                 return Err(Error::InvalidOption("initialTransform has a non-finite entry".into()));
+            }
+            // with `sourceScale` it maps the source as given: the rigid guess acts on the scaled source
+            let scale = source_scale(options)?;
+            if scale != 1.0 {
+                m.fixed_view_mut::<3, 3>(0, 0).unscale_mut(scale);
             }
             transform::check_near_rigid(&m).map_err(|e| {
                 // a rigid matrix given in the other order (a row-major list read column-major, or
@@ -91,7 +110,12 @@ pub(crate) fn initial_transform(options: &Options) -> Result<Matrix4<f64>> {
                 } else {
                     ""
                 };
-                Error::InvalidOption(format!("initialTransform is not rigid: {e}{hint}"))
+                let scaled = if scale != 1.0 {
+                    format!(" once its 3x3 part is divided by sourceScale ({})", num(scale))
+                } else {
+                    String::new()
+                };
+                Error::InvalidOption(format!("initialTransform is not rigid{scaled}: {e}{hint}"))
             })?;
             m
         }

@@ -19,7 +19,7 @@ use crate::outliers::{self, Outliers};
 use crate::register::Options;
 use crate::spacing::Spacing;
 use crate::support::{self, Support};
-use crate::{checks, limits, sampling, transform, Result};
+use crate::{checks, limits, sampling, transform, Error, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use std::borrow::Cow;
 
@@ -30,7 +30,9 @@ const SIZE_RATIO_WARNING: f64 = 10.0;
 
 /// The clouds and figures every later stage works on (normalised units unless named otherwise).
 pub(crate) struct Prepared {
-    /// The source's f64 origin (caller's frame).
+    /// The options' `sourceScale` (1 when unset): the source's points were multiplied by it.
+    pub source_scale: f64,
+    /// The source's f64 origin (caller's frame, scaled by `source_scale`).
     pub origin_source: [f64; 3],
     /// The initial guess's rotation, applied to the local source before normalising.
     pub rotate_init: Matrix4<f64>,
@@ -85,7 +87,15 @@ pub(crate) fn prepare(
     // another target's is dropped before anything is allocated
     let input = InputKey::of(&target, options.non_finite, options.outliers, options.support_plane);
     let kept = kept.filter(|k| k.input == input);
-    let (source, source_warnings, source_rounding) = checked("source", source, options)?;
+    // the source in the target's unit (`sourceScale`): from here on the source as the pipeline sees it
+    let source_scale = options::source_scale(options)?;
+    let source = scaled(source, source_scale);
+    let (source, source_warnings, source_rounding) = checked("source", source, options).map_err(|e| match e {
+        Error::InvalidCloud(m) if source_scale != 1.0 => {
+            Error::InvalidCloud(format!("{m} (its coordinates multiplied by sourceScale = {})", num(source_scale)))
+        }
+        e => e,
+    })?;
     warnings.extend(source_warnings);
     let given = match kept {
         Some(k) => Given::Kept(k, target),
@@ -117,7 +127,7 @@ pub(crate) fn prepare(
     let size_ratio = size_source.max(size_target) / size_source.min(size_target);
     if size_ratio > SIZE_RATIO_WARNING {
         warnings.push(format!(
-            "the clouds differ in size by {}x (largest half-extents: source {}, target {}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres); if they are not, multiply one cloud's coordinates by the factor between the units (1000 from metres to millimetres; the CLI's --source-scale does it for the source)",
+            "the clouds differ in size by {}x (largest half-extents: source {}, target {}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres); if they are not, multiply one cloud's coordinates by the factor between the units (1000 from metres to millimetres: the option sourceScale does it for the source)",
             num(size_ratio.round()),
             num(size_source),
             num(size_target)
@@ -169,6 +179,7 @@ pub(crate) fn prepare(
     let d_evidence = options::evidence_distance(d_final);
     let rounding = source_rounding.max(target.summary.rounding) / norm.scale;
     Ok(Prepared {
+        source_scale,
         origin_source,
         rotate_init,
         upright,
@@ -183,6 +194,14 @@ pub(crate) fn prepare(
         icp_src,
         target,
     })
+}
+
+/// `cloud` with its coordinates (origin and offsets) multiplied by `factor`; as it is for 1.
+fn scaled(cloud: Cow<'_, PointCloud>, factor: f64) -> Cow<'_, PointCloud> {
+    if factor == 1.0 {
+        return cloud;
+    }
+    Cow::Owned(cloud.into_owned().into_transformed(&Matrix4::new_nonuniform_scaling(&Vector3::repeat(factor))))
 }
 
 /// `cloud` validated ([`PointCloud::validated`], `options.non_finite`); with [`Outliers::Drop`]

@@ -3,7 +3,8 @@
 //! Takes the [`Prepared`] clouds, the network's estimate and the search's [`Chosen`] answer
 //! (normalised units); gives the [`Registration`] in the caller's frame and units: the
 //! normalisation, the initial guess's rotation and the clouds' origins undone (for the answer,
-//! the network's estimate and the alternative poses), every transform checked finite, a warning
+//! the network's estimate and the alternative poses; times the `sourceScale`, so that they map the
+//! source as given), every transform checked finite, a warning
 //! added when the confidence is low or another pose fits as well ([`verdict_warning`]). The
 //! timings are the caller's.
 
@@ -14,7 +15,7 @@ use crate::origin;
 use crate::refine::Candidate;
 use crate::register::{Alternative, Registration, Timings};
 use crate::{checks, Result};
-use nalgebra::Matrix4;
+use nalgebra::{Matrix4, Vector3};
 
 /// Confidence below which a warning says the alignment may be wrong (as it does whenever another
 /// pose fits about as well, which caps the confidence at 0.5).
@@ -34,8 +35,10 @@ pub(crate) fn finish(
     let d_final = p.d_final;
     let Chosen { candidate, evidence, confidence, starts_refined, alternatives } = chosen;
     let Candidate { start, T_target_source: t_n, fitness, inlier_rmse: rmse_n, iterations, converged } = candidate;
+    // with `sourceScale` the pipeline's source was the caller's scaled: the answer maps the source as given
+    let given = Matrix4::new_nonuniform_scaling(&Vector3::repeat(p.source_scale));
     let to_caller = |t: &Matrix4<f64>| {
-        origin::to_caller(&(p.norm.denormalize(t) * p.rotate_init), p.origin_source, p.target.summary.origin)
+        origin::to_caller(&(p.norm.denormalize(t) * p.rotate_init), p.origin_source, p.target.summary.origin) * given
     };
     let T_target_source = to_caller(&t_n);
     let T_target_source_network = to_caller(t_net_n);

@@ -111,11 +111,11 @@ pub struct RegisterArgs {
     /// Of a target E57 file holding several scans, only this one (0-based); see `--source-scan`.
     #[arg(long)]
     target_scan: Option<usize>,
-    /// Multiply every source point by this factor after reading, when the source is in
-    /// another unit than the target (e.g. 1000 for a scan in metres onto a model in
-    /// millimetres): the answer, and `--aligned`, are then in the target's unit. The printed
-    /// `T_target_source` maps the scaled points (a point `p` of the file goes to
-    /// `T_target_source (FACTOR p)`); `--json` gives the factor as `sourceScale`.
+    /// The factor from the source's unit to the target's, when they differ (e.g. 1000 for a
+    /// scan in metres onto a model in millimetres; the option `sourceScale`): distances and
+    /// `--aligned` are then in the target's unit. The printed `T_target_source` maps the file's
+    /// own points into the target frame, its 3x3 part the rotation times FACTOR; `--json` gives
+    /// the factor as `sourceScale` too.
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     source_scale: Option<f64>,
     /// Exit with status 1 (after printing every answer) when an answer's confidence is below C,
@@ -157,7 +157,7 @@ struct JsonOutput<'a> {
     /// Where the aligned source was written (`--aligned`).
     #[serde(skip_serializing_if = "Option::is_none")]
     aligned: Option<String>,
-    /// `--source-scale`: `T_target_source` maps the source's points multiplied by it.
+    /// `--source-scale`: the 3x3 part of `T_target_source` is the rotation times it.
     #[serde(skip_serializing_if = "Option::is_none")]
     source_scale: Option<f64>,
     /// Reading both files and registering, in-process (model loading excluded), milliseconds.
@@ -246,8 +246,8 @@ fn print_registration(
     } else {
         match source_scale {
             Some(f) => out!(
-                "T_target_source (maps the source's points multiplied by {f} (--source-scale) into the target frame; to \
-                 12 decimals, --json for every digit):"
+                "T_target_source (maps the source's points, in their own unit, into the target frame: its 3x3 part is the \
+                 rotation times {f} (--source-scale); to 12 decimals, --json for every digit):"
             ),
             None => {
                 out!("T_target_source (maps source points into the target frame; to 12 decimals, --json for every digit):")
@@ -256,9 +256,11 @@ fn print_registration(
         for row in transform::to_rows(&r.T_target_source) {
             out!("{}", matrix_row(&row));
         }
+        let mut rigid = r.T_target_source;
+        rigid.fixed_view_mut::<3, 3>(0, 0).unscale_mut(source_scale.unwrap_or(1.0));
         out!(
             "rotation {:.3} deg, translation {:.6}",
-            transform::rotation_angle_deg(&r.T_target_source),
+            transform::rotation_angle_deg(&rigid),
             transform::translation(&r.T_target_source).norm()
         );
         if let Some(c) = far_centre {
@@ -329,6 +331,7 @@ fn in_flags(message: &str) -> String {
         .replace("networkPoints", "--network-points")
         .replace("initialTransform", "--initial-transform")
         .replace("sourceOverlap", "--source-overlap")
+        .replace("sourceScale", "--source-scale")
 }
 
 /// True when `path` names a file of `source`'s own format that `io::transform_file` moves as it
@@ -396,19 +399,17 @@ fn same_file(a: &Path, b: &Path) -> bool {
 /// source file (`bytes`, the file `file` as read for registering) as itself, moved
 /// (`io::transform_file_with` and the options it was read with, `reading`: PLY, PCD, text lists,
 /// OBJ, OFF, STL, LAS, LAZ, E57, glTF, one scan of an E57 file as an E57 file of that scan; every
-/// attribute kept, normals turned); else (a `.ply` path) as the points read (`cloud`, already scaled) in binary PLY
-/// (`io::write_ply_binary`). `scale` is the `--source-scale` applied before registering.
+/// attribute kept, normals turned); else (a `.ply` path) as the points read (`cloud`) in binary PLY
+/// (`io::write_ply_binary`). `r`'s answer maps the file's own points (times `--source-scale`).
 fn write_aligned(
     file: &Path,
     bytes: &[u8],
     reading: &io::ReadOptions,
     cloud: &arps::PointCloud,
-    scale: Option<&nalgebra::Matrix4<f64>>,
     r: &arps::Registration,
     path: &Path,
 ) -> Result<(), String> {
-    // the file's own points to the target's frame (the scale first)
-    let m = scale.map_or(r.T_target_source, |s| r.T_target_source * s);
+    let m = r.T_target_source;
     let out = if moves_as_it_is(file, path) {
         io::transform_file_with(bytes, &io::file_name(file), &m, reading)
             .map_err(|e| format!("--aligned: {}: {e}", file.display()))?
@@ -460,13 +461,9 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         return Err(format!("--min-confidence: expected a number in [0, 1], got {c}"));
     }
     let up = up.map(|v| up_axis(&v)).transpose()?;
-    let scale = match source_scale {
-        Some(s) if !(s.is_finite() && s > 0.0) => {
-            return Err(format!("--source-scale: expected a finite number > 0, got {s}"))
-        }
-        Some(s) => Some(nalgebra::Matrix4::new_scaling(s)),
-        None => None,
-    };
+    if let Some(s) = source_scale.filter(|s| !(s.is_finite() && *s > 0.0)) {
+        return Err(format!("--source-scale: expected a finite number > 0, got {s}"));
+    }
     if let Some(pattern) = aligned.as_ref().filter(|p| sources.len() > 1 && !p.to_string_lossy().contains("{stem}")) {
         return Err(format!(
             "--aligned: with {} sources the path must hold {{stem}} (each source's name), e.g. {{stem}}-aligned.ply; got {}",
@@ -520,6 +517,7 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         support_plane: if keep_support { Support::Keep } else { Support::Drop },
         up,
         source_overlap,
+        source_scale,
         starts: starts.unwrap_or_else(|| Options::default().starts),
         search: match search {
             SearchArg::Adaptive => arps::Search::Adaptive,
@@ -535,10 +533,7 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
     let mut failed = 0usize;
     let mut unsure = 0usize;
     for (source, output) in sources.iter().zip(&outputs) {
-        let read = read_source(source, &reading, output.is_some()).map(|(src, bytes)| match &scale {
-            Some(m) => (src.into_transformed(m), bytes),
-            None => (src, bytes),
-        });
+        let read = read_source(source, &reading, output.is_some());
         let outcome = read.and_then(|(src, bytes)| {
             // a cloud the engine refuses is named by its file
             let r = registrar.register(&src, &tgt, &options).map_err(|e| match &e {
@@ -554,7 +549,7 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
         let named = (several || json).then(|| source.display().to_string());
         let outcome = outcome.and_then(|(src, bytes, r)| {
             if let (Some(path), Some(bytes)) = (output, bytes) {
-                write_aligned(source, &bytes, &reading, &src, scale.as_ref(), &r, path)?;
+                write_aligned(source, &bytes, &reading, &src, &r, path)?;
             }
             Ok((r, far_centre(&src)))
         });
