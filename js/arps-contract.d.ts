@@ -468,6 +468,16 @@ export type RegistrationEvidence = {
    * along that motion (a surface of revolution, a plane, a cylinder).
    */
   slide: number,
+  /**
+   * How firmly the fit pins down that least constrained motion: the weakest eigenvalue of the
+   * point-to-plane fit's 6x6 information matrix (normalised units, about the inliers' centroid)
+   * over the strongest, in [0, 1]; 1 when too few points pair up to measure it. Below
+   * `UNPINNED_CONSTRAINT` the shapes' surfaces leave that motion free (a surface of revolution
+   * turned about its axis, a straight pipe or extrusion slid along itself, a plane in itself):
+   * only where the clouds' edges fall holds the pose there, and the answer's confidence is at
+   * most 0.25, with a warning naming the motion. Not an input of the logistic model.
+   */
+  constraint: number,
 };
 
 /**

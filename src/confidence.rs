@@ -78,6 +78,63 @@ pub struct Evidence {
     /// fraction of the answer's fitness (at most 2). Near 1: the fit does not pin the pose down
     /// along that motion (a surface of revolution, a plane, a cylinder).
     pub slide: f64,
+    /// How firmly the fit pins down that least constrained motion: the weakest eigenvalue of the
+    /// point-to-plane fit's 6x6 information matrix (normalised units, about the inliers' centroid)
+    /// over the strongest, in [0, 1]; 1 when too few points pair up to measure it. Below
+    /// [`UNPINNED_CONSTRAINT`] the shapes' surfaces leave that motion free (a surface of revolution
+    /// turned about its axis, a straight pipe or extrusion slid along itself, a plane in itself):
+    /// only where the clouds' edges fall holds the pose there, and the answer's confidence is at
+    /// most 0.25, with a warning naming the motion. Not an input of the logistic model.
+    #[serde(default = "one")]
+    pub constraint: f64,
+}
+
+/// [`Evidence::constraint`]'s default: not measured.
+fn one() -> f64 {
+    1.0
+}
+
+/// [`Evidence::constraint`] below this: the fit leaves a motion free. On 300 validation pairs
+/// (paper protocol, any pose, upright) the lowest of answers at confidence 0.5 or more was about
+/// 0.0013 (the bottles, surfaces of revolution whose sampling noise pins them a little); partial
+/// views of a turntable jar or vase 0.0002-0.0008, a well-shaped figurine 0.007 or more
+/// (`BENCHMARK.md`, "Motions the fit leaves free").
+pub const UNPINNED_CONSTRAINT: f64 = 1e-3;
+
+/// The motion the fit pins down least ([`Evidence::constraint`]), in the target's normalised
+/// frame: the screw of the information matrix's weakest eigenvector.
+#[derive(Clone, Copy, Debug)]
+pub struct FreeMotion {
+    /// The turn per unit of the motion (zero for a pure slide).
+    pub w: Vector3<f64>,
+    /// The translation per unit, at `c`.
+    pub shift: Vector3<f64>,
+    /// The inliers' centroid the motion turns about.
+    pub c: Vector3<f64>,
+    /// [`Evidence::constraint`].
+    pub constraint: f64,
+}
+
+impl FreeMotion {
+    /// Says what the motion is, with points in the caller's frame by `place` and directions as
+    /// they are (the normalisation neither turns nor mirrors): a turn about an axis (through a
+    /// point, along a direction) when it mostly turns the points, else a slide along a direction.
+    pub fn describe(&self, place: &dyn Fn(Vector3<f64>) -> Vector3<f64>) -> String {
+        let fmt = |v: Vector3<f64>| {
+            format!("({}, {}, {})", crate::error::num(v.x), crate::error::num(v.y), crate::error::num(v.z))
+        };
+        let round = |v: Vector3<f64>| v.map(|x| (x * 1000.0).round() / 1000.0);
+        let turn = self.w.norm();
+        // the points move by |w| times their distance from the axis, up to about 1 normalised
+        // unit, against |shift| for the slide
+        if turn >= self.shift.norm() {
+            let axis = self.w / turn;
+            let through = self.c + self.w.cross(&self.shift) / (turn * turn);
+            format!("a turn about the axis along {} through {}", fmt(round(axis)), fmt(place(through)))
+        } else {
+            format!("a slide along {}", fmt(round(self.shift.normalize())))
+        }
+    }
 }
 
 /// Measures the [`Evidence`] of `T_target_source` (source points moved into the target frame):
@@ -113,6 +170,9 @@ pub struct Probed {
     /// as [`Evidence::alternatives`] counts (`T_target_source`, briefly refined on the probe
     /// points).
     pub alternatives: Vec<Matrix4<f64>>,
+    /// The motion the fit pins down least, when it leaves it free ([`Evidence::constraint`] below
+    /// [`UNPINNED_CONSTRAINT`]).
+    pub free: Option<FreeMotion>,
 }
 
 /// Which poses the probes may find: any, or only those that keep a shared up axis (the
@@ -180,7 +240,13 @@ pub fn probe(
     // the answer's fitness on the probe points, which both probes compare against
     let mut probe_partners = Partners::default();
     let base = target.evaluate_warm(&probe, T_target_source, d, &mut probe_partners).0;
-    let (slide, screw) = slide(target, &probe, T_target_source, d, base);
+    let (slide, screw, constraint) = slide(target, &probe, T_target_source, d, base);
+    let free = screw.filter(|_| constraint < UNPINNED_CONSTRAINT).map(|Screw { w, shift, c }| FreeMotion {
+        w,
+        shift,
+        c,
+        constraint,
+    });
     let answer = AnswerOnProbe { fitness: base, partners: probe_partners };
     // turns along the least constrained motion only where sliding along it keeps much of the fit
     let screw = screw.filter(|_| slide >= SCREW_MIN_SLIDE);
@@ -204,9 +270,10 @@ pub fn probe(
         ambiguity,
         alternatives,
         slide,
+        constraint,
     };
     let better = turned.best.filter(|_| turned.best_ratio > 1.0);
-    Probed { evidence, better, alternatives: turned.alternatives }
+    Probed { evidence, better, alternatives: turned.alternatives, free }
 }
 
 /// The answer's reverse overlap ([`Evidence::overlap_reverse`]) below this fraction of its
@@ -541,11 +608,12 @@ fn screw_turns(screw: Option<Screw>, t: &Matrix4<f64>) -> Vec<Matrix4<f64>> {
     [1.0, -1.0].iter().map(|sign| screw_move(&screw, sign * s, t)).collect()
 }
 
-/// [`Evidence::slide`] of `t` on the probe points `sample`, and the least constrained motion it
-/// slid along (`None` with too few inliers). `base` is the fitness of `t` on `sample` at `d`.
-fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64, base: f64) -> (f64, Option<Screw>) {
+/// [`Evidence::slide`] of `t` on the probe points `sample`, the least constrained motion it
+/// slid along (`None` with too few inliers), and [`Evidence::constraint`]. `base` is the fitness
+/// of `t` on `sample` at `d`.
+fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64, base: f64) -> (f64, Option<Screw>, f64) {
     if base <= 0.0 || sample.len() < 3 {
-        return (0.0, None);
+        return (0.0, None, 1.0);
     }
     let moved: Vec<Vector3<f64>> = sample.iter().map(|&p| Vector3::from(apply(t, p).map(|v| v as f64))).collect();
     // the inliers at d with their target normals
@@ -557,7 +625,7 @@ fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64, base
         })
         .collect();
     if pairs.len() < 6 {
-        return (0.0, None);
+        return (0.0, None, 1.0);
     }
     let c = pairs.iter().fold(Vector3::zeros(), |a, p| a + p.0) / pairs.len() as f64;
     let mut info = Matrix6::<f64>::zeros();
@@ -568,6 +636,8 @@ fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64, base
     }
     let eig = SymmetricEigen::new(info);
     let weakest = eig.eigenvalues.imin();
+    let strongest = eig.eigenvalues.max();
+    let constraint = if strongest > 0.0 { (eig.eigenvalues[weakest] / strongest).clamp(0.0, 1.0) } else { 1.0 };
     let v = eig.eigenvectors.column(weakest).into_owned();
     let (w, shift) = (Vector3::new(v[0], v[1], v[2]), Vector3::new(v[3], v[4], v[5]));
     // the points' RMS displacement per unit of that motion
@@ -575,14 +645,14 @@ fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64, base
         (moved.iter().map(|p| (w.cross(&(p - c)) + shift).norm_squared()).sum::<f64>() / moved.len() as f64).sqrt();
     let screw = Screw { w, shift, c };
     if rms.is_nan() || rms <= 0.0 {
-        return (0.0, None);
+        return (0.0, None, constraint);
     }
     let mut best = 0.0f64;
     for sign in [1.0, -1.0] {
         let m = screw_move(&screw, sign * SLIDE_RMS / rms, t);
         best = best.max(target.evaluate(sample, &m, d).0 / base);
     }
-    (best.min(2.0), Some(screw))
+    (best.min(2.0), Some(screw), constraint)
 }
 
 /// The model's inputs: the evidence, plus how steeply the fitness curve rises (tight over coarse).

@@ -234,6 +234,56 @@ fn an_answer_on_a_surface_of_revolution_is_doubted() {
     assert!(r.confidence < 0.5, "{} {:?}", r.confidence, r.evidence);
 }
 
+/// Two partial views of a surface of revolution (a jar on a turntable, turned 40 degrees between
+/// them): the surface fits itself turned by any angle about its axis, and only where the views'
+/// edges fall holds the pose, so the fit leaves that turn free (`evidence.constraint` tiny): the
+/// answer, right or not, is not confident, and the warning names the turn, its axis along the
+/// jar's, through it.
+#[test]
+fn partial_views_of_a_surface_of_revolution_leave_the_turn_free() {
+    use rand::Rng;
+    let view = |from_deg: f64, seed: u64| {
+        let mut rng = arps::sampling::rng(seed);
+        let pts = (0..3000)
+            .map(|_| {
+                let a = (from_deg + 150.0 * rng.random::<f64>()).to_radians();
+                let z = 2.0 * rng.random::<f64>() - 1.0;
+                // a jar's profile: a belly and a neck
+                let r = 0.5 + 0.15 * (1.5 * z).cos();
+                [(r * a.cos()) as f32, (r * a.sin()) as f32, z as f32]
+            })
+            .collect();
+        PointCloud::new(pts)
+    };
+    let gt = common::motion([-20.0, 10.0, 30.0], [0.3, -0.2, 0.1]);
+    // the target saw the sector 40 degrees on, from its own frame
+    let turn = turn_about(Vector3::z(), 40.0, Vector3::zeros());
+    let (source, target) = (view(0.0, 1), view(40.0, 2).transformed(&(gt * turn)));
+    let mut reg = Registrar::with_default_model().unwrap();
+    let r = reg.register(&source, &target, &Options::default()).unwrap();
+    assert!(r.evidence.constraint < arps::confidence::UNPINNED_CONSTRAINT, "{:?}", r.evidence);
+    assert!(r.confidence <= 0.25, "{} {:?}", r.confidence, r.warnings);
+    let w = r.warnings.iter().find(|w| w.starts_with("the fit leaves one motion free: a turn about the axis along"));
+    let w = w.unwrap_or_else(|| panic!("{:?}", r.warnings));
+    // the axis: the jar's, in the target's frame (either sign), through the jar's axis
+    let numbers = |s: &str| -> Vec<f64> { s.split(", ").map(|v| v.parse().unwrap()).collect() };
+    let inside = |after: &str| {
+        let s = &w[w.find(after).unwrap() + after.len() + 1..];
+        numbers(&s[..s.find(')').unwrap()])
+    };
+    let axis = Vector3::from_vec(inside("along "));
+    let want = (gt * turn).transform_vector(&Vector3::z());
+    assert!(axis.dot(&want).abs() > 0.99, "axis {axis:?}, the jar's {want:?}: {w}");
+    let through = nalgebra::Point3::from_slice(&inside("through "));
+    let local = (gt * turn).try_inverse().unwrap().transform_point(&through);
+    assert!(local.x.hypot(local.y) < 0.05, "{local:?} is off the jar's axis: {w}");
+    // a shape that pins every motion (the fixture pair) is not held
+    let (s, t, _) = fixture_pair(0);
+    let r = reg.register(&s, &t, &Options::default()).unwrap();
+    assert!(r.evidence.constraint > arps::confidence::UNPINNED_CONSTRAINT, "{:?}", r.evidence);
+    assert!(!r.warnings.iter().any(|w| w.contains("leaves one motion free")), "{:?}", r.warnings);
+}
+
 /// The search's other refined answers count as alternatives when they fit at least 0.9 as well
 /// as the answer and are other poses (more than 15 degrees from the answer and from each other);
 /// the count only ever rises, and it caps the confidence; the poses gather every look-alike found.
@@ -252,6 +302,7 @@ fn the_searchs_other_answers_that_fit_as_well_are_alternatives() {
         ambiguity: 0.5,
         alternatives: 0.0,
         slide: 0.2,
+        constraint: 1.0,
     };
     let count = |others: &[(Matrix4<f64>, f64)], start: f64| {
         let mut e = Evidence { alternatives: start, ..e0 };
@@ -306,6 +357,7 @@ fn an_answer_with_almost_no_overlap_is_not_confident() {
         ambiguity: 0.0,
         alternatives: 0.0,
         slide: 0.0,
+        constraint: 1.0,
     };
     let c = confidence::confidence(&off);
     assert!(c <= off.fitness_coarse / confidence::SUPPORTED_COARSE_FITNESS && c < 0.1, "{c}");

@@ -168,11 +168,16 @@ fn assert_evidence_is_sane(evidence: &JsValue) {
     );
     let slide = num(evidence, "slide");
     assert!((0.0..=2.0).contains(&slide), "evidence.slide = {slide}");
+    let constraint = num(evidence, "constraint");
+    assert!((0.0..=1.0).contains(&constraint), "evidence.constraint = {constraint}");
     let mut keys: Vec<String> =
         js_sys::Object::keys(evidence.unchecked_ref::<js_sys::Object>()).iter().filter_map(|k| k.as_string()).collect();
     keys.sort();
-    let mut want: Vec<String> =
-        fractions.iter().chain(&["rmseRatio", "ambiguity", "alternatives", "slide"]).map(|k| k.to_string()).collect();
+    let mut want: Vec<String> = fractions
+        .iter()
+        .chain(&["rmseRatio", "ambiguity", "alternatives", "slide", "constraint"])
+        .map(|k| k.to_string())
+        .collect();
     want.sort();
     assert_eq!(keys, want, "evidence fields");
 }

@@ -66,7 +66,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       for (const k of ["preprocessMs", "networkMs", "gmrMs", "icpMs", "globalMs", "totalMs"]) assert.equal(typeof res.timings[k], "number", k);
       assert.ok(res.confidence >= 0.8 && res.confidence <= 1, `confidence ${res.confidence} on the known pair`);
       assert.ok(!res.warnings.some((w) => w.startsWith("low confidence")), String(res.warnings));
-      assert.deepEqual(Object.keys(res.evidence).sort(), ["alternatives", "ambiguity", "fitness", "fitnessCoarse", "fitnessLoose", "fitnessTight", "overlapReverse", "rmseRatio", "slide"]);
+      assert.deepEqual(Object.keys(res.evidence).sort(), ["alternatives", "ambiguity", "constraint", "fitness", "fitnessCoarse", "fitnessLoose", "fitnessTight", "overlapReverse", "rmseRatio", "slide"]);
       assert.ok(Number.isInteger(res.startsRefined) && res.startsRefined >= 1, `startsRefined ${res.startsRefined}`);
       assert.ok(res.timings.totalMs > 0);
       assert.ok(Array.isArray(res.warnings));

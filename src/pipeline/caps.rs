@@ -12,10 +12,11 @@
 //! low-confidence warning, and says why in a warning.
 
 use super::prepare::Prepared;
-use crate::confidence::Evidence;
+use crate::confidence::{Evidence, FreeMotion};
 use crate::error::num;
 use crate::refine::Candidate;
 use crate::register::{GUESS_TURN_DEG, UP_TOLERANCE_DEG};
+use nalgebra::Vector3;
 
 /// The most confidence an answer that no start's refinement reached can have (the network's
 /// estimate or the initial transform, unrefined, when no start could be refined or none ended
@@ -80,6 +81,8 @@ pub(crate) struct Doubts {
     /// With `initialTransform`: how far the answer turns from it, degrees, when more than
     /// [`GUESS_TURN_DEG`] (30-100 probe points on a vertebra, turned over, fit 0.89-0.97 of them).
     pub far_from_guess: Option<f64>,
+    /// A motion the fit leaves free ([`crate::confidence::Evidence::constraint`]).
+    pub free: Option<FreeMotion>,
 }
 
 /// The confidence of the `answer` held at [`UNREFINED_CONFIDENCE`], with a warning naming the
@@ -94,7 +97,7 @@ pub(crate) fn cap(
     doubts: Doubts,
     warnings: &mut Vec<String>,
 ) -> f64 {
-    let Doubts { refined_any, tilted, short, mirrored, far_from_guess } = doubts;
+    let Doubts { refined_any, tilted, short, mirrored, far_from_guess, free } = doubts;
     let fitness = answer.fitness;
     let mut capped = !refined_any;
     let s = p.norm.scale;
@@ -165,6 +168,19 @@ pub(crate) fn cap(
             "the answer turns {turn:.0} degrees away from initialTransform (more than {GUESS_TURN_DEG:.0}): either the \
              guess was off, or the answer is a look-alike that fits about as well (a sparse or partial source turned \
              over); check the guess, or leave it out if it is not one"
+        ));
+        capped = true;
+    }
+    // the surfaces leave a motion free: where the clouds' edges fall is all that holds the answer
+    if let Some(m) = free {
+        let (o, centre) = (p.target.summary.origin, p.norm.target_center);
+        let place = |q: Vector3<f64>| Vector3::from(std::array::from_fn(|k| o[k] + centre[k] + q[k] * s));
+        warnings.push(format!(
+            "the fit leaves one motion free: {} keeps the source on the target's surface (a surface of revolution \
+             about its axis, a straight pipe or extrusion along itself, a plane in itself), so only where the clouds' \
+             edges fall holds the answer there, and it may be off along that motion (evidence.constraint {:.1e})",
+            m.describe(&place),
+            m.constraint
         ));
         capped = true;
     }

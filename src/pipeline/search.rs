@@ -416,7 +416,7 @@ pub(crate) fn search(
             ));
         }
     }
-    let doubts = caps::Doubts { refined_any, tilted, short, mirrored, far_from_guess };
+    let doubts = caps::Doubts { refined_any, tilted, short, mirrored, far_from_guess, free: probed.free };
     let confidence = caps::cap(p, confidence, &candidate, doubts, warnings);
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
     // probes turned it over), not so far as to contradict it: the caller asked to refine that
