@@ -637,7 +637,7 @@ fn register_scales_a_source_in_another_unit() {
     // `--min-confidence`: the unscaled source (fits anywhere, at most 0.25) fails the batch after
     // its answer is printed; the scaled one passes; a bound outside [0, 1] is refused
     let out = arps(&["register", src, tgt, "--json", "--min-confidence", "0.5"]);
-    assert!(!out.status.success(), "{}", String::from_utf8_lossy(&out.stdout));
+    assert_eq!(out.status.code(), Some(1), "below --min-confidence: 1; {}", String::from_utf8_lossy(&out.stdout));
     assert!(serde_json::from_slice::<arps::Registration>(&out.stdout).unwrap().confidence < 0.5);
     assert!(
         String::from_utf8_lossy(&out.stderr).contains("1 of 1 answers have a confidence below --min-confidence 0.5")
@@ -646,6 +646,9 @@ fn register_scales_a_source_in_another_unit() {
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let out = arps(&["register", src, tgt, "--min-confidence", "2"]);
     assert!(String::from_utf8_lossy(&out.stderr).contains("--min-confidence: expected a number in [0, 1]"));
+    assert_eq!(out.status.code(), Some(2), "an error: 2");
+    let out = arps(&["register", "no-such-file.ply", tgt, "--min-confidence", "0.5"]);
+    assert_eq!(out.status.code(), Some(2), "an error: 2, whatever --min-confidence");
     for bad in ["0", "-2", "NaN", "inf"] {
         let out = arps(&["register", src, tgt, "--source-scale", bad]);
         assert!(!out.status.success() && out.stdout.is_empty(), "{bad}");

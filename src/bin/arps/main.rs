@@ -78,13 +78,22 @@ enum Command {
     },
 }
 
+/// Exit status of an error (an unreadable file, a bad option, a failed source), as clap's for a
+/// mistyped flag; `register --min-confidence` exits 1 ([`register::UNSURE`]) when every source
+/// was registered but some answer is below it, so a batch tells "check by hand" from "failed".
+const ERROR: u8 = 2;
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match run(cli.command) {
-        Ok(()) => ExitCode::SUCCESS,
+        Ok(Some(unsure)) => {
+            eprintln!("arps: {unsure}");
+            ExitCode::from(register::UNSURE)
+        }
+        Ok(None) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("arps: {e}");
-            ExitCode::FAILURE
+            ExitCode::from(ERROR)
         }
     }
 }
@@ -100,9 +109,11 @@ pub(crate) fn load_registrar(path: Option<&Path>) -> Result<Registrar, String> {
     }
 }
 
-fn run(command: Command) -> Result<(), String> {
-    match command {
-        Command::Register(args) => register::run(args),
+/// Runs the command: `Some(why)` when it ran but some answer is below `register`'s
+/// `--min-confidence`.
+fn run(command: Command) -> Result<Option<String>, String> {
+    let done = match command {
+        Command::Register(args) => return register::run(args),
         Command::Info { weights } => {
             let bytes = std::fs::read(&weights).map_err(|e| format!("{}: {e}", weights.display()))?;
             let w = Weights::from_bytes(&bytes).map_err(|e| format!("{}: {e}", weights.display()))?;
@@ -158,7 +169,8 @@ fn run(command: Command) -> Result<(), String> {
             out!("wrote {} ({} bytes, {} parameters)", out.display(), bytes.len(), config.parameter_count());
             Ok(())
         }
-    }
+    };
+    done.map(|()| None)
 }
 
 /// `--up x,y,z` as the option's three numbers (the engine checks them further).

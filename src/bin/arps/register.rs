@@ -119,8 +119,9 @@ pub struct RegisterArgs {
     #[arg(long, value_name = "FACTOR", allow_negative_numbers = true)]
     source_scale: Option<f64>,
     /// Exit with status 1 (after printing every answer) when an answer's confidence is below C,
-    /// for unattended batches: stderr says how many were. An answer another pose fits about as
-    /// well as is held at 0.5 exactly: a C above 0.5 fails it.
+    /// for unattended batches: stderr says how many were. An error (a file that cannot be read,
+    /// a source that failed) exits 2, as a mistyped flag does. An answer another pose fits about
+    /// as well as is held at 0.5 exactly: a C above 0.5 fails it.
     #[arg(long, value_name = "C", allow_negative_numbers = true)]
     min_confidence: Option<f64>,
     /// Write each source, moved by its answer into the target's frame, to PATH. To a PATH of the
@@ -428,7 +429,7 @@ fn write_aligned(
 }
 
 /// Registers each source onto the target (see [`RegisterArgs`]).
-pub fn run(args: RegisterArgs) -> Result<(), String> {
+pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
     let RegisterArgs {
         sources,
         target,
@@ -577,11 +578,18 @@ pub fn run(args: RegisterArgs) -> Result<(), String> {
     if failed > 0 {
         return Err(format!("{failed} of {} sources failed", sources.len()));
     }
-    if let (Some(c), true) = (min_confidence, unsure > 0) {
-        return Err(format!("{unsure} of {} answers have a confidence below --min-confidence {c}", sources.len()));
-    }
-    Ok(())
+    Ok((min_confidence.is_some() && unsure > 0).then(|| {
+        format!(
+            "{unsure} of {} answers have a confidence below --min-confidence {}",
+            sources.len(),
+            min_confidence.unwrap_or_default()
+        )
+    }))
 }
+
+/// Exit status of `register` when every source was registered but some answer's confidence is
+/// below `--min-confidence` (an error exits 2).
+pub const UNSURE: u8 = 1;
 
 /// One row of a printed 4x4, to 12 decimals: with fewer, a matrix copied from the terminal moves
 /// a survey on a map grid (coordinates near 5e6) by metres (1e-6 of its rotation is 5 there).
