@@ -228,7 +228,10 @@ export type RegisterOptions = {
    * global stage has run, the answer's rotation with the translation the descriptor matches
    * agree on for it is refined as one more start when that translation is another one, and
    * replaces the answer when it fits more than 10% better (an answer slid along a wall, its
-   * rotation right). Then, when most of the source lies on thin walls (another face parallel
+   * rotation right); so is, at the final distance only, the answer's rotation at the next
+   * translation they agree on, when it already fits half as well as the answer (the other of
+   * two alike parts side by side, such as identical pipe spools: an alternative when it fits
+   * about as well). Then, when most of the source lies on thin walls (another face parallel
    * to its own within ten final distances), the answer moved onto those other faces is
    * refined at the final distance, and replaces it when it fits better, its points no farther
    * (a one-view scan of sheet metal settled on the inner faces); one that fits alike comes

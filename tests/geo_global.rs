@@ -182,6 +182,42 @@ fn matches_vote_for_the_translation_of_a_known_rotation() {
     assert_eq!(global::translation::voted(&source, &target, &matches, &(r * f64::NAN), 0.03), None);
 }
 
+/// Two alike parts side by side (the target holds the source twice, 1.5 apart): the matches split
+/// between them, and the vote's modes are both translations, the denser first, the first the
+/// plain vote's; a third mode is only what the wrong matches scatter into.
+#[test]
+fn the_votes_modes_find_each_of_two_alike_parts() {
+    let mut rng = arps::sampling::rng(4);
+    use rand::Rng;
+    let n = 600u32;
+    let source: Vec<[f32; 3]> = (0..n).map(|_| [0, 1, 2].map(|_| rng.random::<f32>() * 2.0 - 1.0)).collect();
+    let truth = turn(Vector3::new(0.1, 0.9, 0.3), 40.0, [0.2, 0.1, -0.3]);
+    let beside = Matrix4::new_translation(&Vector3::new(1.5, 0.0, 0.0)) * truth;
+    // the target: the part, then its copy beside it
+    let target: Vec<[f32; 3]> = source
+        .iter()
+        .map(|&p| arps::transform::apply(&truth, p))
+        .chain(source.iter().map(|&p| arps::transform::apply(&beside, p)))
+        .collect();
+    // a tenth of the matches on the part, a fifteenth on its copy, the rest anywhere
+    let matches: Vec<(u32, u32)> = (0..n)
+        .map(|i| match i % 30 {
+            0 | 10 | 20 => (i, i),
+            5 | 25 => (i, n + i),
+            _ => (i, rng.random_range(0..2 * n)),
+        })
+        .collect();
+    let r = arps::transform::rotation(&truth);
+    let modes = global::translation::modes(&source, &target, &matches, &r, 0.03, 3);
+    let at = |m: &Matrix4<f64>| arps::transform::translation(m);
+    assert!(modes.len() >= 2, "{modes:?}");
+    assert!((modes[0].0 - at(&truth)).norm() < 1e-3 && modes[0].1 >= 55, "{modes:?}");
+    assert!((modes[1].0 - at(&beside)).norm() < 1e-3 && modes[1].1 >= 35, "{modes:?}");
+    assert!(modes.get(2).is_none_or(|m| m.1 < 10), "{modes:?}");
+    assert_eq!(global::translation::voted(&source, &target, &matches, &r, 0.03), Some(modes[0]));
+    assert!(global::translation::modes(&source, &target, &[], &r, 0.03, 2).is_empty());
+}
+
 /// A real LiDAR scan (fixtures/scans/velodyne-small.ply, MIT) against its own other half of the
 /// points, moved: the descriptor matches agree on the motion's translation for its rotation.
 #[test]

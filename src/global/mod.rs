@@ -405,6 +405,12 @@ impl Matched {
         translation::voted(&self.source.points, &self.target.points, &self.nearest, r, self.inlier_distance())
     }
 
+    /// Up to `count` translations the matches agree on for the rotation `r`, densest first
+    /// ([`translation::modes`]), with how many agree on each: one per alike part of a row.
+    pub fn translations(&self, r: &nalgebra::Matrix3<f64>, count: usize) -> Vec<(nalgebra::Vector3<f64>, usize)> {
+        translation::modes(&self.source.points, &self.target.points, &self.nearest, r, self.inlier_distance(), count)
+    }
+
     /// RANSAC's inlier distance, which is also the radius of [`Matched::translation`]'s clusters.
     pub fn inlier_distance(&self) -> f64 {
         INLIER_VOXELS * self.voxel

@@ -22,31 +22,43 @@ pub fn voted(
     r: &Matrix3<f64>,
     radius: f64,
 ) -> Option<(Vector3<f64>, usize)> {
+    modes(source, target, matches, r, radius, 1).into_iter().next()
+}
+
+/// Up to `count` clusters of the votes of [`voted`], densest first: the first is [`voted`]'s;
+/// each next one the densest among the votes farther than twice `radius` from every cluster
+/// before it (counting only those votes). A row of alike parts (two identical pipe spools side
+/// by side, a facade's bays) gives a cluster per part the source matches.
+pub fn modes(
+    source: &[[f32; 3]],
+    target: &[[f32; 3]],
+    matches: &[(u32, u32)],
+    r: &Matrix3<f64>,
+    radius: f64,
+    count: usize,
+) -> Vec<(Vector3<f64>, usize)> {
     if radius.is_nan() || radius <= 0.0 {
-        return None;
+        return Vec::new();
     }
     let v3 = |p: &[f32; 3]| Vector3::new(p[0] as f64, p[1] as f64, p[2] as f64);
     let votes: Vec<Vector3<f64>> = matches
         .iter()
         .filter_map(|&(i, j)| Some(v3(target.get(j as usize)?) - r * v3(source.get(i as usize)?)))
         .collect();
-    if votes.is_empty() {
-        return None;
-    }
     let cell = |v: &Vector3<f64>| -> [i64; 3] { [v.x, v.y, v.z].map(|x| (x / radius).floor() as i64) };
     // the votes sorted by cell, so that a cell's votes are found by a binary search
     let mut by_cell: Vec<([i64; 3], u32)> = votes.iter().enumerate().map(|(k, v)| (cell(v), k as u32)).collect();
     by_cell.sort_unstable();
-    // calls `f` with each vote within `radius` of `v`
-    let each_near = |v: &Vector3<f64>, f: &mut dyn FnMut(usize)| {
+    // calls `f` with each vote within `within` (at most twice `radius`) of `v`
+    let each_near = |v: &Vector3<f64>, within: f64, f: &mut dyn FnMut(usize)| {
         let c = cell(v);
-        for dx in -1..=1 {
-            for dy in -1..=1 {
-                for dz in -1..=1 {
+        for dx in -2..=2 {
+            for dy in -2..=2 {
+                for dz in -2..=2 {
                     let key = [c[0] + dx, c[1] + dy, c[2] + dz];
                     let start = by_cell.partition_point(|e| e.0 < key);
                     for &(_, k) in by_cell[start..].iter().take_while(|e| e.0 == key) {
-                        if (votes[k as usize] - v).norm() < radius {
+                        if (votes[k as usize] - v).norm() < within {
                             f(k as usize);
                         }
                     }
@@ -54,22 +66,32 @@ pub fn voted(
             }
         }
     };
-    let (mut best, mut best_k) = (0usize, 0usize);
-    for (k, v) in votes.iter().enumerate() {
-        let mut n = 0usize;
-        each_near(v, &mut |_| n += 1);
-        if n > best {
-            (best, best_k) = (n, k);
+    // the votes a cluster found so far has claimed
+    let mut claimed = vec![false; votes.len()];
+    let mut out = Vec::new();
+    while out.len() < count {
+        let (mut best, mut best_k) = (0usize, 0usize);
+        for (k, v) in votes.iter().enumerate().filter(|(k, _)| !claimed[*k]) {
+            let mut n = 0usize;
+            each_near(v, radius, &mut |j| n += usize::from(!claimed[j]));
+            if n > best {
+                (best, best_k) = (n, k);
+            }
         }
+        if best == 0 {
+            // no vote left, or none near even itself: not finite (a rotation with a NaN)
+            break;
+        }
+        let (mut sum, mut n) = (Vector3::zeros(), 0usize);
+        each_near(&votes[best_k], radius, &mut |k| {
+            if !claimed[k] {
+                sum += votes[k];
+                n += 1;
+            }
+        });
+        let mean = sum / n as f64;
+        each_near(&mean, 2.0 * radius, &mut |k| claimed[k] = true);
+        out.push((mean, n));
     }
-    if best == 0 {
-        // no vote near even itself: not finite (a rotation with a NaN)
-        return None;
-    }
-    let (mut sum, mut n) = (Vector3::zeros(), 0usize);
-    each_near(&votes[best_k], &mut |k| {
-        sum += votes[k];
-        n += 1;
-    });
-    Some((sum / n as f64, n))
+    out
 }

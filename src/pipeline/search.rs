@@ -131,6 +131,23 @@ pub(crate) fn search(
         refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
         r
     };
+    // one more pose `t` refined at the final distance only (the next of a row of alike parts),
+    // kept as `refine_one` keeps its poses
+    let capped = refine::even_sample(&p.icp_src.points, refine::REFINE_POINTS);
+    let screen = refine::even_sample(&p.icp_src.points, refine::SCREEN_POINTS);
+    let next_part = |c: &Candidate, t: Matrix4<f64>, refined: &mut Vec<(Matrix4<f64>, f64)>| {
+        // most pairs' matches scatter into a second cluster by chance: a pose that does not
+        // already fit half as well as the answer is not refined
+        let t = level(t);
+        let fit = target_index.evaluate(&screen, &t, d_final).0;
+        if fit < NEXT_PART_SCREEN * c.fitness {
+            return None;
+        }
+        let r = refine::refine_final(target_index, &capped, c.start, &t, &how);
+        let r = admits(&r.T_target_source).then_some(r);
+        refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
+        r
+    };
     // `c` judged by the probe, and the probe's better poses refined ([`settle`]): the answer with
     // its evidence and confidence, and how many probe poses were refined
     let judged = |c: Candidate, refined: &mut Vec<(Matrix4<f64>, f64)>| {
@@ -319,20 +336,26 @@ pub(crate) fn search(
     // answer, its rotation right and its translation not: a wall matched to the next one) and,
     // with `up`, the answer turned a quarter and a half turn about up (a box-like room captured
     // from another spot fits its turns about as well as the truth, and the probes, which turn
-    // the answer about its own centre, cannot move it that far)
-    let placed: Vec<Matrix4<f64>> = match &best {
+    // the answer about its own centre, cannot move it that far); and the answer's rotation at
+    // the next translation the matches agree on, refined at the final distance only (the next
+    // of a row of alike parts, such as two identical pipe spools side by side: the wider stages
+    // would pull it back onto the part the answer is on)
+    let placed: Vec<(Matrix4<f64>, bool)> = match &best {
         Some((c, _, _)) if adaptive && p.icp != IcpKind::Off => {
             let t = &c.T_target_source;
             let pivot = t.transform_point(&Point3::from(centroid)).coords;
             let turned = upright.iter().flat_map(|u| UP_TURNS_VOTED.map(|deg| u.turned(t, deg, &pivot)));
-            std::iter::once(*t).chain(turned).filter_map(|r| builder.voted_pose(&r)).collect()
+            let own = builder.voted_poses(t, VOTED_MODES).into_iter().map(|(r, rank)| (r, rank > 0));
+            let turned = turned.filter_map(|r| builder.voted_pose(&r)).map(|r| (r, false));
+            own.chain(turned).collect()
         }
         _ => Vec::new(),
     };
-    for t in placed {
+    for (t, final_only) in placed {
         let Some(c) = best.as_ref().map(|b| b.0) else { break };
         starts_refined += 1;
-        if let Some(r) = refine_one(c.start, t, &mut refined) {
+        let r = if final_only { next_part(&c, t, &mut refined) } else { refine_one(c.start, t, &mut refined) };
+        if let Some(r) = r {
             if refine::clearly_better(&r, &c) && improves(&c, &r) {
                 let (b, extra) = judged(r, &mut refined);
                 (best, starts_refined) = (Some(b), starts_refined + extra);
@@ -515,6 +538,16 @@ const NEARLY_SURE_SCREEN_FIT: f64 = 0.95;
 /// that the descriptors find the answer again is evidence ([`AGREED_CONFIDENCE`]). At 0.8 and 0.9
 /// the search lost pairs (`BENCHMARK.md`, "Starts screened against the answer").
 const GLOBAL_SCREEN_FIT: f64 = 0.7;
+
+/// How many of the translations the global stage's matches agree on for the answer's rotation
+/// are refined ([`Starts::voted_poses`], those that are not the answer's own): the densest, and
+/// the next, which on a row of alike parts (two identical pipe spools side by side) is the part
+/// the answer is not on, an alternative that fits as well.
+const VOTED_MODES: usize = 2;
+
+/// The answer's rotation at the next translation the matches agree on ([`VOTED_MODES`]) is
+/// refined only when it already fits at least this share as well as the answer, unrefined.
+const NEXT_PART_SCREEN: f64 = 0.5;
 
 /// With `up`, the turns about it (degrees) of the answer that are refined with the translation
 /// the global stage's matches agree on for each ([`Starts::voted_pose`]): the look-alikes of a

@@ -204,11 +204,26 @@ impl<'a> Starts<'a> {
     /// `T_target_source`'s than the radius of the matches' clusters (RANSAC's inlier distance).
     #[allow(non_snake_case)]
     pub(crate) fn voted_pose(&self, T_target_source: &Matrix4<f64>) -> Option<Matrix4<f64>> {
-        let matched = self.matched.as_ref()?;
+        self.voted_poses(T_target_source, 1).into_iter().next().map(|(t, _)| t)
+    }
+
+    /// [`Starts::voted_pose`] for each of the `count` translations the matches agree on most
+    /// ([`global::Matched::translations`]) that at least [`MIN_TRANSLATION_VOTES`] agree on and
+    /// that is another one than `T_target_source`'s, with its rank among them (0: the densest):
+    /// with the answer on one of a row of alike parts (two identical pipe spools), the next best
+    /// is the other part.
+    #[allow(non_snake_case)]
+    pub(crate) fn voted_poses(&self, T_target_source: &Matrix4<f64>, count: usize) -> Vec<(Matrix4<f64>, usize)> {
+        let Some(matched) = self.matched.as_ref() else { return Vec::new() };
         let r = transform::rotation(T_target_source);
-        let (t, votes) = matched.translation(&r)?;
-        let agrees = (t - transform::translation(T_target_source)).norm() <= matched.inlier_distance();
-        (votes >= MIN_TRANSLATION_VOTES && !agrees).then(|| transform::from_rotation_translation(&r, &t))
+        let own = transform::translation(T_target_source);
+        matched
+            .translations(&r, count)
+            .into_iter()
+            .enumerate()
+            .filter(|(_, (t, votes))| *votes >= MIN_TRANSLATION_VOTES && (t - own).norm() > matched.inlier_distance())
+            .map(|(rank, (t, _))| (transform::from_rotation_translation(&r, &t), rank))
+            .collect()
     }
 
     /// Up to `count` global hypotheses, best first (describing and matching the clouds on first
