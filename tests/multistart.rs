@@ -590,8 +590,9 @@ fn the_network_from_every_turn_recovers_half_turns() {
 /// its answer is right, comes from `start` with a confidence in `confidence`, and the search
 /// refines only the network's start, the five global ones and fewer than three more (the local
 /// starts and the rotations skipped; of the last stage's three further global hypotheses, those
-/// whose short run does not come near the answer's are screened out); refining every start finds
-/// the same pose.
+/// whose short run does not come near the answer's are screened out), and at most one pose at the
+/// next translation the global stage's matches agree on; refining every start finds the same
+/// pose.
 fn takes_the_shortcut(index: usize, start: Start, confidence: std::ops::Range<f64>) {
     let (source, target, truth) = fixture_pair_in("fixtures/any", index);
     let mut reg = Registrar::with_default_model().unwrap();
@@ -600,7 +601,7 @@ fn takes_the_shortcut(index: usize, start: Start, confidence: std::ops::Range<f6
     assert!(err < 15.0, "rotation error {err:.1} degrees");
     assert_eq!(r.start, start);
     assert!(confidence.contains(&r.confidence), "confidence {}", r.confidence);
-    assert!(r.starts_refined < 1 + 5 + 3, "{} starts refined", r.starts_refined);
+    assert!(r.starts_refined < 1 + 5 + 3 + 1, "{} starts refined", r.starts_refined);
     let all = reg.register(&source, &target, &Options { search: Search::Exhaustive, ..Options::default() }).unwrap();
     assert!(all.starts_refined > 2 * r.starts_refined, "exhaustive: {} starts", all.starts_refined);
     let apart = rotation_error_deg(&all.T_target_source, &r.T_target_source);

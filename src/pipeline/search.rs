@@ -135,15 +135,13 @@ pub(crate) fn search(
     // kept as `refine_one` keeps its poses
     let capped = refine::even_sample(&p.icp_src.points, refine::REFINE_POINTS);
     let screen = refine::even_sample(&p.icp_src.points, refine::SCREEN_POINTS);
+    // most pairs' matches scatter into a second cluster by chance: a pose that does not already
+    // fit half as well as the answer is not refined
+    let next_fits = |c: &Candidate, t: &Matrix4<f64>| {
+        target_index.evaluate(&screen, &level(*t), d_final).0 >= NEXT_PART_SCREEN * c.fitness
+    };
     let next_part = |c: &Candidate, t: Matrix4<f64>, refined: &mut Vec<(Matrix4<f64>, f64)>| {
-        // most pairs' matches scatter into a second cluster by chance: a pose that does not
-        // already fit half as well as the answer is not refined
-        let t = level(t);
-        let fit = target_index.evaluate(&screen, &t, d_final).0;
-        if fit < NEXT_PART_SCREEN * c.fitness {
-            return None;
-        }
-        let r = refine::refine_final(target_index, &capped, c.start, &t, &how);
+        let r = refine::refine_final(target_index, &capped, c.start, &level(t), &how);
         let r = admits(&r.T_target_source).then_some(r);
         refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
         r
@@ -353,6 +351,9 @@ pub(crate) fn search(
     };
     for (t, final_only) in placed {
         let Some(c) = best.as_ref().map(|b| b.0) else { break };
+        if final_only && !next_fits(&c, &t) {
+            continue;
+        }
         starts_refined += 1;
         let r = if final_only { next_part(&c, t, &mut refined) } else { refine_one(c.start, t, &mut refined) };
         if let Some(r) = r {
