@@ -68,7 +68,9 @@ export type RegisterOptions = {
    * look-alike: 30-100 probe points on a vertebra, turned over, fit 0.89-0.97 of them). An
    * answer that puts the
    * source farther than half its size from where the guess puts it comes with a warning (a
-   * look-alike elsewhere, when the guess placed it). Default:
+   * look-alike elsewhere, when the guess placed it). Along a motion the fit leaves free
+   * (`evidence.constraint`: a jar's turn about its axis between two turntable views) the answer
+   * follows the guess, with a warning, since the clouds cannot place it there. Default:
    * the identity. Either 16
    * numbers in **column-major** order (a previous result's `T_target_source`, a three.js
    * `Matrix4.elements`; in JS also a `Float32Array` or `Float64Array`), or four **row-major**

@@ -116,6 +116,57 @@ pub struct FreeMotion {
 }
 
 impl FreeMotion {
+    /// `t` moved `s` units along the motion, exactly: turned by `s |w|` about the axis (through
+    /// `c + w x shift / |w|^2`) and moved `s` times the shift's part along it (the probes' screw
+    /// moves are first order, which a turn of tens of degrees about an axis the inliers' centroid
+    /// lies off would carry off the surface); a slide moves by `s shift`.
+    pub fn moved(&self, s: f64, t: &Matrix4<f64>) -> Matrix4<f64> {
+        let turn = self.w.norm_squared();
+        if turn <= 1e-18 {
+            return Matrix4::new_translation(&(self.shift * s)) * t;
+        }
+        let on_axis = self.c + self.w.cross(&self.shift) / turn;
+        let along = self.w * (self.w.dot(&self.shift) / turn);
+        let r = match nalgebra::Unit::try_new(self.w * s, 1e-12) {
+            Some(axis) => Rotation3::from_axis_angle(&axis, (self.w * s).norm()).into_inner(),
+            None => Matrix3::identity(),
+        };
+        from_rotation_translation(&r, &(on_axis - r * on_axis + along * s)) * t
+    }
+
+    /// `t` moved along the motion to where it puts `points` (source points, up to 256 of them
+    /// used) nearest, on average, to where `guess` puts them: what a guess says where the clouds
+    /// cannot. Over one whole turn (a slide: 2 normalised units either way), in 720 steps, then to
+    /// a tenth of a step.
+    pub fn nearest(&self, t: &Matrix4<f64>, guess: &Matrix4<f64>, points: &[[f32; 3]]) -> Matrix4<f64> {
+        let sample = even_sample(points, 256);
+        let pairs: Vec<(Vector3<f64>, Vector3<f64>)> = sample
+            .iter()
+            .map(|&p| (Vector3::from(apply(t, p).map(f64::from)), Vector3::from(apply(guess, p).map(f64::from))))
+            .collect();
+        let cost = |s: f64| {
+            let m = self.moved(s, &Matrix4::identity());
+            pairs.iter().map(|(q, g)| (m.transform_point(&(*q).into()).coords - g).norm_squared()).sum::<f64>()
+        };
+        let turn = self.w.norm();
+        let reach = if turn > 1e-9 { std::f64::consts::PI / turn } else { 2.0 / self.shift.norm().max(1e-12) };
+        let steps = 720i64;
+        let step = 2.0 * reach / steps as f64;
+        let best = |from: f64, step: f64, n: i64| {
+            (-n..=n).map(|k| from + k as f64 * step).fold((from, cost(from)), |b, s| {
+                let c = cost(s);
+                if c < b.1 {
+                    (s, c)
+                } else {
+                    b
+                }
+            })
+        };
+        let (coarse, _) = best(0.0, step, steps / 2);
+        let (fine, _) = best(coarse, step / 10.0, 10);
+        self.moved(fine, t)
+    }
+
     /// Says what the motion is, with points in the caller's frame by `place` and directions as
     /// they are (the normalisation neither turns nor mirrors): a turn about an axis (through a
     /// point, along a direction) when it mostly turns the points, else a slide along a direction.

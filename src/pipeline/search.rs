@@ -410,6 +410,19 @@ pub(crate) fn search(
             (c, probed, false)
         }
     };
+    // with the caller's guess: along a motion the fit leaves free (a jar's turn about its axis on
+    // a turntable), where only the clouds' edges held the answer, the guess says where it is
+    let (candidate, probed) = match probed.free.filter(|_| refined_any && options.initial_transform.is_some()) {
+        Some(free) => match held_by_guess(&free, &candidate, p, target_index, &screen, &admits) {
+            Some((held, why)) => {
+                warnings.push(why);
+                let probed = judge(&held.T_target_source);
+                (held, probed)
+            }
+            None => (candidate, probed),
+        },
+        None => (candidate, probed),
+    };
     let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined);
     // with `up`: a tilted pose that fits clearly better than the upright answer
     let tilted = tilted
@@ -539,6 +552,55 @@ const NEARLY_SURE_SCREEN_FIT: f64 = 0.95;
 /// that the descriptors find the answer again is evidence ([`AGREED_CONFIDENCE`]). At 0.8 and 0.9
 /// the search lost pairs (`BENCHMARK.md`, "Starts screened against the answer").
 const GLOBAL_SCREEN_FIT: f64 = 0.7;
+
+/// The answer moved along the motion its fit leaves `free` to where the caller's guess
+/// (`p.t_initial`) puts the source ([`confidence::FreeMotion::nearest`]), put back onto the
+/// surfaces by ICP from the final distance's stages and moved along the motion again while that
+/// fits better; with a warning that says so, when that pose is admitted (`up`), another one, and
+/// still fits at least [`HELD_FIT`] as well as the answer (the clouds' edges, not their surfaces,
+/// lose some of the fit there).
+fn held_by_guess(
+    free: &confidence::FreeMotion,
+    answer: &Candidate,
+    p: &Prepared,
+    target: &IcpTarget,
+    screen: &[[f32; 3]],
+    admits: &dyn Fn(&Matrix4<f64>) -> bool,
+) -> Option<(Candidate, String)> {
+    let fit = |t: &Matrix4<f64>| target.evaluate(screen, t, p.d_final).0;
+    let mut t = free.nearest(&answer.T_target_source, &p.t_initial, screen);
+    let mut best = fit(&t);
+    let how = Refinement::new(p.icp, p.d_final, p.d_final, HELD_ITERATIONS);
+    for _ in 0..2 {
+        let Some(r) = refine::refine_best(target, screen, &[(answer.start, t)], &how) else { break };
+        let next = free.nearest(&r.T_target_source, &p.t_initial, screen);
+        let f = fit(&next);
+        if f <= best {
+            break;
+        }
+        (t, best) = (next, f);
+    }
+    let (fitness, inlier_rmse) = target.evaluate(&p.icp_src.points, &t, p.d_final);
+    let other = !refine::coincide(&answer.T_target_source, &t, screen, p.d_final);
+    if !(other && admits(&t) && fitness >= HELD_FIT * answer.fitness) {
+        return None;
+    }
+    let turn = crate::transform::rotation_error_deg(&answer.T_target_source, &t);
+    let why = format!(
+        "the answer follows initialTransform along the motion the fit leaves free (turned {turn:.1} degrees from \
+         where the clouds' edges held it, fitness {fitness:.3} against {:.3}): the clouds cannot tell that motion, \
+         the guess does",
+        answer.fitness
+    );
+    Some((Candidate { T_target_source: t, fitness, inlier_rmse, ..*answer }, why))
+}
+
+/// Iteration cap of [`held_by_guess`]'s refinements.
+const HELD_ITERATIONS: u32 = 30;
+
+/// [`held_by_guess`] keeps the guess's pose along the free motion only when it fits at least this
+/// share as well as the answer the clouds' edges held.
+const HELD_FIT: f64 = 0.5;
 
 /// How many of the translations the global stage's matches agree on for the answer's rotation
 /// are refined ([`Starts::voted_poses`], those that are not the answer's own): the densest, and
