@@ -125,7 +125,7 @@ impl FreeMotion {
         if turn <= 1e-18 {
             return Matrix4::new_translation(&(self.shift * s)) * t;
         }
-        let on_axis = self.c + self.w.cross(&self.shift) / turn;
+        let on_axis = self.axis_point();
         let along = self.w * (self.w.dot(&self.shift) / turn);
         let r = match nalgebra::Unit::try_new(self.w * s, 1e-12) {
             Some(axis) => Rotation3::from_axis_angle(&axis, (self.w * s).norm()).into_inner(),
@@ -167,6 +167,11 @@ impl FreeMotion {
         self.moved(fine, t)
     }
 
+    /// The point of the turn's axis nearest the inliers' centroid: `c + w x shift / |w|^2`.
+    fn axis_point(&self) -> Vector3<f64> {
+        self.c + self.w.cross(&self.shift) / self.w.norm_squared()
+    }
+
     /// Says what the motion is, with points in the caller's frame by `place` and directions as
     /// they are (the normalisation neither turns nor mirrors): a turn about an axis (through a
     /// point, along a direction) when it mostly turns the points, else a slide along a direction.
@@ -180,8 +185,7 @@ impl FreeMotion {
         // unit, against |shift| for the slide
         if turn >= self.shift.norm() {
             let axis = self.w / turn;
-            let through = self.c + self.w.cross(&self.shift) / (turn * turn);
-            format!("a turn about the axis along {} through {}", fmt(round(axis)), fmt(place(through)))
+            format!("a turn about the axis along {} through {}", fmt(round(axis)), fmt(place(self.axis_point())))
         } else {
             format!("a slide along {}", fmt(round(self.shift.normalize())))
         }

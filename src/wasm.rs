@@ -217,8 +217,8 @@ pub fn transform_point_cloud(
     let m = matrix_arg(matrix)?;
     // checked, then used as given: snapped onto a rotation about the frame's origin, a matrix
     // written with a few decimals would move a cloud on a map grid by metres
-    crate::io::check_similarity(&m).map_err(|e| match e {
-        crate::Error::InvalidOption(m) => JsError::new(&m.replacen("the transform", "matrix", 1)),
+    crate::io::check_similarity(&m, "matrix").map_err(|e| match e {
+        crate::Error::InvalidOption(m) => JsError::new(&m),
         e => JsError::new(&e.to_string()),
     })?;
     let cloud = cloud_arg(&cloud, "cloud")?;

@@ -232,7 +232,7 @@ fn descriptor_matches_agree_on_the_translation_of_a_real_scan() {
         .transformed(&arps::transform::rigid_inverse(&truth));
     let matched = global::Matched::new(&source, &target, global::VOXEL_FRACTION);
     let r = arps::transform::rotation(&truth);
-    let (t, votes) = matched.translation(&r).unwrap();
+    let (t, votes) = matched.translations(&r, 1)[0];
     let off = (t - arps::transform::translation(&truth)).norm();
     assert!(off < matched.inlier_distance(), "{off} from the truth's translation ({votes} votes)");
     assert!(votes >= 8, "{votes} votes");

@@ -3,7 +3,7 @@
 //! seeded RANSAC with geometric pre-checks and early termination ([`ransac`]) that returns a few
 //! ranked rigid motions. Each becomes a start of the pipeline's refinement
 //! ([`crate::Start::Global`], [`crate::Start::GlobalNetwork`]). For a given rotation, the matches
-//! also vote for a translation ([`translation`], [`Matched::translation`]): the search puts back an
+//! also vote for a translation ([`translation`], [`Matched::translations`]): the search puts back an
 //! answer whose rotation is right and whose translation is not.
 //!
 //! Cost grows gently with the point count: the feature voxel is chosen from the data so that each
@@ -349,7 +349,7 @@ pub struct Matched {
     source: Described,
     target: Described,
     matches: Vec<(u32, u32)>,
-    /// Every source point's nearest target descriptor (what [`Matched::translation`] votes with).
+    /// Every source point's nearest target descriptor (what [`Matched::translations`] votes with).
     nearest: Vec<(u32, u32)>,
     voxel: f64,
 }
@@ -399,19 +399,13 @@ impl Matched {
         ransac::ransac(&self.source.points, &self.target.points, &self.matches, &rp)
     }
 
-    /// The translation most of every source point's nearest descriptor matches agree on, given the
-    /// rotation `r` ([`translation::voted`] within RANSAC's inlier distance), with how many agree.
-    pub fn translation(&self, r: &nalgebra::Matrix3<f64>) -> Option<(nalgebra::Vector3<f64>, usize)> {
-        translation::voted(&self.source.points, &self.target.points, &self.nearest, r, self.inlier_distance())
-    }
-
     /// Up to `count` translations the matches agree on for the rotation `r`, densest first
     /// ([`translation::modes`]), with how many agree on each: one per alike part of a row.
     pub fn translations(&self, r: &nalgebra::Matrix3<f64>, count: usize) -> Vec<(nalgebra::Vector3<f64>, usize)> {
         translation::modes(&self.source.points, &self.target.points, &self.nearest, r, self.inlier_distance(), count)
     }
 
-    /// RANSAC's inlier distance, which is also the radius of [`Matched::translation`]'s clusters.
+    /// RANSAC's inlier distance, which is also the radius of [`Matched::translations`]'s clusters.
     pub fn inlier_distance(&self) -> f64 {
         INLIER_VOXELS * self.voxel
     }

@@ -14,7 +14,12 @@ use nalgebra::{Matrix3, Matrix4, Vector3};
 /// the frame's origin, which on map-grid coordinates lies kilometres away, and move a survey by
 /// metres for a matrix off by 1e-4.
 fn similarity(m: &Matrix4<f64>) -> Result<Motion> {
-    let bad = |why: &str| Err(Error::InvalidOption(format!("the transform is not rigid (or uniformly scaled): {why}")));
+    similarity_named(m, "the transform")
+}
+
+/// [`similarity`], its errors naming the matrix `what`.
+fn similarity_named(m: &Matrix4<f64>, what: &str) -> Result<Motion> {
+    let bad = |why: &str| Err(Error::InvalidOption(format!("{what} is not rigid (or uniformly scaled): {why}")));
     if m.iter().any(|v| !v.is_finite()) {
         return bad("it has a non-finite entry");
     }
@@ -43,10 +48,11 @@ fn similarity(m: &Matrix4<f64>) -> Result<Motion> {
 }
 
 /// `m` checked as a motion points may be moved by: rigid, or rigid times one uniform scale (a
-/// result's `T_target_source` with `sourceScale`); the error says why not.
+/// result's `T_target_source` with `sourceScale`); the error names the matrix `what` and says why
+/// not.
 #[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]
-pub(crate) fn check_similarity(m: &Matrix4<f64>) -> Result<()> {
-    similarity(m).map(|_| ())
+pub(crate) fn check_similarity(m: &Matrix4<f64>, what: &str) -> Result<()> {
+    similarity_named(m, what).map(|_| ())
 }
 
 /// A checked motion ([`similarity`]) that maps points and turns normals.

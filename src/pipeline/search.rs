@@ -131,17 +131,16 @@ pub(crate) fn search(
         refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
         r
     };
-    // one more pose `t` refined at the final distance only (the next of a row of alike parts),
-    // kept as `refine_one` keeps its poses
+    // one more pose `t` (levelled) refined at the final distance only (the next of a row of alike
+    // parts), kept as `refine_one` keeps its poses
     let capped = refine::even_sample(&p.icp_src.points, refine::REFINE_POINTS);
     let screen = refine::even_sample(&p.icp_src.points, refine::SCREEN_POINTS);
     // most pairs' matches scatter into a second cluster by chance: a pose that does not already
     // fit half as well as the answer is not refined
-    let next_fits = |c: &Candidate, t: &Matrix4<f64>| {
-        target_index.evaluate(&screen, &level(*t), d_final).0 >= NEXT_PART_SCREEN * c.fitness
-    };
+    let next_fits =
+        |c: &Candidate, t: &Matrix4<f64>| target_index.evaluate(&screen, t, d_final).0 >= NEXT_PART_SCREEN * c.fitness;
     let next_part = |c: &Candidate, t: Matrix4<f64>, refined: &mut Vec<(Matrix4<f64>, f64)>| {
-        let r = refine::refine_final(target_index, &capped, c.start, &level(t), &how);
+        let r = refine::refine_final(target_index, &capped, c.start, &t, &how);
         let r = admits(&r.T_target_source).then_some(r);
         refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
         r
@@ -351,11 +350,16 @@ pub(crate) fn search(
     };
     for (t, final_only) in placed {
         let Some(c) = best.as_ref().map(|b| b.0) else { break };
-        if final_only && !next_fits(&c, &t) {
+        // (levelled once: screened and refined from the same pose; `refine_one` levels its own)
+        let next = final_only.then(|| level(t));
+        if next.is_some_and(|t| !next_fits(&c, &t)) {
             continue;
         }
         starts_refined += 1;
-        let r = if final_only { next_part(&c, t, &mut refined) } else { refine_one(c.start, t, &mut refined) };
+        let r = match next {
+            Some(t) => next_part(&c, t, &mut refined),
+            None => refine_one(c.start, t, &mut refined),
+        };
         if let Some(r) = r {
             if refine::clearly_better(&r, &c) && improves(&c, &r) {
                 let (b, extra) = judged(r, &mut refined);

@@ -199,7 +199,7 @@ impl<'a> Starts<'a> {
     }
 
     /// `T_target_source` with the translation the global stage's descriptor matches agree on for
-    /// its rotation ([`global::Matched::translation`]), when the global stage has run, at least
+    /// its rotation ([`global::Matched::translations`]), when the global stage has run, at least
     /// [`MIN_TRANSLATION_VOTES`] matches agree, and that translation is another one: farther from
     /// `T_target_source`'s than the radius of the matches' clusters (RANSAC's inlier distance).
     #[allow(non_snake_case)]
