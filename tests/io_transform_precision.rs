@@ -71,6 +71,28 @@ fn a_float_ply_moved_onto_a_map_grid_gets_double_positions_and_keeps_the_rest() 
 }
 
 #[test]
+fn a_float_ply_scaled_onto_plant_millimetres_keeps_its_own_precision() {
+    // a 2 m scan in metres, scaled by 1000 onto a plant model in millimetres 2.4e6 from zero:
+    // float would hold it to 0.25 mm there (1/8000 of its size, within the engine's warning rule),
+    // 500 times more coarsely than the file held it
+    let (points, scaled) = (box_points(), Matrix4::new_translation(&Vector3::new(2_432_342.0, 1_187_386.0, 1_500.0)));
+    let m = scaled * Matrix4::new_scaling(1000.0);
+    let moved = transform_file(&binary_ply(&points), "scan.ply", &m).unwrap();
+    assert!(String::from_utf8_lossy(&moved[..200]).contains(
+        "property double x
+"
+    ));
+    assert_moved(&moved, "scan.ply", &points, &m, 1e-6);
+    // the same scan moved 10 m from zero in its own metres: float holds it about as finely as the
+    // file did (1e-6 m), and the file stays float
+    let ten = Matrix4::new_translation(&Vector3::new(10.0, -4.0, 1.0));
+    let bytes = binary_ply(&points);
+    let moved = transform_file(&bytes, "scan.ply", &ten).unwrap();
+    assert_eq!(moved.len(), bytes.len());
+    assert_moved(&moved, "scan.ply", &points, &ten, 2e-6);
+}
+
+#[test]
 fn a_float_pcd_or_stl_that_cannot_hold_the_moved_points_is_refused() {
     let points = box_points();
     let mut pcd = b"# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 8\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 8\nDATA binary\n".to_vec();

@@ -153,6 +153,37 @@ impl Bounds {
     }
 }
 
+/// How many times more coarsely than a file held its own positions (in the moved units) `f32`
+/// may hold them moved before a file that can store doubles stores them so ([`Bounds::f32_coarsens`]).
+const COARSER_THAN_OWN: f64 = 8.0;
+
+/// The `f32` step, as a fraction of the moved box's largest half-extent, below which a moved file
+/// keeps `f32` positions however much coarser they get than the file's own
+/// ([`Bounds::f32_coarsens`]): a step this fine is at `f32`'s own precision for a cloud near zero.
+const COARSENED_NEGLIGIBLE: f64 = 2.5e-6;
+
+impl Bounds {
+    /// The rule for a file that can store its moved positions as doubles (a PLY): true when
+    /// [`Self::f32_rounds`] says so, or when `f32` would hold the moved positions (on the axes
+    /// `single` marks) more than [`COARSER_THAN_OWN`] times more coarsely than the file held its
+    /// own, scaled as the motion scales them, and more coarsely than [`COARSENED_NEGLIGIBLE`] of
+    /// the moved box's largest half-extent: a scan in metres near zero moved onto plant
+    /// coordinates in millimetres 2.4e6 from zero keeps its own precision instead of a 0.25 mm grid.
+    pub(super) fn f32_coarsens(&self, motion: &Motion, single: [bool; 3]) -> bool {
+        if self.f32_rounds(motion, single).is_some() {
+            return true;
+        }
+        if self.0[0][0] > self.0[0][1] {
+            return false;
+        }
+        let marked = |v: [f64; 3]| (0..3).filter(|&i| single[i]).fold(0.0f64, |a, i| a.max(v[i]));
+        let step = crate::checks::f32_step(marked(self.largest_moved_per_axis(motion)));
+        let own = crate::checks::f32_step(marked(self.0.map(|[lo, hi]| lo.abs().max(hi.abs())))) * motion.scale.abs();
+        let half = self.0.iter().fold(0.0f64, |a, [lo, hi]| a.max((hi - lo) * 0.5)) * motion.scale.abs();
+        step > COARSER_THAN_OWN * own && step > COARSENED_NEGLIGIBLE * half
+    }
+}
+
 /// An error when `f32` would round the positions of a `format` file that stores them as `f32` (on
 /// the axes `single` marks), moved by `motion`, beyond [`Bounds::f32_rounds`]'s rule: such a file cannot hold them (a local
 /// scan moved onto a map grid), and writing it would move every point by up to half that step. A

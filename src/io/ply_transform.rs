@@ -6,10 +6,11 @@
 //! Binary files are copied and the vertex records rewritten in place; ASCII files get their
 //! vertex lines rewritten (values separated by one space) and every other line as it was. Values
 //! are computed in f64 and written back in the property's own type: a `float` file stays `float`
-//! (its own precision), a `double` file keeps every digit; except where `float` would round the
-//! moved positions beyond [`crate::checks::F32_ROUNDING_WARNING`] of the cloud's size (a local
-//! scan moved onto a map grid: steps of 0.5 at 5.4e6), where `x`, `y` and `z` become `double`
-//! (in the header and in every vertex), the rest of the file as it was. The header and the elements before the
+//! (its own precision), a `double` file keeps every digit; except where `float` would hold the
+//! moved positions much more coarsely than the file held its own (a local scan moved onto a map
+//! grid: steps of 0.5 at 5.4e6; a scan in metres scaled onto plant millimetres: steps of 0.25 at
+//! 2.4e6), where `x`, `y` and `z` become `double` (in the header and in every vertex), the rest of
+//! the file as it was. The header and the elements before the
 //! vertices are read by the PLY reader's own parser, so a file it refuses is refused here too.
 
 use super::motion::{Bounds, Motion};
@@ -89,7 +90,7 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
                 };
                 let mut scratch = lines.clone();
                 move_ascii(bytes, &mut scratch, vertex, &layout, &record, &|n| n, None)?;
-                bounds.get().f32_rounds(&motion, single).is_some()
+                bounds.get().f32_coarsens(&motion, single)
             };
             let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 4);
             if widen {
@@ -111,7 +112,7 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
             }
             let need = records_bytes(bytes.len(), pos, vertex)?;
             let bounds = || binary_bounds(&bytes[pos..pos + need], vertex, &layout, big);
-            if single.contains(&true) && bounds().f32_rounds(&motion, single).is_some() {
+            if single.contains(&true) && bounds().f32_coarsens(&motion, single) {
                 let mut out = widened_header(&bytes[..h.body], vi, &layout);
                 out.extend_from_slice(&bytes[h.body..pos]);
                 widen_binary(&mut out, &bytes[pos..pos + need], vertex, &layout, big, &position, &normal);
