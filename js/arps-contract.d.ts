@@ -470,7 +470,9 @@ export type RegistrationEvidence = {
    * least (the weakest eigenvector of the fit's 6x6 information matrix, scaled to move the
    * points 0.25 of the normalised half-extent on average), the better of both ways, as a
    * fraction of the answer's fitness (at most 2). Near 1: the fit does not pin the pose down
-   * along that motion (a surface of revolution, a plane, a cylinder).
+   * along that motion (a surface of revolution, a plane, a cylinder, a tunnel). At
+   * `SLID_FREE` or above the motion counts as free, as for `Evidence::constraint`: the
+   * confidence is at most 0.25, with a warning naming the motion.
    */
   slide: number,
   /**

@@ -459,20 +459,6 @@ function toColumnMajor(m) {
   return out;
 }
 
-/**
- * `T(ot) M T(-os)` for a column-major rigid 4x4 `M` (a new array of 16 numbers): the same motion
- * between frames whose origins moved, so source points `p - os` map to target points `q - ot`.
- */
-function shift(m, os, ot) {
-  const out = Array.from(m);
-  for (let r = 0; r < 3; r++) {
-    let t = m[12 + r] + ot[r];
-    for (let c = 0; c < 3; c++) t -= m[c * 4 + r] * os[c];
-    out[12 + r] = t;
-  }
-  return out;
-}
-
 /** Whether `v` is bytes (a typed array, DataView or ArrayBuffer); never runs user code. */
 function isBytes(v) {
   return typedArrayKind(v) !== undefined || isArrayBuffer(v) || dataViewBytes(v) !== undefined;
@@ -657,13 +643,6 @@ export function makeApi(glue, isReady, env = {}) {
       if (onProgress !== undefined && onProgress !== null && typeof onProgress !== "function") {
         fail(`onProgress: expected a function, got ${describe(onProgress)}`);
       }
-      const shifted = s.origin !== null || t.origin !== null;
-      const os = s.origin ?? [0, 0, 0];
-      const ot = t.origin ?? [0, 0, 0];
-      // The engine works on points relative to the origins: T_local = T(-ot) T T(os).
-      if (shifted && o?.initialTransform != null) {
-        o.initialTransform = Array.from(shift(toColumnMajor(o.initialTransform), os.map((x) => -x), ot.map((x) => -x)));
-      }
       // What the callback throws reaches the engine as a plain Error (its message read here); the
       // call's error then carries the thrown value itself as its `cause`, as the worker client's does.
       let thrown = null;
@@ -680,18 +659,15 @@ export function makeApi(glue, isReady, env = {}) {
       this.#busy = true;
       let r;
       try {
-        r = guarded("register", () => inner.register(s.points, t.points, o, progress));
+        // the engine places each cloud at its origin (f64) and answers in the caller's frames
+        r = guarded("register", () =>
+          inner.register(s.points, t.points, o, progress, s.origin ?? undefined, t.origin ?? undefined),
+        );
       } catch (e) {
         if (thrown !== null && e instanceof Error) e.cause = thrown.value;
         throw e;
       } finally {
         this.#busy = false;
-      }
-      if (shifted) {
-        // Back to the caller's frame, in f64: T = T(ot) T_local T(-os).
-        r.T_target_source = shift(r.T_target_source, os, ot);
-        r.T_target_source_network = shift(r.T_target_source_network, os, ot);
-        for (const a of r.alternatives) a.T_target_source = shift(a.T_target_source, os, ot);
       }
       return r;
     }

@@ -60,6 +60,11 @@ parentPort.on("message", (data) => {
   if (started) enqueue(data);
   else queued.push(data);
 });
+// a request whose data could not be received here (a buffer detached in its transfer list):
+// the client fails the request in flight instead of waiting for it
+parentPort.on("messageerror", (e) => {
+  parentPort.postMessage({ type: "undeliverable", message: String(e?.message ?? e) });
+});
 await import("./worker.js");
 started = true;
 queued.splice(0).forEach(enqueue);

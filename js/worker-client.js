@@ -135,6 +135,17 @@ export async function createWorkerRegistrar(options = {}) {
     const w = { worker, pending: new Pending(worker), dead: null, ready: null };
     worker.addEventListener("message", (event) => {
       const msg = event.data;
+      if (msg && msg.type === "undeliverable") {
+        // a request the worker could not receive (its data could not be cloned there): the
+        // requests in flight fail, the worker stays (requests run one at a time; the init is
+        // answered before any is sent)
+        for (const [id, p] of w.pending) {
+          if (id === w.initId && w.loaded !== true) continue;
+          w.pending.delete(id);
+          p.reject(new Error(`arps worker: the worker could not receive the request (${msg.message}); send it again with fresh arrays`));
+        }
+        return;
+      }
       const p = msg && w.pending.get(msg.id);
       if (!p) return;
       switch (msg.type) {
@@ -183,7 +194,9 @@ export async function createWorkerRegistrar(options = {}) {
             '(vite.config: optimizeDeps: { exclude: ["arps"] }), or pass createWorker');
       retire(w, new Error(`arps worker: ${message}`));
     });
-    w.ready = send(w, { type: "init", wasm, model, weights }, { onProgress }).promise;
+    const init = send(w, { type: "init", wasm, model, weights }, { onProgress });
+    w.initId = init.id;
+    w.ready = init.promise;
     w.ready.then(
       () => {
         w.loaded = true;
@@ -286,8 +299,21 @@ export async function createWorkerRegistrar(options = {}) {
    * `request` for a method: the buffers of `inputs` transferred when its request options say
    * `transfer`, their `signal` passed on (and `onProgress`, for `register`).
    */
-  const ask = (message, inputs, { transfer = false, signal } = {}, onProgress = undefined) =>
-    request(message, { onProgress, transfer: transfer ? uniqueBuffers(inputs) : [], signal });
+  const ask = (message, inputs, { transfer = false, signal } = {}, onProgress = undefined) => {
+    // a buffer transferred away by an earlier request ({ transfer: true }) cannot be sent again:
+    // refused here, as the engine's own API refuses it, before anything is posted or moved
+    for (const v of inputs) {
+      if (isDetached(v)) {
+        const name = Object.keys(message).find((k) => message[k] === v) ?? "input";
+        return Promise.reject(
+          new Error(
+            `${name}: its buffer cannot be read: it was transferred away (to a worker, say: an earlier request with { transfer: true }) and is detached; pass a fresh array`,
+          ),
+        );
+      }
+    }
+    return request(message, { onProgress, transfer: transfer ? uniqueBuffers(inputs) : [], signal });
+  };
 
   current = spawn(options.onProgress);
   const ready = await current.ready; // on failure the worker was already stopped
@@ -384,20 +410,36 @@ function abortReason(signal) {
   return reason !== undefined ? reason : new DOMException("arps worker: the request was aborted", "AbortError");
 }
 
+/** The buffer a request input holds (a view's, a `{ points, origin }` cloud's points'), else null. */
+function bufferOf(item) {
+  let v = item;
+  if (item && typeof item === "object" && !ArrayBuffer.isView(item) && !(item instanceof ArrayBuffer)) {
+    try {
+      v = item.points;
+    } catch {
+      v = null;
+    }
+  }
+  return ArrayBuffer.isView(v) ? v.buffer : v instanceof ArrayBuffer ? v : null;
+}
+
+/** Whether a request input's buffer was transferred away (detached): a view of it cannot be made. */
+function isDetached(item) {
+  const b = bufferOf(item);
+  if (!b || (typeof SharedArrayBuffer === "function" && b instanceof SharedArrayBuffer)) return false;
+  try {
+    new Uint8Array(b, 0, 0);
+    return false;
+  } catch {
+    return true;
+  }
+}
+
 function uniqueBuffers(views) {
   const out = [];
   for (const item of views) {
-    // a cloud with an origin, { points, origin }, transfers its points (a getter that throws is
-    // left to the engine's own check of the argument, which names it)
-    let v = item;
-    if (item && typeof item === "object" && !ArrayBuffer.isView(item) && !(item instanceof ArrayBuffer)) {
-      try {
-        v = item.points;
-      } catch {
-        v = null;
-      }
-    }
-    const b = ArrayBuffer.isView(v) ? v.buffer : v instanceof ArrayBuffer ? v : null;
+    // (a cloud's points getter that throws is left to the engine's own check, which names it)
+    const b = bufferOf(item);
     // a SharedArrayBuffer is shared, not transferred (and cannot be)
     const shared = typeof SharedArrayBuffer === "function" && b instanceof SharedArrayBuffer;
     if (b && !shared && !out.includes(b)) out.push(b);

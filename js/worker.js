@@ -118,6 +118,10 @@ async function handle(msg) {
   }
 }
 
+// a request whose data could not be received here: the client fails the request in flight
+self.addEventListener("messageerror", () => {
+  post({ type: "undeliverable", message: "its data could not be deserialized in the worker" });
+});
 self.addEventListener("message", (event) => {
   const msg = event.data ?? {};
   handle(msg).catch((e) => {

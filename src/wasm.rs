@@ -315,9 +315,12 @@ impl Registrar {
     }
 
     /// Registers `source` onto `target` (packed xyz, same units) and returns the transform
-    /// mapping source points into the target frame, with quality figures. (The package's entry
-    /// points, `js/facade.js`, also take `Float64Array`s and `{ points, origin }` clouds: they
-    /// pass f32 points relative to an origin here and map the result back in f64.) `options` is a
+    /// mapping source points into the target frame, with quality figures. `sourceOrigin` and
+    /// `targetOrigin` (three finite numbers each, or absent for zero) are where each cloud's
+    /// points are measured from: the caller's points are `origin + points[i]`, and
+    /// `T_target_source`, its alternatives, `initialTransform` and the warnings are in the
+    /// caller's frames (the package's entry points, `js/facade.js`, also take `Float64Array`s and
+    /// `{ points, origin }` clouds and pass them here so). `options` is a
     /// plain object (`RegisterOptions`, or `undefined`/`null`); unknown fields throw. The result
     /// is a plain `RegistrationResult`, the same object as `arps register --json` prints.
     /// `onProgress`, if given, is called with each `RegistrationStage` (`"preparing"`,
@@ -335,11 +338,25 @@ impl Registrar {
             unchecked_optional_param_type = "((stage: RegistrationStage) => void) | null"
         )]
         on_progress: Option<js_sys::Function>,
+        #[wasm_bindgen(js_name = "sourceOrigin", unchecked_optional_param_type = "ArrayLike<number> | null")]
+        source_origin: Option<Vec<f64>>,
+        #[wasm_bindgen(js_name = "targetOrigin", unchecked_optional_param_type = "ArrayLike<number> | null")]
+        target_origin: Option<Vec<f64>>,
     ) -> Result<JsValue, JsError> {
         let options = options.unwrap_or(JsValue::UNDEFINED);
         let options = parse_options(options)?;
-        let source = PointCloud::from_xyz(source).map_err(|e| prefixed("source", e))?;
-        let target = PointCloud::from_xyz(target).map_err(|e| prefixed("target", e))?;
+        let placed = |points: &[f32], origin: Option<Vec<f64>>, what: &str| {
+            let cloud = PointCloud::from_xyz(points).map_err(|e| prefixed(what, e))?;
+            match origin.as_deref() {
+                None => Ok(cloud),
+                Some(&[x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => {
+                    Ok(PointCloud::with_origin(cloud.points, [x, y, z]))
+                }
+                Some(_) => Err(JsError::new(&format!("{what}: origin must be 3 finite numbers [x, y, z]"))),
+            }
+        };
+        let source = placed(source, source_origin, "source")?;
+        let target = placed(target, target_origin, "target")?;
         let mut callback_error: Option<JsValue> = None;
         let mut progress = |stage: crate::Stage| {
             if let (Some(f), None) = (&on_progress, &callback_error) {

@@ -295,6 +295,41 @@ fn partial_views_of_a_surface_of_revolution_leave_the_turn_free() {
     assert!(!r.warnings.iter().any(|w| w.contains("leaves one motion free")), "{:?}", r.warnings);
 }
 
+/// Scans of a tunnel on a helical ramp (centreline radius 25, grade 1:7, a rough 2.75 wall) from
+/// stations 15 apart: the pose that stacks the stations fits better than the truth, and the fit
+/// barely holds it along the ramp's screw (sliding keeps most of it), though the wall's roughness
+/// pins that motion more than [`arps::confidence::UNPINNED_CONSTRAINT`]: doubted, with the motion named.
+#[test]
+fn a_tunnel_on_a_helical_ramp_is_doubted_along_the_ramp() {
+    use rand::Rng;
+    let section = |from: f64, seed: u64| {
+        let mut rng = arps::sampling::rng(seed);
+        let (radius, grade) = (25.0f64, 1.0 / 7.0);
+        let pts = (0..20_000)
+            .map(|_| {
+                let (s, th) = (from + 40.0 * rng.random::<f64>(), std::f64::consts::TAU * rng.random::<f64>());
+                let phi = s / radius;
+                let centre = Vector3::new(radius * phi.cos(), radius * phi.sin(), grade * s);
+                let along = Vector3::new(-phi.sin(), phi.cos(), grade).normalize();
+                let out = Vector3::new(phi.cos(), phi.sin(), 0.0);
+                let side = along.cross(&out);
+                let r = 2.75 + 0.08 * (2.3 * s + 3.0 * th).sin() * (1.1 * s - 2.0 * th).cos();
+                let p = centre + r * (th.cos() * out + th.sin() * side);
+                [p.x as f32, p.y as f32, p.z as f32]
+            })
+            .collect();
+        PointCloud::new(pts)
+    };
+    let (source, target) = (section(0.0, 1), section(15.0, 2));
+    let mut reg = Registrar::with_default_model().unwrap();
+    let options = Options { up: Some([0.0, 0.0, 1.0]), ..Options::default() };
+    let r = reg.register(&source, &target, &options).unwrap();
+    let e = &r.evidence;
+    assert!(e.constraint > arps::confidence::UNPINNED_CONSTRAINT && e.slide >= arps::confidence::SLID_FREE, "{e:?}");
+    assert!(r.confidence <= 0.25, "{} {:?}", r.confidence, r.warnings);
+    assert!(r.warnings.iter().any(|w| w.starts_with("the fit leaves one motion free")), "{:?}", r.warnings);
+}
+
 /// The search's other refined answers count as alternatives when they fit at least 0.9 as well
 /// as the answer and are other poses (more than 15 degrees from the answer and from each other);
 /// the count only ever rises, and it caps the confidence; the poses gather every look-alike found.

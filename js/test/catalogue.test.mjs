@@ -268,6 +268,39 @@ test("alternatives are in the caller's frame for clouds far from zero", () => {
   r.free();
 });
 
+test("clouds far from zero: the identity start and the warnings are in the caller's frame", () => {
+  const r = nodeBuild.Registrar.withDefaultModel();
+  // two overlapping survey strips already in one map frame, their origins 164 m apart
+  const strip = (x0, y0, n) => {
+    const out = new Float64Array(n * 3);
+    for (let i = 0; i < n; i++) {
+      const x = x0 + (i % 60) * 0.5;
+      const y = y0 + Math.floor(i / 60) * 0.5;
+      out.set([x, y, 12 + Math.sin(x * 0.3) * Math.cos(y * 0.2) * 2], i * 3);
+    }
+    return out;
+  };
+  const a = strip(450300, 5600200, 3600);
+  const b = strip(450300, 5600120, 3600);
+  const res = r.register(a, b, { network: false, starts: ["initial"], icp: "off" });
+  // the identity of the caller's frame, not of the engine's local ones
+  assert.deepEqual(res.T_target_source.map((v) => Math.abs(v) < 1e-9 ? 0 : v), [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]);
+  // a pipe along x far from zero: the free motion's point is given in map coordinates
+  const pipe = (n, phase) => {
+    const out = new Float64Array(n * 3);
+    for (let i = 0; i < n; i++) {
+      const t = ((i * 0.618034 + phase) % 1) * 2 * Math.PI;
+      out.set([450000 + (i / n) * 6, 5600000 + 0.3 * Math.cos(t), 20 + 0.3 * Math.sin(t)], i * 3);
+    }
+    return out;
+  };
+  const turned = r.register(pipe(3000, 0.1), pipe(3000, 0.35));
+  const free = turned.warnings.find((w) => w.includes("leaves one motion free")) ?? turned.warnings.join("; ");
+  // (its axis runs along x through y = 5600000, z = 20; written to a thousandth of a metre or so)
+  assert.match(free, /along \(1, 0, 0\) through \(45000\d(\.\d+)?, 5600000(\.\d+)?, (19\.9\d*|20(\.0\d*)?)\)/, free);
+  r.free();
+});
+
 test("large coordinates: Float64Array or { points, origin } in, T_target_source exact in the caller's frame", () => {
   const arps = nodeBuild;
   const r = arps.Registrar.withDefaultModel();

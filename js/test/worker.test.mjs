@@ -77,6 +77,13 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     const res2 = await arps.register(s, t, {}, { transfer: true });
     assert.equal(s.length, 0, "source buffer transferred");
     assert.deepEqual(res2.T_target_source, res.T_target_source);
+    // The same (now detached) arrays sent again: refused before anything is posted or moved (a
+    // detached buffer in a transfer list never reached the worker, and the queue waited on it)
+    const fresh = target();
+    await assert.rejects(arps.register(s, fresh, {}, { transfer: true }), /^Error: source: its buffer cannot be read: it was transferred away/);
+    assert.equal(fresh.length, target().length, "the other array is not transferred by a refused request");
+    await assert.rejects(arps.parsePointCloud(s, "x.ply"), /^Error: bytes: its buffer cannot be read/);
+    assert.deepEqual((await arps.register(source(), fresh)).T_target_source, res.T_target_source);
     // The source saved in the target's frame, in the worker: moved, then PLY bytes; a bad
     // matrix rejects and the client keeps working.
     const moved = await arps.transformPointCloud({ points: source(), origin: [5e5, 4e6, 10] }, res.T_target_source);

@@ -586,7 +586,15 @@ fn held_by_guess(
     }
     let (fitness, inlier_rmse) = target.evaluate(&p.icp_src.points, &t, p.d_final);
     let other = !refine::coincide(&answer.T_target_source, &t, screen, p.d_final);
-    if !(other && admits(&t) && fitness >= HELD_FIT * answer.fitness) {
+    // the guess's pose along the motion: nearer the guess than the answer, and not turned away
+    // from it (a plane leaves three motions free, one of which reaches the guess only in part)
+    let off_guess = |t: &Matrix4<f64>| {
+        let at = |m: &Matrix4<f64>, q| nalgebra::Vector3::from(crate::transform::apply(m, q).map(f64::from));
+        screen.iter().map(|&q| (at(t, q) - at(&p.t_initial, q)).norm_squared()).sum::<f64>()
+    };
+    let nearer = off_guess(&t) < off_guess(&answer.T_target_source)
+        && crate::transform::rotation_error_deg(&t, &p.t_initial) <= GUESS_TURN_DEG;
+    if !(other && nearer && admits(&t) && fitness >= HELD_FIT * answer.fitness) {
         return None;
     }
     let turn = crate::transform::rotation_error_deg(&answer.T_target_source, &t);
