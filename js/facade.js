@@ -84,7 +84,7 @@ function isArrayBuffer(v) {
 function describe(v) {
   if (v === null || v === undefined) return String(v);
   const kind = typedArrayKind(v);
-  if (kind) return `${/^[AEIOU]/.test(kind) ? "an" : "a"} ${kind}`;
+  if (kind) return `${/^[AEIO]/.test(kind) ? "an" : "a"} ${kind}`;
   if (isArrayBuffer(v)) return "an ArrayBuffer";
   if (typeof v === "object") {
     try {
@@ -138,11 +138,11 @@ function cloudArg(v, what) {
   const kind = typedArrayKind(v);
   if (kind === "Float32Array") {
     const len = checkLength(taLength.call(v), what);
-    return { points: viewOf(Float32Array, what, taBuffer.call(v), taByteOffset.call(v), len), origin: null };
+    return { points: notStride4(viewOf(Float32Array, what, taBuffer.call(v), taByteOffset.call(v), len), what), origin: null };
   }
   if (kind === "Float64Array") {
     const len = checkLength(taLength.call(v), what);
-    return centred(viewOf(Float64Array, what, taBuffer.call(v), taByteOffset.call(v), len));
+    return centred(notStride4(viewOf(Float64Array, what, taBuffer.call(v), taByteOffset.call(v), len), what));
   }
   if (kind === undefined && isPlainArray(v)) {
     const len = checkLength(readLength(v, what), what);
@@ -155,10 +155,13 @@ function cloudArg(v, what) {
       } catch (e) {
         fail(`${what}: reading element ${i} threw: ${messageOf(e)}`);
       }
-      if (typeof x !== "number") fail(`${what}: element ${i} is ${describe(x)}, expected a number`);
+      if (typeof x !== "number") {
+        const nested = x !== null && typeof x === "object" ? ` (a list of points: pass them flat, e.g. ${what}.flat(), or [p.x, p.y, p.z] for each)` : "";
+        fail(`${what}: element ${i} is ${describe(x)}, expected a number: a flat list x0, y0, z0, x1, ...${nested}`);
+      }
       out[i] = x;
     }
-    return centred(out);
+    return centred(notStride4(out, what));
   }
   if (kind === undefined && v !== null && typeof v === "object") {
     let points;
@@ -181,7 +184,37 @@ function cloudArg(v, what) {
     }
   }
   return fail(
-    `${what}: expected a Float32Array (or Float64Array) of packed xyz [x0, y0, z0, x1, ...], or { points: Float32Array, origin: [x, y, z] }; got ${describe(v)}`,
+    `${what}: expected a Float32Array (or Float64Array) of packed xyz [x0, y0, z0, x1, ...], or { points: Float32Array, origin: [x, y, z] }; got ${describe(v)}${threeHint(v)}`,
+  );
+}
+
+/** What to pass instead of a three.js geometry or attribute (read in a try: a getter may throw). */
+function threeHint(v) {
+  if (v === null || typeof v !== "object") return "";
+  try {
+    if (v.isInterleavedBufferAttribute) {
+      return " (a three.js InterleavedBufferAttribute: its array interleaves other values; copy x, y, z out, e.g. with getX/getY/getZ)";
+    }
+    if (v.isBufferAttribute) return " (a three.js BufferAttribute: pass its .array)";
+    if (v.isBufferGeometry) return " (a three.js BufferGeometry: pass geometry.attributes.position.array)";
+  } catch {
+    return "";
+  }
+  return "";
+}
+
+/**
+ * `points` itself, unless every fourth number of it is exactly 1 (16 points or more): x, y, z, w
+ * positions (a stride-4 buffer, a shader's vec4s) read as x, y, z give a wrong cloud that still
+ * registers, so they are refused by name.
+ */
+function notStride4(points, what) {
+  const n = Math.floor(points.length / 4);
+  if (n < 16 || points.length % 3 !== 0) return points;
+  for (let k = 0; k < n; k++) if (points[4 * k + 3] !== 1) return points;
+  fail(
+    `${what}: every fourth number is 1, as in x, y, z, w positions (a stride-4 buffer, or an interleaved one's array): ` +
+      "pass x, y, z only, packed [x0, y0, z0, x1, ...]",
   );
 }
 
@@ -559,7 +592,7 @@ export function makeApi(glue, isReady, env = {}) {
       }
       const oom = /unreachable|out of memory|memory access|allocat/i.test(cause);
       throw coded(
-        `arps: ${what} trapped in the engine (${cause})${oom ? ", most likely out of memory: use smaller clouds (see the limits in the README)" : ""}; ` +
+        `arps: ${what} trapped in the engine (${cause})${oom ? ", most likely out of memory: free() registrars no longer needed (each keeps its last target; forgetTarget() drops it), or use smaller clouds (see the limits in the README)" : ""}; ` +
           "the engine was re-instantiated and registrars reload their model on their next call",
         "ARPS_TRAPPED",
         e,

@@ -45,6 +45,13 @@ export default async function init(options) {
             : typeof moduleOrPath === "string" || moduleOrPath instanceof URL
               ? String(moduleOrPath)
               : (moduleOrPath instanceof Response && moduleOrPath.url) || "given to init()";
+        const bytes = moduleOrPath !== undefined && (moduleOrPath instanceof ArrayBuffer || ArrayBuffer.isView(moduleOrPath));
+        if (bytes) {
+          throw new Error(
+            `arps: the engine's bytes given to init() are not WebAssembly (${e.message}): pass the contents of the package's arps_bg.wasm`,
+            { cause: e },
+          );
+        }
         throw new Error(
           `arps: the engine ${which} is not WebAssembly (${e.message}): the server answered with something else, ` +
             "often a page for a path it does not have. Under Vite's dev server, exclude the package from " +

@@ -78,6 +78,7 @@ class Pending extends Map {
  * methods return promises.
  */
 export async function createWorkerRegistrar(options = {}) {
+  options = checkedOptions(options);
   const given = options.worker ?? null;
   // (Deno has a DOM Worker, but one that cannot be unreferenced: its worker_threads Worker can)
   const dom = typeof Worker === "function" && typeof globalThis.Deno !== "object";
@@ -131,6 +132,9 @@ export async function createWorkerRegistrar(options = {}) {
     if (first && given) worker = given;
     else if (createWorker) worker = createWorker();
     else throw new Error("arps worker: the worker stopped and cannot be restarted (pass `createWorker` instead of `worker` to allow restarts)");
+    if (!worker || typeof worker.postMessage !== "function" || typeof worker.addEventListener !== "function") {
+      throw new Error(`arps worker: ${first && given ? "worker" : "createWorker()"} is ${worker === null ? "null" : typeof worker}, not a Worker (an object with postMessage and addEventListener)`);
+    }
     first = false;
     const w = { worker, pending: new Pending(worker), dead: null, ready: null };
     worker.addEventListener("message", (event) => {
@@ -233,6 +237,9 @@ export async function createWorkerRegistrar(options = {}) {
   const loadedWorker = () => (current && current.loaded && !current.dead && !terminated ? current : null);
 
   const request = (message, { onProgress, transfer = [], signal } = {}) => {
+    if (signal !== undefined && signal !== null && (typeof signal !== "object" || typeof signal.addEventListener !== "function")) {
+      return Promise.reject(new Error(`signal: expected an AbortSignal (e.g. AbortSignal.timeout(ms), or an AbortController's signal), got ${typeof signal}`));
+    }
     if (signal?.aborted) return Promise.reject(abortReason(signal));
     // A request sent now has its inputs copied (or transferred) as the call is made, as
     // postMessage does: a caller may refill its arrays once the call returns. One that waits
@@ -408,6 +415,23 @@ function unsendable(e) {
 function abortReason(signal) {
   const reason = signal.reason;
   return reason !== undefined ? reason : new DOMException("arps worker: the request was aborted", "AbortError");
+}
+
+/** The options of `createWorkerRegistrar`, checked: a plain object (or nothing) of known keys, functions where they are. */
+function checkedOptions(options) {
+  if (options === undefined || options === null) return {};
+  if (typeof options !== "object" || Array.isArray(options)) {
+    throw new Error(`createWorkerRegistrar: expected an options object (or nothing), got ${Array.isArray(options) ? "an Array" : typeof options}`);
+  }
+  const known = ["wasm", "model", "weights", "worker", "createWorker", "onProgress"];
+  for (const key of Object.keys(options)) {
+    if (!known.includes(key)) throw new Error(`createWorkerRegistrar: unknown option \`${key}\`; the options are ${known.join(", ")}`);
+  }
+  for (const key of ["createWorker", "onProgress"]) {
+    const v = options[key];
+    if (v !== undefined && v !== null && typeof v !== "function") throw new Error(`createWorkerRegistrar: ${key} must be a function, got ${typeof v}`);
+  }
+  return options;
 }
 
 /** The buffer a request input holds (a view's, a `{ points, origin }` cloud's points'), else null. */

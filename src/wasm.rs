@@ -492,7 +492,15 @@ fn readable_serde_message(message: &str) -> String {
         .replace("expected u32", whole)
         .replace("expected usize", whole)
         .replace("expected f64", "expected a number")
-        .replace("TypeError: Reflect.get called on non-object", "invalid type: expected a list");
+        .replace("TypeError: Reflect.get called on non-object", "invalid type: expected a list")
+        .replace(
+            "Couldn't deserialize u64 from a BigInt outside u64::MIN..u64::MAX bounds",
+            "invalid value: a bigint beyond 0..=18446744073709551615 (2^64 - 1), expected a whole number in that range",
+        )
+        .replace(
+            "Couldn't deserialize u32 from a BigInt outside u32::MIN..u32::MAX bounds",
+            "invalid value: a bigint beyond 0..=4294967295, expected a whole number in that range",
+        );
     // `JsValue([1])` -> `[1]`
     while let Some(at) = m.find("JsValue(") {
         let inner_start = at + "JsValue(".len();

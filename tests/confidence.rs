@@ -539,6 +539,15 @@ fn clouds_rounded_coarser_than_the_distance_they_are_judged_at_are_not_confident
     assert!(r.warnings.iter().any(|w| w.contains("left out 1 of the source's")), "{:?}", r.warnings);
     assert!(!r.warnings.iter().any(|w| w.contains("rounded")), "{:?}", r.warnings);
     assert_eq!(r.confidence, near.confidence);
+    // near zero, a distance finer than f32 resolves there: the distance is named, not the clouds
+    let tiny = Options { max_correspondence_distance: Some(1e-9 * h), ..Options::default() };
+    let r = reg.register(&source, &target, &tiny).unwrap();
+    assert!(
+        r.warnings.iter().any(|w| w.contains("is finer than the clouds' f32 coordinates resolve")),
+        "{:?}",
+        r.warnings
+    );
+    assert!(!r.warnings.iter().any(|w| w.contains("f32 far from zero")), "{:?}", r.warnings);
 }
 
 /// A file that stores coordinates far from zero as 32-bit floats gives values on f32's grid there,
@@ -643,4 +652,24 @@ fn evidence_cost() {
     }
     ratios.sort_by(f64::total_cmp);
     println!("evidence / ICP, median over 24 pairs: {:.2}", ratios[12]);
+}
+
+/// A source of fewer than 64 points is at most `points / 64` sure, with a warning that says so;
+/// from 64 on the cap is gone.
+#[test]
+fn a_source_of_few_points_is_not_sure() {
+    let (source, target, _) = fixture_pair(0);
+    let mut reg = Registrar::with_default_model().unwrap();
+    let few = |n: usize| {
+        PointCloud::with_origin((0..n).map(|i| source.points[i * source.len() / n]).collect(), source.origin)
+    };
+    let r = reg.register(&few(20), &target, &Options::default()).unwrap();
+    assert!(r.confidence <= 20.0 / 64.0, "{}", r.confidence);
+    assert!(
+        r.warnings.iter().any(|w| w.starts_with("the source has 20 points: an answer judged on fewer than 64")),
+        "{:?}",
+        r.warnings
+    );
+    let r = reg.register(&few(64), &target, &Options::default()).unwrap();
+    assert!(!r.warnings.iter().any(|w| w.contains("an answer judged on fewer than")), "{:?}", r.warnings);
 }

@@ -236,3 +236,30 @@ fn a_mesh_read_as_its_sampled_surface() {
         assert!(many.contains("surfacePoints = 20000000 is more than the 16000000 points"), "{many}");
     }
 }
+
+/// Excel's and Notepad's "CSV UTF-8" start with a byte order mark: read past (the header's first
+/// name is `y`, not `\u{feff}y`; a first row without a header is a point), written back in front
+/// by `transform_file`; a UTF-16 file is refused by name.
+#[test]
+fn a_utf8_byte_order_mark_is_read_past_and_utf16_refused() {
+    let bom = |text: &str| [&b"\xEF\xBB\xBF"[..], text.as_bytes()].concat();
+    let swapped = read_point_cloud(&bom("y,x,z\n2,1,3\n5,4,6\n"), "survey.csv").unwrap();
+    assert_eq!(swapped.points, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    let plain = read_point_cloud(&bom("1 2 3\n4 5 6\n"), "scan.xyz").unwrap();
+    assert_eq!(plain.points, vec![[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]]);
+    // a PLY or OBJ saved so too
+    let ply = bom("ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n");
+    assert_eq!(read_point_cloud(&ply, "scan.ply").unwrap().point_f64(0), [1.0, 2.0, 3.0]);
+    let moved = arps::io::transform_file(
+        &bom("y,x,z\n2,1,3\n"),
+        "survey.csv",
+        &nalgebra::Matrix4::new_translation(&nalgebra::Vector3::new(10.0, 0.0, 0.0)),
+    )
+    .unwrap();
+    assert!(moved.starts_with(b"\xEF\xBB\xBFy,x,z\n"), "{}", String::from_utf8_lossy(&moved));
+    assert_eq!(read_point_cloud(&moved, "survey.csv").unwrap().point_f64(0), [11.0, 2.0, 3.0]);
+    for utf16 in [&b"\xFF\xFEx\0 \0y\0"[..], b"\xFE\xFF\0x\0 \0y"] {
+        let e = read_point_cloud(utf16, "survey.csv").unwrap_err().to_string();
+        assert!(e.contains("UTF-16") && e.contains("save it as UTF-8"), "{e}");
+    }
+}

@@ -325,4 +325,13 @@ fn the_format_picks_the_mover_and_unmovable_formats_say_so() {
     let mirror = Matrix4::new_nonuniform_scaling(&Vector3::new(-1.0, 1.0, 1.0));
     let e = transform_file(&format_fixture("eth_car_1000.csv"), "car.csv", &mirror).unwrap_err().to_string();
     assert!(e.contains("mirrors"), "{e}");
+    assert!(!e.contains("transpose"), "{e}");
+    // a motion given in the other order (row-major read column-major): the error says so
+    let motion = Matrix4::new_translation(&Vector3::new(1.0, 2.0, 3.0));
+    let e =
+        transform_file(&format_fixture("eth_car_1000.csv"), "car.csv", &motion.transpose()).unwrap_err().to_string();
+    assert!(
+        e.contains("bottom row") && e.contains("its transpose is rigid, so its 16 numbers may be in the other order"),
+        "{e}"
+    );
 }

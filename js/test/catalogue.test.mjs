@@ -94,6 +94,17 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     // The array-like that leaked 482 MB per call and trapped on the 9th: rejected every time.
     for (let i = 0; i < 12; i++) assert.throws(() => r.register({ length: 1.2e9 }, t), /expected a Float32Array/);
     stillWorks(r, "after 12 array-likes");
+    // The usual slips, each named with its fix: nested points, a three.js attribute, x, y, z, w
+    // positions (every fourth number 1), a Uint8Array
+    const nested = Array.from({ length: s.length / 3 }, (_, i) => [s[3 * i], s[3 * i + 1], s[3 * i + 2]]);
+    assert.throws(() => r.register(nested, t), /^Error: source: element 0 is an Array, expected a number: a flat list x0, y0, z0, x1, \.\.\. \(a list of points: pass them flat, e\.g\. source\.flat\(\)/);
+    assert.throws(() => r.register({ isBufferAttribute: true, array: s, itemSize: 3 }, t), /got an object \(a three\.js BufferAttribute: pass its \.array\)/);
+    assert.throws(() => r.register({ isBufferGeometry: true }, t), /pass geometry\.attributes\.position\.array/);
+    const xyzw = new Float32Array((s.length / 9) * 12);
+    for (let i = 0; i < xyzw.length / 4; i++) xyzw.set([s[3 * i], s[3 * i + 1], s[3 * i + 2], 1], 4 * i);
+    assert.throws(() => r.register(xyzw, t), /^Error: source: every fourth number is 1, as in x, y, z, w positions/);
+    assert.throws(() => r.register(new Uint8Array(9), t), /got a Uint8Array/);
+    stillWorks(r, "after the usual slips");
     // Accepted: a plain Array of numbers, a subclass that lies about its length (its real
     // contents are used), a view into a larger buffer, and a Float64Array.
     for (const [label, src] of [
@@ -119,6 +130,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       ["wrong enum", reg({ icp: "planar" }), /^invalid options: `icp`: unknown variant `planar`, expected one of/],
       ["wrong type", reg({ seed: "seven" }), /^invalid options: `seed`: invalid type: string "seven", expected a whole number, 0 or more$/],
       ["negative count", reg({ icpMaxIterations: -1 }), /^invalid options: `icpMaxIterations`: invalid value: -1, expected a whole number, 0 or more$/],
+      ["a seed beyond 2^64", reg({ seed: 2n ** 70n }), /^invalid options: `seed`: invalid value: a bigint beyond 0\.\.=18446744073709551615 \(2\^64 - 1\)/],
       ["wrong type after a right one", reg({ icp: "point", icpMaxIterations: 1.5 }), /^invalid options: `icpMaxIterations`: invalid type: floating point `1.5`/],
       ["three rows", reg({ initialTransform: [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]] }), /^invalid options: initialTransform has 3 rows; expected/],
       ["sixteen strings", reg({ initialTransform: new Array(16).fill("1") }), /^invalid options: initialTransform\[0\] is a string/],

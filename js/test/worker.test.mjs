@@ -47,6 +47,13 @@ function upsampled(cloud, copies) {
   return out;
 }
 
+test("worker: options that are not its own, and a createWorker that makes no worker, are refused by name", async () => {
+  await assert.rejects(createWorkerRegistrar({ onprogress: () => {} }), /^Error: createWorkerRegistrar: unknown option `onprogress`; the options are wasm, model, weights, worker, createWorker, onProgress/);
+  await assert.rejects(createWorkerRegistrar("fast"), /^Error: createWorkerRegistrar: expected an options object \(or nothing\), got string/);
+  await assert.rejects(createWorkerRegistrar({ createWorker: "worker.js" }), /^Error: createWorkerRegistrar: createWorker must be a function, got string/);
+  await assert.rejects(createWorkerRegistrar({ createWorker: () => null, wasm, model }), /^Error: arps worker: createWorker\(\) is null, not a Worker/);
+});
+
 test("worker: loads, reports progress, rejects errors and keeps working", async () => {
   const initStages = [];
   const arps = await createWorkerRegistrar({ worker: nodeWorker(), wasm, model, onProgress: (s) => initStages.push(s) });
@@ -77,6 +84,7 @@ test("worker: loads, reports progress, rejects errors and keeps working", async 
     const res2 = await arps.register(s, t, {}, { transfer: true });
     assert.equal(s.length, 0, "source buffer transferred");
     assert.deepEqual(res2.T_target_source, res.T_target_source);
+    await assert.rejects(arps.register(source(), target(), {}, { signal: "stop" }), /^Error: signal: expected an AbortSignal/);
     // The same (now detached) arrays sent again: refused before anything is posted or moved (a
     // detached buffer in a transfer list never reached the worker, and the queue waited on it)
     const fresh = target();

@@ -268,7 +268,8 @@ fn read_format(bytes: &[u8], format: Format, faces: Faces, scan: Option<usize>) 
 /// its name's extension, else it is sniffed from the content (see [`detect_format`]). Mesh formats give their
 /// vertices (STL corners merged by position); OBJ, OFF and STL files are parsed whole, so a bad
 /// face is an error here too, while a PLY file is read only up to its `vertex` element.
-/// Non-finite coordinates are kept as they are. [`read_point_cloud_with`] can sample a mesh's
+/// Non-finite coordinates are kept as they are. A text file may start with a UTF-8 byte order
+/// mark; one in UTF-16 is refused by name. [`read_point_cloud_with`] can sample a mesh's
 /// surface instead.
 pub fn read_point_cloud(bytes: &[u8], file_name: &str) -> Result<PointCloud> {
     read_point_cloud_with(bytes, file_name, &ReadOptions::default())
@@ -318,10 +319,29 @@ pub struct ScanInfo {
 /// point decoded); for any other format an empty list (one cloud, nothing to choose). Errors:
 /// an E57 file that cannot be read, a name and content whose format cannot be told.
 pub fn list_scans(bytes: &[u8], file_name: &str) -> Result<Vec<ScanInfo>> {
+    let (bytes, _) = after_bom(bytes)?;
     match detect_format(bytes, file_name)? {
         Format::E57 => e57::scans(bytes),
         _ => Ok(Vec::new()),
     }
+}
+
+/// The file's bytes after a UTF-8 byte order mark, if it starts with one (Excel's and Notepad's
+/// "CSV UTF-8" do), and that mark; an error for a file that starts with a UTF-16 one (a
+/// PowerShell or Windows "Unicode" export), which no reader reads. No format's own first bytes
+/// are these.
+pub(crate) fn after_bom(bytes: &[u8]) -> Result<(&[u8], &[u8])> {
+    const UTF8: &[u8] = b"\xEF\xBB\xBF";
+    if let Some(rest) = bytes.strip_prefix(UTF8) {
+        return Ok((rest, UTF8));
+    }
+    if bytes.starts_with(b"\xFF\xFE") || bytes.starts_with(b"\xFE\xFF") {
+        return Err(Error::parse(
+            "input",
+            "the file is UTF-16 text (it starts with a UTF-16 byte order mark): save it as UTF-8 or ASCII text",
+        ));
+    }
+    Ok((bytes, &[]))
 }
 
 /// Refuses [`ReadOptions::scan`] for a file of one cloud (every format but E57), where it
@@ -341,6 +361,7 @@ pub(crate) fn check_scan(format: Format, scan: Option<usize>) -> Result<()> {
 /// coordinates keep their shape as the vertices do. Fails with a clear error for a count out of
 /// range, and for a mesh with no triangle of positive area.
 pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOptions) -> Result<PointCloud> {
+    let (bytes, _) = after_bom(bytes)?;
     let format = detect_format(bytes, file_name)?;
     if bytes.is_empty() {
         return Err(Error::parse(format.name(), "the file is empty (0 bytes)"));
@@ -379,6 +400,7 @@ pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOption
 /// polygons are fan-triangulated, faces with fewer than three corners are dropped, and an
 /// out-of-range vertex index is an error.
 pub fn read_mesh(bytes: &[u8], file_name: &str) -> Result<Mesh> {
+    let (bytes, _) = after_bom(bytes)?;
     let format = detect_format(bytes, file_name)?;
     if !format.has_faces() {
         return Err(Error::parse(format.name(), "this format holds points only, not a mesh (use read_point_cloud)"));

@@ -17,8 +17,22 @@ fn similarity(m: &Matrix4<f64>) -> Result<Motion> {
     similarity_named(m, "the transform")
 }
 
-/// [`similarity`], its errors naming the matrix `what`.
+/// [`similarity`], its errors naming the matrix `what`; one whose transpose would do says that its
+/// numbers may be in the other order.
 fn similarity_named(m: &Matrix4<f64>, what: &str) -> Result<Motion> {
+    similarity_checked(m, what).map_err(|e| match e {
+        Error::InvalidOption(message) if similarity_checked(&m.transpose(), what).is_ok() => {
+            Error::InvalidOption(format!(
+                "{message}; its transpose is rigid, so its 16 numbers may be in the other order (JS and JSON: \
+             column-major, as three.js; the CLI: row by row)"
+            ))
+        }
+        e => e,
+    })
+}
+
+/// [`similarity_named`] without the hint.
+fn similarity_checked(m: &Matrix4<f64>, what: &str) -> Result<Motion> {
     let bad = |why: &str| Err(Error::InvalidOption(format!("{what} is not rigid (or uniformly scaled): {why}")));
     if m.iter().any(|v| !v.is_finite()) {
         return bad("it has a non-finite entry");

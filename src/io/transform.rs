@@ -39,6 +39,14 @@ pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result
 /// format); every other file as
 /// [`transform_file`] moves it (a mesh read as points over its surface is moved as the mesh).
 pub fn transform_file_with(bytes: &[u8], file_name: &str, m: &Matrix4<f64>, options: &ReadOptions) -> Result<Vec<u8>> {
+    // a text file's UTF-8 byte order mark: read past, and written back in front
+    let (bytes, bom) = super::after_bom(bytes)?;
+    let moved = transform_format(bytes, file_name, m, options)?;
+    Ok(if bom.is_empty() { moved } else { [bom, &moved[..]].concat() })
+}
+
+/// [`transform_file_with`] of a file without a byte order mark.
+fn transform_format(bytes: &[u8], file_name: &str, m: &Matrix4<f64>, options: &ReadOptions) -> Result<Vec<u8>> {
     let format = detect_format(bytes, file_name)?;
     super::check_scan(format, options.scan)?;
     match format {

@@ -117,13 +117,23 @@ pub(crate) fn cap(
     }
     // clouds given as f32 far from zero: their points sit on a grid as coarse as the fit's distance
     if p.rounding > ROUNDING_DISTANCES * p.d_evidence {
-        warnings.push(format!(
-            "the clouds' coordinates were rounded to steps of about {} (f32 far from zero), more than the distance \
-             the answer is judged at ({}): the fit cannot confirm the pose; give the coordinates as f64 (a Float64Array, or a file that \
-             stores doubles)",
-            num(p.rounding * s),
-            num(p.d_evidence * s)
-        ));
+        // (a grid as fine as f32 is near zero: it is the distance that is too fine, not the clouds)
+        warnings.push(if p.rounding < crate::checks::F32_ROUNDING_WARNING {
+            format!(
+                "the distance the answer is judged at ({}) is finer than the clouds' f32 coordinates resolve (steps of \
+                 about {}): the fit cannot confirm the pose; give a maxCorrespondenceDistance of a few point spacings",
+                num(p.d_evidence * s),
+                num(p.rounding * s)
+            )
+        } else {
+            format!(
+                "the clouds' coordinates were rounded to steps of about {} (f32 far from zero), more than the distance \
+                 the answer is judged at ({}): the fit cannot confirm the pose; give the coordinates as f64 (a \
+                 Float64Array, or a file that stores doubles)",
+                num(p.rounding * s),
+                num(p.d_evidence * s)
+            )
+        });
         capped = true;
     }
     // with `up`: a tilted pose that fits clearly better than the upright answer (the clouds were
@@ -186,9 +196,22 @@ pub(crate) fn cap(
         ));
         capped = true;
     }
-    if capped {
-        confidence.min(UNREFINED_CONFIDENCE)
-    } else {
-        confidence
+    let confidence = if capped { confidence.min(UNREFINED_CONFIDENCE) } else { confidence };
+    // a source of few points: a pose judged on so few is as sure as they are many
+    let n = p.src_n.len();
+    let few = n as f64 / SURE_POINTS as f64;
+    if n < SURE_POINTS && confidence > few {
+        warnings.push(format!(
+            "the source has {n} points: an answer judged on fewer than {SURE_POINTS} is at most {few:.2} sure \
+             ({n}/{SURE_POINTS}); give it more points"
+        ));
+        return few;
     }
+    confidence
 }
+
+/// A source of fewer points than this has an answer at most `points / SURE_POINTS` sure: 16 to
+/// 24 points cropped from a partial scan came back 16-63 degrees off at 0.93-0.98 in 3 of 8 tries
+/// (a junior web developer's trial, `BENCHMARK.md`, session 63); from 32 points on every try was
+/// right.
+pub(crate) const SURE_POINTS: usize = 64;
