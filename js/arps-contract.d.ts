@@ -51,6 +51,14 @@ export type RegisterOptions = {
    */
   icpMaxIterations?: number,
   /**
+   * How the answer's last refinement weighs its pairs: `"squared"` (every pair within the
+   * distance alike; the default) or `"robust"` (once the search has its answer, one more
+   * refinement weighs each pair by Tukey's biweight of its residual, so that a surface that
+   * changed between the scans, such as eroded cliffs, a new building, a moved object or a bent
+   * part, no longer pulls the answer). For scans of a scene that changed, and for survey accuracy.
+   */
+  icpLoss?: IcpLoss,
+  /**
    * Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
    * correspondence distance, or of the default distance when `max_correspondence_distance` is
    * wider (the voxels the answer's evidence is measured on). `0` uses the full clouds, as does
@@ -259,6 +267,11 @@ export type RegistrationSearch = "adaptive" | "exhaustive";
  * Which ICP to run after the network.
  */
 export type IcpKind = "off" | "point" | "plane";
+
+/**
+ * How the answer's last refinement weighs its pairs (`Options::icp_loss`).
+ */
+export type IcpLoss = "squared" | "robust";
 
 /**
  * What to do with points that have a NaN or infinite coordinate, or one beyond

@@ -3,7 +3,7 @@
 //!
 //! # One set of types
 //! The options are [`Options`], the result is [`Registration`]; their nested types are
-//! [`Evidence`], [`Alternative`], [`Timings`], [`Start`], [`Search`], [`IcpKind`], [`NonFinite`],
+//! [`Evidence`], [`Alternative`], [`Timings`], [`Start`], [`Search`], [`IcpKind`], [`IcpLoss`], [`NonFinite`],
 //! [`Outliers`], [`Support`], [`Stage`] (the progress stages) and [`ModelConfig`]; the readers take [`ReadOptions`]. They
 //! are serde types: the wasm binding converts them
 //! with serde-wasm-bindgen and the CLI with serde_json, so JS and JSON see the same objects, field
@@ -32,6 +32,7 @@
 //! [`Start`]: crate::Start
 //! [`Search`]: crate::Search
 //! [`IcpKind`]: crate::IcpKind
+//! [`IcpLoss`]: crate::IcpLoss
 //! [`NonFinite`]: crate::NonFinite
 //! [`Outliers`]: crate::Outliers
 //! [`Support`]: crate::Support
@@ -190,7 +191,8 @@ pub fn typescript() -> String {
     use crate::confidence::Evidence;
     use crate::model::config::Reference;
     use crate::{
-        Alternative, IcpKind, NonFinite, Options, Outliers, Registration, Search, Stage, Start, Support, Timings,
+        Alternative, IcpKind, IcpLoss, NonFinite, Options, Outliers, Registration, Search, Stage, Start, Support,
+        Timings,
     };
     use ts_rs::{Config, TS};
 
@@ -207,6 +209,7 @@ pub fn typescript() -> String {
         decl::<Start>(&cfg),
         decl::<Search>(&cfg),
         decl::<IcpKind>(&cfg),
+        decl::<IcpLoss>(&cfg),
         decl::<NonFinite>(&cfg),
         decl::<Outliers>(&cfg),
         decl::<Support>(&cfg),

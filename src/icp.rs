@@ -19,6 +19,21 @@ pub enum IcpKind {
     Plane,
 }
 
+/// How the answer's last refinement weighs its pairs (`Options::icp_loss`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "IcpLoss"))]
+pub enum IcpLoss {
+    /// Every pair within the distance alike (least squares), the default.
+    #[default]
+    Squared,
+    /// After the search, the answer is refined once more with each pair weighed by Tukey's
+    /// biweight of its residual ([`IcpParams::robust`]): a surface that changed between the scans
+    /// (erosion, construction, a moved object, a bent part) no longer pulls the answer, the
+    /// surfaces that stayed hold it.
+    Robust,
+}
+
 impl IcpKind {
     /// The kind of a short search run (a probe, a screen of starts): this one, or point-to-point
     /// when refinement is off, since a search run that does not move finds nothing.
@@ -55,7 +70,17 @@ pub struct IcpParams {
     /// Stop a run that is going nowhere ([`GiveUp`]); `None` (what [`IcpParams::new`] sets)
     /// runs to convergence or the cap.
     pub give_up: Option<GiveUp>,
+    /// Weigh each pair by Tukey's biweight of its residual (point-to-plane: along the normal;
+    /// point-to-point: the distance), at [`TUKEY_C`] times the pairs' robust spread (1.4826 times
+    /// their median absolute residual): pairs far beyond the spread of the rest (a surface that
+    /// changed between the scans) no longer pull the step. `false` (what [`IcpParams::new`] sets):
+    /// every pair within the distance counts alike.
+    pub robust: bool,
 }
+
+/// Tukey's biweight constant of [`IcpParams::robust`], in robust spreads: 95% efficiency on
+/// Gaussian residuals.
+pub const TUKEY_C: f64 = 4.685;
 
 /// When an ICP run stops early for fitting too little: after at least `after` iterations, at the
 /// first whose fitness is below `below` (the run is then not `converged`). For a search run whose
@@ -97,8 +122,37 @@ impl IcpParams {
             relative_rmse: 1e-6,
             damping: 0.0,
             give_up: None,
+            robust: false,
         }
     }
+}
+
+/// Tukey's biweights of `residuals` ([`IcpParams::robust`]); `None` when their median absolute
+/// value is zero or not finite (every pair alike: the plain step).
+fn tukey_weights(residuals: &[f64]) -> Option<Vec<f64>> {
+    if residuals.is_empty() {
+        return None;
+    }
+    let mut abs: Vec<f64> = residuals.iter().map(|r| r.abs()).collect();
+    let mid = abs.len() / 2;
+    let median = *abs.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let c = TUKEY_C * 1.4826 * median;
+    if !(c.is_finite() && c > 0.0) {
+        return None;
+    }
+    Some(
+        residuals
+            .iter()
+            .map(|r| {
+                let u = r / c;
+                if u.abs() < 1.0 {
+                    (1.0 - u * u).powi(2)
+                } else {
+                    0.0
+                }
+            })
+            .collect(),
+    )
 }
 
 /// Neighbours used for the target normals of point-to-plane ICP (the point itself and the
@@ -426,8 +480,8 @@ impl IcpTarget {
         let mut t = *init;
         for it in 1..=params.max_iterations {
             let update = match params.kind {
-                IcpKind::Plane => self.plane_update(scratch, params.damping),
-                _ => self.point_update(scratch),
+                IcpKind::Plane => self.plane_update(scratch, params.damping, params.robust),
+                _ => self.point_update(scratch, params.robust),
             };
             let Some(update) = update else { break };
             let next = compose_rigid(&update, &t);
@@ -568,19 +622,41 @@ impl IcpTarget {
     }
 
     /// Point-to-point update: Kabsch on the current inlier pairs.
-    fn point_update(&self, scratch: &mut Scratch) -> Option<Matrix4<f64>> {
+    fn point_update(&self, scratch: &mut Scratch, robust: bool) -> Option<Matrix4<f64>> {
         scratch.target_xyz.clear();
         scratch.target_xyz.extend(scratch.target.iter().map(|&j| self.points[j].map(|v| v as f64)));
-        Some(rigid::kabsch(&scratch.moved, &scratch.target_xyz, None))
+        let weights = robust
+            .then(|| {
+                let residuals: Vec<f64> = scratch
+                    .moved
+                    .iter()
+                    .zip(&scratch.target_xyz)
+                    .map(|(p, q)| (Vector3::from(*q) - Vector3::from(*p)).norm())
+                    .collect();
+                tukey_weights(&residuals)
+            })
+            .flatten();
+        Some(rigid::kabsch(&scratch.moved, &scratch.target_xyz, weights.as_deref()))
     }
 
     /// Point-to-plane update on the current inlier pairs, damped by `damping` (see
     /// [`IcpTarget::align`]).
-    fn plane_update(&self, scratch: &Scratch, damping: f64) -> Option<Matrix4<f64>> {
+    fn plane_update(&self, scratch: &Scratch, damping: f64, robust: bool) -> Option<Matrix4<f64>> {
         let n = scratch.moved.len();
         if n == 0 {
             return None;
         }
+        let along_normal = |p: &[f64; 3], j: usize| {
+            let nq = Vector3::from(self.normal(j).map(|v| v as f64));
+            (Vector3::from(self.points[j].map(|v| v as f64)) - Vector3::from(*p)).dot(&nq)
+        };
+        let weights = robust
+            .then(|| {
+                let residuals: Vec<f64> =
+                    scratch.moved.iter().zip(&scratch.target).map(|(p, &j)| along_normal(p, j)).collect();
+                tukey_weights(&residuals)
+            })
+            .flatten();
         // Linearise about the centroid of the moved source: better conditioned far from the
         // origin, and the rotation part is then about the data, not about (0, 0, 0).
         let mut c = Vector3::zeros();
@@ -590,13 +666,18 @@ impl IcpTarget {
         c /= n as f64;
         let mut ata = Matrix6::<f64>::zeros();
         let mut atb = Vector6::<f64>::zeros();
-        for (p, &j) in scratch.moved.iter().zip(&scratch.target) {
+        for (i, (p, &j)) in scratch.moved.iter().zip(&scratch.target).enumerate() {
+            let w = weights.as_ref().map_or(1.0, |w| w[i]);
+            if w == 0.0 {
+                continue;
+            }
             let p = Vector3::from(*p) - c;
             let q = Vector3::from(self.points[j].map(|v| v as f64)) - c;
             let nq = Vector3::from(self.normal(j).map(|v| v as f64));
             let pxn = p.cross(&nq);
-            let a = Vector6::new(pxn.x, pxn.y, pxn.z, nq.x, nq.y, nq.z);
-            let b = (q - p).dot(&nq);
+            let sw = w.sqrt();
+            let a = Vector6::new(pxn.x, pxn.y, pxn.z, nq.x, nq.y, nq.z) * sw;
+            let b = (q - p).dot(&nq) * sw;
             // Upper triangle only; mirrored below.
             for r in 0..6 {
                 let ar = a[r];

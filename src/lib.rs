@@ -74,7 +74,7 @@ pub mod weights;
 pub use cloud::{NonFinite, PointCloud};
 pub use confidence::Evidence;
 pub use error::{Error, Result};
-pub use icp::IcpKind;
+pub use icp::{IcpKind, IcpLoss};
 pub use model::{Model, ModelConfig};
 pub use outliers::Outliers;
 pub use refine::Start;

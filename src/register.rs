@@ -3,7 +3,7 @@
 
 use crate::cloud::{NonFinite, PointCloud};
 use crate::confidence::Evidence;
-use crate::icp::IcpKind;
+use crate::icp::{IcpKind, IcpLoss};
 use crate::model::{Model, ModelWorkspace};
 use crate::outliers::Outliers;
 use crate::pipeline::starts::{self, Starts};
@@ -61,6 +61,13 @@ pub struct Options {
     /// `icpConverged` says whether it converged).
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub icp_max_iterations: u32,
+    /// How the answer's last refinement weighs its pairs: `"squared"` (every pair within the
+    /// distance alike; the default) or `"robust"` (once the search has its answer, one more
+    /// refinement weighs each pair by Tukey's biweight of its residual, so that a surface that
+    /// changed between the scans, such as eroded cliffs, a new building, a moved object or a bent
+    /// part, no longer pulls the answer). For scans of a scene that changed, and for survey accuracy.
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
+    pub icp_loss: IcpLoss,
     /// Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
     /// correspondence distance, or of the default distance when `max_correspondence_distance` is
     /// wider (the voxels the answer's evidence is measured on). `0` uses the full clouds, as does
@@ -331,6 +338,7 @@ impl Default for Options {
             network: true,
             max_correspondence_distance: None,
             icp_max_iterations: 30,
+            icp_loss: IcpLoss::Squared,
             voxel_size: None,
             initial_transform: None,
             non_finite: NonFinite::Error,

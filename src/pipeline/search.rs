@@ -414,6 +414,19 @@ pub(crate) fn search(
             (c, probed, false)
         }
     };
+    // with `icpLoss: "robust"`: the answer refined once more with the pairs far beyond the spread
+    // of the rest (a surface that changed between the scans) weighed down, and judged there
+    let (candidate, probed) = match refined_any && p.icp != IcpKind::Off && robust_loss(options) {
+        true => {
+            let c =
+                robust_polish(target_index, &p.icp_src.points, &candidate, p.icp, d_final, options.icp_max_iterations);
+            let c = if admits(&c.T_target_source) { c } else { candidate };
+            let probed =
+                if c.T_target_source == candidate.T_target_source { probed } else { judge(&c.T_target_source) };
+            (c, probed)
+        }
+        false => (candidate, probed),
+    };
     // with the caller's guess: along a motion the fit leaves free (a jar's turn about its axis on
     // a turntable), where only the clouds' edges held the answer, the guess says where it is
     let (candidate, probed) = match probed.free.filter(|_| refined_any && options.initial_transform.is_some()) {
@@ -605,6 +618,40 @@ fn held_by_guess(
         answer.fitness
     );
     Some((Candidate { T_target_source: t, fitness, inlier_rmse, ..*answer }, why))
+}
+
+/// Whether the answer gets [`robust_polish`] (`icpLoss: "robust"`).
+fn robust_loss(options: &Options) -> bool {
+    options.icp_loss == crate::icp::IcpLoss::Robust
+}
+
+/// `answer` refined by ICP at the final distance `d` with Tukey's biweight on its pairs
+/// ([`crate::icp::IcpParams::robust`]), on at most [`refine::REFINE_POINTS`] of the source's
+/// points, its fitness measured on all of them.
+fn robust_polish(
+    target: &IcpTarget,
+    source: &[[f32; 3]],
+    answer: &Candidate,
+    kind: IcpKind,
+    d: f64,
+    max_iterations: u32,
+) -> Candidate {
+    let sample = refine::even_sample(source, refine::REFINE_POINTS);
+    let params = crate::icp::IcpParams {
+        robust: true,
+        max_iterations: max_iterations.max(1) * 2,
+        ..crate::icp::IcpParams::new(kind, d)
+    };
+    let r = target.align(&sample, &answer.T_target_source, &params);
+    let (fitness, inlier_rmse) = target.evaluate(source, &r.T_target_source, d);
+    Candidate {
+        T_target_source: r.T_target_source,
+        fitness,
+        inlier_rmse,
+        iterations: answer.iterations + r.iterations,
+        converged: r.converged,
+        ..*answer
+    }
 }
 
 /// Iteration cap of [`held_by_guess`]'s refinements.

@@ -2,7 +2,7 @@
 //! moved source written where `--aligned` says.
 
 use crate::{load_registrar, up_axis};
-use arps::{io, transform, IcpKind, NonFinite, Options, Outliers, Start, Support};
+use arps::{io, transform, IcpKind, IcpLoss, NonFinite, Options, Outliers, Start, Support};
 use clap::{Args, ValueEnum};
 use std::path::{Path, PathBuf};
 
@@ -25,6 +25,14 @@ enum IcpArg {
     Off,
 }
 
+#[derive(Clone, Copy, ValueEnum)]
+enum LossArg {
+    /// Every pair alike (least squares; default).
+    Squared,
+    /// Tukey's biweight on the answer's last refinement.
+    Robust,
+}
+
 /// The options of `arps register`.
 #[derive(Args)]
 pub struct RegisterArgs {
@@ -45,6 +53,10 @@ pub struct RegisterArgs {
     /// Iteration cap of each ICP stage [default: the engine's `Options::icp_max_iterations`].
     #[arg(long)]
     icp_max_iterations: Option<u32>,
+    /// How the answer's last refinement weighs its pairs (`Options::icp_loss`): `robust` for
+    /// scans of a scene that changed between them (erosion, construction, moved objects).
+    #[arg(long, value_enum, default_value_t = LossArg::Squared)]
+    icp_loss: LossArg,
     /// Points per cloud fed to the network (default: the model's N).
     #[arg(long)]
     network_points: Option<usize>,
@@ -437,6 +449,7 @@ pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
         icp,
         max_correspondence_distance,
         icp_max_iterations,
+        icp_loss,
         network_points,
         seed,
         voxel_size,
@@ -509,6 +522,10 @@ pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
         },
         max_correspondence_distance,
         icp_max_iterations: icp_max_iterations.unwrap_or(Options::default().icp_max_iterations),
+        icp_loss: match icp_loss {
+            LossArg::Squared => IcpLoss::Squared,
+            LossArg::Robust => IcpLoss::Robust,
+        },
         network_points,
         seed,
         voxel_size,
