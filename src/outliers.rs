@@ -132,7 +132,7 @@ pub fn drop_far_with(cloud: PointCloud, spacing: &Spacing) -> (PointCloud, usize
 /// The warning for `dropped` far outliers of the cloud `what` of `total` points.
 pub fn warning(what: &str, dropped: usize, total: usize) -> String {
     format!(
-        "left out {dropped} of the {what}'s {total} points ({:.1}%): they lie far out from the rest of the cloud (stray returns); `outliers: \"keep\"` keeps them",
+        "left out {dropped} of the {what}'s {total} points ({:.1}%): they lie far out from the rest of the cloud, sparser than it (stray returns, or the far end of a scan whose density falls with range); `outliers: \"keep\"` keeps them",
         100.0 * dropped as f64 / total.max(1) as f64
     )
 }
