@@ -20,7 +20,7 @@ fn errors(result: &JsValue) -> (f64, f64) {
 }
 
 fn register_ok(r: &mut Registrar, options: JsValue) -> JsValue {
-    match r.register(&source(), &target(), Some(options), None) {
+    match r.register(&source(), &target(), Some(options), None, None, None) {
         Ok(v) => v,
         Err(e) => panic!("register failed: {}", message(e)),
     }
@@ -126,7 +126,7 @@ fn a_symmetric_shape_offers_its_look_alike_poses() {
     );
     let opts = options(r#"{"network": false, "starts": ["initial"]}"#);
     js_sys::Reflect::set(&opts, &"initialTransform".into(), &column_major_js(&turned)).unwrap();
-    let res = match r.register(&source, &target, Some(opts), None) {
+    let res = match r.register(&source, &target, Some(opts), None, None, None) {
         Ok(v) => v,
         Err(e) => panic!("register failed: {}", message(e)),
     };
@@ -214,7 +214,7 @@ fn search_option_and_global_starts() {
     }
     // A bad value: a clear error naming the accepted ones, and the registrar still works.
     for bad in [r#"{"search": "thorough"}"#, r#"{"search": 1}"#] {
-        let e = r.register(&source(), &target(), Some(options(bad)), None).err().map(message).expect(bad);
+        let e = r.register(&source(), &target(), Some(options(bad)), None, None, None).err().map(message).expect(bad);
         assert!(e.starts_with("invalid options"), "{bad}: {e}");
         if bad.contains("thorough") {
             assert!(e.contains("thorough") && e.contains("adaptive") && e.contains("exhaustive"), "{e}");
@@ -236,7 +236,7 @@ fn the_network_from_every_turn_is_a_start_that_needs_the_network() {
     assert!(num(&t, "networkMs") > 0.0 && num(&t, "networkMs") <= num(&t, "totalMs"), "the turns' passes are timed");
     // without the network it cannot run alone: a clear error, and the registrar still works
     let bad = r#"{"network": false, "starts": ["rotationsNetwork"]}"#;
-    let e = r.register(&source(), &target(), Some(options(bad)), None).err().map(message).expect(bad);
+    let e = r.register(&source(), &target(), Some(options(bad)), None, None, None).err().map(message).expect(bad);
     assert!(e.contains("rotationsNetwork") && e.contains("\"rotations\""), "{e}");
     still_works(&mut r);
 }
@@ -340,7 +340,10 @@ fn nan_points_can_be_dropped() {
     let mut src = source();
     src[3 * 10 + 1] = f32::NAN;
     src[3 * 20] = f32::INFINITY;
-    let res = r.register(&src, &target(), Some(options(r#"{"nonFinite": "drop"}"#)), None).map_err(message).unwrap();
+    let res = r
+        .register(&src, &target(), Some(options(r#"{"nonFinite": "drop"}"#)), None, None, None)
+        .map_err(message)
+        .unwrap();
     let (rot, tr) = errors(&res);
     assert!(rot < 1.0 && tr < 0.02, "{rot:.3} deg, {tr:.4}");
 }
@@ -353,10 +356,13 @@ fn stray_returns_are_left_out_unless_kept() {
     for (k, i) in [5usize, 400, 900].into_iter().enumerate() {
         src[3 * i..3 * i + 3].copy_from_slice(&[20.0 + k as f32, -15.0, 12.0 - k as f32]);
     }
-    let res = r.register(&src, &target(), None, None).map_err(message).unwrap();
+    let res = r.register(&src, &target(), None, None, None, None).map_err(message).unwrap();
     let warnings = strings(&get(&res, "warnings"));
     assert!(warnings.iter().any(|w| w.contains("left out 3 of the source's")), "{warnings:?}");
-    let kept = r.register(&src, &target(), Some(options(r#"{"outliers": "keep"}"#)), None).map_err(message).unwrap();
+    let kept = r
+        .register(&src, &target(), Some(options(r#"{"outliers": "keep"}"#)), None, None, None)
+        .map_err(message)
+        .unwrap();
     assert!(!strings(&get(&kept, "warnings")).iter().any(|w| w.contains("left out")));
 }
 
@@ -381,14 +387,16 @@ fn a_support_plane_under_the_source_alone_is_left_out_unless_kept() {
         let y = lo[1] - (hi[1] - lo[1]) + 3.0 * (hi[1] - lo[1]) * v;
         src.extend([x, y, lo[2] - 0.01]);
     }
-    let res = r.register(&src, &target(), None, None).map_err(message).unwrap();
+    let res = r.register(&src, &target(), None, None, None, None).map_err(message).unwrap();
     let warnings = strings(&get(&res, "warnings"));
     assert!(
         warnings.iter().any(|w| w.contains(&format!("of the source's {} points", n + side * side))),
         "{warnings:?}"
     );
-    let kept =
-        r.register(&src, &target(), Some(options(r#"{"supportPlane": "keep"}"#)), None).map_err(message).unwrap();
+    let kept = r
+        .register(&src, &target(), Some(options(r#"{"supportPlane": "keep"}"#)), None, None, None)
+        .map_err(message)
+        .unwrap();
     assert!(!strings(&get(&kept, "warnings")).iter().any(|w| w.contains("left out a plane")));
 }
 
@@ -400,7 +408,7 @@ fn every_error_throws_and_the_registrar_keeps_working() {
     let tgt = target();
     let expect_err = |r: &mut Registrar, s: &[f32], t: &[f32], o: JsValue, needle: &str| {
         let e = r
-            .register(s, t, Some(o), None)
+            .register(s, t, Some(o), None, None, None)
             .err()
             .map(message)
             .unwrap_or_else(|| panic!("expected an error containing {needle:?}"));
@@ -540,7 +548,7 @@ fn custom_weights_from_bytes_match_the_default_model() {
     let fields = serde_json::to_value(&tiny_config).unwrap().as_object().unwrap().len();
     assert_eq!(keys as usize, fields);
     assert_eq!(get(&t.provenance().map_err(message).unwrap(), "kind").as_string().as_deref(), Some("random"));
-    let res = t.register(&source(), &target(), None, None).map_err(message).unwrap();
+    let res = t.register(&source(), &target(), None, None, None, None).map_err(message).unwrap();
     assert!(arps::transform::check_rigid(&matrix(&res, "T_target_source"), 1e-3).is_ok());
 }
 
@@ -556,7 +564,7 @@ fn parse_point_cloud_reads_real_bytes() {
     // The readers' output registers as is.
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
     let tgt = parse_point_cloud(TARGET_PLY, "target.ply", None).map_err(message).unwrap();
-    let res = r.register(&got, &tgt, None, None).map_err(message).unwrap();
+    let res = r.register(&got, &tgt, None, None, None, None).map_err(message).unwrap();
     let (rot, tr) = errors(&res);
     assert!(rot < 1.0 && tr < 0.02, "{rot:.3} deg, {tr:.4}");
 }
@@ -677,7 +685,7 @@ fn degenerate_inputs_never_trap() {
     ];
     for (name, s, t) in &cases {
         for opts in [None, Some(options(r#"{"icp": "point", "voxelSize": 0}"#))] {
-            if let Ok(res) = r.register(s, t, opts, None) {
+            if let Ok(res) = r.register(s, t, opts, None, None, None) {
                 let m = matrix(&res, "T_target_source");
                 assert!(m.iter().all(|v| v.is_finite()), "{name}: non-finite matrix {m}");
             }
@@ -697,11 +705,11 @@ fn progress_callback_sees_each_stage_and_a_throwing_callback_is_reported() {
         })
     };
     let f: js_sys::Function = push.as_ref().unchecked_ref::<js_sys::Function>().clone();
-    r.register(&source(), &target(), None, Some(f)).map_err(message).unwrap();
+    r.register(&source(), &target(), None, Some(f), None, None).map_err(message).unwrap();
     let stages: Vec<String> = seen.iter().map(|s| s.as_string().unwrap()).collect();
     assert_eq!(stages, ["preparing", "network", "refining"]);
     let throwing = js_sys::Function::new_with_args("stage", "throw new Error('boom at ' + stage)");
-    let e = message(r.register(&source(), &target(), None, Some(throwing)).unwrap_err());
+    let e = message(r.register(&source(), &target(), None, Some(throwing), None, None).unwrap_err());
     assert!(e.contains("onProgress threw: boom at preparing"), "{e}");
     still_works(&mut r);
 }
@@ -721,11 +729,43 @@ fn registrations_onto_the_same_target_equal_a_fresh_registrars() {
     };
     let fresh = |s: &[f32]| {
         let mut r = Registrar::with_default_model().map_err(message).unwrap();
-        untimed(r.register(s, &target(), None, None).map_err(message).unwrap())
+        untimed(r.register(s, &target(), None, None, None, None).map_err(message).unwrap())
     };
     let mut kept = Registrar::with_default_model().map_err(message).unwrap();
     for s in [&full[..], &half[..], &full[..]] {
-        let again = untimed(kept.register(s, &target(), None, None).map_err(message).unwrap());
+        let again = untimed(kept.register(s, &target(), None, None, None, None).map_err(message).unwrap());
         assert_eq!(again, fresh(s));
     }
+}
+
+/// Each cloud's origin places its points in the caller's frame: the fixture pair given as offsets
+/// from two origins far apart and far from zero comes back in that frame (the truth conjugated
+/// by the origins); the identity start is the caller's identity; a bad origin is an error that
+/// names the cloud, and the registrar keeps working.
+#[wasm_bindgen_test]
+fn origins_place_each_cloud_in_the_callers_frame() {
+    let mut r = Registrar::with_default_model().unwrap();
+    let (a, b) = ([512345.25, 4123456.5, 87.125], [512349.75, 4123450.25, 91.0]);
+    let res =
+        r.register(&source(), &target(), None, None, Some(a.to_vec()), Some(b.to_vec())).map_err(message).unwrap();
+    let shift = |o: [f64; 3]| nalgebra::Matrix4::new_translation(&nalgebra::Vector3::from(o));
+    let truth = shift(b) * ground_truth() * shift(a).try_inverse().unwrap();
+    let m = matrix(&res, "T_target_source");
+    // the error where the clouds are (at the source's origin), not at the frame's zero 4e6 away
+    let at = |t: &nalgebra::Matrix4<f64>| t.transform_point(&nalgebra::Point3::from(a));
+    assert!((at(&m) - at(&truth)).norm() < 0.02, "{m} vs {truth}");
+    // the "initial" start without initialTransform: the identity of the caller's frame
+    let alone = options(r#"{"network": false, "starts": ["initial"], "icp": "off"}"#);
+    let res = r
+        .register(&source(), &source(), Some(alone), None, Some(a.to_vec()), Some(b.to_vec()))
+        .map_err(message)
+        .unwrap();
+    let m = matrix(&res, "T_target_source");
+    assert!((m - nalgebra::Matrix4::identity()).abs().max() < 1e-9, "{m}");
+    let e = r.register(&source(), &target(), None, None, Some(vec![1.0, 2.0]), None).err().map(message).unwrap();
+    assert!(e.contains("source: origin must be 3 finite numbers"), "{e}");
+    let e =
+        r.register(&source(), &target(), None, None, None, Some(vec![1.0, f64::NAN, 2.0])).err().map(message).unwrap();
+    assert!(e.contains("target: origin must be 3 finite numbers"), "{e}");
+    still_works(&mut r);
 }

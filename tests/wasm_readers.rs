@@ -90,9 +90,10 @@ fn organised_pcd_keeps_nan_and_drop_option_registers_it() {
     let nan = xyz.chunks(3).filter(|p| p.iter().any(|v| v.is_nan())).count();
     assert_eq!(nan, 1577, "no-return points stay NaN in the Float32Array");
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
-    let e = r.register(&xyz, &xyz, None, None).err().map(message).expect("NaN rejected by default");
+    let e = r.register(&xyz, &xyz, None, None, None, None).err().map(message).expect("NaN rejected by default");
     assert!(e.contains("non-finite"), "{e}");
-    let res = r.register(&xyz, &xyz, Some(options(r#"{"nonFinite": "drop"}"#)), None).map_err(message).unwrap();
+    let res =
+        r.register(&xyz, &xyz, Some(options(r#"{"nonFinite": "drop"}"#)), None, None, None).map_err(message).unwrap();
     let m = matrix(&res, "T_target_source");
     assert!(rotation_error_deg(&m, &nalgebra::Matrix4::identity()) < 0.5, "a cloud onto itself: {m}");
 }
@@ -104,7 +105,7 @@ fn real_scan_recovers_a_known_motion() {
     let gt = from_rotation_translation(&euler_xyz(0.08, -0.12, 0.18), &Vector3::new(0.4, -0.3, 0.1));
     let tgt: Vec<f32> = src.chunks(3).flat_map(|p| arps::transform::apply(&gt, [p[0], p[1], p[2]])).collect();
     let mut r = Registrar::with_default_model().map_err(message).unwrap();
-    let res = r.register(&src, &tgt, None, None).map_err(message).unwrap();
+    let res = r.register(&src, &tgt, None, None, None, None).map_err(message).unwrap();
     let m = matrix(&res, "T_target_source");
     let (rot, tr) = (rotation_error_deg(&m, &gt), translation_error(&m, &gt));
     assert!(rot < 1.0 && tr < 0.05, "rotation error {rot:.3} deg, translation error {tr:.4}");
