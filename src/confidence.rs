@@ -125,6 +125,11 @@ pub struct FreeMotion {
     pub constraint: f64,
     /// [`Evidence::slide`].
     pub slide: f64,
+    /// Further motions the fit leaves free (the information matrix's next eigenvectors whose
+    /// eigenvalues also lie below [`UNPINNED_CONSTRAINT`] of the strongest, weakest first:
+    /// a pipe's slide beside its turn, a plane's two slides beside its turn), as the turn per unit
+    /// and the translation per unit at `c`; only [`FreeMotion::describe`] names them.
+    pub also: [Option<(Vector3<f64>, Vector3<f64>)>; 2],
 }
 
 impl FreeMotion {
@@ -207,15 +212,31 @@ impl FreeMotion {
             format!("({}, {}, {})", one(v.x), one(v.y), one(v.z))
         };
         let round = |v: Vector3<f64>| v.map(|x| (x * 1000.0).round() / 1000.0);
-        let turn = self.w.norm();
-        // the points move by |w| times their distance from the axis, up to about 1 normalised
-        // unit, against |shift| for the slide
-        if turn >= self.shift.norm() {
-            let axis = self.w / turn;
-            format!("a turn about the axis along {} through {}", fmt(round(axis)), at(place(self.axis_point())))
-        } else {
-            format!("a slide along {}", fmt(round(self.shift.normalize())))
+        let one = |w: Vector3<f64>, shift: Vector3<f64>| {
+            let turn = w.norm();
+            // the points move by |w| times their distance from the axis, up to about 1 normalised
+            // unit, against |shift| for the slide
+            if turn >= shift.norm() {
+                let axis_point = self.c + w.cross(&shift) / w.norm_squared();
+                format!("a turn about the axis along {} through {}", fmt(round(w / turn)), at(place(axis_point)))
+            } else {
+                format!("a slide along {}", fmt(round(shift.normalize())))
+            }
+        };
+        let mut all = vec![one(self.w, self.shift)];
+        all.extend(self.also.iter().flatten().map(|&(w, shift)| one(w, shift)));
+        match all.len() {
+            1 => all.remove(0),
+            _ => {
+                let last = all.pop().unwrap_or_default();
+                format!("{} and {last}", all.join(", "))
+            }
         }
+    }
+
+    /// How many motions the fit leaves free: this one and [`FreeMotion::also`].
+    pub fn count(&self) -> usize {
+        1 + self.also.iter().flatten().count()
     }
 }
 
@@ -322,10 +343,10 @@ pub fn probe(
     // the answer's fitness on the probe points, which both probes compare against
     let mut probe_partners = Partners::default();
     let base = target.evaluate_warm(&probe, T_target_source, d, &mut probe_partners).0;
-    let (slide, screw, constraint) = slide(target, &probe, T_target_source, d, base);
+    let (slide, screw, constraint, also) = slide(target, &probe, T_target_source, d, base);
     let free = screw
         .filter(|_| constraint < UNPINNED_CONSTRAINT || slide >= SLID_FREE)
-        .map(|Screw { w, shift, c }| FreeMotion { w, shift, c, constraint, slide });
+        .map(|Screw { w, shift, c }| FreeMotion { w, shift, c, constraint, slide, also });
     let answer = AnswerOnProbe { fitness: base, partners: probe_partners };
     // turns along the least constrained motion only where sliding along it keeps much of the fit
     let screw = screw.filter(|_| slide >= SCREW_MIN_SLIDE);
@@ -690,9 +711,16 @@ fn screw_turns(screw: Option<Screw>, t: &Matrix4<f64>) -> Vec<Matrix4<f64>> {
 /// [`Evidence::slide`] of `t` on the probe points `sample`, the least constrained motion it
 /// slid along (`None` with too few inliers), and [`Evidence::constraint`]. `base` is the fitness
 /// of `t` on `sample` at `d`.
-fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64, base: f64) -> (f64, Option<Screw>, f64) {
+#[allow(clippy::type_complexity)]
+fn slide(
+    target: &IcpTarget,
+    sample: &[[f32; 3]],
+    t: &Matrix4<f64>,
+    d: f64,
+    base: f64,
+) -> (f64, Option<Screw>, f64, [Option<(Vector3<f64>, Vector3<f64>)>; 2]) {
     if base <= 0.0 || sample.len() < 3 {
-        return (0.0, None, 1.0);
+        return (0.0, None, 1.0, [None; 2]);
     }
     let moved: Vec<Vector3<f64>> = sample.iter().map(|&p| Vector3::from(apply(t, p).map(|v| v as f64))).collect();
     // the inliers at d with their target normals
@@ -704,7 +732,7 @@ fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64, base
         })
         .collect();
     if pairs.len() < 6 {
-        return (0.0, None, 1.0);
+        return (0.0, None, 1.0, [None; 2]);
     }
     let c = pairs.iter().fold(Vector3::zeros(), |a, p| a + p.0) / pairs.len() as f64;
     let mut info = Matrix6::<f64>::zeros();
@@ -717,21 +745,36 @@ fn slide(target: &IcpTarget, sample: &[[f32; 3]], t: &Matrix4<f64>, d: f64, base
     let weakest = eig.eigenvalues.imin();
     let strongest = eig.eigenvalues.max();
     let constraint = if strongest > 0.0 { (eig.eigenvalues[weakest] / strongest).clamp(0.0, 1.0) } else { 1.0 };
-    let v = eig.eigenvectors.column(weakest).into_owned();
-    let (w, shift) = (Vector3::new(v[0], v[1], v[2]), Vector3::new(v[3], v[4], v[5]));
+    let motion = |k: usize| {
+        let v = eig.eigenvectors.column(k);
+        (Vector3::new(v[0], v[1], v[2]), Vector3::new(v[3], v[4], v[5]))
+    };
+    let (w, shift) = motion(weakest);
+    // the next eigenvectors below the free-motion line too, weakest first (a pipe, a plane)
+    let mut next: [Option<usize>; 2] = [None; 2];
+    for k in (0..6).filter(|&k| k != weakest && strongest > 0.0 && eig.eigenvalues[k] / strongest < UNPINNED_CONSTRAINT)
+    {
+        let below = |j: Option<usize>| j.is_none_or(|j| eig.eigenvalues[k] < eig.eigenvalues[j]);
+        if below(next[0]) {
+            next = [Some(k), next[0]];
+        } else if below(next[1]) {
+            next[1] = Some(k);
+        }
+    }
+    let also = next.map(|k| k.map(motion));
     // the points' RMS displacement per unit of that motion
     let rms =
         (moved.iter().map(|p| (w.cross(&(p - c)) + shift).norm_squared()).sum::<f64>() / moved.len() as f64).sqrt();
     let screw = Screw { w, shift, c };
     if rms.is_nan() || rms <= 0.0 {
-        return (0.0, None, constraint);
+        return (0.0, None, constraint, also);
     }
     let mut best = 0.0f64;
     for sign in [1.0, -1.0] {
         let m = screw_move(&screw, sign * SLIDE_RMS / rms, t);
         best = best.max(target.evaluate(sample, &m, d).0 / base);
     }
-    (best.min(2.0), Some(screw), constraint)
+    (best.min(2.0), Some(screw), constraint, also)
 }
 
 /// The model's inputs: the evidence, plus how steeply the fitness curve rises (tight over coarse).

@@ -292,7 +292,7 @@ fn partial_views_of_a_surface_of_revolution_leave_the_turn_free() {
     let (s, t, _) = fixture_pair(0);
     let r = reg.register(&s, &t, &Options::default()).unwrap();
     assert!(r.evidence.constraint > arps::confidence::UNPINNED_CONSTRAINT, "{:?}", r.evidence);
-    assert!(!r.warnings.iter().any(|w| w.contains("leaves one motion free")), "{:?}", r.warnings);
+    assert!(!r.warnings.iter().any(|w| w.starts_with("the fit leaves ")), "{:?}", r.warnings);
 }
 
 /// Scans of a tunnel on a helical ramp (centreline radius 25, grade 1:7, a rough 2.75 wall) from
@@ -327,7 +327,7 @@ fn a_tunnel_on_a_helical_ramp_is_doubted_along_the_ramp() {
     let e = &r.evidence;
     assert!(e.constraint > arps::confidence::UNPINNED_CONSTRAINT && e.slide >= arps::confidence::SLID_FREE, "{e:?}");
     assert!(r.confidence <= 0.25, "{} {:?}", r.confidence, r.warnings);
-    assert!(r.warnings.iter().any(|w| w.starts_with("the fit leaves one motion free")), "{:?}", r.warnings);
+    assert!(r.warnings.iter().any(|w| w.starts_with("the fit leaves ")), "{:?}", r.warnings);
 }
 
 /// The search's other refined answers count as alternatives when they fit at least 0.9 as well

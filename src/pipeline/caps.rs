@@ -185,11 +185,15 @@ pub(crate) fn cap(
     if let Some(m) = free {
         let (o, centre) = (p.target.summary.origin, p.norm.target_center);
         let place = |q: Vector3<f64>| Vector3::from(std::array::from_fn(|k| o[k] + centre[k] + q[k] * s));
+        let (count, keep, that) = match m.count() {
+            1 => ("one motion".to_string(), "keeps", "that motion"),
+            n => (format!("{n} motions"), "keep", "those motions"),
+        };
         warnings.push(format!(
-            "the fit leaves one motion free: {} keeps the source on the target's surface (a surface of revolution \
+            "the fit leaves {count} free: {} {keep} the source on the target's surface (a surface of revolution \
              about its axis, a straight pipe, tunnel or extrusion along itself, a plane in itself), so only where the \
-             clouds' edges fall holds the answer there, and it may be off along that motion (evidence.constraint {:.1e}; \
-             slid along it by a quarter of the clouds' half-size, the answer keeps {:.0}% of its fit)",
+             clouds' edges fall holds the answer there, and it may be off along {that} (evidence.constraint {:.1e}; \
+             slid along the first by a quarter of the clouds' half-size, the answer keeps {:.0}% of its fit)",
             m.describe(&place, s),
             m.constraint,
             100.0 * m.slide.min(1.0)
