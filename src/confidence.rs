@@ -709,8 +709,8 @@ fn screw_turns(screw: Option<Screw>, t: &Matrix4<f64>) -> Vec<Matrix4<f64>> {
 }
 
 /// [`Evidence::slide`] of `t` on the probe points `sample`, the least constrained motion it
-/// slid along (`None` with too few inliers), and [`Evidence::constraint`]. `base` is the fitness
-/// of `t` on `sample` at `d`.
+/// slid along (`None` with too few inliers), [`Evidence::constraint`], and the next motions below
+/// [`UNPINNED_CONSTRAINT`] ([`FreeMotion::also`]). `base` is the fitness of `t` on `sample` at `d`.
 #[allow(clippy::type_complexity)]
 fn slide(
     target: &IcpTarget,
