@@ -142,7 +142,7 @@ impl FreeMotion {
         if turn <= 1e-18 {
             return Matrix4::new_translation(&(self.shift * s)) * t;
         }
-        let on_axis = self.axis_point();
+        let on_axis = self.axis_point(self.w, self.shift);
         let along = self.w * (self.w.dot(&self.shift) / turn);
         let r = match nalgebra::Unit::try_new(self.w * s, 1e-12) {
             Some(axis) => Rotation3::from_axis_angle(&axis, (self.w * s).norm()).into_inner(),
@@ -184,9 +184,10 @@ impl FreeMotion {
         self.moved(fine, t)
     }
 
-    /// The point of the turn's axis nearest the inliers' centroid: `c + w x shift / |w|^2`.
-    fn axis_point(&self) -> Vector3<f64> {
-        self.c + self.w.cross(&self.shift) / self.w.norm_squared()
+    /// The point of the axis of the turn `w` with the translation `shift` at `c` (this motion's,
+    /// or one of [`FreeMotion::also`]) nearest the inliers' centroid: `c + w x shift / |w|^2`.
+    fn axis_point(&self, w: Vector3<f64>, shift: Vector3<f64>) -> Vector3<f64> {
+        self.c + w.cross(&shift) / w.norm_squared()
     }
 
     /// Says what the motion is, with points in the caller's frame by `place` (written to a
@@ -217,8 +218,8 @@ impl FreeMotion {
             // the points move by |w| times their distance from the axis, up to about 1 normalised
             // unit, against |shift| for the slide
             if turn >= shift.norm() {
-                let axis_point = self.c + w.cross(&shift) / w.norm_squared();
-                format!("a turn about the axis along {} through {}", fmt(round(w / turn)), at(place(axis_point)))
+                let on_axis = self.axis_point(w, shift);
+                format!("a turn about the axis along {} through {}", fmt(round(w / turn)), at(place(on_axis)))
             } else {
                 format!("a slide along {}", fmt(round(shift.normalize())))
             }

@@ -192,8 +192,14 @@ fn cloud_arg(value: &JsValue, what: &str) -> Result<PointCloud, JsError> {
         true => Array::from(&origin).iter().map(|v| v.as_f64().unwrap_or(f64::NAN)).collect(),
         false => Vec::new(),
     };
-    match o[..] {
-        [x, y, z] if o.iter().all(|v| v.is_finite()) => Ok(PointCloud::with_origin(cloud.points, [x, y, z])),
+    placed_at(cloud, &o, what)
+}
+
+/// `cloud` with its points measured from `origin`, which must be three finite numbers (the error
+/// names the cloud `what`).
+fn placed_at(cloud: PointCloud, origin: &[f64], what: &str) -> Result<PointCloud, JsError> {
+    match *origin {
+        [x, y, z] if origin.iter().all(|v| v.is_finite()) => Ok(PointCloud::with_origin(cloud.points, [x, y, z])),
         _ => Err(JsError::new(&format!("{what}: origin must be 3 finite numbers [x, y, z]"))),
     }
 }
@@ -347,12 +353,9 @@ impl Registrar {
         let options = parse_options(options)?;
         let placed = |points: &[f32], origin: Option<Vec<f64>>, what: &str| {
             let cloud = PointCloud::from_xyz(points).map_err(|e| prefixed(what, e))?;
-            match origin.as_deref() {
+            match origin {
                 None => Ok(cloud),
-                Some(&[x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => {
-                    Ok(PointCloud::with_origin(cloud.points, [x, y, z]))
-                }
-                Some(_) => Err(JsError::new(&format!("{what}: origin must be 3 finite numbers [x, y, z]"))),
+                Some(o) => placed_at(cloud, &o, what),
             }
         };
         let source = placed(source, source_origin, "source")?;

@@ -14,7 +14,8 @@ use nalgebra::{Matrix3, Vector3};
 /// votes within `radius` of it, and the mean of those, with how many they are. `None` without
 /// votes, with a `radius` that is not positive, or when no vote is finite. Deterministic (ties to
 /// the first vote in `matches`' order); the votes sorted into cells of side `radius`, each vote
-/// compared with those of the 27 cells around its own, so O(m log m) for `m` votes spread evenly.
+/// compared with those of the 125 cells around its own (out to twice `radius`), so O(m log m)
+/// for `m` votes spread evenly.
 pub fn voted(
     source: &[[f32; 3]],
     target: &[[f32; 3]],

@@ -146,6 +146,22 @@ impl Bounds {
         self.largest_moved_per_axis(motion).into_iter().fold(0.0, f64::max)
     }
 
+    /// What `f32` does to the positions moved by `motion` on the axes `single` marks (those the
+    /// file stores as `f32`): [`F32Steps`]; `None` without a position.
+    fn f32_steps(&self, motion: &Motion, single: [bool; 3]) -> Option<F32Steps> {
+        if self.0[0][0] > self.0[0][1] {
+            return None;
+        }
+        let marked = |v: [f64; 3]| (0..3).filter(|&i| single[i]).fold(0.0f64, |a, i| a.max(v[i]));
+        let far = marked(self.largest_moved_per_axis(motion));
+        Some(F32Steps {
+            far,
+            step: crate::checks::f32_step(far),
+            own: crate::checks::f32_step(marked(self.0.map(|[lo, hi]| lo.abs().max(hi.abs())))),
+            half: self.0.iter().fold(0.0f64, |a, [lo, hi]| a.max((hi - lo) * 0.5)) * motion.scale.abs(),
+        })
+    }
+
     /// The `f32` step at the largest moved value of the axes `single` marks (those the file stores
     /// as `f32`), when `f32` would round the moved positions there: beyond
     /// [`crate::checks::F32_ROUNDING_WARNING`] of the moved box's largest half-extent (the rule of
@@ -153,30 +169,11 @@ impl Bounds {
     /// the file's own values on those axes were (a file already on the grid keeps its own
     /// precision); a cloud of no extent (one point) on the second condition alone. Else `None`.
     pub(super) fn f32_rounds(&self, motion: &Motion, single: [bool; 3]) -> Option<f64> {
-        if self.0[0][0] > self.0[0][1] {
-            return None;
-        }
-        let half = self.0.iter().fold(0.0f64, |a, [lo, hi]| a.max((hi - lo) * 0.5)) * motion.scale.abs();
-        let moved = self.largest_moved_per_axis(motion);
-        let marked = |v: [f64; 3]| (0..3).filter(|&i| single[i]).fold(0.0f64, |a, i| a.max(v[i]));
-        let far = marked(moved);
-        let own = crate::checks::f32_step(marked(self.0.map(|[lo, hi]| lo.abs().max(hi.abs()))));
-        let step = crate::checks::f32_step(far);
+        let F32Steps { far, step, own, half } = self.f32_steps(motion, single)?;
         let loses = half <= 0.0 || crate::checks::f32_rounds(far, half);
         (loses && step > own).then_some(step)
     }
-}
 
-/// How many times more coarsely than a file held its own positions (in the moved units) `f32`
-/// may hold them moved before a file that can store doubles stores them so ([`Bounds::f32_coarsens`]).
-const COARSER_THAN_OWN: f64 = 8.0;
-
-/// The `f32` step, as a fraction of the moved box's largest half-extent, below which a moved file
-/// keeps `f32` positions however much coarser they get than the file's own
-/// ([`Bounds::f32_coarsens`]): a step this fine is at `f32`'s own precision for a cloud near zero.
-const COARSENED_NEGLIGIBLE: f64 = 2.5e-6;
-
-impl Bounds {
     /// The rule for a file that can store its moved positions as doubles (a PLY): true when
     /// [`Self::f32_rounds`] says so, or when `f32` would hold the moved positions (on the axes
     /// `single` marks) more than [`COARSER_THAN_OWN`] times more coarsely than the file held its
@@ -187,16 +184,32 @@ impl Bounds {
         if self.f32_rounds(motion, single).is_some() {
             return true;
         }
-        if self.0[0][0] > self.0[0][1] {
-            return false;
-        }
-        let marked = |v: [f64; 3]| (0..3).filter(|&i| single[i]).fold(0.0f64, |a, i| a.max(v[i]));
-        let step = crate::checks::f32_step(marked(self.largest_moved_per_axis(motion)));
-        let own = crate::checks::f32_step(marked(self.0.map(|[lo, hi]| lo.abs().max(hi.abs())))) * motion.scale.abs();
-        let half = self.0.iter().fold(0.0f64, |a, [lo, hi]| a.max((hi - lo) * 0.5)) * motion.scale.abs();
-        step > COARSER_THAN_OWN * own && step > COARSENED_NEGLIGIBLE * half
+        self.f32_steps(motion, single).is_some_and(|F32Steps { step, own, half, .. }| {
+            step > COARSER_THAN_OWN * own * motion.scale.abs() && step > COARSENED_NEGLIGIBLE * half
+        })
     }
 }
+
+/// What `f32` does to a file's positions moved by a motion ([`Bounds::f32_steps`]).
+struct F32Steps {
+    /// The largest moved value on the marked axes.
+    far: f64,
+    /// The `f32` step there.
+    step: f64,
+    /// The `f32` step at the file's own largest value on those axes (in the file's units).
+    own: f64,
+    /// The moved box's largest half-extent.
+    half: f64,
+}
+
+/// How many times more coarsely than a file held its own positions (in the moved units) `f32`
+/// may hold them moved before a file that can store doubles stores them so ([`Bounds::f32_coarsens`]).
+const COARSER_THAN_OWN: f64 = 8.0;
+
+/// The `f32` step, as a fraction of the moved box's largest half-extent, below which a moved file
+/// keeps `f32` positions however much coarser they get than the file's own
+/// ([`Bounds::f32_coarsens`]): a step this fine is at `f32`'s own precision for a cloud near zero.
+const COARSENED_NEGLIGIBLE: f64 = 2.5e-6;
 
 /// An error when `f32` would round the positions of a `format` file that stores them as `f32` (on
 /// the axes `single` marks), moved by `motion`, beyond [`Bounds::f32_rounds`]'s rule: such a file cannot hold them (a local

@@ -416,7 +416,10 @@ pub(crate) fn search(
     };
     // with `icpLoss: "robust"`: the answer refined once more with the pairs far beyond the spread
     // of the rest (a surface that changed between the scans) weighed down, and judged there
-    let (candidate, probed) = match refined_any && p.icp != IcpKind::Off && robust_loss(options) {
+    let (candidate, probed) = match refined_any
+        && p.icp != IcpKind::Off
+        && options.icp_loss == crate::icp::IcpLoss::Robust
+    {
         true => {
             let c =
                 robust_polish(target_index, &p.icp_src.points, &candidate, p.icp, d_final, options.icp_max_iterations);
@@ -618,11 +621,6 @@ fn held_by_guess(
         answer.fitness
     );
     Some((Candidate { T_target_source: t, fitness, inlier_rmse, ..*answer }, why))
-}
-
-/// Whether the answer gets [`robust_polish`] (`icpLoss: "robust"`).
-fn robust_loss(options: &Options) -> bool {
-    options.icp_loss == crate::icp::IcpLoss::Robust
 }
 
 /// `answer` refined by ICP at the final distance `d` with Tukey's biweight on its pairs
