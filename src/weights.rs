@@ -4,7 +4,10 @@
 //! * `format` = `"arps-weights"`, `format_version` = `"1"`;
 //! * `config` = the [`ModelConfig`] as JSON;
 //! * `provenance` = free-form JSON describing how the weights were made (trainer, steps, data,
-//!   date, or `"random"` with its seed).
+//!   date, or `"random"` with its seed);
+//! * `checksum` = `"fnv1a64:"` and 16 hex digits: FNV-1a (64-bit) of every tensor's name and
+//!   stored bytes, tensors in name order ([`tensor_checksum`]). Written on every save; files
+//!   without it (made by other tools) still load.
 //!
 //! Tensors are stored as `F32`, `F16`, or `I8` with a scale per row (see [`int8`]: a 2-D tensor
 //! `NAME` of dtype `I8` comes with a tensor `NAME.scale`, `F32` or `F16`, one positive scale per
@@ -15,7 +18,8 @@
 //! Loading checks the format and version, validates the config, and checks that every tensor the
 //! config needs is present with the right shape and a supported dtype, that every `I8` tensor has
 //! its valid scale tensor (and that there are no other tensors), reporting the first mismatch by
-//! name.
+//! name, and last that the tensors' bytes match the checksum, so that a file damaged in a
+//! download or a copy is refused rather than run with changed weights.
 
 pub mod int8;
 
@@ -31,6 +35,21 @@ use std::collections::{BTreeMap, HashMap};
 pub const FORMAT: &str = "arps-weights";
 /// The format version this engine reads and writes.
 pub const FORMAT_VERSION: u32 = 1;
+/// Metadata key of the tensors' checksum ([`tensor_checksum`]).
+pub const CHECKSUM_KEY: &str = "checksum";
+
+/// The checksum of a file's tensors, as the `checksum` metadata holds it: `"fnv1a64:"` and 16
+/// lower-case hex digits of FNV-1a (64-bit) over each tensor's name and then its stored bytes,
+/// tensors in byte order of their names. `tensors` may come in any order.
+pub fn tensor_checksum<'a>(tensors: impl IntoIterator<Item = (&'a str, &'a [u8])>) -> String {
+    let mut sorted: Vec<(&str, &[u8])> = tensors.into_iter().collect();
+    sorted.sort_unstable_by_key(|(name, _)| *name);
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for byte in sorted.iter().flat_map(|(name, data)| name.as_bytes().iter().chain(data.iter())) {
+        h = (h ^ u64::from(*byte)).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    format!("fnv1a64:{h:016x}")
+}
 
 /// The embedded default model (`models/web.safetensors`; see `models/MODEL.md` for how it was made).
 /// Only with the `embed-model` feature (on by default); the npm package's `.wasm` is built without
@@ -194,6 +213,16 @@ impl Weights {
                 _ => format!("tensor '{extra}' is not part of the declared config (wrong config or wrong file)"),
             }));
         }
+        if let Some(expected) = meta.get(CHECKSUM_KEY) {
+            let names = st.names();
+            let found = tensor_checksum(names.iter().filter_map(|n| Some((n.as_ref(), st.tensor(n).ok()?.data()))));
+            if &found != expected {
+                return Err(Error::Weights(format!(
+                    "the tensors' checksum is {found}, the file's metadata says {expected}: the file was \
+                     damaged (in a download or a copy?) or its tensors changed after it was written"
+                )));
+            }
+        }
         Ok(Self { config, provenance, tensors, int8: int8s })
     }
 
@@ -233,6 +262,10 @@ impl Weights {
             serde_json::to_string(&self.config).map_err(|e| Error::Weights(e.to_string()))?,
         );
         meta.insert("provenance".to_string(), self.provenance.to_string());
+        meta.insert(
+            CHECKSUM_KEY.to_string(),
+            tensor_checksum(raw.iter().map(|(n, _, _, b)| (n.as_str(), b.as_slice()))),
+        );
         safetensors::serialize(views, Some(meta)).map_err(|e| Error::Weights(format!("serialising: {e}")))
     }
 }

@@ -161,6 +161,38 @@ fn truncated_and_garbage_files_are_rejected() {
     assert!(err(&hostile).starts_with("weights:"));
 }
 
+/// A damaged file whose bytes still parse (a changed weight, a swapped byte) is refused by its
+/// checksum, not run with changed weights; a file without a checksum (another tool's) loads.
+#[test]
+fn tensors_that_do_not_match_the_checksum_are_refused() {
+    let w = tiny();
+    for store in [StoreAs::F32, StoreAs::F16, StoreAs::I8] {
+        let bytes = w.to_bytes(store).unwrap();
+        let (_, meta) = safetensors::SafeTensors::read_metadata(&bytes).unwrap();
+        let sum = meta.metadata().as_ref().unwrap()["checksum"].clone();
+        assert!(sum.starts_with("fnv1a64:") && sum.len() == 24, "{sum}");
+        let header = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize + 8;
+        // a low mantissa bit of a value in the middle of the data: a finite, plausible weight
+        let mut damaged = bytes.clone();
+        damaged[header + (bytes.len() - header) / 2 & !3] ^= 1;
+        let e = err(&damaged);
+        assert!(e.contains("checksum") && e.contains(&sum) && e.contains("damaged"), "{e}");
+    }
+    // the same tensors without the key: read as before
+    let no_sum = craft(&f32_tensors(&w), good_meta(&w.config));
+    assert_eq!(Weights::from_bytes(&no_sum).unwrap().tensors, w.tensors);
+    // the key computed by the library's own function over the same tensors: read
+    let tensors = f32_tensors(&w);
+    let mut meta = good_meta(&w.config);
+    meta.insert(
+        "checksum".to_string(),
+        arps::weights::tensor_checksum(tensors.iter().map(|(n, _, _, b)| (n.as_str(), b.as_slice()))),
+    );
+    assert_eq!(Weights::from_bytes(&craft(&tensors, meta.clone())).unwrap().tensors, w.tensors);
+    meta.insert("checksum".to_string(), "fnv1a64:0000000000000000".to_string());
+    assert!(err(&craft(&tensors, meta)).contains("checksum"));
+}
+
 #[test]
 fn embedded_default_model_loads() {
     let w = Weights::from_bytes(arps::weights::DEFAULT_MODEL).unwrap();

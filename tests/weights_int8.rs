@@ -37,10 +37,13 @@ fn craft(tensors: &[Raw], meta: HashMap<String, String>) -> Vec<u8> {
     safetensors::serialize(views, Some(meta)).unwrap()
 }
 
-/// The tiny model stored as I8, then edited by `edit` and serialised again.
+/// The tiny model stored as I8, then edited by `edit` and serialised again (with the checksum
+/// of the edited tensors, as a tool that writes the file would).
 fn edited(edit: impl FnOnce(&mut Vec<Raw>)) -> Vec<u8> {
-    let (mut raw, meta) = tensors_of(&tiny().to_bytes(StoreAs::I8).unwrap());
+    let (mut raw, mut meta) = tensors_of(&tiny().to_bytes(StoreAs::I8).unwrap());
     edit(&mut raw);
+    let sum = arps::weights::tensor_checksum(raw.iter().map(|(n, _, _, b)| (n.as_str(), b.as_slice())));
+    meta.insert("checksum".to_string(), sum);
     craft(&raw, meta)
 }
 
