@@ -139,6 +139,12 @@ pub(crate) fn search(
     // fit half as well as the answer is not refined
     let next_fits =
         |c: &Candidate, t: &Matrix4<f64>| target_index.evaluate(&screen, t, d_final).0 >= NEXT_PART_SCREEN * c.fitness;
+    // with a final distance wider than the default (the caller's), fitness there makes every pose
+    // fit (a correct answer's flip about an axis 0.93 as well as the answer at ten times the
+    // default): the verdict compares the answer and the refined poses at the evidence distance,
+    // where the probes compare theirs
+    let at_evidence =
+        (p.d_evidence < d_final).then_some(|t: &Matrix4<f64>| target_index.evaluate(&capped, t, p.d_evidence).0);
     let next_part = |c: &Candidate, t: Matrix4<f64>, refined: &mut Vec<(Matrix4<f64>, f64)>| {
         let r = refine::refine_final(target_index, &capped, c.start, &t, &how);
         let r = admits(&r.T_target_source).then_some(r);
@@ -230,9 +236,9 @@ pub(crate) fn search(
             // judged as the caller would see it: with the look-alikes the search found so far
             Step::Unsure(_)
                 if adaptive
-                    && best
-                        .as_ref()
-                        .is_some_and(|(c, probed, _)| verdict(c, probed, &refined).2 >= UNSURE_CONFIDENCE) =>
+                    && best.as_ref().is_some_and(|(c, probed, _)| {
+                        verdict(c, probed, &refined, at_evidence.as_ref()).2 >= UNSURE_CONFIDENCE
+                    }) =>
             {
                 continue
             }
@@ -443,7 +449,7 @@ pub(crate) fn search(
         },
         None => (candidate, probed),
     };
-    let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined);
+    let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined, at_evidence.as_ref());
     // with `up`: a tilted pose that fits clearly better than the upright answer
     let tilted = tilted
         .filter(|t| refined_any && refine::clearly_better(t, &candidate))
@@ -502,10 +508,25 @@ const GUESS_SHIFT: f64 = 0.5;
 
 /// The final verdict on the answer `c` judged by the probe (`probed`): its evidence, with the
 /// other answers the search `refined` that fit about as well counted as alternatives
-/// ([`confidence::count_search_alternatives`]), those alternative poses, and its confidence.
-fn verdict(c: &Candidate, probed: &Probed, refined: &[(Matrix4<f64>, f64)]) -> (Evidence, Vec<Matrix4<f64>>, f64) {
+/// ([`confidence::count_search_alternatives`]), those alternative poses, and its confidence. With
+/// `at_evidence` (a final distance wider than the evidence distance), the answer and the refined
+/// poses are compared by their fitness at the evidence distance, not at the final one.
+fn verdict(
+    c: &Candidate,
+    probed: &Probed,
+    refined: &[(Matrix4<f64>, f64)],
+    at_evidence: Option<&impl Fn(&Matrix4<f64>) -> f64>,
+) -> (Evidence, Vec<Matrix4<f64>>, f64) {
     let (mut evidence, mut poses) = (probed.evidence, probed.alternatives.clone());
-    confidence::count_search_alternatives(&mut evidence, &mut poses, &c.T_target_source, c.fitness, refined);
+    let remeasured: Vec<(Matrix4<f64>, f64)>;
+    let (fitness, refined) = match at_evidence {
+        Some(fit) => {
+            remeasured = refined.iter().map(|(t, _)| (*t, fit(t))).collect();
+            (fit(&c.T_target_source), remeasured.as_slice())
+        }
+        None => (c.fitness, refined),
+    };
+    confidence::count_search_alternatives(&mut evidence, &mut poses, &c.T_target_source, fitness, refined);
     (evidence, poses, confidence::confidence(&evidence))
 }
 
