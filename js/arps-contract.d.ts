@@ -19,7 +19,7 @@ export type RegisterOptions = {
   /**
    * Seed of every random choice (the network's point sampling, the global starts' RANSAC).
    * Default 0. The same inputs and seed give the same output, bit for bit, on a given build.
-   * A non-negative integer (in JS a `bigint` for values above 2^53).
+   * A non-negative integer (in JS a `bigint` from 2^53 on: a number that large may have been rounded).
    */
   seed?: number | bigint,
   /**
@@ -106,8 +106,10 @@ export type RegisterOptions = {
    * What to do with a support plane, the table or floor under a scanned object: `"drop"` (leave
    * it out of each cloud that stands on one, with a warning that counts its points; the
    * default) or `"keep"`. A support plane holds a tenth or more of its cloud, has nearly all
-   * the rest of the cloud on one side, and reaches out beyond what stands on it on at least
-   * three sides. Left in a scan registered onto a model of the object, it sets the clouds'
+   * the rest of the cloud on one side, reaches out beyond what stands on it on at least
+   * three sides (with at least 30% of its points outside the footprint of the rest), and is
+   * one layer (a sheet's two faces are not a table; nor is a plane with the object's own
+   * bottom face sampled just above it, which no capture of an object on a table sees). Left in a scan registered onto a model of the object, it sets the clouds'
    * scale and the object's flat faces are drawn onto it; between two scans it pulls the answer
    * towards the table's motion, which differs from the object's when the object was tipped or
    * turned over between them. Keep it for two scans of an object that stood still on its
@@ -535,7 +537,7 @@ export type ReadOptions = {
   surfacePoints?: number | null,
   /**
    * Seed of the surface sampling: the same file, count and seed give the same points on every
-   * platform. Default 0. A non-negative integer (in JS a `bigint` for values above 2^53).
+   * platform. Default 0. A non-negative integer (in JS a `bigint` from 2^53 on: a number that large may have been rounded).
    */
   seed?: number | bigint,
   /**

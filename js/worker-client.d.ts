@@ -66,6 +66,11 @@ export interface CreateWorkerRegistrarOptions {
   onProgress?: (stage: Stage) => void;
 }
 
+/**
+ * A request's options (each method's last argument): other keys, a non-boolean `transfer` (a
+ * transfer list, as `postMessage` takes one) and `onProgress` on a method other than `register`
+ * are refused by name.
+ */
 export interface WorkerRequestOptions {
   /**
    * Called with each progress stage of this request. If it throws, the request rejects with an

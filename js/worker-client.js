@@ -306,7 +306,8 @@ export async function createWorkerRegistrar(options = {}) {
    * `request` for a method: the buffers of `inputs` transferred when its request options say
    * `transfer`, their `signal` passed on (and `onProgress`, for `register`).
    */
-  const ask = (message, inputs, { transfer = false, signal } = {}, onProgress = undefined) => {
+  const ask = (message, inputs, req, onProgress = undefined) => {
+    const { transfer = false, signal } = req ?? {};
     // a buffer transferred away by an earlier request ({ transfer: true }) cannot be sent again:
     // refused here, as the engine's own API refuses it, before anything is posted or moved
     for (const v of inputs) {
@@ -328,36 +329,44 @@ export async function createWorkerRegistrar(options = {}) {
   return {
     provenance: ready.provenance,
     modelConfig: ready.modelConfig,
-    async register(source, target, registerOptions, { onProgress, transfer = false, signal } = {}) {
+    async register(source, target, registerOptions, req) {
+      checkRequest("register", req, ["onProgress", "transfer", "signal"]);
       inheritedOptions(registerOptions);
       const message = { type: "register", source, target, options: registerOptions };
-      return (await ask(message, [source, target], { transfer, signal }, onProgress)).result;
+      return (await ask(message, [source, target], req, req?.onProgress)).result;
     },
-    async parsePointCloud(bytes, fileName, readOptions, req = {}) {
+    async parsePointCloud(bytes, fileName, readOptions, req) {
+      checkRequest("parsePointCloud", req);
       misplacedRequest("parsePointCloud", readOptions);
       inheritedOptions(readOptions);
       return (await ask({ type: "parse", bytes, fileName, options: readOptions }, [bytes], req)).points;
     },
-    async readPointCloud(bytes, fileName, readOptions, req = {}) {
+    async readPointCloud(bytes, fileName, readOptions, req) {
+      checkRequest("readPointCloud", req);
       misplacedRequest("readPointCloud", readOptions);
       inheritedOptions(readOptions);
       return (await ask({ type: "read", bytes, fileName, options: readOptions }, [bytes], req)).cloud;
     },
-    async transformPointCloud(cloud, matrix, req = {}) {
+    async transformPointCloud(cloud, matrix, req) {
+      checkRequest("transformPointCloud", req);
       return (await ask({ type: "transform", cloud, matrix }, [cloud], req)).cloud;
     },
-    async writePly(cloud, req = {}) {
+    async writePly(cloud, req) {
+      checkRequest("writePly", req);
       return (await ask({ type: "write", cloud }, [cloud], req)).bytes;
     },
-    async listScans(bytes, fileName, req = {}) {
+    async listScans(bytes, fileName, req) {
+      checkRequest("listScans", req);
       return (await ask({ type: "scans", bytes, fileName }, [bytes], req)).scans;
     },
-    async transformFile(bytes, fileName, matrix, readOptions, req = {}) {
+    async transformFile(bytes, fileName, matrix, readOptions, req) {
+      checkRequest("transformFile", req);
       misplacedRequest("transformFile", readOptions, "fifth");
       inheritedOptions(readOptions);
       return (await ask({ type: "move", bytes, fileName, matrix, options: readOptions }, [bytes], req)).bytes;
     },
-    async forgetTarget(req = {}) {
+    async forgetTarget(req) {
+      checkRequest("forgetTarget", req);
       // a worker not loaded (or none, after an abort, a crash or a trap) holds no target: no
       // worker is started for nothing to forget
       if (!current || !current.loaded || current.dead) return;
@@ -368,6 +377,27 @@ export async function createWorkerRegistrar(options = {}) {
       if (current) retire(current, new Error("arps worker: terminated"));
     },
   };
+}
+
+/**
+ * Throws when a method's request options (its last argument) are not an object of its own keys
+ * (`known`): a typo (`tranfser`) or a `transfer` list as `postMessage` takes one would otherwise
+ * be ignored, or read as `true`.
+ */
+function checkRequest(what, req, known = ["transfer", "signal"]) {
+  if (req === undefined || req === null) return;
+  if (typeof req !== "object" || Array.isArray(req)) {
+    throw new Error(`${what}: the request options must be an object (${known.join(", ")}), got ${Array.isArray(req) ? "an array" : typeof req}`);
+  }
+  for (const key of Object.keys(req)) {
+    if (!known.includes(key)) throw new Error(`${what}: unknown request option \`${key}\`; the request options are ${known.join(", ")}`);
+  }
+  if (req.transfer !== undefined && typeof req.transfer !== "boolean") {
+    throw new Error(`${what}: transfer: expected true or false (the client finds the inputs' buffers itself), got ${Array.isArray(req.transfer) ? "an array" : typeof req.transfer}`);
+  }
+  if (req.onProgress !== undefined && req.onProgress !== null && typeof req.onProgress !== "function") {
+    throw new Error(`${what}: onProgress: expected a function, got ${typeof req.onProgress}`);
+  }
 }
 
 /**

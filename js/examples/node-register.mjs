@@ -3,7 +3,7 @@
 //   node node_modules/arps/examples/node-register.mjs SOURCE TARGET [--icp plane|point|off] [--search adaptive|exhaustive]
 //     [--surface-points N] [--source-scale F] [--up X,Y,Z] [--drop-non-finite] [--json] [--aligned OUT]
 // SOURCE and TARGET are any format the readers know (PLY, PCD, LAS/LAZ, E57, XYZ/PTS/CSV, OBJ,
-// OFF, STL), read with their coordinates kept (map-grid surveys too: `readPointCloud`).
+// OFF, STL, glTF), read with their coordinates kept (map-grid surveys too: `readPointCloud`).
 // --surface-points N reads a mesh (a CAD model) as N points drawn over its surface, not its
 // vertices; --source-scale F is the `sourceScale` option (a scan in metres onto a model in
 // millimetres: 1000); --up is the `up` option; --drop-non-finite drops NaN points (an organised

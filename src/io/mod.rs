@@ -289,7 +289,7 @@ pub struct ReadOptions {
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub surface_points: Option<usize>,
     /// Seed of the surface sampling: the same file, count and seed give the same points on every
-    /// platform. Default 0. A non-negative integer (in JS a `bigint` for values above 2^53).
+    /// platform. Default 0. A non-negative integer (in JS a `bigint` from 2^53 on: a number that large may have been rounded).
     #[cfg_attr(feature = "ts", ts(type = "number | bigint", optional = nullable))]
     pub seed: u64,
     /// For an E57 file, which holds one point cloud per scan: only this one (0-based, in the
