@@ -69,7 +69,7 @@ pub struct Options {
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub icp_loss: IcpLoss,
     /// Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
-    /// correspondence distance, or of the default distance when `max_correspondence_distance` is
+    /// correspondence distance, or of the default distance when `maxCorrespondenceDistance` is
     /// wider (the voxels the answer's evidence is measured on). `0` uses the full clouds, as does
     /// a size below a millionth of the clouds' shared half-extent. Must be >= 0, and at most the
     /// clouds' shared half-extent.

@@ -215,7 +215,7 @@ impl Weights {
         }
         if let Some(expected) = meta.get(CHECKSUM_KEY) {
             let names = st.names();
-            let found = tensor_checksum(names.iter().filter_map(|n| Some((n.as_ref(), st.tensor(n).ok()?.data()))));
+            let found = tensor_checksum(names.iter().filter_map(|n| Some((*n, st.tensor(n).ok()?.data()))));
             if &found != expected {
                 return Err(Error::Weights(format!(
                     "the tensors' checksum is {found}, the file's metadata says {expected}: the file was \

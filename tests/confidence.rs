@@ -688,13 +688,13 @@ fn box_ball_rod(n: usize, seed: u32) -> Vec<[f64; 3]> {
         let k = r();
         if k < 0.5 {
             let (f, a, b) = ((r() * 6.0) as u32, r(), r());
-            let (mut x, mut y, mut z) = ((a - 0.5) * 2.0, b - 0.5, (r() - 0.5) * 0.6);
-            match f {
-                0 => z = -0.3,
-                1 => z = 0.3,
-                2 | 3 => (x, y, z) = (if f == 2 { -1.0 } else { 1.0 }, a - 0.5, (b - 0.5) * 0.6),
-                _ => (x, y, z) = ((a - 0.5) * 2.0, if f == 4 { -0.5 } else { 0.5 }, (b - 0.5) * 0.6),
-            }
+            // a height drawn for every face (used by none of them), as the port's source draws it
+            let _ = r();
+            let (x, y, z) = match f {
+                0 | 1 => ((a - 0.5) * 2.0, b - 0.5, if f == 0 { -0.3 } else { 0.3 }),
+                2 | 3 => (if f == 2 { -1.0 } else { 1.0 }, a - 0.5, (b - 0.5) * 0.6),
+                _ => ((a - 0.5) * 2.0, if f == 4 { -0.5 } else { 0.5 }, (b - 0.5) * 0.6),
+            };
             p.push([x, y, z]);
         } else if k < 0.8 {
             let (u, t) = (2.0 * r() - 1.0, 2.0 * std::f64::consts::PI * r());

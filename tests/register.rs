@@ -130,7 +130,7 @@ fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
             good.clone(),
             good.clone(),
             Options { voxel_size: Some(1e6), ..Options::default() },
-            "voxelSize = 1e6 is more than",
+            "voxelSize = 1e6 is more than the clouds' largest half-extent (1.116): a cloud would be a voxel or two",
         ),
         (
             good.clone(),

@@ -174,7 +174,7 @@ fn tensors_that_do_not_match_the_checksum_are_refused() {
         let header = u64::from_le_bytes(bytes[..8].try_into().unwrap()) as usize + 8;
         // a low mantissa bit of a value in the middle of the data: a finite, plausible weight
         let mut damaged = bytes.clone();
-        damaged[header + (bytes.len() - header) / 2 & !3] ^= 1;
+        damaged[(header + (bytes.len() - header) / 2) & !3] ^= 1;
         let e = err(&damaged);
         assert!(e.contains("checksum") && e.contains(&sum) && e.contains("damaged"), "{e}");
     }

@@ -158,19 +158,24 @@ pub(crate) fn coarse_distance(d_final: f64) -> f64 {
 pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
     // beyond the clouds' largest half-extent (1 in normalised units) every point pairs with
     // one whatever the pose: a fit, and a confidence, that say nothing
-    let too_far = |name: &str, v: f64| {
+    let too_far = |name: &str, v: f64, why: &str| {
         Error::InvalidOption(format!(
-            "{name} = {} is more than the clouds' largest half-extent ({}): every point would pair with one, \
-             whatever the pose (the default distance is {} of it)",
+            "{name} = {} is more than the clouds' largest half-extent ({}): {why}",
             num(v),
             num(s),
-            DEFAULT_MAX_CORRESPONDENCE
         ))
     };
     let d_final = match options.max_correspondence_distance {
         Some(d) if d.is_finite() && d > 0.0 => {
             if d / s > 1.0 {
-                return Err(too_far("maxCorrespondenceDistance", d));
+                return Err(too_far(
+                    "maxCorrespondenceDistance",
+                    d,
+                    &format!(
+                        "every point would pair with one, whatever the pose (the default distance is {} of it)",
+                        DEFAULT_MAX_CORRESPONDENCE
+                    ),
+                ));
             }
             d / s
         }
@@ -187,7 +192,12 @@ pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
         // meaningfully (and would saturate the grid keys): treat them as "no voxelisation".
         Some(v) if v.is_finite() && v >= 0.0 => {
             if v / s > 1.0 {
-                return Err(too_far("voxelSize", v));
+                return Err(too_far(
+                    "voxelSize",
+                    v,
+                    "a cloud would be a voxel or two, no shape left to align (the default is half the \
+                     correspondence distance; 0 keeps every point)",
+                ));
             }
             if v / s < 1e-6 {
                 0.0
