@@ -60,7 +60,7 @@ export type RegisterOptions = {
   icpLoss?: IcpLoss,
   /**
    * Voxel size of the clouds ICP works on, in the clouds' units. Default: half the final max
-   * correspondence distance, or of the default distance when `max_correspondence_distance` is
+   * correspondence distance, or of the default distance when `maxCorrespondenceDistance` is
    * wider (the voxels the answer's evidence is measured on). `0` uses the full clouds, as does
    * a size below a millionth of the clouds' shared half-extent. Must be >= 0, and at most the
    * clouds' shared half-extent.
@@ -176,8 +176,10 @@ export type RegisterOptions = {
    * "turnedInitial", "rotationsNetwork"]`; each extra start costs one ICP run on at most 2048
    * points (`"turned"` and `"turnedInitial"` are six each, `"global"` and `"globalNetwork"` up
    * to five each, plus the descriptor matching, `"rotations"` 24, `"rotationsNetwork"` 24 and
-   * as many network passes), so `["network"]` is the fastest. Must be non-empty, without
-   * repeats.
+   * as many network passes), so `["network"]` is the fastest, and the least sure: when the
+   * network turns the source wrong (a half turn), no other start corrects it, and the
+   * confidence may not tell (two vehicle LiDAR sweeps at a 20-degree turn came back turned over
+   * at 0.98). Must be non-empty, without repeats.
    * - `"network"`: the network + GMR estimate (with `network: false`, the initial transform,
    *   reported as `"initial"`);
    * - `"centroids"`: `initialTransform`'s rotation (none if unset) with the translation that
