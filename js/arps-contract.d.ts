@@ -549,6 +549,16 @@ export type ReadOptions = {
    * an empty list). Unset (the default): every scan, as one cloud.
    */
   scan?: number | null,
+  /**
+   * For a LAS or LAZ file: only the points of these classification codes (ASPRS: 2 ground,
+   * 3-5 vegetation, 6 building, 7 low noise, 9 water, 18 high noise, ...), e.g. `[2]` to
+   * register two epochs by their ground where vegetation or buildings changed, or every code
+   * but the noise ones. An error when no point of the file is of them (the message names the
+   * classes it holds), when the list is empty, and for a file of another format (it has no
+   * classes). `transform_file` moves every point of the file whatever this says. Unset (the
+   * default): every point.
+   */
+  classes?: number[],
 };
 
 /**

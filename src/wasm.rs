@@ -267,7 +267,8 @@ pub fn list_scans(
 /// column-major (or, through the package's entry, four row-major rows), a rigid transform or one
 /// times a uniform scale (a change of unit). `options`: the `ReadOptions` the cloud was read
 /// with; with `scan`, an E57 file's scan alone is saved, as an E57 file of its own (its points'
-/// and images' bytes kept, the other scans left out). Returns the moved file's bytes. Throws on a
+/// and images' bytes kept, the other scans left out); with `classes`, a LAS file is still moved
+/// whole (every point, whatever its class). Returns the moved file's bytes. Throws on a
 /// format it cannot tell, a file its reader refuses, integer coordinates where the moved ones
 /// cannot be stored, a matrix that is not rigid (or uniformly scaled), and invalid options.
 #[wasm_bindgen(js_name = transformFile)]

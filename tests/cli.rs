@@ -192,6 +192,27 @@ fn register_reads_one_scan_of_an_e57_file() {
     }
 }
 
+/// `--source-classes` / `--target-classes`: the ground (class 2) of a LAS survey registers onto
+/// the whole survey about where it lies; a class the file does not hold, and classes of a PLY file, are
+/// refused with the flag named.
+#[test]
+fn register_reads_the_classes_of_a_las_file() {
+    let las = "fixtures/formats/simple.las";
+    let out = arps(&["register", las, las, "--source-classes", "2", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let r: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
+    // (a sparse 4 km survey, 1065 points, judged at 58 m: its ground lands within 2 m)
+    let at = nalgebra::Point3::new(637_000.0, 851_000.0, 430.0);
+    assert!((r.T_target_source.transform_point(&at) - at).norm() < 2.0, "{}", r.T_target_source);
+    let bad = arps(&["register", las, las, "--target-classes", "6,9"]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("none of its 1065 points is of classes 6, 9"), "{err}");
+    let ply = "fixtures/scans/velodyne-small.ply";
+    let bad = arps(&["register", ply, las, "--source-classes", "2"]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("--source-classes keeps points of some LAS classes, but this is a PLY file"), "{err}");
+}
+
 #[test]
 fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
     let dir = common::scratch("cli");
@@ -685,7 +706,7 @@ fn the_registration_seed_leaves_the_surface_sampling_alone() {
     let out = arps(&["register", scan, mesh, "--surface-points", "3000", "--seed", "7", "--json"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let cli: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
-    let surface = |seed| arps::io::ReadOptions { surface_points: Some(3000), seed, scan: None };
+    let surface = |seed| arps::io::ReadOptions { surface_points: Some(3000), seed, scan: None, classes: None };
     let read = |p: &str, o: &arps::io::ReadOptions| arps::io::read_path_with(&dir.join(p), o).unwrap();
     let lib = |read_seed| {
         arps::Registrar::with_default_model()

@@ -246,3 +246,40 @@ fn hostile_compressed_data_gives_errors_not_allocations() {
         }
     }
 }
+
+/// `ReadOptions::classes`: the points of the named classification codes alone, from LAS and LAZ
+/// alike (point format 3, and format 6 whose layered chunks decode the classification layer only
+/// when asked); counts as the files' classification bytes give them (`simple`: 789 of class 1,
+/// 276 of class 2; `1_4_w_evlr`: 1000 of class 2).
+#[test]
+fn classes_keep_the_points_of_those_classification_codes() {
+    use arps::io::{read_point_cloud_with, Classes, ReadOptions};
+    let with = |name: &str, codes: &[u8]| {
+        let options = ReadOptions { classes: Some(Classes::of(codes.iter().copied())), ..ReadOptions::default() };
+        read_point_cloud_with(&fixture(name), name, &options)
+    };
+    let key = |c: &PointCloud| {
+        let mut v: Vec<[i64; 3]> = (0..c.len()).map(|i| c.point_f64(i).map(|x| (x * 100.0).round() as i64)).collect();
+        v.sort_unstable();
+        v
+    };
+    for name in ["simple.las", "simple.laz", "simple.copc.laz"] {
+        let (ground, other, both) =
+            (with(name, &[2]).unwrap(), with(name, &[1]).unwrap(), with(name, &[1, 2]).unwrap());
+        assert_eq!((ground.len(), other.len(), both.len()), (276, 789, 1065), "{name}");
+        // the two classes split the file's points
+        let mut split = key(&ground);
+        split.extend(key(&other));
+        split.sort_unstable();
+        assert_eq!(split, key(&read(name)), "{name}");
+    }
+    assert_eq!(with("simple.laz", &[2]).unwrap(), with("simple.las", &[2]).unwrap());
+    for name in ["1_4_w_evlr.las", "1_4_w_evlr.laz"] {
+        assert_eq!(with(name, &[2]).unwrap(), read(name), "{name}");
+        let e = with(name, &[6, 9]).unwrap_err().to_string();
+        has(&e, &["none of its 1000 points is of classes 6, 9", "it holds classes 2 (1000)"]);
+    }
+    // a format without classifications
+    let e = with("fuze_binary.ply", &[2]).unwrap_err().to_string();
+    has(&e, &["classes option", "PLY file", "only LAS and LAZ"]);
+}

@@ -211,7 +211,11 @@ fn read_path_uses_the_file_name() {
 #[test]
 fn a_mesh_read_as_its_sampled_surface() {
     let surface = |name: &str, n: usize, seed: u64| {
-        read_point_cloud_with(&fixture(name), name, &ReadOptions { surface_points: Some(n), seed, scan: None })
+        read_point_cloud_with(
+            &fixture(name),
+            name,
+            &ReadOptions { surface_points: Some(n), seed, scan: None, classes: None },
+        )
     };
     let stl = "angle_block_binary_solid.stl";
     let s = surface(stl, 5000, 0).unwrap();
@@ -225,8 +229,11 @@ fn a_mesh_read_as_its_sampled_surface() {
         assert_eq!(surface(points_only, 3000, 0).unwrap().points, read(points_only).points, "{points_only}");
     }
     let ply = std::fs::read(format!("{}/fixtures/wasm/source.ply", env!("CARGO_MANIFEST_DIR"))).unwrap();
-    let as_surface =
-        read_point_cloud_with(&ply, "s.ply", &ReadOptions { surface_points: Some(3000), seed: 0, scan: None });
+    let as_surface = read_point_cloud_with(
+        &ply,
+        "s.ply",
+        &ReadOptions { surface_points: Some(3000), seed: 0, scan: None, classes: None },
+    );
     assert_eq!(as_surface.unwrap().points, read_point_cloud(&ply, "s.ply").unwrap().points, "a PLY without faces");
     let few = surface(stl, 3, 0).unwrap_err().to_string();
     assert!(few.contains("surfacePoints = 3 is fewer than 16"), "{few}");

@@ -12,8 +12,12 @@ use nalgebra::Vector3;
 fn a_partial_scan_registers_onto_a_cad_model_read_as_its_surface() {
     let name = "angle_block_binary_solid.stl";
     let bytes = std::fs::read(format!("{}/fixtures/formats/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
-    let model = read_point_cloud_with(&bytes, name, &ReadOptions { surface_points: Some(20_000), seed: 0, scan: None })
-        .unwrap();
+    let model = read_point_cloud_with(
+        &bytes,
+        name,
+        &ReadOptions { surface_points: Some(20_000), seed: 0, scan: None, classes: None },
+    )
+    .unwrap();
     // the scan: other points of the same surface, the part seen from one side (70% of it)
     let dense = read_mesh(&bytes, name).unwrap().sample_surface(20_000, 7).unwrap();
     let (lo, hi) = dense.bounds();
@@ -106,7 +110,13 @@ fn mesh_targets_read_as_vertices_and_as_surfaces() {
         let readings = [None, Some(50_000)];
         let targets: Vec<_> = readings
             .iter()
-            .map(|&n| read_point_cloud_with(&bytes, &name, &ReadOptions { surface_points: n, seed: 0, scan: None }))
+            .map(|&n| {
+                read_point_cloud_with(
+                    &bytes,
+                    &name,
+                    &ReadOptions { surface_points: n, seed: 0, scan: None, classes: None },
+                )
+            })
             .collect();
         if targets.iter().any(|t| t.is_err()) {
             continue;

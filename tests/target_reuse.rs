@@ -17,8 +17,12 @@ use common::{bumpy_surface, crop, motion};
 fn model_and_scans() -> (PointCloud, Vec<PointCloud>) {
     let name = "angle_block_binary_solid.stl";
     let bytes = std::fs::read(format!("{}/fixtures/formats/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
-    let model = read_point_cloud_with(&bytes, name, &ReadOptions { surface_points: Some(20_000), seed: 0, scan: None })
-        .unwrap();
+    let model = read_point_cloud_with(
+        &bytes,
+        name,
+        &ReadOptions { surface_points: Some(20_000), seed: 0, scan: None, classes: None },
+    )
+    .unwrap();
     let dense = read_mesh(&bytes, name).unwrap().sample_surface(6_000, 7).unwrap();
     let reach = 0.6 * model.half_extent() as f32;
     let close_up = |c: [f32; 3]| {
@@ -91,9 +95,12 @@ fn registrations_onto_a_kept_target_equal_fresh_ones() {
 fn registrations_onto_a_kept_large_target_equal_fresh_ones_through_another_voxel() {
     let name = "angle_block_binary_solid.stl";
     let bytes = std::fs::read(format!("{}/fixtures/formats/{name}", env!("CARGO_MANIFEST_DIR"))).unwrap();
-    let model =
-        read_point_cloud_with(&bytes, name, &ReadOptions { surface_points: Some(400_000), seed: 1, scan: None })
-            .unwrap();
+    let model = read_point_cloud_with(
+        &bytes,
+        name,
+        &ReadOptions { surface_points: Some(400_000), seed: 1, scan: None, classes: None },
+    )
+    .unwrap();
     let (_, scans) = model_and_scans();
     // the default ICP voxel (half of 0.025 of the scale, the model's half-extent) keeps at most
     // half the model's points, so its copy stands in; at a tenth of that voxel, it does not
@@ -278,9 +285,12 @@ fn many_scans_onto_one_target() {
         ("CAD model, close-ups up to 30 degrees", close_ups),
     ];
     for points in [200_000, 1_000_000] {
-        let model =
-            read_point_cloud_with(&bytes, name, &ReadOptions { surface_points: Some(points), seed: 0, scan: None })
-                .unwrap();
+        let model = read_point_cloud_with(
+            &bytes,
+            name,
+            &ReadOptions { surface_points: Some(points), seed: 0, scan: None, classes: None },
+        )
+        .unwrap();
         for (what, scans) in &sets {
             time_kept_and_anew(what, &model, scans, 5.0);
         }

@@ -518,6 +518,15 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     assert.ok(movedLaz[104] & 0x80 && movedLaz.length < movedLas.length * 0.6, "LAZ moved as LAZ");
     assert.deepEqual(arps.readPointCloud(movedLaz, "a.laz"), arps.readPointCloud(movedLas, "a.las"), "LAZ's points");
     rejects(r, "transformFile: not LAS", () => arps.transformFile(new Uint8Array(400), "a.las", T), /LASF/);
+    // classes: the ground (class 2) of the LAZ survey alone, 276 of its 1065 points; an empty
+    // list and a file without classes refused; transformFile with the same read options moves
+    // every point of the file
+    assert.equal(arps.readPointCloud(laz, "simple.laz", { classes: [2] }).points.length, 3 * 276);
+    assert.equal(arps.parsePointCloud(laz, "simple.laz", { classes: [1, 2] }).length, 3 * 1065);
+    rejects(r, "readPointCloud: no class named", () => arps.readPointCloud(laz, "simple.laz", { classes: [] }), /keeps no point/);
+    rejects(r, "readPointCloud: no point of those classes", () => arps.readPointCloud(laz, "simple.laz", { classes: [6] }), /none of its 1065 points is of classes 6 \(it holds classes 1 \(789\), 2 \(276\)/);
+    rejects(r, "readPointCloud: classes of a PLY", () => arps.readPointCloud(frag, "frag.ply", { classes: [2] }), /only LAS and LAZ files hold classifications/);
+    assert.deepEqual(arps.transformFile(laz, "simple.laz", T, { classes: [2] }), movedLaz);
     // a file under another format's name goes by its signature: a PLY named .las is moved as PLY
     assert.deepEqual(arps.transformFile(frag, "a.las", T), movedPly);
     // a PCD (x y z normal_x normal_y normal_z rgb) moved as it is (near zero): its points those

@@ -2,14 +2,16 @@
 //! (LAS compressed by LASzip): the X, Y, Z of every point record, as `X * scale + offset` in
 //! `f64`, so georeferenced coordinates keep every digit the file holds. Every record is read,
 //! whatever its classification (noise classes and withheld points too, as PDAL and laspy read
-//! them); isolated noise far from the rest is what the registration's far-outlier step leaves
-//! out (`Options::outliers`).
+//! them), unless the caller names the classes to keep ([`super::ReadOptions::classes`]);
+//! isolated noise far from the rest is what the registration's far-outlier step leaves out
+//! (`Options::outliers`).
 //!
 //! The header is read here; a LAZ file's points are decompressed by the `laz` crate (the Rust
 //! port of LASzip), only their X, Y, Z layers where the file is layered (point formats 6 to 10).
 //! That crate trusts the file's chunk table and layer sizes, so they are checked here first: a
 //! count that the bytes could not hold is an error, not an allocation or a panic.
 
+use super::classes::Classes;
 use super::util::{bounded_capacity, u32_at};
 use crate::{Error, Result};
 use laz::laszip::{ChunkTable, LasZipDecompressor, LazItemType, LazVlr};
@@ -67,6 +69,8 @@ pub(super) struct Header {
     pub(super) vlrs_at: usize,
     vlr_count: u32,
     pub(super) compressed: bool,
+    /// The point data format, 0 to 10.
+    format: u8,
     pub(super) record_len: usize,
     pub(super) count: u64,
     pub(super) scale: [f64; 3],
@@ -132,6 +136,7 @@ impl Header {
             vlrs_at: header_size,
             vlr_count: u32_at(bytes, 100),
             compressed,
+            format,
             record_len,
             count,
             scale,
@@ -156,22 +161,56 @@ impl Header {
     pub(super) fn point(&self, record: &[u8]) -> [f64; 3] {
         [0, 1, 2].map(|k| u32_at(record, 4 * k) as i32 as f64 * self.scale[k] + self.shift[k])
     }
-}
 
-/// Reads the points of a LAS or LAZ file.
-pub(crate) fn read(bytes: &[u8]) -> Result<Vec<[f64; 3]>> {
-    let header = Header::read(bytes)?;
-    crate::limits::check_file_points(FORMAT, header.count)?;
-    if header.compressed {
-        read_compressed(bytes, &header)
-    } else {
-        read_records(bytes, &header)
+    /// A record's classification code: the low 5 bits of byte 15 in point formats 0 to 5 (the
+    /// others are flags), byte 16 in formats 6 to 10.
+    fn class(&self, record: &[u8]) -> u8 {
+        if self.format < 6 {
+            record[15] & 0x1F
+        } else {
+            record[16]
+        }
     }
 }
 
-/// The points of an uncompressed file.
-fn read_records(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
-    Ok(h.records(bytes)?.chunks_exact(h.record_len).map(|r| h.point(r)).collect())
+/// Reads the points of a LAS or LAZ file: every record, or with `classes` those of these
+/// classification codes (an error when none is, naming the classes the file holds).
+pub(crate) fn read(bytes: &[u8], classes: Option<Classes>) -> Result<Vec<[f64; 3]>> {
+    let header = Header::read(bytes)?;
+    crate::limits::check_file_points(FORMAT, header.count)?;
+    let mut held = [0u64; 256];
+    let mut keep = |record: &[u8]| {
+        classes.is_none_or(|c| {
+            let class = header.class(record);
+            held[usize::from(class)] += 1;
+            c.has(class)
+        })
+    };
+    let points = if header.compressed {
+        read_compressed(bytes, &header, classes.is_some(), &mut keep)
+    } else {
+        read_records(bytes, &header, &mut keep)
+    }?;
+    match classes {
+        Some(c) if points.is_empty() && header.count > 0 => {
+            let found: Vec<String> = (0..=255u8)
+                .filter(|k| held[usize::from(*k)] > 0)
+                .map(|k| format!("{k} ({})", held[usize::from(k)]))
+                .collect();
+            Err(err(format!(
+                "none of its {} points is of classes {} (it holds classes {}, points in brackets)",
+                header.count,
+                c.list(),
+                found.join(", ")
+            )))
+        }
+        _ => Ok(points),
+    }
+}
+
+/// The points of an uncompressed file whose records `keep` keeps.
+fn read_records(bytes: &[u8], h: &Header, keep: &mut dyn FnMut(&[u8]) -> bool) -> Result<Vec<[f64; 3]>> {
+    Ok(h.records(bytes)?.chunks_exact(h.record_len).filter(|r| keep(r)).map(|r| h.point(r)).collect())
 }
 
 /// A variable length record after the public header block.
@@ -295,13 +334,25 @@ fn decompressor<'a>(
 
 /// The points of a LAZ file, decompressed by the `laz` crate once its chunk table and layer
 /// sizes are known to fit in the file.
-fn read_compressed(bytes: &[u8], h: &Header) -> Result<Vec<[f64; 3]>> {
-    // only X, Y, Z (and what they are coded with) where the file is layered
-    let selection = DecompressionSelection(DecompressionSelection::XY_RETURNS_CHANNEL | DecompressionSelection::Z);
+fn read_compressed(
+    bytes: &[u8],
+    h: &Header,
+    classes: bool,
+    keep: &mut dyn FnMut(&[u8]) -> bool,
+) -> Result<Vec<[f64; 3]>> {
+    // only X, Y, Z (and what they are coded with) where the file is layered, and the
+    // classification when the caller keeps some classes
+    let class = if classes { DecompressionSelection::CLASSIFICATION } else { 0 };
+    let selection =
+        DecompressionSelection(DecompressionSelection::XY_RETURNS_CHANNEL | DecompressionSelection::Z | class);
     // reserved as if the points were stored uncompressed (fewer than a compressed file holds), the
     // rest grows as they decode
     let mut points = Vec::with_capacity(bounded_capacity(h.count, bytes.len() - h.offset, h.record_len));
-    each_record(bytes, h, selection, &mut |record| points.push(h.point(record)))?;
+    each_record(bytes, h, selection, &mut |record| {
+        if keep(record) {
+            points.push(h.point(record))
+        }
+    })?;
     Ok(points)
 }
 

@@ -32,6 +32,7 @@
 use crate::cloud::PointCloud;
 use crate::{Error, Result};
 
+mod classes;
 mod e57;
 mod e57_transform;
 mod gltf;
@@ -250,7 +251,13 @@ fn sniff(bytes: &[u8]) -> Option<Format> {
     None
 }
 
-fn read_format(bytes: &[u8], format: Format, faces: Faces, scan: Option<usize>) -> Result<Raw> {
+fn read_format(
+    bytes: &[u8],
+    format: Format,
+    faces: Faces,
+    scan: Option<usize>,
+    classes: Option<Classes>,
+) -> Result<Raw> {
     match format {
         Format::Ply => ply::read(bytes, faces),
         Format::Pcd => pcd::read(bytes),
@@ -258,7 +265,7 @@ fn read_format(bytes: &[u8], format: Format, faces: Faces, scan: Option<usize>) 
         Format::Obj => obj::read(bytes),
         Format::Off => off::read(bytes),
         Format::Stl => stl::read(bytes),
-        Format::Las => las::read(bytes).map(|vertices| Raw { vertices, triangles: Vec::new() }),
+        Format::Las => las::read(bytes, classes).map(|vertices| Raw { vertices, triangles: Vec::new() }),
         Format::E57 => e57::read(bytes, scan).map(|vertices| Raw { vertices, triangles: Vec::new() }),
         Format::Gltf => gltf::read(bytes, faces),
     }
@@ -298,6 +305,15 @@ pub struct ReadOptions {
     /// an empty list). Unset (the default): every scan, as one cloud.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub scan: Option<usize>,
+    /// For a LAS or LAZ file: only the points of these classification codes (ASPRS: 2 ground,
+    /// 3-5 vegetation, 6 building, 7 low noise, 9 water, 18 high noise, ...), e.g. `[2]` to
+    /// register two epochs by their ground where vegetation or buildings changed, or every code
+    /// but the noise ones. An error when no point of the file is of them (the message names the
+    /// classes it holds), when the list is empty, and for a file of another format (it has no
+    /// classes). `transform_file` moves every point of the file whatever this says. Unset (the
+    /// default): every point.
+    #[cfg_attr(feature = "ts", ts(type = "number[]", optional = nullable))]
+    pub classes: Option<Classes>,
 }
 
 /// One scan of a file that holds several (E57), as [`list_scans`] describes it. In JS a plain
@@ -381,8 +397,15 @@ pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOption
         }
     }
     check_scan(format, options.scan)?;
+    if options.classes.is_some() && format != Format::Las {
+        return Err(Error::InvalidOption(format!(
+            "the classes option keeps points of some LAS classes, but this is a {} file: only LAS and LAZ files \
+             hold classifications (leave it unset)",
+            format.name()
+        )));
+    }
     let faces = if options.surface_points.is_some() { Faces::IfAny } else { Faces::Skip };
-    let raw = read_format(bytes, format, faces, options.scan)?;
+    let raw = read_format(bytes, format, faces, options.scan, options.classes)?;
     crate::limits::check_file_points(format.name(), raw.vertices.len() as u64)?;
     if raw.vertices.is_empty() {
         return Err(Error::parse(format.name(), "the file holds no points"));
@@ -405,7 +428,7 @@ pub fn read_mesh(bytes: &[u8], file_name: &str) -> Result<Mesh> {
     if !format.has_faces() {
         return Err(Error::parse(format.name(), "this format holds points only, not a mesh (use read_point_cloud)"));
     }
-    Ok(read_format(bytes, format, Faces::Required, None)?.into_mesh())
+    Ok(read_format(bytes, format, Faces::Required, None, None)?.into_mesh())
 }
 
 /// Writes a cloud as binary little-endian PLY, in the caller's frame: `float x y z` per vertex
@@ -415,6 +438,7 @@ pub fn write_ply_binary(cloud: &PointCloud) -> Vec<u8> {
     ply::write_binary(cloud)
 }
 
+pub use classes::Classes;
 pub use las_transform::transform_las;
 #[cfg_attr(not(target_arch = "wasm32"), allow(unused_imports))]
 pub(crate) use motion::check_similarity;

@@ -37,7 +37,8 @@ pub fn transform_file(bytes: &[u8], file_name: &str, m: &Matrix4<f64>) -> Result
 /// file of its own (its points' and images' pages copied as they are, the XML listing only them,
 /// their poses moved; an error for a scan beyond the file's, or set for a file of another
 /// format); every other file as
-/// [`transform_file`] moves it (a mesh read as points over its surface is moved as the mesh).
+/// [`transform_file`] moves it (a mesh read as points over its surface is moved as the mesh, a
+/// LAS file read with [`ReadOptions::classes`] is moved whole: every point, whatever its class).
 pub fn transform_file_with(bytes: &[u8], file_name: &str, m: &Matrix4<f64>, options: &ReadOptions) -> Result<Vec<u8>> {
     // a text file's UTF-8 byte order mark: read past, and written back in front
     let (bytes, bom) = super::after_bom(bytes)?;

@@ -123,6 +123,16 @@ pub struct RegisterArgs {
     /// Of a target E57 file holding several scans, only this one (0-based); see `--source-scan`.
     #[arg(long)]
     target_scan: Option<usize>,
+    /// Of a source LAS or LAZ file, only the points of these classification codes,
+    /// comma-separated (ASPRS: 2 ground, 3-5 vegetation, 6 building, 7 low noise, 18 high
+    /// noise; e.g. `--source-classes 2` for the ground alone); an error for other formats.
+    /// `--aligned` to the source's own format moves every point of the file.
+    #[arg(long, value_name = "CODES", value_delimiter = ',')]
+    source_classes: Vec<u8>,
+    /// Of a target LAS or LAZ file, only the points of these classification codes; see
+    /// `--source-classes`.
+    #[arg(long, value_name = "CODES", value_delimiter = ',')]
+    target_classes: Vec<u8>,
     /// The factor from the source's unit to the target's, when they differ (e.g. 1000 for a
     /// scan in metres onto a model in millimetres; the option `sourceScale`): distances and
     /// `--aligned` are then in the target's unit. The printed `T_target_source` maps the file's
@@ -178,8 +188,10 @@ struct JsonOutput<'a> {
 }
 
 fn read_cloud(path: &Path, options: &io::ReadOptions) -> Result<arps::PointCloud, String> {
-    io::read_path_with(path, options)
-        .map_err(|e| format!("{}: {}", path.display(), e.to_string().replace("the scan option", "--target-scan")))
+    io::read_path_with(path, options).map_err(|e| {
+        let message = e.to_string().replace("the scan option", "--target-scan");
+        format!("{}: {}", path.display(), message.replace("the classes option", "--target-classes"))
+    })
 }
 
 /// A warning when the file at `path` is a mesh with faces and so was read as its vertices (an
@@ -229,8 +241,10 @@ fn read_source(
     options: &io::ReadOptions,
     keep: bool,
 ) -> Result<(arps::PointCloud, Option<Vec<u8>>), String> {
-    let at =
-        |e: arps::Error| format!("{}: {}", path.display(), e.to_string().replace("the scan option", "--source-scan"));
+    let at = |e: arps::Error| {
+        let message = e.to_string().replace("the scan option", "--source-scan");
+        format!("{}: {}", path.display(), message.replace("the classes option", "--source-classes"))
+    };
     let bytes = io::read_file(path).map_err(at)?;
     let cloud = io::read_point_cloud_with(&bytes, &io::file_name(path), options).map_err(at)?;
     Ok((cloud, keep.then_some(bytes)))
@@ -466,6 +480,8 @@ pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
         surface_seed,
         source_scan,
         target_scan,
+        source_classes,
+        target_classes,
         source_scale,
         min_confidence,
         aligned,
@@ -504,8 +520,10 @@ pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
     }
     let mut registrar = load_registrar(weights.as_deref())?;
     let mut t0 = std::time::Instant::now();
-    let reading = io::ReadOptions { surface_points, seed: surface_seed, scan: source_scan };
-    let reading_target = io::ReadOptions { scan: target_scan, ..reading };
+    let classes = |codes: Vec<u8>| (!codes.is_empty()).then(|| io::Classes::of(codes));
+    let reading =
+        io::ReadOptions { surface_points, seed: surface_seed, scan: source_scan, classes: classes(source_classes) };
+    let reading_target = io::ReadOptions { scan: target_scan, classes: classes(target_classes), ..reading };
     let initial_transform = match initial_transform.as_deref() {
         None => None,
         Some(v) if v.len() == 16 => Some(std::array::from_fn(|r| std::array::from_fn(|c| v[4 * r + c]))),
