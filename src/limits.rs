@@ -69,6 +69,12 @@ pub const MAX_FILE_POINTS: usize = MAX_POINTS_PER_CLOUD;
 /// Most bytes a compressed body may decompress to.
 pub const MAX_DECODED_BYTES: u64 = 1 << 30;
 
+/// Bytes a file read whole from disk may hold ([`crate::io::read_file`], native only): 4 GiB,
+/// more than any file of [`MAX_FILE_POINTS`] points needs, so that a device or pipe that never
+/// ends (`/dev/zero`) is an error, not memory exhausted. (In JS the package refuses files over
+/// 1 GiB before they reach the engine.)
+pub const MAX_READ_BYTES: u64 = 4 << 30;
+
 /// Largest value of every size in a model config (points, widths, heads, H, J).
 pub const MAX_MODEL_DIM: usize = 4096;
 

@@ -295,7 +295,9 @@ impl Refinement {
         let r = self.d_coarse / self.d_final;
         let mut stages: Vec<f64> = SCHEDULE.iter().map(|f| f * r).collect();
         let mut f = r;
-        while f > 1.0 {
+        // (at most 64 halvings: a ratio beyond f64's range, from distances no caller can set,
+        // still ends)
+        while f > 1.0 && stages.len() < SCHEDULE.len() + 64 {
             f = (f / 2.0).max(1.0);
             // a last step shorter than a quarter of the halving is merged into the final stage
             if f < 1.25 {

@@ -126,6 +126,14 @@ fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
             Options { max_correspondence_distance: Some(1e30), ..Options::default() },
             "maxCorrespondenceDistance = 1e30 is more than the clouds' largest half-extent",
         ),
+        // finer than f32 resolves (a QA trial's 1e-310 trapped the engine: its halving schedule
+        // down from the default never ended)
+        (
+            good.clone(),
+            good.clone(),
+            Options { max_correspondence_distance: Some(1e-310), ..Options::default() },
+            "maxCorrespondenceDistance = 1e-310 is finer than the clouds' f32 coordinates resolve",
+        ),
         (
             good.clone(),
             good.clone(),

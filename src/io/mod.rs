@@ -462,11 +462,42 @@ pub fn read_path_with(path: &std::path::Path, options: &ReadOptions) -> Result<P
 /// A file's bytes, as [`read_path_with`] reads them: an I/O error names the path (native only).
 #[cfg(not(target_arch = "wasm32"))]
 pub fn read_file(path: &std::path::Path) -> Result<Vec<u8>> {
-    std::fs::read(path).map_err(|e| Error::Io(std::io::Error::new(e.kind(), format!("{}: {e}", path.display()))))
+    read_file_within(path, crate::limits::MAX_READ_BYTES)
+}
+
+/// [`read_file`] with the most bytes it may hold.
+#[cfg(not(target_arch = "wasm32"))]
+fn read_file_within(path: &std::path::Path, limit: u64) -> Result<Vec<u8>> {
+    use std::io::Read;
+    let io = |e: std::io::Error| Error::Io(std::io::Error::new(e.kind(), format!("{}: {e}", path.display())));
+    let file = std::fs::File::open(path).map_err(io)?;
+    // a regular file's length reserves its bytes; a device or pipe's reads stop one byte past the
+    // limit
+    let size = file.metadata().map(|m| m.len()).unwrap_or(0).min(limit);
+    let mut bytes = Vec::with_capacity(size as usize);
+    file.take(limit + 1).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(Error::TooLarge(format!(
+            "{}: more than {limit} bytes, the most a file read whole may hold (a device or pipe that never ends?)",
+            path.display()
+        )));
+    }
+    Ok(bytes)
 }
 
 /// The name [`read_path_with`] gives the readers for `path` (its last component; the format
 /// comes from its extension).
 pub fn file_name(path: &std::path::Path) -> String {
     path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default()
+}
+
+#[cfg(all(test, unix))]
+mod tests {
+    /// A device that never ends is refused at the limit, not read until memory runs out.
+    #[test]
+    fn a_file_that_never_ends_is_refused_at_the_limit() {
+        let e = super::read_file_within(std::path::Path::new("/dev/zero"), 1 << 20).unwrap_err().to_string();
+        assert!(e.contains("/dev/zero: more than 1048576 bytes") && e.contains("never ends"), "{e}");
+        assert_eq!(super::read_file_within(std::path::Path::new("/dev/null"), 1 << 20).unwrap(), Vec::<u8>::new());
+    }
 }

@@ -177,6 +177,17 @@ pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
                     ),
                 ));
             }
+            // below f32's resolution at the clouds' size no pair is within it, and the halving
+            // schedule down to it from the default would never end
+            if d / s < f64::from(f32::EPSILON) {
+                return Err(Error::InvalidOption(format!(
+                    "maxCorrespondenceDistance = {} is finer than the clouds' f32 coordinates resolve at their \
+                     size (half-extent {}: steps of about {}); give a few point spacings",
+                    num(d),
+                    num(s),
+                    num(s * f64::from(f32::EPSILON))
+                )));
+            }
             d / s
         }
         Some(d) => {

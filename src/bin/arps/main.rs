@@ -102,7 +102,7 @@ fn main() -> ExitCode {
 pub(crate) fn load_registrar(path: Option<&Path>) -> Result<Registrar, String> {
     match path {
         Some(p) => {
-            let bytes = std::fs::read(p).map_err(|e| format!("{}: {e}", p.display()))?;
+            let bytes = arps::io::read_file(p).map_err(|e| e.to_string())?;
             Registrar::from_bytes(&bytes).map_err(|e| format!("{}: {e}", p.display()))
         }
         None => Registrar::with_default_model().map_err(|e| e.to_string()),
@@ -115,7 +115,7 @@ fn run(command: Command) -> Result<Option<String>, String> {
     let done = match command {
         Command::Register(args) => return register::run(args),
         Command::Info { weights } => {
-            let bytes = std::fs::read(&weights).map_err(|e| format!("{}: {e}", weights.display()))?;
+            let bytes = arps::io::read_file(&weights).map_err(|e| e.to_string())?;
             let w = Weights::from_bytes(&bytes).map_err(|e| format!("{}: {e}", weights.display()))?;
             let c = &w.config;
             out!("{}: arps weights, format version {}", weights.display(), arps::weights::FORMAT_VERSION);

@@ -26,7 +26,7 @@ pub fn run(args: QuantizeArgs) -> Result<(), String> {
         32 => StoreAs::F32,
         b => return Err(format!("--bits {b} is not supported: use 8 (int8), 16 (f16) or 32 (f32)")),
     };
-    let in_bytes = std::fs::read(&args.input).map_err(|e| format!("{}: {e}", args.input.display()))?;
+    let in_bytes = arps::io::read_file(&args.input).map_err(|e| e.to_string())?;
     let mut w = Weights::from_bytes(&in_bytes).map_err(|e| format!("{}: {e}", args.input.display()))?;
     let storage = match store {
         StoreAs::I8 => "int8 weight matrices (symmetric, one f32 scale per row), f16 vectors",
