@@ -265,7 +265,7 @@ export type RegistrationStart = "network" | "centroids" | "initial" | "turned" |
 /**
  * How the options' `starts` are searched (see `search`).
  */
-export type RegistrationSearch = "adaptive" | "exhaustive";
+export type RegistrationSearch = "adaptive" | "exhaustive" | "local";
 
 /**
  * Which ICP to run after the network.

@@ -285,6 +285,14 @@ pub enum Search {
     /// search's stages of the starts, each stage's best judged by the probes as there (so both
     /// count the same look-alikes as alternatives), all of them run, without its last stages.
     Exhaustive,
+    /// Every start is refined and the best returned, and nothing moves it after: a pose the
+    /// confidence's probes find that fits better (the answer turned over, say) is refined and
+    /// offered among the alternatives, with a warning, instead of replacing the answer (the
+    /// answer is then at most 0.5 sure); no stages after the starts'. With `starts: ["initial"]`
+    /// and `initialTransform`, a refinement of the caller's guess alone: a tracking or survey
+    /// pose that a look-alike with more overlap would otherwise replace (a room's quarter turn,
+    /// stations stacked along a tunnel).
+    Local,
 }
 
 /// [`Search::Adaptive`] stops once the best answer's confidence reaches this: high enough that a

@@ -741,3 +741,42 @@ fn a_wider_distance_does_not_make_a_flip_an_alternative() {
         );
     }
 }
+
+/// `search: "local"` keeps the refined guess: from a guess turned a half turn from the truth,
+/// the default search takes the truth the probes find (it fits better), the local one keeps its
+/// answer near the guess, offers the truth among its alternatives, says so, and is at most 0.5
+/// sure. (Fragment and tunnel users' tracking poses were replaced by look-alikes with more
+/// overlap.)
+#[test]
+#[allow(non_snake_case)]
+fn the_local_search_keeps_the_guess_and_offers_the_better_pose() {
+    let T_target_source = from_rotation_translation(
+        &turn_about(Vector3::new(0.3, 1.0, 0.2), 30.0, Vector3::zeros()).fixed_view::<3, 3>(0, 0).into(),
+        &Vector3::new(0.4, -0.2, 0.3),
+    );
+    let inverse = T_target_source.try_inverse().unwrap();
+    let cloud = |pts: Vec<[f64; 3]>| PointCloud::new(pts.iter().map(|p| p.map(|v| v as f32)).collect());
+    let target = cloud(box_ball_rod(3000, 1));
+    let source = cloud(box_ball_rod(3000, 101).iter().map(|p| common::apply(&inverse, *p)).collect());
+    // the guess: the truth turned a half turn about x through the target's centroid
+    let centre =
+        (0..target.len()).fold(Vector3::zeros(), |c, i| c + Vector3::from(target.point_f64(i))) / target.len() as f64;
+    let guess = turn_about(Vector3::x(), 180.0, centre) * T_target_source;
+    let mut reg = Registrar::with_default_model().unwrap();
+    let options = |search| Options { search, network: false, ..from_pose(&guess) };
+    let default = reg.register(&source, &target, &options(arps::Search::Adaptive)).unwrap();
+    assert!(common::errors(&default.T_target_source, &T_target_source).0 < 1.0, "{}", default.T_target_source);
+    let local = reg.register(&source, &target, &options(arps::Search::Local)).unwrap();
+    assert!(common::errors(&local.T_target_source, &guess).0 < 15.0, "{}", local.T_target_source);
+    assert!(local.confidence <= 0.5, "{}", local.confidence);
+    assert!(
+        local.alternatives.iter().any(|a| common::errors(&a.T_target_source, &T_target_source).0 < 1.0),
+        "{:?}",
+        local.alternatives.iter().map(|a| common::errors(&a.T_target_source, &T_target_source)).collect::<Vec<_>>()
+    );
+    assert!(
+        local.warnings.iter().any(|w| w.contains("fits better") && w.contains("the local search keeps")),
+        "{:?}",
+        local.warnings
+    );
+}

@@ -157,6 +157,15 @@ pub(crate) fn search(
         // with ICP off the first start is the answer, unrefined: the probe only judges it
         let (c, probed, extra) = if p.icp == IcpKind::Off {
             (c, judge(&c.T_target_source), 0)
+        } else if options.search == Search::Local {
+            // the local search keeps its answer: a better pose of the probe is refined and noted
+            // among the refined answers (an alternative), not taken
+            let probed = judge(&c.T_target_source);
+            let extra = probed.better.map_or(0, |t| {
+                refine_one(c.start, t, refined);
+                1
+            });
+            (c, probed, extra)
         } else {
             settle(c, &judge, |t| refine_one(c.start, t, refined), &improves)
         };
@@ -450,6 +459,26 @@ pub(crate) fn search(
         None => (candidate, probed),
     };
     let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined, at_evidence.as_ref());
+    // the local search kept its answer where a pose the probes found fits better
+    if options.search == Search::Local {
+        let t = &candidate.T_target_source;
+        let elsewhere = refined
+            .iter()
+            .filter(|(o, f)| *f > candidate.fitness && !confidence::same_pose(o, t))
+            .max_by(|a, b| a.1.total_cmp(&b.1));
+        if let Some((o, f)) = elsewhere {
+            let c = Point3::from(centroid);
+            warnings.push(format!(
+                "a pose {:.1} degrees from the answer, putting the source {} from where the answer puts it, fits \
+                 better (fitness {:.2} against {:.2}; among the alternatives): the local search keeps the answer \
+                 its starts refined to",
+                crate::transform::rotation_error_deg(o, t),
+                crate::error::num((o.transform_point(&c) - t.transform_point(&c)).norm() * p.norm.scale),
+                f,
+                candidate.fitness
+            ));
+        }
+    }
     // with `up`: a tilted pose that fits clearly better than the upright answer
     let tilted = tilted
         .filter(|t| refined_any && refine::clearly_better(t, &candidate))

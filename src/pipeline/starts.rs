@@ -67,7 +67,7 @@ pub(crate) enum Step {
 pub(crate) fn stages(kinds: &[Start], search: Search, guess: bool) -> Vec<Step> {
     let (unsure, mut kinds): (Vec<Start>, Vec<Start>) = match search {
         Search::Adaptive => kinds.iter().partition(|k| k.is_for_unsure()),
-        Search::Exhaustive => (Vec::new(), kinds.to_vec()),
+        Search::Exhaustive | Search::Local => (Vec::new(), kinds.to_vec()),
     };
     let mut stages: Vec<Vec<Start>> = kinds.iter().take(1).map(|&k| vec![k]).collect();
     if guess && search == Search::Adaptive && kinds.iter().skip(1).any(|&k| k == Start::Initial) {

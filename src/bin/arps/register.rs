@@ -13,6 +13,10 @@ enum SearchArg {
     Adaptive,
     /// Every start refined, the best by fitness.
     Exhaustive,
+    /// Every start refined, the best kept where it is: a better pose the confidence's probes
+    /// find is offered among the alternatives, not taken (with `--starts initial` and
+    /// `--initial-transform`, a refinement of that guess alone).
+    Local,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -558,6 +562,7 @@ pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
         search: match search {
             SearchArg::Adaptive => arps::Search::Adaptive,
             SearchArg::Exhaustive => arps::Search::Exhaustive,
+            SearchArg::Local => arps::Search::Local,
         },
     };
     // the target is read once; the registrar keeps it prepared from one source to the next
