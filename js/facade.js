@@ -356,6 +356,16 @@ export function inheritedMessage(key) {
 }
 
 /**
+ * Sets `key` on the copy `out` as its own property, even `__proto__` (an assignment would set
+ * the copy's prototype instead, and the engine would never see the key: an options object
+ * parsed from JSON, `{"__proto__": {...}}`, would be ignored without a word rather than refused
+ * as an unknown field).
+ */
+function ownKey(out, key, value) {
+  Object.defineProperty(out, key, { value, enumerable: true, writable: true, configurable: true });
+}
+
+/**
  * Options -> plain data (own enumerable string keys; arrays and typed arrays copied to arrays;
  * nested depth at most 3). Every read of the caller's object happens here, in a try, so a
  * throwing getter or Proxy trap becomes an `Error` naming the option. Shapes are checked by
@@ -394,7 +404,7 @@ function optionsArg(options) {
     }
     const plain = plainValue(value, key, 0);
     if (key === "initialTransform") checkTransformShape(plain);
-    out[key] = plain;
+    ownKey(out, key, plain);
   }
   return out;
 }
@@ -437,7 +447,7 @@ function plainValue(v, path, depth, prefix = "invalid options") {
     } catch (e) {
       fail(`${prefix}: reading \`${path}.${k}\` threw: ${messageOf(e)}`);
     }
-    out[k] = plainValue(x, `${path}.${k}`, depth + 1, prefix);
+    ownKey(out, k, plainValue(x, `${path}.${k}`, depth + 1, prefix));
   }
   return out;
 }

@@ -17,8 +17,8 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-engine_budget=${ARPS_ENGINE_BUDGET:-1345000}
-engine_gz_budget=${ARPS_ENGINE_GZ_BUDGET:-552000}
+engine_budget=${ARPS_ENGINE_BUDGET:-1360000}
+engine_gz_budget=${ARPS_ENGINE_GZ_BUDGET:-558000}
 model_budget=${ARPS_MODEL_BUDGET:-1260000}
 model_gz_budget=${ARPS_MODEL_GZ_BUDGET:-1200000}
 simd_min=${ARPS_SIMD_MIN:-200}

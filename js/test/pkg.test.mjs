@@ -42,6 +42,8 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     throws(() => r.register(nan, t), /source point 1 has a non-finite coordinate/);
     throws(() => r.register(s.subarray(0, 30), t), /source has 10 finite points/);
     throws(() => r.register(s, t, { icpMaxIteration: 3 }), /unknown field `icpMaxIteration`/);
+    // an own `__proto__` key (options parsed from JSON) is a key like any other, refused
+    throws(() => r.register(s, t, JSON.parse('{"__proto__": {"icp": "off"}, "starts": ["network"]}')), /unknown field `__proto__`/);
     throws(() => r.register(s, t, { icp: "planar" }), /invalid options/);
     throws(() => r.register(s, t, { networkPoints: 1 }), /networkPoints = 1/);
     throws(() => r.register(s, t, { starts: [] }), /starts is empty/);
@@ -109,6 +111,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     assert.equal(read.points.length, 2000 * 3);
     assert.deepEqual([...arps.parsePointCloud(sourcePly, "source.ply", { surfacePoints: 5000 })], [...source()]);
     assert.throws(() => arps.parsePointCloud(stl, "block.stl", { surfacePoint: 5000 }), /invalid read options: unknown field `surfacePoint`/);
+    assert.throws(() => arps.parsePointCloud(stl, "block.stl", JSON.parse('{"__proto__": {"surfacePoints": 5000}}')), /invalid read options: unknown field `__proto__`/);
     assert.throws(() => arps.parsePointCloud(stl, "block.stl", { surfacePoints: 3 }), /surfacePoints = 3 is fewer than 16/);
     assert.throws(() => arps.parsePointCloud(stl, "block.stl", { surfacePoints: 2e7 }), /more than the 16000000/);
     assert.throws(() => arps.parsePointCloud(stl, "block.stl", { surfacePoints: "many" }), /invalid read options/);

@@ -2,8 +2,7 @@
 //! of a LAS or LAZ file: the ASPRS codes 0 to 255 (2 ground, 3-5 vegetation, 6 building, 7 low
 //! noise, 9 water, 18 high noise, ...). In JS and JSON a list of integers.
 
-use serde::de::{Error as _, SeqAccess, Visitor};
-use serde::ser::SerializeSeq;
+use serde::de::Error as _;
 
 /// A set of classification codes, 0 to 255 (a bit each). Never empty when read from a list.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -42,38 +41,19 @@ impl Classes {
 
 impl serde::Serialize for Classes {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let mut seq = s.serialize_seq(None)?;
-        for c in self.codes() {
-            seq.serialize_element(&c)?;
-        }
-        seq.end()
+        s.collect_seq(self.codes())
     }
 }
 
 impl<'de> serde::Deserialize<'de> for Classes {
     fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct Codes;
-        impl<'de> Visitor<'de> for Codes {
-            type Value = Classes;
-            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
-                f.write_str("a non-empty list of LAS classification codes, integers 0 to 255 (e.g. [2] for ground)")
-            }
-            fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Classes, A::Error> {
-                let mut set = Classes::default();
-                let mut any = false;
-                while let Some(code) = seq.next_element::<u8>()? {
-                    set.insert(code);
-                    any = true;
-                }
-                if !any {
-                    return Err(A::Error::custom(
-                        "classes: an empty list keeps no point (leave classes unset to keep every point)",
-                    ));
-                }
-                Ok(set)
-            }
+        let codes = Vec::<u8>::deserialize(d)?;
+        if codes.is_empty() {
+            return Err(D::Error::custom(
+                "classes: an empty list keeps no point (leave classes unset to keep every point)",
+            ));
         }
-        d.deserialize_seq(Codes)
+        Ok(Self::of(codes))
     }
 }
 
