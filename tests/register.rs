@@ -132,7 +132,7 @@ fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
             good.clone(),
             good.clone(),
             Options { max_correspondence_distance: Some(1e-310), ..Options::default() },
-            "maxCorrespondenceDistance = 1e-310 is finer than the clouds' f32 coordinates resolve",
+            "maxCorrespondenceDistance = 1e-310 is less than a ten-thousandth of the step of the clouds' f32",
         ),
         (
             good.clone(),

@@ -137,6 +137,10 @@ pub(crate) fn rigid_in_local_frames(
     transform::nearest_rigid(&local).map_err(|e| Error::InvalidOption(format!("initialTransform is not rigid: {e}")))
 }
 
+/// The least `maxCorrespondenceDistance`, as a share of f32's step at the clouds' half-extent
+/// (`f32::EPSILON` of it): a ten-thousandth.
+const MIN_DISTANCE_OF_F32_STEP: f64 = 1e-4;
+
 /// The distance the answer's evidence and confidence are measured at, in normalised units: the
 /// final ICP distance `d_final`, or the default one when that is smaller. The confidence is
 /// calibrated at the default; measured at a wider distance the caller chose, every pose would
@@ -177,12 +181,14 @@ pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
                     ),
                 ));
             }
-            // below f32's resolution at the clouds' size no pair is within it, and the halving
-            // schedule down to it from the default would never end
-            if d / s < f64::from(f32::EPSILON) {
+            // far below f32's resolution at the clouds' size no pair can be within it, and the
+            // halving schedule down to it from the default would not end (1e-310 trapped the
+            // engine); a distance merely finer than that resolution is judged, with a warning
+            if d / s < f64::from(f32::EPSILON) * MIN_DISTANCE_OF_F32_STEP {
                 return Err(Error::InvalidOption(format!(
-                    "maxCorrespondenceDistance = {} is finer than the clouds' f32 coordinates resolve at their \
-                     size (half-extent {}: steps of about {}); give a few point spacings",
+                    "maxCorrespondenceDistance = {} is less than a ten-thousandth of the step of the clouds' f32 \
+                     coordinates at their size (half-extent {}: steps of about {}): no two points can be that \
+                     near; give a few point spacings",
                     num(d),
                     num(s),
                     num(s * f64::from(f32::EPSILON))
