@@ -145,7 +145,7 @@ fn every_enum_value_is_declared() {
     let starts = names(&Start::ALL);
     assert_eq!(starts, ts_literals(&ts, "RegistrationStart"));
     assert!(Start::ALL.iter().all(|s| starts.contains(s.name())));
-    assert_eq!(names(&[Search::Adaptive, Search::Exhaustive]), ts_literals(&ts, "RegistrationSearch"));
+    assert_eq!(names(&[Search::Adaptive, Search::Exhaustive, Search::Local]), ts_literals(&ts, "RegistrationSearch"));
     assert_eq!(names(&[IcpKind::Off, IcpKind::Point, IcpKind::Plane]), ts_literals(&ts, "IcpKind"));
     assert_eq!(names(&[NonFinite::Error, NonFinite::Drop]), ts_literals(&ts, "NonFinite"));
     assert_eq!(names(&[Outliers::Drop, Outliers::Keep]), ts_literals(&ts, "Outliers"));
