@@ -410,14 +410,6 @@ pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOption
     if raw.vertices.is_empty() {
         return Err(Error::parse(format.name(), "the file holds no points"));
     }
-    // the cloud keeps f32 offsets from an origin: a finite coordinate beyond half f32's range
-    // could come out infinite (a file moved by 1e300 read back as Infinity, silently)
-    if let Some(v) = raw.vertices.iter().flatten().find(|v| v.is_finite() && v.abs() > f64::from(f32::MAX) / 2.0) {
-        return Err(Error::parse(
-            format.name(),
-            format!("a coordinate is {}, beyond the 1.7e38 the engine's points can hold", crate::error::num(*v)),
-        ));
-    }
     match options.surface_points {
         Some(n) if !raw.triangles.is_empty() => {
             let points = mesh::sample_triangles(&raw.vertices, &raw.triangles, n, options.seed)?;
