@@ -459,6 +459,11 @@ pub(crate) fn search(
         None => (candidate, probed),
     };
     let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined, at_evidence.as_ref());
+    // how far apart two poses put the source's centroid (normalised units)
+    let apart = |a: &Matrix4<f64>, b: &Matrix4<f64>| {
+        let c = Point3::from(centroid);
+        (a.transform_point(&c) - b.transform_point(&c)).norm()
+    };
     // the local search kept its answer where a pose the probes found fits better
     if options.search == Search::Local {
         let t = &candidate.T_target_source;
@@ -467,13 +472,12 @@ pub(crate) fn search(
             .filter(|(o, f)| *f > candidate.fitness && !confidence::same_pose(o, t))
             .max_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((o, f)) = elsewhere {
-            let c = Point3::from(centroid);
             warnings.push(format!(
                 "a pose {:.1} degrees from the answer, putting the source {} from where the answer puts it, fits \
                  better (fitness {:.2} against {:.2}; among the alternatives): the local search keeps the answer \
                  its starts refined to",
                 crate::transform::rotation_error_deg(o, t),
-                crate::error::num((o.transform_point(&c) - t.transform_point(&c)).norm() * p.norm.scale),
+                crate::error::num(apart(o, t) * p.norm.scale),
                 f,
                 candidate.fitness
             ));
@@ -496,8 +500,7 @@ pub(crate) fn search(
     // size (`GUESS_SHIFT`): a look-alike elsewhere (a repeated room, the next bay) when the guess
     // placed it
     if options.initial_transform.is_some() {
-        let c = Point3::from(centroid);
-        let shift = (candidate.T_target_source.transform_point(&c) - p.t_initial.transform_point(&c)).norm();
+        let shift = apart(&candidate.T_target_source, &p.t_initial);
         let size = p.src_n.half_extent();
         if shift > GUESS_SHIFT * size {
             warnings.push(format!(

@@ -192,10 +192,14 @@ struct JsonOutput<'a> {
 }
 
 fn read_cloud(path: &Path, options: &io::ReadOptions) -> Result<arps::PointCloud, String> {
-    io::read_path_with(path, options).map_err(|e| {
-        let message = e.to_string().replace("the scan option", "--target-scan");
-        format!("{}: {}", path.display(), message.replace("the classes option", "--target-classes"))
-    })
+    io::read_path_with(path, options).map_err(|e| read_error(path, &e, "target"))
+}
+
+/// A reader's error on the file at `path`, its read options named as the flags of `side`
+/// (`source` or `target`): "the scan option" as `--source-scan`, say.
+fn read_error(path: &Path, e: &arps::Error, side: &str) -> String {
+    let message = e.to_string().replace("the scan option", &format!("--{side}-scan"));
+    format!("{}: {}", path.display(), message.replace("the classes option", &format!("--{side}-classes")))
 }
 
 /// A warning when the file at `path` is a mesh with faces and so was read as its vertices (an
@@ -245,10 +249,7 @@ fn read_source(
     options: &io::ReadOptions,
     keep: bool,
 ) -> Result<(arps::PointCloud, Option<Vec<u8>>), String> {
-    let at = |e: arps::Error| {
-        let message = e.to_string().replace("the scan option", "--source-scan");
-        format!("{}: {}", path.display(), message.replace("the classes option", "--source-classes"))
-    };
+    let at = |e: arps::Error| read_error(path, &e, "source");
     let bytes = io::read_file(path).map_err(at)?;
     let cloud = io::read_point_cloud_with(&bytes, &io::file_name(path), options).map_err(at)?;
     Ok((cloud, keep.then_some(bytes)))
