@@ -355,11 +355,18 @@ export type RegistrationResult = {
    */
   timings: RegistrationTimings,
   /**
-   * Things to know about this result (input resampled, low confidence, ...), as sentences.
-   * One starting with `"low confidence"` comes with every result whose `confidence` is below
-   * 0.5.
+   * Things to know about this result (input resampled, low confidence, ...), as sentences
+   * for people. One starting with `"low confidence"` comes with every result whose
+   * `confidence` is below 0.5. Test for a kind of warning with `warning_codes`, not by
+   * matching these sentences: they name figures, and may be reworded.
    */
   warnings: Array<string>,
+  /**
+   * The kind of each warning, in the same order as `warnings` (`warning_codes[i]` is the
+   * kind of `warnings[i]`): what code tests for (`warningCodes.includes("sizeMismatch")`).
+   * Every result whose `confidence` is below 0.5 holds `WarningCode::LowConfidence`.
+   */
+  warningCodes: Array<WarningCode>,
   /**
    * An estimate of the probability that `T_target_source` is right (within the evaluation's
    * recall thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on validation
@@ -392,6 +399,59 @@ export type RegistrationResult = {
    */
   alternatives: Array<RegistrationAlternative>,
 };
+
+/**
+ * The kind of a registration's warning: `warningCodes[i]` is the kind of `warnings[i]`. One
+ * code may come with several sentences (the source's and the target's, or two causes of one
+ * doubt). New codes may be added; a caller that meets one it does not know should show the
+ * sentence.
+ *
+ * * `"lowConfidence"`: the confidence is below 0.5, or another pose fits about as well
+ *   (`alternatives`): the alignment may be wrong. Comes with every result whose `confidence` is
+ *   below 0.5.
+ * * `"sizeMismatch"`: the clouds differ in size by a large factor: probably different units
+ *   (metres and millimetres); the option `sourceScale` scales the source.
+ * * `"coarseCoordinates"`: a cloud's coordinates were rounded to 32-bit floats far from zero (a
+ *   map grid given as `Float32Array`, a file that stores floats), to steps that can make the
+ *   answer as coarse.
+ * * `"distanceTooFine"`: the distance the answer is judged at is finer than `f32` coordinates
+ *   resolve there.
+ * * `"distanceTooWide"`: the source is small against the distance the answer is judged at: it fits
+ *   about as well turned or moved, so the fit cannot confirm its pose (different units, or too
+ *   wide a `maxCorrespondenceDistance`).
+ * * `"nearlyLine"`: a cloud is nearly a line: the rotation about it is weakly held.
+ * * `"bothFlat"`: both clouds are flat: sliding within the plane and turning about its normal are
+ *   held only by their outlines.
+ * * `"freeMotion"`: the fit leaves a motion free (a surface of revolution, a straight pipe or
+ *   tunnel, a plane): only the clouds' edges hold the answer along it (`evidence.constraint`).
+ * * `"thinWall"`: the source fits about as well on the other face of a thin wall or sheet.
+ * * `"mirrorImage"`: a mirror image of the source fits clearly better: one cloud is probably
+ *   mirrored (a left part for a right one, an axis flipped on export).
+ * * `"lowOverlap"`: less of the source lies on the target than `sourceOverlap` says it should.
+ * * `"notUpright"`: with `up`: a tilted pose fits clearly better than the upright answer (the
+ *   clouds were not both captured level).
+ * * `"unrefined"`: no start could be refined (or none ended upright with `up`): the answer is the
+ *   network's estimate or the initial transform, unrefined.
+ * * `"turnedFromGuess"`: the answer turned far from `initialTransform`: the guess was off, or the
+ *   answer is a look-alike.
+ * * `"farFromGuess"`: the answer places the source far from where `initialTransform` does: a
+ *   look-alike elsewhere (a repeated room, the next bay) if the guess placed it.
+ * * `"heldByGuess"`: along a motion the fit leaves free, the answer follows `initialTransform`:
+ *   the guess, not the clouds, placed it there.
+ * * `"betterPoseNotTaken"`: with `search: "local"`: a pose the probes found fits better than the
+ *   answer; it is offered among the alternatives, not taken.
+ * * `"fewPoints"`: the source has too few points to be sure of any answer.
+ * * `"networkResampled"`: a cloud has fewer points than the network takes: it saw some twice (the
+ *   answer is still refined on every point).
+ * * `"nonFiniteDropped"`: points with a non-finite coordinate (or one beyond 1e18) were left out
+ *   (`nonFinite: "drop"`).
+ * * `"outliersDropped"`: outliers were left out (`outliers: "drop"`).
+ * * `"supportPlaneDropped"`: a support plane (a table, a turntable, the floor) was left out
+ *   (`supportPlane: "drop"`).
+ * * `"meshVertices"`: the CLI read a mesh file's vertices as the cloud (`--surface-points` samples
+ *   its surface).
+ */
+export type WarningCode = "lowConfidence" | "sizeMismatch" | "coarseCoordinates" | "distanceTooFine" | "distanceTooWide" | "nearlyLine" | "bothFlat" | "freeMotion" | "thinWall" | "mirrorImage" | "lowOverlap" | "notUpright" | "unrefined" | "turnedFromGuess" | "farFromGuess" | "heldByGuess" | "betterPoseNotTaken" | "fewPoints" | "networkResampled" | "nonFiniteDropped" | "outliersDropped" | "supportPlaneDropped" | "meshVertices";
 
 /**
  * Milliseconds spent in each stage of one registration (0 where no clock is available; in JS

@@ -1,6 +1,7 @@
 //! Checks on what the pipeline computes: results that are not finite, initial guesses that
 //! leave no overlap to find.
 
+use crate::warning::{Warning, WarningCode};
 use crate::{Error, Result};
 use nalgebra::Matrix4;
 
@@ -79,13 +80,15 @@ pub fn f32_step(far: f64) -> f64 {
 /// already, and the answer can be as coarse. Returns that step (the spacing of `f32` values at
 /// the cloud's farthest coordinate, in its units; 0 for a cloud at zero, or one stored as offsets
 /// whose points are not on such a grid), warned or not.
-pub fn f32_rounding(what: &str, cloud: &crate::PointCloud, warnings: &mut Vec<String>) -> f64 {
+pub fn f32_rounding(what: &str, cloud: &crate::PointCloud, warnings: &mut Vec<Warning>) -> f64 {
     let (lo, hi) = cloud.bounds();
     let half = crate::cloud::half_extent_of(lo, hi);
     if !cloud.origin_is_zero() {
         let (step, far) = stored_step(cloud, lo, hi);
         if half > 0.0 && step > F32_ROUNDING_WARNING * half {
-            warnings.push(format!(
+            warnings.push(Warning::new(
+                WarningCode::CoarseCoordinates,
+                format!(
                 "the {what}'s coordinates lie up to {} from zero for a cloud of largest half-extent {}, on the grid \
                  of 32-bit floats there (a file that stores them as float?): they were rounded to steps of about {} \
                  before they were read, and the answer can be as coarse; store them as double, or as offsets from a \
@@ -93,6 +96,7 @@ pub fn f32_rounding(what: &str, cloud: &crate::PointCloud, warnings: &mut Vec<St
                 crate::error::num(far),
                 crate::error::num(half),
                 crate::error::num(step)
+            ),
             ));
         }
         return step;
@@ -100,13 +104,16 @@ pub fn f32_rounding(what: &str, cloud: &crate::PointCloud, warnings: &mut Vec<St
     let far = lo.iter().chain(&hi).fold(0.0f64, |m, v| m.max((*v as f64).abs()));
     let step = f32_step(far);
     if half > 0.0 && f32_rounds(far, half) {
-        warnings.push(format!(
-            "the {what}'s coordinates lie up to {} from zero for a cloud of largest half-extent {}: as f32 they \
-             are rounded to steps of about {}, and the answer can be as coarse; pass them as f64 (a Float64Array, \
-             readPointCloud's {{ points, origin }}, PointCloud::from_points_f64)",
-            crate::error::num(far),
-            crate::error::num(half),
-            crate::error::num(step)
+        warnings.push(Warning::new(
+            WarningCode::CoarseCoordinates,
+            format!(
+                "the {what}'s coordinates lie up to {} from zero for a cloud of largest half-extent {}: as f32 they \
+                 are rounded to steps of about {}, and the answer can be as coarse; pass them as f64 (a Float64Array, \
+                 readPointCloud's {{ points, origin }}, PointCloud::from_points_f64)",
+                crate::error::num(far),
+                crate::error::num(half),
+                crate::error::num(step)
+            ),
         ));
     }
     step
@@ -197,7 +204,7 @@ pub fn principal_spreads(points: &[[f32; 3]]) -> [f64; 3] {
 
 /// Refuses a collinear cloud (an error naming it) and warns about a nearly collinear one;
 /// returns its principal spreads. `what` names the cloud.
-pub fn not_collinear(what: &str, points: &[[f32; 3]], warnings: &mut Vec<String>) -> Result<[f64; 3]> {
+pub fn not_collinear(what: &str, points: &[[f32; 3]], warnings: &mut Vec<Warning>) -> Result<[f64; 3]> {
     let s = principal_spreads(points);
     let ratio = s[1] / s[0];
     if ratio.is_nan() || ratio < COLLINEAR_RATIO {
@@ -206,9 +213,9 @@ pub fn not_collinear(what: &str, points: &[[f32; 3]], warnings: &mut Vec<String>
         )));
     }
     if ratio < THIN_RATIO {
-        warnings.push(format!(
+        warnings.push(Warning::new(WarningCode::NearlyLine, format!(
             "{what} is nearly a line (spread across it {ratio:.1e} of the spread along it): the rotation about its axis is weakly constrained and may be wrong"
-        ));
+        )));
     }
     Ok(s)
 }
@@ -217,13 +224,16 @@ pub fn not_collinear(what: &str, points: &[[f32; 3]], warnings: &mut Vec<String>
 /// says whether they are: point-to-plane ICP then runs point-to-point, since every normal is the
 /// plane's and a point-to-plane fit cannot move within it (`icp` says whether ICP runs at all, for
 /// the warning).
-pub fn flat_pair(source: [f64; 3], target: [f64; 3], icp: bool, warnings: &mut Vec<String>) -> bool {
+pub fn flat_pair(source: [f64; 3], target: [f64; 3], icp: bool, warnings: &mut Vec<Warning>) -> bool {
     let flat = source[2] / source[0] < FLAT_RATIO && target[2] / target[0] < FLAT_RATIO;
     if flat {
         let how = if icp { " (ICP ran point-to-point, which pairs the outlines)" } else { "" };
-        warnings.push(format!(
+        warnings.push(Warning::new(
+            WarningCode::BothFlat,
+            format!(
             "both clouds are flat: sliding within the plane and turning about its normal are held only by the clouds' \
              outlines{how}, so check the result"
+        ),
         ));
     }
     flat
@@ -248,7 +258,12 @@ mod tests {
         assert!((far - 5.4e6).abs() < 30.0, "{far}");
         let mut warnings = Vec::new();
         assert_eq!(f32_rounding("source", &cloud, &mut warnings), 0.5);
-        assert!(warnings.len() == 1 && warnings[0].contains("grid of 32-bit floats"), "{warnings:?}");
+        assert!(
+            warnings.len() == 1
+                && warnings[0].code == WarningCode::CoarseCoordinates
+                && warnings[0].message.contains("grid of 32-bit floats"),
+            "{warnings:?}"
+        );
         // the same points in f64: not on the grid, no warning
         let exact: Vec<[f64; 3]> =
             f32_values.iter().map(|p| [p[0], p[1] + 0.123_456_7 * (p[0] / 20.0), p[2]]).collect();
@@ -278,16 +293,16 @@ mod tests {
         assert!(not_collinear("source", &line, &mut w).unwrap_err().to_string().contains("source is collinear"));
         let rod: Vec<[f32; 3]> = (0..100).map(|i| [i as f32, (i % 2) as f32 * 0.5, 0.0]).collect();
         not_collinear("target", &rod, &mut w).unwrap();
-        assert!(w[0].contains("target is nearly a line"), "{w:?}");
+        assert!(w[0].code == WarningCode::NearlyLine && w[0].message.contains("target is nearly a line"), "{w:?}");
         let plane: Vec<[f32; 3]> = (0..400).map(|i| [(i % 20) as f32, (i / 20) as f32, 0.0]).collect();
         let mut w = Vec::new();
         let s = not_collinear("source", &plane, &mut w).unwrap();
         assert!(w.is_empty());
         assert!(flat_pair(s, s, true, &mut w));
         assert_eq!(w.len(), 1);
-        assert!(w[0].contains("ICP ran point-to-point"), "{w:?}");
+        assert!(w[0].code == WarningCode::BothFlat && w[0].message.contains("ICP ran point-to-point"), "{w:?}");
         let mut w = Vec::new();
-        assert!(flat_pair(s, s, false, &mut w) && !w[0].contains("ICP"), "{w:?}");
+        assert!(flat_pair(s, s, false, &mut w) && !w[0].message.contains("ICP"), "{w:?}");
         let cube: Vec<[f32; 3]> =
             (0..1000).map(|i| [(i % 10) as f32, (i / 10 % 10) as f32, (i / 100) as f32]).collect();
         let c = principal_spreads(&cube);

@@ -4,7 +4,8 @@
 //! # One set of types
 //! The options are [`Options`], the result is [`Registration`]; their nested types are
 //! [`Evidence`], [`Alternative`], [`Timings`], [`Start`], [`Search`], [`IcpKind`], [`IcpLoss`], [`NonFinite`],
-//! [`Outliers`], [`Support`], [`Stage`] (the progress stages) and [`ModelConfig`]; the readers take [`ReadOptions`]. They
+//! [`Outliers`], [`Support`], [`Stage`] (the progress stages), [`WarningCode`] (what a warning is
+//! about) and [`ModelConfig`]; the readers take [`ReadOptions`]. They
 //! are serde types: the wasm binding converts them
 //! with serde-wasm-bindgen and the CLI with serde_json, so JS and JSON see the same objects, field
 //! for field. The TypeScript declarations of the package (`js/arps-contract.d.ts`, part of
@@ -37,6 +38,7 @@
 //! [`Outliers`]: crate::Outliers
 //! [`Support`]: crate::Support
 //! [`Stage`]: crate::Stage
+//! [`WarningCode`]: crate::WarningCode
 //! [`ModelConfig`]: crate::ModelConfig
 
 use crate::ModelConfig;
@@ -215,6 +217,7 @@ pub fn typescript() -> String {
         decl::<Support>(&cfg),
         decl::<Stage>(&cfg),
         decl::<Registration>(&cfg),
+        decl::<crate::WarningCode>(&cfg),
         decl::<Timings>(&cfg),
         decl::<Evidence>(&cfg),
         decl::<Alternative>(&cfg),

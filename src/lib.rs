@@ -67,6 +67,7 @@ pub mod timing;
 #[cfg(feature = "train")]
 pub mod train;
 pub mod transform;
+pub mod warning;
 #[cfg(target_arch = "wasm32")]
 pub mod wasm;
 pub mod weights;
@@ -80,4 +81,5 @@ pub use outliers::Outliers;
 pub use refine::Start;
 pub use register::{Alternative, Options, Registrar, Registration, Search, Stage, Timings};
 pub use support::Support;
+pub use warning::{Warning, WarningCode};
 pub use weights::{StoreAs, Weights};

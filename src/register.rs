@@ -12,6 +12,7 @@ use crate::pipeline::{network, options, prepare, result, search};
 use crate::refine::Start;
 use crate::support::Support;
 use crate::timing::{default_clock, Clock, Stopwatch};
+use crate::warning::WarningCode;
 use crate::weights::Weights;
 use crate::Result;
 use nalgebra::Matrix4;
@@ -451,10 +452,15 @@ pub struct Registration {
     pub max_correspondence_distance: f64,
     /// Time per stage, in milliseconds.
     pub timings: Timings,
-    /// Things to know about this result (input resampled, low confidence, ...), as sentences.
-    /// One starting with `"low confidence"` comes with every result whose `confidence` is below
-    /// 0.5.
+    /// Things to know about this result (input resampled, low confidence, ...), as sentences
+    /// for people. One starting with `"low confidence"` comes with every result whose
+    /// `confidence` is below 0.5. Test for a kind of warning with `warning_codes`, not by
+    /// matching these sentences: they name figures, and may be reworded.
     pub warnings: Vec<String>,
+    /// The kind of each warning, in the same order as `warnings` (`warning_codes[i]` is the
+    /// kind of `warnings[i]`): what code tests for (`warningCodes.includes("sizeMismatch")`).
+    /// Every result whose `confidence` is below 0.5 holds [`WarningCode::LowConfidence`].
+    pub warning_codes: Vec<WarningCode>,
     /// An estimate of the probability that `T_target_source` is right (within the evaluation's
     /// recall thresholds), in [0, 1]: a logistic model over `evidence`, calibrated on validation
     /// pairs (`arps::confidence`). Read it as "likely right" near 1, "likely wrong" near 0; below

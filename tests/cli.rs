@@ -637,6 +637,7 @@ fn register_scales_a_source_in_another_unit() {
     arps::transform::check_near_rigid(&rigid(&r.T_target_source)).unwrap();
     assert!(rot < 1.0 && tr < 20.0, "rotation error {rot} deg, translation error {tr} mm");
     assert!(!r.warnings.iter().any(|w| w.contains("differ in size")), "{:?}", r.warnings);
+    assert!(!r.warning_codes.contains(&arps::WarningCode::SizeMismatch), "{:?}", r.warning_codes);
     // the aligned source is in millimetres: the file's points moved by the answer
     let written = arps::io::read_path(&aligned).unwrap();
     let source = arps::io::read_path(&root.join(src)).unwrap();
@@ -655,6 +656,11 @@ fn register_scales_a_source_in_another_unit() {
     assert!(json.get("sourceScale").is_none(), "{json}");
     let r: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
     assert!(r.warnings.iter().any(|w| w.contains("differ in size by 10")), "{:?}", r.warnings);
+    // the JSON gives each warning's kind, in the warnings' order
+    let codes = json["warningCodes"].as_array().unwrap();
+    assert_eq!(codes.len(), r.warnings.len(), "{json}");
+    let at = r.warnings.iter().position(|w| w.contains("differ in size")).unwrap();
+    assert_eq!(codes[at], "sizeMismatch", "{json}");
     // `--min-confidence`: the unscaled source (fits anywhere, at most 0.25) fails the batch after
     // its answer is printed; the scaled one passes; a bound outside [0, 1] is refused
     let out = arps(&["register", src, tgt, "--json", "--min-confidence", "0.5"]);

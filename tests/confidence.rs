@@ -118,6 +118,7 @@ fn a_right_answer_is_trusted_and_a_turned_one_doubted() {
             let wrong = judge(&mut reg, &s, &t, &(turn_about(axis, 180.0, c) * gt));
             assert!(wrong.confidence < 0.5, "pair {i}, 180 about {axis:?}: {}", wrong.confidence);
             assert!(wrong.warnings.iter().any(|w| w.contains("low confidence")), "{:?}", wrong.warnings);
+            assert!(wrong.warning_codes.contains(&arps::WarningCode::LowConfidence), "{:?}", wrong.warning_codes);
         }
     }
 }

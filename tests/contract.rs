@@ -151,6 +151,7 @@ fn every_enum_value_is_declared() {
     assert_eq!(names(&[Outliers::Drop, Outliers::Keep]), ts_literals(&ts, "Outliers"));
     assert_eq!(names(&[Support::Drop, Support::Keep]), ts_literals(&ts, "SupportPlane"));
     assert_eq!(names(&[Stage::Preparing, Stage::Network, Stage::Refining]), ts_literals(&ts, "RegistrationStage"));
+    assert_eq!(names(&arps::WarningCode::ALL), ts_literals(&ts, "WarningCode"));
 }
 
 #[test]

@@ -55,6 +55,8 @@ fn stray_returns_are_left_out_and_the_pair_registered() {
                 "pair {index}: {:?}",
                 r.warnings
             );
+            let dropped = r.warning_codes.iter().filter(|c| **c == arps::WarningCode::OutliersDropped).count();
+            assert_eq!(dropped, 2, "pair {index}: {:?}", r.warning_codes);
         }
     }
 }

@@ -189,6 +189,7 @@ fn bad_inputs_get_errors_and_leave_the_registrar_usable() {
         "{:?}",
         r.warnings
     );
+    assert!(r.warning_codes.contains(&arps::WarningCode::NonFiniteDropped), "{:?}", r.warning_codes);
     // a bad point is named by its coordinates in the caller's frame, not by an offset
     let far = PointCloud::from_points_f64(
         &(0..600)
@@ -255,6 +256,7 @@ fn clouds_in_different_units_get_a_warning() {
     let same = bumpy_surface(1500, 0.2);
     let r = registrar().register(&source, &same, &Options::default()).unwrap();
     assert!(!r.warnings.iter().any(|w| w.contains("same unit")), "{:?}", r.warnings);
+    assert!(!r.warning_codes.contains(&arps::WarningCode::SizeMismatch), "{:?}", r.warning_codes);
     // the target in millimetres, the source in metres
     let millimetres = PointCloud::new(same.points.iter().map(|p| p.map(|x| x * 1000.0)).collect());
     let r = registrar().register(&source, &millimetres, &Options::default()).unwrap();
@@ -263,6 +265,10 @@ fn clouds_in_different_units_get_a_warning() {
         "{:?}",
         r.warnings
     );
+    // its kind, for code that acts on it, at the sentence's place
+    assert_eq!(r.warning_codes.len(), r.warnings.len());
+    let at = r.warning_codes.iter().position(|c| *c == arps::WarningCode::SizeMismatch).unwrap();
+    assert!(r.warnings[at].contains("differ in size by 1000x"), "{:?}", r.warnings);
 }
 
 /// A cloud far from zero given as f32 has lost its digits before the engine sees it: the result

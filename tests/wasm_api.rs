@@ -359,6 +359,11 @@ fn stray_returns_are_left_out_unless_kept() {
     let res = r.register(&src, &target(), None, None, None, None).map_err(message).unwrap();
     let warnings = strings(&get(&res, "warnings"));
     assert!(warnings.iter().any(|w| w.contains("left out 3 of the source's")), "{warnings:?}");
+    // each warning's kind, in the same order, as JS strings
+    let codes = strings(&get(&res, "warningCodes"));
+    assert_eq!(codes.len(), warnings.len(), "{codes:?}");
+    let at = warnings.iter().position(|w| w.contains("left out 3 of the source's")).unwrap();
+    assert_eq!(codes[at], "outliersDropped", "{codes:?}");
     let kept = r
         .register(&src, &target(), Some(options(r#"{"outliers": "keep"}"#)), None, None, None)
         .map_err(message)

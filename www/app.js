@@ -440,6 +440,7 @@ function resultJson(r, truth) {
     maxCorrespondenceDistance: r.maxCorrespondenceDistance,
     timings: r.timings,
     warnings: r.warnings,
+    warningCodes: r.warningCodes,
     T_target_source_network: rowMajor(r.T_target_source_network),
     start: r.start,
     startsRefined: r.startsRefined,
@@ -543,7 +544,7 @@ function showResult(r, truth = null) {
   );
   // the engine's warnings (less the API options the page does not offer), and where the page
   // can mend one: scans in different units
-  const hints = r.warnings.some((w) => /differ in size/.test(w))
+  const hints = r.warningCodes.includes("sizeMismatch")
     ? ["Different units? Say which under Units (with the scans): the source is then scaled into the target's unit."]
     : [];
   const warnings = r.warnings.map((w) => w.replace(/; `(outliers|supportPlane): "keep"` keeps (them|it)$/, ""));

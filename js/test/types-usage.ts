@@ -1,7 +1,7 @@
 // Compile-only check of the package's TypeScript declarations (tsc --noEmit -p js/test): typical
 // use must type-check, options are typed (not `any`), and misspelled options are rejected.
 import init, { canTransform, initSync, listScans, Registrar, parsePointCloud, readPointCloud, transformFile, transformPointCloud, version, writePly } from "../../pkg/arps.js";
-import type { InitOptions, RegisterOptions, RegistrationEvidence, RegistrationResult, RegistrationSearch, ScanInfo } from "../../pkg/arps.js";
+import type { InitOptions, RegisterOptions, RegistrationEvidence, RegistrationResult, RegistrationSearch, ScanInfo, WarningCode } from "../../pkg/arps.js";
 import { createWorkerRegistrar, type Stage, type WorkerRegistrar } from "../../pkg/worker-client.js";
 
 export async function modelFiles(wasm: Uint8Array, model: Uint8Array, signal: AbortSignal): Promise<Registrar> {
@@ -34,6 +34,11 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   r.register(source, target, null);
   const ms: number = again.timings.totalMs + result.fitness + result.inlierRmse + result.icpIterations;
   const w: string[] = result.warnings;
+  const codes: WarningCode[] = result.warningCodes;
+  const unitsDiffer: boolean = result.warningCodes.includes("sizeMismatch");
+  // @ts-expect-error a code that does not exist
+  const misspelt: WarningCode = "sizeMissmatch";
+  void codes, unitsDiffer, misspelt;
   const start: "network" | "centroids" | "initial" | "turned" | "turnedInitial" | "global" | "globalNetwork" | "rotations" | "rotationsNetwork" = result.start;
   r.register(source, target, { starts: ["network", "initial"] });
   r.register(source, target, { starts: ["turned", "turnedInitial", "rotations", "rotationsNetwork"] });

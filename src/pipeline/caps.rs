@@ -16,6 +16,7 @@ use crate::confidence::{Evidence, FreeMotion};
 use crate::error::num;
 use crate::refine::Candidate;
 use crate::register::{GUESS_TURN_DEG, UP_TOLERANCE_DEG};
+use crate::warning::{Warning, WarningCode};
 use nalgebra::Vector3;
 
 /// The most confidence an answer that no start's refinement reached can have (the network's
@@ -95,7 +96,7 @@ pub(crate) fn cap(
     confidence: f64,
     answer: &Candidate,
     doubts: Doubts,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Warning>,
 ) -> f64 {
     let Doubts { refined_any, tilted, short, mirrored, far_from_guess, free } = doubts;
     let fitness = answer.fitness;
@@ -106,32 +107,38 @@ pub(crate) fn cap(
     // units, the source the smaller)
     let source_extent = p.src_n.half_extent();
     if source_extent < SMALL_SOURCE_DISTANCES * p.d_evidence {
-        warnings.push(format!(
+        warnings.push(Warning::new(WarningCode::DistanceTooWide, format!(
             "the source's half-extent ({}) is less than {SMALL_SOURCE_DISTANCES} times the distance the answer is judged at ({}): \
              it fits about as well turned or moved over the target's surface, so the fit cannot confirm its pose \
              (clouds in different units? else give a smaller maxCorrespondenceDistance)",
             num(source_extent * s),
             num(p.d_evidence * s)
-        ));
+        )));
         capped = true;
     }
     // clouds given as f32 far from zero: their points sit on a grid as coarse as the fit's distance
     if p.rounding > ROUNDING_DISTANCES * p.d_evidence {
         // (a grid as fine as f32 is near zero: it is the distance that is too fine, not the clouds)
         warnings.push(if p.rounding < crate::checks::F32_ROUNDING_WARNING {
-            format!(
+            Warning::new(
+                WarningCode::DistanceTooFine,
+                format!(
                 "the distance the answer is judged at ({}) is finer than the clouds' f32 coordinates resolve (steps of \
                  about {}): the fit cannot confirm the pose; give a maxCorrespondenceDistance of a few point spacings",
                 num(p.d_evidence * s),
                 num(p.rounding * s)
+            ),
             )
         } else {
-            format!(
+            Warning::new(
+                WarningCode::CoarseCoordinates,
+                format!(
                 "the clouds' coordinates were rounded to steps of about {} (f32 far from zero), more than the distance \
                  the answer is judged at ({}): the fit cannot confirm the pose; give the coordinates as f64 (a \
                  Float64Array, or a file that stores doubles)",
                 num(p.rounding * s),
                 num(p.d_evidence * s)
+            ),
             )
         });
         capped = true;
@@ -139,29 +146,35 @@ pub(crate) fn cap(
     // with `up`: a tilted pose that fits clearly better than the upright answer (the clouds were
     // not both captured level, or not about that axis)
     if let Some(t) = tilted {
-        warnings.push(format!(
-            "a pose tilted {:.0} degrees off `up` fits clearly better than the upright answer (fitness {:.3} \
-             against {:.3}): if the clouds were not both captured level within {UP_TOLERANCE_DEG} degrees of `up`, \
-             leave `up` out",
-            t.tilt_deg, t.fitness, fitness
+        warnings.push(Warning::new(
+            WarningCode::NotUpright,
+            format!(
+                "a pose tilted {:.0} degrees off `up` fits clearly better than the upright answer (fitness {:.3} \
+                 against {:.3}): if the clouds were not both captured level within {UP_TOLERANCE_DEG} degrees of `up`, \
+                 leave `up` out",
+                t.tilt_deg, t.fitness, fitness
+            ),
         ));
         capped = true;
     }
     // with `sourceOverlap`: less of the source lies on the target than the caller knows does
     if let Some((share, declared)) = short {
-        warnings.push(format!(
+        warnings.push(Warning::new(
+            WarningCode::LowOverlap,
+            format!(
             "only {:.0}% of the source lies within {} of the target under the answer, where sourceOverlap says {:.0}%: \
              the wrong model, a mirror-image export (one axis flipped), a scale or unit error, points the target \
              lacks (a table or clutter left in the source), or a pose the search did not find",
             100.0 * share,
             num(2.0 * p.d_evidence * s),
             100.0 * declared
+        ),
         ));
         capped = true;
     }
     // a mirror image of the source fits clearly better: the clouds are mirror images of each other
     if let Some(m) = mirrored {
-        warnings.push(format!(
+        warnings.push(Warning::new(WarningCode::MirrorImage, format!(
             "a mirror image of the source fits the target clearly better than the answer (fitness {:.3}, inlier RMSE {} \
              against {:.3}, {}): one cloud is probably a mirror image of the other (a left part for a right one, a \
              file with one axis flipped), which no rigid motion aligns",
@@ -169,15 +182,18 @@ pub(crate) fn cap(
             num(m.inlier_rmse * s),
             fitness,
             num(answer.inlier_rmse * s)
-        ));
+        )));
         capped = true;
     }
     // the answer contradicts the caller's guess
     if let Some(turn) = far_from_guess {
-        warnings.push(format!(
+        warnings.push(Warning::new(
+            WarningCode::TurnedFromGuess,
+            format!(
             "the answer turns {turn:.0} degrees away from initialTransform (more than {GUESS_TURN_DEG:.0}): either the \
              guess was off, or the answer is a look-alike that fits about as well (a sparse or partial source turned \
              over); check the guess, or leave it out if it is not one"
+        ),
         ));
         capped = true;
     }
@@ -189,14 +205,17 @@ pub(crate) fn cap(
             1 => ("one motion".to_string(), "keeps", "that motion"),
             n => (format!("{n} motions"), "keep", "those motions"),
         };
-        warnings.push(format!(
-            "the fit leaves {count} free: {} {keep} the source on the target's surface (a surface of revolution \
-             about its axis, a straight pipe, tunnel or extrusion along itself, a plane in itself), so only where the \
-             clouds' edges fall holds the answer there, and it may be off along {that} (evidence.constraint {:.1e}; \
-             slid along the first by a quarter of the clouds' half-size, the answer keeps {:.0}% of its fit)",
-            m.describe(&place, s),
-            m.constraint,
-            100.0 * m.slide.min(1.0)
+        warnings.push(Warning::new(
+            WarningCode::FreeMotion,
+            format!(
+                "the fit leaves {count} free: {} {keep} the source on the target's surface (a surface of revolution \
+                 about its axis, a straight pipe, tunnel or extrusion along itself, a plane in itself), so only where the \
+                 clouds' edges fall holds the answer there, and it may be off along {that} (evidence.constraint {:.1e}; \
+                 slid along the first by a quarter of the clouds' half-size, the answer keeps {:.0}% of its fit)",
+                m.describe(&place, s),
+                m.constraint,
+                100.0 * m.slide.min(1.0)
+            ),
         ));
         capped = true;
     }
@@ -205,9 +224,12 @@ pub(crate) fn cap(
     let n = p.src_n.len();
     let few = n as f64 / SURE_POINTS as f64;
     if n < SURE_POINTS && confidence > few {
-        warnings.push(format!(
-            "the source has {n} points: an answer judged on fewer than {SURE_POINTS} is at most {few:.2} sure \
-             ({n}/{SURE_POINTS}); give it more points"
+        warnings.push(Warning::new(
+            WarningCode::FewPoints,
+            format!(
+                "the source has {n} points: an answer judged on fewer than {SURE_POINTS} is at most {few:.2} sure \
+                 ({n}/{SURE_POINTS}); give it more points"
+            ),
         ));
         return few;
     }

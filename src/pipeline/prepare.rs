@@ -19,6 +19,7 @@ use crate::outliers::{self, Outliers};
 use crate::register::Options;
 use crate::spacing::Spacing;
 use crate::support::{self, Support};
+use crate::warning::{Warning, WarningCode};
 use crate::{checks, limits, sampling, transform, Error, Result};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 use std::borrow::Cow;
@@ -67,7 +68,7 @@ pub(crate) struct Prepared {
 enum Given<'a> {
     /// With the caller's target, which a kept target at another scale is prepared from again.
     Kept(Box<PreparedTarget>, Cow<'a, PointCloud>),
-    Validated(PointCloud, Vec<String>, f64),
+    Validated(PointCloud, Vec<Warning>, f64),
 }
 
 /// Validates, normalises and samples the pair (see the module docs); `kept` is a target prepared
@@ -78,7 +79,7 @@ pub(crate) fn prepare(
     options: &Options,
     resolved: &Resolved,
     kept: Option<Box<PreparedTarget>>,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Warning>,
 ) -> Result<Prepared> {
     let n_net = resolved.n_net;
     limits::check_cloud_points("source", source.len())?;
@@ -126,12 +127,12 @@ pub(crate) fn prepare(
     let (size_source, size_target) = (source.half_extent(), summary.bounding.1);
     let size_ratio = size_source.max(size_target) / size_source.min(size_target);
     if size_ratio > SIZE_RATIO_WARNING {
-        warnings.push(format!(
+        warnings.push(Warning::new(WarningCode::SizeMismatch, format!(
             "the clouds differ in size by {}x (largest half-extents: source {}, target {}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres); if they are not, multiply one cloud's coordinates by the factor between the units (1000 from metres to millimetres: the option sourceScale does it for the source)",
             num(size_ratio.round()),
             num(size_source),
             num(size_target)
-        ));
+        )));
     }
     // The network sees the source already turned by the initial guess (its shift only moves
     // the source's centre, which the normalisation removes).
@@ -162,9 +163,12 @@ pub(crate) fn prepare(
     };
     for (what, len) in [("source", src_n.len()), ("target", target.cloud.len())] {
         if len < n_net {
-            warnings.push(format!(
+            warnings.push(Warning::new(
+                WarningCode::NetworkResampled,
+                format!(
                 "{what} has {len} points, fewer than the {n_net} the network takes: it saw some of them twice (the \
                  network's estimate is only a start; the answer is refined on every point)"
+            ),
             ));
         }
     }
@@ -210,15 +214,18 @@ fn scaled(cloud: Cow<'_, PointCloud>, factor: f64) -> Cow<'_, PointCloud> {
 /// and the step the `f32` coordinates of the points kept are rounded to ([`checks::f32_rounding`],
 /// its units).
 /// `what` names the cloud in messages.
-fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<(PointCloud, Vec<String>, f64)> {
+fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<(PointCloud, Vec<Warning>, f64)> {
     let given = cloud.len();
     let mut cloud = cloud.into_owned().into_validated(what, MIN_POINTS, options.non_finite)?;
     let mut warnings = Vec::new();
     if cloud.len() < given {
-        warnings.push(format!(
+        warnings.push(Warning::new(
+            WarningCode::NonFiniteDropped,
+            format!(
             "left out {} of the {what}'s {given} points: a non-finite coordinate (NaN, infinite) or one beyond 1e18 \
              (`nonFinite: \"drop\"`)",
             given - cloud.len()
+        ),
         ));
     }
     // the two tests' sample, shared while the cloud is unchanged
@@ -230,13 +237,16 @@ fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<
         if dropped == 0 {
             spacing = Some(sampled);
         } else {
-            warnings.push(outliers::warning(what, dropped, total));
+            warnings.push(Warning::new(WarningCode::OutliersDropped, outliers::warning(what, dropped, total)));
         }
     }
     if options.support_plane == Support::Drop {
         let spacing = spacing.unwrap_or_else(|| Spacing::of(&cloud.points));
         if let Some(plane) = support::find_with(&cloud.points, &spacing) {
-            warnings.push(support::warning(what, plane.indices.len(), cloud.len()));
+            warnings.push(Warning::new(
+                WarningCode::SupportPlaneDropped,
+                support::warning(what, plane.indices.len(), cloud.len()),
+            ));
             cloud = cloud.without(&plane.indices);
         }
     }

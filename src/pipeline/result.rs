@@ -14,6 +14,7 @@ use crate::confidence::Evidence;
 use crate::origin;
 use crate::refine::Candidate;
 use crate::register::{Alternative, Registration, Timings};
+use crate::warning::{Warning, WarningCode};
 use crate::{checks, Result};
 use nalgebra::{Matrix4, Vector3};
 
@@ -27,7 +28,7 @@ pub(crate) fn finish(
     prepared: &Prepared,
     t_net_n: &Matrix4<f64>,
     chosen: Chosen,
-    mut warnings: Vec<String>,
+    mut warnings: Vec<Warning>,
     timings: Timings,
 ) -> Result<Registration> {
     let p = prepared;
@@ -44,13 +45,15 @@ pub(crate) fn finish(
     let T_target_source_network = to_caller(t_net_n);
     checks::finite_transform(&T_target_source, "the result")?;
     checks::finite_transform(&T_target_source_network, "the network's estimate")?;
-    warnings.extend(verdict_warning(confidence, &evidence, fitness, d_final * s));
+    let verdict = verdict_warning(confidence, &evidence, fitness, d_final * s);
+    warnings.extend(verdict.map(|m| Warning::new(WarningCode::LowConfidence, m)));
     let mut others = Vec::with_capacity(alternatives.len());
     for a in alternatives {
         let t = to_caller(&a.T_target_source);
         checks::finite_transform(&t, "an alternative pose")?;
         others.push(Alternative { T_target_source: t, fitness: a.fitness, inlier_rmse: a.inlier_rmse * s });
     }
+    let (warning_codes, warnings) = warnings.into_iter().map(|w| (w.code, w.message)).unzip();
     Ok(Registration {
         T_target_source,
         T_target_source_network,
@@ -62,6 +65,7 @@ pub(crate) fn finish(
         max_correspondence_distance: d_final * s,
         timings,
         warnings,
+        warning_codes,
         confidence,
         evidence,
         starts_refined,

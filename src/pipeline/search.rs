@@ -58,6 +58,7 @@ use crate::register::{
     Options, Search, AGREED_CONFIDENCE, GLOBAL_BEFORE_STOP_POINTS, GUESS_TURN_DEG, NEARLY_SURE_CONFIDENCE,
     STOP_CONFIDENCE, UNSURE_CONFIDENCE, UP_TOLERANCE_DEG,
 };
+use crate::warning::{Warning, WarningCode};
 use crate::Result;
 use nalgebra::{Matrix4, Point3};
 
@@ -84,7 +85,7 @@ pub(crate) fn search(
     options: &Options,
     model: &Model,
     workspace: &mut ModelWorkspace,
-    warnings: &mut Vec<String>,
+    warnings: &mut Vec<Warning>,
 ) -> Result<Chosen> {
     let p = prepared;
     let d_final = p.d_final;
@@ -412,10 +413,10 @@ pub(crate) fn search(
             let t = level(if options.network { builder.t_net_n() } else { p.t_initial });
             let probed = judge(&t);
             let answer = if options.network { "the network's estimate" } else { "the initial transform" };
-            warnings.push(match upright {
+            warnings.push(Warning::new(WarningCode::Unrefined, match upright {
                 Some(_) => format!("no refined start ended upright (within {UP_TOLERANCE_DEG} degrees of `up`), or the global descriptors matched too little: the answer is {answer}, levelled, unrefined"),
                 None => format!("no start could be refined (the global descriptors matched too little): the answer is {answer}, unrefined"),
-            });
+            }));
             // its fitness at the final distance, as every answer's (the evidence's may be tighter)
             let (fitness, inlier_rmse) = target_index.evaluate(&p.icp_src.points, &t, d_final);
             let c = Candidate {
@@ -450,7 +451,7 @@ pub(crate) fn search(
     let (candidate, probed) = match probed.free.filter(|_| refined_any && options.initial_transform.is_some()) {
         Some(free) => match held_by_guess(&free, &candidate, p, target_index, &screen, &admits) {
             Some((held, why)) => {
-                warnings.push(why);
+                warnings.push(Warning::new(WarningCode::HeldByGuess, why));
                 let probed = judge(&held.T_target_source);
                 (held, probed)
             }
@@ -472,14 +473,17 @@ pub(crate) fn search(
             .filter(|(o, f)| *f > candidate.fitness && !confidence::same_pose(o, t))
             .max_by(|a, b| a.1.total_cmp(&b.1));
         if let Some((o, f)) = elsewhere {
-            warnings.push(format!(
-                "a pose {:.1} degrees from the answer, putting the source {} from where the answer puts it, fits \
-                 better (fitness {:.2} against {:.2}; among the alternatives): the local search keeps the answer \
-                 its starts refined to",
-                crate::transform::rotation_error_deg(o, t),
-                crate::error::num(apart(o, t) * p.norm.scale),
-                f,
-                candidate.fitness
+            warnings.push(Warning::new(
+                WarningCode::BetterPoseNotTaken,
+                format!(
+                    "a pose {:.1} degrees from the answer, putting the source {} from where the answer puts it, fits \
+                     better (fitness {:.2} against {:.2}; among the alternatives): the local search keeps the answer \
+                     its starts refined to",
+                    crate::transform::rotation_error_deg(o, t),
+                    crate::error::num(apart(o, t) * p.norm.scale),
+                    f,
+                    candidate.fitness
+                ),
             ));
         }
     }
@@ -503,12 +507,12 @@ pub(crate) fn search(
         let shift = apart(&candidate.T_target_source, &p.t_initial);
         let size = p.src_n.half_extent();
         if shift > GUESS_SHIFT * size {
-            warnings.push(format!(
+            warnings.push(Warning::new(WarningCode::FarFromGuess, format!(
                 "the answer puts the source {} from where initialTransform puts it, {:.1} times the source's half-extent: \
                  if the guess placed it, the answer may be a look-alike elsewhere (a repeated room, the next bay)",
                 crate::error::num(shift * p.norm.scale),
                 shift / size
-            ));
+            )));
         }
     }
     let doubts = caps::Doubts { refined_any, tilted, short, mirrored, far_from_guess, free: probed.free };
@@ -522,10 +526,10 @@ pub(crate) fn search(
         && far_from_guess.is_none()
         && !confidence::same_pose(&candidate.T_target_source, &p.t_initial)
     {
-        warnings.push(format!(
+        warnings.push(Warning::new(WarningCode::TurnedFromGuess, format!(
             "the answer turns {turn:.1} degrees from initialTransform, the one start: ICP from it, or a pose the \
              confidence's probes turned it to, fit better there (a guess that was off, or a symmetric shape's look-alike)"
-        ));
+        )));
     }
     let alternatives = refine_alternatives(target_index, &p.icp_src.points, &candidate, &poses, &how);
     Ok(Chosen { candidate, evidence, confidence, starts_refined, alternatives })

@@ -16,6 +16,7 @@ use crate::global::{self, TargetFeatures};
 use crate::icp::IcpTarget;
 use crate::outliers::Outliers;
 use crate::support::Support;
+use crate::warning::Warning;
 use crate::{checks, limits, sampling, Result};
 use std::sync::OnceLock;
 
@@ -69,7 +70,7 @@ pub(crate) struct TargetSummary {
     /// Its principal spreads ([`checks::not_collinear`]).
     pub spreads: [f64; 3],
     /// The warnings its checks gave (points left out, a nearly collinear target).
-    pub warnings: Vec<String>,
+    pub warnings: Vec<Warning>,
     /// The step its `f32` coordinates are rounded to (`checks::f32_rounding`, its units).
     pub rounding: f64,
 }
@@ -98,7 +99,7 @@ fn icp_cloud(cloud: &PointCloud, sizes: &Sizes) -> PointCloud {
 
 /// The summary of the validated `target` (its origin not yet dropped); an error when it is
 /// collinear. `warnings`: what its checks said (`prepare::checked`), kept among its warnings.
-pub(crate) fn summary(target: &PointCloud, warnings: Vec<String>, rounding: f64) -> Result<TargetSummary> {
+pub(crate) fn summary(target: &PointCloud, warnings: Vec<Warning>, rounding: f64) -> Result<TargetSummary> {
     let mut warnings = warnings;
     let spreads = checks::not_collinear("target", &target.points, &mut warnings)?;
     let bounding = JointNormalization::box_of(target);

@@ -13,6 +13,7 @@ use crate::error::num;
 use crate::icp::IcpTarget;
 use crate::refine::{self, Candidate, Refinement};
 use crate::transform;
+use crate::warning::{Warning, WarningCode};
 use nalgebra::{Matrix3, Matrix4, Vector3};
 
 /// Source points sampled to look for other faces.
@@ -193,7 +194,7 @@ pub(crate) struct Across {
     /// Those of them that `admits` said may count.
     pub refined: Vec<Candidate>,
     /// A warning when a pose on other faces fits alike ([`fits_alike`]).
-    pub warning: Option<String>,
+    pub warning: Option<Warning>,
 }
 
 /// The `answer` moved across the thin walls of the `target` the `source` lies on
@@ -239,7 +240,8 @@ pub(crate) fn across_walls(
     let warning =
         std::iter::once(&answer).chain(&refined).filter(other).find(|r| fits_alike(r, &chosen)).map(|alike| {
             let at = |c: &Candidate| c.T_target_source.transform_point(&centre.into());
-            alike_warning((at(&chosen) - at(alike)).norm() * scale, &chosen, alike)
+            let shift = (at(&chosen) - at(alike)).norm() * scale;
+            Warning::new(WarningCode::ThinWall, alike_warning(shift, &chosen, alike))
         });
     Across { chosen, tried, refined, warning }
 }

@@ -598,7 +598,10 @@ pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
         t0 = std::time::Instant::now();
         match outcome {
             Ok((mut r, centre)) => {
-                r.warnings.extend(vertices_warning(source).into_iter().chain(target_vertices.clone()));
+                for w in vertices_warning(source).into_iter().chain(target_vertices.clone()) {
+                    r.warnings.push(w);
+                    r.warning_codes.push(arps::WarningCode::MeshVertices);
+                }
                 let aligned = output.as_ref().map(|p| p.display().to_string());
                 unsure += usize::from(min_confidence.is_some_and(|c| r.confidence < c));
                 print_registration(&r, time_ms, json, named, aligned, centre, source_scale)?
