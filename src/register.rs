@@ -289,10 +289,14 @@ pub enum Search {
     /// Every start is refined and the best returned, and nothing moves it after: a pose the
     /// confidence's probes find that fits better (the answer turned over, say) is refined and
     /// offered among the alternatives, with a warning, instead of replacing the answer (the
-    /// answer is then at most 0.5 sure); no stages after the starts'. With `starts: ["initial"]`
-    /// and `initialTransform`, a refinement of the caller's guess alone: a tracking or survey
-    /// pose that a look-alike with more overlap would otherwise replace (a room's quarter turn,
-    /// stations stacked along a tunnel).
+    /// answer is then at most 0.5 sure); no stages after the starts'. Its ICP stages start at
+    /// [`crate::refine::SCHEDULE`]'s multiples of the final distance even when that is tighter
+    /// than the default (the other searches start from the default distance), so that a start
+    /// moves only as far as the caller's distance reaches: a survey swath hanging past the
+    /// reference's edge is not pulled onto it. With `starts: ["initial"]` and
+    /// `initialTransform`, a refinement of the caller's guess alone: a tracking or survey pose
+    /// that a look-alike with more overlap would otherwise replace (a room's quarter turn,
+    /// stations stacked along a tunnel, a swath one sand wave on).
     Local,
 }
 

@@ -93,9 +93,15 @@ pub(crate) fn search(
     let target_index = p.target.index();
     // the network's estimate, or with the network off the initial transform (`starts::kinds`)
     let estimate = if options.network { Start::Network } else { Start::Initial };
+    // the local search reaches only as far as the caller's distance: its stages start at a few
+    // times it (the others from the default distance, so that the starts travel as far)
+    let d_coarse = match options.search {
+        Search::Local => d_final,
+        _ => super::options::coarse_distance(d_final),
+    };
     let how = Refinement {
         estimate: Some(estimate),
-        ..Refinement::new(p.icp, d_final, super::options::coarse_distance(d_final), options.icp_max_iterations)
+        ..Refinement::new(p.icp, d_final, d_coarse, options.icp_max_iterations)
     };
     let source_index = IcpTarget::new(&p.icp_src.points, false);
     // with `up`: every start levelled, and only upright answers, probe poses and alternatives
