@@ -126,7 +126,9 @@ pub struct Options {
     /// from a phone or a terrestrial scanner (gravity-aligned), survey data, a CAD model in its
     /// upright pose (`[0, 0, 1]` for z-up data, `[0, 1, 0]` for three.js's y-up). The answer then
     /// only turns the source about this axis, within [`UP_TOLERANCE_DEG`] of tilt for scans
-    /// levelled a little differently: every start is levelled first, answers tilted further are
+    /// levelled a little differently: every start is levelled first (its tilt off `up` taken
+    /// out, ICP then finds the small tilt between the scans; with `icp: "off"` the answer is
+    /// the levelled start, so leave `up` out to judge a pose as given), answers tilted further are
     /// rejected, and look-alikes tilted further do not count as alternatives; the answer turned
     /// a quarter and a half turn about up, each placed where the global descriptors' matches
     /// agree, is refined too (a box-like room captured from another spot fits its turns about as

@@ -4,7 +4,7 @@
 //! | --- | --- | --- |
 //! | [`Format::Ply`] | `.ply` | ascii, binary little/big endian; any vertex properties; faces |
 //! | [`Format::Pcd`] | `.pcd` | DATA ascii, binary, binary_compressed (LZF); organised clouds |
-//! | [`Format::Xyz`] | `.xyz .pts .txt .csv` | whitespace/comma/semicolon separated; the columns a header names (`x y z`, `Easting,Northing,Elevation`), else the first three numbers |
+//! | [`Format::Xyz`] | `.xyz .pts .txt .csv` | whitespace/comma/semicolon separated; the columns a header names (`x y z`, `Easting,Northing,Elevation`; two named without the third is an error), else the first three numbers |
 //! | [`Format::Obj`] | `.obj` | `v` and `f` (`i`, `i/t`, `i//n`, `i/t/n`, negative indices) |
 //! | [`Format::Off`] | `.off` | `OFF`, `COFF`, `NOFF`, `CNOFF`, `STOFF`, counts on the header line |
 //! | [`Format::Stl`] | `.stl` | ascii and binary (also binary files whose header starts with `solid`) |

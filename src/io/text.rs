@@ -6,7 +6,9 @@
 //! (`x`, `y`, `z`, or `easting`, `northing`, `elevation`/`height`, case-insensitive; a `//` or
 //! `#` comment line such as CloudCompare's `//X,Y,Z,R,G,B` counts), those columns are read, so a
 //! survey's `PointID,Easting,Northing,Elevation` reads its coordinates, not its point numbers;
-//! otherwise the first three numbers of a row are x, y, z. Other columns (intensity, colour,
+//! otherwise the first three numbers of a row are x, y, z; a header that names two of them but
+//! not the third (`time easting northing depth`) is an error, since the first three numbers would
+//! not be the coordinates. Other columns (intensity, colour,
 //! normals) are ignored. Blank lines and `#` / `//` comments are skipped anywhere. After data has
 //! started, a row without numbers in its coordinate columns is an error naming its line. A row
 //! whose values, separated by whitespace or semicolons, are numbers written with decimal commas or
@@ -29,16 +31,35 @@ pub(crate) struct Columns {
 /// The first three fields, no normal: a list without column names.
 const UNNAMED: Columns = Columns { xyz: [0, 1, 2], normal: None };
 
-/// The columns a header line names, when it names all three coordinates.
-fn named_columns(line: &str) -> Option<Columns> {
+/// What a header line says about the coordinate columns.
+enum Header {
+    /// It names all three.
+    Named(Columns),
+    /// It names two of them: which, and which is missing (for the error).
+    Partly(String),
+    /// It names fewer (a title, a point count, other columns).
+    Unnamed,
+}
+
+/// The names each coordinate column goes by (case-insensitive).
+const COORDINATE_NAMES: [&[&str]; 3] =
+    [&["x", "easting", "east"], &["y", "northing", "north"], &["z", "elevation", "elev", "height", "altitude", "alt"]];
+
+/// The columns a header line names ([`Header`]).
+fn named_columns(line: &str) -> Header {
     let names: Vec<String> =
         split_fields(line).map(|t| t.trim_matches(['"', '\'']).trim_start_matches("//").to_ascii_lowercase()).collect();
     let find = |aliases: &[&str]| names.iter().position(|n| aliases.contains(&n.as_str()));
-    let xyz = [
-        find(&["x", "easting", "east"])?,
-        find(&["y", "northing", "north"])?,
-        find(&["z", "elevation", "elev", "height", "altitude", "alt"])?,
-    ];
+    let found = COORDINATE_NAMES.map(find);
+    let [Some(x), Some(y), Some(z)] = found else {
+        if found.iter().flatten().count() < 2 {
+            return Header::Unnamed;
+        }
+        let named: Vec<String> = found.iter().flatten().map(|&c| format!("{} (column {})", names[c], c + 1)).collect();
+        let missing = ["x", "y", "z"][found.iter().position(Option::is_none).unwrap_or(2)];
+        return Header::Partly(format!("{} but no {missing} column", named.join(" and ")));
+    };
+    let xyz = [x, y, z];
     let normal = match (
         find(&["nx", "normal_x", "normalx"]),
         find(&["ny", "normal_y", "normaly"]),
@@ -47,7 +68,7 @@ fn named_columns(line: &str) -> Option<Columns> {
         (Some(x), Some(y), Some(z)) => Some([x, y, z]),
         _ => None,
     };
-    Some(Columns { xyz, normal })
+    Header::Named(Columns { xyz, normal })
 }
 
 /// True when the line holds no data (blank or a comment).
@@ -88,13 +109,22 @@ pub(crate) struct Row<'a, 'b> {
 /// numbers in its coordinate columns, a file without any data row.
 pub(crate) fn scan<'a>(bytes: &'a [u8], visit: &mut dyn FnMut(&Row<'a, '_>) -> Result<()>) -> Result<()> {
     let mut columns = UNNAMED;
+    // a header that names two coordinate columns but not the third (a `depth`, a `height` spelt
+    // otherwise): its rows' first three numbers are not the coordinates
+    let mut partly: Option<(usize, String)> = None;
+    let header =
+        |n: usize, line: &str, columns: &mut Columns, partly: &mut Option<(usize, String)>| match named_columns(line) {
+            Header::Named(c) => (*columns, *partly) = (c, None),
+            Header::Partly(what) => *partly = Some((n, what)),
+            Header::Unnamed => {}
+        };
     let mut started = false;
     let mut fields: Vec<&'a str> = Vec::new();
     for (n, raw) in Lines::new(bytes) {
         let line = utf8_line(F, n, raw)?;
         if is_comment(line) {
             if !started {
-                columns = named_columns(comment_text(line)).unwrap_or(columns);
+                header(n, comment_text(line), &mut columns, &mut partly);
             }
             continue;
         }
@@ -112,11 +142,23 @@ pub(crate) fn scan<'a>(bytes: &'a [u8], visit: &mut dyn FnMut(&Row<'a, '_>) -> R
                     ),
                 ))
             }
+            Some(_) if !started && partly.is_some() => {
+                let (h, what) = partly.take().unwrap_or_default();
+                return Err(Error::parse(
+                    F,
+                    format!(
+                        "line {h}: the header names {what} (x, y, z, or easting, northing, elevation, \
+                         case-insensitive), so the rows' first three numbers need not be the coordinates: name the \
+                         missing column (a depth below the surface: negate it into an elevation, or name it z in \
+                         every file registered with this one), or remove the header to read the first three numbers"
+                    ),
+                ));
+            }
             Some(point) => {
                 started = true;
                 visit(&Row { line, fields: &fields, columns, point })?;
             }
-            None if !started => columns = named_columns(line).unwrap_or(columns), // header
+            None if !started => header(n, line, &mut columns, &mut partly),
             None => return Err(bad_row(n, line, &fields, &columns)),
         }
     }
@@ -247,6 +289,15 @@ mod tests {
         assert!(e.contains("columns [2, 3, 4]"), "{e}");
         // Unnamed: the first three numbers, as before.
         assert_eq!(read(b"12\n1 2 3 9 9 9\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        assert_eq!(read(b"survey of x\n1 2 3\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
+        // Two coordinates named, the third not: not the first three numbers (a time column first)
+        let e = read(b"time easting northing depth\n1700000000.5 512202.86 5712095.35 -25.1\n").unwrap_err();
+        let e = e.to_string();
+        assert!(e.contains("line 1") && e.contains("easting (column 2) and northing (column 3) but no z"), "{e}");
+        let e = read(b"# X;Y;Depth\n1;2;3\n").unwrap_err().to_string();
+        assert!(e.contains("x (column 1) and y (column 2) but no z"), "{e}");
+        // a later header that names all three is read
+        assert_eq!(read(b"x y depth\nid x y z\n7 1 2 3\n").unwrap(), vec![[1.0, 2.0, 3.0]]);
     }
 
     #[test]
