@@ -677,10 +677,18 @@ fn held_by_guess(
         return None;
     }
     let turn = crate::transform::rotation_error_deg(&answer.T_target_source, &t);
+    // how far the source's centre moved, in the caller's units
+    let centre = screen.iter().fold(nalgebra::Vector3::zeros(), |c, q| c + nalgebra::Vector3::from(q.map(f64::from)))
+        / screen.len().max(1) as f64;
+    let moved = (t.transform_point(&Point3::from(centre))
+        - answer.T_target_source.transform_point(&Point3::from(centre)))
+    .norm()
+        * p.norm.scale;
     let why = format!(
-        "the answer follows initialTransform along the motion the fit leaves free (turned {turn:.1} degrees from \
-         where the clouds' edges held it, fitness {fitness:.3} against {:.3}): the clouds cannot tell that motion, \
-         the guess does",
+        "the answer follows initialTransform along the motion the fit leaves free (moved {} and turned {turn:.1} \
+         degrees from where the clouds' edges held it, fitness {fitness:.3} against {:.3}): the clouds cannot tell \
+         that motion, the guess does",
+        crate::error::num(moved),
         answer.fitness
     );
     Some((Candidate { T_target_source: t, fitness, inlier_rmse, ..*answer }, why))
