@@ -81,26 +81,22 @@ fn a_local_refinement_at_a_tight_distance_stays_where_the_guess_put_it() {
     let source =
         PointCloud::from_points_f64(&true_swath.iter().map(|&p| common::apply(&misplaced, p)).collect::<Vec<_>>());
     let mut reg = Registrar::with_default_model().unwrap();
-    let survey = |guess: &Matrix4<f64>| Options {
+    let survey = Options {
         network: false,
         starts: vec![Start::Initial],
-        initial_transform: Some(arps::transform::to_rows(guess)),
+        initial_transform: Some(arps::transform::to_rows(&T_target_source)),
         up: Some([0.0, 0.0, 1.0]),
         max_correspondence_distance: Some(1.0),
         icp_loss: IcpLoss::Robust,
         search: Search::Local,
         ..Options::default()
     };
-    // the local search from the truth stays there; the default search from it (its stages from
-    // the default distance, 7 m here) slides the swath a wavelength on
-    for (search, stays) in [(Search::Local, true), (Search::Adaptive, false)] {
-        let r = reg.register(&source, &target, &Options { search, ..survey(&T_target_source) }).unwrap();
-        let deg = arps::transform::rotation_error_deg(&r.T_target_source, &T_target_source);
-        // how far the swath's centre lands from where the truth puts it
-        let at = |t: &Matrix4<f64>| nalgebra::Vector3::from(common::apply(t, common::apply(&misplaced, centre)));
-        let shift = (at(&r.T_target_source) - at(&T_target_source)).norm();
-        eprintln!("{search:?}: {deg:.3} degrees, {shift:.3} m off (confidence {:.3})", r.confidence);
-        let right = deg < 0.1 && shift < 0.2;
-        assert_eq!(right, stays, "{search:?}: {deg} degrees, {shift} m off (confidence {})", r.confidence);
-    }
+    // from the truth it stays there (with stages from the default distance, 7 m here, ICP slid
+    // it a wavelength on: 25 m)
+    let r = reg.register(&source, &target, &survey).unwrap();
+    let deg = arps::transform::rotation_error_deg(&r.T_target_source, &T_target_source);
+    // how far the swath's centre lands from where the truth puts it
+    let at = |t: &Matrix4<f64>| nalgebra::Vector3::from(common::apply(t, common::apply(&misplaced, centre)));
+    let shift = (at(&r.T_target_source) - at(&T_target_source)).norm();
+    assert!(deg < 0.1 && shift < 0.2, "{deg} degrees, {shift} m off (confidence {})", r.confidence);
 }
