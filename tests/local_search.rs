@@ -2,7 +2,7 @@
 //! pose that reaches only a few times that distance. A survey swath that hangs partly off the
 //! reference's edge, over a seabed of sand waves: the default search's wide stages pair the
 //! overhanging points with the reference's edge and pull the swath onto it, a whole sand-wave
-//! wavelength away (25 m, confidently), where the local refinement stays at the truth.
+//! wavelength away (25 m), where the local refinement stays at the truth.
 #![allow(non_snake_case)]
 
 mod common;
