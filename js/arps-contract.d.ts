@@ -450,10 +450,12 @@ export type RegistrationResult = {
  * * `"outliersDropped"`: outliers were left out (`outliers: "drop"`).
  * * `"supportPlaneDropped"`: a support plane (a table, a turntable, the floor) was left out
  *   (`supportPlane: "drop"`).
+ * * `"pointsAtZero"`: several points lie exactly at (0, 0, 0), as a depth camera writes its
+ *   pixels without a return: they are registered as points; remove them.
  * * `"meshVertices"`: the CLI read a mesh file's vertices as the cloud (`--surface-points` samples
  *   its surface).
  */
-export type WarningCode = "lowConfidence" | "sizeMismatch" | "coarseCoordinates" | "distanceTooFine" | "distanceTooWide" | "nearlyLine" | "bothFlat" | "freeMotion" | "thinWall" | "mirrorImage" | "lowOverlap" | "notUpright" | "unrefined" | "turnedFromGuess" | "farFromGuess" | "heldByGuess" | "betterPoseNotTaken" | "fewPoints" | "networkResampled" | "nonFiniteDropped" | "outliersDropped" | "supportPlaneDropped" | "meshVertices";
+export type WarningCode = "lowConfidence" | "sizeMismatch" | "coarseCoordinates" | "distanceTooFine" | "distanceTooWide" | "nearlyLine" | "bothFlat" | "freeMotion" | "thinWall" | "mirrorImage" | "lowOverlap" | "notUpright" | "unrefined" | "turnedFromGuess" | "farFromGuess" | "heldByGuess" | "betterPoseNotTaken" | "fewPoints" | "networkResampled" | "nonFiniteDropped" | "outliersDropped" | "supportPlaneDropped" | "pointsAtZero" | "meshVertices";
 
 /**
  * Milliseconds spent in each stage of one registration (0 where no clock is available; in JS

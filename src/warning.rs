@@ -54,6 +54,8 @@ use serde::{Deserialize, Serialize};
 /// * `"outliersDropped"`: outliers were left out (`outliers: "drop"`).
 /// * `"supportPlaneDropped"`: a support plane (a table, a turntable, the floor) was left out
 ///   (`supportPlane: "drop"`).
+/// * `"pointsAtZero"`: several points lie exactly at (0, 0, 0), as a depth camera writes its
+///   pixels without a return: they are registered as points; remove them.
 /// * `"meshVertices"`: the CLI read a mesh file's vertices as the cloud (`--surface-points` samples
 ///   its surface).
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
@@ -104,13 +106,15 @@ pub enum WarningCode {
     OutliersDropped,
     /// `"supportPlaneDropped"`: a support plane left out (see the type's docs).
     SupportPlaneDropped,
+    /// `"pointsAtZero"`: points exactly at (0, 0, 0) (see the type's docs).
+    PointsAtZero,
     /// `"meshVertices"`: the CLI read a mesh's vertices (see the type's docs).
     MeshVertices,
 }
 
 impl WarningCode {
     /// Every code, in the order declared.
-    pub const ALL: [WarningCode; 23] = [
+    pub const ALL: [WarningCode; 24] = [
         WarningCode::LowConfidence,
         WarningCode::SizeMismatch,
         WarningCode::CoarseCoordinates,
@@ -133,6 +137,7 @@ impl WarningCode {
         WarningCode::NonFiniteDropped,
         WarningCode::OutliersDropped,
         WarningCode::SupportPlaneDropped,
+        WarningCode::PointsAtZero,
         WarningCode::MeshVertices,
     ];
 }

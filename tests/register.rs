@@ -292,3 +292,19 @@ fn f32_coordinates_far_from_zero_get_a_warning() {
     let r = registrar().register(&source, &target, &Options::default()).unwrap();
     assert!(!r.warnings.iter().any(rounded), "{:?}", r.warnings);
 }
+
+/// A depth camera writes its pixels without a return as (0, 0, 0): a frame with a cluster of
+/// them is warned about (`pointsAtZero`), counting them; a clean one is not.
+#[test]
+fn points_at_zero_are_warned_about() {
+    let (source, target, _) = common::fixture_pair(1);
+    let clean = registrar().register(&source, &target, &Options::default()).unwrap();
+    assert!(!clean.warning_codes.contains(&arps::WarningCode::PointsAtZero), "{:?}", clean.warnings);
+    let mut points = source.to_xyz_f64();
+    points.extend(std::iter::repeat_n(0.0, 3 * 40));
+    let with_zeros = PointCloud::from_xyz_f64(&points).unwrap();
+    let r = registrar().register(&with_zeros, &target, &Options::default()).unwrap();
+    let at = r.warning_codes.iter().position(|c| *c == arps::WarningCode::PointsAtZero);
+    let at = at.unwrap_or_else(|| panic!("{:?}", r.warnings));
+    assert!(r.warnings[at].starts_with("40 of the source's points lie exactly at (0, 0, 0)"), "{}", r.warnings[at]);
+}

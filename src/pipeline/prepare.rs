@@ -208,6 +208,10 @@ fn scaled(cloud: Cow<'_, PointCloud>, factor: f64) -> Cow<'_, PointCloud> {
     Cow::Owned(cloud.into_owned().into_transformed(&Matrix4::new_nonuniform_scaling(&Vector3::repeat(factor))))
 }
 
+/// Points exactly at (0, 0, 0) from which a cloud is warned about: more than one is no
+/// coincidence.
+const MIN_AT_ZERO: usize = 2;
+
 /// `cloud` validated ([`PointCloud::validated`], `options.non_finite`); with [`Outliers::Drop`]
 /// without its far outliers ([`outliers::drop_far_with`]); then with [`Support::Drop`] without the
 /// support plane it stands on ([`support::find`]); with a warning for each that left points out,
@@ -222,10 +226,10 @@ fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<
         warnings.push(Warning::new(
             WarningCode::NonFiniteDropped,
             format!(
-            "left out {} of the {what}'s {given} points: a non-finite coordinate (NaN, infinite) or one beyond 1e18 \
-             (`nonFinite: \"drop\"`)",
-            given - cloud.len()
-        ),
+                "left out {} of the {what}'s {given} points: a non-finite coordinate (NaN, infinite) or one beyond \
+                 1e18 (`nonFinite: \"drop\"`)",
+                given - cloud.len()
+            ),
         ));
     }
     // the two tests' sample, shared while the cloud is unchanged
@@ -249,6 +253,19 @@ fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<
             ));
             cloud = cloud.without(&plane.indices);
         }
+    }
+    // a depth camera's pixels without a return, written as (0, 0, 0): a cluster the outlier test
+    // may keep (it is dense), which stretches the clouds' box and so the default distance
+    let at_zero = (0..cloud.len()).filter(|&i| cloud.point_f64(i) == [0.0; 3]).count();
+    if at_zero >= MIN_AT_ZERO {
+        warnings.push(Warning::new(
+            WarningCode::PointsAtZero,
+            format!(
+                "{at_zero} of the {what}'s points lie exactly at (0, 0, 0), as a depth camera writes its pixels \
+                 without a return: remove them (they are registered as points, and they widen the clouds' box and \
+                 the default distance)"
+            ),
+        ));
     }
     // the points kept (a stray left out, far from zero, rounds nothing that is registered)
     let rounding = checks::f32_rounding(what, &cloud, &mut warnings);
