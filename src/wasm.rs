@@ -261,6 +261,8 @@ pub fn list_scans(
 /// stored; rigid motions only) and glTF/GLB (a new parent node above its top nodes, its buffers
 /// kept) (see `canTransform`). Positions are mapped in f64 and written back as the file stored them (the
 /// property's type, the text's decimals, LAS's scaled integers with new offsets), normals turned,
+/// a Gaussian splat PLY's splats turned and scaled with the scene (`rot_*` quaternions, `scale_*`
+/// log-extents, `f_rest_*` colour coefficients),
 /// everything else kept (colours, intensity, classification, faces, other fields, the header).
 /// `fileName` says the format by its extension, where the file does not start with a format's
 /// signature (else the content does). `matrix`: 16 numbers,

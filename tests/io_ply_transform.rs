@@ -211,3 +211,88 @@ fn hostile_files_and_transforms_are_refused_with_a_message() {
         }
     }
 }
+
+/// A 3D Gaussian Splatting file of `n` splats (the reference layout: position, zero normal,
+/// colour, 45 colour coefficients, opacity, log-extents, quaternion), binary or ASCII.
+fn splat_file(n: usize, ascii: bool) -> (Vec<u8>, Vec<Vec<f32>>) {
+    let mut names: Vec<String> =
+        ["x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"].map(String::from).to_vec();
+    names.extend((0..45).map(|k| format!("f_rest_{k}")));
+    names.extend(["opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"].map(String::from));
+    let format = if ascii { "ascii" } else { "binary_little_endian" };
+    let mut out = format!("ply\nformat {format} 1.0\nelement vertex {n}\n").into_bytes();
+    for name in &names {
+        out.extend(format!("property float {name}\n").bytes());
+    }
+    out.extend(b"end_header\n");
+    let records: Vec<Vec<f32>> = (0..n)
+        .map(|i| {
+            (0..names.len()).map(|k| ((i * 62 + k) as f32 * 0.618).sin() * if k < 3 { 2.0 } else { 1.0 }).collect()
+        })
+        .collect();
+    for r in &records {
+        if ascii {
+            let line: Vec<String> = r.iter().map(|v| v.to_string()).collect();
+            out.extend(line.join(" ").bytes());
+            out.push(b'\n');
+        } else {
+            r.iter().for_each(|v| out.extend(v.to_le_bytes()));
+        }
+    }
+    (out, records)
+}
+
+/// The values of a moved splat file, read back (every property float).
+fn splat_values(bytes: &[u8], n: usize, ascii: bool) -> Vec<Vec<f32>> {
+    let body = &bytes[header_len(bytes)..];
+    if ascii {
+        let text = std::str::from_utf8(body).unwrap();
+        return text.lines().take(n).map(|l| l.split(' ').map(|v| v.parse().unwrap()).collect()).collect();
+    }
+    body.chunks_exact(62 * 4).take(n).map(|r| (0..62).map(|k| f32_at(r, 4 * k)).collect()).collect()
+}
+
+#[test]
+fn gaussian_splats_turn_and_scale_with_the_scene() {
+    use nalgebra::{Quaternion, UnitQuaternion};
+    // turned, moved and scaled by 2.5 (a scene of unknown scale onto another)
+    let rigid = arps::transform::from_rotation_translation(
+        nalgebra::Rotation3::from_euler_angles(0.4, -1.2, 2.9).matrix(),
+        &nalgebra::Vector3::new(1.0, -2.0, 0.5),
+    );
+    let mut m = rigid;
+    m.fixed_view_mut::<3, 3>(0, 0).scale_mut(2.5);
+    let r = rigid.fixed_view::<3, 3>(0, 0).into_owned();
+    for ascii in [false, true] {
+        let (file, before) = splat_file(4, ascii);
+        let moved = arps::io::transform_ply(&file, &m).unwrap();
+        let after = splat_values(&moved, 4, ascii);
+        for (b, a) in before.iter().zip(&after) {
+            let f = |v: &[f32], k: usize| v[k] as f64;
+            // the centre moved
+            let p = m.transform_point(&nalgebra::Point3::new(f(b, 0), f(b, 1), f(b, 2)));
+            assert!((0..3).all(|k| (f(a, k) - p[k]).abs() < 1e-5), "{a:?}");
+            // colour of the constant band and opacity as they were
+            assert_eq!((&a[6..9], a[54]), (&b[6..9], b[54]));
+            // the extents 2.5 times larger (logarithms)
+            assert!((55..58).all(|k| (f(a, k) - f(b, k) - 2.5f64.ln()).abs() < 1e-5), "{a:?}");
+            // the axes turned: the new quaternion's rotation is R times the old one's
+            let axes = |v: &[f32]| {
+                let q = Quaternion::new(f(v, 58), f(v, 59), f(v, 60), f(v, 61));
+                *UnitQuaternion::from_quaternion(q).to_rotation_matrix().matrix()
+            };
+            assert!((axes(a) - r * axes(b)).abs().max() < 1e-5, "{a:?}");
+            // the view-dependent colour turned: its coefficients changed, their energy per band kept
+            let energy = |v: &[f32], c: usize, band: std::ops::Range<usize>| {
+                band.map(|k| f(v, 9 + 15 * c + k).powi(2)).sum::<f64>()
+            };
+            for c in 0..3 {
+                for band in [0..3, 3..8, 8..15] {
+                    let (e_a, e_b) = (energy(a, c, band.clone()), energy(b, c, band));
+                    assert!((e_a - e_b).abs() < 1e-4 * e_b.max(1.0), "{e_a} vs {e_b}");
+                }
+            }
+            assert_ne!(&a[9..54], &b[9..54]);
+        }
+    }
+}

@@ -53,6 +53,7 @@ mod pcd;
 mod pcd_transform;
 mod ply;
 mod ply_transform;
+mod splat;
 mod stl;
 mod stl_transform;
 mod text;

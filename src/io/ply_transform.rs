@@ -1,7 +1,9 @@
 //! A PLY file moved as it is: the positions of its `vertex` element mapped by a rigid (or
-//! uniformly scaled) transform, its normals turned, every other byte kept (colours, intensity,
-//! other properties, faces and other elements, comments, the encoding). What saves a registered
-//! scan in the target's frame without losing what the registration did not read.
+//! uniformly scaled) transform, its normals turned, a Gaussian splat file's splats turned and
+//! scaled with them ([`super::splat`]: `rot_*`, `scale_*`, `f_rest_*`), every other byte kept
+//! (colours, intensity, other properties, faces and other elements, comments, the encoding).
+//! What saves a registered scan in the target's frame without losing what the registration did
+//! not read.
 //!
 //! Binary files are copied and the vertex records rewritten in place; ASCII files get their
 //! vertex lines rewritten (values separated by one space) and every other line as it was. Values
@@ -17,6 +19,7 @@ use super::motion::{Bounds, Motion};
 use super::ply::{
     parse_header, read_ascii_element, read_binary_element, Element, Encoding, Kind, Out, Scalar, Want, F,
 };
+use super::splat::{Splat, SplatMotion};
 use super::util::{parse_f64, utf8_line, Lines};
 use crate::{Error, Result};
 use nalgebra::Matrix4;
@@ -26,6 +29,9 @@ use nalgebra::Matrix4;
 struct Layout {
     position: [usize; 3],
     normal: Option<[usize; 3]>,
+    /// A Gaussian splat's attributes ([`Splat::indices`]), turned with the scene; empty in other
+    /// files.
+    splat: Vec<usize>,
     /// The positions are written as `double` (declared so by [`widened_header`]).
     widened: bool,
 }
@@ -55,7 +61,8 @@ fn layout(el: &Element) -> Result<Layout> {
         (Some(x), Some(y), Some(z)) if float(x) && float(y) && float(z) => Some([x, y, z]),
         _ => None,
     };
-    Ok(Layout { position, normal, widened: false })
+    let splat = Splat::of(el).map(|s| s.indices()).unwrap_or_default();
+    Ok(Layout { position, normal, splat, widened: false })
 }
 
 /// The PLY file `bytes` with its vertices moved by `m` (`T_target_source`: a rigid transform, or
@@ -71,6 +78,12 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let layout = layout(vertex)?;
     let position = |p| motion.point(p);
     let normal = |n| motion.normal(n);
+    let splat = Splat::of(vertex).map(|s| SplatMotion::new(&motion.rotation, motion.scale(), &s));
+    let attrs = |v: &mut [f64]| {
+        if let Some(s) = &splat {
+            s.apply(v)
+        }
+    };
     let single = layout.position.map(|i| matches!(vertex.props[i].kind, Kind::Scalar(Scalar::F32)));
     match h.encoding {
         Encoding::Ascii => {
@@ -89,7 +102,7 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
                     p
                 };
                 let mut scratch = lines.clone();
-                move_ascii(bytes, &mut scratch, vertex, &layout, &record, &|n| n, None)?;
+                move_ascii(bytes, &mut scratch, vertex, &layout, (&record, &|n| n, &|_| {}), None)?;
                 bounds.get().f32_coarsens(&motion, single)
             };
             let mut out = Vec::with_capacity(bytes.len() + bytes.len() / 4);
@@ -100,7 +113,7 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
                 out.extend_from_slice(&bytes[..start]);
             }
             let layout = Layout { widened: widen, ..layout };
-            move_ascii(bytes, &mut lines, vertex, &layout, &position, &normal, Some(&mut out))?;
+            move_ascii(bytes, &mut lines, vertex, &layout, (&position, &normal, &attrs), Some(&mut out))?;
             out.extend_from_slice(&bytes[lines.offset()..]);
             Ok(out)
         }
@@ -115,12 +128,12 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
             if single.contains(&true) && bounds().f32_coarsens(&motion, single) {
                 let mut out = widened_header(&bytes[..h.body], vi, &layout);
                 out.extend_from_slice(&bytes[h.body..pos]);
-                widen_binary(&mut out, &bytes[pos..pos + need], vertex, &layout, big, &position, &normal);
+                widen_binary(&mut out, &bytes[pos..pos + need], vertex, &layout, big, (&position, &normal, &attrs));
                 out.extend_from_slice(&bytes[pos + need..]);
                 return Ok(out);
             }
             let mut out = bytes.to_vec();
-            move_binary(&mut out, pos, vertex, &layout, big, &position, &normal)?;
+            move_binary(&mut out, pos, vertex, &layout, big, (&position, &normal, &attrs))?;
             Ok(out)
         }
     }
@@ -202,8 +215,7 @@ fn widen_binary(
     el: &Element,
     layout: &Layout,
     big: bool,
-    position: &dyn Fn([f64; 3]) -> [f64; 3],
-    normal: &dyn Fn([f64; 3]) -> [f64; 3],
+    (position, normal, attrs): Movers,
 ) {
     let stride = el.fixed_size().unwrap_or(0);
     if stride == 0 {
@@ -214,6 +226,7 @@ fn widen_binary(
     let n = layout.normal.map(|idx| idx.map(|i| offsets[i]));
     out.reserve(records.len() + records.len() / stride * 12);
     let mut scratch = vec![0u8; stride];
+    let mut values = vec![0.0; layout.splat.len()];
     for record in records.chunks_exact(stride) {
         let read = |slot: [(usize, Scalar); 3]| slot.map(|(off, s)| s.read_f64(&record[off..off + s.size()], big));
         let moved = position(read(p));
@@ -224,6 +237,7 @@ fn widen_binary(
                 put(&mut scratch, n[a], turned[a], big);
             }
         }
+        turn_splat(&mut scratch, &offsets, &layout.splat, &mut values, big, attrs);
         for (i, &(off, s)) in offsets.iter().enumerate() {
             match layout.position.iter().position(|&k| k == i) {
                 Some(a) => out.extend_from_slice(&if big { moved[a].to_be_bytes() } else { moved[a].to_le_bytes() }),
@@ -269,8 +283,7 @@ fn move_binary(
     el: &Element,
     layout: &Layout,
     big: bool,
-    position: &dyn Fn([f64; 3]) -> [f64; 3],
-    normal: &dyn Fn([f64; 3]) -> [f64; 3],
+    (position, normal, attrs): Movers,
 ) -> Result<()> {
     let stride = el.fixed_size().unwrap_or(0);
     let need = records_bytes(out.len(), pos, el)?;
@@ -280,6 +293,7 @@ fn move_binary(
     let offsets = offsets(el);
     let slots = |idx: [usize; 3]| idx.map(|i| offsets[i]);
     let (p, n) = (slots(layout.position), layout.normal.map(slots));
+    let mut values = vec![0.0; layout.splat.len()];
     for record in out[pos..pos + need].chunks_exact_mut(stride) {
         let read = |slot: [(usize, Scalar); 3]| slot.map(|(off, s)| s.read_f64(&record[off..off + s.size()], big));
         let moved = position(read(p));
@@ -292,8 +306,36 @@ fn move_binary(
                 put(record, n[a], turned[a], big);
             }
         }
+        turn_splat(record, &offsets, &layout.splat, &mut values, big, attrs);
     }
     Ok(())
+}
+
+/// What moves a vertex: its position, its normal, its splat attributes ([`SplatMotion::apply`];
+/// nothing in other files).
+type Movers<'a> = (&'a dyn Fn([f64; 3]) -> [f64; 3], &'a dyn Fn([f64; 3]) -> [f64; 3], &'a dyn Fn(&mut [f64]));
+
+/// A binary record's splat attributes (the properties `indices`) read into `values`, moved by
+/// `attrs` and written back in their own types; nothing without them.
+fn turn_splat(
+    record: &mut [u8],
+    offsets: &[(usize, Scalar)],
+    indices: &[usize],
+    values: &mut [f64],
+    big: bool,
+    attrs: &dyn Fn(&mut [f64]),
+) {
+    if indices.is_empty() {
+        return;
+    }
+    for (v, &i) in values.iter_mut().zip(indices) {
+        let (off, s) = offsets[i];
+        *v = s.read_f64(&record[off..off + s.size()], big);
+    }
+    attrs(values);
+    for (&v, &i) in values.iter().zip(indices) {
+        put(record, offsets[i], v, big);
+    }
 }
 
 /// A value for an ASCII file, in the property's type: the shortest text that reads back the same.
@@ -313,8 +355,7 @@ fn move_ascii(
     lines: &mut Lines,
     el: &Element,
     layout: &Layout,
-    position: &dyn Fn([f64; 3]) -> [f64; 3],
-    normal: &dyn Fn([f64; 3]) -> [f64; 3],
+    (position, normal, attrs): Movers,
     mut out: Option<&mut Vec<u8>>,
 ) -> Result<()> {
     let types: Vec<Scalar> = el
@@ -367,6 +408,16 @@ fn move_ascii(
                 let (position, normal) = (Some((layout.position, moved)), turned);
                 for (idx, values) in [position, normal].into_iter().flatten() {
                     for (i, v) in idx.into_iter().zip(values) {
+                        tokens[i] = text(v, types[i]);
+                    }
+                }
+                if !layout.splat.is_empty() {
+                    let mut values = Vec::with_capacity(layout.splat.len());
+                    for &i in &layout.splat {
+                        values.push(parse_f64(F, n, &format!("'{}'", el.props[i].name), &tokens[i])?);
+                    }
+                    attrs(&mut values);
+                    for (&i, v) in layout.splat.iter().zip(values) {
                         tokens[i] = text(v, types[i]);
                     }
                 }
