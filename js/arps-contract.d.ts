@@ -623,6 +623,16 @@ export type ReadOptions = {
    * default): every point.
    */
   classes?: number[],
+  /**
+   * For a Gaussian splat PLY (a vertex `opacity` property, the logit the splat file stores):
+   * only the splats at least this opaque (the logit's sigmoid, in [0, 1]; 0.5 keeps those
+   * with a logit of 0 or more). Splat scenes hold transparent floaters strewn about and huge
+   * background splats that can mislead the search; their surfaces are the opaque splats. An
+   * error when no splat is that opaque, for a PLY without `opacity`, with `surfacePoints`, and
+   * for a file of another format. `transform_file` moves every splat of the file whatever
+   * this says. Unset (the default): every splat.
+   */
+  minOpacity?: number | null,
 };
 
 /**

@@ -211,6 +211,14 @@ fn register_reads_the_classes_of_a_las_file() {
     let bad = arps(&["register", ply, las, "--source-classes", "2"]);
     let err = String::from_utf8_lossy(&bad.stderr);
     assert!(err.contains("--source-classes keeps points of some LAS classes, but this is a PLY file"), "{err}");
+    // `--source-min-opacity` / `--target-min-opacity`: splats only; the flag named
+    let bad = arps(&["register", ply, ply, "--target-min-opacity", "0.5"]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(!bad.status.success() && err.contains("--target-min-opacity keeps the opaque splats"), "{err}");
+    assert!(err.contains("this PLY has no vertex 'opacity' property"), "{err}");
+    let bad = arps(&["register", las, las, "--source-min-opacity", "2"]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(err.contains("--source-min-opacity 2 must be a number in [0, 1]"), "{err}");
 }
 
 #[test]
@@ -712,7 +720,8 @@ fn the_registration_seed_leaves_the_surface_sampling_alone() {
     let out = arps(&["register", scan, mesh, "--surface-points", "3000", "--seed", "7", "--json"]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
     let cli: arps::Registration = serde_json::from_slice(&out.stdout).unwrap();
-    let surface = |seed| arps::io::ReadOptions { surface_points: Some(3000), seed, scan: None, classes: None };
+    let surface =
+        |seed| arps::io::ReadOptions { surface_points: Some(3000), seed, scan: None, classes: None, min_opacity: None };
     let read = |p: &str, o: &arps::io::ReadOptions| arps::io::read_path_with(&dir.join(p), o).unwrap();
     let lib = |read_seed| {
         arps::Registrar::with_default_model()

@@ -66,7 +66,7 @@ fn a_glb_by_trimesh_is_its_mesh_placed_by_its_node() {
     let mesh = read_mesh(&bytes, "fuze.glb").unwrap();
     assert_eq!(mesh.triangles.len(), 1000);
     assert!((mesh.surface_area() / obj_area() - 1.0).abs() < 1e-5);
-    let options = ReadOptions { surface_points: Some(5000), seed: 3, scan: None, classes: None };
+    let options = ReadOptions { surface_points: Some(5000), seed: 3, scan: None, classes: None, min_opacity: None };
     let surface = read_point_cloud_with(&bytes, "fuze.glb", &options).unwrap();
     assert_eq!(surface.len(), 5000);
 }

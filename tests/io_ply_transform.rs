@@ -296,3 +296,41 @@ fn gaussian_splats_turn_and_scale_with_the_scene() {
         }
     }
 }
+
+#[test]
+fn splats_are_read_by_their_opacity() {
+    use arps::io::{read_point_cloud_with, ReadOptions};
+    let (file, records) = splat_file(40, false);
+    // `{ minOpacity: 0.5 }`: the splats whose opacity logit is 0 or more
+    let options: ReadOptions = serde_json::from_str(r#"{ "minOpacity": 0.5 }"#).unwrap();
+    let opaque: Vec<&Vec<f32>> = records.iter().filter(|r| r[54] >= 0.0).collect();
+    assert!(!opaque.is_empty() && opaque.len() < records.len());
+    let cloud = read_point_cloud_with(&file, "scene.ply", &options).unwrap();
+    assert_eq!(cloud.len(), opaque.len());
+    for (i, r) in opaque.iter().enumerate() {
+        let p = cloud.point_f64(i);
+        assert!((0..3).all(|k| (p[k] - r[k] as f64).abs() < 1e-6), "{p:?} {r:?}");
+    }
+    // the same in an ASCII file
+    let (ascii, _) = splat_file(40, true);
+    assert_eq!(read_point_cloud_with(&ascii, "scene.ply", &options).unwrap().len(), opaque.len());
+    // refused: none that opaque (the most opaque named), out of [0, 1], with surfacePoints, a PLY
+    // without opacity, another format
+    let with = |min: f64| ReadOptions { min_opacity: Some(min), ..ReadOptions::default() };
+    let e = read_point_cloud_with(&file, "scene.ply", &with(0.9999)).unwrap_err().to_string();
+    assert!(e.contains("no splat of the file is that opaque (the most opaque: 0.7"), "{e}");
+    let e = read_point_cloud_with(&file, "scene.ply", &with(1.5)).unwrap_err().to_string();
+    assert!(e.contains("minOpacity = 1.5 must be a number in [0, 1]"), "{e}");
+    let sampled = ReadOptions { surface_points: Some(100), ..with(0.5) };
+    let e = read_point_cloud_with(&file, "scene.ply", &sampled).unwrap_err().to_string();
+    assert!(e.contains("give one of them"), "{e}");
+    let e = read_point_cloud_with(&format_fixture("frag_115_2000_binary.ply"), "f.ply", &with(0.5)).unwrap_err();
+    assert!(e.to_string().contains("no vertex 'opacity' property"), "{e}");
+    let e = read_point_cloud_with(b"1 2 3\n4 5 6\n", "p.xyz", &with(0.5)).unwrap_err().to_string();
+    assert!(e.contains("but this is a XYZ file"), "{e}");
+    // moving the file moves every splat, whatever the option
+    let moved =
+        arps::transform::from_rotation_translation(&nalgebra::Matrix3::identity(), &Vector3::new(1.0, 0.0, 0.0));
+    let out = arps::io::transform_file_with(&file, "scene.ply", &moved, &with(0.5)).unwrap();
+    assert_eq!(splat_values(&out, 40, false).len(), 40);
+}

@@ -214,7 +214,7 @@ fn a_mesh_read_as_its_sampled_surface() {
         read_point_cloud_with(
             &fixture(name),
             name,
-            &ReadOptions { surface_points: Some(n), seed, scan: None, classes: None },
+            &ReadOptions { surface_points: Some(n), seed, scan: None, classes: None, min_opacity: None },
         )
     };
     let stl = "angle_block_binary_solid.stl";
@@ -232,7 +232,7 @@ fn a_mesh_read_as_its_sampled_surface() {
     let as_surface = read_point_cloud_with(
         &ply,
         "s.ply",
-        &ReadOptions { surface_points: Some(3000), seed: 0, scan: None, classes: None },
+        &ReadOptions { surface_points: Some(3000), seed: 0, scan: None, classes: None, min_opacity: None },
     );
     assert_eq!(as_surface.unwrap().points, read_point_cloud(&ply, "s.ply").unwrap().points, "a PLY without faces");
     let few = surface(stl, 3, 0).unwrap_err().to_string();

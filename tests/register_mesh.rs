@@ -15,7 +15,7 @@ fn a_partial_scan_registers_onto_a_cad_model_read_as_its_surface() {
     let model = read_point_cloud_with(
         &bytes,
         name,
-        &ReadOptions { surface_points: Some(20_000), seed: 0, scan: None, classes: None },
+        &ReadOptions { surface_points: Some(20_000), seed: 0, scan: None, classes: None, min_opacity: None },
     )
     .unwrap();
     // the scan: other points of the same surface, the part seen from one side (70% of it)
@@ -114,7 +114,7 @@ fn mesh_targets_read_as_vertices_and_as_surfaces() {
                 read_point_cloud_with(
                     &bytes,
                     &name,
-                    &ReadOptions { surface_points: n, seed: 0, scan: None, classes: None },
+                    &ReadOptions { surface_points: n, seed: 0, scan: None, classes: None, min_opacity: None },
                 )
             })
             .collect();

@@ -20,7 +20,7 @@ fn model_and_scans() -> (PointCloud, Vec<PointCloud>) {
     let model = read_point_cloud_with(
         &bytes,
         name,
-        &ReadOptions { surface_points: Some(20_000), seed: 0, scan: None, classes: None },
+        &ReadOptions { surface_points: Some(20_000), seed: 0, scan: None, classes: None, min_opacity: None },
     )
     .unwrap();
     let dense = read_mesh(&bytes, name).unwrap().sample_surface(6_000, 7).unwrap();
@@ -98,7 +98,7 @@ fn registrations_onto_a_kept_large_target_equal_fresh_ones_through_another_voxel
     let model = read_point_cloud_with(
         &bytes,
         name,
-        &ReadOptions { surface_points: Some(400_000), seed: 1, scan: None, classes: None },
+        &ReadOptions { surface_points: Some(400_000), seed: 1, scan: None, classes: None, min_opacity: None },
     )
     .unwrap();
     let (_, scans) = model_and_scans();
@@ -288,7 +288,7 @@ fn many_scans_onto_one_target() {
         let model = read_point_cloud_with(
             &bytes,
             name,
-            &ReadOptions { surface_points: Some(points), seed: 0, scan: None, classes: None },
+            &ReadOptions { surface_points: Some(points), seed: 0, scan: None, classes: None, min_opacity: None },
         )
         .unwrap();
         for (what, scans) in &sets {

@@ -152,7 +152,7 @@ fn a_mesh_read_as_its_surface() {
     let core = arps::io::read_point_cloud_with(
         bytes,
         name,
-        &arps::io::ReadOptions { surface_points: Some(1000), seed: 3, scan: None, classes: None },
+        &arps::io::ReadOptions { surface_points: Some(1000), seed: 3, scan: None, classes: None, min_opacity: None },
     );
     assert_eq!(xyz.unwrap(), core.unwrap().to_xyz());
     let e = parse_point_cloud(bytes, name, Some(options(r#"{"surfacePoint": 1000}"#))).err().map(message);

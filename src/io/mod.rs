@@ -285,7 +285,7 @@ pub fn read_point_cloud(bytes: &[u8], file_name: &str) -> Result<PointCloud> {
 
 /// How [`read_point_cloud_with`] turns a file into points. In JS (`parsePointCloud`,
 /// `readPointCloud`) a plain object with these fields in camelCase, each optional.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "camelCase", default, deny_unknown_fields)]
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "ReadOptions"))]
 pub struct ReadOptions {
@@ -315,6 +315,15 @@ pub struct ReadOptions {
     /// default): every point.
     #[cfg_attr(feature = "ts", ts(type = "number[]", optional = nullable))]
     pub classes: Option<Classes>,
+    /// For a Gaussian splat PLY (a vertex `opacity` property, the logit the splat file stores):
+    /// only the splats at least this opaque (the logit's sigmoid, in [0, 1]; 0.5 keeps those
+    /// with a logit of 0 or more). Splat scenes hold transparent floaters strewn about and huge
+    /// background splats that can mislead the search; their surfaces are the opaque splats. An
+    /// error when no splat is that opaque, for a PLY without `opacity`, with `surfacePoints`, and
+    /// for a file of another format. `transform_file` moves every splat of the file whatever
+    /// this says. Unset (the default): every splat.
+    #[cfg_attr(feature = "ts", ts(optional = nullable))]
+    pub min_opacity: Option<f64>,
 }
 
 /// One scan of a file that holds several (E57), as [`list_scans`] describes it. In JS a plain
@@ -405,8 +414,14 @@ pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOption
             format.name()
         )));
     }
+    if let Some(min) = options.min_opacity {
+        check_min_opacity(format, min, options)?;
+    }
     let faces = if options.surface_points.is_some() { Faces::IfAny } else { Faces::Skip };
-    let raw = read_format(bytes, format, faces, options.scan, options.classes)?;
+    let mut raw = read_format(bytes, format, faces, options.scan, options.classes)?;
+    if let Some(min) = options.min_opacity {
+        raw.vertices = opaque(bytes, raw.vertices, min)?;
+    }
     crate::limits::check_file_points(format.name(), raw.vertices.len() as u64)?;
     if raw.vertices.is_empty() {
         return Err(Error::parse(format.name(), "the file holds no points"));
@@ -418,6 +433,53 @@ pub fn read_point_cloud_with(bytes: &[u8], file_name: &str, options: &ReadOption
         }
         _ => Ok(raw.into_cloud()),
     }
+}
+
+/// Refuses a `minOpacity` out of [0, 1], with `surfacePoints`, or for a format other than PLY.
+fn check_min_opacity(format: Format, min: f64, options: &ReadOptions) -> Result<()> {
+    if !(0.0..=1.0).contains(&min) {
+        return Err(Error::InvalidOption(format!(
+            "minOpacity = {} must be a number in [0, 1]",
+            crate::error::num(min)
+        )));
+    }
+    if format != Format::Ply {
+        return Err(Error::InvalidOption(format!(
+            "the minOpacity option keeps the opaque splats of a Gaussian splat PLY, but this is a {} file (leave it \
+             unset)",
+            format.name()
+        )));
+    }
+    if options.surface_points.is_some() {
+        return Err(Error::InvalidOption(
+            "minOpacity keeps splats, surfacePoints samples a mesh's faces: give one of them".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// The `vertices` of the PLY file `bytes` whose `opacity` logit's sigmoid is at least `min`; an
+/// error when the file has no `opacity` or none is that opaque (naming the most opaque).
+fn opaque(bytes: &[u8], vertices: Vec<[f64; 3]>, min: f64) -> Result<Vec<[f64; 3]>> {
+    let logits = ply::read_vertex_property(bytes, "opacity")?.ok_or_else(|| {
+        Error::InvalidOption(
+            "the minOpacity option keeps the opaque splats of a Gaussian splat PLY, but this PLY has no vertex \
+             'opacity' property (leave it unset)"
+                .into(),
+        )
+    })?;
+    let sigmoid = |logit: f64| 1.0 / (1.0 + (-logit).exp());
+    let kept: Vec<[f64; 3]> =
+        vertices.iter().zip(&logits).filter(|(_, &l)| sigmoid(l) >= min).map(|(v, _)| *v).collect();
+    if kept.is_empty() {
+        let most = logits.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+        return Err(Error::InvalidOption(format!(
+            "minOpacity = {}: no splat of the file is that opaque (the most opaque: {})",
+            crate::error::num(min),
+            crate::error::num(sigmoid(most))
+        )));
+    }
+    Ok(kept)
 }
 
 /// Reads a triangle mesh (OBJ, OFF, STL, glTF/GLB, or PLY with a `face` element) from a file's bytes;

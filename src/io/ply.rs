@@ -339,6 +339,37 @@ pub(crate) fn read(bytes: &[u8], faces: Faces) -> Result<Raw> {
     Ok(Raw { vertices: out.points, triangles: out.triangles })
 }
 
+/// The values of the vertex property `name` (a scalar), in the vertices' order; `None` when the
+/// vertex element has no such scalar property.
+pub(crate) fn read_vertex_property(bytes: &[u8], name: &str) -> Result<Option<Vec<f64>>> {
+    let h = parse_header(bytes)?;
+    let vi = h.vertex_index()?;
+    let el = &h.elements[vi];
+    let Some(i) = el.props.iter().position(|p| p.name == name && matches!(p.kind, Kind::Scalar(_))) else {
+        return Ok(None);
+    };
+    let mut wants = vec![Want::Skip; vi + 1];
+    // (the property read as a point's three coordinates: the readers' one path for every layout)
+    wants[vi] = Want::Points([i; 3]);
+    let mut out = Out::default();
+    match h.encoding {
+        Encoding::Ascii => {
+            let mut lines = Lines::at(bytes, h.body, h.last_line);
+            for (el, want) in h.elements.iter().zip(&wants) {
+                read_ascii_element(&mut lines, el, *want, &mut out)?;
+            }
+        }
+        Encoding::BinaryLe | Encoding::BinaryBe => {
+            let big = h.encoding == Encoding::BinaryBe;
+            let mut pos = h.body;
+            for (el, want) in h.elements.iter().zip(&wants) {
+                read_binary_element(bytes, &mut pos, el, *want, big, &mut out)?;
+            }
+        }
+    }
+    Ok(Some(out.points.into_iter().map(|p| p[0]).collect()))
+}
+
 pub(super) fn read_binary_element(
     bytes: &[u8],
     pos: &mut usize,

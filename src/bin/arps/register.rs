@@ -137,6 +137,16 @@ pub struct RegisterArgs {
     /// `--source-classes`.
     #[arg(long, value_name = "CODES", value_delimiter = ',')]
     target_classes: Vec<u8>,
+    /// Of a source Gaussian splat PLY, only the splats at least this opaque (0 to 1: the
+    /// sigmoid of the file's `opacity` logit; 0.5 keeps logits of 0 or more): the floaters
+    /// and huge background splats left out. An error for other files. `--aligned` to the
+    /// source's own format moves every splat (turned and scaled with the scene).
+    #[arg(long, value_name = "OPACITY")]
+    source_min_opacity: Option<f64>,
+    /// Of a target Gaussian splat PLY, only the splats at least this opaque; see
+    /// `--source-min-opacity`.
+    #[arg(long, value_name = "OPACITY")]
+    target_min_opacity: Option<f64>,
     /// The factor from the source's unit to the target's, when they differ (e.g. 1000 for a
     /// scan in metres onto a model in millimetres; the option `sourceScale`): distances and
     /// `--aligned` are then in the target's unit. The printed `T_target_source` maps the file's
@@ -199,7 +209,9 @@ fn read_cloud(path: &Path, options: &io::ReadOptions) -> Result<arps::PointCloud
 /// (`source` or `target`): "the scan option" as `--source-scan`, say.
 fn read_error(path: &Path, e: &arps::Error, side: &str) -> String {
     let message = e.to_string().replace("the scan option", &format!("--{side}-scan"));
-    format!("{}: {}", path.display(), message.replace("the classes option", &format!("--{side}-classes")))
+    let message = message.replace("the classes option", &format!("--{side}-classes"));
+    let message = message.replace("the minOpacity option", &format!("--{side}-min-opacity"));
+    format!("{}: {}", path.display(), message.replace("minOpacity =", &format!("--{side}-min-opacity")))
 }
 
 /// A warning when the file at `path` is a mesh with faces and so was read as its vertices (an
@@ -487,6 +499,8 @@ pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
         target_scan,
         source_classes,
         target_classes,
+        source_min_opacity,
+        target_min_opacity,
         source_scale,
         min_confidence,
         aligned,
@@ -526,9 +540,19 @@ pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
     let mut registrar = load_registrar(weights.as_deref())?;
     let mut t0 = std::time::Instant::now();
     let classes = |codes: Vec<u8>| (!codes.is_empty()).then(|| io::Classes::of(codes));
-    let reading =
-        io::ReadOptions { surface_points, seed: surface_seed, scan: source_scan, classes: classes(source_classes) };
-    let reading_target = io::ReadOptions { scan: target_scan, classes: classes(target_classes), ..reading };
+    let reading = io::ReadOptions {
+        surface_points,
+        seed: surface_seed,
+        scan: source_scan,
+        classes: classes(source_classes),
+        min_opacity: source_min_opacity,
+    };
+    let reading_target = io::ReadOptions {
+        scan: target_scan,
+        classes: classes(target_classes),
+        min_opacity: target_min_opacity,
+        ..reading
+    };
     let initial_transform = match initial_transform.as_deref() {
         None => None,
         Some(v) if v.len() == 16 => Some(std::array::from_fn(|r| std::array::from_fn(|c| v[4 * r + c]))),
