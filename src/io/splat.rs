@@ -13,7 +13,13 @@
 //! constant band (`f_dc_*`) and `opacity` do not change.
 
 use super::ply::{Element, Kind};
-use nalgebra::{DMatrix, Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Quaternion, Rotation3, UnitQuaternion, Vector3};
+
+/// The largest band's size (degree 3: 7 coefficients).
+const MAX_BAND: usize = 7;
+
+/// A band's rotation matrix, its first `2l + 1` rows and columns used.
+type Band = [[f64; MAX_BAND]; MAX_BAND];
 
 /// Where a vertex's splat attributes are (property indices), when the element has them.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -56,7 +62,7 @@ pub(super) struct SplatMotion {
     /// `log s`.
     log_scale: f64,
     /// Each band's rotation matrix, degree 1 first.
-    bands: Vec<DMatrix<f64>>,
+    bands: Vec<Band>,
 }
 
 impl SplatMotion {
@@ -85,10 +91,13 @@ impl SplatMotion {
         let per = rest.len() / 3;
         for channel in rest.chunks_exact_mut(per.max(1)) {
             let mut at = 0;
-            for m in &self.bands {
-                let n = m.nrows();
-                let turned = m * nalgebra::DVector::from_column_slice(&channel[at..at + n]);
-                channel[at..at + n].copy_from_slice(turned.as_slice());
+            for (l, m) in self.bands.iter().enumerate() {
+                let n = 2 * l + 3;
+                let mut turned = [0.0; MAX_BAND];
+                for (r, t) in turned.iter_mut().enumerate().take(n) {
+                    *t = (0..n).map(|c| m[r][c] * channel[at + c]).sum();
+                }
+                channel[at..at + n].copy_from_slice(&turned[..n]);
                 at += n;
             }
         }
@@ -96,23 +105,25 @@ impl SplatMotion {
 }
 
 /// The real spherical harmonics of degree `l` (1 to 3) at the unit direction `d`, in the basis
-/// and order 3D Gaussian Splatting evaluates them.
-fn basis(l: usize, d: Vector3<f64>) -> Vec<f64> {
+/// and order 3D Gaussian Splatting evaluates them (the first `2l + 1` entries).
+fn basis(l: usize, d: Vector3<f64>) -> [f64; MAX_BAND] {
     let (x, y, z) = (d.x, d.y, d.z);
     let (xx, yy, zz) = (x * x, y * y, z * z);
     match l {
         1 => {
             let c = 0.488_602_511_902_919_9;
-            vec![-c * y, c * z, -c * x]
+            [-c * y, c * z, -c * x, 0.0, 0.0, 0.0, 0.0]
         }
-        2 => vec![
+        2 => [
             1.092_548_430_592_079_2 * x * y,
             -1.092_548_430_592_079_2 * y * z,
             0.315_391_565_252_520_05 * (2.0 * zz - xx - yy),
             -1.092_548_430_592_079_2 * x * z,
             0.546_274_215_296_039_6 * (xx - yy),
+            0.0,
+            0.0,
         ],
-        _ => vec![
+        _ => [
             -0.590_043_589_926_643_5 * y * (3.0 * xx - yy),
             2.890_611_442_640_554 * x * y * z,
             -0.457_045_799_464_465_8 * y * (4.0 * zz - xx - yy),
@@ -126,27 +137,50 @@ fn basis(l: usize, d: Vector3<f64>) -> Vec<f64> {
 
 /// The matrix `M` that turns a colour function's coefficients of degree `l` by `rotation`: with
 /// `f(d) = Σ c_m Y_m(d)`, `f(Rᵀ d) = Σ (M c)_m Y_m(d)`. Exact (each band is closed under
-/// rotations), found by least squares over 64 directions spread over the sphere.
-fn band_rotation(l: usize, rotation: &Matrix3<f64>) -> DMatrix<f64> {
+/// rotations), found by least squares over 64 directions spread over the sphere: `(AᵀA) M =
+/// AᵀB`, `A` the basis at the directions and `B` at the directions turned back, solved by
+/// Gauss-Jordan elimination (`AᵀA`, the band's Gram matrix over the directions, is well
+/// conditioned).
+fn band_rotation(l: usize, rotation: &Matrix3<f64>) -> Band {
     const DIRECTIONS: usize = 64;
     let n = 2 * l + 1;
     let golden = std::f64::consts::PI * (3.0 - 5f64.sqrt());
-    let (mut a, mut b) = (DMatrix::zeros(DIRECTIONS, n), DMatrix::zeros(DIRECTIONS, n));
+    // [AᵀA | AᵀB], accumulated direction by direction
+    let mut g = [[0.0f64; 2 * MAX_BAND]; MAX_BAND];
     for j in 0..DIRECTIONS {
         let z = 1.0 - 2.0 * (j as f64 + 0.5) / DIRECTIONS as f64;
         let r = (1.0 - z * z).sqrt();
         let d = Vector3::new(r * (golden * j as f64).cos(), r * (golden * j as f64).sin(), z);
-        for (m, v) in basis(l, d).into_iter().enumerate() {
-            a[(j, m)] = v;
-        }
-        for (m, v) in basis(l, rotation.transpose() * d).into_iter().enumerate() {
-            b[(j, m)] = v;
+        let (a, b) = (basis(l, d), basis(l, rotation.transpose() * d));
+        for (row, ar) in g.iter_mut().zip(a).take(n) {
+            for c in 0..n {
+                row[c] += ar * a[c];
+                row[MAX_BAND + c] += ar * b[c];
+            }
         }
     }
-    // (AᵀA) M = AᵀB; AᵀA is the band's Gram matrix over the directions, well conditioned
-    let gram = a.transpose() * &a;
-    let rhs = a.transpose() * b;
-    gram.cholesky().map(|c| c.solve(&rhs)).unwrap_or_else(|| DMatrix::identity(n, n))
+    for k in 0..n {
+        let pivot = (k..n).fold(k, |p, r| if g[r][k].abs() > g[p][k].abs() { r } else { p });
+        g.swap(k, pivot);
+        let diagonal = g[k][k];
+        for v in g[k].iter_mut() {
+            *v /= diagonal;
+        }
+        let here = g[k];
+        for (r, row) in g.iter_mut().enumerate().take(n) {
+            if r != k {
+                let f = row[k];
+                for (v, h) in row.iter_mut().zip(here) {
+                    *v -= f * h;
+                }
+            }
+        }
+    }
+    let mut m = [[0.0; MAX_BAND]; MAX_BAND];
+    for (row, solved) in m.iter_mut().zip(g) {
+        row[..n].copy_from_slice(&solved[MAX_BAND..MAX_BAND + n]);
+    }
+    m
 }
 
 #[cfg(test)]
@@ -161,15 +195,15 @@ mod tests {
     fn a_turned_colour_function_reads_the_old_one_from_the_old_direction() {
         let r = rotation();
         for l in 1..=3 {
-            let m = band_rotation(l, &r);
-            let c: Vec<f64> = (0..2 * l + 1).map(|k| (k as f64 * 1.7 + 0.3).sin()).collect();
-            let turned = &m * nalgebra::DVector::from_column_slice(&c);
+            let (m, n) = (band_rotation(l, &r), 2 * l + 1);
+            let c: Vec<f64> = (0..n).map(|k| (k as f64 * 1.7 + 0.3).sin()).collect();
+            let turned: Vec<f64> = (0..n).map(|i| (0..n).map(|k| m[i][k] * c[k]).sum()).collect();
             for d in [Vector3::new(0.3, -0.5, 0.81), Vector3::new(-0.9, 0.1, 0.2), Vector3::new(0.0, 0.0, 1.0)] {
                 let d = d.normalize();
                 let f = |coeffs: &[f64], dir: Vector3<f64>| -> f64 {
                     basis(l, dir).iter().zip(coeffs).map(|(y, c)| y * c).sum()
                 };
-                let (new, old) = (f(turned.as_slice(), d), f(&c, r.transpose() * d));
+                let (new, old) = (f(&turned, d), f(&c, r.transpose() * d));
                 assert!((new - old).abs() < 1e-12, "degree {l}: {new} vs {old}");
             }
         }
@@ -200,8 +234,8 @@ mod tests {
         // each channel's degree-1 band turned as the band's matrix turns it
         let m1 = band_rotation(1, &r);
         for c in 0..3 {
-            let old = nalgebra::DVector::from_column_slice(&before[7 + 15 * c..7 + 15 * c + 3]);
-            let want = &m1 * old;
+            let old = &before[7 + 15 * c..7 + 15 * c + 3];
+            let want: Vec<f64> = (0..3).map(|i| (0..3).map(|k| m1[i][k] * old[k]).sum()).collect();
             assert!((0..3).all(|k| (v[7 + 15 * c + k] - want[k]).abs() < 1e-12));
         }
     }
