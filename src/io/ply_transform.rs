@@ -29,9 +29,8 @@ use nalgebra::Matrix4;
 struct Layout {
     position: [usize; 3],
     normal: Option<[usize; 3]>,
-    /// A Gaussian splat's attributes ([`Splat::indices`]), turned with the scene; empty in other
-    /// files.
-    splat: Vec<usize>,
+    /// A Gaussian splat file's splat attributes, turned with the scene.
+    splat: Option<Splat>,
     /// The positions are written as `double` (declared so by [`widened_header`]).
     widened: bool,
 }
@@ -61,8 +60,14 @@ fn layout(el: &Element) -> Result<Layout> {
         (Some(x), Some(y), Some(z)) if float(x) && float(y) && float(z) => Some([x, y, z]),
         _ => None,
     };
-    let splat = Splat::of(el).map(|s| s.indices()).unwrap_or_default();
-    Ok(Layout { position, normal, splat, widened: false })
+    Ok(Layout { position, normal, splat: Splat::of(el), widened: false })
+}
+
+impl Layout {
+    /// The splat attributes' property indices ([`Splat::indices`]); none in other files.
+    fn splat_indices(&self) -> &[usize] {
+        self.splat.as_ref().map_or(&[], Splat::indices)
+    }
 }
 
 /// The PLY file `bytes` with its vertices moved by `m` (`T_target_source`: a rigid transform, or
@@ -78,7 +83,7 @@ pub fn transform_ply(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     let layout = layout(vertex)?;
     let position = |p| motion.point(p);
     let normal = |n| motion.normal(n);
-    let splat = Splat::of(vertex).map(|s| SplatMotion::new(&motion.rotation, motion.scale(), &s));
+    let splat = layout.splat.as_ref().map(|s| SplatMotion::new(&motion.rotation, motion.scale(), s));
     let attrs = |v: &mut [f64]| {
         if let Some(s) = &splat {
             s.apply(v)
@@ -226,7 +231,7 @@ fn widen_binary(
     let n = layout.normal.map(|idx| idx.map(|i| offsets[i]));
     out.reserve(records.len() + records.len() / stride * 12);
     let mut scratch = vec![0u8; stride];
-    let mut values = vec![0.0; layout.splat.len()];
+    let mut values = vec![0.0; layout.splat_indices().len()];
     for record in records.chunks_exact(stride) {
         let read = |slot: [(usize, Scalar); 3]| slot.map(|(off, s)| s.read_f64(&record[off..off + s.size()], big));
         let moved = position(read(p));
@@ -237,7 +242,7 @@ fn widen_binary(
                 put(&mut scratch, n[a], turned[a], big);
             }
         }
-        turn_splat(&mut scratch, &offsets, &layout.splat, &mut values, big, attrs);
+        turn_splat(&mut scratch, &offsets, layout.splat_indices(), &mut values, big, attrs);
         for (i, &(off, s)) in offsets.iter().enumerate() {
             match layout.position.iter().position(|&k| k == i) {
                 Some(a) => out.extend_from_slice(&if big { moved[a].to_be_bytes() } else { moved[a].to_le_bytes() }),
@@ -293,7 +298,7 @@ fn move_binary(
     let offsets = offsets(el);
     let slots = |idx: [usize; 3]| idx.map(|i| offsets[i]);
     let (p, n) = (slots(layout.position), layout.normal.map(slots));
-    let mut values = vec![0.0; layout.splat.len()];
+    let mut values = vec![0.0; layout.splat_indices().len()];
     for record in out[pos..pos + need].chunks_exact_mut(stride) {
         let read = |slot: [(usize, Scalar); 3]| slot.map(|(off, s)| s.read_f64(&record[off..off + s.size()], big));
         let moved = position(read(p));
@@ -306,7 +311,7 @@ fn move_binary(
                 put(record, n[a], turned[a], big);
             }
         }
-        turn_splat(record, &offsets, &layout.splat, &mut values, big, attrs);
+        turn_splat(record, &offsets, layout.splat_indices(), &mut values, big, attrs);
     }
     Ok(())
 }
@@ -411,13 +416,14 @@ fn move_ascii(
                         tokens[i] = text(v, types[i]);
                     }
                 }
-                if !layout.splat.is_empty() {
-                    let mut values = Vec::with_capacity(layout.splat.len());
-                    for &i in &layout.splat {
+                let splat = layout.splat_indices();
+                if !splat.is_empty() {
+                    let mut values = Vec::with_capacity(splat.len());
+                    for &i in splat {
                         values.push(parse_f64(F, n, &format!("'{}'", el.props[i].name), &tokens[i])?);
                     }
                     attrs(&mut values);
-                    for (&i, v) in layout.splat.iter().zip(values) {
+                    for (&i, v) in splat.iter().zip(values) {
                         tokens[i] = text(v, types[i]);
                     }
                 }

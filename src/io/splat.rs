@@ -24,14 +24,15 @@ type Band = [[f64; MAX_BAND]; MAX_BAND];
 /// Where a vertex's splat attributes are (property indices), when the element has them.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub(super) struct Splat {
-    /// `rot_0..rot_3`.
-    rot: [usize; 4],
-    /// `scale_0..scale_2`.
-    scale: [usize; 3],
-    /// `f_rest_0..f_rest_{3k-1}`, `k` coefficients per channel (3, 8 or 15: degree 1, 2 or 3);
-    /// empty when the element has none, or a count of no whole degree.
-    rest: Vec<usize>,
+    /// `rot_0..rot_3`, `scale_0..scale_2`, then `f_rest_0..f_rest_{3k-1}`, `k` coefficients per
+    /// channel (3, 8 or 15: degree 1, 2 or 3; none when the element has none, or a count of no
+    /// whole degree): the order [`SplatMotion::apply`] takes their values in.
+    indices: Vec<usize>,
 }
+
+/// How many of [`Splat::indices`] come before the colour coefficients (the quaternion's 4, the
+/// log-extents' 3).
+const SHAPE: usize = 7;
 
 impl Splat {
     /// The splat attributes of the vertex element `el`: `rot_0..3` and `scale_0..2` as
@@ -45,13 +46,13 @@ impl Splat {
         let [s0, s1, s2] = [0, 1, 2].map(|k| find(format!("scale_{k}")));
         let rest: Vec<usize> = (0..).map_while(|k| find(format!("f_rest_{k}"))).collect();
         let rest = if [9, 24, 45].contains(&rest.len()) { rest } else { Vec::new() };
-        Some(Self { rot: [r0?, r1?, r2?, r3?], scale: [s0?, s1?, s2?], rest })
+        Some(Self { indices: [r0?, r1?, r2?, r3?, s0?, s1?, s2?].into_iter().chain(rest).collect() })
     }
 
     /// The property indices the mover reads and writes, in the order [`SplatMotion::apply`]
     /// takes their values: the quaternion, the log-extents, the colour coefficients.
-    pub(super) fn indices(&self) -> Vec<usize> {
-        self.rot.iter().chain(&self.scale).chain(&self.rest).copied().collect()
+    pub(super) fn indices(&self) -> &[usize] {
+        &self.indices
     }
 }
 
@@ -69,7 +70,7 @@ impl SplatMotion {
     /// The action of the motion `s R` (`rotation` `R`, `scale` `s`) on the attributes of `splat`.
     pub(super) fn new(rotation: &Matrix3<f64>, scale: f64, splat: &Splat) -> Self {
         let turn = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*rotation));
-        let degrees = match splat.rest.len() / 3 {
+        let degrees = match (splat.indices.len() - SHAPE) / 3 {
             3 => 1,
             8 => 2,
             15 => 3,
@@ -84,10 +85,10 @@ impl SplatMotion {
         let [w, x, y, z] = [values[0], values[1], values[2], values[3]];
         let q = self.turn.quaternion() * Quaternion::new(w, x, y, z);
         values[..4].copy_from_slice(&[q.w, q.i, q.j, q.k]);
-        for v in &mut values[4..7] {
+        for v in &mut values[4..SHAPE] {
             *v += self.log_scale;
         }
-        let rest = &mut values[7..];
+        let rest = &mut values[SHAPE..];
         let per = rest.len() / 3;
         for channel in rest.chunks_exact_mut(per.max(1)) {
             let mut at = 0;
@@ -212,7 +213,7 @@ mod tests {
     #[test]
     fn a_splat_is_turned_and_scaled_with_the_scene() {
         let r = rotation();
-        let splat = Splat { rot: [0, 1, 2, 3], scale: [4, 5, 6], rest: (7..52).collect() };
+        let splat = Splat { indices: (0..52).collect() };
         let motion = SplatMotion::new(&r, 2.5, &splat);
         // an unnormalised quaternion, log-extents, and degree-3 colour
         let q = Quaternion::new(0.8, -0.4, 1.1, 0.3);

@@ -466,11 +466,7 @@ pub(crate) fn search(
         None => (candidate, probed),
     };
     let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined, at_evidence.as_ref());
-    // how far apart two poses put the source's centroid (normalised units)
-    let apart = |a: &Matrix4<f64>, b: &Matrix4<f64>| {
-        let c = Point3::from(centroid);
-        (a.transform_point(&c) - b.transform_point(&c)).norm()
-    };
+    let apart = |a: &Matrix4<f64>, b: &Matrix4<f64>| apart(a, b, centroid);
     // the local search kept its answer where a pose the probes found fits better
     if options.search == Search::Local {
         let t = &candidate.T_target_source;
@@ -677,13 +673,8 @@ fn held_by_guess(
         return None;
     }
     let turn = crate::transform::rotation_error_deg(&answer.T_target_source, &t);
-    // how far the source's centre moved, in the caller's units
-    let centre = screen.iter().fold(nalgebra::Vector3::zeros(), |c, q| c + nalgebra::Vector3::from(q.map(f64::from)))
-        / screen.len().max(1) as f64;
-    let moved = (t.transform_point(&Point3::from(centre))
-        - answer.T_target_source.transform_point(&Point3::from(centre)))
-    .norm()
-        * p.norm.scale;
+    // how far the guess moved the source's centroid, in the caller's units
+    let moved = apart(&t, &answer.T_target_source, p.src_n.centroid()) * p.norm.scale;
     let why = format!(
         "the answer follows initialTransform along the motion the fit leaves free (moved {} and turned {turn:.1} \
          degrees from where the clouds' edges held it, fitness {fitness:.3} against {:.3}): the clouds cannot tell \
@@ -692,6 +683,13 @@ fn held_by_guess(
         answer.fitness
     );
     Some((Candidate { T_target_source: t, fitness, inlier_rmse, ..*answer }, why))
+}
+
+/// How far apart the poses `a` and `b` put the point `at` (the source's centroid; normalised
+/// units).
+fn apart(a: &Matrix4<f64>, b: &Matrix4<f64>, at: [f64; 3]) -> f64 {
+    let c = Point3::from(at);
+    (a.transform_point(&c) - b.transform_point(&c)).norm()
 }
 
 /// `answer` refined by ICP at the final distance `d` with Tukey's biweight on its pairs
