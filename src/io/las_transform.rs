@@ -1,6 +1,6 @@
 //! A LAS file moved as it is: every point record's X, Y, Z mapped by a rigid (or uniformly
 //! scaled) transform in f64 and stored again with the file's own scales; the header's offsets
-//! (new ones, at the moved points' centre, so the integers fit) and bounds updated; every other
+//! (new ones near the moved points' centre, round where the integers still fit) and bounds updated; every other
 //! byte kept (intensity, returns, classification, GPS time, colour, extra bytes, the VLRs and
 //! EVLRs, the CRS records). What saves a registered survey in the target's frame as the LAS its
 //! tools read. A LAZ file comes back as LAZ: the LAS file it compresses, moved, compressed again
@@ -30,6 +30,22 @@ pub fn transform_las(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     move_records(bytes.to_vec(), &h, &motion)
 }
 
+/// The offset of an axis whose moved points span `lo` to `hi`: their centre rounded to the
+/// coarsest power of ten (1e7 down to 1) that leaves every point within 2^31 steps of `scale`
+/// of it (a survey's offsets as tools write them: 400000, 5600000, 0), else the centre on the
+/// scale's grid.
+fn round_offset(lo: f64, hi: f64, scale: f64) -> f64 {
+    let centre = (lo + hi) / 2.0;
+    let fits = |offset: f64| [lo, hi].iter().all(|v| ((v - offset) / scale).abs() < 2_000_000_000.0);
+    (0..=7)
+        .rev()
+        .map(|k| 10f64.powi(k))
+        .filter(|&step| step >= scale)
+        .map(|step| (centre / step).round() * step)
+        .find(|&offset| fits(offset))
+        .unwrap_or_else(|| (centre / scale).round() * scale)
+}
+
 /// `out`, an uncompressed LAS file described by `h`, with its records moved and its header's
 /// offsets and bounds updated.
 fn move_records(mut out: Vec<u8>, h: &Header, motion: &Motion) -> Result<Vec<u8>> {
@@ -37,7 +53,7 @@ fn move_records(mut out: Vec<u8>, h: &Header, motion: &Motion) -> Result<Vec<u8>
     let end = h.offset + records.len();
     let n = h.count as usize;
     let moved = |record: &[u8]| motion.point(h.point(record));
-    // the new offsets: the moved points' centre, on each axis's grid of the scale
+    // the new offsets: near the moved points' centre, round where the integers fit
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for record in records.chunks_exact(h.record_len) {
         let q = moved(record);
@@ -46,11 +62,8 @@ fn move_records(mut out: Vec<u8>, h: &Header, motion: &Motion) -> Result<Vec<u8>
             hi[k] = hi[k].max(q[k]);
         }
     }
-    let shift: [f64; 3] = if n == 0 {
-        h.shift
-    } else {
-        std::array::from_fn(|k| ((lo[k] + hi[k]) / 2.0 / h.scale[k]).round() * h.scale[k])
-    };
+    let shift: [f64; 3] =
+        if n == 0 { h.shift } else { std::array::from_fn(|k| round_offset(lo[k], hi[k], h.scale[k])) };
     for (k, axis) in ["x", "y", "z"].into_iter().enumerate().filter(|_| n > 0) {
         let steps = [lo[k], hi[k]].map(|v| ((v - shift[k]) / h.scale[k]).round());
         if steps.iter().any(|s| !(*s >= i32::MIN as f64 && *s <= i32::MAX as f64)) {
@@ -80,4 +93,22 @@ fn move_records(mut out: Vec<u8>, h: &Header, motion: &Motion) -> Result<Vec<u8>
         }
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::round_offset;
+
+    #[test]
+    fn offsets_are_round_where_the_integers_fit() {
+        // a survey on a map grid at millimetres: within 2e9 mm (2,000 km) of a power of ten
+        assert_eq!(round_offset(400_120.5, 400_380.25, 0.001), 0.0);
+        assert_eq!(round_offset(5_600_100.5, 5_600_300.0, 0.001), 6_000_000.0);
+        // at 1e-6 steps the points must stay within 2,000 units: 400,000 holds 400,120-400,380
+        assert_eq!(round_offset(400_120.5, 400_380.25, 1e-6), 400_000.0);
+        // a span of 3,000 units at 1e-6 needs the centre itself, on the scale's grid
+        let o = round_offset(400_000.5, 403_999.5, 1e-6);
+        assert!((o - 402_000.0).abs() < 1e-6, "{o}");
+        assert_eq!(round_offset(-12.5, 3.0, 0.01), 0.0);
+    }
 }
