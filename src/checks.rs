@@ -208,8 +208,22 @@ pub fn not_collinear(what: &str, points: &[[f32; 3]], warnings: &mut Vec<Warning
     let s = principal_spreads(points);
     let ratio = s[1] / s[0];
     if ratio.is_nan() || ratio < COLLINEAR_RATIO {
+        // a cloud given as 32-bit floats far from zero: rounded onto a grid as coarse as itself
+        let far = points.iter().flatten().fold(0.0f64, |m, v| if v.is_finite() { m.max((*v as f64).abs()) } else { m });
+        let step = f32_step(far);
+        let rounded = if step > 1e-3 * s[0] {
+            format!(
+                " (its 32-bit float coordinates lie up to {} from zero, where floats are {} apart: it may be a line only \
+                 because they were rounded; give the coordinates as f64: a Float64Array, {{ points, origin }}, or \
+                 PointCloud::from_points_f64)",
+                crate::error::num(far),
+                crate::error::num(step)
+            )
+        } else {
+            String::new()
+        };
         return Err(Error::InvalidCloud(format!(
-            "{what} is collinear: its points lie along a line (spread across it {ratio:.1e} of the spread along it, below {COLLINEAR_RATIO:e}), so the rotation about that line cannot be determined"
+            "{what} is collinear: its points lie along a line (spread across it {ratio:.1e} of the spread along it, below {COLLINEAR_RATIO:e}), so the rotation about that line cannot be determined{rounded}"
         )));
     }
     if ratio < THIN_RATIO {
@@ -272,6 +286,28 @@ mod tests {
         let mut warnings = Vec::new();
         assert_eq!(f32_rounding("source", &cloud, &mut warnings), 0.0);
         assert!(warnings.is_empty(), "{warnings:?}");
+    }
+
+    #[test]
+    fn a_cloud_rounded_to_a_line_by_f32_says_so() {
+        // a 1 m room corner 3e7 from zero in x and y, as f32: x and y round to one value
+        let corner = |x0: f64| -> Vec<[f32; 3]> {
+            (0..400)
+                .map(|k| {
+                    let (u, v) = ((k % 20) as f64 / 20.0, (k / 20) as f64 / 20.0);
+                    [[u, v, 0.0], [u, 0.0, v], [0.0, u, v]][k % 3]
+                })
+                .map(|p| [(p[0] + x0) as f32, (p[1] + x0) as f32, p[2] as f32])
+                .collect()
+        };
+        let e = not_collinear("source", &corner(3e7), &mut Vec::new()).unwrap_err().to_string();
+        assert!(e.contains("is collinear") && e.contains("from zero, where floats are 2 apart"), "{e}");
+        assert!(e.contains("Float64Array"), "{e}");
+        // near zero the corner is no line at all; a true line near zero names no rounding
+        assert!(not_collinear("source", &corner(0.0), &mut Vec::new()).is_ok());
+        let line: Vec<[f32; 3]> = (0..100).map(|i| [i as f32 * 0.01, 0.0, 0.0]).collect();
+        let e = not_collinear("target", &line, &mut Vec::new()).unwrap_err().to_string();
+        assert!(e.contains("is collinear") && !e.contains("32-bit"), "{e}");
     }
 
     #[test]

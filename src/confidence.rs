@@ -184,6 +184,16 @@ impl FreeMotion {
         self.moved(fine, t)
     }
 
+    /// `t` moved along this motion and each of [`FreeMotion::also`] in turn ([`FreeMotion::nearest`]
+    /// along each, three rounds) to where it puts `points` nearest where `guess` puts them: a
+    /// plane's answer brought to the guess along its two slides and its turn, not along one.
+    pub fn nearest_along_all(&self, t: &Matrix4<f64>, guess: &Matrix4<f64>, points: &[[f32; 3]]) -> Matrix4<f64> {
+        let others = self.also.iter().flatten().map(|&(w, shift)| FreeMotion { w, shift, also: [None; 2], ..*self });
+        let motions: Vec<FreeMotion> = std::iter::once(*self).chain(others).collect();
+        let rounds = if motions.len() > 1 { 3 } else { 1 };
+        (0..rounds).fold(*t, |t, _| motions.iter().fold(t, |t, m| m.nearest(&t, guess, points)))
+    }
+
     /// The point of the axis of the turn `w` with the translation `shift` at `c` (this motion's,
     /// or one of [`FreeMotion::also`]) nearest the inliers' centroid: `c + w x shift / |w|^2`.
     fn axis_point(&self, w: Vector3<f64>, shift: Vector3<f64>) -> Vector3<f64> {

@@ -425,7 +425,10 @@ pub fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
     if points.len() <= n {
         return points.to_vec();
     }
-    (0..n).map(|i| points[i * points.len() / n]).collect()
+    // in u64: 8192 samples of a 600k-point cloud overflow wasm32's usize (the sample then
+    // covered the cloud's first part only)
+    let (len, n64) = (points.len() as u64, n as u64);
+    (0..n as u64).map(|i| points[(i * len / n64) as usize]).collect()
 }
 
 /// Refines every start with coarse-to-fine ICP against one prepared target ([`Refinement::stages`]:

@@ -218,6 +218,12 @@ fn broken_files_are_refused_with_what_is_wrong() {
     past_view["accessors"][0]["count"] = serde_json::json!(5);
     let e = read_point_cloud(&glb(&past_view, &good[good.len() - 64..]), "p.glb").unwrap_err().to_string();
     assert!(e.contains("accessors[0]"), "{e}");
+    // a stride of 2^63 wrapped the size check's product to 0, and the read then panicked
+    let mut wrapping = past_view.clone();
+    wrapping["accessors"][0]["count"] = serde_json::json!(3);
+    wrapping["bufferViews"][0]["byteStride"] = serde_json::json!(1u64 << 63);
+    let e = read_point_cloud(&glb(&wrapping, &good[good.len() - 64..]), "p.glb").unwrap_err().to_string();
+    assert!(e.contains("accessors[0]") && e.contains("need"), "{e}");
 }
 
 /// Equal but for the cloud's `f32` storage (a cloud near zero keeps its points in `f32`).

@@ -283,7 +283,12 @@ impl Doc<'_, '_> {
                         "{aw}: its view's byteStride {stride} is less than an element's {element} bytes"
                     )));
                 }
-                let need = (count as u64).saturating_sub(1) * stride as u64 + element as u64 + offset as u64;
+                // checked: a stride or count near 2^64 wraps the product past the size check
+                let need = (count as u64)
+                    .saturating_sub(1)
+                    .checked_mul(stride as u64)
+                    .and_then(|v| v.checked_add(element as u64 + offset as u64))
+                    .unwrap_or(u64::MAX);
                 if count > 0 && need > bytes.len() as u64 {
                     return Err(err(format!(
                         "{aw}: {count} elements of {element} bytes every {stride} from byte {offset} need {need} bytes, \
@@ -340,8 +345,10 @@ impl Doc<'_, '_> {
         let elements = out.len() / comps.max(1);
         for k in 0..n {
             let i = index_kind.get(&at[k * index_kind.size()..], false) as usize;
-            let slot = out
-                .get_mut(i * comps..(i + 1) * comps)
+            // compared before multiplying (`i * comps` wraps in wasm32's usize for i near 2^32)
+            let slot = (i < elements)
+                .then(|| out.get_mut(i * comps..(i + 1) * comps))
+                .flatten()
                 .ok_or_else(|| err(format!("{sw}: index {i} is beyond the accessor's {elements} elements")))?;
             for (c, s) in slot.iter_mut().enumerate() {
                 let b = k * element + c * component.size();
@@ -388,7 +395,11 @@ pub(crate) fn roots(json: &Value) -> Result<Vec<usize>> {
     let scene = item(json, "scenes", s, "the file's scene")?;
     list(scene, "nodes")
         .iter()
-        .map(|n| n.as_u64().map(|n| n as usize).ok_or_else(|| err(format!("scenes[{s}]'s nodes are not indices"))))
+        .map(|n| {
+            n.as_u64()
+                .and_then(|n| usize::try_from(n).ok())
+                .ok_or_else(|| err(format!("scenes[{s}]'s nodes are not indices")))
+        })
         .collect()
 }
 
@@ -468,7 +479,7 @@ pub(crate) fn read(bytes: &[u8], faces: Faces) -> Result<Raw> {
             }
         }
         for child in list(node, "children").iter().rev() {
-            let child = child.as_u64().map(|c| c as usize).filter(|&c| c < nodes.len());
+            let child = child.as_u64().and_then(|c| usize::try_from(c).ok()).filter(|&c| c < nodes.len());
             stack.push(child.ok_or_else(|| err(format!("{nw}'s children are not indices of its nodes")))?);
         }
     }
@@ -487,7 +498,7 @@ fn parents(json: &Value) -> Vec<Option<usize>> {
     let mut parent = vec![None; nodes.len()];
     for (i, node) in nodes.iter().enumerate() {
         for c in list(node, "children").iter().filter_map(Value::as_u64) {
-            if let Some(p) = parent.get_mut(c as usize) {
+            if let Some(p) = usize::try_from(c).ok().and_then(|c| parent.get_mut(c)) {
                 *p = Some(i);
             }
         }
@@ -543,7 +554,7 @@ fn skin(doc: &Doc, world: &[Matrix4<f64>], s: usize, what: &str) -> Result<Vec<M
     let sw = format!("skins[{s}]");
     let joints: Vec<usize> = list(skin, "joints")
         .iter()
-        .map(|j| j.as_u64().map(|j| j as usize).filter(|&j| j < world.len()))
+        .map(|j| j.as_u64().and_then(|j| usize::try_from(j).ok()).filter(|&j| j < world.len()))
         .collect::<Option<_>>()
         .ok_or_else(|| err(format!("{sw}'s joints are not indices of its nodes")))?;
     let inverse = match index(skin, "inverseBindMatrices", &sw)? {

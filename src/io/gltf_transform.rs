@@ -47,8 +47,7 @@ fn place(doc: &mut Value, m: &Matrix4<f64>) -> Result<()> {
     let mut tops: Vec<usize> = list(doc, "scenes")
         .iter()
         .flat_map(|s| list(s, "nodes"))
-        .filter_map(|n| n.as_u64())
-        .map(|n| n as usize)
+        .filter_map(|n| n.as_u64().and_then(|n| usize::try_from(n).ok()))
         .collect();
     if list(doc, "scenes").is_empty() {
         tops = roots(doc)?;
@@ -65,7 +64,8 @@ fn place(doc: &mut Value, m: &Matrix4<f64>) -> Result<()> {
     nodes.extend(tops.iter().map(|&n| json!({ "name": "T_target_source", "matrix": matrix, "children": [n] })));
     for scene in doc.get_mut("scenes").and_then(Value::as_array_mut).into_iter().flatten() {
         for n in scene.get_mut("nodes").and_then(Value::as_array_mut).into_iter().flatten() {
-            if let Some(k) = n.as_u64().and_then(|n| tops.binary_search(&(n as usize)).ok()) {
+            if let Some(k) = n.as_u64().and_then(|n| usize::try_from(n).ok()).and_then(|n| tops.binary_search(&n).ok())
+            {
                 *n = json!(first + k);
             }
         }

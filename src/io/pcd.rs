@@ -121,7 +121,7 @@ pub(crate) fn parse_header(bytes: &[u8]) -> Result<Header> {
             "SIZE" => {
                 let v = values
                     .iter()
-                    .map(|s| parse_count(F, n, "SIZE", s).map(|v| v as usize))
+                    .map(|s| parse_count(F, n, "SIZE", s).map(|v| usize::try_from(v).unwrap_or(usize::MAX)))
                     .collect::<Result<Vec<_>>>()?;
                 sizes = Some((n, v));
             }

@@ -452,9 +452,15 @@ pub(crate) fn search(
         }
         false => (candidate, probed),
     };
-    // with the caller's guess: along a motion the fit leaves free (a jar's turn about its axis on
-    // a turntable), where only the clouds' edges held the answer, the guess says where it is
-    let (candidate, probed) = match probed.free.filter(|_| refined_any && options.initial_transform.is_some()) {
+    // with the caller's guess: along a motion the surfaces leave free (a jar's turn about its axis
+    // on a turntable: `constraint` below the line), where only the clouds' edges held the answer,
+    // the guess says where it is. Not along a motion the fit only barely holds (`slide`): a low
+    // relief pins the pose by its gentle slopes, which ICP follows from the guess to the truth,
+    // though a slid pose keeps most of the fit at the default distance (a 30 mm bas-relief,
+    // 4.5 mm: held at a 2-degree guess's error; 0.004 degrees without the hold)
+    let surfaces_free = |f: &confidence::FreeMotion| f.constraint < confidence::UNPINNED_CONSTRAINT;
+    let guided = refined_any && options.initial_transform.is_some();
+    let (candidate, probed) = match probed.free.filter(|f| guided && surfaces_free(f)) {
         Some(free) => match held_by_guess(&free, &candidate, p, target_index, &screen, &admits) {
             Some((held, why)) => {
                 warnings.push(Warning::new(WarningCode::HeldByGuess, why));
@@ -632,7 +638,8 @@ const NEARLY_SURE_SCREEN_FIT: f64 = 0.95;
 /// the search lost pairs (`BENCHMARK.md`, "Starts screened against the answer").
 const GLOBAL_SCREEN_FIT: f64 = 0.7;
 
-/// The answer moved along the motion its fit leaves `free` to where the caller's guess
+/// The answer moved along the motion its surfaces leave `free` (its constraint below
+/// [`confidence::UNPINNED_CONSTRAINT`]) to where the caller's guess
 /// (`p.t_initial`) puts the source ([`confidence::FreeMotion::nearest`]), put back onto the
 /// surfaces by ICP from the final distance's stages and moved along the motion again while that
 /// fits better; with a warning that says so, when that pose is admitted (`up`), another one, and
@@ -647,12 +654,12 @@ fn held_by_guess(
     admits: &dyn Fn(&Matrix4<f64>) -> bool,
 ) -> Option<(Candidate, String)> {
     let fit = |t: &Matrix4<f64>| target.evaluate(screen, t, p.d_final).0;
-    let mut t = free.nearest(&answer.T_target_source, &p.t_initial, screen);
+    let mut t = free.nearest_along_all(&answer.T_target_source, &p.t_initial, screen);
     let mut best = fit(&t);
     let how = Refinement::new(p.icp, p.d_final, p.d_final, HELD_ITERATIONS);
     for _ in 0..2 {
         let Some(r) = refine::refine_best(target, screen, &[(answer.start, t)], &how) else { break };
-        let next = free.nearest(&r.T_target_source, &p.t_initial, screen);
+        let next = free.nearest_along_all(&r.T_target_source, &p.t_initial, screen);
         let f = fit(&next);
         if f <= best {
             break;
