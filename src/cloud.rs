@@ -15,6 +15,20 @@ use nalgebra::{Matrix4, Vector3};
 /// The fewest points a cloud may have to be registered.
 pub const MIN_POINTS: usize = 16;
 
+/// How many distinct points `points` holds, counted up to `k` (it stops there): a cloud of 12
+/// points repeated 2,000 times is 12 points, not 24,000. Reads only until `k` are found.
+pub fn distinct_up_to(points: &[[f32; 3]], k: usize) -> usize {
+    let mut seen = std::collections::HashSet::with_capacity(k.min(points.len()));
+    for p in points {
+        // +0.0 and -0.0 are one point
+        seen.insert(p.map(|v| (v + 0.0).to_bits()));
+        if seen.len() >= k {
+            break;
+        }
+    }
+    seen.len()
+}
+
 /// Ratio of a cloud's distance from zero (largest absolute coordinate of its bounding-box centre)
 /// to its size (largest half-extent) above which [`PointCloud::from_points_f64`] moves the
 /// origin to the bounding-box centre. Below it, `f32` keeps the shape to about `16 * 2^-24`
@@ -228,6 +242,14 @@ impl PointCloud {
         if self.len() < min_points {
             return Err(Error::InvalidCloud(format!(
                 "{what} has {} finite points; at least {min_points} are needed",
+                self.len()
+            )));
+        }
+        let distinct = distinct_up_to(&self.points, min_points);
+        if distinct < min_points {
+            return Err(Error::InvalidCloud(format!(
+                "{what} has {} finite points but only {distinct} distinct ones (the others repeat them); at least \
+                 {min_points} distinct points are needed",
                 self.len()
             )));
         }

@@ -673,6 +673,19 @@ fn a_source_of_few_points_is_not_sure() {
     );
     let r = reg.register(&few(64), &target, &Options::default()).unwrap();
     assert!(!r.warnings.iter().any(|w| w.contains("an answer judged on fewer than")), "{:?}", r.warnings);
+    // the same 20 points repeated 1,200 times are 20 points, not 24,000 (40 points repeated so
+    // came back at 0.998, as many points as given)
+    let repeated = |n: usize, times: usize| {
+        let c = few(n);
+        PointCloud::with_origin(c.points.iter().cycle().take(n * times).copied().collect(), c.origin)
+    };
+    let r = reg.register(&repeated(20, 1200), &target, &Options::default()).unwrap();
+    assert!(r.confidence <= 20.0 / 64.0, "{}", r.confidence);
+    let said = "the source has 20 distinct points (of 24000: the others repeat them): an answer judged on fewer";
+    assert!(r.warnings.iter().any(|w| w.starts_with(said)), "{:?}", r.warnings);
+    // and 12 repeated 2,000 times are too few, as 12 given once are
+    let e = reg.register(&repeated(12, 2000), &target, &Options::default()).unwrap_err().to_string();
+    assert!(e.contains("24000 finite points but only 12 distinct ones"), "{e}");
 }
 
 /// The documentation audit's pair (a box with a ball and a rod beside it, 3,000 points, the

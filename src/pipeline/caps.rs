@@ -221,14 +221,19 @@ pub(crate) fn cap(
     }
     let confidence = if capped { confidence.min(UNREFINED_CONFIDENCE) } else { confidence };
     // a source of few points: a pose judged on so few is as sure as they are many
-    let n = p.src_n.len();
+    // (distinct points: the same ones repeated judge nothing more)
+    let n = crate::cloud::distinct_up_to(&p.src_n.points, SURE_POINTS);
     let few = n as f64 / SURE_POINTS as f64;
     if n < SURE_POINTS && confidence > few {
+        let count = match p.src_n.len() {
+            len if n < len => format!("{n} distinct points (of {len}: the others repeat them)"),
+            _ => format!("{n} points"),
+        };
         warnings.push(Warning::new(
             WarningCode::FewPoints,
             format!(
-                "the source has {n} points: an answer judged on fewer than {SURE_POINTS} is at most {few:.2} sure \
-                 ({n}/{SURE_POINTS}); give it more points"
+                "the source has {count}: an answer judged on fewer than {SURE_POINTS} is at most {few:.2} \
+                 sure ({n}/{SURE_POINTS}); give it more points"
             ),
         ));
         return few;
