@@ -405,8 +405,8 @@ export type RegistrationResult = {
 /**
  * The kind of a registration's warning: `warningCodes[i]` is the kind of `warnings[i]`. One
  * code may come with several sentences (the source's and the target's, or two causes of one
- * doubt). New codes may be added; a caller that meets one it does not know should show the
- * sentence.
+ * doubt). New codes may be added (in Rust the enum is `#[non_exhaustive]`: a `match` needs a
+ * wildcard arm); a caller that meets one it does not know should show the sentence.
  *
  * * `"lowConfidence"`: the confidence is below 0.5, or another pose fits about as well
  *   (`alternatives`): the alignment may be wrong. Comes with every result whose `confidence` is
