@@ -245,6 +245,11 @@ impl PointCloud {
                 self.len()
             )));
         }
+        let (lo, hi) = self.bounds();
+        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
+        if extent <= 0.0 {
+            return Err(Error::InvalidCloud(format!("{what} has zero extent: all {} points coincide", self.len())));
+        }
         let distinct = distinct_up_to(&self.points, min_points);
         if distinct < min_points {
             return Err(Error::InvalidCloud(format!(
@@ -252,11 +257,6 @@ impl PointCloud {
                  {min_points} distinct points are needed",
                 self.len()
             )));
-        }
-        let (lo, hi) = self.bounds();
-        let extent = (0..3).map(|a| hi[a] - lo[a]).fold(0.0f32, f32::max);
-        if extent <= 0.0 {
-            return Err(Error::InvalidCloud(format!("{what} has zero extent: all {} points coincide", self.len())));
         }
         Ok(())
     }
