@@ -31,8 +31,8 @@ pub fn transform_las(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
 }
 
 /// The offset of an axis whose moved points span `lo` to `hi`: their centre rounded to the
-/// coarsest power of ten (1e7 down to 1) that leaves every point within 2^31 steps of `scale`
-/// of it (a survey's offsets as tools write them: 400000, 5600000, 0), else the centre on the
+/// coarsest power of ten (1e7 down to 1) that leaves every point within 2e9 steps of `scale`
+/// of it (`i32` holds 2^31) (a survey's offsets as tools write them: 400000, 5600000, 0), else the centre on the
 /// scale's grid.
 fn round_offset(lo: f64, hi: f64, scale: f64) -> f64 {
     let centre = (lo + hi) / 2.0;

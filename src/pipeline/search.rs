@@ -640,7 +640,8 @@ const GLOBAL_SCREEN_FIT: f64 = 0.7;
 
 /// The answer moved along the motion its surfaces leave `free` (its constraint below
 /// [`confidence::UNPINNED_CONSTRAINT`]) to where the caller's guess
-/// (`p.t_initial`) puts the source ([`confidence::FreeMotion::nearest`]), put back onto the
+/// (`p.t_initial`) puts the source (along it and the other free motions of a plane:
+/// [`confidence::FreeMotion::nearest_along_all`]), put back onto the
 /// surfaces by ICP from the final distance's stages and moved along the motion again while that
 /// fits better; with a warning that says so, when that pose is admitted (`up`), another one, and
 /// still fits at least [`HELD_FIT`] as well as the answer (the clouds' edges, not their surfaces,
