@@ -39,6 +39,9 @@ pub enum Error {
     /// An operating-system I/O error (native only: reading a path, writing a file).
     #[error("I/O error: {0}")]
     Io(#[from] std::io::Error),
+    /// The registration was cancelled through its [`Cancel`](crate::Cancel) handle.
+    #[error("cancelled: the registration was stopped through its Cancel handle")]
+    Cancelled,
 }
 
 impl Error {

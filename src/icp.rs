@@ -479,6 +479,10 @@ impl IcpTarget {
         }
         let mut t = *init;
         for it in 1..=params.max_iterations {
+            // a cancelled registration stops here (`crate::cancel`): its answer is not returned
+            if crate::cancel::cancelled() {
+                break;
+            }
             let update = match params.kind {
                 IcpKind::Plane => self.plane_update(scratch, params.damping, params.robust),
                 _ => self.point_update(scratch, params.robust),

@@ -38,6 +38,7 @@
 
 #![warn(missing_docs)]
 
+pub mod cancel;
 pub mod checks;
 pub mod cloud;
 pub mod confidence;
@@ -72,6 +73,7 @@ pub mod warning;
 pub mod wasm;
 pub mod weights;
 
+pub use cancel::Cancel;
 pub use cloud::{NonFinite, PointCloud};
 pub use confidence::Evidence;
 pub use error::{Error, Result};

@@ -611,6 +611,31 @@ impl Registrar {
         self.register_cow(Cow::Borrowed(source), Cow::Borrowed(target), options, progress)
     }
 
+    /// [`Registrar::register_with_progress`] that stops early and returns [`crate::Error::Cancelled`]
+    /// once `cancel` is cancelled (from another thread: a deadline, a client that went away; see
+    /// [`crate::cancel`]); at once when it already is. The registrar stays usable, and a call
+    /// that is not cancelled gives the same answer as [`Registrar::register`].
+    pub fn register_cancellable(
+        &mut self,
+        source: &PointCloud,
+        target: &PointCloud,
+        options: &Options,
+        progress: &mut dyn FnMut(Stage),
+        cancel: &crate::Cancel,
+    ) -> Result<Registration> {
+        if cancel.is_cancelled() {
+            return Err(crate::Error::Cancelled);
+        }
+        let result = crate::cancel::during(cancel, || {
+            self.register_cow(Cow::Borrowed(source), Cow::Borrowed(target), options, progress)
+        });
+        if cancel.is_cancelled() {
+            // what a stopped search found is not an answer; the target it prepared stays valid
+            return Err(crate::Error::Cancelled);
+        }
+        result
+    }
+
     /// [`Registrar::register_with_progress`] on clouds the caller hands over: their points become
     /// the validated clouds without a copy (the wasm binding's, which it made for the call).
     #[cfg_attr(not(target_arch = "wasm32"), allow(dead_code))]

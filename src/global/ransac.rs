@@ -129,7 +129,7 @@ pub fn ransac(
     let mut inl = Vec::with_capacity(n);
     let mut needed = params.max_iterations as u64;
     let mut it = 0u64;
-    while it < needed {
+    while it < needed && !crate::cancel::cancelled() {
         it += 1;
         let a = rng.random_range(0..n);
         let b = rng.random_range(0..n);
