@@ -208,10 +208,12 @@ pub fn not_collinear(what: &str, points: &[[f32; 3]], warnings: &mut Vec<Warning
     let s = principal_spreads(points);
     let ratio = s[1] / s[0];
     if ratio.is_nan() || ratio < COLLINEAR_RATIO {
-        // a cloud given as 32-bit floats far from zero: rounded onto a grid as coarse as itself
-        let far = points.iter().flatten().fold(0.0f64, |m, v| if v.is_finite() { m.max((*v as f64).abs()) } else { m });
+        // a cloud given as 32-bit floats far from zero, rounded coarser than its size allows (the
+        // rule of the coarse-coordinates warning, `f32_rounds`)
+        let (lo, hi) = crate::cloud::bounds_of(points);
+        let far = lo.iter().chain(&hi).fold(0.0f64, |m, v| m.max((*v as f64).abs()));
         let step = f32_step(far);
-        let rounded = if step > 1e-3 * s[0] {
+        let rounded = if f32_rounds(far, crate::cloud::half_extent_of(lo, hi)) {
             format!(
                 " (its 32-bit float coordinates lie up to {} from zero, where floats are {} apart: it may be a line only \
                  because they were rounded; give the coordinates as f64: a Float64Array, {{ points, origin }}, or \

@@ -113,12 +113,14 @@ pub(crate) fn list<'v>(v: &'v Value, key: &str) -> &'v [Value] {
 pub(crate) fn index(v: &Value, key: &str, what: &str) -> Result<Option<usize>> {
     match v.get(key) {
         None => Ok(None),
-        Some(x) => x
-            .as_u64()
-            .and_then(|i| usize::try_from(i).ok())
-            .map(Some)
-            .ok_or_else(|| err(format!("{what}'s {key} is not a non-negative integer"))),
+        Some(x) => as_index(x).map(Some).ok_or_else(|| err(format!("{what}'s {key} is not a non-negative integer"))),
     }
+}
+
+/// `v` as an index (a non-negative integer that `usize` holds: one beyond 2^32 is no index in
+/// wasm32, rather than cut to 32 bits).
+pub(crate) fn as_index(v: &Value) -> Option<usize> {
+    v.as_u64().and_then(|i| usize::try_from(i).ok())
 }
 
 fn required(v: &Value, key: &str, what: &str) -> Result<usize> {
@@ -395,11 +397,7 @@ pub(crate) fn roots(json: &Value) -> Result<Vec<usize>> {
     let scene = item(json, "scenes", s, "the file's scene")?;
     list(scene, "nodes")
         .iter()
-        .map(|n| {
-            n.as_u64()
-                .and_then(|n| usize::try_from(n).ok())
-                .ok_or_else(|| err(format!("scenes[{s}]'s nodes are not indices")))
-        })
+        .map(|n| as_index(n).ok_or_else(|| err(format!("scenes[{s}]'s nodes are not indices"))))
         .collect()
 }
 
@@ -479,7 +477,7 @@ pub(crate) fn read(bytes: &[u8], faces: Faces) -> Result<Raw> {
             }
         }
         for child in list(node, "children").iter().rev() {
-            let child = child.as_u64().and_then(|c| usize::try_from(c).ok()).filter(|&c| c < nodes.len());
+            let child = as_index(child).filter(|&c| c < nodes.len());
             stack.push(child.ok_or_else(|| err(format!("{nw}'s children are not indices of its nodes")))?);
         }
     }
@@ -497,8 +495,8 @@ fn parents(json: &Value) -> Vec<Option<usize>> {
     let nodes = list(json, "nodes");
     let mut parent = vec![None; nodes.len()];
     for (i, node) in nodes.iter().enumerate() {
-        for c in list(node, "children").iter().filter_map(Value::as_u64) {
-            if let Some(p) = usize::try_from(c).ok().and_then(|c| parent.get_mut(c)) {
+        for c in list(node, "children").iter().filter_map(as_index) {
+            if let Some(p) = parent.get_mut(c) {
                 *p = Some(i);
             }
         }
@@ -554,7 +552,7 @@ fn skin(doc: &Doc, world: &[Matrix4<f64>], s: usize, what: &str) -> Result<Vec<M
     let sw = format!("skins[{s}]");
     let joints: Vec<usize> = list(skin, "joints")
         .iter()
-        .map(|j| j.as_u64().and_then(|j| usize::try_from(j).ok()).filter(|&j| j < world.len()))
+        .map(|j| as_index(j).filter(|&j| j < world.len()))
         .collect::<Option<_>>()
         .ok_or_else(|| err(format!("{sw}'s joints are not indices of its nodes")))?;
     let inverse = match index(skin, "inverseBindMatrices", &sw)? {

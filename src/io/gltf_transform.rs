@@ -5,7 +5,7 @@
 //! binary chunk and every chunk after it; its JSON is written anew (its keys in sorted order).
 //! The file is read by the glTF reader first, so a file it refuses is refused here too.
 
-use super::gltf::{list, open, roots, F};
+use super::gltf::{as_index, list, open, roots, F};
 use super::motion::Motion;
 use super::Faces;
 use crate::{Error, Result};
@@ -44,11 +44,7 @@ pub(crate) fn transform_gltf(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> 
 
 /// Puts `m` above every top node: each gets a new parent (see the module docs).
 fn place(doc: &mut Value, m: &Matrix4<f64>) -> Result<()> {
-    let mut tops: Vec<usize> = list(doc, "scenes")
-        .iter()
-        .flat_map(|s| list(s, "nodes"))
-        .filter_map(|n| n.as_u64().and_then(|n| usize::try_from(n).ok()))
-        .collect();
+    let mut tops: Vec<usize> = list(doc, "scenes").iter().flat_map(|s| list(s, "nodes")).filter_map(as_index).collect();
     if list(doc, "scenes").is_empty() {
         tops = roots(doc)?;
     }
@@ -64,8 +60,7 @@ fn place(doc: &mut Value, m: &Matrix4<f64>) -> Result<()> {
     nodes.extend(tops.iter().map(|&n| json!({ "name": "T_target_source", "matrix": matrix, "children": [n] })));
     for scene in doc.get_mut("scenes").and_then(Value::as_array_mut).into_iter().flatten() {
         for n in scene.get_mut("nodes").and_then(Value::as_array_mut).into_iter().flatten() {
-            if let Some(k) = n.as_u64().and_then(|n| usize::try_from(n).ok()).and_then(|n| tops.binary_search(&n).ok())
-            {
+            if let Some(k) = as_index(n).and_then(|n| tops.binary_search(&n).ok()) {
                 *n = json!(first + k);
             }
         }
