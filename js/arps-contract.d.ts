@@ -400,6 +400,16 @@ export type RegistrationResult = {
    * onto the answer or onto another drops it, so it can also be shorter.
    */
   alternatives: Array<RegistrationAlternative>,
+  /**
+   * The motions the fit leaves free, weakest held first; empty when the fit pins every motion.
+   * Along each, the surfaces keep the source on the target (a surface of revolution turned
+   * about its axis, a straight pipe, tunnel or extrusion slid along itself, a plane slid or
+   * turned in itself), so only where the clouds' edges fall holds the answer there, and it may
+   * be off along it: what the warning `"freeMotion"` names in words, as numbers an application
+   * can draw or constrain (with a guess, `initialTransform`, the answer follows the guess along
+   * them: `"heldByGuess"`).
+   */
+  freeMotions: Array<RegistrationFreeMotion>,
 };
 
 /**
@@ -587,6 +597,33 @@ export type RegistrationAlternative = {
    */
   inlierRmse: number,
 };
+
+/**
+ * A motion the fit leaves free (one of the result's `freeMotions`): a turn about an axis or a
+ * slide along a direction, in the target's frame and units.
+ */
+export type RegistrationFreeMotion = {
+  /**
+   * A turn about an axis, or a slide.
+   */
+  kind: FreeMotionKind,
+  /**
+   * The turn's axis or the slide's direction: a unit vector in the target's frame (either
+   * sign: the motion is free both ways).
+   */
+  direction: [number, number, number],
+  /**
+   * For a turn, the point of its axis nearest the fitted points' centroid; for a slide, that
+   * centroid (where to draw it); in the target's frame (with its origin: map-grid coordinates
+   * as given).
+   */
+  through: [number, number, number],
+};
+
+/**
+ * What a `FreeMotion` is.
+ */
+export type FreeMotionKind = "turn" | "slide";
 
 /**
  * How `read_point_cloud_with` turns a file into points. In JS (`parsePointCloud`,

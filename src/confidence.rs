@@ -114,7 +114,7 @@ pub const SLID_FREE: f64 = 0.85;
 /// The motion the fit pins down least ([`Evidence::constraint`]), in the target's normalised
 /// frame: the screw of the information matrix's weakest eigenvector.
 #[derive(Clone, Copy, Debug)]
-pub struct FreeMotion {
+pub struct FreeScrew {
     /// The turn per unit of the motion (zero for a pure slide).
     pub w: Vector3<f64>,
     /// The translation per unit, at `c`.
@@ -128,11 +128,31 @@ pub struct FreeMotion {
     /// Further motions the fit leaves free (the information matrix's next eigenvectors whose
     /// eigenvalues also lie below [`UNPINNED_CONSTRAINT`] of the strongest, weakest first:
     /// a pipe's slide beside its turn, a plane's two slides beside its turn), as the turn per unit
-    /// and the translation per unit at `c`; only [`FreeMotion::describe`] names them.
+    /// and the translation per unit at `c`; only [`FreeScrew::describe`] names them.
     pub also: [Option<(Vector3<f64>, Vector3<f64>)>; 2],
 }
 
-impl FreeMotion {
+/// One motion of a [`FreeScrew`] ([`FreeScrew::parts`]), in the target's normalised frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum ScrewPart {
+    /// A turn about the axis along the unit vector `axis` through the point `through` (the
+    /// axis's point nearest the inliers' centroid).
+    Turn {
+        /// The axis's direction, a unit vector.
+        axis: Vector3<f64>,
+        /// Its point nearest the inliers' centroid.
+        through: Vector3<f64>,
+    },
+    /// A slide along the unit vector `direction`; `at` is the inliers' centroid.
+    Slide {
+        /// The direction, a unit vector.
+        direction: Vector3<f64>,
+        /// The inliers' centroid.
+        at: Vector3<f64>,
+    },
+}
+
+impl FreeScrew {
     /// `t` moved `s` units along the motion, exactly: turned by `s |w|` about the axis (through
     /// `c + w x shift / |w|^2`) and moved `s` times the shift's part along it (the probes' screw
     /// moves are first order, which a turn of tens of degrees about an axis the inliers' centroid
@@ -184,18 +204,18 @@ impl FreeMotion {
         self.moved(fine, t)
     }
 
-    /// `t` moved along this motion and each of [`FreeMotion::also`] in turn ([`FreeMotion::nearest`]
+    /// `t` moved along this motion and each of [`FreeScrew::also`] in turn ([`FreeScrew::nearest`]
     /// along each, three rounds) to where it puts `points` nearest where `guess` puts them: a
     /// plane's answer brought to the guess along its two slides and its turn, not along one.
     pub fn nearest_along_all(&self, t: &Matrix4<f64>, guess: &Matrix4<f64>, points: &[[f32; 3]]) -> Matrix4<f64> {
-        let others = self.also.iter().flatten().map(|&(w, shift)| FreeMotion { w, shift, also: [None; 2], ..*self });
-        let motions: Vec<FreeMotion> = std::iter::once(*self).chain(others).collect();
+        let others = self.also.iter().flatten().map(|&(w, shift)| FreeScrew { w, shift, also: [None; 2], ..*self });
+        let motions: Vec<FreeScrew> = std::iter::once(*self).chain(others).collect();
         let rounds = if motions.len() > 1 { 3 } else { 1 };
         (0..rounds).fold(*t, |t, _| motions.iter().fold(t, |t, m| m.nearest(&t, guess, points)))
     }
 
     /// The point of the axis of the turn `w` with the translation `shift` at `c` (this motion's,
-    /// or one of [`FreeMotion::also`]) nearest the inliers' centroid: `c + w x shift / |w|^2`.
+    /// or one of [`FreeScrew::also`]) nearest the inliers' centroid: `c + w x shift / |w|^2`.
     fn axis_point(&self, w: Vector3<f64>, shift: Vector3<f64>) -> Vector3<f64> {
         self.c + w.cross(&shift) / w.norm_squared()
     }
@@ -223,19 +243,16 @@ impl FreeMotion {
             format!("({}, {}, {})", one(v.x), one(v.y), one(v.z))
         };
         let round = |v: Vector3<f64>| v.map(|x| (x * 1000.0).round() / 1000.0);
-        let one = |w: Vector3<f64>, shift: Vector3<f64>| {
-            let turn = w.norm();
-            // the points move by |w| times their distance from the axis, up to about 1 normalised
-            // unit, against |shift| for the slide
-            if turn >= shift.norm() {
-                let on_axis = self.axis_point(w, shift);
-                format!("a turn about the axis along {} through {}", fmt(round(w / turn)), at(place(on_axis)))
-            } else {
-                format!("a slide along {}", fmt(round(shift.normalize())))
-            }
-        };
-        let mut all = vec![one(self.w, self.shift)];
-        all.extend(self.also.iter().flatten().map(|&(w, shift)| one(w, shift)));
+        let mut all: Vec<String> = self
+            .parts()
+            .into_iter()
+            .map(|part| match part {
+                ScrewPart::Turn { axis, through } => {
+                    format!("a turn about the axis along {} through {}", fmt(round(axis)), at(place(through)))
+                }
+                ScrewPart::Slide { direction, .. } => format!("a slide along {}", fmt(round(direction))),
+            })
+            .collect();
         match all.len() {
             1 => all.remove(0),
             _ => {
@@ -245,7 +262,27 @@ impl FreeMotion {
         }
     }
 
-    /// How many motions the fit leaves free: this one and [`FreeMotion::also`].
+    /// What each motion the fit leaves free is (this one, then each of [`FreeScrew::also`]), in
+    /// the target's normalised frame: a turn about an axis when it mostly turns the points, else
+    /// a slide.
+    pub fn parts(&self) -> Vec<ScrewPart> {
+        let one = |w: Vector3<f64>, shift: Vector3<f64>| {
+            let turn = w.norm();
+            // the points move by |w| times their distance from the axis, up to about 1 normalised
+            // unit, against |shift| for the slide
+            if turn >= shift.norm() {
+                ScrewPart::Turn { axis: w / turn, through: self.axis_point(w, shift) }
+            } else {
+                ScrewPart::Slide { direction: shift.normalize(), at: self.c }
+            }
+        };
+        std::iter::once((self.w, self.shift))
+            .chain(self.also.iter().flatten().copied())
+            .map(|(w, s)| one(w, s))
+            .collect()
+    }
+
+    /// How many motions the fit leaves free: this one and [`FreeScrew::also`].
     pub fn count(&self) -> usize {
         1 + self.also.iter().flatten().count()
     }
@@ -286,7 +323,7 @@ pub struct Probed {
     pub alternatives: Vec<Matrix4<f64>>,
     /// The motion the fit pins down least, when it leaves it free ([`Evidence::constraint`] below
     /// [`UNPINNED_CONSTRAINT`], or [`Evidence::slide`] at least [`SLID_FREE`]).
-    pub free: Option<FreeMotion>,
+    pub free: Option<FreeScrew>,
 }
 
 /// Which poses the probes may find: any, or only those that keep a shared up axis (the
@@ -357,7 +394,7 @@ pub fn probe(
     let (slide, screw, constraint, also) = slide(target, &probe, T_target_source, d, base);
     let free = screw
         .filter(|_| constraint < UNPINNED_CONSTRAINT || slide >= SLID_FREE)
-        .map(|Screw { w, shift, c }| FreeMotion { w, shift, c, constraint, slide, also });
+        .map(|Screw { w, shift, c }| FreeScrew { w, shift, c, constraint, slide, also });
     let answer = AnswerOnProbe { fitness: base, partners: probe_partners };
     // turns along the least constrained motion only where sliding along it keeps much of the fit
     let screw = screw.filter(|_| slide >= SCREW_MIN_SLIDE);
@@ -721,7 +758,7 @@ fn screw_turns(screw: Option<Screw>, t: &Matrix4<f64>) -> Vec<Matrix4<f64>> {
 
 /// [`Evidence::slide`] of `t` on the probe points `sample`, the least constrained motion it
 /// slid along (`None` with too few inliers), [`Evidence::constraint`], and the next motions below
-/// [`UNPINNED_CONSTRAINT`] ([`FreeMotion::also`]). `base` is the fitness of `t` on `sample` at `d`.
+/// [`UNPINNED_CONSTRAINT`] ([`FreeScrew::also`]). `base` is the fitness of `t` on `sample` at `d`.
 #[allow(clippy::type_complexity)]
 fn slide(
     target: &IcpTarget,

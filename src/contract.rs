@@ -3,7 +3,7 @@
 //!
 //! # One set of types
 //! The options are [`Options`], the result is [`Registration`]; their nested types are
-//! [`Evidence`], [`Alternative`], [`Timings`], [`Start`], [`Search`], [`IcpKind`], [`IcpLoss`], [`NonFinite`],
+//! [`Evidence`], [`Alternative`], [`FreeMotion`] (with [`FreeMotionKind`]), [`Timings`], [`Start`], [`Search`], [`IcpKind`], [`IcpLoss`], [`NonFinite`],
 //! [`Outliers`], [`Support`], [`Stage`] (the progress stages), [`WarningCode`] (what a warning is
 //! about) and [`ModelConfig`]; the readers take [`ReadOptions`]. They
 //! are serde types: the wasm binding converts them
@@ -27,6 +27,8 @@
 //! [`Options`]: crate::Options
 //! [`Registration`]: crate::Registration
 //! [`Alternative`]: crate::Alternative
+//! [`FreeMotion`]: crate::FreeMotion
+//! [`FreeMotionKind`]: crate::FreeMotionKind
 //! [`ReadOptions`]: crate::io::ReadOptions
 //! [`Evidence`]: crate::confidence::Evidence
 //! [`Timings`]: crate::Timings
@@ -193,8 +195,8 @@ pub fn typescript() -> String {
     use crate::confidence::Evidence;
     use crate::model::config::Reference;
     use crate::{
-        Alternative, IcpKind, IcpLoss, NonFinite, Options, Outliers, Registration, Search, Stage, Start, Support,
-        Timings,
+        Alternative, FreeMotion, FreeMotionKind, IcpKind, IcpLoss, NonFinite, Options, Outliers, Registration, Search,
+        Stage, Start, Support, Timings,
     };
     use ts_rs::{Config, TS};
 
@@ -221,6 +223,8 @@ pub fn typescript() -> String {
         decl::<Timings>(&cfg),
         decl::<Evidence>(&cfg),
         decl::<Alternative>(&cfg),
+        decl::<FreeMotion>(&cfg),
+        decl::<FreeMotionKind>(&cfg),
         decl::<crate::io::ReadOptions>(&cfg),
         decl::<crate::io::ScanInfo>(&cfg),
         decl::<ModelConfig>(&cfg),

@@ -81,7 +81,7 @@ pub use icp::{IcpKind, IcpLoss};
 pub use model::{Model, ModelConfig};
 pub use outliers::Outliers;
 pub use refine::Start;
-pub use register::{Alternative, Options, Registrar, Registration, Search, Stage, Timings};
+pub use register::{Alternative, FreeMotion, FreeMotionKind, Options, Registrar, Registration, Search, Stage, Timings};
 pub use support::Support;
 pub use warning::{Warning, WarningCode};
 pub use weights::{StoreAs, Weights};

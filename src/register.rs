@@ -491,6 +491,43 @@ pub struct Registration {
     /// onto the answer or onto another drops it, so it can also be shorter.
     #[serde(default)]
     pub alternatives: Vec<Alternative>,
+    /// The motions the fit leaves free, weakest held first; empty when the fit pins every motion.
+    /// Along each, the surfaces keep the source on the target (a surface of revolution turned
+    /// about its axis, a straight pipe, tunnel or extrusion slid along itself, a plane slid or
+    /// turned in itself), so only where the clouds' edges fall holds the answer there, and it may
+    /// be off along it: what the warning `"freeMotion"` names in words, as numbers an application
+    /// can draw or constrain (with a guess, `initialTransform`, the answer follows the guess along
+    /// them: `"heldByGuess"`).
+    #[serde(default)]
+    pub free_motions: Vec<FreeMotion>,
+}
+
+/// A motion the fit leaves free (one of the result's `freeMotions`): a turn about an axis or a
+/// slide along a direction, in the target's frame and units.
+#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "RegistrationFreeMotion"))]
+pub struct FreeMotion {
+    /// A turn about an axis, or a slide.
+    pub kind: FreeMotionKind,
+    /// The turn's axis or the slide's direction: a unit vector in the target's frame (either
+    /// sign: the motion is free both ways).
+    pub direction: [f64; 3],
+    /// For a turn, the point of its axis nearest the fitted points' centroid; for a slide, that
+    /// centroid (where to draw it); in the target's frame (with its origin: map-grid coordinates
+    /// as given).
+    pub through: [f64; 3],
+}
+
+/// What a [`FreeMotion`] is.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "camelCase")]
+#[cfg_attr(feature = "ts", derive(ts_rs::TS))]
+pub enum FreeMotionKind {
+    /// A turn about the axis along `direction` through `through`.
+    Turn,
+    /// A slide along `direction`.
+    Slide,
 }
 
 /// Another pose that fits about as well as the answer (one of the result's `alternatives`):

@@ -278,6 +278,15 @@ fn partial_views_of_a_surface_of_revolution_leave_the_turn_free() {
     let through = nalgebra::Point3::from_slice(&inside("through "));
     let local = (gt * turn).try_inverse().unwrap().transform_point(&through);
     assert!(local.x.hypot(local.y) < 0.05, "{local:?} is off the jar's axis: {w}");
+    // the same motion as numbers: one turn, its axis and a point of it as the sentence gives them
+    match r.free_motions[..] {
+        [arps::FreeMotion { kind: arps::FreeMotionKind::Turn, direction, through: on_axis }] => {
+            assert!((Vector3::from(direction).norm() - 1.0).abs() < 1e-9);
+            assert!(Vector3::from(direction).dot(&axis.normalize()).abs() > 0.9999, "{direction:?} {w}");
+            assert!((Vector3::from(on_axis) - through.coords).norm() < 2e-3, "{on_axis:?} {w}");
+        }
+        ref other => panic!("{other:?}: {w}"),
+    }
     // a guess (a turntable's angle) says what the clouds cannot: the answer follows it along the
     // free turn, and says so; it stays at 0.25 (nothing in the clouds confirms the guess)
     let truth = gt * turn;
@@ -294,6 +303,7 @@ fn partial_views_of_a_surface_of_revolution_leave_the_turn_free() {
     let r = reg.register(&s, &t, &Options::default()).unwrap();
     assert!(r.evidence.constraint > arps::confidence::UNPINNED_CONSTRAINT, "{:?}", r.evidence);
     assert!(!r.warnings.iter().any(|w| w.starts_with("the fit leaves ")), "{:?}", r.warnings);
+    assert!(r.free_motions.is_empty(), "{:?}", r.free_motions);
 }
 
 /// Scans of a tunnel on a helical ramp (centreline radius 25, grade 1:7, a rough 2.75 wall) from
@@ -329,6 +339,7 @@ fn a_tunnel_on_a_helical_ramp_is_doubted_along_the_ramp() {
     assert!(e.constraint > arps::confidence::UNPINNED_CONSTRAINT && e.slide >= arps::confidence::SLID_FREE, "{e:?}");
     assert!(r.confidence <= 0.25, "{} {:?}", r.confidence, r.warnings);
     assert!(r.warnings.iter().any(|w| w.starts_with("the fit leaves ")), "{:?}", r.warnings);
+    assert!(!r.free_motions.is_empty());
 }
 
 /// The search's other refined answers count as alternatives when they fit at least 0.9 as well

@@ -152,6 +152,8 @@ fn every_enum_value_is_declared() {
     assert_eq!(names(&[Support::Drop, Support::Keep]), ts_literals(&ts, "SupportPlane"));
     assert_eq!(names(&[Stage::Preparing, Stage::Network, Stage::Refining]), ts_literals(&ts, "RegistrationStage"));
     assert_eq!(names(&arps::WarningCode::ALL), ts_literals(&ts, "WarningCode"));
+    use arps::FreeMotionKind::{Slide, Turn};
+    assert_eq!(names(&[Turn, Slide]), ts_literals(&ts, "FreeMotionKind"));
 }
 
 #[test]

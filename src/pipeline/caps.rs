@@ -12,7 +12,7 @@
 //! low-confidence warning, and says why in a warning.
 
 use super::prepare::Prepared;
-use crate::confidence::{Evidence, FreeMotion};
+use crate::confidence::{Evidence, FreeScrew};
 use crate::error::num;
 use crate::refine::Candidate;
 use crate::register::{GUESS_TURN_DEG, UP_TOLERANCE_DEG};
@@ -83,7 +83,7 @@ pub(crate) struct Doubts {
     /// [`GUESS_TURN_DEG`] (30-100 probe points on a vertebra, turned over, fit 0.89-0.97 of them).
     pub far_from_guess: Option<f64>,
     /// A motion the fit leaves free ([`crate::confidence::Evidence::constraint`]).
-    pub free: Option<FreeMotion>,
+    pub free: Option<FreeScrew>,
 }
 
 /// The confidence of the `answer` held at [`UNREFINED_CONFIDENCE`], with a warning naming the
@@ -199,8 +199,7 @@ pub(crate) fn cap(
     }
     // the surfaces leave a motion free: where the clouds' edges fall is all that holds the answer
     if let Some(m) = free {
-        let (o, centre) = (p.target.summary.origin, p.norm.target_center);
-        let place = |q: Vector3<f64>| Vector3::from(std::array::from_fn(|k| o[k] + centre[k] + q[k] * s));
+        let place = |q: Vector3<f64>| p.in_target_frame(q);
         let (count, keep, that) = match m.count() {
             1 => ("one motion".to_string(), "keeps", "that motion"),
             n => (format!("{n} motions"), "keep", "those motions"),

@@ -63,6 +63,15 @@ pub(crate) struct Prepared {
     pub target: Box<PreparedTarget>,
 }
 
+impl Prepared {
+    /// A point of the target's normalised frame in the caller's target frame (its origin and
+    /// normalisation undone).
+    pub(crate) fn in_target_frame(&self, q: Vector3<f64>) -> Vector3<f64> {
+        let (o, centre, s) = (self.target.summary.origin, self.norm.target_center, self.norm.scale);
+        Vector3::from(std::array::from_fn(|k| o[k] + centre[k] + q[k] * s))
+    }
+}
+
 /// The target as [`prepare`] receives it: prepared by an earlier call from the same input, or
 /// validated now.
 enum Given<'a> {

@@ -10,10 +10,10 @@
 
 use super::prepare::Prepared;
 use super::search::Chosen;
-use crate::confidence::Evidence;
+use crate::confidence::{Evidence, ScrewPart};
 use crate::origin;
 use crate::refine::Candidate;
-use crate::register::{Alternative, Registration, Timings};
+use crate::register::{Alternative, FreeMotion, FreeMotionKind, Registration, Timings};
 use crate::warning::{Warning, WarningCode};
 use crate::{checks, Result};
 use nalgebra::{Matrix4, Vector3};
@@ -34,7 +34,7 @@ pub(crate) fn finish(
     let p = prepared;
     let s = p.norm.scale;
     let d_final = p.d_final;
-    let Chosen { candidate, evidence, confidence, starts_refined, alternatives } = chosen;
+    let Chosen { candidate, evidence, confidence, starts_refined, alternatives, free } = chosen;
     let Candidate { start, T_target_source: t_n, fitness, inlier_rmse: rmse_n, iterations, converged } = candidate;
     // with `sourceScale` the pipeline's source was the caller's scaled: the answer maps the source as given
     let given = Matrix4::new_nonuniform_scaling(&Vector3::repeat(p.source_scale));
@@ -53,6 +53,8 @@ pub(crate) fn finish(
         checks::finite_transform(&t, "an alternative pose")?;
         others.push(Alternative { T_target_source: t, fitness: a.fitness, inlier_rmse: a.inlier_rmse * s });
     }
+    let free_motions =
+        free.map(|f| f.parts().into_iter().map(|part| free_motion(p, part)).collect()).unwrap_or_default();
     let (warning_codes, warnings) = warnings.into_iter().map(|w| (w.code, w.message)).unzip();
     Ok(Registration {
         T_target_source,
@@ -70,7 +72,18 @@ pub(crate) fn finish(
         evidence,
         starts_refined,
         alternatives: others,
+        free_motions,
     })
+}
+
+/// A free motion of the normalised target frame in the caller's target frame: directions as they
+/// are (the normalisation neither turns nor mirrors), points placed with the origin.
+fn free_motion(p: &Prepared, part: ScrewPart) -> FreeMotion {
+    let (kind, direction, through) = match part {
+        ScrewPart::Turn { axis, through } => (FreeMotionKind::Turn, axis, through),
+        ScrewPart::Slide { direction, at } => (FreeMotionKind::Slide, direction, at),
+    };
+    FreeMotion { kind, direction: direction.into(), through: p.in_target_frame(through).into() }
 }
 
 /// The warning of a doubtful answer: its confidence is below [`LOW_CONFIDENCE`], or another pose

@@ -75,6 +75,8 @@ pub(crate) struct Chosen {
     /// Other poses that fit about as well ([`Evidence::alternatives`]), refined like the answer,
     /// the best fitting first.
     pub alternatives: Vec<Candidate>,
+    /// The motions the fit leaves free ([`Probed::free`]).
+    pub free: Option<confidence::FreeScrew>,
 }
 
 /// Refines the starts of each stage in turn (see the module docs).
@@ -458,7 +460,7 @@ pub(crate) fn search(
     // relief pins the pose by its gentle slopes, which ICP follows from the guess to the truth,
     // though a slid pose keeps most of the fit at the default distance (a 30 mm bas-relief,
     // 4.5 mm: held at a 2-degree guess's error; 0.004 degrees without the hold)
-    let surfaces_free = |f: &confidence::FreeMotion| f.constraint < confidence::UNPINNED_CONSTRAINT;
+    let surfaces_free = |f: &confidence::FreeScrew| f.constraint < confidence::UNPINNED_CONSTRAINT;
     let guided = refined_any && options.initial_transform.is_some();
     let (candidate, probed) = match probed.free.filter(|f| guided && surfaces_free(f)) {
         Some(free) => match held_by_guess(&free, &candidate, p, target_index, &screen, &admits) {
@@ -523,7 +525,8 @@ pub(crate) fn search(
             )));
         }
     }
-    let doubts = caps::Doubts { refined_any, tilted, short, mirrored, far_from_guess, free: probed.free };
+    let free = probed.free;
+    let doubts = caps::Doubts { refined_any, tilted, short, mirrored, far_from_guess, free };
     let confidence = caps::cap(p, confidence, &candidate, doubts, warnings);
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
     // probes turned it over), not so far as to contradict it: the caller asked to refine that
@@ -540,7 +543,7 @@ pub(crate) fn search(
         )));
     }
     let alternatives = refine_alternatives(target_index, &p.icp_src.points, &candidate, &poses, &how);
-    Ok(Chosen { candidate, evidence, confidence, starts_refined, alternatives })
+    Ok(Chosen { candidate, evidence, confidence, starts_refined, alternatives, free })
 }
 
 /// With [`Options::initial_transform`], an answer that puts the source's centroid farther than
@@ -641,13 +644,13 @@ const GLOBAL_SCREEN_FIT: f64 = 0.7;
 /// The answer moved along the motion its surfaces leave `free` (its constraint below
 /// [`confidence::UNPINNED_CONSTRAINT`]) to where the caller's guess
 /// (`p.t_initial`) puts the source (along it and the other free motions of a plane:
-/// [`confidence::FreeMotion::nearest_along_all`]), put back onto the
+/// [`confidence::FreeScrew::nearest_along_all`]), put back onto the
 /// surfaces by ICP from the final distance's stages and moved along the motion again while that
 /// fits better; with a warning that says so, when that pose is admitted (`up`), another one, and
 /// still fits at least [`HELD_FIT`] as well as the answer (the clouds' edges, not their surfaces,
 /// lose some of the fit there).
 fn held_by_guess(
-    free: &confidence::FreeMotion,
+    free: &confidence::FreeScrew,
     answer: &Candidate,
     p: &Prepared,
     target: &IcpTarget,
