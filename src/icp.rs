@@ -611,6 +611,26 @@ impl IcpTarget {
         out.iter().find(|(i, _)| *i != j).map_or(f64::INFINITY, |(_, d2)| (*d2 as f64).sqrt())
     }
 
+    /// The target's spacing: the median, over up to `samples` of its points spread evenly, of
+    /// the distance to the `k`th nearest other point (a point repeated counts as a neighbour at
+    /// 0); infinite for a target of `k` points or fewer.
+    pub(crate) fn median_reach(&self, k: usize, samples: usize) -> f64 {
+        if self.points.len() <= k || samples == 0 {
+            return f64::INFINITY;
+        }
+        let mut out = Vec::with_capacity(k + 1);
+        let mut reach: Vec<f64> = crate::refine::even_sample(&self.points, samples)
+            .iter()
+            .map(|q| {
+                // the point itself first, at 0
+                self.index.knn_into(q, k + 1, &mut out);
+                out.last().map_or(f64::INFINITY, |&(_, d2)| (d2 as f64).sqrt())
+            })
+            .collect();
+        let mid = reach.len() / 2;
+        *reach.select_nth_unstable_by(mid, f64::total_cmp).1
+    }
+
     /// The target point nearest to `q` (target frame) if it is closer than `max_distance`
     /// (strictly): its index into [`IcpTarget::points`].
     // one copy, not one per caller (the confidence's probes, the walls: none on ICP's own path),

@@ -46,7 +46,8 @@ use serde::{Deserialize, Serialize};
 ///   the guess, not the clouds, placed it there.
 /// * `"betterPoseNotTaken"`: with `search: "local"`: a pose the probes found fits better than the
 ///   answer; it is offered among the alternatives, not taken.
-/// * `"fewPoints"`: the source has too few points to be sure of any answer.
+/// * `"fewPoints"`: the source has too few points to be sure of any answer, or the clouds are too
+///   sparse for the distance the answer is judged at (points many times that distance apart).
 /// * `"networkResampled"`: a cloud has fewer points than the network takes: it saw some twice (the
 ///   answer is still refined on every point).
 /// * `"nonFiniteDropped"`: points with a non-finite coordinate (or one beyond 1e18) were left out
@@ -97,7 +98,7 @@ pub enum WarningCode {
     HeldByGuess,
     /// `"betterPoseNotTaken"`: with `search: "local"`, a better-fitting pose was not taken (see the type's docs).
     BetterPoseNotTaken,
-    /// `"fewPoints"`: too few source points to be sure (see the type's docs).
+    /// `"fewPoints"`: too few source points, or too sparse clouds, to be sure (see the type's docs).
     FewPoints,
     /// `"networkResampled"`: fewer points than the network takes (see the type's docs).
     NetworkResampled,

@@ -419,6 +419,13 @@ fn register_takes_several_sources_onto_one_target() {
         assert_eq!(line["source"], source, "{line}");
     }
     assert!(lines[3]["error"].as_str().unwrap().contains("missing.ply"), "{}", lines[3]);
+    // one source that fails: the same line on stdout, the error on stderr, exit status 2
+    let out = arps(&["register", "missing.ply", target, "--json"]);
+    assert_eq!(out.status.code(), Some(2));
+    let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(line["source"], "missing.ply", "{line}");
+    assert!(line["error"].as_str().unwrap().contains("missing.ply"), "{line}");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("missing.ply"));
     let (alone_a, alone_b) = (alone(a), alone(b));
     assert_eq!(untimed(lines[0].clone()), alone_a);
     assert_eq!(untimed(lines[1].clone()), alone_b);

@@ -14,6 +14,7 @@
 use super::prepare::Prepared;
 use crate::confidence::{Evidence, FreeScrew};
 use crate::error::num;
+use crate::icp::IcpTarget;
 use crate::refine::Candidate;
 use crate::register::{GUESS_TURN_DEG, UP_TOLERANCE_DEG};
 use crate::warning::{Warning, WarningCode};
@@ -84,6 +85,38 @@ pub(crate) struct Doubts {
     pub far_from_guess: Option<f64>,
     /// A motion the fit leaves free ([`crate::confidence::Evidence::constraint`]).
     pub free: Option<FreeScrew>,
+    /// A target too sparse for the evidence distance ([`too_sparse`]): its spacing in evidence
+    /// distances, and the answer's fitness there.
+    pub sparse: Option<(f64, f64)>,
+}
+
+/// A target whose spacing (the median distance from a point to its 4th nearest neighbour) is
+/// more than this many times the distance the answer is judged at is too sparse for the fit to
+/// judge it ([`too_sparse`]): independent samples of a surface seldom lie that close to each
+/// other, so few source points pair up under a right pose or a wrong one, and the confidence is
+/// not calibrated there (1,024-point validation pairs: 3 to 4). On partial views of four meshes
+/// sampled independently, 100 to 300 points each (spacings 5 to 11), 25 answers of 72 that were
+/// wrong had 0.5 or more, up to 0.92; held at this line, 5 (`BENCHMARK.md`, "Sparse clouds").
+pub(crate) const SPARSE_SPACINGS: f64 = 7.0;
+
+/// [`too_sparse`] leaves an answer alone when at least this share of the source fits within the
+/// evidence distance: clouds whose points coincide (the same markers, survey points or samples in
+/// both) pair up however sparse they are (0.58 or more in those trials; independent samples 0.19
+/// or less).
+pub(crate) const SPARSE_FITS: f64 = 0.4;
+
+/// Points of the target whose neighbours [`too_sparse`] measures its spacing from.
+const SPARSE_SAMPLE: usize = 256;
+
+/// The target's spacing in evidence distances `d` when it is more than [`SPARSE_SPACINGS`] and
+/// the answer's `fitness` at `d` is below [`SPARSE_FITS`]: the fit cannot tell a right pose from a
+/// wrong one there.
+pub(crate) fn too_sparse(target: &IcpTarget, fitness: f64, d: f64) -> Option<(f64, f64)> {
+    if fitness >= SPARSE_FITS {
+        return None;
+    }
+    let spacings = target.median_reach(4, SPARSE_SAMPLE) / d;
+    (spacings > SPARSE_SPACINGS).then_some((spacings, fitness))
 }
 
 /// The confidence of the `answer` held at [`UNREFINED_CONFIDENCE`], with a warning naming the
@@ -98,7 +131,7 @@ pub(crate) fn cap(
     doubts: Doubts,
     warnings: &mut Vec<Warning>,
 ) -> f64 {
-    let Doubts { refined_any, tilted, short, mirrored, far_from_guess, free } = doubts;
+    let Doubts { refined_any, tilted, short, mirrored, far_from_guess, free, sparse } = doubts;
     let fitness = answer.fitness;
     let mut capped = !refined_any;
     let s = p.norm.scale;
@@ -214,6 +247,21 @@ pub(crate) fn cap(
                 m.describe(&place, s),
                 m.constraint,
                 100.0 * m.slide.min(1.0)
+            ),
+        ));
+        capped = true;
+    }
+    // a target too sparse for the distance: independent samples seldom pair up, right or wrong
+    if let Some((spacings, fitness)) = sparse {
+        warnings.push(Warning::new(
+            WarningCode::FewPoints,
+            format!(
+                "the target's points lie {spacings:.1} times the distance the answer is judged at ({}) apart (the \
+                 median distance to a point's 4th nearest neighbour), and {:.0}% of the source's fit within it: the \
+                 clouds are too sparse for the fit to tell a right pose from a wrong one; give denser clouds (more \
+                 points over the same surface)",
+                num(p.d_evidence * s),
+                100.0 * fitness
             ),
         ));
         capped = true;

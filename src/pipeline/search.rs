@@ -526,7 +526,8 @@ pub(crate) fn search(
         }
     }
     let free = probed.free;
-    let doubts = caps::Doubts { refined_any, tilted, short, mirrored, far_from_guess, free };
+    let sparse = caps::too_sparse(target_index, evidence.fitness, p.d_evidence);
+    let doubts = caps::Doubts { refined_any, tilted, short, mirrored, far_from_guess, free, sparse };
     let confidence = caps::cap(p, confidence, &candidate, doubts, warnings);
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
     // probes turned it over), not so far as to contradict it: the caller asked to refine that

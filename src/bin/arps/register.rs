@@ -176,7 +176,8 @@ pub struct RegisterArgs {
     /// camelCase, transforms as 16 column-major numbers, like the JS API's result; plus
     /// `wallMs`, the milliseconds of reading both files and registering, and `source`, the
     /// source's path. With several sources, one such line per source (JSON Lines; reading the
-    /// target counts in the first's `wallMs`), or `{"source", "error"}` for one that failed.
+    /// target counts in the first's `wallMs`). A source that failed gives `{"source", "error"}`
+    /// instead (one source or several; the exit status is then 2).
     #[arg(long)]
     json: bool,
 }
@@ -630,7 +631,14 @@ pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
                 unsure += usize::from(min_confidence.is_some_and(|c| r.confidence < c));
                 print_registration(&r, time_ms, json, named, aligned, centre, source_scale)?
             }
-            Err(e) if !several => return Err(in_flags(&e)),
+            Err(e) if !several => {
+                let e = in_flags(&e);
+                // (a script reading stdout sees the failure as JSON too, as with several sources)
+                if json {
+                    out!("{}", serde_json::json!({ "source": named, "error": e }));
+                }
+                return Err(e);
+            }
             Err(e) => {
                 let e = in_flags(&e);
                 failed += 1;
