@@ -38,8 +38,10 @@ use serde::{Deserialize, Serialize};
 ///   clouds were not both captured level).
 /// * `"unrefined"`: no start could be refined (or none ended upright with `up`): the answer is the
 ///   network's estimate or the initial transform, unrefined.
-/// * `"turnedFromGuess"`: the answer turned far from `initialTransform`: the guess was off, or the
-///   answer is a look-alike.
+/// * `"turnedFromGuess"`: the answer turned far from `initialTransform` (more than 60 degrees; its
+///   confidence is then at most 0.25): the guess was off, or the answer is a look-alike. With
+///   `starts: ["initial"]`, the guess as the one start, it also says how far the answer moved from
+///   the guess whenever it ended at another pose (no cap below 60 degrees).
 /// * `"farFromGuess"`: the answer places the source far from where `initialTransform` does: a
 ///   look-alike elsewhere (a repeated room, the next bay) if the guess placed it.
 /// * `"heldByGuess"`: along a motion the fit leaves free, the answer follows `initialTransform`:

@@ -460,9 +460,13 @@ pub(crate) fn search(
     // relief pins the pose by its gentle slopes, which ICP follows from the guess to the truth,
     // though a slid pose keeps most of the fit at the default distance (a 30 mm bas-relief,
     // 4.5 mm: held at a 2-degree guess's error; 0.004 degrees without the hold)
+    // Along a motion the fit barely holds, the guess holds the answer only when the answer turned
+    // far from it: a nearly round teapot came back 25-30 degrees from a guess 1 degree off
     let surfaces_free = |f: &confidence::FreeScrew| f.constraint < confidence::UNPINNED_CONSTRAINT;
+    let turned_far =
+        crate::transform::rotation_error_deg(&candidate.T_target_source, &p.t_initial) > HELD_SLID_TURN_DEG;
     let guided = refined_any && options.initial_transform.is_some();
-    let (candidate, probed) = match probed.free.filter(|f| guided && surfaces_free(f)) {
+    let (candidate, probed) = match probed.free.filter(|f| guided && (surfaces_free(f) || turned_far)) {
         Some(free) => match held_by_guess(&free, &candidate, p, target_index, &screen, &admits) {
             Some((held, why)) => {
                 warnings.push(Warning::new(WarningCode::HeldByGuess, why));
@@ -643,7 +647,8 @@ const NEARLY_SURE_SCREEN_FIT: f64 = 0.95;
 const GLOBAL_SCREEN_FIT: f64 = 0.7;
 
 /// The answer moved along the motion its surfaces leave `free` (its constraint below
-/// [`confidence::UNPINNED_CONSTRAINT`]) to where the caller's guess
+/// [`confidence::UNPINNED_CONSTRAINT`], or barely hold when the answer turned far from the guess:
+/// [`HELD_SLID_TURN_DEG`]) to where the caller's guess
 /// (`p.t_initial`) puts the source (along it and the other free motions of a plane:
 /// [`confidence::FreeScrew::nearest_along_all`]), put back onto the
 /// surfaces by ICP from the final distance's stages and moved along the motion again while that
@@ -732,6 +737,14 @@ fn robust_polish(
         ..*answer
     }
 }
+
+/// Along a motion the fit barely holds ([`confidence::Evidence::slide`] at or above
+/// [`confidence::SLID_FREE`], its constraint above [`confidence::UNPINNED_CONSTRAINT`]), the
+/// caller's guess holds the answer ([`held_by_guess`]) only when the answer turned more than this
+/// many degrees from it: ICP follows a low relief's gentle slopes from a guess 2 degrees off to
+/// the truth, while views of a nearly round teapot turned 25-30 degrees from a guess 1 degree
+/// off.
+const HELD_SLID_TURN_DEG: f64 = 10.0;
 
 /// Iteration cap of [`held_by_guess`]'s refinements.
 const HELD_ITERATIONS: u32 = 30;
