@@ -493,10 +493,12 @@ fn parse_object<T: serde::de::DeserializeOwned + Default>(options: JsValue, what
 /// string given for `up` or `starts`), and a hint for whole numbers from 2^53 on (a `bigint`).
 fn readable_serde_message(message: &str) -> String {
     let whole = "expected a whole number, 0 or more";
+    // (`usize` is 32 bits here: 2^32 does not fit a point count any more than an iteration cap)
+    let small = "expected a whole number from 0 to 4294967295";
     let mut m = message
         .replace("expected u64", whole)
-        .replace("expected u32", whole)
-        .replace("expected usize", whole)
+        .replace("expected u32", small)
+        .replace("expected usize", small)
         .replace("expected f64", "expected a number")
         .replace("TypeError: Reflect.get called on non-object", "invalid type: expected a list")
         .replace(
@@ -524,15 +526,18 @@ fn readable_serde_message(message: &str) -> String {
         let inner = m[inner_start..end].to_string();
         m.replace_range(at..=end, &inner);
     }
-    // a float that is a whole number from 2^53 on: JS numbers cannot hold such seeds exactly
-    if m.contains(whole) {
+    for expected in [whole, small] {
+        if !m.contains(expected) {
+            continue;
+        }
         let value = m.split('`').nth(1).and_then(|v| v.parse::<f64>().ok());
-        if value.is_some_and(|v| v >= 9_007_199_254_740_992.0) {
+        // a float that is a whole number from 2^53 on: JS numbers cannot hold such seeds exactly
+        if expected == whole && value.is_some_and(|v| v >= 9_007_199_254_740_992.0) {
             m.push_str(" (from 2^53 on, give it as a bigint: 2n ** 53n)");
         }
         // a negative whole number reaches serde as a float: say what is wrong with it, its sign
         if let Some(v) = value.filter(|v| *v < 0.0 && v.fract() == 0.0) {
-            m = format!("invalid value: {v}, {whole}");
+            m = format!("invalid value: {v}, {expected}");
         }
     }
     m
