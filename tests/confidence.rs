@@ -736,6 +736,8 @@ fn clouds_too_sparse_for_the_distance_are_not_sure() {
         .collect();
     let r = judge(&mut reg, &PointCloud::new(shared), &t8, &gt);
     assert!(!flagged(&r) && r.confidence > 0.5, "{} {:?}", r.confidence, r.warnings);
+    // and a sparse target's normals are not a surface's: no motion is said to be free
+    assert!(r.free_motions.is_empty(), "{:?} {:?}", r.free_motions, r.warnings);
 }
 
 /// The documentation audit's pair (a box with a ball and a rod beside it, 3,000 points, the

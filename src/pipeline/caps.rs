@@ -105,18 +105,21 @@ pub(crate) const SPARSE_SPACINGS: f64 = 7.0;
 /// or less).
 pub(crate) const SPARSE_FITS: f64 = 0.4;
 
-/// Points of the target whose neighbours [`too_sparse`] measures its spacing from.
+/// Points of the target whose neighbours [`sparse_spacings`] measures its spacing from.
 const SPARSE_SAMPLE: usize = 256;
 
-/// The target's spacing in evidence distances `d` when it is more than [`SPARSE_SPACINGS`] and
-/// the answer's `fitness` at `d` is below [`SPARSE_FITS`]: the fit cannot tell a right pose from a
-/// wrong one there.
-pub(crate) fn too_sparse(target: &IcpTarget, fitness: f64, d: f64) -> Option<(f64, f64)> {
-    if fitness >= SPARSE_FITS {
-        return None;
-    }
+/// The target's spacing in evidence distances `d` when it is more than [`SPARSE_SPACINGS`]: a
+/// target too sparse for the distance.
+pub(crate) fn sparse_spacings(target: &IcpTarget, d: f64) -> Option<f64> {
     let spacings = target.median_reach(4, SPARSE_SAMPLE) / d;
-    (spacings > SPARSE_SPACINGS).then_some((spacings, fitness))
+    (spacings > SPARSE_SPACINGS).then_some(spacings)
+}
+
+/// On a target too sparse for the distance (its [`sparse_spacings`]), the spacings and the
+/// answer's `fitness` at the evidence distance when that is below [`SPARSE_FITS`]: the fit cannot
+/// tell a right pose from a wrong one there.
+pub(crate) fn too_sparse(sparse_spacings: Option<f64>, fitness: f64) -> Option<(f64, f64)> {
+    sparse_spacings.filter(|_| fitness < SPARSE_FITS).map(|s| (s, fitness))
 }
 
 /// The confidence of the `answer` held at [`UNREFINED_CONFIDENCE`], with a warning naming the

@@ -454,19 +454,24 @@ pub(crate) fn search(
         }
         false => (candidate, probed),
     };
+    // The motions the fit leaves free, as the probe measured them from the target's normals; none
+    // on a target too sparse for the distance, whose normals, estimated from points many
+    // distances apart, are not a surface's (a set of distinct markers pins every motion; 20-33
+    // survey corners were said to leave three free)
+    let sparse_target = caps::sparse_spacings(target_index, p.d_evidence);
+    let free_of = |probed: &Probed| probed.free.filter(|_| sparse_target.is_none());
     // with the caller's guess: along a motion the surfaces leave free (a jar's turn about its axis
     // on a turntable: `constraint` below the line), where only the clouds' edges held the answer,
-    // the guess says where it is. Not along a motion the fit only barely holds (`slide`): a low
-    // relief pins the pose by its gentle slopes, which ICP follows from the guess to the truth,
-    // though a slid pose keeps most of the fit at the default distance (a 30 mm bas-relief,
-    // 4.5 mm: held at a 2-degree guess's error; 0.004 degrees without the hold)
-    // Along a motion the fit barely holds, the guess holds the answer only when the answer turned
-    // far from it: a nearly round teapot came back 25-30 degrees from a guess 1 degree off
+    // the guess says where it is. Along a motion the fit only barely holds (`slide`) only when the
+    // answer turned far from the guess (a nearly round teapot: 25-30 degrees from a guess 1 degree
+    // off): a low relief pins the pose by its gentle slopes, which ICP follows from a near guess to
+    // the truth, though a slid pose keeps most of the fit at the default distance (a 30 mm
+    // bas-relief, 4.5 mm: held at a 2-degree guess's error; 0.004 degrees without the hold)
     let surfaces_free = |f: &confidence::FreeScrew| f.constraint < confidence::UNPINNED_CONSTRAINT;
     let turned_far =
         crate::transform::rotation_error_deg(&candidate.T_target_source, &p.t_initial) > HELD_SLID_TURN_DEG;
     let guided = refined_any && options.initial_transform.is_some();
-    let (candidate, probed) = match probed.free.filter(|f| guided && (surfaces_free(f) || turned_far)) {
+    let (candidate, probed) = match free_of(&probed).filter(|f| guided && (surfaces_free(f) || turned_far)) {
         Some(free) => match held_by_guess(&free, &candidate, p, target_index, &screen, &admits) {
             Some((held, why)) => {
                 warnings.push(Warning::new(WarningCode::HeldByGuess, why));
@@ -529,8 +534,8 @@ pub(crate) fn search(
             )));
         }
     }
-    let free = probed.free;
-    let sparse = caps::too_sparse(target_index, evidence.fitness, p.d_evidence);
+    let free = free_of(&probed);
+    let sparse = caps::too_sparse(sparse_target, evidence.fitness);
     let doubts = caps::Doubts { refined_any, tilted, short, mirrored, far_from_guess, free, sparse };
     let confidence = caps::cap(p, confidence, &candidate, doubts, warnings);
     // a refinement of the caller's guess alone that ended at another pose (ICP went far, or the
