@@ -78,7 +78,10 @@ export type RegisterOptions = {
    * source farther than half its size from where the guess puts it comes with a warning (a
    * look-alike elsewhere, when the guess placed it). Along a motion the fit leaves free
    * (`evidence.constraint`: a jar's turn about its axis between two turntable views) the answer
-   * follows the guess, with a warning, since the clouds cannot place it there. Default:
+   * follows the guess, with a warning, since the clouds cannot place it there; so it does along
+   * a motion the fit barely holds (`evidence.slide`: a nearly round teapot) when the answer
+   * turned more than 10 degrees from the guess (a guess off along such a motion is then off as
+   * much, at a confidence of 0.25 or less). Default:
    * the identity. Either 16
    * numbers in **column-major** order (a previous result's `T_target_source`, a three.js
    * `Matrix4.elements`; in JS also a `Float32Array` or `Float64Array`), or four **row-major**
@@ -450,8 +453,9 @@ export type RegistrationResult = {
  *   the guess whenever it ended at another pose (no cap below 60 degrees).
  * * `"farFromGuess"`: the answer places the source far from where `initialTransform` does: a
  *   look-alike elsewhere (a repeated room, the next bay) if the guess placed it.
- * * `"heldByGuess"`: along a motion the fit leaves free, the answer follows `initialTransform`:
- *   the guess, not the clouds, placed it there.
+ * * `"heldByGuess"`: along a motion the fit leaves free (or barely holds, when the answer turned
+ *   more than 10 degrees from the guess), the answer follows `initialTransform`: the guess, not
+ *   the clouds, placed it there (the result names the motion in `freeMotions`).
  * * `"betterPoseNotTaken"`: with `search: "local"`: a pose the probes found fits better than the
  *   answer; it is offered among the alternatives, not taken.
  * * `"fewPoints"`: the source has too few points to be sure of any answer, or the clouds are too

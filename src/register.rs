@@ -86,7 +86,10 @@ pub struct Options {
     /// source farther than half its size from where the guess puts it comes with a warning (a
     /// look-alike elsewhere, when the guess placed it). Along a motion the fit leaves free
     /// (`evidence.constraint`: a jar's turn about its axis between two turntable views) the answer
-    /// follows the guess, with a warning, since the clouds cannot place it there. Default:
+    /// follows the guess, with a warning, since the clouds cannot place it there; so it does along
+    /// a motion the fit barely holds (`evidence.slide`: a nearly round teapot) when the answer
+    /// turned more than 10 degrees from the guess (a guess off along such a motion is then off as
+    /// much, at a confidence of 0.25 or less). Default:
     /// the identity. Either 16
     /// numbers in **column-major** order (a previous result's `T_target_source`, a three.js
     /// `Matrix4.elements`; in JS also a `Float32Array` or `Float64Array`), or four **row-major**

@@ -44,8 +44,9 @@ use serde::{Deserialize, Serialize};
 ///   the guess whenever it ended at another pose (no cap below 60 degrees).
 /// * `"farFromGuess"`: the answer places the source far from where `initialTransform` does: a
 ///   look-alike elsewhere (a repeated room, the next bay) if the guess placed it.
-/// * `"heldByGuess"`: along a motion the fit leaves free, the answer follows `initialTransform`:
-///   the guess, not the clouds, placed it there.
+/// * `"heldByGuess"`: along a motion the fit leaves free (or barely holds, when the answer turned
+///   more than 10 degrees from the guess), the answer follows `initialTransform`: the guess, not
+///   the clouds, placed it there (the result names the motion in `freeMotions`).
 /// * `"betterPoseNotTaken"`: with `search: "local"`: a pose the probes found fits better than the
 ///   answer; it is offered among the alternatives, not taken.
 /// * `"fewPoints"`: the source has too few points to be sure of any answer, or the clouds are too
@@ -96,7 +97,7 @@ pub enum WarningCode {
     TurnedFromGuess,
     /// `"farFromGuess"`: the answer lies far from where `initialTransform` puts it (see the type's docs).
     FarFromGuess,
-    /// `"heldByGuess"`: `initialTransform` placed the answer along a free motion (see the type's docs).
+    /// `"heldByGuess"`: `initialTransform` placed the answer along a free or barely held motion (see the type's docs).
     HeldByGuess,
     /// `"betterPoseNotTaken"`: with `search: "local"`, a better-fitting pose was not taken (see the type's docs).
     BetterPoseNotTaken,

@@ -526,6 +526,19 @@ fn readable_serde_message(message: &str) -> String {
         let inner = m[inner_start..end].to_string();
         m.replace_range(at..=end, &inner);
     }
+    // a float of many digits (1e300 as serde writes it: 301 of them) in its short form
+    if let Some(at) = m.find("floating point `") {
+        let start = at + "floating point `".len();
+        if let Some(len) = m[start..].find('`') {
+            let text = &m[start..start + len];
+            if let Ok(v) = text.parse::<f64>() {
+                if text.len() > 24 {
+                    let short = format!("{v:e}");
+                    m.replace_range(start..start + len, &short);
+                }
+            }
+        }
+    }
     for expected in [whole, small] {
         if !m.contains(expected) {
             continue;

@@ -426,6 +426,12 @@ fn register_takes_several_sources_onto_one_target() {
     assert_eq!(line["source"], "missing.ply", "{line}");
     assert!(line["error"].as_str().unwrap().contains("missing.ply"), "{line}");
     assert!(String::from_utf8_lossy(&out.stderr).contains("missing.ply"));
+    // a target that cannot be read: `{"target", "error"}`
+    let out = arps(&["register", a, "missing-target.ply", "--json"]);
+    assert_eq!(out.status.code(), Some(2));
+    let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(line["target"], "missing-target.ply", "{line}");
+    assert!(line["error"].as_str().unwrap().contains("missing-target.ply"), "{line}");
     let (alone_a, alone_b) = (alone(a), alone(b));
     assert_eq!(untimed(lines[0].clone()), alone_a);
     assert_eq!(untimed(lines[1].clone()), alone_b);

@@ -130,6 +130,7 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
       ["wrong enum", reg({ icp: "planar" }), /^invalid options: `icp`: unknown variant `planar`, expected one of/],
       ["wrong type", reg({ seed: "seven" }), /^invalid options: `seed`: invalid type: string "seven", expected a whole number, 0 or more$/],
       ["negative count", reg({ icpMaxIterations: -1 }), /^invalid options: `icpMaxIterations`: invalid value: -1, expected a whole number from 0 to 4294967295$/],
+      ["a float of 301 digits", reg({ icpMaxIterations: 1e300 }), /^invalid options: `icpMaxIterations`: invalid type: floating point `1e300`, expected a whole number from 0 to 4294967295$/],
       ["count beyond 32 bits", reg({ networkPoints: 2 ** 32 }), /^invalid options: `networkPoints`: invalid value: integer `4294967296`, expected a whole number from 0 to 4294967295$/],
       ["a seed beyond 2^64", reg({ seed: 2n ** 70n }), /^invalid options: `seed`: invalid value: a bigint beyond 0\.\.=18446744073709551615 \(2\^64 - 1\)/],
       ["wrong type after a right one", reg({ icp: "point", icpMaxIterations: 1.5 }), /^invalid options: `icpMaxIterations`: invalid type: floating point `1.5`/],

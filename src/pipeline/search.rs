@@ -471,10 +471,14 @@ pub(crate) fn search(
     let turned_far =
         crate::transform::rotation_error_deg(&candidate.T_target_source, &p.t_initial) > HELD_SLID_TURN_DEG;
     let guided = refined_any && options.initial_transform.is_some();
+    // (the motion an answer was held along: still the one the result names, when the probe of
+    // the held pose finds it held a little more firmly there)
+    let mut held_along = None;
     let (candidate, probed) = match free_of(&probed).filter(|f| guided && (surfaces_free(f) || turned_far)) {
-        Some(free) => match held_by_guess(&free, &candidate, p, target_index, &screen, &admits) {
+        Some(free) => match held_by_guess(&free, !surfaces_free(&free), &candidate, p, target_index, &screen, &admits) {
             Some((held, why)) => {
                 warnings.push(Warning::new(WarningCode::HeldByGuess, why));
+                held_along = Some(free);
                 let probed = judge(&held.T_target_source);
                 (held, probed)
             }
@@ -534,7 +538,7 @@ pub(crate) fn search(
             )));
         }
     }
-    let free = free_of(&probed);
+    let free = free_of(&probed).or(held_along);
     let sparse = caps::too_sparse(sparse_target, evidence.fitness);
     let doubts = caps::Doubts { refined_any, tilted, short, mirrored, far_from_guess, free, sparse };
     let confidence = caps::cap(p, confidence, &candidate, doubts, warnings);
@@ -662,6 +666,7 @@ const GLOBAL_SCREEN_FIT: f64 = 0.7;
 /// lose some of the fit there).
 fn held_by_guess(
     free: &confidence::FreeScrew,
+    barely: bool,
     answer: &Candidate,
     p: &Prepared,
     target: &IcpTarget,
@@ -697,13 +702,23 @@ fn held_by_guess(
     let turn = crate::transform::rotation_error_deg(&answer.T_target_source, &t);
     // how far the guess moved the source's centroid, in the caller's units
     let moved = apart(&t, &answer.T_target_source, p.src_n.centroid()) * p.norm.scale;
-    let why = format!(
-        "the answer follows initialTransform along the motion the fit leaves free (moved {} and turned {turn:.1} \
-         degrees from where the clouds' edges held it, fitness {fitness:.3} against {:.3}): the clouds cannot tell \
-         that motion, the guess does",
-        crate::error::num(moved),
-        answer.fitness
-    );
+    let why = if barely {
+        format!(
+            "the answer follows initialTransform along the motion the fit barely holds (moved {} and turned \
+             {turn:.1} degrees from where the fit held it, fitness {fitness:.3} against {:.3}): the clouds tell that \
+             motion only weakly, so the guess decides it; a guess off along it is off as much",
+            crate::error::num(moved),
+            answer.fitness
+        )
+    } else {
+        format!(
+            "the answer follows initialTransform along the motion the fit leaves free (moved {} and turned {turn:.1} \
+             degrees from where the clouds' edges held it, fitness {fitness:.3} against {:.3}): the clouds cannot tell \
+             that motion, the guess does",
+            crate::error::num(moved),
+            answer.fitness
+        )
+    };
     Some((Candidate { T_target_source: t, fitness, inlier_rmse, ..*answer }, why))
 }
 

@@ -177,7 +177,8 @@ pub struct RegisterArgs {
     /// `wallMs`, the milliseconds of reading both files and registering, and `source`, the
     /// source's path. With several sources, one such line per source (JSON Lines; reading the
     /// target counts in the first's `wallMs`). A source that failed gives `{"source", "error"}`
-    /// instead (one source or several; the exit status is then 2).
+    /// instead (one source or several; the exit status is then 2), and a target that could not be
+    /// read `{"target", "error"}` alone.
     #[arg(long)]
     json: bool,
 }
@@ -592,7 +593,12 @@ pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
         },
     };
     // the target is read once; the registrar keeps it prepared from one source to the next
-    let tgt = read_cloud(&target, &reading_target)?;
+    let tgt = read_cloud(&target, &reading_target).inspect_err(|e| {
+        // (a script reading stdout sees the failure as JSON, as it does a source's)
+        if json {
+            out!("{}", serde_json::json!({ "target": target.display().to_string(), "error": e }));
+        }
+    })?;
     // a mesh read as its vertices (no --surface-points): said with each answer
     let vertices_warning = |path: &Path| (surface_points.is_none()).then(|| read_as_vertices(path)).flatten();
     let target_vertices = vertices_warning(&target);
