@@ -475,15 +475,17 @@ pub(crate) fn search(
     // the held pose finds it held a little more firmly there)
     let mut held_along = None;
     let (candidate, probed) = match free_of(&probed).filter(|f| guided && (surfaces_free(f) || turned_far)) {
-        Some(free) => match held_by_guess(&free, !surfaces_free(&free), &candidate, p, target_index, &screen, &admits) {
-            Some((held, why)) => {
-                warnings.push(Warning::new(WarningCode::HeldByGuess, why));
-                held_along = Some(free);
-                let probed = judge(&held.T_target_source);
-                (held, probed)
+        Some(free) => {
+            match held_by_guess(&free, !surfaces_free(&free), &candidate, p, target_index, &screen, &admits) {
+                Some((held, why)) => {
+                    warnings.push(Warning::new(WarningCode::HeldByGuess, why));
+                    held_along = Some(free);
+                    let probed = judge(&held.T_target_source);
+                    (held, probed)
+                }
+                None => (candidate, probed),
             }
-            None => (candidate, probed),
-        },
+        }
         None => (candidate, probed),
     };
     let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined, at_evidence.as_ref());
@@ -663,7 +665,8 @@ const GLOBAL_SCREEN_FIT: f64 = 0.7;
 /// surfaces by ICP from the final distance's stages and moved along the motion again while that
 /// fits better; with a warning that says so, when that pose is admitted (`up`), another one, and
 /// still fits at least [`HELD_FIT`] as well as the answer (the clouds' edges, not their surfaces,
-/// lose some of the fit there).
+/// lose some of the fit there). `barely`: the fit barely holds the motion (its constraint above
+/// the unpinned line), which the warning says.
 fn held_by_guess(
     free: &confidence::FreeScrew,
     barely: bool,
