@@ -259,7 +259,13 @@ fn bad_input_is_one_line_on_stderr_and_a_failure_exit() {
     for (args, hint) in cases {
         let out = arps(args);
         assert!(!out.status.success(), "{args:?} succeeded");
-        assert!(out.stdout.is_empty(), "{args:?} printed on stdout");
+        if args.contains(&"--json") {
+            // with --json the failure is on stdout too, as JSON
+            let line: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+            assert!(line["error"].as_str().unwrap().contains(hint), "{args:?}: {line}");
+        } else {
+            assert!(out.stdout.is_empty(), "{args:?} printed on stdout");
+        }
         let err = String::from_utf8(out.stderr).unwrap();
         assert_eq!(err.trim_end().lines().count(), 1, "{args:?}: {err}");
         assert!(err.starts_with("arps: ") && err.contains(hint), "{args:?}: {err}");
