@@ -25,6 +25,14 @@ export interface CloudWithOrigin {
   origin: readonly number[] | Float64Array | Float32Array;
 }
 
+/** What `rigidFromPairs` returns: the motion that best maps the paired points, and how well. */
+export interface PairsFit {
+  /** The rigid `T_target_source`, 16 numbers, column-major (ready for `initialTransform`). */
+  T_target_source: number[];
+  /** The RMS distance between the pairs under it, in the clouds' units. */
+  rmse: number;
+}
+
 /** How a weights file was made (its `provenance` metadata); `kind: "random"` means untrained. */
 export interface ModelProvenance {
   /** `"random"` for an untrained deterministic initialisation, else how it was trained. */

@@ -494,6 +494,27 @@ function matrixArg(m, name) {
   return toColumnMajor(plain);
 }
 
+/** Paired points for `rigidFromPairs`: packed xyz numbers (an array or a typed array) or a list of
+ * `[x, y, z]` -> a Float64Array of packed xyz (the engine checks counts and values). */
+function pairsArg(v, name) {
+  const bad = (why) => fail(`${name}: ${why}; expected packed xyz numbers (an array or a typed array) or a list of [x, y, z]`);
+  if (typedArrayKind(v) !== undefined) return Float64Array.from(v, Number);
+  if (!isPlainArray(v)) bad(`got ${describe(v)}`);
+  const out = [];
+  for (let i = 0; i < v.length; i++) {
+    const x = v[i];
+    if (isPlainArray(x)) {
+      if (x.length !== 3) bad(`${name}[${i}] has ${x.length} numbers`);
+      for (const c of x) {
+        if (typeof c !== "number") bad(`${name}[${i}] holds ${describe(c)}`);
+        out.push(c);
+      }
+    } else if (typeof x === "number") out.push(x);
+    else bad(`${name}[${i}] is ${describe(x)}`);
+  }
+  return Float64Array.from(out);
+}
+
 /** A checked `initialTransform` (16 column-major numbers or 4 row-major rows) -> 16 column-major. */
 function toColumnMajor(m) {
   if (m.length === 16) return Float64Array.from(m);
@@ -838,6 +859,13 @@ export function makeApi(glue, isReady, env = {}) {
     return guarded("canTransform", () => glue.canTransform(name));
   }
 
+  /** The rigid T_target_source that best maps paired points (landmarks) onto each other; see arps.d.ts. */
+  function rigidFromPairs(source, target) {
+    const s = pairsArg(source, "source");
+    const t = pairsArg(target, "target");
+    return guarded("rigidFromPairs", () => glue.rigidFromPairs(s, t));
+  }
+
   /** The crate version. */
   function version() {
     return guarded("version", () => glue.version());
@@ -852,6 +880,7 @@ export function makeApi(glue, isReady, env = {}) {
     transformFile,
     canTransform,
     listScans,
+    rigidFromPairs,
     version,
     setDefaultModel,
   };

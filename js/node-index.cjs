@@ -83,6 +83,7 @@ module.exports = {
   transformFile: api.transformFile,
   canTransform: api.canTransform,
   listScans: api.listScans,
+  rigidFromPairs: api.rigidFromPairs,
   version: api.version,
   /**
    * Nothing to do in Node (the engine loads on the first call; the default model is read from

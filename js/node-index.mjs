@@ -6,7 +6,7 @@ import { createRequire } from "node:module";
 const require = createRequire(import.meta.url);
 const arps = require("./arps.js");
 
-export const { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly, transformFile, canTransform, listScans, version } =
+export const { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly, transformFile, canTransform, listScans, rigidFromPairs, version } =
   arps;
 
 /** Nothing to do in Node (the engine loads on the first call); `init({ model })` sets another default model. */

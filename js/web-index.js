@@ -107,4 +107,4 @@ export function initSync(options) {
   return exports;
 }
 
-export const { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly, transformFile, canTransform, listScans, version } = api;
+export const { Registrar, parsePointCloud, readPointCloud, transformPointCloud, writePly, transformFile, canTransform, listScans, rigidFromPairs, version } = api;

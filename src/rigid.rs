@@ -56,6 +56,57 @@ pub fn kabsch(source: &[[f64; 3]], target: &[[f64; 3]], weights: Option<&[f64]>)
     rigid_from_parts(&m, &cs, &ct)
 }
 
+/// The rigid `T_target_source` that best maps paired points `source[i]` onto `target[i]` (least
+/// squares, [`kabsch`]), and the RMS distance between the pairs under it: a guess from picked or
+/// surveyed landmarks, for [`crate::Options::initial_transform`]. Errors: lists of different
+/// lengths, fewer than 3 pairs, a coordinate that is not finite, and pairs on one line (or one
+/// point) in either list, where the turn about that line is not determined.
+#[allow(non_snake_case)]
+pub fn fit_pairs(source: &[[f64; 3]], target: &[[f64; 3]]) -> crate::Result<(Matrix4<f64>, f64)> {
+    use crate::Error::InvalidOption;
+    if source.len() != target.len() {
+        return Err(InvalidOption(format!(
+            "the pairs: {} source points against {} target points (each source point pairs with the target point \
+             at the same index)",
+            source.len(),
+            target.len()
+        )));
+    }
+    if source.len() < 3 {
+        return Err(InvalidOption(format!("the pairs: {} given, at least 3 are needed", source.len())));
+    }
+    for (what, points) in [("source", source), ("target", target)] {
+        if let Some(i) = points.iter().position(|p| !p.iter().all(|v| v.is_finite())) {
+            return Err(InvalidOption(format!("the pairs: {what} point {i} is not finite")));
+        }
+        // the farthest point from the centroid gives a direction; the points' largest distance
+        // from the line along it, against that reach, says whether they span more than a line
+        let n = points.len() as f64;
+        let c = points.iter().fold(Vector3::zeros(), |a, p| a + Vector3::from(*p)) / n;
+        let (reach, dir) = points.iter().map(|p| Vector3::from(*p) - c).fold((0.0f64, Vector3::zeros()), |b, d| {
+            if d.norm() > b.0 {
+                (d.norm(), d)
+            } else {
+                b
+            }
+        });
+        let off = points.iter().map(|p| (Vector3::from(*p) - c).cross(&dir).norm() / reach.max(f64::MIN_POSITIVE));
+        if reach <= 0.0 || off.fold(0.0, f64::max) <= 1e-6 * reach {
+            return Err(InvalidOption(format!(
+                "the pairs: the {what} points lie on one line (or at one point): the turn about it is not determined; \
+                 pick a point off that line"
+            )));
+        }
+    }
+    let T_target_source = kabsch(source, target, None);
+    let sum: f64 = source
+        .iter()
+        .zip(target)
+        .map(|(s, t)| (T_target_source.transform_point(&(*s).into()).coords - Vector3::from(*t)).norm_squared())
+        .sum();
+    Ok((T_target_source, (sum / source.len() as f64).sqrt()))
+}
+
 /// `[[R, ct - R cs], [0, 1]]` with `R` from the cross-covariance `m`; identity if anything is
 /// not finite.
 pub(crate) fn rigid_from_parts(m: &Matrix3<f64>, cs: &Vector3<f64>, ct: &Vector3<f64>) -> Matrix4<f64> {
@@ -156,6 +207,25 @@ pub fn nearest_rotation(r: &Matrix3<f64>) -> Matrix3<f64> {
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn pairs_give_their_motion_and_errors_name_what_is_wrong() {
+        let t = from_rotation_translation(&crate::transform::euler_xyz(0.4, -1.1, 2.0), &Vector3::new(5e5, 4e6, 30.0));
+        let source = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 2.0, 0.0], [0.5, 0.5, 3.0]];
+        let target: Vec<[f64; 3]> = source.iter().map(|p| t.transform_point(&(*p).into()).coords.into()).collect();
+        let (fit, rmse) = fit_pairs(&source, &target).unwrap();
+        assert!((fit - t).abs().max() < 1e-6 && rmse < 1e-6, "{fit} {rmse}");
+        // three points are enough; two, or three on a line, are not
+        assert!(fit_pairs(&source[..3], &target[..3]).is_ok());
+        let err = |s: &[[f64; 3]], t: &[[f64; 3]]| fit_pairs(s, t).unwrap_err().to_string();
+        assert!(err(&source[..2], &target[..2]).contains("at least 3"));
+        assert!(err(&source, &target[..3]).contains("4 source points against 3"));
+        let line = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0], [2.0, 2.0, 2.0]];
+        assert!(err(&line, &target[..3]).contains("source points lie on one line"));
+        let mut bad = target.clone();
+        bad[1][2] = f64::NAN;
+        assert!(err(&source, &bad).contains("target point 1 is not finite"));
+    }
+
     use super::*;
     use crate::transform::{check_rigid, euler_xyz, rotation, translation};
 

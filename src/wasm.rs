@@ -231,6 +231,36 @@ pub fn transform_point_cloud(
     cloud_object(&cloud.placed(&m))
 }
 
+/// The rigid `T_target_source` that best maps paired points onto each other (least squares):
+/// `source[i]` (in the source's frame) pairs with `target[i]` (in the target's), e.g. 3 or more
+/// landmarks picked or surveyed in both, for the option `initialTransform`. Each list: packed xyz
+/// numbers (an array or a typed array, read as f64) or a list of `[x, y, z]`. Returns
+/// `{ T_target_source, rmse }`: 16 numbers, column-major, and the RMS distance between the pairs
+/// under it, in the clouds' units (a large one: a pair mismatched, or landmarks picked far off).
+/// Throws on lists of different lengths, fewer than 3 pairs, a value that is not finite, and
+/// points on one line (or at one point) in either list.
+#[wasm_bindgen(js_name = rigidFromPairs, unchecked_return_type = "PairsFit")]
+pub fn rigid_from_pairs(
+    #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] source: &[f64],
+    #[wasm_bindgen(unchecked_param_type = "ArrayLike<number> | number[][]")] target: &[f64],
+) -> Result<JsValue, JsError> {
+    let points = |v: &[f64], what: &str| -> Result<Vec<[f64; 3]>, JsError> {
+        if !v.len().is_multiple_of(3) {
+            return Err(JsError::new(&format!(
+                "the pairs: {what} has {} numbers, not a multiple of 3 (x, y, z per point)",
+                v.len()
+            )));
+        }
+        Ok(v.chunks_exact(3).map(|c| [c[0], c[1], c[2]]).collect())
+    };
+    let (t, rmse) = crate::rigid::fit_pairs(&points(source, "source")?, &points(target, "target")?).map_err(js_err)?;
+    let out = Object::new();
+    let m: Array = t.as_slice().iter().map(|v| JsValue::from_f64(*v)).collect();
+    set(&out, "T_target_source", &m)?;
+    set(&out, "rmse", &JsValue::from_f64(rmse))?;
+    Ok(out.into())
+}
+
 /// A cloud as a binary little-endian PLY file (`x`, `y`, `z` per vertex): `double` coordinates
 /// (`origin + points[i]`) when the cloud's origin is not zero, so map-grid coordinates keep their
 /// digits, else `float`. With `transformPointCloud`, what saves a registered source in the

@@ -626,3 +626,35 @@ test("web build: a call before init() says so, without breaking the module", asy
   await fresh.default({ module_or_path: readFileSync(path.join(pkg, "arps_bg.wasm")), model: readFileSync(path.join(pkg, "models", "arps-web.safetensors")) });
   stillWorks(fresh.Registrar.withDefaultModel(), "after init");
 });
+
+for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]]) {
+  test(`${name}: rigidFromPairs fits landmarks, names what is wrong, and its answer starts a registration`, () => {
+    // the fixture's ground truth (row-major rows) maps source landmarks onto target ones
+    const T = groundTruth;
+    const at = (p) => [0, 1, 2].map((r) => T[r][0] * p[0] + T[r][1] * p[1] + T[r][2] * p[2] + T[r][3]);
+    const src = source();
+    const picks = [0, 97, 311, 523, 801].map((i) => [src[3 * i], src[3 * i + 1], src[3 * i + 2]]);
+    const fit = arps.rigidFromPairs(picks, picks.map(at));
+    const { rot, tr } = errors(fit.T_target_source);
+    assert.ok(rot < 1e-4 && tr < 1e-5 && fit.rmse < 1e-5, `${rot} deg, ${tr}, rmse ${fit.rmse}`);
+    // packed numbers and typed arrays read alike
+    const packed = arps.rigidFromPairs(new Float32Array(picks.flat()), picks.map(at).flat());
+    assert.ok(errors(packed.T_target_source).rot < 1e-3);
+    // noisy landmarks: a guess the registration refines
+    const noisy = picks.map(at).map((p, i) => p.map((v, k) => v + 0.01 * Math.sin(7 * i + k)));
+    const guess = arps.rigidFromPairs(picks, noisy);
+    assert.ok(guess.rmse > 0.001 && guess.rmse < 0.05, `rmse ${guess.rmse}`);
+    const r = arps.Registrar.withDefaultModel();
+    const res = r.register(source(), target(), { initialTransform: guess.T_target_source });
+    assert.ok(errors(res.T_target_source).rot < 1, `refined ${errors(res.T_target_source).rot} deg`);
+    for (const [label, fn, re] of [
+      ["two pairs", () => arps.rigidFromPairs(picks.slice(0, 2), picks.slice(0, 2).map(at)), /the pairs: 2 given, at least 3 are needed/],
+      ["lengths differ", () => arps.rigidFromPairs(picks, picks.slice(0, 4).map(at)), /5 source points against 4 target points/],
+      ["not xyz", () => arps.rigidFromPairs([1, 2, 3, 4], [1, 2, 3, 4]), /source has 4 numbers, not a multiple of 3/],
+      ["on a line", () => arps.rigidFromPairs([[0, 0, 0], [1, 1, 1], [2, 2, 2]], picks.slice(0, 3).map(at)), /source points lie on one line/],
+      ["NaN", () => arps.rigidFromPairs(picks, picks.map(at).map((p, i) => (i === 2 ? [p[0], NaN, p[2]] : p))), /target point 2 is not finite/],
+      ["a string", () => arps.rigidFromPairs("1,2,3", picks.map(at)), /source: got a string; expected packed xyz numbers/],
+      ["a short row", () => arps.rigidFromPairs([[1, 2]], picks.map(at)), /source\[0\] has 2 numbers/],
+    ]) rejects(r, label, fn, re);
+  });
+}

@@ -1,7 +1,7 @@
 // Compile-only check of the package's TypeScript declarations (tsc --noEmit -p js/test): typical
 // use must type-check, options are typed (not `any`), and misspelled options are rejected.
-import init, { canTransform, initSync, listScans, Registrar, parsePointCloud, readPointCloud, transformFile, transformPointCloud, version, writePly } from "../../pkg/arps.js";
-import type { InitOptions, RegisterOptions, RegistrationEvidence, RegistrationResult, RegistrationSearch, ScanInfo, WarningCode } from "../../pkg/arps.js";
+import init, { canTransform, initSync, listScans, Registrar, parsePointCloud, readPointCloud, rigidFromPairs, transformFile, transformPointCloud, version, writePly } from "../../pkg/arps.js";
+import type { InitOptions, PairsFit, RegisterOptions, RegistrationEvidence, RegistrationResult, RegistrationSearch, ScanInfo, WarningCode } from "../../pkg/arps.js";
 import { createWorkerRegistrar, type Stage, type WorkerRegistrar } from "../../pkg/worker-client.js";
 
 export async function modelFiles(wasm: Uint8Array, model: Uint8Array, signal: AbortSignal): Promise<Registrar> {
@@ -84,6 +84,9 @@ export async function onMainThread(source: Float32Array, target: Float32Array): 
   const bytes: Uint8Array = writePly(transformPointCloud(new Float64Array(source), [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]));
   // @ts-expect-error the matrix comes second
   transformPointCloud(result.T_target_source);
+  // A guess from paired landmarks: packed numbers or rows of [x, y, z].
+  const pairs: PairsFit = rigidFromPairs([[0, 0, 0], [1, 0, 0], [0, 1, 0]], new Float64Array([1, 0, 0, 2, 0, 0, 1, 1, 0]));
+  const pairsRmse: number = pairs.rmse;
   // A file moved as it is, in its own format (colours, normals and faces kept).
   const movedFile: Uint8Array = transformFile(new Uint8Array(), "scan.pcd", result.T_target_source);
   const movedSurvey: Uint8Array = canTransform("survey.las") ? transformFile(new Uint8Array(), "survey.las", result.T_target_source) : new Uint8Array();
