@@ -118,3 +118,26 @@ fn a_factor_of_one_changes_nothing_and_bad_factors_are_refused() {
     let after = registrar.register(&source, &target, &Options::default()).unwrap();
     assert_eq!(after.T_target_source, plain.T_target_source);
 }
+
+#[test]
+fn a_factor_given_the_wrong_way_round_is_named_with_its_inverse() {
+    let (source, target) = (fixture("source.ply"), fixture("target.ply"));
+    let source_mm = in_unit(&source, [0.0; 3], 0.001);
+    let mut registrar = Registrar::with_default_model().unwrap();
+    let wrong = Options { source_scale: Some(1000.0), ..Options::default() };
+    let r = registrar.register(&source_mm, &target, &wrong).unwrap();
+    let at = r.warnings.iter().position(|w| w.contains("differ in size")).expect("a size warning");
+    assert!(
+        r.warnings[at].contains("sourceScale = 1000 may be the wrong way round: its inverse, 0.001,"),
+        "{:?}",
+        r.warnings
+    );
+    // without a factor the warning says nothing of one
+    let r = registrar.register(&source_mm, &target, &Options::default()).unwrap();
+    let at = r.warnings.iter().position(|w| w.contains("differ in size")).expect("a size warning");
+    assert!(!r.warnings[at].contains("wrong way round"), "{:?}", r.warnings);
+    // the right factor: no size warning at all
+    let right = Options { source_scale: Some(0.001), ..Options::default() };
+    let r = registrar.register(&source_mm, &target, &right).unwrap();
+    assert!(!r.warnings.iter().any(|w| w.contains("differ in size")), "{:?}", r.warnings);
+}

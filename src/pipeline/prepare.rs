@@ -136,8 +136,20 @@ pub(crate) fn prepare(
     let (size_source, size_target) = (source.half_extent(), summary.bounding.1);
     let size_ratio = size_source.max(size_target) / size_source.min(size_target);
     if size_ratio > SIZE_RATIO_WARNING {
+        // a factor given the wrong way round: its inverse would make the sizes agree
+        let inverse = size_source / (source_scale * source_scale);
+        let reversed = source_scale != 1.0 && inverse.max(size_target) / inverse.min(size_target) <= SIZE_RATIO_WARNING;
+        let hint = if reversed {
+            format!(
+                "; sourceScale = {} may be the wrong way round: its inverse, {}, makes the sizes agree",
+                num(source_scale),
+                num(1.0 / source_scale)
+            )
+        } else {
+            String::new()
+        };
         warnings.push(Warning::new(WarningCode::SizeMismatch, format!(
-            "the clouds differ in size by {}x (largest half-extents: source {}, target {}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres); if they are not, multiply one cloud's coordinates by the factor between the units (1000 from metres to millimetres: the option sourceScale does it for the source)",
+            "the clouds differ in size by {}x (largest half-extents: source {}, target {}): registration is rigid, so both must be in the same unit (e.g. both metres, not metres and millimetres); if they are not, multiply one cloud's coordinates by the factor between the units (1000 from metres to millimetres: the option sourceScale does it for the source){hint}",
             num(size_ratio.round()),
             num(size_source),
             num(size_target)
