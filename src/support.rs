@@ -30,7 +30,10 @@
 //!   its band (within twice it), where a sheet's other face lies and only the rim of what stands
 //!   on a table does.
 //!
-//! The points of the whole cloud within the plane's fitted thickness are its points.
+//! The points of the whole cloud within the plane's fitted thickness are its points, with those
+//! under it (nothing stands below a support) and those of its noise's tail above it (up to twice
+//! its band) outside the footprint of what stands on it: left in, a few of those at the table's
+//! edges would stretch the cloud's box, and with it the default distance, to the table's size.
 
 use crate::cloud::MIN_POINTS;
 use crate::spacing::Spacing;
@@ -286,12 +289,14 @@ fn test(
         hi = [hi[0].max(a), hi[1].max(b)];
     }
     let (lo, hi) = (lo.map(|x| x - reach), hi.map(|x| x + reach));
+    // which sides of the footprint a point in plane coordinates lies beyond
+    let beyond_sides = |(a, b): (f64, f64)| [a < lo[0], a > hi[0], b < lo[1], b > hi[1]];
+    let outside = |ab: (f64, f64)| beyond_sides(ab).iter().any(|&o| o);
     // how many of the plane's points lie beyond each side of the footprint, and beyond any
     let mut sides = [0usize; 4];
     let mut beyond = 0usize;
     for p in &on {
-        let (a, b) = coords(p);
-        let out = [a < lo[0], a > hi[0], b < lo[1], b > hi[1]];
+        let out = beyond_sides(coords(p));
         for (s, o) in sides.iter_mut().zip(out) {
             *s += o as usize;
         }
@@ -312,8 +317,16 @@ fn test(
     // the thickness from the spread of the plane's sample points about it (scanner noise), at
     // most the band it was found in
     let half_thickness = (4.0 * 1.4826 * mad).clamp(0.25 * band, band);
-    let indices: Vec<usize> =
-        (0..points.len()).filter(|&i| plane.distance(&points[i]).abs() <= half_thickness).collect();
+    // its points: those within its thickness, those under it (its noise's far side, strays
+    // under a floor: nothing stands below a support), and its noise's tail above it out of the
+    // footprint of what stands on it (up to the height of the points off it), which would
+    // otherwise stretch the cloud's box, and with it the default distance, to the table's edges
+    let indices: Vec<usize> = (0..points.len())
+        .filter(|&i| {
+            let d = plane.distance(&points[i]);
+            d <= half_thickness || (d <= 2.0 * band && outside(coords(&points[i])))
+        })
+        .collect();
     if points.len() - indices.len() < MIN_POINTS {
         return None;
     }
@@ -386,6 +399,30 @@ mod tests {
         let kept = PointCloud::with_origin(points, [1.0, 2.0, 3.0]).without(&plane.indices);
         assert_eq!(kept.origin, [1.0, 2.0, 3.0]);
         assert!(kept.len() > 2_800 && kept.points.iter().all(|p| p[2] > 0.0));
+    }
+
+    #[test]
+    fn the_tables_noise_tail_goes_with_it() {
+        // a few of the table's points just beyond its thickness, above it and below it, out at
+        // its edges: left in, they would stretch the object's box to the table's
+        let mut points = block(3_000, [0.3, 0.2, 0.25], false, 23);
+        points.extend(table(1_500, 1.0, 24));
+        let ht = find(&points).expect("a support plane").half_thickness as f32;
+        let mut r = stream(25);
+        let tail: Vec<[f32; 3]> = (0..24)
+            .map(|k| {
+                let (x, y) = (r() * 0.3 + 0.65 * if k % 2 == 0 { 1.0 } else { -1.0 }, r());
+                [x, y, if k % 3 == 0 { -1.5 * ht } else { 1.5 * ht }]
+            })
+            .collect();
+        points.extend(tail);
+        let plane = find(&points).expect("a support plane");
+        assert!((3_000..points.len()).all(|i| plane.indices.binary_search(&i).is_ok()));
+        let kept = PointCloud::with_origin(points.clone(), [0.0; 3]).without(&plane.indices);
+        assert!(kept.len() > 2_800, "{}", kept.len());
+        assert!(kept.points.iter().all(|p| p[0].abs() < 0.31 && p[1].abs() < 0.21), "the object's box");
+        // the object's own walls near the table are kept: only what lies within the thickness goes
+        assert!(plane.indices.iter().all(|&i| i >= 3_000 || points[i][2] <= plane.half_thickness as f32));
     }
 
     #[test]

@@ -134,11 +134,13 @@ pub(crate) fn prepare(
     let rotate_init = transform::from_rotation_translation(&transform::rotation(&init_local), &Vector3::zeros());
     let shift = Matrix4::new_translation(&transform::translation(&init_local));
     let (size_source, size_target) = (source.half_extent(), summary.bounding.1);
-    let size_ratio = size_source.max(size_target) / size_source.min(size_target);
+    // how many times the larger of two sizes is the smaller
+    let apart = |a: f64, b: f64| a.max(b) / a.min(b);
+    let size_ratio = apart(size_source, size_target);
     if size_ratio > SIZE_RATIO_WARNING {
         // a factor given the wrong way round: its inverse would make the sizes agree
         let inverse = size_source / (source_scale * source_scale);
-        let reversed = source_scale != 1.0 && inverse.max(size_target) / inverse.min(size_target) <= SIZE_RATIO_WARNING;
+        let reversed = source_scale != 1.0 && apart(inverse, size_target) <= SIZE_RATIO_WARNING;
         let hint = if reversed {
             format!(
                 "; sourceScale = {} may be the wrong way round: its inverse, {}, makes the sizes agree",
