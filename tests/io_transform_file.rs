@@ -174,6 +174,19 @@ fn text_lists_keep_colours_turn_unnamed_normals_and_follow_a_change_of_unit() {
     let rgb = "0.5 0.25 1.0 255 0 0\n1.5 0.75 2.0 0 255 0\n";
     let moved = String::from_utf8(transform_file(rgb.as_bytes(), "c.xyz", &m).unwrap()).unwrap();
     assert!(moved.lines().zip(["255 0 0", "0 255 0"]).all(|(l, c)| l.ends_with(c)), "{moved}");
+    // Colours 0-1 in columns a header names (a pure red is a unit vector): kept, in every way
+    // of naming them; without names they would be taken for normals.
+    for (name, header, sep) in
+        [("c.csv", "x,y,z,r,g,b", ","), ("c.txt", "x y z red green blue", " "), ("c.txt", "//X Y Z R G B", " ")]
+    {
+        let rows = ["0.5 0.25 1.0 1.0 0.0 0.0", "1.5 0.75 2.0 0.0 1.0 0.0", "2.5 0.5 1.5 0.0 0.0 1.0"];
+        let file = format!("{header}\n{}\n", rows.map(|r| r.replace(' ', sep)).join("\n"));
+        let moved = String::from_utf8(transform_file(file.as_bytes(), name, &m).unwrap()).unwrap();
+        for (row, l) in rows.iter().zip(moved.lines().skip(1)) {
+            assert!(l.ends_with(&row[12..].replace(' ', sep)), "{header}: {l}");
+        }
+        assert_points_moved(file.as_bytes(), moved.as_bytes(), name, &m, 5e-3 + 1e-9);
+    }
     // Metres onto millimetres: three decimals in metres are whole millimetres.
     let scale = Matrix4::new_scaling(1000.0);
     let moved = String::from_utf8(transform_file(b"1.234 -0.5 2.000\n", "m.xyz", &scale).unwrap()).unwrap();

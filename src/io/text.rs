@@ -26,10 +26,13 @@ const F: &str = "XYZ";
 pub(crate) struct Columns {
     pub(crate) xyz: [usize; 3],
     pub(crate) normal: Option<[usize; 3]>,
+    /// Whether a header line named the columns (then a normal is where it names one, and only
+    /// there).
+    pub(crate) named: bool,
 }
 
 /// The first three fields, no normal: a list without column names.
-const UNNAMED: Columns = Columns { xyz: [0, 1, 2], normal: None };
+const UNNAMED: Columns = Columns { xyz: [0, 1, 2], normal: None, named: false };
 
 /// What a header line says about the coordinate columns.
 enum Header {
@@ -68,7 +71,7 @@ fn named_columns(line: &str) -> Header {
         (Some(x), Some(y), Some(z)) => Some([x, y, z]),
         _ => None,
     };
-    Header::Named(Columns { xyz, normal })
+    Header::Named(Columns { xyz, normal, named: true })
 }
 
 /// True when the line holds no data (blank or a comment).
@@ -281,7 +284,7 @@ mod tests {
             Ok(())
         })
         .unwrap();
-        assert_eq!(cols, Some(Columns { xyz: [0, 1, 2], normal: Some([6, 7, 8]) }));
+        assert_eq!(cols, Some(Columns { xyz: [0, 1, 2], normal: Some([6, 7, 8]), named: true }));
         // Named columns, and a later row without a number there: the error names the column.
         let e = read(b"id x y z\n7 1 2 3\n8 1 y 3\n").unwrap_err().to_string();
         assert!(e.contains("line 3") && e.contains("'y'"), "{e}");

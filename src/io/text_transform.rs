@@ -5,7 +5,8 @@
 //! The rows are the ones the reader reads ([`super::text`]), in the columns it reads. A normal is
 //! turned when the header names its columns (`nx ny nz`, `normal_x ...`), or, in a list without
 //! column names, when the three columns after x, y, z hold a unit vector on every row (MeshLab's
-//! and CloudCompare's `x y z nx ny nz`). Values are written with as many decimals as the file's
+//! and CloudCompare's `x y z nx ny nz`); a header that names the columns and no normal has none
+//! (its `r g b` may be colours from 0 to 1, every pure one a unit vector). Values are written with as many decimals as the file's
 //! most precise coordinate (fewer or more after a change of unit: see
 //! [`super::number_style::NumberStyle`]), or in exponent form when the file uses it; normals with
 //! at least six decimals. Rows whose coordinates are not finite are kept as they are.
@@ -24,9 +25,10 @@ const UNIT_TOLERANCE: f64 = 1e-2;
 const AFTER_XYZ: [usize; 3] = [3, 4, 5];
 
 /// Where `row`'s normal is: the columns the header names, else, in a list without column names
-/// and when `guess`, the three after x, y, z.
+/// and when `guess`, the three after x, y, z. A header that names its columns and no normal has
+/// none: its `r g b` with colours from 0 to 1 (a pure red is a unit vector) are not turned.
 fn normal_columns(row: &Row, guess: bool) -> Option<[usize; 3]> {
-    row.columns.normal.or((guess && row.columns.xyz == [0, 1, 2]).then_some(AFTER_XYZ))
+    row.columns.normal.or((guess && !row.columns.named).then_some(AFTER_XYZ))
 }
 
 /// The text list `bytes` with its points moved by `m` (`T_target_source`: a rigid transform, or
