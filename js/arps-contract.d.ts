@@ -55,7 +55,10 @@ export type RegisterOptions = {
    * distance alike; the default) or `"robust"` (once the search has its answer, one more
    * refinement weighs each pair by Tukey's biweight of its residual, so that a surface that
    * changed between the scans, such as eroded cliffs, a new building, a moved object or a bent
-   * part, no longer pulls the answer). For scans of a scene that changed, and for survey accuracy.
+   * part, no longer pulls the answer; it runs at the distance, then at a half and a quarter of
+   * it, whose pose is kept where clearly more of the source lies within the quarter, so that a
+   * change about as high as the distance, which pulled least squares, is left out too). For
+   * scans of a scene that changed, and for survey accuracy.
    */
   icpLoss?: IcpLoss,
   /**

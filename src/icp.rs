@@ -28,9 +28,9 @@ pub enum IcpLoss {
     #[default]
     Squared,
     /// After the search, the answer is refined once more with each pair weighed by Tukey's
-    /// biweight of its residual ([`IcpParams::robust`]): a surface that changed between the scans
-    /// (erosion, construction, a moved object, a bent part) no longer pulls the answer, the
-    /// surfaces that stayed hold it.
+    /// biweight of its residual ([`IcpParams::robust`]), at the distance and then at a half and a
+    /// quarter of it: a surface that changed between the scans (erosion, construction, a moved
+    /// object, a bent part) no longer pulls the answer, the surfaces that stayed hold it.
     Robust,
 }
 

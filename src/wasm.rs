@@ -290,7 +290,7 @@ pub fn list_scans(
 /// (compressed again), E57 (its scans' poses moved, its points kept as
 /// stored; rigid motions only) and glTF/GLB (a new parent node above its top nodes, its buffers
 /// kept) (see `canTransform`). Positions are mapped in f64 and written back as the file stored them (the
-/// property's type, the text's decimals, LAS's scaled integers with new offsets), normals turned,
+/// property's type, the text's decimals, LAS's scaled integers, with its offsets where the moved points fit them), normals turned,
 /// a Gaussian splat PLY's splats turned and scaled with the scene (`rot_*` quaternions, `scale_*`
 /// log-extents, `f_rest_*` colour coefficients),
 /// everything else kept (colours, intensity, classification, faces, other fields, the header).

@@ -73,7 +73,22 @@ fn a_las_1_2_survey_keeps_its_colours_and_gps_times() {
     let bytes = fixture("simple.las");
     let first = read_point_cloud(&bytes, "a.las").unwrap().point_f64(0);
     let m = motion(first);
-    check(&bytes, &transform_las(&bytes, &m).unwrap(), &m);
+    let moved = transform_las(&bytes, &m).unwrap();
+    check(&bytes, &moved, &m);
+    // a correction of metres keeps the file's offsets, as its tools wrote them (here not round)
+    assert!(moved[155..179] == bytes[155..179], "the offsets kept");
+    let mut shifted = bytes.clone();
+    shifted[155..163].copy_from_slice(&123_456.78f64.to_le_bytes());
+    let moved = transform_las(&shifted, &m).unwrap();
+    check(&shifted, &moved, &m);
+    assert_eq!(f64_at(&moved, 155), 123_456.78, "the offsets kept");
+    // moved 30,000 km (3e9 steps of its scale 0.01 from its offsets), new ones: round, near the points
+    let far = Matrix4::new_translation(&Vector3::new(3e7, 0.0, 0.0));
+    let moved = transform_las(&bytes, &far).unwrap();
+    check(&bytes, &moved, &far);
+    let (offset_x, was) = (f64_at(&moved, 155), f64_at(&bytes, 155));
+    assert!(offset_x != was && offset_x % 1e6 == 0.0 && (offset_x - was - 3e7).abs() < 1e7, "{was} -> {offset_x}");
+    assert!(moved[163..179] == bytes[163..179], "y and z keep theirs");
 }
 
 #[test]

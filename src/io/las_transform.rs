@@ -1,7 +1,7 @@
 //! A LAS file moved as it is: every point record's X, Y, Z mapped by a rigid (or uniformly
-//! scaled) transform in f64 and stored again with the file's own scales; the header's offsets
-//! (new ones near the moved points' centre, round where the integers still fit) and bounds updated; every other
-//! byte kept (intensity, returns, classification, GPS time, colour, extra bytes, the VLRs and
+//! scaled) transform in f64 and stored again with the file's own scales and, where the moved
+//! points still fit them, its own offsets (else new ones near the moved points' centre, round
+//! where the integers still fit); the header's bounds updated; every other byte kept (intensity, returns, classification, GPS time, colour, extra bytes, the VLRs and
 //! EVLRs, the CRS records). What saves a registered survey in the target's frame as the LAS its
 //! tools read. A LAZ file comes back as LAZ: the LAS file it compresses, moved, compressed again
 //! (`laz_write`).
@@ -36,7 +36,7 @@ pub fn transform_las(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
 /// scale's grid.
 fn round_offset(lo: f64, hi: f64, scale: f64) -> f64 {
     let centre = (lo + hi) / 2.0;
-    let fits = |offset: f64| [lo, hi].iter().all(|v| ((v - offset) / scale).abs() < 2_000_000_000.0);
+    let fits = |offset: f64| fits(lo, hi, offset, scale);
     (0..=7)
         .rev()
         .map(|k| 10f64.powi(k))
@@ -46,6 +46,12 @@ fn round_offset(lo: f64, hi: f64, scale: f64) -> f64 {
         .unwrap_or_else(|| (centre / scale).round() * scale)
 }
 
+/// Whether points from `lo` to `hi` on an axis lie within 2e9 steps of `scale` of `offset` (`i32`
+/// holds 2^31).
+fn fits(lo: f64, hi: f64, offset: f64, scale: f64) -> bool {
+    [lo, hi].iter().all(|v| ((v - offset) / scale).abs() < 2_000_000_000.0)
+}
+
 /// `out`, an uncompressed LAS file described by `h`, with its records moved and its header's
 /// offsets and bounds updated.
 fn move_records(mut out: Vec<u8>, h: &Header, motion: &Motion) -> Result<Vec<u8>> {
@@ -53,7 +59,9 @@ fn move_records(mut out: Vec<u8>, h: &Header, motion: &Motion) -> Result<Vec<u8>
     let end = h.offset + records.len();
     let n = h.count as usize;
     let moved = |record: &[u8]| motion.point(h.point(record));
-    // the new offsets: near the moved points' centre, round where the integers fit
+    // the offsets: the file's own where the moved points fit them (a correction of a few metres
+    // keeps a survey's header as its tools wrote it), else near the moved points' centre, round
+    // where the integers fit
     let (mut lo, mut hi) = ([f64::INFINITY; 3], [f64::NEG_INFINITY; 3]);
     for record in records.chunks_exact(h.record_len) {
         let q = moved(record);
@@ -62,8 +70,14 @@ fn move_records(mut out: Vec<u8>, h: &Header, motion: &Motion) -> Result<Vec<u8>
             hi[k] = hi[k].max(q[k]);
         }
     }
-    let shift: [f64; 3] =
-        if n == 0 { h.shift } else { std::array::from_fn(|k| round_offset(lo[k], hi[k], h.scale[k])) };
+    let shift: [f64; 3] = if n == 0 {
+        h.shift
+    } else {
+        std::array::from_fn(|k| match fits(lo[k], hi[k], h.shift[k], h.scale[k]) {
+            true => h.shift[k],
+            false => round_offset(lo[k], hi[k], h.scale[k]),
+        })
+    };
     for (k, axis) in ["x", "y", "z"].into_iter().enumerate().filter(|_| n > 0) {
         let steps = [lo[k], hi[k]].map(|v| ((v - shift[k]) / h.scale[k]).round());
         if steps.iter().any(|s| !(*s >= i32::MIN as f64 && *s <= i32::MAX as f64)) {

@@ -732,9 +732,23 @@ fn apart(a: &Matrix4<f64>, b: &Matrix4<f64>, at: [f64; 3]) -> f64 {
     (a.transform_point(&c) - b.transform_point(&c)).norm()
 }
 
+/// How many times [`robust_polish`] halves its distance after the robust run at the final one.
+/// Least squares at the final distance lets a changed surface as high as that distance (a fill
+/// pad over a quarter of a survey, 0.5-1 m at 1 m) tilt the answer, and a robust run from that
+/// tilt stays near it; runs at a half and a quarter of the distance leave the changed surface
+/// out and come back (`BENCHMARK.md`, "A fill pad under the robust loss"). Further halvings
+/// reach below the ICP voxel at the default voxel (half the distance) and lose precision.
+const ROBUST_HALVINGS: u32 = 2;
+
+/// [`robust_polish`] keeps its descent's pose only when, at the finest distance, this many times
+/// as many of the source's points lie on the target as under the polished pose.
+const ROBUST_DESCENT_GAIN: f64 = 1.05;
+
 /// `answer` refined by ICP at the final distance `d` with Tukey's biweight on its pairs
 /// ([`crate::icp::IcpParams::robust`]), on at most [`refine::REFINE_POINTS`] of the source's
-/// points, its fitness measured on all of them.
+/// points, then at halved distances ([`ROBUST_HALVINGS`]), whose pose is kept when it holds
+/// clearly more of them at the finest ([`ROBUST_DESCENT_GAIN`]); its fitness measured on all of
+/// them at `d`.
 fn robust_polish(
     target: &IcpTarget,
     source: &[[f32; 3]],
@@ -750,6 +764,23 @@ fn robust_polish(
         ..crate::icp::IcpParams::new(kind, d)
     };
     let r = target.align(&sample, &answer.T_target_source, &params);
+    // the descent: robust runs at halved distances from there, kept when at the finest distance
+    // clearly more of the source lies on the target than under the polished pose
+    let mut t = r.T_target_source;
+    let mut dk = d;
+    for _ in 0..ROBUST_HALVINGS {
+        dk *= 0.5;
+        t = target
+            .align(&sample, &t, &crate::icp::IcpParams { max_correspondence_distance: dk, ..params })
+            .T_target_source;
+    }
+    let r = if target.evaluate(&sample, &t, dk).0
+        > ROBUST_DESCENT_GAIN * target.evaluate(&sample, &r.T_target_source, dk).0
+    {
+        crate::icp::IcpResult { T_target_source: t, ..r }
+    } else {
+        r
+    };
     let (fitness, inlier_rmse) = target.evaluate(source, &r.T_target_source, d);
     Candidate {
         T_target_source: r.T_target_source,
