@@ -450,6 +450,27 @@ fn register_takes_several_sources_onto_one_target() {
     assert_eq!(text.matches("T_target_source").count(), 2, "{text}");
 }
 
+/// A registration whose `--aligned` file cannot be written (here its path is a folder) prints its
+/// answer with the error (`alignedError` in JSON) and exits 2: the answer is not lost.
+#[test]
+fn an_aligned_file_that_cannot_be_written_keeps_the_answer() {
+    let dir = common::scratch("cli-aligned-blocked");
+    let blocked = dir.join("blocked-aligned.ply");
+    std::fs::create_dir_all(&blocked).unwrap();
+    let (source, target) = ("fixtures/wasm/source.ply", "fixtures/wasm/target.ply");
+    let out = arps(&["register", source, target, "--json", "--aligned", blocked.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "{}", String::from_utf8_lossy(&out.stderr));
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(v["T_target_source"].as_array().map(Vec::len), Some(16), "{v}");
+    assert!(v["alignedError"].as_str().is_some_and(|e| e.contains("blocked-aligned.ply")), "{v}");
+    assert!(v.get("aligned").is_none() && v.get("error").is_none(), "{v}");
+    assert!(String::from_utf8_lossy(&out.stderr).contains("blocked-aligned.ply"));
+    let out = arps(&["register", source, target, "--aligned", blocked.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("T_target_source") && text.contains("the aligned source was not written"), "{text}");
+}
+
 /// `--aligned PATH` writes the source moved by its answer as binary PLY: every point as read,
 /// mapped in f64, so a map-grid survey comes back in doubles to the last digit and a local scan
 /// in floats; the JSON names the file. With several sources `{stem}` names each one. An input

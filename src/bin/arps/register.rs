@@ -169,7 +169,8 @@ pub struct RegisterArgs {
     /// in binary PLY (`double` coordinates when they are far from zero, else `float`).
     /// With several sources PATH must hold `{stem}`, replaced by each source file's name
     /// without its extension (e.g. `out/{stem}-aligned.ply`). An input file is never
-    /// overwritten.
+    /// overwritten. A file that cannot be written (a folder without room or rights) fails its
+    /// source, after the answer is printed.
     #[arg(long, value_name = "PATH")]
     aligned: Option<PathBuf>,
     /// Print exactly one JSON object on stdout: the engine's result (`arps::Registration`), fields
@@ -178,7 +179,8 @@ pub struct RegisterArgs {
     /// source's path. With several sources, one such line per source (JSON Lines; reading the
     /// target counts in the first's `wallMs`). A source that failed gives `{"source", "error"}`
     /// instead (one source or several; the exit status is then 2), and a target that could not be
-    /// read `{"target", "error"}` alone.
+    /// read `{"target", "error"}` alone. A registered source whose `--aligned` file could not be
+    /// written gives its result with `alignedError` (the exit status is 2 too).
     #[arg(long)]
     json: bool,
 }
@@ -196,6 +198,9 @@ struct JsonOutput<'a> {
     /// Where the aligned source was written (`--aligned`).
     #[serde(skip_serializing_if = "Option::is_none")]
     aligned: Option<String>,
+    /// Why the aligned source could not be written (`--aligned`); the answer stands.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    aligned_error: Option<String>,
     /// `--source-scale`: the 3x3 part of `T_target_source` is the rotation times it.
     #[serde(skip_serializing_if = "Option::is_none")]
     source_scale: Option<f64>,
@@ -271,14 +276,14 @@ fn read_source(
 
 /// Prints one registration of `arps register`: the text report, or one JSON line (`--json`);
 /// `source` names the source (in the text report, given when several were), `aligned` where the
-/// moved source was written (`--aligned`), `source_scale` the `--source-scale` its points were
+/// moved source was written (`--aligned`), or why it could not be, `source_scale` the `--source-scale` its points were
 /// multiplied by.
 fn print_registration(
     r: &arps::Registration,
     time_ms: f64,
     json: bool,
     source: Option<String>,
-    aligned: Option<String>,
+    aligned: Option<Result<String, String>>,
     far_centre: Option<[f64; 3]>,
     source_scale: Option<f64>,
 ) -> Result<(), String> {
@@ -286,8 +291,20 @@ fn print_registration(
         out!("source {source}");
     }
     if json {
-        let out = serde_json::to_string(&JsonOutput { source, result: r, aligned, source_scale, wall_ms: time_ms })
-            .map_err(|e| format!("internal: {e}"))?;
+        let (aligned, aligned_error) = match aligned {
+            Some(Ok(path)) => (Some(path), None),
+            Some(Err(e)) => (None, Some(e)),
+            None => (None, None),
+        };
+        let out = serde_json::to_string(&JsonOutput {
+            source,
+            result: r,
+            aligned,
+            aligned_error,
+            source_scale,
+            wall_ms: time_ms,
+        })
+        .map_err(|e| format!("internal: {e}"))?;
         out!("{out}");
     } else {
         match source_scale {
@@ -349,8 +366,10 @@ fn print_registration(
         for w in &r.warnings {
             out!("warning: {}", in_flags(w));
         }
-        if let Some(path) = aligned {
-            out!("wrote the aligned source to {path}");
+        match aligned {
+            Some(Ok(path)) => out!("wrote the aligned source to {path}"),
+            Some(Err(e)) => out!("the aligned source was not written (the answer above stands): {e}"),
+            None => {}
         }
     }
     Ok(())
@@ -620,22 +639,34 @@ pub fn run(args: RegisterArgs) -> Result<Option<String>, String> {
         let time_ms = t0.elapsed().as_secs_f64() * 1e3;
         // (the JSON names every source, the text report only one of several)
         let named = (several || json).then(|| source.display().to_string());
-        let outcome = outcome.and_then(|(src, bytes, r)| {
-            if let (Some(path), Some(bytes)) = (output, bytes) {
-                write_aligned(source, &bytes, &reading, &src, &r, path)?;
-            }
-            Ok((r, far_centre(&src)))
+        // the moved source written; a failure to write it leaves the answer, which is printed
+        // with the error (a registration that worked is not lost to a full disk or a bad path)
+        let outcome = outcome.map(|(src, bytes, r)| {
+            let aligned = match (output, bytes) {
+                (Some(path), Some(bytes)) => Some(
+                    write_aligned(source, &bytes, &reading, &src, &r, path)
+                        .map(|()| path.display().to_string())
+                        .map_err(|e| in_flags(&e)),
+                ),
+                _ => None,
+            };
+            (r, far_centre(&src), aligned)
         });
         t0 = std::time::Instant::now();
         match outcome {
-            Ok((mut r, centre)) => {
+            Ok((mut r, centre, aligned)) => {
                 for w in vertices_warning(source).into_iter().chain(target_vertices.clone()) {
                     r.warnings.push(w);
                     r.warning_codes.push(arps::WarningCode::MeshVertices);
                 }
-                let aligned = output.as_ref().map(|p| p.display().to_string());
                 unsure += usize::from(min_confidence.is_some_and(|c| r.confidence < c));
-                print_registration(&r, time_ms, json, named, aligned, centre, source_scale)?
+                let not_written = aligned.as_ref().and_then(|a| a.as_ref().err()).cloned();
+                print_registration(&r, time_ms, json, named, aligned, centre, source_scale)?;
+                match not_written {
+                    Some(e) if !several => return Err(e),
+                    Some(_) => failed += 1,
+                    None => {}
+                }
             }
             Err(e) if !several => {
                 let e = in_flags(&e);
