@@ -224,8 +224,9 @@ pub(super) fn check_f32(bounds: &Bounds, motion: &Motion, single: [bool; 3], for
     match bounds.f32_rounds(motion, single) {
         Some(step) => Err(Error::InvalidOption(format!(
             "the transform moves this {format} file's points up to {} from zero, where its float32 coordinates hold \
-             them only to steps of {} (the cloud is {} across): save the moved points in double precision instead \
-             (a PLY: writePly(transformPointCloud(...)), or the CLI's --aligned with a .ply path)",
+             them only to steps of {} (the cloud is {} across): save the moved points in double precision instead, \
+             as a PLY (in JS: writePly(transformPointCloud(...)); the CLI: --aligned with a .ply path), which keeps \
+             only the points",
             crate::error::num(bounds.largest_moved(motion)),
             crate::error::num(step),
             crate::error::num(bounds.diagonal(motion))

@@ -38,8 +38,17 @@ struct Layout {
 /// The vertex element's layout; an error when x, y or z is missing, not a floating-point
 /// scalar, or the element has a list property (a vertex of variable size).
 fn layout(el: &Element) -> Result<Layout> {
-    if el.props.iter().any(|p| matches!(p.kind, Kind::List { .. })) {
-        return Err(Error::parse(F, "element 'vertex' has a list property: its positions cannot be moved in place"));
+    if let Some(list) = el.props.iter().find(|p| matches!(p.kind, Kind::List { .. })) {
+        return Err(Error::parse(
+            F,
+            format!(
+                "the file was read, but it cannot be moved as it is: element 'vertex' has a list property ('{}'), so \
+                 its vertices differ in size; save the moved points as a new PLY instead (in JS: \
+                 writePly(transformPointCloud(...)); the CLI: --aligned with a .ply path of another name), which \
+                 keeps only the points",
+                list.name
+            ),
+        ));
     }
     let find = |name: &str| el.props.iter().position(|p| p.name == name);
     let float = |i: usize| matches!(el.props[i].kind, Kind::Scalar(s) if !s.is_int());
