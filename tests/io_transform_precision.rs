@@ -93,12 +93,52 @@ fn a_float_ply_scaled_onto_plant_millimetres_keeps_its_own_precision() {
 }
 
 #[test]
-fn a_float_pcd_or_stl_that_cannot_hold_the_moved_points_is_refused() {
+fn a_float_pcd_moved_onto_a_map_grid_gets_double_coordinates_and_a_float_stl_is_refused() {
     let points = box_points();
-    let mut pcd = b"# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 8\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 8\nDATA binary\n".to_vec();
+    let head = "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 8\nHEIGHT 1\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 8\nDATA binary\n";
+    let mut pcd = head.as_bytes().to_vec();
     points.iter().flatten().for_each(|v| pcd.extend_from_slice(&(*v as f32).to_le_bytes()));
-    let e = transform_file(&pcd, "scan.pcd", &onto_map()).unwrap_err().to_string();
-    assert!(e.contains("float32 coordinates hold them only to steps of 0.5"), "{e}");
+    pcd.extend_from_slice(b"trailing bytes");
+    let moved = transform_file(&pcd, "scan.pcd", &onto_map()).unwrap();
+    assert_eq!(String::from_utf8_lossy(&moved[..head.len()]), head.replace("SIZE 4 4 4", "SIZE 8 8 8"));
+    assert_eq!(moved.len(), pcd.len() + 8 * 12, "12 bytes more per point");
+    assert!(moved.ends_with(b"trailing bytes"));
+    assert_moved(&moved, "scan.pcd", &points, &onto_map(), 1e-6);
+    // moved 10 m from zero, float holds it as finely as the file did: the file stays float
+    let ten = Matrix4::new_translation(&Vector3::new(10.0, -4.0, 1.0));
+    assert_eq!(transform_file(&pcd, "scan.pcd", &ten).unwrap().len(), pcd.len());
+    // the real files: every other field kept (colour, normals turned), holes kept, compressed again
+    for name in ["cloud_bin_0_binary.pcd", "milk_compressed.pcd", "table_scene_80x60_compressed.pcd"] {
+        let bytes = std::fs::read(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/formats").join(name))
+            .unwrap();
+        let before = read_point_cloud(&bytes, name).unwrap();
+        let moved = transform_file(&bytes, name, &onto_map()).unwrap();
+        assert!(String::from_utf8_lossy(&moved[..400]).contains("SIZE 8 8 8"), "{name}");
+        let after = read_point_cloud(&moved, name).unwrap();
+        assert_eq!(after.len(), before.len());
+        for i in 0..before.len() {
+            let (p, q) = (before.point_f64(i), after.point_f64(i));
+            if !p.iter().all(|v| v.is_finite()) {
+                assert!(q.iter().all(|v| v.is_nan()), "{name}: a hole stays a hole");
+                continue;
+            }
+            let want = apply(&onto_map(), p);
+            assert!((0..3).all(|k| (q[k] - want[k]).abs() < 1e-6), "{name} point {i}: {q:?} vs {want:?}");
+        }
+        if name == "cloud_bin_0_binary.pcd" {
+            // x y z normal_x normal_y normal_z rgb, 28 bytes a record, then 40: the colours
+            // kept, the normals turned
+            let (old, new) = (bytes.len() - 3903 * 28, moved.len() - 3903 * 40);
+            let turn = onto_map().fixed_view::<3, 3>(0, 0).into_owned();
+            let f = |b: &[u8], at: usize| f32::from_le_bytes(b[at..at + 4].try_into().unwrap()) as f64;
+            for i in 0..3903 {
+                let (r, w) = (old + 28 * i, new + 40 * i);
+                assert_eq!(bytes[r + 24..r + 28], moved[w + 36..w + 40], "point {i}'s colour");
+                let n = turn * Vector3::new(f(&bytes, r + 12), f(&bytes, r + 16), f(&bytes, r + 20));
+                assert!((0..3).all(|k| (f(&moved, w + 24 + 4 * k) - n[k]).abs() < 1e-6), "point {i}'s normal");
+            }
+        }
+    }
     let mut stl = vec![0u8; 80];
     stl.extend_from_slice(&1u32.to_le_bytes());
     for v in [[0.0, 0.0, 1.0], points[0], points[1], points[2]] {

@@ -533,9 +533,16 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     assert.deepEqual(arps.transformFile(frag, "a.las", T), movedPly);
     // a PCD (x y z normal_x normal_y normal_z rgb) moved as it is (near zero): its points those
     // transformPointCloud gives, its header and colours kept; moved onto the map grid, where its
-    // float32 fields would round the points, refused; the names canTransform accepts
+    // float32 fields would round the points, with x, y, z as doubles; the names canTransform accepts
     const pcd = readFileSync(path.join(root, "fixtures", "formats", "cloud_bin_0_binary.pcd"));
-    rejects(r, "transformFile: a float PCD onto the map grid", () => arps.transformFile(pcd, "cloud.pcd", T), /float32 coordinates hold them only to steps of 0\.03125/);
+    const farPcd = arps.transformFile(pcd, "cloud.pcd", T);
+    assert.ok(new TextDecoder().decode(farPcd.subarray(0, 200)).includes("SIZE 8 8 8 4 4 4 4"), "x, y, z as doubles");
+    assert.equal(farPcd.length, pcd.length + 12 * 3903);
+    const farWant = arps.transformPointCloud(arps.readPointCloud(pcd, "c.pcd"), T);
+    const farGot = arps.readPointCloud(farPcd, "c.pcd");
+    let farApart = 0;
+    for (let i = 0; i < farGot.points.length; i++) farApart = Math.max(farApart, Math.abs(farGot.origin[i % 3] + farGot.points[i] - farWant.origin[i % 3] - farWant.points[i]));
+    assert.ok(farApart < 1e-5, `transformFile's PCD points on the map grid ${farApart} from transformPointCloud's`);
     const movedPcd = arps.transformFile(pcd, "cloud.pcd", turn);
     const pcdBody = pcd.indexOf("DATA binary\n") + 12;
     assert.ok(movedPcd.length === pcd.length);

@@ -2,7 +2,10 @@
 //! `normal_z`) turned, every other byte kept (the header, VIEWPOINT included, other fields such as
 //! rgb, intensity and curvature, the encoding).
 //!
-//! Binary bodies are rewritten in place, in each field's own type (`F 4` stays `float`); a
+//! Binary bodies are rewritten in place, in each field's own type (`F 4` stays `float`), except
+//! that `float` coordinates moved where float would hold them more coarsely than the file did (a
+//! local scan moved onto a map grid: [`Bounds::f32_coarsens`], the rule a PLY follows) become
+//! `double` (`SIZE 8`, the records 12 bytes longer); a
 //! `binary_compressed` body is decompressed, rewritten and compressed again (LZF); an ascii body
 //! has its coordinate tokens rewritten as the file wrote its numbers
 //! ([`super::number_style::NumberStyle`]). Points whose coordinates are not finite (the holes of
@@ -10,7 +13,7 @@
 //! so a file it refuses is refused here too.
 
 use super::lzf;
-use super::motion::{check_f32, Bounds, Motion};
+use super::motion::{Bounds, Motion};
 use super::number_style::{span, Rewrite, Styles};
 use super::pcd::{byte_offset, parse_header, Data, Header, F};
 use crate::{Error, Result};
@@ -47,21 +50,34 @@ pub fn transform_pcd(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     match h.data {
         Data::Ascii => move_ascii(bytes, &h, xyz, normal, &motion),
         Data::Binary => {
-            h.records(bytes)?;
-            let mut out = bytes.to_vec();
+            let end = h.body_at + h.records(bytes)?.len();
             let offset: Vec<usize> = (0..h.fields.len()).map(|f| h.body_at + byte_offset(&h.fields, f)).collect();
-            check_single(&out, &h, xyz, &motion, &|i, f| offset[f] + i * h.stride)?;
-            move_values(&mut out, &h, xyz, normal, &motion, &|i, f| offset[f] + i * h.stride);
+            let at = |i: usize, f: usize| offset[f] + i * h.stride;
+            if coarsened(bytes, &h, xyz, &motion, &at) {
+                // the records rebuilt with double coordinates, after the header that declares them
+                let (mut out, body) = widened(bytes, &bytes[..h.body_at], &h, xyz, normal, &motion, &at, false);
+                out.extend_from_slice(&body);
+                out.extend_from_slice(&bytes[end..]);
+                return Ok(out);
+            }
+            let mut out = bytes.to_vec();
+            move_values(&mut out, &h, xyz, normal, &motion, &at);
             Ok(out)
         }
         Data::Compressed => {
             let (mut raw, end) = h.decompress(bytes)?;
             let start: Vec<usize> = (0..h.fields.len()).map(|f| h.column_start(f)).collect();
-            check_single(&raw, &h, xyz, &motion, &|i, f| start[f] + i * h.fields[f].size)?;
-            move_values(&mut raw, &h, xyz, normal, &motion, &|i, f| start[f] + i * h.fields[f].size);
+            let at = |i: usize, f: usize| start[f] + i * h.fields[f].size;
+            let (header, raw) = if coarsened(&raw, &h, xyz, &motion, &at) {
+                // the columns rebuilt with double coordinates
+                widened(&raw, &bytes[..h.body_at], &h, xyz, normal, &motion, &at, true)
+            } else {
+                move_values(&mut raw, &h, xyz, normal, &motion, &at);
+                (bytes[..h.body_at].to_vec(), raw)
+            };
             let packed = lzf::compress(&raw);
-            let mut out = Vec::with_capacity(h.body_at + 8 + packed.len() + (bytes.len() - end));
-            out.extend_from_slice(&bytes[..h.body_at]);
+            let mut out = Vec::with_capacity(header.len() + 8 + packed.len() + (bytes.len() - end));
+            out.extend_from_slice(&header);
             out.extend_from_slice(&(packed.len() as u32).to_le_bytes());
             out.extend_from_slice(&(raw.len() as u32).to_le_bytes());
             out.extend_from_slice(&packed);
@@ -71,24 +87,84 @@ pub fn transform_pcd(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     }
 }
 
-/// An error when the `xyz` fields that are `float` (SIZE 4) would round the points moved by
-/// `motion` ([`check_f32`]); `at` as for [`move_values`].
-fn check_single(
-    buf: &[u8],
-    h: &Header,
-    xyz: [usize; 3],
-    motion: &Motion,
-    at: &dyn Fn(usize, usize) -> usize,
-) -> Result<()> {
+/// Whether `float` (`SIZE 4`) `xyz` fields would hold the points moved by `motion` more coarsely
+/// than the file did ([`Bounds::f32_coarsens`]); `at` as for [`move_values`].
+fn coarsened(buf: &[u8], h: &Header, xyz: [usize; 3], motion: &Motion, at: &dyn Fn(usize, usize) -> usize) -> bool {
     let single = xyz.map(|k| h.fields[k].size == 4);
     if !single.contains(&true) {
-        return Ok(());
+        return false;
     }
     let mut bounds = Bounds::default();
     for i in 0..h.n_points as usize {
         bounds.add([0, 1, 2].map(|a| h.fields[xyz[a]].read_f64(&buf[at(i, xyz[a])..])));
     }
-    check_f32(&bounds, motion, single, "binary PCD")
+    bounds.f32_coarsens(motion, single)
+}
+
+/// The header `head` with its `SIZE` line declaring x, y, z `double` (8), and the body of `src`
+/// (laid out as `h` says, field `f` of point `i` at `at(i, f)`) rebuilt so: as records, or as
+/// columns (`columns`, a decompressed `binary_compressed` body); x, y, z moved by `motion`, the
+/// normal turned, every other value copied. A point whose coordinates are not finite (a hole)
+/// keeps them.
+#[allow(clippy::too_many_arguments)]
+fn widened(
+    src: &[u8],
+    head: &[u8],
+    h: &Header,
+    xyz: [usize; 3],
+    normal: Option<[usize; 3]>,
+    motion: &Motion,
+    at: &dyn Fn(usize, usize) -> usize,
+    columns: bool,
+) -> (Vec<u8>, Vec<u8>) {
+    let n = h.n_points as usize;
+    let sizes: Vec<usize> =
+        h.fields.iter().enumerate().map(|(f, field)| if xyz.contains(&f) { 8 } else { field.size }).collect();
+    let width = |f: usize| sizes[f] * h.fields[f].count;
+    let stride: usize = (0..sizes.len()).map(width).sum();
+    // where each field starts: in a record, or (columns) in the body
+    let mut start = Vec::with_capacity(sizes.len());
+    let mut next = 0;
+    for f in 0..sizes.len() {
+        start.push(next);
+        next += if columns { width(f) * n } else { width(f) };
+    }
+    let new_at = |i: usize, f: usize| start[f] + i * if columns { sizes[f] } else { stride };
+    let mut body = vec![0u8; n * stride];
+    for i in 0..n {
+        for f in (0..sizes.len()).filter(|f| !xyz.contains(f)) {
+            let (from, to, len) = (at(i, f), new_at(i, f), width(f));
+            body[to..to + len].copy_from_slice(&src[from..from + len]);
+        }
+        let p = [0, 1, 2].map(|a| h.fields[xyz[a]].read_f64(&src[at(i, xyz[a])..]));
+        let q = if p.iter().all(|v| v.is_finite()) { motion.point(p) } else { p };
+        for a in 0..3 {
+            body[new_at(i, xyz[a])..][..8].copy_from_slice(&q[a].to_le_bytes());
+        }
+        if let Some(nf) = normal {
+            let v = [0, 1, 2].map(|a| h.fields[nf[a]].read_f64(&body[new_at(i, nf[a])..]));
+            if v.iter().all(|v| v.is_finite()) {
+                let turned = motion.normal(v);
+                (0..3).for_each(|a| h.fields[nf[a]].write_float(turned[a], &mut body[new_at(i, nf[a])..]));
+            }
+        }
+    }
+    // the header, its SIZE line rewritten
+    let mut header = Vec::with_capacity(head.len() + 8);
+    for line in head.split_inclusive(|&b| b == b'\n') {
+        let t = line.trim_ascii_start();
+        if t.len() > 4 && t[..4].eq_ignore_ascii_case(b"SIZE") && t[4].is_ascii_whitespace() {
+            header.extend_from_slice(b"SIZE");
+            // (sizes are 1, 2, 4 or 8: the header's check)
+            for &s in &sizes {
+                header.extend_from_slice(&[b' ', b'0' + s as u8]);
+            }
+            header.extend_from_slice(if line.ends_with(b"\r\n") { b"\r\n" } else { b"\n" });
+        } else {
+            header.extend_from_slice(line);
+        }
+    }
+    (header, body)
 }
 
 /// Each point's `xyz` fields in `buf` moved and its `normal` fields turned, in their own type;
