@@ -44,8 +44,7 @@ fn layout(el: &Element) -> Result<Layout> {
             format!(
                 "the file was read, but it cannot be moved as it is: element 'vertex' has a list property ('{}'), so \
                  its vertices differ in size; save the moved points as a new PLY instead (in JS: \
-                 writePly(transformPointCloud(...)); the CLI: --aligned with a .ply path of another name), which \
-                 keeps only the points",
+                 writePly(transformPointCloud(...)), which keeps only the points)",
                 list.name
             ),
         ));
