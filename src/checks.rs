@@ -128,7 +128,8 @@ pub const STORED_F32_SAMPLE: usize = 256;
 /// on that grid (0.5 apart at 5.4e6), which the reader's offsets keep to within their own `f32`
 /// rounding; `f64` values are on it only by chance (one coordinate in a few thousand at 5.4e6).
 /// Per axis, when every one of [`STORED_F32_SAMPLE`] points evenly spread has its coordinate on
-/// the grid (within the offsets' rounding, and that grid at least 8 times as coarse), that axis's
+/// the grid (within the offsets' rounding, and that grid at least 8 times as coarse), and not all
+/// of them on twice the grid (a posting of the data's own, such as a terrain model's), that axis's
 /// step counts; the largest counts. `(0, far)` when no axis is on such a grid.
 pub fn stored_f32_step(cloud: &crate::PointCloud) -> (f64, f64) {
     let (lo, hi) = cloud.bounds();
@@ -150,11 +151,14 @@ fn stored_step(cloud: &crate::PointCloud, lo: [f32; 3], hi: [f32; 3]) -> (f64, f
         if n == 0 || !far_a.is_finite() || grid < 8.0 * slack {
             continue;
         }
-        let on_grid = (0..n).step_by(n.div_ceil(STORED_F32_SAMPLE).max(1)).all(|i| {
-            let v = cloud.origin[a] + cloud.points[i][a] as f64;
-            (v - (v as f32) as f64).abs() <= slack
-        });
-        if on_grid {
+        let value = |i: usize| cloud.origin[a] + cloud.points[i][a] as f64;
+        let sample = (0..n).step_by(n.div_ceil(STORED_F32_SAMPLE).max(1));
+        let on_grid = sample.clone().all(|i| (value(i) - (value(i) as f32) as f64).abs() <= slack);
+        // values that all sit on twice the grid keep a coarser step of their own (a terrain model
+        // posted every metre at a northing where f32 steps by 0.5, or every 0.25 m at an easting
+        // where it steps by 1/32): rounding to f32 leaves about as many on its odd multiples
+        let odd = sample.clone().any(|i| (value(i) / grid).round().rem_euclid(2.0) == 1.0);
+        if on_grid && odd {
             step = step.max(grid);
         }
     }
@@ -258,6 +262,23 @@ pub fn flat_pair(source: [f64; 3], target: [f64; 3], icp: bool, warnings: &mut V
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_terrain_model_posted_on_a_grid_of_its_own_is_not_taken_for_f32() {
+        // a DEM exported as text with millimetre heights at easting 500,000 and northing
+        // 6,000,000 (f32 steps there: 1/32 and 0.5), posted every 1, 0.5 and 0.25 m
+        for (posting, warned) in [(1.0, false), (0.25, false), (0.5, true)] {
+            let points: Vec<[f64; 3]> = (0..400)
+                .map(|i| {
+                    let (c, r) = ((i % 20) as f64, (i / 20) as f64);
+                    [500_000.0 + c * posting, 6_000_000.0 + r * posting, 100.0 + ((i * 37) % 1000) as f64 * 0.001]
+                })
+                .collect();
+            let cloud = crate::PointCloud::from_points_f64(&points);
+            // (a posting as coarse as f32's own step there cannot be told from f32's rounding)
+            assert_eq!(stored_f32_step(&cloud).0 > 0.0, warned, "posting {posting}");
+        }
+    }
 
     #[test]
     fn a_cloud_read_from_f32_values_far_from_zero_is_on_their_grid() {

@@ -314,9 +314,11 @@ pub fn transform_file(
     crate::io::transform_file_with(bytes, file_name, &matrix_arg(matrix)?, &options).map_err(js_err)
 }
 
-/// True when `transformFile` moves a file of this name as it is: `.ply .pcd .xyz .pts .txt .csv
-/// .obj .off .stl .las .laz .e57 .glb .gltf` (case-insensitive). False for
-/// other names: save such a source as `writePly(transformPointCloud(cloud, T))`.
+/// True when `transformFile` moves a file of this name as it is, by its extension: `.ply .pcd
+/// .xyz .pts .txt .csv .obj .off .stl .las .laz .e57 .glb .gltf` (case-insensitive). False for
+/// other names; `transformFile` still knows a file of another name by its content (a PLY, PCD,
+/// LAS, LAZ, E57 or GLB signature, a text list) and moves it as it is. A file it does not know:
+/// save it as `writePly(transformPointCloud(cloud, T))`.
 #[wasm_bindgen(js_name = canTransform)]
 pub fn can_transform(#[wasm_bindgen(js_name = fileName)] file_name: &str) -> bool {
     crate::io::can_transform(file_name)

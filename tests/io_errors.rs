@@ -230,7 +230,11 @@ fn pcd_body_errors() {
 
 #[test]
 fn text_errors() {
-    has(&cloud_err(b"x y z\n1 2 3\n4 5 6\n7 8\n", "a.xyz"), &["XYZ", "line 4", "at least 3 numbers"]);
+    has(&cloud_err(b"1 2 3\n4 5 6\n7 8\n", "a.xyz"), &["XYZ", "line 3", "at least 3 numbers"]);
+    has(
+        &cloud_err(b"x y z\n1 2 3\n4 5 6\n7 8\n", "a.xyz"),
+        &["line 4", "x, y, z in columns [1, 2, 3] (named in the header)"],
+    );
     has(&cloud_err(b"1,2,3\n4,five,6\n", "a.csv"), &["line 2", "'five'"]);
     has(&cloud_err(b"x y z\n# nothing\n", "a.xyz"), &["no line with three numbers"]);
     has(&cloud_err(b"", "a.txt"), &["XYZ parse error: the file is empty (0 bytes)"]);

@@ -5,7 +5,7 @@
 //! Binary bodies are rewritten in place, in each field's own type (`F 4` stays `float`), except
 //! that `float` coordinates moved where float would hold them more coarsely than the file did (a
 //! local scan moved onto a map grid: [`Bounds::f32_coarsens`], the rule a PLY follows) become
-//! `double` (`SIZE 8`, the records 12 bytes longer); a
+//! `double` (`SIZE 8`, the records 12 bytes longer; an ascii body's header says `SIZE 8` for them); a
 //! `binary_compressed` body is decompressed, rewritten and compressed again (LZF); an ascii body
 //! has its coordinate tokens rewritten as the file wrote its numbers
 //! ([`super::number_style::NumberStyle`]). Points whose coordinates are not finite (the holes of
@@ -149,14 +149,18 @@ fn widened(
             }
         }
     }
-    // the header, its SIZE line rewritten
+    (sized_header(head, &sizes), body)
+}
+
+/// The header `head` with its `SIZE` line declaring `sizes`, every other byte as it was.
+fn sized_header(head: &[u8], sizes: &[usize]) -> Vec<u8> {
     let mut header = Vec::with_capacity(head.len() + 8);
     for line in head.split_inclusive(|&b| b == b'\n') {
         let t = line.trim_ascii_start();
         if t.len() > 4 && t[..4].eq_ignore_ascii_case(b"SIZE") && t[4].is_ascii_whitespace() {
             header.extend_from_slice(b"SIZE");
             // (sizes are 1, 2, 4 or 8: the header's check)
-            for &s in &sizes {
+            for &s in sizes {
                 header.extend_from_slice(&[b' ', b'0' + s as u8]);
             }
             header.extend_from_slice(if line.ends_with(b"\r\n") { b"\r\n" } else { b"\n" });
@@ -164,7 +168,7 @@ fn widened(
             header.extend_from_slice(line);
         }
     }
-    (header, body)
+    header
 }
 
 /// Each point's `xyz` fields in `buf` moved and its `normal` fields turned, in their own type;
@@ -210,10 +214,13 @@ fn move_ascii(
         }
         Ok(v)
     };
-    // First pass: how the file writes its numbers.
+    // First pass: how the file writes its numbers, and where its points are.
     let mut styles = Styles::default();
+    let mut bounds = Bounds::default();
     h.ascii_rows(bytes, &mut |n, _, toks| {
-        styles.bound(parse(n, toks, xyz, xyz_at)?);
+        let p = parse(n, toks, xyz, xyz_at)?;
+        styles.bound(p);
+        bounds.add(p);
         xyz_at.iter().for_each(|&k| styles.position.learn(toks[k]));
         if let Some(at) = normal_at {
             at.iter().for_each(|&k| styles.normal.learn(toks[k]));
@@ -240,7 +247,18 @@ fn move_ascii(
         out.line(line, &mut edits);
         Ok(())
     })?;
-    Ok(out.finish())
+    let moved = out.finish();
+    // values written with the digits they need, declared `double` where a reader that takes the
+    // header's `float` would round them (as the binary encodings are widened)
+    let single = xyz.map(|k| h.fields[k].size == 4);
+    if !(single.contains(&true) && bounds.f32_coarsens(motion, single)) {
+        return Ok(moved);
+    }
+    let sizes: Vec<usize> =
+        h.fields.iter().enumerate().map(|(f, field)| if xyz.contains(&f) { 8 } else { field.size }).collect();
+    let mut widened = sized_header(&moved[..h.body_at], &sizes);
+    widened.extend_from_slice(&moved[h.body_at..]);
+    Ok(widened)
 }
 
 #[cfg(test)]
