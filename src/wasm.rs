@@ -514,10 +514,32 @@ fn parse_object<T: serde::de::DeserializeOwned + Default>(options: JsValue, what
                 && serde_wasm_bindgen::from_value::<T>(one.into()).is_err()
         };
         match object_keys(&clean).ok().and_then(|keys| keys.iter().find(alone)).and_then(|k| k.as_string()) {
-            Some(field) => JsError::new(&format!("invalid {what}: `{field}`: {message}")),
+            Some(field) => {
+                let fails = |one: JsValue| serde_wasm_bindgen::from_value::<T>(one).err().map(|e| e.to_string());
+                let message = with_choices(message, &field, &fails);
+                JsError::new(&format!("invalid {what}: `{field}`: {message}"))
+            }
             None => JsError::new(&format!("invalid {what}: {message}")),
         }
     })
+}
+
+/// `message` about `field`, where it names the Rust type of a named choice (`expected enum
+/// IcpLoss`, a value of the wrong type), with the choices instead, as serde lists them for a name
+/// that is none of them (`fails`: the error of an object of that one field, if any).
+fn with_choices(message: String, field: &str, fails: &dyn Fn(JsValue) -> Option<String>) -> String {
+    let Some(at) = message.find(", expected enum ") else { return message };
+    let choices = |probe: JsValue| {
+        let one = Object::new();
+        Reflect::set(&one, &JsValue::from_str(field), &probe).ok()?;
+        let e = fails(one.into())?;
+        e.split_once("unknown variant ``, ").map(|(_, expected)| expected.to_string())
+    };
+    // a choice, or a list of them (`starts`)
+    match choices(JsValue::from_str("")).or_else(|| choices(Array::of1(&"".into()).into())) {
+        Some(expected) => format!("{}, {expected}", &message[..at]),
+        None => message,
+    }
 }
 
 /// serde-wasm-bindgen's message in the contract's words: its integer and float types, the

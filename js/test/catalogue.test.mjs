@@ -128,6 +128,8 @@ for (const [name, arps] of [["node build", nodeBuild], ["web build", webBuild]])
     const cases = [
       ["unknown field", reg({ icpMaxIteration: 3 }), /unknown field `icpMaxIteration`/],
       ["wrong enum", reg({ icp: "planar" }), /^invalid options: `icp`: unknown variant `planar`, expected one of/],
+      ["a number for a choice", reg({ icpLoss: 1 }), /^invalid options: `icpLoss`: invalid type: floating point `1.0`, expected `squared` or `robust`$/],
+      ["a number in a list of choices", reg({ starts: ["network", 2] }), /^invalid options: `starts`: invalid type: floating point `2.0`, expected one of `network`, `centroids`/],
       ["wrong type", reg({ seed: "seven" }), /^invalid options: `seed`: invalid type: string "seven", expected a whole number, 0 or more$/],
       ["negative count", reg({ icpMaxIterations: -1 }), /^invalid options: `icpMaxIterations`: invalid value: -1, expected a whole number from 0 to 4294967295$/],
       ["a float of 301 digits", reg({ icpMaxIterations: 1e300 }), /^invalid options: `icpMaxIterations`: invalid type: floating point `1e300`, expected a whole number from 0 to 4294967295$/],
