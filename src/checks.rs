@@ -91,8 +91,8 @@ pub fn f32_rounding(what: &str, cloud: &crate::PointCloud, warnings: &mut Vec<Wa
                 format!(
                 "the {what}'s coordinates lie up to {} from zero for a cloud of largest half-extent {}, on the grid \
                  of 32-bit floats there (a file that stores them as float?): they were rounded to steps of about {} \
-                 before they were read, and the answer can be as coarse; store them as double, or as offsets from a \
-                 nearby origin",
+                 before they were read (unless that is a grid of their own, such as a terrain model posted at that \
+                 step), and the answer can be as coarse; store them as double, or as offsets from a nearby origin",
                 crate::error::num(far),
                 crate::error::num(half),
                 crate::error::num(step)
