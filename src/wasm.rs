@@ -290,7 +290,8 @@ pub fn list_scans(
 /// (compressed again), E57 (its scans' poses moved, its points kept as
 /// stored; rigid motions only) and glTF/GLB (a new parent node above its top nodes, its buffers
 /// kept) (see `canTransform`). Positions are mapped in f64 and written back as the file stored them (the
-/// property's type, the text's decimals, LAS's scaled integers, with its offsets where the moved points fit them), normals turned,
+/// property's type, the text's decimals, LAS's scaled integers, with its offsets where the moved
+/// points fit them), normals turned,
 /// a Gaussian splat PLY's splats turned and scaled with the scene (`rot_*` quaternions, `scale_*`
 /// log-extents, `f_rest_*` colour coefficients),
 /// everything else kept (colours, intensity, classification, faces, other fields, the header).
@@ -508,14 +509,15 @@ fn parse_object<T: serde::de::DeserializeOwned + Default>(options: JsValue, what
         let message = e.to_string();
         let message = message.strip_prefix("Error: ").unwrap_or(&message);
         let message = readable_serde_message(message);
+        // the error of `T` from an object of one field, if any
+        let fails = |one: JsValue| serde_wasm_bindgen::from_value::<T>(one).err().map(|e| e.to_string());
         let alone = |key: &JsValue| {
             let one = Object::new();
             Reflect::set(&one, key, &Reflect::get(&clean, key).unwrap_or(JsValue::UNDEFINED)).is_ok()
-                && serde_wasm_bindgen::from_value::<T>(one.into()).is_err()
+                && fails(one.into()).is_some()
         };
         match object_keys(&clean).ok().and_then(|keys| keys.iter().find(alone)).and_then(|k| k.as_string()) {
             Some(field) => {
-                let fails = |one: JsValue| serde_wasm_bindgen::from_value::<T>(one).err().map(|e| e.to_string());
                 let message = with_choices(message, &field, &fails);
                 JsError::new(&format!("invalid {what}: `{field}`: {message}"))
             }

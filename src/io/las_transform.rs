@@ -1,8 +1,9 @@
 //! A LAS file moved as it is: every point record's X, Y, Z mapped by a rigid (or uniformly
 //! scaled) transform in f64 and stored again with the file's own scales and, where the moved
 //! points still fit them, its own offsets (else new ones near the moved points' centre, round
-//! where the integers still fit); the header's bounds updated; every other byte kept (intensity, returns, classification, GPS time, colour, extra bytes, the VLRs and
-//! EVLRs, the CRS records). What saves a registered survey in the target's frame as the LAS its
+//! where the integers still fit); the header's bounds updated; every other byte kept
+//! (intensity, returns, classification, GPS time, colour, extra bytes, the VLRs and EVLRs, the
+//! CRS records). What saves a registered survey in the target's frame as the LAS its
 //! tools read. A LAZ file comes back as LAZ: the LAS file it compresses, moved, compressed again
 //! (`laz_write`).
 

@@ -56,6 +56,11 @@ impl Styles {
         self.bounds.add(p);
     }
 
+    /// The positions' bounds taken in so far ([`Styles::bound`]).
+    pub(super) fn bounds(&self) -> &Bounds {
+        &self.bounds
+    }
+
     /// As the moved values are written by `motion`: positions shifted by its scale (a change of
     /// unit), with at least the digits of a step of [`STEP_OF_DIAGONAL`] of the moved cloud's
     /// diagonal (decimals, or in exponent form significant digits, for the largest moved value);

@@ -5,7 +5,8 @@
 //! Binary bodies are rewritten in place, in each field's own type (`F 4` stays `float`), except
 //! that `float` coordinates moved where float would hold them more coarsely than the file did (a
 //! local scan moved onto a map grid: [`Bounds::f32_coarsens`], the rule a PLY follows) become
-//! `double` (`SIZE 8`, the records 12 bytes longer; an ascii body's header says `SIZE 8` for them); a
+//! `double` (`SIZE 8`, the records 12 bytes longer; an ascii body's header says `SIZE 8` for
+//! them); a
 //! `binary_compressed` body is decompressed, rewritten and compressed again (LZF); an ascii body
 //! has its coordinate tokens rewritten as the file wrote its numbers
 //! ([`super::number_style::NumberStyle`]). Points whose coordinates are not finite (the holes of
@@ -87,18 +88,29 @@ pub fn transform_pcd(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     }
 }
 
-/// Whether `float` (`SIZE 4`) `xyz` fields would hold the points moved by `motion` more coarsely
-/// than the file did ([`Bounds::f32_coarsens`]); `at` as for [`move_values`].
-fn coarsened(buf: &[u8], h: &Header, xyz: [usize; 3], motion: &Motion, at: &dyn Fn(usize, usize) -> usize) -> bool {
+/// Whether `float` (`SIZE 4`) `xyz` fields would hold the points of `bounds` moved by `motion`
+/// more coarsely than the file did ([`Bounds::f32_coarsens`]).
+fn coarsens(bounds: &Bounds, h: &Header, xyz: [usize; 3], motion: &Motion) -> bool {
     let single = xyz.map(|k| h.fields[k].size == 4);
-    if !single.contains(&true) {
+    single.contains(&true) && bounds.f32_coarsens(motion, single)
+}
+
+/// [`coarsens`] for the points of a binary or decompressed body `buf`; `at` as for
+/// [`move_values`].
+fn coarsened(buf: &[u8], h: &Header, xyz: [usize; 3], motion: &Motion, at: &dyn Fn(usize, usize) -> usize) -> bool {
+    if xyz.iter().all(|&k| h.fields[k].size != 4) {
         return false;
     }
     let mut bounds = Bounds::default();
     for i in 0..h.n_points as usize {
         bounds.add([0, 1, 2].map(|a| h.fields[xyz[a]].read_f64(&buf[at(i, xyz[a])..])));
     }
-    bounds.f32_coarsens(motion, single)
+    coarsens(&bounds, h, xyz, motion)
+}
+
+/// The fields' sizes with x, y, z `double` (8).
+fn widened_sizes(h: &Header, xyz: [usize; 3]) -> Vec<usize> {
+    h.fields.iter().enumerate().map(|(f, field)| if xyz.contains(&f) { 8 } else { field.size }).collect()
 }
 
 /// The header `head` with its `SIZE` line declaring x, y, z `double` (8), and the body of `src`
@@ -118,8 +130,7 @@ fn widened(
     columns: bool,
 ) -> (Vec<u8>, Vec<u8>) {
     let n = h.n_points as usize;
-    let sizes: Vec<usize> =
-        h.fields.iter().enumerate().map(|(f, field)| if xyz.contains(&f) { 8 } else { field.size }).collect();
+    let sizes = widened_sizes(h, xyz);
     let width = |f: usize| sizes[f] * h.fields[f].count;
     let stride: usize = (0..sizes.len()).map(width).sum();
     // where each field starts: in a record, or (columns) in the body
@@ -216,17 +227,17 @@ fn move_ascii(
     };
     // First pass: how the file writes its numbers, and where its points are.
     let mut styles = Styles::default();
-    let mut bounds = Bounds::default();
     h.ascii_rows(bytes, &mut |n, _, toks| {
-        let p = parse(n, toks, xyz, xyz_at)?;
-        styles.bound(p);
-        bounds.add(p);
+        styles.bound(parse(n, toks, xyz, xyz_at)?);
         xyz_at.iter().for_each(|&k| styles.position.learn(toks[k]));
         if let Some(at) = normal_at {
             at.iter().for_each(|&k| styles.normal.learn(toks[k]));
         }
         Ok(())
     })?;
+    // values written with the digits they need, declared `double` where a reader that takes the
+    // header's `float` would round them (as the binary encodings are widened)
+    let widen = coarsens(styles.bounds(), h, xyz, motion);
     let styles = styles.for_writing(motion);
     // Second pass: the point lines rewritten, the bytes between them copied.
     let mut out = Rewrite::new(bytes);
@@ -248,15 +259,10 @@ fn move_ascii(
         Ok(())
     })?;
     let moved = out.finish();
-    // values written with the digits they need, declared `double` where a reader that takes the
-    // header's `float` would round them (as the binary encodings are widened)
-    let single = xyz.map(|k| h.fields[k].size == 4);
-    if !(single.contains(&true) && bounds.f32_coarsens(motion, single)) {
+    if !widen {
         return Ok(moved);
     }
-    let sizes: Vec<usize> =
-        h.fields.iter().enumerate().map(|(f, field)| if xyz.contains(&f) { 8 } else { field.size }).collect();
-    let mut widened = sized_header(&moved[..h.body_at], &sizes);
+    let mut widened = sized_header(&moved[..h.body_at], &widened_sizes(h, xyz));
     widened.extend_from_slice(&moved[h.body_at..]);
     Ok(widened)
 }

@@ -6,10 +6,10 @@
 //! turned when the header names its columns (`nx ny nz`, `normal_x ...`), or, in a list without
 //! column names, when the three columns after x, y, z hold a unit vector on every row (MeshLab's
 //! and CloudCompare's `x y z nx ny nz`); a header that names the columns and no normal has none
-//! (its `r g b` may be colours from 0 to 1, every pure one a unit vector). Values are written with as many decimals as the file's
-//! most precise coordinate (fewer or more after a change of unit: see
-//! [`super::number_style::NumberStyle`]), or in exponent form when the file uses it; normals with
-//! at least six decimals. Rows whose coordinates are not finite are kept as they are.
+//! (its `r g b` may be colours from 0 to 1, every pure one a unit vector). Values are written
+//! with as many decimals as the file's most precise coordinate (fewer or more after a change of
+//! unit: see [`super::number_style::NumberStyle`]), or in exponent form when the file uses it;
+//! normals with at least six decimals. Rows whose coordinates are not finite are kept as they are.
 
 use super::motion::Motion;
 use super::number_style::{span, Rewrite, Styles};

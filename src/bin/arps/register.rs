@@ -276,8 +276,8 @@ fn read_source(
 
 /// Prints one registration of `arps register`: the text report, or one JSON line (`--json`);
 /// `source` names the source (in the text report, given when several were), `aligned` where the
-/// moved source was written (`--aligned`), or why it could not be, `source_scale` the `--source-scale` its points were
-/// multiplied by.
+/// moved source was written (`--aligned`), or why it could not be, `source_scale` the
+/// `--source-scale` its points were multiplied by.
 fn print_registration(
     r: &arps::Registration,
     time_ms: f64,
