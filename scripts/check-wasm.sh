@@ -18,7 +18,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 engine_budget=${ARPS_ENGINE_BUDGET:-1400000}
-engine_gz_budget=${ARPS_ENGINE_GZ_BUDGET:-572000}
+engine_gz_budget=${ARPS_ENGINE_GZ_BUDGET:-573500}
 model_budget=${ARPS_MODEL_BUDGET:-1260000}
 model_gz_budget=${ARPS_MODEL_GZ_BUDGET:-1200000}
 simd_min=${ARPS_SIMD_MIN:-200}

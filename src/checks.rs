@@ -200,7 +200,11 @@ pub fn principal_spreads(points: &[[f32; 3]]) -> [f64; 3] {
         yz += y * z;
         zz += z * z;
     }
-    let cov = nalgebra::Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz) / n;
+    spreads_of(&(nalgebra::Matrix3::new(xx, xy, xz, xy, yy, yz, xz, yz, zz) / n))
+}
+
+/// The standard deviations along the principal axes of the covariance `cov`, largest first.
+pub(crate) fn spreads_of(cov: &nalgebra::Matrix3<f64>) -> [f64; 3] {
     let mut ev: Vec<f64> = cov.symmetric_eigenvalues().iter().map(|v| v.max(0.0).sqrt()).collect();
     ev.sort_by(|a, b| b.total_cmp(a));
     [ev[0], ev[1], ev[2]]

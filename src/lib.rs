@@ -48,6 +48,7 @@ pub mod data;
 pub mod error;
 pub mod global;
 pub mod gmr;
+pub mod grain;
 pub mod icp;
 pub mod io;
 pub mod limits;

@@ -11,7 +11,10 @@ use std::hash::{BuildHasherDefault, Hasher};
 /// lookups of a large cloud. Keys come from the caller's coordinates, so a crafted cloud could make
 /// many collide; that costs time only, never a different result.
 #[derive(Default)]
-struct VoxelKeyHasher(u64);
+pub(crate) struct VoxelKeyHasher(u64);
+
+/// A map from voxel grid keys to slots, hashed by [`VoxelKeyHasher`].
+pub(crate) type VoxelKeys = HashMap<[i64; 3], u32, BuildHasherDefault<VoxelKeyHasher>>;
 
 impl Hasher for VoxelKeyHasher {
     fn write(&mut self, bytes: &[u8]) {
@@ -171,7 +174,7 @@ const DENSE_CELLS_PER_POINT: usize = 4;
 /// the same slots in the same order, so the same output.
 enum Slots {
     Dense { lo: [i64; 3], dims: [usize; 3], slot: Vec<u32> },
-    Hashed(HashMap<[i64; 3], u32, BuildHasherDefault<VoxelKeyHasher>>),
+    Hashed(VoxelKeys),
 }
 
 impl Slots {

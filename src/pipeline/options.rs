@@ -6,14 +6,56 @@
 
 use super::starts;
 use crate::error::num;
+use crate::grain::Grain;
 use crate::model::Model;
 use crate::refine;
 use crate::register::{Options, MAX_NETWORK_POINTS};
 use crate::{transform, Error, Result};
 use nalgebra::Matrix4;
 
-/// Default final ICP distance in normalised units.
+/// Default final ICP distance in normalised units, on clouds that resolve their surfaces no
+/// more finely than a few spacings of it (see [`default_distance`]).
 const DEFAULT_MAX_CORRESPONDENCE: f64 = 0.025;
+
+/// The default ICP voxel in normalised units: half the default distance.
+pub(crate) const DEFAULT_VOXEL: f64 = DEFAULT_MAX_CORRESPONDENCE * 0.5;
+
+/// The coarser of two clouds' grains (either may be sparse: then the pair has none).
+pub(crate) fn pair_grain(a: Option<Grain>, b: Option<Grain>) -> Option<Grain> {
+    let (a, b) = (a?, b?);
+    Some(Grain { spacing: a.spacing.max(b.spacing), spread: a.spread.max(b.spread) })
+}
+
+/// The default distance is kept unless it spans more than this many of the pair's point spacings
+/// ([`Grain::spacing`]): it spans 2.5-4 on objects' scans, the 3DMatch fragments and the paper's
+/// pairs, 9 on 500,000-point objects, 13-29 on a drone survey of 1-5 million points and about 20
+/// on a LiDAR frame, where an answer off by a fraction of it fits as well as the right one
+/// (`BENCHMARK.md`, "Dense scenes: a default distance from the points' grain").
+const DENSE_SPACINGS: f64 = 10.0;
+
+/// On a denser pair the default is this many of its point spacings...
+const GRAIN_SPACINGS: f64 = 4.0;
+
+/// ...and no less than this many times its points' spread across their surface
+/// ([`Grain::spread`]: noise) ...
+const GRAIN_SPREADS: f64 = 3.0;
+
+/// ...nor less than this share of the size-based default: ICP's voxels (half the distance) keep
+/// at most about 16 times the points they keep at the default.
+const MIN_GRAIN_SHARE: f64 = 0.25;
+
+/// The default final distance for a pair whose grain is `grain` (normalised units; `None`: sparse
+/// at the default voxel's scale): [`DEFAULT_MAX_CORRESPONDENCE`], or on a pair that resolves its
+/// surfaces more finely than [`DENSE_SPACINGS`] of it, [`GRAIN_SPACINGS`] of its spacing (within
+/// the bounds above).
+pub(crate) fn default_distance(grain: Option<Grain>) -> f64 {
+    match grain {
+        Some(g) if DEFAULT_MAX_CORRESPONDENCE > DENSE_SPACINGS * g.spacing => (GRAIN_SPACINGS * g.spacing)
+            .max(GRAIN_SPREADS * g.spread)
+            .clamp(MIN_GRAIN_SHARE * DEFAULT_MAX_CORRESPONDENCE, DEFAULT_MAX_CORRESPONDENCE),
+        _ => DEFAULT_MAX_CORRESPONDENCE,
+    }
+}
 
 /// The options that need no cloud to check, resolved.
 #[derive(Clone, Copy, Debug)]
@@ -159,7 +201,7 @@ pub(crate) fn coarse_distance(d_final: f64) -> f64 {
 
 /// The final ICP distance and the ICP voxel size in normalised units, for a normalisation of
 /// scale `s` (user units per normalised unit).
-pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
+pub(crate) fn distances(options: &Options, s: f64, grain: Option<Grain>) -> Result<(f64, f64)> {
     // beyond the clouds' largest half-extent (1 in normalised units) every point pairs with
     // one whatever the pose: a fit, and a confidence, that say nothing
     let too_far = |name: &str, v: f64, why: &str| {
@@ -202,7 +244,7 @@ pub(crate) fn distances(options: &Options, s: f64) -> Result<(f64, f64)> {
                 num(d)
             )))
         }
-        None => DEFAULT_MAX_CORRESPONDENCE,
+        None => default_distance(grain),
     };
     let voxel = match options.voxel_size {
         // Voxels below a millionth of the clouds' half-extent cannot merge distinct f32 points

@@ -169,7 +169,12 @@ pub(crate) fn prepare(
     let t_initial = norm.normalize_transform(&shift);
     checks::initial_distance(&t_initial)?;
     let src_n = source_init.into_transformed(&norm.source_to_normalized());
-    let (d_final, voxel) = options::distances(options, norm.scale)?;
+    // how finely the pair resolves its surfaces: the coarser of the two, in normalised units
+    let grain = options::pair_grain(
+        crate::grain::of(&src_n.points, options::DEFAULT_VOXEL),
+        summary.grain.map(|g| crate::grain::Grain { spacing: g.spacing / norm.scale, spread: g.spread / norm.scale }),
+    );
+    let (d_final, voxel) = options::distances(options, norm.scale, grain)?;
     let sizes = Sizes { scale: norm.scale.to_bits(), voxel: voxel.to_bits(), n_net, seed: options.seed };
     let target = match given {
         Given::Kept(mut k, _) if k.sizes.scale == sizes.scale => {

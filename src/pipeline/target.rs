@@ -13,6 +13,7 @@
 
 use crate::cloud::{JointNormalization, NonFinite, PointCloud};
 use crate::global::{self, TargetFeatures};
+use crate::grain::{self, Grain};
 use crate::icp::IcpTarget;
 use crate::outliers::Outliers;
 use crate::support::Support;
@@ -73,6 +74,9 @@ pub(crate) struct TargetSummary {
     pub warnings: Vec<Warning>,
     /// The step its `f32` coordinates are rounded to (`checks::f32_rounding`, its units).
     pub rounding: f64,
+    /// How finely it resolves its surface ([`grain::of`] in cells of the default ICP voxel at its
+    /// own size; its units), `None` when sparse at that scale.
+    pub grain: Option<Grain>,
 }
 
 /// What the prepared target depends on besides the target: the normalisation's scale (the
@@ -103,7 +107,8 @@ pub(crate) fn summary(target: &PointCloud, warnings: Vec<Warning>, rounding: f64
     let mut warnings = warnings;
     let spreads = checks::not_collinear("target", &target.points, &mut warnings)?;
     let bounding = JointNormalization::box_of(target);
-    Ok(TargetSummary { origin: target.origin, bounding, spreads, warnings, rounding })
+    let grain = grain::of(&target.points, super::options::DEFAULT_VOXEL * bounding.1);
+    Ok(TargetSummary { origin: target.origin, bounding, spreads, warnings, rounding, grain })
 }
 
 /// The target prepared for the network, ICP and the global hypotheses (normalised units), with
