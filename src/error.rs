@@ -22,6 +22,16 @@ pub enum Error {
         /// What went wrong, and where.
         message: String,
     },
+    /// A file that was read but cannot be written moved as it is (`io::transform_file`, the CLI's
+    /// `--aligned`): a field that cannot hold moved coordinates, or a layout whose bytes would
+    /// change. `format` names the file's format, `message` what stands in the way and what to do.
+    #[error("{format} file cannot be moved as it is: {message}")]
+    Unmovable {
+        /// The format of the file.
+        format: &'static str,
+        /// What stands in the way, and what to do instead.
+        message: String,
+    },
     /// A weights file that is corrupt, truncated, of an unknown version, or does not match the
     /// model configuration it declares (the first mismatching tensor is named).
     #[error("weights: {0}")]
@@ -48,6 +58,11 @@ impl Error {
     /// Shorthand for a [`Error::Parse`].
     pub fn parse(format: &'static str, message: impl Into<String>) -> Self {
         Error::Parse { format, message: message.into() }
+    }
+
+    /// Shorthand for an [`Error::Unmovable`].
+    pub fn unmovable(format: &'static str, message: impl Into<String>) -> Self {
+        Error::Unmovable { format, message: message.into() }
     }
 }
 

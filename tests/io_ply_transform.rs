@@ -176,12 +176,12 @@ fn hostile_files_and_transforms_are_refused_with_a_message() {
         b"ply\nformat ascii 1.0\nelement vertex 1\nproperty int x\nproperty int y\nproperty int z\nend_header\n1 2 3\n",
         &m
     )
-    .contains("is an integer"));
+    .starts_with("PLY file cannot be moved as it is: vertex property 'x' is an integer"));
     assert!(refused(
         b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty list uchar int ids\nend_header\n1 2 3 0\n",
         &m
     )
-    .contains("list property ('ids')"));
+    .starts_with("PLY file cannot be moved as it is: element 'vertex' has a list property ('ids')"));
     assert!(refused(b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n4 5\n", &m)
         .contains("a vertex needs 3 values"));
     assert!(refused(b"ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n", &m)

@@ -215,22 +215,25 @@ const COARSENED_NEGLIGIBLE: f64 = 2.5e-6;
 /// the axes `single` marks), moved by `motion`, beyond [`Bounds::f32_rounds`]'s rule: such a file cannot hold them (a local
 /// scan moved onto a map grid), and writing it would move every point by up to half that step. A
 /// cloud of no extent is never refused.
-pub(super) fn check_f32(bounds: &Bounds, motion: &Motion, single: [bool; 3], format: &str) -> Result<()> {
+pub(super) fn check_f32(bounds: &Bounds, motion: &Motion, single: [bool; 3], format: &'static str) -> Result<()> {
     // a cloud of no extent (one point, or one place) has no size to lose digits against: moved
     // anywhere, float32 holds it to its usual seven digits
     if bounds.0.iter().all(|[lo, hi]| hi <= lo) {
         return Ok(());
     }
     match bounds.f32_rounds(motion, single) {
-        Some(step) => Err(Error::InvalidOption(format!(
-            "the transform moves this {format} file's points up to {} from zero, where its float32 coordinates hold \
-             them only to steps of {} (the cloud is {} across): save the moved points in double precision instead, \
-             as a PLY (in JS: writePly(transformPointCloud(...)); the CLI: --aligned with a .ply path), which keeps \
-             only the points",
-            crate::error::num(bounds.largest_moved(motion)),
-            crate::error::num(step),
-            crate::error::num(bounds.diagonal(motion))
-        ))),
+        Some(step) => Err(Error::unmovable(
+            format,
+            format!(
+                "the transform moves its points up to {} from zero, where its float32 coordinates hold them only to \
+                 steps of {} (the cloud is {} across): save the moved points in double precision instead, as a PLY \
+                 (in JS: writePly(transformPointCloud(...)); the CLI: --aligned with a .ply path), which keeps only \
+                 the points",
+                crate::error::num(bounds.largest_moved(motion)),
+                crate::error::num(step),
+                crate::error::num(bounds.diagonal(motion))
+            ),
+        )),
         None => Ok(()),
     }
 }

@@ -27,7 +27,7 @@ fn refuse_continued_vertices(bytes: &[u8]) -> Result<()> {
     for (n, raw) in Lines::new(bytes) {
         let kw = raw.trim_ascii_start().split(|b| b.is_ascii_whitespace()).next().unwrap_or_default();
         if (kw == b"v" || kw == b"vn") && continued(raw).is_some() {
-            return Err(Error::parse(
+            return Err(Error::unmovable(
                 F,
                 format!(
                     "line {n}: a vertex continued on the next line (a trailing '\\') cannot be moved in place; \

@@ -37,7 +37,7 @@ pub fn transform_pcd(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
     for (fi, _, _) in h.axes {
         let f = &h.fields[fi];
         if f.ty != 'F' {
-            return Err(Error::parse(
+            return Err(Error::unmovable(
                 F,
                 format!(
                     "field '{}' is an integer (TYPE {}): it cannot hold moved coordinates (TYPE F needed)",

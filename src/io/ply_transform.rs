@@ -39,11 +39,10 @@ struct Layout {
 /// scalar, or the element has a list property (a vertex of variable size).
 fn layout(el: &Element) -> Result<Layout> {
     if let Some(list) = el.props.iter().find(|p| matches!(p.kind, Kind::List { .. })) {
-        return Err(Error::parse(
+        return Err(Error::unmovable(
             F,
             format!(
-                "the file was read, but it cannot be moved as it is: element 'vertex' has a list property ('{}'), so \
-                 its vertices differ in size; save the moved points as a new PLY instead (in JS: \
+                "element 'vertex' has a list property ('{}'), so its vertices differ in size; save the moved points as a new PLY instead (in JS: \
                  writePly(transformPointCloud(...)), which keeps only the points)",
                 list.name
             ),
@@ -55,7 +54,7 @@ fn layout(el: &Element) -> Result<Layout> {
     for (a, axis) in ["x", "y", "z"].into_iter().enumerate() {
         let i = find(axis).ok_or_else(|| Error::parse(F, format!("element 'vertex' has no '{axis}' property")))?;
         if !float(i) {
-            return Err(Error::parse(
+            return Err(Error::unmovable(
                 F,
                 format!(
                     "vertex property '{axis}' is an integer: it cannot hold moved coordinates (float or double needed)"

@@ -78,7 +78,7 @@ pub fn transform_text(bytes: &[u8], m: &Matrix4<f64>) -> Result<Vec<u8>> {
         if !out.line_if(row.line, &mut edits, &readable) {
             edits.iter_mut().for_each(|e| e.2 = e.2.with_point());
             if !out.line_if(row.line, &mut edits, &readable) {
-                return Err(Error::parse(
+                return Err(Error::unmovable(
                     "XYZ",
                     format!("{}: its moved values would read as numbers with decimal commas", show(row.line.trim())),
                 ));
