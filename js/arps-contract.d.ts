@@ -37,12 +37,13 @@ export type RegisterOptions = {
   network?: boolean,
   /**
    * ICP's final maximum correspondence distance, in the clouds' units. Default: 2.5% of the
-   * clouds' shared half-extent; on a dense pair (a scene whose points lie closer than a tenth
-   * of that, such as a LiDAR frame or a drone survey) four point spacings of the sparser
-   * cloud, at least three times its noise and a quarter of the 2.5% (Rust: `arps::grain`);
-   * the result's `maxCorrespondenceDistance` says which. ICP runs coarse to fine at 4x, 2x and
-   * 1x this distance; `fitness` and `inlierRmse` are measured at 1x. Must be > 0, and at most
-   * the clouds' shared half-extent (beyond it every point pairs with one, whatever the pose).
+   * clouds' shared half-extent, or six point spacings of the sparser cloud where that is less
+   * (a dense scene: a LiDAR frame, a drone survey, an object scan of millions of points), at
+   * least three times its noise and a quarter of the 2.5% (Rust: `arps::grain`); the result's
+   * `maxCorrespondenceDistance` says which. ICP runs coarse to fine at 4x, 2x and 1x this
+   * distance; `fitness` and `inlierRmse` are measured at 1x (the confidence's evidence at the
+   * 2.5%, or at a smaller distance you give). Must be > 0, and at most the clouds' shared
+   * half-extent (beyond it every point pairs with one, whatever the pose).
    */
   maxCorrespondenceDistance?: number | null,
   /**

@@ -15,10 +15,13 @@ use nalgebra::Matrix4;
 
 /// Default final ICP distance in normalised units, on clouds that resolve their surfaces no
 /// more finely than a few spacings of it (see [`default_distance`]).
-const DEFAULT_MAX_CORRESPONDENCE: f64 = 0.025;
+pub(crate) const DEFAULT_MAX_CORRESPONDENCE: f64 = 0.025;
 
-/// The default ICP voxel in normalised units: half the default distance.
-pub(crate) const DEFAULT_VOXEL: f64 = DEFAULT_MAX_CORRESPONDENCE * 0.5;
+/// The cells [`crate::grain::of`] measures a cloud's grain in, normalised units: the size-based
+/// default distance. In cells of half of it (the default ICP voxel) a noise of a tenth of the
+/// cell lost its tails to the cell's faces (a 3-million-point bunny's noise read as a half to
+/// 0.87 of what it was).
+pub(crate) const GRAIN_CELL: f64 = DEFAULT_MAX_CORRESPONDENCE;
 
 /// The coarser of two clouds' grains (either may be sparse: then the pair has none).
 pub(crate) fn pair_grain(a: Option<Grain>, b: Option<Grain>) -> Option<Grain> {
@@ -26,15 +29,12 @@ pub(crate) fn pair_grain(a: Option<Grain>, b: Option<Grain>) -> Option<Grain> {
     Some(Grain { spacing: a.spacing.max(b.spacing), spread: a.spread.max(b.spread) })
 }
 
-/// The default distance is kept unless it spans more than this many of the pair's point spacings
-/// ([`Grain::spacing`]): it spans 2.5-4 on objects' scans, the 3DMatch fragments and the paper's
-/// pairs, 9 on 500,000-point objects, 13-29 on a drone survey of 1-5 million points and about 20
-/// on a LiDAR frame, where an answer off by a fraction of it fits as well as the right one
-/// (`BENCHMARK.md`, "Dense scenes: a default distance from the points' grain").
-const DENSE_SPACINGS: f64 = 10.0;
-
-/// On a denser pair the default is this many of its point spacings...
-const GRAIN_SPACINGS: f64 = 4.0;
+/// The default distance is at most this many of the pair's point spacings ([`Grain::spacing`]):
+/// the size-based default spans 2.5-4 on objects' scans, the 3DMatch fragments and the paper's
+/// pairs (which keep it), 8-9 on 500,000-point objects, 13-29 on a drone survey of 1-5 million
+/// points and about 15 on a LiDAR frame, where an answer off by a fraction of it fits as well as
+/// the right one (`BENCHMARK.md`, "Dense scenes: a default distance from the points' grain").
+const GRAIN_SPACINGS: f64 = 6.0;
 
 /// ...and no less than this many times its points' spread across their surface
 /// ([`Grain::spread`]: noise) ...
@@ -45,16 +45,15 @@ const GRAIN_SPREADS: f64 = 3.0;
 const MIN_GRAIN_SHARE: f64 = 0.25;
 
 /// The default final distance for a pair whose grain is `grain` (normalised units; `None`: sparse
-/// at the default voxel's scale): [`DEFAULT_MAX_CORRESPONDENCE`], or on a pair that resolves its
-/// surfaces more finely than [`DENSE_SPACINGS`] of it, [`GRAIN_SPACINGS`] of its spacing (within
-/// the bounds above).
+/// at the scale of [`GRAIN_CELL`]): [`DEFAULT_MAX_CORRESPONDENCE`], or [`GRAIN_SPACINGS`] of the
+/// pair's spacing where that is less (within the bounds above), so that it shrinks smoothly as
+/// the clouds get denser.
 pub(crate) fn default_distance(grain: Option<Grain>) -> f64 {
-    match grain {
-        Some(g) if DEFAULT_MAX_CORRESPONDENCE > DENSE_SPACINGS * g.spacing => (GRAIN_SPACINGS * g.spacing)
+    grain.map_or(DEFAULT_MAX_CORRESPONDENCE, |g| {
+        (GRAIN_SPACINGS * g.spacing)
             .max(GRAIN_SPREADS * g.spread)
-            .clamp(MIN_GRAIN_SHARE * DEFAULT_MAX_CORRESPONDENCE, DEFAULT_MAX_CORRESPONDENCE),
-        _ => DEFAULT_MAX_CORRESPONDENCE,
-    }
+            .clamp(MIN_GRAIN_SHARE * DEFAULT_MAX_CORRESPONDENCE, DEFAULT_MAX_CORRESPONDENCE)
+    })
 }
 
 /// The options that need no cloud to check, resolved.
@@ -184,11 +183,19 @@ pub(crate) fn rigid_in_local_frames(
 const MIN_DISTANCE_OF_F32_STEP: f64 = 1e-4;
 
 /// The distance the answer's evidence and confidence are measured at, in normalised units: the
-/// final ICP distance `d_final`, or the default one when that is smaller. The confidence is
-/// calibrated at the default; measured at a wider distance the caller chose, every pose would
-/// fit better and a wrong one pass for right.
-pub(crate) fn evidence_distance(d_final: f64) -> f64 {
-    d_final.min(DEFAULT_MAX_CORRESPONDENCE)
+/// final ICP distance `d_final` the caller gave, or the size-based default when that is smaller
+/// or the caller gave none. The confidence is calibrated at the size-based default; measured at a
+/// wider distance the caller chose, every pose would fit better and a wrong one pass for right.
+/// A dense pair's tighter default ([`default_distance`]) refines the answer, and its evidence is
+/// still measured at the size-based default: at the tighter one a turned or slid look-alike of a
+/// nearly round part fits less well and the probes stopped counting it (a casting's half views
+/// 85 degrees off at 0.965 instead of 0.25: `BENCHMARK.md`, "Dense scenes: a default distance
+/// from the points' grain").
+pub(crate) fn evidence_distance(options: &Options, d_final: f64) -> f64 {
+    match options.max_correspondence_distance {
+        Some(_) => d_final.min(DEFAULT_MAX_CORRESPONDENCE),
+        None => DEFAULT_MAX_CORRESPONDENCE,
+    }
 }
 
 /// The distance the search's ICP stages start from ([`crate::refine::Refinement::d_coarse`]), in
@@ -270,9 +277,9 @@ pub(crate) fn distances(options: &Options, s: f64, grain: Option<Grain>) -> Resu
                 num(v)
             )))
         }
-        // half the evidence distance: a wider final distance than the default keeps the default's
+        // half the final distance: a wider final distance than the default keeps the default's
         // voxels, on which the answer's evidence is measured as it was calibrated
-        None => evidence_distance(d_final) * 0.5,
+        None => d_final.min(DEFAULT_MAX_CORRESPONDENCE) * 0.5,
     };
     Ok((d_final, voxel))
 }

@@ -171,7 +171,7 @@ pub(crate) fn prepare(
     let src_n = source_init.into_transformed(&norm.source_to_normalized());
     // how finely the pair resolves its surfaces: the coarser of the two, in normalised units
     let grain = options::pair_grain(
-        crate::grain::of(&src_n.points, options::DEFAULT_VOXEL),
+        crate::grain::of(&src_n.points, options::GRAIN_CELL),
         summary.grain.map(|g| crate::grain::Grain { spacing: g.spacing / norm.scale, spread: g.spread / norm.scale }),
     );
     let (d_final, voxel) = options::distances(options, norm.scale, grain)?;
@@ -208,7 +208,7 @@ pub(crate) fn prepare(
     limits::check_icp_points("source", src_n.len(), icp_src.len(), voxel_user, default)?;
     limits::check_icp_points("target", target.cloud.len(), target.icp.len(), voxel_user, default)?;
     let upright = Upright::of(options, &rotate_init);
-    let d_evidence = options::evidence_distance(d_final);
+    let d_evidence = options::evidence_distance(options, d_final);
     let rounding = source_rounding.max(target.summary.rounding) / norm.scale;
     Ok(Prepared {
         source_scale,

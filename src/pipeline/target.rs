@@ -74,7 +74,7 @@ pub(crate) struct TargetSummary {
     pub warnings: Vec<Warning>,
     /// The step its `f32` coordinates are rounded to (`checks::f32_rounding`, its units).
     pub rounding: f64,
-    /// How finely it resolves its surface ([`grain::of`] in cells of the default ICP voxel at its
+    /// How finely it resolves its surface ([`grain::of`] in cells of the default distance at its
     /// own size; its units), `None` when sparse at that scale.
     pub grain: Option<Grain>,
 }
@@ -107,7 +107,7 @@ pub(crate) fn summary(target: &PointCloud, warnings: Vec<Warning>, rounding: f64
     let mut warnings = warnings;
     let spreads = checks::not_collinear("target", &target.points, &mut warnings)?;
     let bounding = JointNormalization::box_of(target);
-    let grain = grain::of(&target.points, super::options::DEFAULT_VOXEL * bounding.1);
+    let grain = grain::of(&target.points, super::options::GRAIN_CELL * bounding.1);
     Ok(TargetSummary { origin: target.origin, bounding, spreads, warnings, rounding, grain })
 }
 

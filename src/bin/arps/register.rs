@@ -51,7 +51,8 @@ pub struct RegisterArgs {
     /// Refinement after the network.
     #[arg(long, value_enum, default_value_t = IcpArg::Plane)]
     icp: IcpArg,
-    /// Final ICP max correspondence distance, in the clouds' units (default: 2.5% of their half-extent).
+    /// Final ICP max correspondence distance, in the clouds' units (default: 2.5% of their
+    /// half-extent, or six point spacings of the sparser cloud where that is less: a dense scene).
     #[arg(long)]
     max_correspondence_distance: Option<f64>,
     /// Iteration cap of each ICP stage [default: the engine's `Options::icp_max_iterations`].
