@@ -103,14 +103,6 @@ fn one() -> f64 {
 /// (`BENCHMARK.md`, "Motions the fit leaves free").
 pub const UNPINNED_CONSTRAINT: f64 = 1e-3;
 
-/// The least distance (normalised units) [`Evidence::slide`] and [`Evidence::constraint`] are
-/// measured at: the size-based default correspondence distance, where [`SLID_FREE`] was set. At a
-/// tighter one (a dense pair's default, or the caller's) a nearly round part's slide along its
-/// axis loses much of the fit to small departures from roundness (0.51 at 0.0072 against 0.98 at
-/// 0.019 on a casting's half views, two wrong answers then passed at 0.98-0.998 for right:
-/// `BENCHMARK.md`, "Dense scenes: a default distance from the points' grain").
-pub const SLIDE_MIN_DISTANCE: f64 = crate::pipeline::options::DEFAULT_MAX_CORRESPONDENCE;
-
 /// [`Evidence::slide`] at or above this: the fit barely holds the answer along its least
 /// constrained motion either (it keeps this share of the fit slid a quarter of the clouds'
 /// half-size along it), which is then as free as below [`UNPINNED_CONSTRAINT`]: a tunnel scan on
@@ -399,10 +391,7 @@ pub fn probe(
     // the answer's fitness on the probe points, which both probes compare against
     let mut probe_partners = Partners::default();
     let base = target.evaluate_warm(&probe, T_target_source, d, &mut probe_partners).0;
-    // the slide at no less than the size-based default distance ([`SLIDE_MIN_DISTANCE`])
-    let d_slide = d.max(SLIDE_MIN_DISTANCE);
-    let base_slide = if d_slide > d { target.evaluate(&probe, T_target_source, d_slide).0 } else { base };
-    let (slide, screw, constraint, also) = slide(target, &probe, T_target_source, d_slide, base_slide);
+    let (slide, screw, constraint, also) = slide(target, &probe, T_target_source, d, base);
     let free = screw
         .filter(|_| constraint < UNPINNED_CONSTRAINT || slide >= SLID_FREE)
         .map(|Screw { w, shift, c }| FreeScrew { w, shift, c, constraint, slide, also });
