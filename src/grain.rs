@@ -38,6 +38,14 @@ pub struct Grain {
     pub spread: f64,
 }
 
+impl Grain {
+    /// The grain with both lengths multiplied by `factor` (1 / the normalisation's scale: in
+    /// normalised units).
+    pub fn scaled(self, factor: f64) -> Self {
+        Self { spacing: self.spacing * factor, spread: self.spread * factor }
+    }
+}
+
 /// The grain of `points` measured in cells of side `cell` (their units); `None` when the cloud is
 /// sparse at that scale or `cell` is not a positive finite size.
 pub fn of(points: &[[f32; 3]], cell: f64) -> Option<Grain> {

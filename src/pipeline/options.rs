@@ -13,9 +13,9 @@ use crate::register::{Options, MAX_NETWORK_POINTS};
 use crate::{transform, Error, Result};
 use nalgebra::Matrix4;
 
-/// Default final ICP distance in normalised units, on clouds that resolve their surfaces no
-/// more finely than a few spacings of it (see [`default_distance`]).
-pub(crate) const DEFAULT_MAX_CORRESPONDENCE: f64 = 0.025;
+/// The size-based default final ICP distance in normalised units (2.5% of the clouds' shared
+/// half-extent); a dense pair's default is less ([`default_distance`]).
+const DEFAULT_MAX_CORRESPONDENCE: f64 = 0.025;
 
 /// The cells [`crate::grain::of`] measures a cloud's grain in, normalised units: the size-based
 /// default distance. In cells of half of it (the default ICP voxel) a noise of a tenth of the
@@ -31,7 +31,7 @@ pub(crate) fn pair_grain(a: Option<Grain>, b: Option<Grain>) -> Option<Grain> {
 
 /// The default distance is at most this many of the pair's point spacings ([`Grain::spacing`]):
 /// the size-based default spans 2.5-4 on objects' scans, the 3DMatch fragments and the paper's
-/// pairs (which keep it), 8-9 on 500,000-point objects, 13-29 on a drone survey of 1-5 million
+/// pairs (which keep it), 7-9 on 500,000-point objects, 13-29 on a drone survey of 1-5 million
 /// points and about 15 on a LiDAR frame, where an answer off by a fraction of it fits as well as
 /// the right one (`BENCHMARK.md`, "Dense scenes: a default distance from the points' grain").
 const GRAIN_SPACINGS: f64 = 6.0;
@@ -277,9 +277,55 @@ pub(crate) fn distances(options: &Options, s: f64, grain: Option<Grain>) -> Resu
                 num(v)
             )))
         }
-        // half the final distance: a wider final distance than the default keeps the default's
-        // voxels, on which the answer's evidence is measured as it was calibrated
+        // half the final distance; a wider one than the default keeps the default's voxels, on
+        // which the answer's evidence is measured as it was calibrated (a dense pair's tighter
+        // default takes finer ones: its answer is refined on them)
         None => d_final.min(DEFAULT_MAX_CORRESPONDENCE) * 0.5,
     };
     Ok((d_final, voxel))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const D: f64 = DEFAULT_MAX_CORRESPONDENCE;
+
+    fn grain(spacing: f64, spread: f64) -> Option<Grain> {
+        Some(Grain { spacing, spread })
+    }
+
+    #[test]
+    fn a_dense_pairs_default_shrinks_smoothly_with_its_spacing_within_its_bounds() {
+        // sparse at the cells' scale, or no denser than six spacings to the share: the share
+        assert_eq!(default_distance(None), D);
+        assert_eq!(default_distance(grain(D / 4.0, 0.0)), D);
+        assert_eq!(default_distance(grain(D / 6.0, 0.0)), D);
+        // denser: six spacings, continuous where it meets the share
+        assert!((default_distance(grain(D / 6.0 * 0.999, 0.0)) - D * 0.999).abs() < 1e-12);
+        assert!((default_distance(grain(D / 12.0, 0.0)) - D / 2.0).abs() < 1e-12);
+        // no less than three spreads (noise) ...
+        assert!((default_distance(grain(D / 12.0, D / 4.0)) - D * 0.75).abs() < 1e-12);
+        // ... nor a quarter of the share
+        assert_eq!(default_distance(grain(D / 100.0, 0.0)), D / 4.0);
+        // the coarser of the two clouds
+        let pair = pair_grain(grain(D / 12.0, 0.001), grain(D / 8.0, 0.0005)).unwrap();
+        assert_eq!((pair.spacing, pair.spread), (D / 8.0, 0.001));
+        assert!(pair_grain(grain(D / 12.0, 0.0), None).is_none());
+    }
+
+    #[test]
+    fn the_evidence_is_measured_at_the_share_unless_the_caller_gives_a_tighter_distance() {
+        let given = |d: f64| Options { max_correspondence_distance: Some(d), ..Options::default() };
+        // a dense pair's own tighter default: evidence at the share, as calibrated
+        assert_eq!(evidence_distance(&Options::default(), D / 3.0), D);
+        // the caller's: the tighter of theirs and the share
+        assert_eq!(evidence_distance(&given(1.0), D / 3.0), D / 3.0);
+        assert_eq!(evidence_distance(&given(1.0), D * 3.0), D);
+        // the voxel follows the final distance, up to the share's
+        let (d, voxel) = distances(&Options::default(), 1.0, grain(D / 12.0, 0.0)).unwrap();
+        assert!((d - D / 2.0).abs() < 1e-12 && (voxel - D / 4.0).abs() < 1e-12);
+        let (d, voxel) = distances(&given(3.0 * D), 1.0, grain(D / 12.0, 0.0)).unwrap();
+        assert!((d - 3.0 * D).abs() < 1e-12 && (voxel - D / 2.0).abs() < 1e-12);
+    }
 }

@@ -172,7 +172,7 @@ pub(crate) fn prepare(
     // how finely the pair resolves its surfaces: the coarser of the two, in normalised units
     let grain = options::pair_grain(
         crate::grain::of(&src_n.points, options::GRAIN_CELL),
-        summary.grain.map(|g| crate::grain::Grain { spacing: g.spacing / norm.scale, spread: g.spread / norm.scale }),
+        summary.grain.map(|g| g.scaled(1.0 / norm.scale)),
     );
     let (d_final, voxel) = options::distances(options, norm.scale, grain)?;
     let sizes = Sizes { scale: norm.scale.to_bits(), voxel: voxel.to_bits(), n_net, seed: options.seed };
