@@ -37,7 +37,8 @@ export type RegisterOptions = {
   network?: boolean,
   /**
    * ICP's final maximum correspondence distance, in the clouds' units. Default: 2.5% of the
-   * clouds' shared half-extent, or six point spacings of the sparser cloud where that is less
+   * clouds' shared half-extent (of the points kept: far outliers and a dropped support plane
+   * left out), or six point spacings of the sparser cloud where that is less
    * (a dense scene: a LiDAR frame, a drone survey, an object scan of millions of points), at
    * least three times its noise and a quarter of the 2.5% (Rust: `arps::grain`); the result's
    * `maxCorrespondenceDistance` says which. ICP runs coarse to fine at 4x, 2x and 1x this
