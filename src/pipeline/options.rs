@@ -207,7 +207,8 @@ pub(crate) fn coarse_distance(d_final: f64) -> f64 {
 }
 
 /// The final ICP distance and the ICP voxel size in normalised units, for a normalisation of
-/// scale `s` (user units per normalised unit).
+/// scale `s` (user units per normalised unit) and a pair whose grain is `grain` (normalised
+/// units; [`default_distance`] when the caller gives no distance).
 pub(crate) fn distances(options: &Options, s: f64, grain: Option<Grain>) -> Result<(f64, f64)> {
     // beyond the clouds' largest half-extent (1 in normalised units) every point pairs with
     // one whatever the pose: a fit, and a confidence, that say nothing
