@@ -169,11 +169,15 @@ pub(crate) fn prepare(
     let t_initial = norm.normalize_transform(&shift);
     checks::initial_distance(&t_initial)?;
     let src_n = source_init.into_transformed(&norm.source_to_normalized());
-    // how finely the pair resolves its surfaces: the coarser of the two, in normalised units
-    let grain = options::pair_grain(
-        crate::grain::of(&src_n.points, options::GRAIN_CELL),
-        summary.grain.map(|g| g.scaled(1.0 / norm.scale)),
-    );
+    // how finely the pair resolves its surfaces, for the default distance (a distance the caller
+    // gives needs none: the source's pass is skipped): the coarser of the two, normalised units
+    let grain = match options.max_correspondence_distance {
+        Some(_) => None,
+        None => options::pair_grain(
+            crate::grain::of(&src_n.points, options::GRAIN_CELL),
+            summary.grain.map(|g| g.scaled(1.0 / norm.scale)),
+        ),
+    };
     let (d_final, voxel) = options::distances(options, norm.scale, grain)?;
     let sizes = Sizes { scale: norm.scale.to_bits(), voxel: voxel.to_bits(), n_net, seed: options.seed };
     let target = match given {
