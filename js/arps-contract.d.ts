@@ -56,14 +56,19 @@ export type RegisterOptions = {
    */
   icpMaxIterations?: number,
   /**
-   * How the answer's last refinement weighs its pairs: `"squared"` (every pair within the
-   * distance alike; the default) or `"robust"` (once the search has its answer, one more
-   * refinement weighs each pair by Tukey's biweight of its residual, so that a surface that
-   * changed between the scans, such as eroded cliffs, a new building, a moved object or a bent
-   * part, no longer pulls the answer; it runs at the distance, then at a half and a quarter of
-   * it, whose pose is kept where clearly more of the source lies within the quarter, so that a
-   * change about as high as the distance, which pulled least squares, is left out too). For
-   * scans of a scene that changed, and for survey accuracy.
+   * How ICP weighs its pairs: `"robust"` (the default: each pair weighed by Tukey's biweight
+   * of its residual, so that a surface that changed between the scans, such as eroded cliffs,
+   * a new building, a dug pit, moved furniture or a bent part, no longer pulls the answer; in
+   * every stage of the refinement of `initialTransform`, which the wide stages would
+   * otherwise pull off a right guess, and in one more refinement of the search's answer, at
+   * the scale of the pairs' spread and by a graduated descent of fixed scales from half the
+   * distance down, so that a change within the distance, which pulled least squares far
+   * enough to spread every residual, is left out too; that pose replaces the least-squares
+   * answer only where clearly more of the source lies on the target's surfaces, so where
+   * nothing changed the answer is least squares' but for a few pairs in a hundred) or
+   * `"squared"` (every pair within the distance alike, throughout). A change over half the
+   * overlap is the scene to any robust weighting, and one lower than the error it leaves (a
+   * low pad that tilted the fit by as much) is not told from it.
    */
   icpLoss?: IcpLoss,
   /**
@@ -286,7 +291,7 @@ export type RegistrationSearch = "adaptive" | "exhaustive" | "local";
 export type IcpKind = "off" | "point" | "plane";
 
 /**
- * How the answer's last refinement weighs its pairs (`Options::icp_loss`).
+ * How ICP weighs the answer's pairs (`Options::icp_loss`).
  */
 export type IcpLoss = "squared" | "robust";
 

@@ -82,13 +82,7 @@ pub fn of(points: &[[f32; 3]], cell: f64) -> Option<Grain> {
     if spacings.len() * 2 < moments.len() {
         return None;
     }
-    Some(Grain { spacing: median(&mut spacings), spread: median(&mut spreads) })
-}
-
-/// The median of a non-empty list (the upper one of an even count).
-fn median(v: &mut [f64]) -> f64 {
-    let mid = v.len() / 2;
-    *v.select_nth_unstable_by(mid, f64::total_cmp).1
+    Some(Grain { spacing: crate::stats::median(&mut spacings)?, spread: crate::stats::median(&mut spreads)? })
 }
 
 /// A cell's point count and sums (about its anchor).

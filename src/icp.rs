@@ -19,18 +19,23 @@ pub enum IcpKind {
     Plane,
 }
 
-/// How the answer's last refinement weighs its pairs (`Options::icp_loss`).
+/// How ICP weighs the answer's pairs (`Options::icp_loss`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "camelCase")]
 #[cfg_attr(feature = "ts", derive(ts_rs::TS), ts(rename = "IcpLoss"))]
 pub enum IcpLoss {
-    /// Every pair within the distance alike (least squares), the default.
-    #[default]
+    /// Every pair within the distance alike (least squares), throughout.
     Squared,
-    /// After the search, the answer is refined once more with each pair weighed by Tukey's
-    /// biweight of its residual ([`IcpParams::robust`]), at the distance and then at a half and a
-    /// quarter of it: a surface that changed between the scans (erosion, construction, a moved
-    /// object, a bent part) no longer pulls the answer, the surfaces that stayed hold it.
+    /// Least squares in the search, then each pair weighed by Tukey's biweight of its residual
+    /// ([`IcpParams::robust`]): in every stage of the refinement of the caller's
+    /// `initialTransform`, and in one more refinement of the search's answer, at the scale of
+    /// the pairs' spread and by a graduated descent of fixed scales (a half to a sixteenth of the
+    /// distance), whose pose replaces the answer only where clearly more of the source lies on
+    /// the target's surfaces (to within a few times the residuals' noise) than under it. A surface
+    /// that changed between the scans (erosion, construction, a moved object, a bent part) no
+    /// longer pulls the answer; the surfaces that stayed hold it. Where nothing changed the
+    /// answer is, but for a few pairs in a hundred, least squares'. The default.
+    #[default]
     Robust,
 }
 
@@ -76,6 +81,12 @@ pub struct IcpParams {
     /// changed between the scans) no longer pull the step. `false` (what [`IcpParams::new`] sets):
     /// every pair within the distance counts alike.
     pub robust: bool,
+    /// With [`IcpParams::robust`]: the biweight's scale (the residual whose weight is zero), fixed,
+    /// instead of [`TUKEY_C`] robust spreads of the pairs' residuals. A graduated descent of
+    /// fixed scales leaves out a changed surface that the spread alone counts in, when it moved
+    /// the pose enough to spread every residual. `None` (what [`IcpParams::new`] sets): the
+    /// spread's.
+    pub robust_scale: Option<f64>,
 }
 
 /// Tukey's biweight constant of [`IcpParams::robust`], in robust spreads: 95% efficiency on
@@ -123,20 +134,25 @@ impl IcpParams {
             damping: 0.0,
             give_up: None,
             robust: false,
+            robust_scale: None,
         }
     }
 }
 
-/// Tukey's biweights of `residuals` ([`IcpParams::robust`]); `None` when their median absolute
-/// value is zero or not finite (every pair alike: the plain step).
-fn tukey_weights(residuals: &[f64]) -> Option<Vec<f64>> {
+/// Tukey's biweights of `residuals` ([`IcpParams::robust`]) at the scale `fixed`, or without one
+/// at [`TUKEY_C`] robust spreads; `None` when that scale is zero or not finite (every pair
+/// alike: the plain step).
+fn tukey_weights(residuals: &[f64], fixed: Option<f64>) -> Option<Vec<f64>> {
     if residuals.is_empty() {
         return None;
     }
-    let mut abs: Vec<f64> = residuals.iter().map(|r| r.abs()).collect();
-    let mid = abs.len() / 2;
-    let median = *abs.select_nth_unstable_by(mid, f64::total_cmp).1;
-    let c = TUKEY_C * 1.4826 * median;
+    let c = match fixed {
+        Some(c) => c,
+        None => {
+            let mut abs: Vec<f64> = residuals.iter().map(|r| r.abs()).collect();
+            TUKEY_C * 1.4826 * crate::stats::median(&mut abs)?
+        }
+    };
     if !(c.is_finite() && c > 0.0) {
         return None;
     }
@@ -484,8 +500,8 @@ impl IcpTarget {
                 break;
             }
             let update = match params.kind {
-                IcpKind::Plane => self.plane_update(scratch, params.damping, params.robust),
-                _ => self.point_update(scratch, params.robust),
+                IcpKind::Plane => self.plane_update(scratch, params),
+                _ => self.point_update(scratch, params),
             };
             let Some(update) = update else { break };
             let next = compose_rigid(&update, &t);
@@ -536,6 +552,20 @@ impl IcpTarget {
         partners: &mut Partners,
     ) -> (f64, f64) {
         partners.lend(|scratch| self.correspond(source, t, max_distance, scratch))
+    }
+
+    /// The residuals (absolute, along the target point's normal) of the points of `source`
+    /// under `T_target_source` whose nearest target point lies within `max_distance`, in the
+    /// source's order: how far the source lies off the target's surfaces, however sparsely the
+    /// target samples them (the distance to the nearest point counts the sampling too).
+    pub fn plane_residuals(&self, source: &[[f32; 3]], t: &Matrix4<f64>, max_distance: f64) -> Vec<f64> {
+        let mut scratch = Scratch::default();
+        self.correspond(source, t, max_distance, &mut scratch);
+        let along = |p: &[f64; 3], j: usize| {
+            let (q, n) = (self.points[j], self.normal(j));
+            (0..3).map(|a| (q[a] as f64 - p[a]) * n[a] as f64).sum::<f64>().abs()
+        };
+        scratch.moved.iter().zip(&scratch.target).map(|(p, &j)| along(p, j)).collect()
     }
 
     /// One correspondence pass: fills `scratch` with the inlier pairs and returns
@@ -646,10 +676,11 @@ impl IcpTarget {
     }
 
     /// Point-to-point update: Kabsch on the current inlier pairs.
-    fn point_update(&self, scratch: &mut Scratch, robust: bool) -> Option<Matrix4<f64>> {
+    fn point_update(&self, scratch: &mut Scratch, params: &IcpParams) -> Option<Matrix4<f64>> {
         scratch.target_xyz.clear();
         scratch.target_xyz.extend(scratch.target.iter().map(|&j| self.points[j].map(|v| v as f64)));
-        let weights = robust
+        let weights = params
+            .robust
             .then(|| {
                 let residuals: Vec<f64> = scratch
                     .moved
@@ -657,15 +688,15 @@ impl IcpTarget {
                     .zip(&scratch.target_xyz)
                     .map(|(p, q)| (Vector3::from(*q) - Vector3::from(*p)).norm())
                     .collect();
-                tukey_weights(&residuals)
+                tukey_weights(&residuals, params.robust_scale)
             })
             .flatten();
         Some(rigid::kabsch(&scratch.moved, &scratch.target_xyz, weights.as_deref()))
     }
 
-    /// Point-to-plane update on the current inlier pairs, damped by `damping` (see
+    /// Point-to-plane update on the current inlier pairs, damped by `params.damping` (see
     /// [`IcpTarget::align`]).
-    fn plane_update(&self, scratch: &Scratch, damping: f64, robust: bool) -> Option<Matrix4<f64>> {
+    fn plane_update(&self, scratch: &Scratch, params: &IcpParams) -> Option<Matrix4<f64>> {
         let n = scratch.moved.len();
         if n == 0 {
             return None;
@@ -674,11 +705,12 @@ impl IcpTarget {
             let nq = Vector3::from(self.normal(j).map(|v| v as f64));
             (Vector3::from(self.points[j].map(|v| v as f64)) - Vector3::from(*p)).dot(&nq)
         };
-        let weights = robust
+        let weights = params
+            .robust
             .then(|| {
                 let residuals: Vec<f64> =
                     scratch.moved.iter().zip(&scratch.target).map(|(p, &j)| along_normal(p, j)).collect();
-                tukey_weights(&residuals)
+                tukey_weights(&residuals, params.robust_scale)
             })
             .flatten();
         // Linearise about the centroid of the moved source: better conditioned far from the
@@ -730,7 +762,7 @@ impl IcpTarget {
             return None;
         }
         let mut x = Vector6::<f64>::zeros();
-        let damp = damping.max(0.0) * lmax;
+        let damp = params.damping.max(0.0) * lmax;
         for k in 0..6 {
             let l = eig.eigenvalues[k];
             if l > PLANE_RANK_TOL * lmax {

@@ -64,6 +64,7 @@ pub mod rigid;
 pub mod sampling;
 pub mod spacing;
 pub mod spatial;
+mod stats;
 pub mod support;
 pub mod timing;
 #[cfg(feature = "train")]

@@ -279,13 +279,20 @@ pub struct Refinement {
     /// with the network off the initial transform), if any: it takes the widest stage plainly,
     /// damped ([`WIDE_DAMPING`]) and not at all (the closer stages only), as three candidates.
     pub estimate: Option<Start>,
+    /// Weigh the pairs of the [`Start::Initial`] start by Tukey's biweight ([`IcpParams::robust`])
+    /// in every stage (the pipeline's with `icpLoss: "robust"` and the caller's
+    /// `initialTransform`): a surface that changed between the scans, within the wide stages'
+    /// distances of the guess, would pull a guess that is already right off it (a third of a
+    /// survey raised 2 m: 9 m at the corners). The pipeline's other starts, and its identity
+    /// start without a guess, are refined by least squares, as the search compares them.
+    pub robust_guess: bool,
 }
 
 impl Refinement {
     /// A refinement at the final distance `d_final` whose stages start from `d_coarse` (the
-    /// larger of the two: [`Refinement::d_coarse`]); no estimate.
+    /// larger of the two: [`Refinement::d_coarse`]); no estimate, no robust guess.
     pub fn new(kind: IcpKind, d_final: f64, d_coarse: f64, max_iterations: u32) -> Self {
-        Self { kind, d_final, d_coarse: d_coarse.max(d_final), max_iterations, estimate: None }
+        Self { kind, d_final, d_coarse: d_coarse.max(d_final), max_iterations, estimate: None, robust_guess: false }
     }
 
     /// The stages, as multiples of `d_final`: [`SCHEDULE`] when `d_coarse` is `d_final`; else
@@ -469,7 +476,7 @@ fn refine_stages(
     how: &Refinement,
     schedule: &[f64],
 ) -> Vec<Candidate> {
-    let Refinement { kind, d_final, max_iterations, estimate, .. } = *how;
+    let Refinement { kind, d_final, max_iterations, estimate, robust_guess, .. } = *how;
     // each start with its points' partners in the previous stage (warm-starts the next)
     let mut live: Vec<(Candidate, Partners)> = starts
         .iter()
@@ -500,7 +507,11 @@ fn refine_stages(
                     c.fitness = target.evaluate_warm(source, &c.T_target_source, d_final * factor, partners).0;
                     continue;
                 }
-                let params = IcpParams { damping: if wide == Wide::Damped { WIDE_DAMPING } else { 0.0 }, ..params };
+                let params = IcpParams {
+                    damping: if wide == Wide::Damped { WIDE_DAMPING } else { 0.0 },
+                    robust: robust_guess && c.start == Start::Initial,
+                    ..params
+                };
                 let r = target.align_warm(source, &c.T_target_source, &params, partners);
                 c.T_target_source = r.T_target_source;
                 c.iterations += r.iterations;

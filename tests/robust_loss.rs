@@ -1,6 +1,7 @@
-//! `icpLoss: "robust"`: two surveys of a terrain between which a stretch changed (a cliff that
-//! retreated, a building that went up, a fill pad as high as the distance). Least squares lets the
-//! changed surface pull the answer; the robust last refinement is held by the surfaces that stayed.
+//! `icpLoss: "robust"` (the default): two surveys of a terrain between which a stretch changed (a
+//! cliff that retreated, a building that went up, a fill pad within the distance, a raised corner).
+//! Least squares lets the changed surface pull the answer; the robust refinements are held by the
+//! surfaces that stayed.
 
 mod common;
 use arps::{IcpLoss, Options, PointCloud, Registrar, Start};
@@ -61,9 +62,10 @@ fn a_changed_stretch_pulls_least_squares_and_not_the_robust_refinement() {
     let a = reg.register(&same, &target, &options(IcpLoss::Squared)).unwrap();
     let b = reg.register(&same, &target, &options(IcpLoss::Robust)).unwrap();
     assert!(common::errors(&a.T_target_source, &truth).1 < 0.1 && common::errors(&b.T_target_source, &truth).1 < 0.1);
-    // the option by its JSON name, and a wrong one refused
-    let parsed: Options = serde_json::from_str(r#"{"icpLoss":"robust"}"#).unwrap();
-    assert_eq!(parsed.icp_loss, IcpLoss::Robust);
+    // the option by its JSON name, the default, and a wrong one refused
+    let parsed: Options = serde_json::from_str(r#"{"icpLoss":"squared"}"#).unwrap();
+    assert_eq!(parsed.icp_loss, IcpLoss::Squared);
+    assert_eq!(Options::default().icp_loss, IcpLoss::Robust);
     let e = serde_json::from_str::<Options>(r#"{"icpLoss":"huber"}"#).unwrap_err().to_string();
     assert!(e.contains("unknown variant `huber`") && e.contains("squared") && e.contains("robust"), "{e}");
 }
@@ -144,4 +146,77 @@ fn a_fill_pad_as_high_as_the_distance_does_not_tilt_the_robust_answer() {
         "robust: {rr} degrees, {}",
         corner(&robust.T_target_source)
     );
+}
+
+#[test]
+fn a_fill_pad_within_the_distance_does_not_tilt_the_robust_answer() {
+    // a quarter of the site raised 1.5 m at the default distance (several metres): the pad pairs
+    // with the old ground and tilts least squares so far that every residual spreads, and a
+    // robust run at that spread stays near the tilt; the graduated descent comes back
+    let misplaced = misplacement();
+    let truth = misplaced.try_inverse().unwrap();
+    let source = site(2, 100_000, Some(1.5)).transformed(&misplaced);
+    let target = site(1, 100_000, None);
+    let options = |loss| Options { icp_loss: loss, ..Options::default() };
+    let mut reg = Registrar::with_default_model().unwrap();
+    let squared = reg.register(&source, &target, &options(IcpLoss::Squared)).unwrap();
+    let robust = reg.register(&source, &target, &options(IcpLoss::Robust)).unwrap();
+    let (s, r) = (far_corner(&squared.T_target_source, &truth), far_corner(&robust.T_target_source, &truth));
+    assert!(s > 0.5, "the pad tilts least squares: {s} at the far corner");
+    assert!(r < 0.1, "robust: {r} at the far corner ({} degrees)", common::errors(&robust.T_target_source, &truth).0);
+}
+
+#[test]
+fn a_right_guess_is_held_by_the_ground_that_stayed() {
+    // a third of the site (one corner) raised 2 m, the second epoch misplaced and the guess right:
+    // refining the guess, the wide stages pair the raised corner with the old ground and pull
+    // least squares metres off; weighed robustly from the first stage the guess stays
+    let misplaced = misplacement();
+    let truth = misplaced.try_inverse().unwrap();
+    let raised = |seed| {
+        let mut c = site(seed, 100_000, None);
+        for p in c.points.iter_mut().filter(|p| p[0] > 135.0 && p[1] > 135.0) {
+            p[2] += 2.0;
+        }
+        c
+    };
+    let source = raised(2).transformed(&misplaced);
+    let target = site(1, 100_000, None);
+    let rows = |m: &Matrix4<f64>| std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]));
+    let options = |loss| Options {
+        initial_transform: Some(rows(&truth)),
+        starts: vec![Start::Initial],
+        search: arps::Search::Local,
+        up: Some([0.0, 0.0, 1.0]),
+        support_plane: arps::Support::Keep,
+        max_correspondence_distance: Some(1.0),
+        icp_loss: loss,
+        ..Options::default()
+    };
+    let mut reg = Registrar::with_default_model().unwrap();
+    let squared = reg.register(&source, &target, &options(IcpLoss::Squared)).unwrap();
+    let robust = reg.register(&source, &target, &options(IcpLoss::Robust)).unwrap();
+    let (s, r) = (far_corner(&squared.T_target_source, &truth), far_corner(&robust.T_target_source, &truth));
+    assert!(s > 1.0, "the raised corner pulls least squares off the guess: {s} at the far corner");
+    assert!(r < 0.05, "robust: {r} at the far corner");
+}
+
+/// The second epoch's misplacement: 0.35 degrees about a tilted axis through the site's centre,
+/// then (1.2, -0.8, 0.4).
+fn misplacement() -> Matrix4<f64> {
+    let about = Matrix4::new_translation(&nalgebra::Vector3::new(150.0, 150.0, 0.0));
+    let turn = nalgebra::Rotation3::from_axis_angle(
+        &nalgebra::Unit::new_normalize(nalgebra::Vector3::new(0.2, -0.1, 1.0)),
+        0.35f64.to_radians(),
+    );
+    Matrix4::new_translation(&nalgebra::Vector3::new(1.2, -0.8, 0.4))
+        * about
+        * turn.to_homogeneous()
+        * about.try_inverse().unwrap()
+}
+
+/// How far `t` puts the site's far corner from where `truth` does: the largest error a tilt makes.
+fn far_corner(t: &Matrix4<f64>, truth: &Matrix4<f64>) -> f64 {
+    let p = nalgebra::Point3::new(300.0, 300.0, 0.0);
+    (t.transform_point(&p) - truth.transform_point(&p)).norm()
 }

@@ -10,7 +10,8 @@
 //! 5. [`search`]: the adaptive or exhaustive refinement of the starts, with the confidence stop,
 //!    and the other poses that fit about as well ([`search::Chosen`]); [`caps`] holds down the
 //!    confidence of answers whose fit cannot confirm their pose, and of answers a mirror image of
-//!    the source fits clearly better than ([`mirror`]).
+//!    the source fits clearly better than ([`mirror`]); with `icpLoss: "robust"`, [`robust`]
+//!    polishes the answer with a changed surface weighed down.
 //!    With `up` ([`crate::Options::up`]), [`upright`] levels its starts and rules out tilted
 //!    answers and look-alikes.
 //! 6. [`result`]: the chosen answer and its alternatives mapped back to the caller's frame and
@@ -22,6 +23,7 @@ pub(crate) mod network;
 pub(crate) mod options;
 pub(crate) mod prepare;
 pub(crate) mod result;
+pub(crate) mod robust;
 pub(crate) mod search;
 pub(crate) mod starts;
 pub(crate) mod target;

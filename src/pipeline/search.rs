@@ -48,6 +48,7 @@
 use super::caps;
 use super::mirror;
 use super::prepare::Prepared;
+use super::robust;
 use super::starts::{self, Starts, Step};
 use super::wall;
 use crate::confidence::{self, Evidence, Probed};
@@ -103,6 +104,7 @@ pub(crate) fn search(
     };
     let how = Refinement {
         estimate: Some(estimate),
+        robust_guess: options.icp_loss == crate::icp::IcpLoss::Robust && options.initial_transform.is_some(),
         ..Refinement::new(p.icp, d_final, d_coarse, options.icp_max_iterations)
     };
     let source_index = IcpTarget::new(&p.icp_src.points, false);
@@ -255,7 +257,7 @@ pub(crate) fn search(
             Step::Unsure(_)
                 if adaptive
                     && best.as_ref().is_some_and(|(c, probed, _)| {
-                        verdict(c, probed, &refined, at_evidence.as_ref()).2 >= UNSURE_CONFIDENCE
+                        verdict(c, None, probed, &refined, at_evidence.as_ref()).2 >= UNSURE_CONFIDENCE
                     }) =>
             {
                 continue
@@ -438,19 +440,25 @@ pub(crate) fn search(
             (c, probed, false)
         }
     };
-    // with `icpLoss: "robust"`: the answer refined once more with the pairs far beyond the spread
-    // of the rest (a surface that changed between the scans) weighed down, and judged there
+    // with `icpLoss: "robust"` (the default): the answer refined once more with the pairs far
+    // beyond the spread of the rest (a surface that changed between the scans) weighed down,
+    // and judged there when that puts clearly more of the source on the target; its look-alikes
+    // still count as against the least-squares answer (`verdict`)
+    let mut polished_from = None;
     let (candidate, probed) = match refined_any
         && p.icp != IcpKind::Off
         && options.icp_loss == crate::icp::IcpLoss::Robust
     {
         true => {
             let c =
-                robust_polish(target_index, &p.icp_src.points, &candidate, p.icp, d_final, options.icp_max_iterations);
+                robust::polish(target_index, &p.icp_src.points, &candidate, p.icp, d_final, options.icp_max_iterations);
             let c = if admits(&c.T_target_source) { c } else { candidate };
-            let probed =
-                if c.T_target_source == candidate.T_target_source { probed } else { judge(&c.T_target_source) };
-            (c, probed)
+            if c.T_target_source == candidate.T_target_source {
+                (c, probed)
+            } else {
+                polished_from = Some(candidate);
+                (c, judge(&c.T_target_source))
+            }
         }
         false => (candidate, probed),
     };
@@ -488,7 +496,8 @@ pub(crate) fn search(
         }
         None => (candidate, probed),
     };
-    let (evidence, poses, confidence) = verdict(&candidate, &probed, &refined, at_evidence.as_ref());
+    let versus = polished_from.filter(|_| held_along.is_none());
+    let (evidence, poses, confidence) = verdict(&candidate, versus.as_ref(), &probed, &refined, at_evidence.as_ref());
     let apart = |a: &Matrix4<f64>, b: &Matrix4<f64>| apart(a, b, centroid);
     // the local search kept its answer where a pose the probes found fits better
     if options.search == Search::Local {
@@ -574,8 +583,14 @@ const GUESS_SHIFT: f64 = 0.5;
 /// ([`confidence::count_search_alternatives`]), those alternative poses, and its confidence. With
 /// `at_evidence` (a final distance wider than the evidence distance), the answer and the refined
 /// poses are compared by their fitness at the evidence distance, not at the final one.
+/// With `polished_from` (the least-squares answer that the robust refinement replaced by `c`),
+/// the refined poses count against the lesser of the two fits: they were refined by least
+/// squares, and a polish that puts more of the source on the target does not make the
+/// look-alikes the search found fit less alike (a cone 64 degrees off, whose one look-alike
+/// went at 0.5 to none at 0.81).
 fn verdict(
     c: &Candidate,
+    polished_from: Option<&Candidate>,
     probed: &Probed,
     refined: &[(Matrix4<f64>, f64)],
     at_evidence: Option<&impl Fn(&Matrix4<f64>) -> f64>,
@@ -585,9 +600,10 @@ fn verdict(
     let (fitness, refined) = match at_evidence {
         Some(fit) => {
             remeasured = refined.iter().map(|(t, _)| (*t, fit(t))).collect();
-            (fit(&c.T_target_source), remeasured.as_slice())
+            let of = |c: &Candidate| fit(&c.T_target_source);
+            (of(c).min(polished_from.map_or(f64::INFINITY, of)), remeasured.as_slice())
         }
-        None => (c.fitness, refined),
+        None => (c.fitness.min(polished_from.map_or(f64::INFINITY, |u| u.fitness)), refined),
     };
     confidence::count_search_alternatives(&mut evidence, &mut poses, &c.T_target_source, fitness, refined);
     (evidence, poses, confidence::confidence(&evidence))
@@ -730,66 +746,6 @@ fn held_by_guess(
 fn apart(a: &Matrix4<f64>, b: &Matrix4<f64>, at: [f64; 3]) -> f64 {
     let c = Point3::from(at);
     (a.transform_point(&c) - b.transform_point(&c)).norm()
-}
-
-/// How many times [`robust_polish`] halves its distance after the robust run at the final one.
-/// Least squares at the final distance lets a changed surface as high as that distance (a fill
-/// pad over a quarter of a survey, 0.5-1 m at 1 m) tilt the answer, and a robust run from that
-/// tilt stays near it; runs at a half and a quarter of the distance leave the changed surface
-/// out and come back (`BENCHMARK.md`, "A fill pad under the robust loss"). Further halvings
-/// reach below the ICP voxel at the default voxel (half the distance) and lose precision.
-const ROBUST_HALVINGS: u32 = 2;
-
-/// [`robust_polish`] keeps its descent's pose only when, at the finest distance, this many times
-/// as many of the source's points lie on the target as under the polished pose.
-const ROBUST_DESCENT_GAIN: f64 = 1.05;
-
-/// `answer` refined by ICP at the final distance `d` with Tukey's biweight on its pairs
-/// ([`crate::icp::IcpParams::robust`]), on at most [`refine::REFINE_POINTS`] of the source's
-/// points, then at halved distances ([`ROBUST_HALVINGS`]), whose pose is kept when it holds
-/// clearly more of them at the finest ([`ROBUST_DESCENT_GAIN`]); its fitness measured on all of
-/// them at `d`.
-fn robust_polish(
-    target: &IcpTarget,
-    source: &[[f32; 3]],
-    answer: &Candidate,
-    kind: IcpKind,
-    d: f64,
-    max_iterations: u32,
-) -> Candidate {
-    let sample = refine::even_sample(source, refine::REFINE_POINTS);
-    let params = crate::icp::IcpParams {
-        robust: true,
-        max_iterations: max_iterations.max(1) * 2,
-        ..crate::icp::IcpParams::new(kind, d)
-    };
-    let r = target.align(&sample, &answer.T_target_source, &params);
-    // the descent: robust runs at halved distances from there, kept when at the finest distance
-    // clearly more of the source lies on the target than under the polished pose
-    let mut t = r.T_target_source;
-    let mut dk = d;
-    for _ in 0..ROBUST_HALVINGS {
-        dk *= 0.5;
-        t = target
-            .align(&sample, &t, &crate::icp::IcpParams { max_correspondence_distance: dk, ..params })
-            .T_target_source;
-    }
-    let r = if target.evaluate(&sample, &t, dk).0
-        > ROBUST_DESCENT_GAIN * target.evaluate(&sample, &r.T_target_source, dk).0
-    {
-        crate::icp::IcpResult { T_target_source: t, ..r }
-    } else {
-        r
-    };
-    let (fitness, inlier_rmse) = target.evaluate(source, &r.T_target_source, d);
-    Candidate {
-        T_target_source: r.T_target_source,
-        fitness,
-        inlier_rmse,
-        iterations: answer.iterations + r.iterations,
-        converged: r.converged,
-        ..*answer
-    }
 }
 
 /// Along a motion the fit barely holds ([`confidence::Evidence::slide`] at or above

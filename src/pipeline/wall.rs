@@ -88,7 +88,7 @@ pub(crate) fn other_faces(
     let matched = on.len();
     let mut spacings: Vec<f64> =
         on.iter().step_by((matched / SPACING_POINTS).max(1)).map(|&(_, j)| target.spacing_at(j)).collect();
-    let spacing = median(&mut spacings).filter(|s| s.is_finite()).unwrap_or(0.0);
+    let spacing = crate::stats::median(&mut spacings).filter(|s| s.is_finite()).unwrap_or(0.0);
     let hit = (HIT * d_final).max(HIT_SPACING * spacing);
     // each point that sees another face: the unit direction to it and its distance
     let mut faces: Vec<(Vector3<f64>, f64)> = Vec::new();
@@ -133,7 +133,7 @@ pub(crate) fn other_faces(
     walls
         .iter_mut()
         .filter_map(|(w, thick)| {
-            let d = w.normalize() * median(thick)?;
+            let d = w.normalize() * crate::stats::median(thick)?;
             Some(transform::from_rotation_translation(&Matrix3::identity(), &d) * t)
         })
         .collect()
@@ -144,12 +144,6 @@ pub(crate) fn other_faces(
 #[inline(never)]
 fn normal_of(target: &IcpTarget, j: usize) -> Vector3<f64> {
     Vector3::from(target.normal(j).map(|v| v as f64))
-}
-
-/// The median of `v` (its upper middle for an even count; `None` when empty), reordering it.
-fn median(v: &mut [f64]) -> Option<f64> {
-    let k = v.len() / 2;
-    (!v.is_empty()).then(|| *v.select_nth_unstable_by(k, f64::total_cmp).1)
 }
 
 /// A pose on another face fits alike when its fitness is within this fraction of the answer's...

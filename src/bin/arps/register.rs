@@ -31,9 +31,10 @@ enum IcpArg {
 
 #[derive(Clone, Copy, ValueEnum)]
 enum LossArg {
-    /// Every pair alike (least squares; default).
+    /// Every pair alike (least squares), throughout.
     Squared,
-    /// Tukey's biweight on the answer's last refinement.
+    /// Tukey's biweight on the refinement of an initial transform and on the answer's last
+    /// refinement, kept where it fits clearly more of the source (default).
     Robust,
 }
 
@@ -58,9 +59,10 @@ pub struct RegisterArgs {
     /// Iteration cap of each ICP stage [default: the engine's `Options::icp_max_iterations`].
     #[arg(long)]
     icp_max_iterations: Option<u32>,
-    /// How the answer's last refinement weighs its pairs (`Options::icp_loss`): `robust` for
-    /// scans of a scene that changed between them (erosion, construction, moved objects).
-    #[arg(long, value_enum, default_value_t = LossArg::Squared)]
+    /// How ICP weighs its pairs (`Options::icp_loss`): `robust` weighs down a surface that
+    /// changed between the scans (erosion, construction, moved objects), `squared` is least
+    /// squares throughout.
+    #[arg(long, value_enum, default_value_t = LossArg::Robust)]
     icp_loss: LossArg,
     /// Points per cloud fed to the network (default: the model's N).
     #[arg(long)]
