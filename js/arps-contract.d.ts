@@ -62,13 +62,14 @@ export type RegisterOptions = {
    * every stage of the refinement of `initialTransform`, which the wide stages would
    * otherwise pull off a right guess, and in one more refinement of the search's answer, at
    * the scale of the pairs' spread and by a graduated descent of fixed scales from half the
-   * distance down, so that a change within the distance, which pulled least squares far
-   * enough to spread every residual, is left out too; that pose replaces the least-squares
+   * distance down, from the answer and from `initialTransform`, so that a change within the
+   * distance, which pulled least squares far enough to spread every residual, is left out
+   * too; that pose replaces the least-squares
    * answer only where clearly more of the source lies on the target's surfaces, so where
    * nothing changed the answer is least squares' but for a few pairs in a hundred) or
    * `"squared"` (every pair within the distance alike, throughout). A change over half the
-   * overlap is the scene to any robust weighting, and one lower than the error it leaves (a
-   * low pad that tilted the fit by as much) is not told from it.
+   * overlap is the scene to any robust weighting, and without a guess near the truth one that
+   * tilted the fit by about its own height is not told from the rest.
    */
   icpLoss?: IcpLoss,
   /**

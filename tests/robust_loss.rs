@@ -220,3 +220,41 @@ fn far_corner(t: &Matrix4<f64>, truth: &Matrix4<f64>) -> f64 {
     let p = nalgebra::Point3::new(300.0, 300.0, 0.0);
     (t.transform_point(&p) - truth.transform_point(&p)).norm()
 }
+
+#[test]
+fn a_guess_a_little_off_is_not_tilted_by_a_low_fill_over_a_third() {
+    // a third of the site filled 1.5 m (above the distance, below the wide stages' reach), the
+    // guess tilted 0.05 degrees and 0.3 m low: the refinement of the guess counts the fill in and
+    // tilts metres off, the descent from the answer stays on the tilt, and the descent from the
+    // guess comes back
+    let misplaced = misplacement();
+    let truth = misplaced.try_inverse().unwrap();
+    let filled = |seed| {
+        let mut c = site(seed, 100_000, None);
+        for p in c.points.iter_mut().filter(|p| p[0] > 135.0 && p[1] > 135.0) {
+            p[2] += 1.5;
+        }
+        c
+    };
+    let source = filled(2).transformed(&misplaced);
+    let target = site(1, 100_000, None);
+    let off = Matrix4::new_translation(&nalgebra::Vector3::new(0.0, 0.0, 0.3))
+        * nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::x_axis(), 0.05f64.to_radians()).to_homogeneous();
+    let rows = |m: &Matrix4<f64>| std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]));
+    let options = |loss| Options {
+        initial_transform: Some(rows(&(off * truth))),
+        starts: vec![Start::Initial],
+        search: arps::Search::Local,
+        up: Some([0.0, 0.0, 1.0]),
+        support_plane: arps::Support::Keep,
+        max_correspondence_distance: Some(1.0),
+        icp_loss: loss,
+        ..Options::default()
+    };
+    let mut reg = Registrar::with_default_model().unwrap();
+    let squared = reg.register(&source, &target, &options(IcpLoss::Squared)).unwrap();
+    let robust = reg.register(&source, &target, &options(IcpLoss::Robust)).unwrap();
+    let (s, r) = (far_corner(&squared.T_target_source, &truth), far_corner(&robust.T_target_source, &truth));
+    assert!(s > 1.0, "the fill tilts least squares: {s} at the far corner");
+    assert!(r < 0.05, "robust: {r} at the far corner");
+}

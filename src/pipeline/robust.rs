@@ -5,6 +5,7 @@
 
 use crate::icp::{IcpKind, IcpParams, IcpTarget};
 use crate::refine::{self, Candidate};
+use nalgebra::Matrix4;
 
 /// The first fixed biweight scale of [`polish`]'s graduated descent, in final distances; each
 /// step halves it.
@@ -36,39 +37,57 @@ const NOISE_TIMES: f64 = 3.0;
 /// `answer` refined by ICP at the final distance `d` with Tukey's biweight on its pairs
 /// ([`IcpParams::robust`]), on at most [`refine::REFINE_POINTS`] of the source's points: at the
 /// biweight scale of the pairs' spread, and by a graduated descent (fixed scales from
-/// [`GRADUATED_FIRST`] of `d`, halving, [`GRADUATED_STEPS`] times, then the spread's again); the
-/// better of the two by the share of the sample on the target's surfaces ([`NOISE_TIMES`],
-/// [`GAIN`]) replaces `answer` when it puts clearly more there, with its fitness measured on all
-/// of the source at `d`; else `answer` as it is.
+/// [`GRADUATED_FIRST`] of `d`, halving, [`GRADUATED_STEPS`] times, then the spread's again) from
+/// the answer and, with the caller's `guess`, from the guess too; the best of them by the share of
+/// the sample on the target's surfaces ([`NOISE_TIMES`], [`GAIN`]) replaces `answer` when it puts
+/// clearly more there, with its fitness measured on all of the source at `d`; else `answer` as it
+/// is.
 pub(super) fn polish(
     target: &IcpTarget,
     source: &[[f32; 3]],
     answer: &Candidate,
+    guess: Option<&Matrix4<f64>>,
     kind: IcpKind,
     d: f64,
     max_iterations: u32,
 ) -> Candidate {
     let sample = refine::even_sample(source, refine::REFINE_POINTS);
     let params = IcpParams { robust: true, max_iterations: max_iterations.max(1) * 2, ..IcpParams::new(kind, d) };
-    let spread = target.align(&sample, &answer.T_target_source, &params);
-    let mut t = answer.T_target_source;
-    let mut scale = GRADUATED_FIRST * d;
-    for _ in 0..GRADUATED_STEPS {
-        let fixed = IcpParams { robust_scale: Some(scale), max_iterations: max_iterations.max(1), ..params };
-        t = target.align(&sample, &t, &fixed).T_target_source;
-        scale *= 0.5;
-    }
-    let graduated = target.align(&sample, &t, &params);
+    let graduated = |from: &Matrix4<f64>| {
+        let mut t = *from;
+        let mut scale = GRADUATED_FIRST * d;
+        for _ in 0..GRADUATED_STEPS {
+            let fixed = IcpParams { robust_scale: Some(scale), max_iterations: max_iterations.max(1), ..params };
+            t = target.align(&sample, &t, &fixed).T_target_source;
+            scale *= 0.5;
+        }
+        target.align(&sample, &t, &params)
+    };
+    // the spread's run and the descent from the answer, and the descent from the caller's guess
+    // (a change that tilted the refinement of a right guess, lower than the tilt's own error, is
+    // told from the rest only near the guess)
+    let mut runs = vec![target.align(&sample, &answer.T_target_source, &params), graduated(&answer.T_target_source)];
+    runs.extend(guess.map(graduated));
     // each pose's share of the sample on the target's surfaces, to within a few times the
     // smallest of their median residuals (the noise, where a pose is right)
-    let poses = [answer.T_target_source, spread.T_target_source, graduated.T_target_source];
-    let residuals = poses.map(|t| target.plane_residuals(&sample, &t, d));
+    let residuals: Vec<Vec<f64>> = std::iter::once(&answer.T_target_source)
+        .chain(runs.iter().map(|r| &r.T_target_source))
+        .map(|t| target.plane_residuals(&sample, t, d))
+        .collect();
     let noise = residuals.iter().filter_map(|r| crate::stats::median(&mut r.clone())).fold(f64::INFINITY, f64::min);
-    let on = residuals.map(|r| r.iter().filter(|&&x| x <= NOISE_TIMES * noise).count() as f64);
-    let (r, on_r) = if on[2] > GAIN * on[1] { (graduated, on[2]) } else { (spread, on[1]) };
-    if on_r <= GAIN * on[0] {
+    let on: Vec<f64> =
+        residuals.iter().map(|r| r.iter().filter(|&&x| x <= NOISE_TIMES * noise).count() as f64).collect();
+    // the spread's run, unless a descent puts clearly more on the surfaces
+    let mut best = 0;
+    for k in 1..runs.len() {
+        if on[k + 1] > GAIN * on[best + 1] {
+            best = k;
+        }
+    }
+    if on[best + 1] <= GAIN * on[0] {
         return *answer;
     }
+    let r = runs[best];
     let (fitness, inlier_rmse) = target.evaluate(source, &r.T_target_source, d);
     Candidate {
         T_target_source: r.T_target_source,

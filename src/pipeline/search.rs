@@ -445,23 +445,29 @@ pub(crate) fn search(
     // and judged there when that puts clearly more of the source on the target; its look-alikes
     // still count as against the least-squares answer (`verdict`)
     let mut polished_from = None;
-    let (candidate, probed) = match refined_any
-        && p.icp != IcpKind::Off
-        && options.icp_loss == crate::icp::IcpLoss::Robust
-    {
-        true => {
-            let c =
-                robust::polish(target_index, &p.icp_src.points, &candidate, p.icp, d_final, options.icp_max_iterations);
-            let c = if admits(&c.T_target_source) { c } else { candidate };
-            if c.T_target_source == candidate.T_target_source {
-                (c, probed)
-            } else {
-                polished_from = Some(candidate);
-                (c, judge(&c.T_target_source))
+    let guess = options.initial_transform.is_some().then_some(&p.t_initial);
+    let (candidate, probed) =
+        match refined_any && p.icp != IcpKind::Off && options.icp_loss == crate::icp::IcpLoss::Robust {
+            true => {
+                let c = robust::polish(
+                    target_index,
+                    &p.icp_src.points,
+                    &candidate,
+                    guess,
+                    p.icp,
+                    d_final,
+                    options.icp_max_iterations,
+                );
+                let c = if admits(&c.T_target_source) { c } else { candidate };
+                if c.T_target_source == candidate.T_target_source {
+                    (c, probed)
+                } else {
+                    polished_from = Some(candidate);
+                    (c, judge(&c.T_target_source))
+                }
             }
-        }
-        false => (candidate, probed),
-    };
+            false => (candidate, probed),
+        };
     // The motions the fit leaves free, as the probe measured them from the target's normals; none
     // on a target too sparse for the distance, whose normals, estimated from points many
     // distances apart, are not a surface's (a set of distinct markers pins every motion; 20-33
