@@ -110,42 +110,17 @@ fn site(seed: u64, n: usize, fill: Option<f64>) -> PointCloud {
 #[test]
 fn a_fill_pad_as_high_as_the_distance_does_not_tilt_the_robust_answer() {
     // a quarter of the site raised by the distance: at that distance its points pair with the old
-    // ground and tilt the least-squares fit, and a robust refinement from that tilt stays near it;
-    // refined again at a half and a quarter of the distance it comes back
-    let about = Matrix4::new_translation(&nalgebra::Vector3::new(150.0, 150.0, 0.0));
-    let turn = nalgebra::Rotation3::from_axis_angle(
-        &nalgebra::Unit::new_normalize(nalgebra::Vector3::new(0.2, -0.1, 1.0)),
-        0.35f64.to_radians(),
-    );
-    let misplaced = Matrix4::new_translation(&nalgebra::Vector3::new(1.2, -0.8, 0.4))
-        * about
-        * turn.to_homogeneous()
-        * about.try_inverse().unwrap();
-    let truth = misplaced.try_inverse().unwrap();
-    let source = site(2, 100_000, Some(1.0)).transformed(&misplaced);
-    let target = site(1, 100_000, None);
-    let options = |loss| Options {
+    // ground and tilt the least-squares fit, and a robust run from that tilt at its residuals'
+    // spread stays near it; the graduated descent comes back
+    let given = Options {
         up: Some([0.0, 0.0, 1.0]),
         support_plane: arps::Support::Keep,
         max_correspondence_distance: Some(1.0),
-        icp_loss: loss,
         ..Options::default()
     };
-    let mut reg = Registrar::with_default_model().unwrap();
-    // the error at the site's far corner, the largest a tilt makes
-    let corner = |t: &Matrix4<f64>| {
-        let p = nalgebra::Point3::new(300.0, 300.0, 0.0);
-        (t.transform_point(&p) - truth.transform_point(&p)).norm()
-    };
-    let squared = corner(&reg.register(&source, &target, &options(IcpLoss::Squared)).unwrap().T_target_source);
-    let robust = reg.register(&source, &target, &options(IcpLoss::Robust)).unwrap();
-    let (rr, _) = common::errors(&robust.T_target_source, &truth);
-    assert!(squared > 0.5, "the pad tilts least squares: {squared} at the far corner");
-    assert!(
-        corner(&robust.T_target_source) < 0.1 && rr < 0.01,
-        "robust: {rr} degrees, {}",
-        corner(&robust.T_target_source)
-    );
+    let (s, r, degrees) = fill_pad(1.0, given);
+    assert!(s > 0.5, "the pad tilts least squares: {s} at the far corner");
+    assert!(r < 0.1 && degrees < 0.01, "robust: {degrees} degrees, {r} at the far corner");
 }
 
 #[test]
@@ -153,17 +128,24 @@ fn a_fill_pad_within_the_distance_does_not_tilt_the_robust_answer() {
     // a quarter of the site raised 1.5 m at the default distance (several metres): the pad pairs
     // with the old ground and tilts least squares so far that every residual spreads, and a
     // robust run at that spread stays near the tilt; the graduated descent comes back
+    let (s, r, degrees) = fill_pad(1.5, Options::default());
+    assert!(s > 0.5, "the pad tilts least squares: {s} at the far corner");
+    assert!(r < 0.1, "robust: {r} at the far corner ({degrees} degrees)");
+}
+
+/// The misplaced site with a fill pad `height` high over its quarter, registered with `given`
+/// and least squares, then the robust loss: how far each puts the far corner, and the robust
+/// answer's rotation error in degrees.
+fn fill_pad(height: f64, given: Options) -> (f64, f64, f64) {
     let misplaced = misplacement();
     let truth = misplaced.try_inverse().unwrap();
-    let source = site(2, 100_000, Some(1.5)).transformed(&misplaced);
+    let source = site(2, 100_000, Some(height)).transformed(&misplaced);
     let target = site(1, 100_000, None);
-    let options = |loss| Options { icp_loss: loss, ..Options::default() };
     let mut reg = Registrar::with_default_model().unwrap();
-    let squared = reg.register(&source, &target, &options(IcpLoss::Squared)).unwrap();
-    let robust = reg.register(&source, &target, &options(IcpLoss::Robust)).unwrap();
-    let (s, r) = (far_corner(&squared.T_target_source, &truth), far_corner(&robust.T_target_source, &truth));
-    assert!(s > 0.5, "the pad tilts least squares: {s} at the far corner");
-    assert!(r < 0.1, "robust: {r} at the far corner ({} degrees)", common::errors(&robust.T_target_source, &truth).0);
+    let mut with = |icp_loss| reg.register(&source, &target, &Options { icp_loss, ..given.clone() }).unwrap();
+    let (squared, robust) = (with(IcpLoss::Squared), with(IcpLoss::Robust));
+    let degrees = common::errors(&robust.T_target_source, &truth).0;
+    (far_corner(&squared.T_target_source, &truth), far_corner(&robust.T_target_source, &truth), degrees)
 }
 
 #[test]
@@ -171,20 +153,39 @@ fn a_right_guess_is_held_by_the_ground_that_stayed() {
     // a third of the site (one corner) raised 2 m, the second epoch misplaced and the guess right:
     // refining the guess, the wide stages pair the raised corner with the old ground and pull
     // least squares metres off; weighed robustly from the first stage the guess stays
+    let (s, r) = raised_corner_from_guess(2.0, Matrix4::identity());
+    assert!(s > 1.0, "the raised corner pulls least squares off the guess: {s} at the far corner");
+    assert!(r < 0.05, "robust: {r} at the far corner");
+}
+
+#[test]
+fn a_guess_a_little_off_is_not_tilted_by_a_low_fill_over_a_third() {
+    // a third of the site filled 1.5 m (above the distance, below the wide stages' reach), the
+    // guess tilted 0.05 degrees and 0.3 m low: the refinement of the guess counts the fill in and
+    // tilts metres off, the descent from the answer stays on the tilt, and the descent from the
+    // guess comes back
+    let off = Matrix4::new_translation(&nalgebra::Vector3::new(0.0, 0.0, 0.3))
+        * nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::x_axis(), 0.05f64.to_radians()).to_homogeneous();
+    let (s, r) = raised_corner_from_guess(1.5, off);
+    assert!(s > 1.0, "the fill tilts least squares: {s} at the far corner");
+    assert!(r < 0.05, "robust: {r} at the far corner");
+}
+
+/// The survey recipe (the guess `off` times the truth as `initialTransform`, its refinement alone,
+/// `up`, the support kept, 1 m) on the misplaced site whose corner third (x, y > 135) was raised by
+/// `height`: how far least squares and the robust loss put the far corner.
+fn raised_corner_from_guess(height: f32, off: Matrix4<f64>) -> (f64, f64) {
     let misplaced = misplacement();
     let truth = misplaced.try_inverse().unwrap();
-    let raised = |seed| {
-        let mut c = site(seed, 100_000, None);
-        for p in c.points.iter_mut().filter(|p| p[0] > 135.0 && p[1] > 135.0) {
-            p[2] += 2.0;
-        }
-        c
-    };
-    let source = raised(2).transformed(&misplaced);
+    let mut raised = site(2, 100_000, None);
+    for p in raised.points.iter_mut().filter(|p| p[0] > 135.0 && p[1] > 135.0) {
+        p[2] += height;
+    }
+    let source = raised.transformed(&misplaced);
     let target = site(1, 100_000, None);
     let rows = |m: &Matrix4<f64>| std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]));
     let options = |loss| Options {
-        initial_transform: Some(rows(&truth)),
+        initial_transform: Some(rows(&(off * truth))),
         starts: vec![Start::Initial],
         search: arps::Search::Local,
         up: Some([0.0, 0.0, 1.0]),
@@ -194,11 +195,8 @@ fn a_right_guess_is_held_by_the_ground_that_stayed() {
         ..Options::default()
     };
     let mut reg = Registrar::with_default_model().unwrap();
-    let squared = reg.register(&source, &target, &options(IcpLoss::Squared)).unwrap();
-    let robust = reg.register(&source, &target, &options(IcpLoss::Robust)).unwrap();
-    let (s, r) = (far_corner(&squared.T_target_source, &truth), far_corner(&robust.T_target_source, &truth));
-    assert!(s > 1.0, "the raised corner pulls least squares off the guess: {s} at the far corner");
-    assert!(r < 0.05, "robust: {r} at the far corner");
+    let mut far = |loss| far_corner(&reg.register(&source, &target, &options(loss)).unwrap().T_target_source, &truth);
+    (far(IcpLoss::Squared), far(IcpLoss::Robust))
 }
 
 /// The second epoch's misplacement: 0.35 degrees about a tilted axis through the site's centre,
@@ -219,42 +217,4 @@ fn misplacement() -> Matrix4<f64> {
 fn far_corner(t: &Matrix4<f64>, truth: &Matrix4<f64>) -> f64 {
     let p = nalgebra::Point3::new(300.0, 300.0, 0.0);
     (t.transform_point(&p) - truth.transform_point(&p)).norm()
-}
-
-#[test]
-fn a_guess_a_little_off_is_not_tilted_by_a_low_fill_over_a_third() {
-    // a third of the site filled 1.5 m (above the distance, below the wide stages' reach), the
-    // guess tilted 0.05 degrees and 0.3 m low: the refinement of the guess counts the fill in and
-    // tilts metres off, the descent from the answer stays on the tilt, and the descent from the
-    // guess comes back
-    let misplaced = misplacement();
-    let truth = misplaced.try_inverse().unwrap();
-    let filled = |seed| {
-        let mut c = site(seed, 100_000, None);
-        for p in c.points.iter_mut().filter(|p| p[0] > 135.0 && p[1] > 135.0) {
-            p[2] += 1.5;
-        }
-        c
-    };
-    let source = filled(2).transformed(&misplaced);
-    let target = site(1, 100_000, None);
-    let off = Matrix4::new_translation(&nalgebra::Vector3::new(0.0, 0.0, 0.3))
-        * nalgebra::Rotation3::from_axis_angle(&nalgebra::Vector3::x_axis(), 0.05f64.to_radians()).to_homogeneous();
-    let rows = |m: &Matrix4<f64>| std::array::from_fn(|r| std::array::from_fn(|c| m[(r, c)]));
-    let options = |loss| Options {
-        initial_transform: Some(rows(&(off * truth))),
-        starts: vec![Start::Initial],
-        search: arps::Search::Local,
-        up: Some([0.0, 0.0, 1.0]),
-        support_plane: arps::Support::Keep,
-        max_correspondence_distance: Some(1.0),
-        icp_loss: loss,
-        ..Options::default()
-    };
-    let mut reg = Registrar::with_default_model().unwrap();
-    let squared = reg.register(&source, &target, &options(IcpLoss::Squared)).unwrap();
-    let robust = reg.register(&source, &target, &options(IcpLoss::Robust)).unwrap();
-    let (s, r) = (far_corner(&squared.T_target_source, &truth), far_corner(&robust.T_target_source, &truth));
-    assert!(s > 1.0, "the fill tilts least squares: {s} at the far corner");
-    assert!(r < 0.05, "robust: {r} at the far corner");
 }
