@@ -32,10 +32,10 @@ pub enum IcpLoss {
     /// the pairs' spread and by a graduated descent of fixed scales (a half to a sixteenth of the
     /// distance) from the answer and from `initialTransform`, whose pose replaces the answer only
     /// where clearly more of the source lies on the target's surfaces (to within a few times the
-    /// residuals' noise) than under it. A surface
-    /// that changed between the scans (erosion, construction, a moved object, a bent part) no
-    /// longer pulls the answer; the surfaces that stayed hold it. Where nothing changed the
-    /// answer is, but for a few pairs in a hundred, least squares'. The default.
+    /// residuals' noise) than under it. A surface that changed between the scans (erosion,
+    /// construction, a moved object, a bent part) no longer pulls the answer; the surfaces that
+    /// stayed hold it. Where nothing changed the answer is, but for a few pairs in a hundred,
+    /// least squares'. The default.
     #[default]
     Robust,
 }
