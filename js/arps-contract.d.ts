@@ -64,9 +64,9 @@ export type RegisterOptions = {
    * the scale of the pairs' spread and by a graduated descent of fixed scales from half the
    * distance down, from the answer and from `initialTransform`, so that a change within the
    * distance, which pulled least squares far enough to spread every residual, is left out
-   * too; that pose replaces the least-squares
-   * answer only where clearly more of the source lies on the target's surfaces, so where
-   * nothing changed the answer is least squares' but for a few pairs in a hundred) or
+   * too; that pose replaces the least-squares answer only where clearly more of the source
+   * lies on the target's surfaces, so where nothing changed the answer is least squares' but
+   * for a few pairs in a hundred) or
    * `"squared"` (every pair within the distance alike, throughout). A change over half the
    * overlap is the scene to any robust weighting, and without a guess near the truth one that
    * tilted the fit by about its own height is not told from the rest.

@@ -658,8 +658,7 @@ impl IcpTarget {
                 out.last().map_or(f64::INFINITY, |&(_, d2)| (d2 as f64).sqrt())
             })
             .collect();
-        let mid = reach.len() / 2;
-        *reach.select_nth_unstable_by(mid, f64::total_cmp).1
+        crate::stats::median(&mut reach).unwrap_or(f64::INFINITY)
     }
 
     /// The target point nearest to `q` (target frame) if it is closer than `max_distance`

@@ -308,8 +308,7 @@ fn test(
     }
     // one layer, not a sheet's two faces: some of its points near its middle
     let mut residual: Vec<f64> = on.iter().map(|p| plane.distance(p).abs()).collect();
-    let mid = residual.len() / 2;
-    let mad = *residual.select_nth_unstable_by(mid, f64::total_cmp).1;
+    let mad = crate::stats::median(&mut residual)?;
     let middle = residual.iter().filter(|&&r| r < MIDDLE * mad).count();
     if (middle as f64) < MIDDLE_SHARE * on.len() as f64 {
         return None;

@@ -69,25 +69,23 @@ pub(super) fn polish(
     let mut runs = vec![target.align(&sample, &answer.T_target_source, &params), graduated(&answer.T_target_source)];
     runs.extend(guess.map(graduated));
     // each pose's share of the sample on the target's surfaces, to within a few times the
-    // smallest of their median residuals (the noise, where a pose is right)
-    let residuals: Vec<Vec<f64>> = std::iter::once(&answer.T_target_source)
+    // smallest of their median residuals (the noise, where a pose is right); the answer's first
+    let mut residuals: Vec<Vec<f64>> = std::iter::once(&answer.T_target_source)
         .chain(runs.iter().map(|r| &r.T_target_source))
         .map(|t| target.plane_residuals(&sample, t, d))
         .collect();
-    let noise = residuals.iter().filter_map(|r| crate::stats::median(&mut r.clone())).fold(f64::INFINITY, f64::min);
-    let on: Vec<f64> =
-        residuals.iter().map(|r| r.iter().filter(|&&x| x <= NOISE_TIMES * noise).count() as f64).collect();
+    let noise = residuals.iter_mut().filter_map(|r| crate::stats::median(r)).fold(f64::INFINITY, f64::min);
+    let on = |r: &Vec<f64>| r.iter().filter(|&&x| x <= NOISE_TIMES * noise).count() as f64;
     // the spread's run, unless a descent puts clearly more on the surfaces
-    let mut best = 0;
-    for k in 1..runs.len() {
-        if on[k + 1] > GAIN * on[best + 1] {
-            best = k;
+    let (mut r, mut on_r) = (&runs[0], on(&residuals[1]));
+    for (next, on_next) in runs.iter().zip(residuals[1..].iter().map(on)).skip(1) {
+        if on_next > GAIN * on_r {
+            (r, on_r) = (next, on_next);
         }
     }
-    if on[best + 1] <= GAIN * on[0] {
+    if on_r <= GAIN * on(&residuals[0]) {
         return *answer;
     }
-    let r = runs[best];
     let (fitness, inlier_rmse) = target.evaluate(source, &r.T_target_source, d);
     Candidate {
         T_target_source: r.T_target_source,
