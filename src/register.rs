@@ -127,16 +127,19 @@ pub struct Options {
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub outliers: Outliers,
     /// What to do with a support plane, the table or floor under a scanned object: `"drop"` (leave
-    /// it out of each cloud that stands on one, with a warning that counts its points; the
-    /// default) or `"keep"`. A support plane holds a tenth or more of its cloud, has nearly all
-    /// the rest of the cloud on one side, reaches out beyond what stands on it on at least
-    /// three sides (with at least 30% of its points outside the footprint of the rest), and is
-    /// one layer (a sheet's two faces are not a table; nor is a plane with the object's own
-    /// bottom face sampled just above it, which no capture of an object on a table sees). Left in a scan registered onto a model of the object, it sets the clouds'
-    /// scale and the object's flat faces are drawn onto it; between two scans it pulls the answer
-    /// towards the table's motion, which differs from the object's when the object was tipped or
-    /// turned over between them. Keep it for two scans of an object that stood still on its
-    /// table, where the shared table helps.
+    /// it out of each cloud that stands on one, with a warning that counts its points; the default)
+    /// or `"keep"`. A support plane holds a tenth or more of its cloud, has nearly all the rest of
+    /// the cloud on one side, reaches out beyond what stands on it on at least three sides (with at
+    /// least 30% of its points outside the footprint of the rest), and is one layer (a sheet's two
+    /// faces are not a table; nor is a plane with the object's own bottom face sampled just above
+    /// it, which no capture of an object on a table sees). At least a tenth of the cloud stands off
+    /// it, or a hundredth when the other cloud stands on a support plane: a view that is nearly all
+    /// table around a small object loses its table when the other view does, and both are left out.
+    /// Left in a scan registered onto a model of the object, it sets the clouds' scale and the
+    /// object's flat faces are drawn onto it; between two scans it pulls the answer towards the
+    /// table's motion, which differs from the object's when the object was tipped or turned over
+    /// between them. Keep it for two scans of an object that stood still on its table, where the
+    /// shared table helps.
     #[cfg_attr(feature = "ts", ts(optional = nullable))]
     pub support_plane: Support,
     /// The direction that is up in both clouds' frames, when both were captured level: scans

@@ -15,7 +15,9 @@
 //! populous distinct planes are refitted to their points and tested in that order; the first that
 //! passes is the support:
 //! - at least [`MIN_SHARE`] of the sample lies on it and [`MIN_REST`] off it (an object stands
-//!   on it: a cloud that is nearly all one plane is a flat object or a wall);
+//!   on it: a cloud that is nearly all one plane is a flat object or a wall), or
+//!   [`MIN_REST_PAIRED`] where the other cloud of the pair stands on a support ([`find_paired`]:
+//!   a view that is nearly all table around a small object);
 //! - all but [`OTHER_SIDE`] of the points off it lie on one side (the object stands on it; a
 //!   plane through the middle of a shape is part of the shape), strays aside ([`STRAY_REACH`]:
 //!   they neither count here nor widen the footprint below);
@@ -84,6 +86,11 @@ pub const MIN_SHARE: f64 = 0.1;
 
 /// Least share of the sample off the plane (more than twice its band away).
 pub const MIN_REST: f64 = 0.1;
+
+/// Least share of the sample off the plane when the other cloud of the pair stands on a support
+/// plane ([`find_paired`]): a view that is nearly all table around a small object, whose
+/// partner shows that the scene stands on one.
+pub const MIN_REST_PAIRED: f64 = 0.01;
 
 /// Most share of the points off the plane that may lie on its other side.
 pub const OTHER_SIDE: f64 = 0.03;
@@ -191,6 +198,19 @@ pub fn find(points: &[[f32; 3]]) -> Option<SupportPlane> {
 
 /// [`find`] with the sample of `points` already made (`spacing`, [`Spacing::of`] them).
 pub fn find_with(points: &[[f32; 3]], spacing: &Spacing) -> Option<SupportPlane> {
+    search(points, spacing, MIN_REST)
+}
+
+/// [`find_with`] for a cloud whose partner stands on a support plane: the plane may hold all but
+/// [`MIN_REST_PAIRED`] of the sample (a table scanned around a small object, which [`MIN_REST`]
+/// alone takes for a flat object or a wall).
+pub fn find_paired(points: &[[f32; 3]], spacing: &Spacing) -> Option<SupportPlane> {
+    search(points, spacing, MIN_REST_PAIRED)
+}
+
+/// The support plane of `points` (their sample `spacing`) with at least `min_rest` of the sample
+/// off it.
+fn search(points: &[[f32; 3]], spacing: &Spacing, min_rest: f64) -> Option<SupportPlane> {
     let Spacing { sample, index, .. } = spacing;
     if sample.len() < MIN_SAMPLE {
         return None;
@@ -234,17 +254,18 @@ pub fn find_with(points: &[[f32; 3]], spacing: &Spacing) -> Option<SupportPlane>
     }
     // the sample points that stand among others (not strays), which judge the points off a plane
     let settled: Vec<[f32; 3]> = spacing.settled(STRAY_REACH).copied().collect();
-    distinct.iter().find_map(|c| test(points, sample, &settled, reach, *c))
+    distinct.iter().find_map(|c| test(points, sample, &settled, reach, min_rest, *c))
 }
 
-/// `c`'s plane refitted, if it is a support of `points` (see the module docs); `sample` is their
-/// even sample, `settled` those of its points that are not strays ([`STRAY_REACH`]), and `reach`
-/// the sample's median reach.
+/// `c`'s plane refitted, if it is a support of `points` (see the module docs) with at least
+/// `min_rest` of the sample off it; `sample` is their even sample, `settled` those of its points
+/// that are not strays ([`STRAY_REACH`]), and `reach` the sample's median reach.
 fn test(
     points: &[[f32; 3]],
     sample: &[[f32; 3]],
     settled: &[[f32; 3]],
     reach: f64,
+    min_rest: f64,
     c: Candidate,
 ) -> Option<SupportPlane> {
     let (mut plane, band) = (c.plane, c.band);
@@ -258,7 +279,7 @@ fn test(
     let off: Vec<(f64, [f32; 3])> =
         settled.iter().map(|p| (plane.distance(p), *p)).filter(|(d, _)| d.abs() > 2.0 * band).collect();
     let n = sample.len() as f64;
-    if (on.len() as f64) < MIN_SHARE * n || (off.len() as f64) < MIN_REST * n {
+    if (on.len() as f64) < MIN_SHARE * n || (off.len() as f64) < min_rest * n {
         return None;
     }
     // a second layer just beside it: the other face of a sheet
@@ -486,7 +507,7 @@ mod tests {
         points.extend(table(1_500, 1.0, 21));
         let c = |points: &[[f32; 3]]| {
             let plane = Plane { point: Vector3::zeros(), normal: Vector3::z() };
-            test(points, points, points, 0.05, Candidate { plane, band: 0.01, count: 0 })
+            test(points, points, points, 0.05, MIN_REST, Candidate { plane, band: 0.01, count: 0 })
         };
         assert!(c(&points).is_some());
         points.extend(table(1_500, 1.0, 22).into_iter().map(|p| [p[0], p[1], -0.015 + p[2]]));
@@ -494,11 +515,18 @@ mod tests {
     }
 
     #[test]
-    fn a_small_object_on_a_large_table_is_left_as_it_is() {
+    fn a_small_object_on_a_large_table_is_left_as_it_is_unless_its_pair_stands_on_one() {
         // too little stands off the plane (4% of the cloud): the object could be the plane's own
         let mut points = block(200, [0.1, 0.08, 0.1], false, 12);
         points.extend(table(4_800, 1.2, 13));
-        assert_eq!(find(&points), None);
+        let sample = Spacing::of(&points);
+        assert_eq!(find_with(&points, &sample), None);
+        // paired with a cloud that stands on a support, it is a table
+        let plane = find_paired(&points, &sample).expect("a support plane");
+        assert!(plane.normal[2] > 0.99 && (200..5_000).all(|i| plane.indices.binary_search(&i).is_ok()));
+        // a table with nothing on it is none either way
+        let bare = table(5_000, 1.2, 14);
+        assert_eq!(find_paired(&bare, &Spacing::of(&bare)), None);
     }
 
     #[test]

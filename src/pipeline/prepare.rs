@@ -93,27 +93,41 @@ pub(crate) fn prepare(
     let n_net = resolved.n_net;
     limits::check_cloud_points("source", source.len())?;
     limits::check_cloud_points("target", target.len())?;
-    // the target given again: its checks passed already, and what it holds is reused below;
-    // another target's is dropped before anything is allocated
-    let input = InputKey::of(&target, options.non_finite, options.outliers, options.support_plane);
-    let kept = kept.filter(|k| k.input == input);
     // the source in the target's unit (`sourceScale`): from here on the source as the pipeline sees it
     let source_scale = options::source_scale(options)?;
     let source = scaled(source, source_scale);
-    let (source, source_warnings, source_rounding) = checked("source", source, options).map_err(|e| match e {
+    let (source, mut source_warnings, source_spacing) = validated("source", source, options).map_err(|e| match e {
         Error::InvalidCloud(m) if source_scale != 1.0 => {
             Error::InvalidCloud(format!("{m} (its coordinates multiplied by sourceScale = {})", num(source_scale)))
         }
         e => e,
     })?;
-    warnings.extend(source_warnings);
+    // the source's support plane; the target's is searched for as the pair of a cloud that
+    // stands on one where the source does
+    let mut source_plane = source_spacing.as_ref().and_then(|s| support::find_with(&source.points, s));
+    let paired = source_plane.is_some();
+    // the target given again: its checks passed already, and what it holds is reused below;
+    // another target's is dropped before anything is allocated
+    let input = InputKey::of(&target, options.non_finite, options.outliers, options.support_plane, paired);
+    let kept = kept.filter(|k| k.input == input);
     let given = match kept {
         Some(k) => Given::Kept(k, target),
         None => {
-            let (t, target_warnings, rounding) = checked("target", target, options)?;
+            let (t, target_warnings, rounding) = checked("target", target, options, paired)?;
             Given::Validated(t, target_warnings, rounding)
         }
     };
+    // a target that stands on a support plane: the source is its pair
+    let target_warnings = match &given {
+        Given::Kept(k, _) => &k.summary.warnings,
+        Given::Validated(_, target_warnings, _) => target_warnings,
+    };
+    let target_stands = target_warnings.iter().any(|w| w.code == WarningCode::SupportPlaneDropped);
+    if let (None, true, Some(spacing)) = (&source_plane, target_stands, &source_spacing) {
+        source_plane = support::find_paired(&source.points, spacing);
+    }
+    let (source, source_rounding) = finished("source", source, source_plane, &mut source_warnings);
+    warnings.extend(source_warnings);
     let spreads_source = checks::not_collinear("source", &source.points, warnings)?;
     let summary = match &given {
         Given::Kept(k, _) => k.summary.clone(),
@@ -188,7 +202,7 @@ pub(crate) fn prepare(
         // the same target at another scale (a source larger than it)
         Given::Kept(old, target) => {
             drop(old);
-            let local = checked("target", target, options)?.0.into_local();
+            let local = checked("target", target, options, paired)?.0.into_local();
             Box::new(PreparedTarget::new(input, summary, sizes, local, &norm))
         }
         Given::Validated(t, _, _) => Box::new(PreparedTarget::new(input, summary, sizes, t.into_local(), &norm)),
@@ -245,12 +259,14 @@ fn scaled(cloud: Cow<'_, PointCloud>, factor: f64) -> Cow<'_, PointCloud> {
 const MIN_AT_ZERO: usize = 2;
 
 /// `cloud` validated ([`PointCloud::validated`], `options.non_finite`); with [`Outliers::Drop`]
-/// without its far outliers ([`outliers::drop_far_with`]); then with [`Support::Drop`] without the
-/// support plane it stands on ([`support::find`]); with a warning for each that left points out,
-/// and the step the `f32` coordinates of the points kept are rounded to ([`checks::f32_rounding`],
-/// its units).
+/// without its far outliers ([`outliers::drop_far_with`]), with a warning for each that left
+/// points out; and, with [`Support::Drop`], the sample its support plane is searched in.
 /// `what` names the cloud in messages.
-fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<(PointCloud, Vec<Warning>, f64)> {
+fn validated(
+    what: &str,
+    cloud: Cow<'_, PointCloud>,
+    options: &Options,
+) -> Result<(PointCloud, Vec<Warning>, Option<Spacing>)> {
     let given = cloud.len();
     let mut cloud = cloud.into_owned().into_validated(what, MIN_POINTS, options.non_finite)?;
     let mut warnings = Vec::new();
@@ -276,15 +292,44 @@ fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<
             warnings.push(Warning::new(WarningCode::OutliersDropped, outliers::warning(what, dropped, total)));
         }
     }
-    if options.support_plane == Support::Drop {
-        let spacing = spacing.unwrap_or_else(|| Spacing::of(&cloud.points));
-        if let Some(plane) = support::find_with(&cloud.points, &spacing) {
-            warnings.push(Warning::new(
-                WarningCode::SupportPlaneDropped,
-                support::warning(what, plane.indices.len(), cloud.len()),
-            ));
-            cloud = cloud.without(&plane.indices);
-        }
+    let spacing = match options.support_plane {
+        Support::Drop => Some(spacing.unwrap_or_else(|| Spacing::of(&cloud.points))),
+        Support::Keep => None,
+    };
+    Ok((cloud, warnings, spacing))
+}
+
+/// `cloud` [`validated`], then without its support plane ([`support::find_with`], or
+/// [`support::find_paired`] where `paired`: the other cloud stands on one) with
+/// [`Support::Drop`]; see [`finished`].
+fn checked(
+    what: &str,
+    cloud: Cow<'_, PointCloud>,
+    options: &Options,
+    paired: bool,
+) -> Result<(PointCloud, Vec<Warning>, f64)> {
+    let (cloud, mut warnings, spacing) = validated(what, cloud, options)?;
+    let search = if paired { support::find_paired } else { support::find_with };
+    let plane = spacing.and_then(|s| search(&cloud.points, &s));
+    let (cloud, rounding) = finished(what, cloud, plane, &mut warnings);
+    Ok((cloud, warnings, rounding))
+}
+
+/// A [`validated`] `cloud` without its support `plane`, if any, and the step the `f32`
+/// coordinates of the points kept are rounded to ([`checks::f32_rounding`], its units); a warning
+/// for the plane, for points at (0, 0, 0) and for a coarse rounding goes to `warnings`.
+fn finished(
+    what: &str,
+    mut cloud: PointCloud,
+    plane: Option<support::SupportPlane>,
+    warnings: &mut Vec<Warning>,
+) -> (PointCloud, f64) {
+    if let Some(plane) = plane {
+        warnings.push(Warning::new(
+            WarningCode::SupportPlaneDropped,
+            support::warning(what, plane.indices.len(), cloud.len()),
+        ));
+        cloud = cloud.without(&plane.indices);
     }
     // a depth camera's pixels without a return, written as (0, 0, 0): a cluster the outlier test
     // may keep (it is dense), which stretches the clouds' box and so the default distance
@@ -300,8 +345,8 @@ fn checked(what: &str, cloud: Cow<'_, PointCloud>, options: &Options) -> Result<
         ));
     }
     // the points kept (a stray left out, far from zero, rounds nothing that is registered)
-    let rounding = checks::f32_rounding(what, &cloud, &mut warnings);
-    Ok((cloud, warnings, rounding))
+    let rounding = checks::f32_rounding(what, &cloud, warnings);
+    (cloud, rounding)
 }
 
 #[cfg(test)]

@@ -22,7 +22,9 @@ use crate::{checks, limits, sampling, Result};
 use std::sync::OnceLock;
 
 /// What recognises a target given again: a 128-bit fingerprint (XXH3) of its points' bytes, their
-/// count, its origin and the `nonFinite`, `outliers` and `supportPlane` options.
+/// count, its origin, the `nonFinite`, `outliers` and `supportPlane` options and whether its
+/// support plane was searched for as the pair of a source that stands on one
+/// ([`crate::support::find_paired`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct InputKey {
     fingerprint: u128,
@@ -31,12 +33,19 @@ pub(crate) struct InputKey {
     non_finite: NonFinite,
     outliers: Outliers,
     support: Support,
+    paired: bool,
 }
 
 impl InputKey {
-    /// The key of `cloud` checked with `non_finite`, `outliers` and `support` (one pass over its
-    /// points).
-    pub(crate) fn of(cloud: &PointCloud, non_finite: NonFinite, outliers: Outliers, support: Support) -> Self {
+    /// The key of `cloud` checked with `non_finite`, `outliers` and `support`, `paired` with a
+    /// source that stands on a support plane (one pass over its points).
+    pub(crate) fn of(
+        cloud: &PointCloud,
+        non_finite: NonFinite,
+        outliers: Outliers,
+        support: Support,
+        paired: bool,
+    ) -> Self {
         let mut hasher = xxhash_rust::xxh3::Xxh3::new();
         // the points' little-endian bytes, a chunk at a time
         let mut buf = [0u8; 12 * 256];
@@ -55,6 +64,7 @@ impl InputKey {
             non_finite,
             outliers,
             support,
+            paired,
         }
     }
 }
