@@ -605,6 +605,13 @@ fn max_displacement(a: &Matrix4<f64>, b: &Matrix4<f64>, points: &[[f32; 3]]) -> 
 /// of the truth, either way).
 pub const TIE_FITNESS: f64 = 0.10;
 
+/// Fitnesses within [`TIE_FITNESS`] of each other are a near tie only while the worse leaves at
+/// most this many times the share of the source off the target (`1 - fitness`) that the better
+/// one leaves: two poses that put nearly all of the source on the target (a scan inside its
+/// model) are told apart by the few points the worse one leaves off (a notch, a keyway, a
+/// locating pin), which fitness alone counts as a hair.
+pub const TIE_MISFIT: f64 = 2.0;
+
 /// Near ties ([`TIE_FITNESS`]) between poses whose turns away from the initial guess
 /// ([`turn_deg`]) differ by more than this many degrees go to the smaller turn ([`better`]).
 pub const TIE_TURN_DEG: f64 = 60.0;
@@ -619,21 +626,33 @@ pub fn turn_deg(T_target_source: &Matrix4<f64>) -> f64 {
 
 /// True when `c` is a better answer than `b`. Normally the higher fitness at the final distance;
 /// among equal fitness (the same number of inliers), the lower inlier RMSE. But when the two
-/// fit within [`TIE_FITNESS`] of each other and turn away from the initial guess by amounts
+/// fit within [`TIE_FITNESS`] (and [`TIE_MISFIT`]) of each other and turn away from the initial guess by amounts
 /// more than [`TIE_TURN_DEG`] apart, the one that turns less: the poses fit alike, and a motion
 /// no larger than needed is the likelier one (scans of one object from one device, a guess
 /// that was roughly right). On pairs in arbitrary poses the rule favours neither the truth nor
 /// its look-alike; on pairs turned by at most 45 degrees per axis it picks the truth over a
 /// flip of a near-symmetric shape (`BENCHMARK.md`, "Near ties go to the smaller turn").
 pub fn better(c: &Candidate, b: &Candidate) -> bool {
-    let near_tie = c.fitness <= b.fitness * (1.0 + TIE_FITNESS) && b.fitness <= c.fitness * (1.0 + TIE_FITNESS);
-    if near_tie {
+    if near_tie(c, b) {
         let (turn_c, turn_b) = (turn_deg(&c.T_target_source), turn_deg(&b.T_target_source));
         if (turn_c - turn_b).abs() > TIE_TURN_DEG {
             return turn_c < turn_b;
         }
     }
     c.fitness > b.fitness || (c.fitness == b.fitness && c.inlier_rmse < b.inlier_rmse)
+}
+
+/// True when `c` and `b` fit within [`TIE_FITNESS`] and [`TIE_MISFIT`] of each other: a near
+/// tie for [`better`].
+fn near_tie(c: &Candidate, b: &Candidate) -> bool {
+    let (lo, hi) = (c.fitness.min(b.fitness), c.fitness.max(b.fitness));
+    hi <= lo * (1.0 + TIE_FITNESS) && 1.0 - lo <= TIE_MISFIT * (1.0 - hi)
+}
+
+/// True when `c` leaves less than a [`TIE_MISFIT`]th of the share of the source off the target
+/// that `b` leaves (`1 - fitness`): better than `b` beyond any near tie, whatever the turns.
+pub fn leaves_far_less_off(c: &Candidate, b: &Candidate) -> bool {
+    c.fitness > b.fitness && 1.0 - b.fitness > TIE_MISFIT * (1.0 - c.fitness)
 }
 
 /// True when `c` fits more than [`TIE_FITNESS`] better than `b`: better beyond a near tie.

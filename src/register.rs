@@ -503,21 +503,24 @@ pub struct Registration {
     /// Other poses that fit about as well as `T_target_source` (at least 0.9 of its fitness when
     /// found, by the confidence's probes or by the search, more than 15 degrees from it and from
     /// each other, or as turned but placing the source more than 0.2 of the clouds' half-extent
-    /// away: a facade's next window bay), each refined like the answer, the best fitting first; empty when the fit is
-    /// unique. On a symmetric shape the right pose is often one of these rather than the answer,
-    /// and nothing in the clouds tells them apart: an application can offer them to its user.
-    /// `evidence.alternatives` counts those of the probes or of the search, whichever found more
-    /// (the confidence's input), so this list can be longer; a refinement that brings a pose back
-    /// onto the answer or onto another drops it, so it can also be shorter.
+    /// away: a facade's next window bay), each refined like the answer, the best fitting first;
+    /// empty when the fit is unique. One may fit a little better than the answer, which the search
+    /// chose among near ties by its turn; one that leaves less than half as much of the source off
+    /// the target becomes the answer. On a symmetric shape the right pose is often one of these
+    /// rather than the answer, and nothing in the clouds tells them apart: an application can offer
+    /// them to its user. `evidence.alternatives` counts those of the probes or of the search,
+    /// whichever found more (the confidence's input), so this list can be longer; a refinement that
+    /// brings a pose back onto the answer or onto another drops it, so it can also be shorter.
     #[serde(default)]
     pub alternatives: Vec<Alternative>,
     /// The motions the fit leaves free, weakest held first; empty when the fit pins every motion.
-    /// Along each, the surfaces keep the source on the target (a surface of revolution turned
-    /// about its axis, a straight pipe, tunnel or extrusion slid along itself, a plane slid or
-    /// turned in itself), so only where the clouds' edges fall holds the answer there, and it may
-    /// be off along it: what the warning `"freeMotion"` names in words, as numbers an application
-    /// can draw or constrain (with a guess, `initialTransform`, the answer follows the guess along
-    /// them: `"heldByGuess"`).
+    /// Along each, the surfaces keep the source on the target (a surface of revolution turned about
+    /// its axis, a straight pipe, tunnel or extrusion slid along itself, a plane slid or turned in
+    /// itself), or nearly (small features repeated along it: holes on a bolt circle, a gear's
+    /// teeth), so only where the clouds' edges fall, or those features, holds the answer there, and
+    /// it may be off along it: what the warning `"freeMotion"` names in words, as numbers an
+    /// application can draw or constrain (with a guess, `initialTransform`, the answer follows the
+    /// guess along them: `"heldByGuess"`).
     #[serde(default)]
     pub free_motions: Vec<FreeMotion>,
 }

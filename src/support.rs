@@ -16,8 +16,8 @@
 //! passes is the support:
 //! - at least [`MIN_SHARE`] of the sample lies on it and [`MIN_REST`] off it (an object stands
 //!   on it: a cloud that is nearly all one plane is a flat object or a wall), or
-//!   [`MIN_REST_PAIRED`] where the other cloud of the pair stands on a support ([`find_paired`]:
-//!   a view that is nearly all table around a small object);
+//!   [`MIN_REST_PAIRED`] where the other cloud of the pair stands on a support by either share
+//!   ([`find_paired`]: views that are nearly all table, or turntable, around a small object);
 //! - all but [`OTHER_SIDE`] of the points off it lie on one side (the object stands on it; a
 //!   plane through the middle of a shape is part of the shape), strays aside ([`STRAY_REACH`]:
 //!   they neither count here nor widen the footprint below);
@@ -88,8 +88,8 @@ pub const MIN_SHARE: f64 = 0.1;
 pub const MIN_REST: f64 = 0.1;
 
 /// Least share of the sample off the plane when the other cloud of the pair stands on a support
-/// plane ([`find_paired`]): a view that is nearly all table around a small object, whose
-/// partner shows that the scene stands on one.
+/// plane by this share or [`MIN_REST`] ([`find_paired`]): a view that is nearly all table around
+/// a small object, whose partner shows that the scene stands on one.
 pub const MIN_REST_PAIRED: f64 = 0.01;
 
 /// Most share of the points off the plane that may lie on its other side.
@@ -201,9 +201,9 @@ pub fn find_with(points: &[[f32; 3]], spacing: &Spacing) -> Option<SupportPlane>
     search(points, spacing, MIN_REST)
 }
 
-/// [`find_with`] for a cloud whose partner stands on a support plane: the plane may hold all but
-/// [`MIN_REST_PAIRED`] of the sample (a table scanned around a small object, which [`MIN_REST`]
-/// alone takes for a flat object or a wall).
+/// [`find_with`] for a cloud whose partner stands on a support plane (by either share): the
+/// plane may hold all but [`MIN_REST_PAIRED`] of the sample (a table scanned around a small
+/// object, which [`MIN_REST`] alone takes for a flat object or a wall).
 pub fn find_paired(points: &[[f32; 3]], spacing: &Spacing) -> Option<SupportPlane> {
     search(points, spacing, MIN_REST_PAIRED)
 }

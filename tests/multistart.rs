@@ -286,6 +286,25 @@ fn near_ties_go_to_the_pose_that_turns_less() {
     assert!(refine::clearly_better(&far, &c[0]) && !refine::clearly_better(&c[0], &far));
 }
 
+#[test]
+fn poses_that_put_nearly_all_of_the_source_on_the_target_are_told_apart_by_what_they_leave_off() {
+    use Start::*;
+    let misfit = refine::TIE_MISFIT;
+    // a scan inside its model: the half turn leaves 0.65% off (a notch), the truth none; the
+    // fitnesses are within the near tie's margin, but the truth is no tie
+    let c = [turned(Network, 0.9935, 20.0), turned(Global, 1.0, 180.0)];
+    assert_eq!(refine::choose(&c), Some(1));
+    assert!(refine::leaves_far_less_off(&c[1], &c[0]) && !refine::leaves_far_less_off(&c[0], &c[1]));
+    // leaving off less than TIE_MISFIT times as much is a near tie again: the smaller turn
+    let c = [turned(Network, 1.0 - 0.9 * misfit * 0.005, 20.0), turned(Global, 0.995, 180.0)];
+    assert_eq!(refine::choose(&c), Some(0));
+    assert!(!refine::leaves_far_less_off(&c[1], &c[0]));
+    // at the fits of partial scans, the margin on fitness decides as before
+    let c = [turned(Network, 0.6, 20.0), turned(Global, 0.63, 180.0)];
+    assert_eq!(refine::choose(&c), Some(0));
+    assert!(!refine::leaves_far_less_off(&c[1], &c[0]));
+}
+
 /// A 1,500-point bumpy surface as the prepared target, the same points moved by the inverse of
 /// `truth` as the source, and `truth` (`T_target_source`).
 fn surface_pair() -> (IcpTarget, Vec<[f32; 3]>, Matrix4<f64>) {

@@ -244,9 +244,11 @@ pub(crate) fn cap(
             WarningCode::FreeMotion,
             format!(
                 "the fit leaves {count} free: {} {keep} the source on the target's surface (a surface of revolution \
-                 about its axis, a straight pipe, tunnel or extrusion along itself, a plane in itself), so only where the \
-                 clouds' edges fall holds the answer there, and it may be off along {that} (evidence.constraint {:.1e}; \
-                 slid along the first by a quarter of the clouds' half-size, the answer keeps {:.0}% of its fit)",
+                 about its axis, a straight pipe, tunnel or extrusion along itself, a plane in itself), or nearly (small \
+                 features repeated along it: holes on a bolt circle, a gear's teeth), so only where the clouds' edges \
+                 fall, or those small features, holds the answer there, and it may be off along {that} \
+                 (evidence.constraint {:.1e}; slid along the first by a quarter of the clouds' half-size, the answer \
+                 keeps {:.0}% of its fit)",
                 m.describe(&place, s),
                 m.constraint,
                 100.0 * m.slide.min(1.0)

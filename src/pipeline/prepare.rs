@@ -102,10 +102,15 @@ pub(crate) fn prepare(
         }
         e => e,
     })?;
-    // the source's support plane; the target's is searched for as the pair of a cloud that
-    // stands on one where the source does
-    let mut source_plane = source_spacing.as_ref().and_then(|s| support::find_with(&source.points, s));
-    let paired = source_plane.is_some();
+    // the source's support plane, and else the one it may stand on as the pair of a cloud that
+    // stands on one ([`support::find_paired`]); the target's is searched for as such a pair where
+    // the source stands on either
+    let source_strict = source_spacing.as_ref().and_then(|s| support::find_with(&source.points, s));
+    let source_paired = match (&source_strict, &source_spacing) {
+        (None, Some(s)) => support::find_paired(&source.points, s),
+        _ => None,
+    };
+    let paired = source_strict.is_some() || source_paired.is_some();
     // the target given again: its checks passed already, and what it holds is reused below;
     // another target's is dropped before anything is allocated
     let input = InputKey::of(&target, options.non_finite, options.outliers, options.support_plane, paired);
@@ -123,9 +128,7 @@ pub(crate) fn prepare(
         Given::Validated(_, target_warnings, _) => target_warnings,
     };
     let target_stands = target_warnings.iter().any(|w| w.code == WarningCode::SupportPlaneDropped);
-    if let (None, true, Some(spacing)) = (&source_plane, target_stands, &source_spacing) {
-        source_plane = support::find_paired(&source.points, spacing);
-    }
+    let source_plane = source_strict.or(source_paired.filter(|_| target_stands));
     let (source, source_rounding) = finished("source", source, source_plane, &mut source_warnings);
     warnings.extend(source_warnings);
     let spreads_source = checks::not_collinear("source", &source.points, warnings)?;
@@ -299,8 +302,8 @@ fn validated(
     Ok((cloud, warnings, spacing))
 }
 
-/// `cloud` [`validated`], then without its support plane ([`support::find_with`], or
-/// [`support::find_paired`] where `paired`: the other cloud stands on one) with
+/// `cloud` [`validated`], then without its support plane ([`support::find_with`], or else
+/// [`support::find_paired`] where `paired`: the other cloud stands on one by either) with
 /// [`Support::Drop`]; see [`finished`].
 fn checked(
     what: &str,
@@ -309,8 +312,10 @@ fn checked(
     paired: bool,
 ) -> Result<(PointCloud, Vec<Warning>, f64)> {
     let (cloud, mut warnings, spacing) = validated(what, cloud, options)?;
-    let search = if paired { support::find_paired } else { support::find_with };
-    let plane = spacing.and_then(|s| search(&cloud.points, &s));
+    let plane = spacing.and_then(|s| {
+        support::find_with(&cloud.points, &s)
+            .or_else(|| paired.then(|| support::find_paired(&cloud.points, &s)).flatten())
+    });
     let (cloud, rounding) = finished(what, cloud, plane, &mut warnings);
     Ok((cloud, warnings, rounding))
 }

@@ -27,7 +27,9 @@
 //! stage's best once that stage has run (the other too while the answer is below
 //! [`STOP_CONFIDENCE`]). The answer's final verdict also counts, as alternatives, the other refined
 //! answers that fit about as well ([`confidence::count_search_alternatives`]); those alternative
-//! poses are refined like the answer and handed on with it ([`refine_alternatives`]). With `up`
+//! poses are refined like the answer and handed on with it ([`refine_alternatives`]), and one
+//! that then leaves far less of the source off the target ([`refine::leaves_far_less_off`])
+//! becomes the answer, judged anew. With `up`
 //! ([`Prepared::upright`]), every start is levelled first, a stage whose best ends tilted settles
 //! nothing, and the probes count only upright poses (turning the answer about up too). Once the
 //! global stage has run, the answer's rotation with the translation its descriptor matches agree
@@ -488,7 +490,7 @@ pub(crate) fn search(
     // (the motion an answer was held along: still the one the result names, when the probe of
     // the held pose finds it held a little more firmly there)
     let mut held_along = None;
-    let (candidate, probed) = match free_of(&probed).filter(|f| guided && (surfaces_free(f) || turned_far)) {
+    let (mut candidate, mut probed) = match free_of(&probed).filter(|f| guided && (surfaces_free(f) || turned_far)) {
         Some(free) => {
             match held_by_guess(&free, !surfaces_free(&free), &candidate, p, target_index, &screen, &admits) {
                 Some((held, why)) => {
@@ -503,7 +505,27 @@ pub(crate) fn search(
         None => (candidate, probed),
     };
     let versus = polished_from.filter(|_| held_along.is_none());
-    let (evidence, poses, confidence) = verdict(&candidate, versus.as_ref(), &probed, &refined, at_evidence.as_ref());
+    let (mut evidence, mut poses, mut confidence) =
+        verdict(&candidate, versus.as_ref(), &probed, &refined, at_evidence.as_ref());
+    let mut alternatives = refine_alternatives(target_index, &p.icp_src.points, &candidate, &poses, &how);
+    // an alternative that, refined like the answer, leaves far less of the source off the
+    // target (a scan inside its model: the answer a gear turned over, its keyway off the model,
+    // where the probes found the truth) is the answer, judged anew, and the answer one of its
+    // alternatives; one that fits only somewhat better stays an alternative (on the validation
+    // pairs, a tenth better turned a near-symmetric trim the wrong way over)
+    let swap = refined_any && p.icp != IcpKind::Off && options.search != Search::Local && held_along.is_none();
+    let beats = |a: &Candidate| {
+        refine::leaves_far_less_off(a, &candidate)
+            && !refine::coincide(&candidate.T_target_source, &a.T_target_source, &p.icp_src.points, d_final)
+            && admits(&a.T_target_source)
+    };
+    if let Some(a) = alternatives.iter().find(|a| swap && beats(a)) {
+        let a = *a;
+        refined.push((candidate.T_target_source, candidate.fitness));
+        (candidate, probed) = (a, judge(&a.T_target_source));
+        (evidence, poses, confidence) = verdict(&candidate, None, &probed, &refined, at_evidence.as_ref());
+        alternatives = refine_alternatives(target_index, &p.icp_src.points, &candidate, &poses, &how);
+    }
     let apart = |a: &Matrix4<f64>, b: &Matrix4<f64>| apart(a, b, centroid);
     // the local search kept its answer where a pose the probes found fits better
     if options.search == Search::Local {
@@ -573,7 +595,6 @@ pub(crate) fn search(
              confidence's probes turned it to, fit better there (a guess that was off, or a symmetric shape's look-alike)"
         )));
     }
-    let alternatives = refine_alternatives(target_index, &p.icp_src.points, &candidate, &poses, &how);
     Ok(Chosen { candidate, evidence, confidence, starts_refined, alternatives, free })
 }
 

@@ -23,8 +23,8 @@ use std::sync::OnceLock;
 
 /// What recognises a target given again: a 128-bit fingerprint (XXH3) of its points' bytes, their
 /// count, its origin, the `nonFinite`, `outliers` and `supportPlane` options and whether its
-/// support plane was searched for as the pair of a source that stands on one
-/// ([`crate::support::find_paired`]).
+/// support plane was searched for as the pair of a source that stands on one (by either share,
+/// [`crate::support::find_paired`]).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct InputKey {
     fingerprint: u128,
