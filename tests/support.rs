@@ -19,6 +19,14 @@ fn mug() -> PointCloud {
     arps::io::read_point_cloud(include_bytes!("../fixtures/scans/table-mug-object.ply"), "mug.ply").unwrap()
 }
 
+/// The scene's points split in two captures of the same table and mug (alternate points).
+fn two_captures() -> (PointCloud, PointCloud) {
+    let scene = scene();
+    let (even, odd): (Vec<_>, Vec<_>) = scene.points.iter().enumerate().partition(|(i, _)| i % 2 == 0);
+    let capture = |half: Vec<(usize, &[f32; 3])>| PointCloud::new(half.into_iter().map(|(_, p)| *p).collect());
+    (capture(even), capture(odd))
+}
+
 fn keep() -> Options {
     Options { support_plane: Support::Keep, ..Options::default() }
 }
@@ -64,11 +72,9 @@ fn the_table_under_a_captured_mug_is_left_out_and_the_mug_registered_onto_its_mo
 #[test]
 fn two_captures_of_a_mug_that_stood_still_are_registered_with_or_without_their_tables() {
     // two captures of the same table and mug (alternate points), one moved
-    let scene = scene();
-    let (even, odd): (Vec<_>, Vec<_>) = scene.points.iter().enumerate().partition(|(i, _)| i % 2 == 0);
-    let first = PointCloud::new(even.into_iter().map(|(_, p)| *p).collect());
+    let (first, second) = two_captures();
     let gt = common::motion([15.0, -20.0, 35.0], [0.2, 0.1, -0.1]);
-    let second = PointCloud::new(odd.into_iter().map(|(_, p)| *p).collect()).transformed(&gt);
+    let second = second.transformed(&gt);
     let mut registrar = Registrar::with_default_model().unwrap();
     let r = registrar.register(&first, &second, &Options::default()).unwrap();
     for what in ["source", "target"] {
@@ -88,10 +94,7 @@ fn two_captures_of_a_mug_that_stood_still_are_registered_with_or_without_their_t
 /// and the truth for the mug (the first capture's mug onto the second's).
 fn tipped_over(camera: &Matrix4<f64>) -> (PointCloud, PointCloud, Matrix4<f64>) {
     use nalgebra::{Rotation3, Translation3, Unit, Vector3};
-    let scene = scene();
-    let (even, odd): (Vec<_>, Vec<_>) = scene.points.iter().enumerate().partition(|(i, _)| i % 2 == 0);
-    let first = PointCloud::new(even.into_iter().map(|(_, p)| *p).collect());
-    let second = PointCloud::new(odd.into_iter().map(|(_, p)| *p).collect());
+    let (first, second) = two_captures();
     let plane = arps::support::find(&second.points).expect("a table");
     let n = Vector3::from(plane.normal);
     let on = Vector3::from(plane.point);
@@ -163,11 +166,9 @@ fn a_view_that_is_nearly_all_table_loses_its_table_when_the_other_view_does() {
     // the second capture seen wider, the mug a small part of it: alone its table is no support
     // (too little stands on it: a flat object or a wall), but the first capture stands on one,
     // so both tables are left out and the mug registered
-    let scene = scene();
-    let (even, odd): (Vec<_>, Vec<_>) = scene.points.iter().enumerate().partition(|(i, _)| i % 2 == 0);
-    let first = PointCloud::new(even.into_iter().map(|(_, p)| *p).collect());
+    let (first, second) = two_captures();
     let gt = common::motion([15.0, -20.0, 35.0], [0.2, 0.1, -0.1]);
-    let wide = widened(&PointCloud::new(odd.into_iter().map(|(_, p)| *p).collect()), 3).transformed(&gt);
+    let wide = widened(&second, 3).transformed(&gt);
     let sample = arps::spacing::Spacing::of(&wide.points);
     assert_eq!(arps::support::find_with(&wide.points, &sample), None);
     assert!(arps::support::find_paired(&wide.points, &sample).is_some());
@@ -193,11 +194,10 @@ fn a_view_that_is_nearly_all_table_loses_its_table_when_the_other_view_does() {
 fn two_views_that_are_nearly_all_table_lose_both_tables() {
     // a small object on a turntable or a desk: the mug a small part of both captures, neither
     // table a support alone, each the pair of the other
-    let scene = scene();
-    let (even, odd): (Vec<_>, Vec<_>) = scene.points.iter().enumerate().partition(|(i, _)| i % 2 == 0);
-    let first = widened(&PointCloud::new(even.into_iter().map(|(_, p)| *p).collect()), 3);
+    let (first, second) = two_captures();
+    let first = widened(&first, 3);
     let gt = common::motion([-25.0, 10.0, 40.0], [0.1, -0.2, 0.05]);
-    let second = widened(&PointCloud::new(odd.into_iter().map(|(_, p)| *p).collect()), 3).transformed(&gt);
+    let second = widened(&second, 3).transformed(&gt);
     assert_eq!(arps::support::find(&first.points), None);
     assert_eq!(arps::support::find(&second.points), None);
     let r = Registrar::with_default_model().unwrap().register(&first, &second, &Options::default()).unwrap();
