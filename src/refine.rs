@@ -625,13 +625,13 @@ pub fn turn_deg(T_target_source: &Matrix4<f64>) -> f64 {
 }
 
 /// True when `c` is a better answer than `b`. Normally the higher fitness at the final distance;
-/// among equal fitness (the same number of inliers), the lower inlier RMSE. But when the two
-/// fit within [`TIE_FITNESS`] (and [`TIE_MISFIT`]) of each other and turn away from the initial guess by amounts
-/// more than [`TIE_TURN_DEG`] apart, the one that turns less: the poses fit alike, and a motion
-/// no larger than needed is the likelier one (scans of one object from one device, a guess
-/// that was roughly right). On pairs in arbitrary poses the rule favours neither the truth nor
-/// its look-alike; on pairs turned by at most 45 degrees per axis it picks the truth over a
-/// flip of a near-symmetric shape (`BENCHMARK.md`, "Near ties go to the smaller turn").
+/// among equal fitness (the same number of inliers), the lower inlier RMSE. But when the two fit
+/// within [`TIE_FITNESS`] (and [`TIE_MISFIT`]) of each other and turn away from the initial guess
+/// by amounts more than [`TIE_TURN_DEG`] apart, the one that turns less: the poses fit alike, and a
+/// motion no larger than needed is the likelier one (scans of one object from one device, a guess
+/// that was roughly right). On pairs in arbitrary poses the rule favours neither the truth nor its
+/// look-alike; on pairs turned by at most 45 degrees per axis it picks the truth over a flip of a
+/// near-symmetric shape (`BENCHMARK.md`, "Near ties go to the smaller turn").
 pub fn better(c: &Candidate, b: &Candidate) -> bool {
     if near_tie(c, b) {
         let (turn_c, turn_b) = (turn_deg(&c.T_target_source), turn_deg(&b.T_target_source));
@@ -646,7 +646,7 @@ pub fn better(c: &Candidate, b: &Candidate) -> bool {
 /// tie for [`better`].
 fn near_tie(c: &Candidate, b: &Candidate) -> bool {
     let (lo, hi) = (c.fitness.min(b.fitness), c.fitness.max(b.fitness));
-    hi <= lo * (1.0 + TIE_FITNESS) && 1.0 - lo <= TIE_MISFIT * (1.0 - hi)
+    hi <= lo * (1.0 + TIE_FITNESS) && !leaves_far_less_off(c, b) && !leaves_far_less_off(b, c)
 }
 
 /// True when `c` leaves less than a [`TIE_MISFIT`]th of the share of the source off the target
