@@ -30,7 +30,9 @@ use serde::{Deserialize, Serialize};
 ///   held only by their outlines.
 /// * `"freeMotion"`: the fit leaves a motion free (a surface of revolution, a straight pipe or
 ///   tunnel, a plane): only the clouds' edges hold the answer along it (`evidence.constraint`).
-/// * `"thinWall"`: the source fits about as well on the other face of a thin wall or sheet.
+/// * `"thinWall"`: the source fits about as well moved onto a parallel face within ten final
+///   distances: the other face of a thin wall or sheet, or the next of a repeated structure (a
+///   building's floors one storey apart at a default distance of half a metre).
 /// * `"mirrorImage"`: a mirror image of the source fits clearly better: one cloud is probably
 ///   mirrored (a left part for a right one, an axis flipped on export).
 /// * `"lowOverlap"`: less of the source lies on the target than `sourceOverlap` says it should.
@@ -83,7 +85,8 @@ pub enum WarningCode {
     BothFlat,
     /// `"freeMotion"`: the fit leaves a motion free (see the type's docs).
     FreeMotion,
-    /// `"thinWall"`: the other face of a thin wall fits alike (see the type's docs).
+    /// `"thinWall"`: the other face of a thin wall, or the next of a repeat, fits alike (see the
+    /// type's docs).
     ThinWall,
     /// `"mirrorImage"`: a mirror image fits clearly better (see the type's docs).
     MirrorImage,

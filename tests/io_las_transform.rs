@@ -29,14 +29,20 @@ fn motion(about: [f64; 3]) -> Matrix4<f64> {
         * Matrix4::new_translation(&-c)
 }
 
-/// Checks `moved` against `bytes` moved by `m`: points to within half a scale step (plus the
-/// reader's f32 offsets), every record's bytes after X, Y, Z and everything after the records
-/// kept, the header's bounds those of the points.
+/// Checks `moved` against `bytes` moved by `m`: the scales times `m`'s uniform scale (a change
+/// of unit keeps the points' precision), points to within half a scale step (plus the reader's
+/// f32 offsets), every record's bytes after X, Y, Z and everything after the records kept, the
+/// header's bounds those of the points.
 fn check(bytes: &[u8], moved: &[u8], m: &Matrix4<f64>) {
     assert_eq!(moved.len(), bytes.len());
     let (offset, record, count) = records(bytes);
-    let scale = [131, 139, 147].map(|at| f64_at(bytes, at));
-    assert!(moved[..155] == bytes[..155], "the header before the offsets");
+    let factor = m.fixed_view::<3, 3>(0, 0).determinant().cbrt();
+    let scale = [131, 139, 147].map(|at| f64_at(moved, at));
+    for (k, at) in [131, 139, 147].into_iter().enumerate() {
+        let want = f64_at(bytes, at) * factor;
+        assert!((scale[k] - want).abs() <= 1e-11 * want, "axis {k}'s scale {} for {want}", scale[k]);
+    }
+    assert!(moved[..131] == bytes[..131], "the header before the scales");
     assert!(moved[227..offset] == bytes[227..offset], "the rest of the header and the VLRs");
     let end = offset + count * record;
     assert!(moved[end..] == bytes[end..], "what follows the points (EVLRs)");
@@ -97,9 +103,12 @@ fn a_las_1_4_file_keeps_its_evlrs() {
     let first = read_point_cloud(&bytes, "a.las").unwrap().point_f64(0);
     let m = motion(first);
     check(&bytes, &transform_las(&bytes, &m).unwrap(), &m);
-    // a uniform scale (a change of unit) too
-    let mm = m * Matrix4::new_scaling(1.5);
-    check(&bytes, &transform_las(&bytes, &mm).unwrap(), &mm);
+    // a uniform scale (a change of unit) too: to a thousandth (millimetres to metres), the grid
+    // scaled with the points (kept, the file's scales would store them a thousand times coarser)
+    for factor in [1.5, 0.001] {
+        let scaled = m * Matrix4::new_scaling(factor);
+        check(&bytes, &transform_las(&bytes, &scaled).unwrap(), &scaled);
+    }
 }
 
 /// The LASzip record's data and where it starts, found by its user id among the VLRs.
@@ -153,8 +162,8 @@ fn a_laz_file_comes_back_as_laz_whose_points_are_the_las_files_moved() {
         assert!(laz_records(&moved) == moved_las[offset..offset + count * record], "{laz}: the records");
         let (a, b) = (read_point_cloud(&moved, "a.laz").unwrap(), read_point_cloud(&moved_las, "a.las").unwrap());
         assert!((0..a.len()).all(|i| a.point_f64(i) == b.point_f64(i)) && a.len() == b.len(), "{laz}: the points");
-        assert!(moved[..96] == laz_bytes[..96] && moved[100..155] == laz_bytes[100..155], "{laz}: the header");
-        assert!(moved[155..227] == moved_las[155..227], "{laz}: the moved points' offsets and bounds");
+        assert!(moved[..96] == laz_bytes[..96] && moved[100..131] == laz_bytes[100..131], "{laz}: the header");
+        assert!(moved[131..227] == moved_las[131..227], "{laz}: the moved points' scales, offsets and bounds");
         let (vlr_at, len_at) =
             (laszip_record(&laz_bytes).1, 227.max(u16::from_le_bytes([laz_bytes[94], laz_bytes[95]]) as usize));
         assert!(moved[len_at..vlr_at] == laz_bytes[len_at..vlr_at], "{laz}: the VLRs before the LASzip record");
@@ -174,7 +183,9 @@ fn a_laz_file_comes_back_as_laz_whose_points_are_the_las_files_moved() {
     let (before, after) = (read_point_cloud(&copc, "a.laz").unwrap(), read_point_cloud(&moved, "a.laz").unwrap());
     assert_eq!(before.len(), after.len());
     assert_eq!(laz_records(&moved).len(), before.len() * u16::from_le_bytes([copc[105], copc[106]]) as usize);
-    let scale = [131, 139, 147].map(|at| f64_at(&copc, at));
+    // (the moved file's scales: 1.5 times the file's)
+    let scale = [131, 139, 147].map(|at| f64_at(&moved, at));
+    assert!((0..3).all(|k| (scale[k] - 1.5 * f64_at(&copc, 131 + 8 * k)).abs() < 1e-12), "{scale:?}");
     for i in 0..before.len() {
         let want = m.transform_point(&nalgebra::Point3::from(before.point_f64(i)));
         let got = after.point_f64(i);

@@ -96,7 +96,7 @@ fn a_flat_sheet_scanned_on_one_face_is_said_to_fit_either() {
     let mut reg = Registrar::with_default_model().unwrap();
     let r = reg.register(&source, &target, &from(&truth)).unwrap();
     assert!(
-        r.warnings.iter().any(|w| w.contains("onto its other face")),
+        r.warnings.iter().any(|w| w.contains("onto a parallel face")),
         "either face fits a flat sheet's one-face scan: {:?}",
         r.warnings
     );

@@ -1,13 +1,15 @@
 //! A LAS file moved as it is: every point record's X, Y, Z mapped by a rigid (or uniformly
-//! scaled) transform in f64 and stored again with the file's own scales and, where the moved
-//! points still fit them, its own offsets (else new ones near the moved points' centre, round
-//! where the integers still fit); the header's bounds updated; every other byte kept
+//! scaled) transform in f64 and stored again with the file's own scales (times the transform's
+//! scale: a change of unit keeps the points' precision, 0.01 mm staying 0.01 mm in metres) and,
+//! where the moved points still fit them, its own offsets (else new ones near the moved points'
+//! centre, round where the integers still fit); the header's scales, offsets and bounds updated;
+//! every other byte kept
 //! (intensity, returns, classification, GPS time, colour, extra bytes, the VLRs and EVLRs, the
 //! CRS records). What saves a registered survey in the target's frame as the LAS its
 //! tools read. A LAZ file comes back as LAZ: the LAS file it compresses, moved, compressed again
 //! (`laz_write`).
 
-use super::las::{decompressed, err, Header, BOUNDS_AT, OFFSETS_AT};
+use super::las::{decompressed, err, Header, BOUNDS_AT, OFFSETS_AT, SCALES_AT};
 use super::laz_write::compressed;
 use super::motion::Motion;
 use crate::Result;
@@ -53,13 +55,25 @@ fn fits(lo: f64, hi: f64, offset: f64, scale: f64) -> bool {
     [lo, hi].iter().all(|v| ((v - offset) / scale).abs() < 2_000_000_000.0)
 }
 
+/// A LAS scale times the motion's uniform `factor`, to 12 significant digits (0.01 times 0.001
+/// is 1e-5, not 1.0000000000000001e-5); the scale itself for a factor of 1.
+fn scaled(scale: f64, factor: f64) -> f64 {
+    if factor == 1.0 {
+        return scale;
+    }
+    let v = scale * factor;
+    format!("{v:.11e}").parse().unwrap_or(v)
+}
+
 /// `out`, an uncompressed LAS file described by `h`, with its records moved and its header's
-/// offsets and bounds updated.
+/// scales, offsets and bounds updated.
 fn move_records(mut out: Vec<u8>, h: &Header, motion: &Motion) -> Result<Vec<u8>> {
     let records = h.records(&out)?;
     let end = h.offset + records.len();
     let n = h.count as usize;
     let moved = |record: &[u8]| motion.point(h.point(record));
+    // the points' grid, scaled with them (a change of unit)
+    let scale = h.scale.map(|s| scaled(s, motion.scale().abs()));
     // the offsets: the file's own where the moved points fit them (a correction of a few metres
     // keeps a survey's header as its tools wrote it), else near the moved points' centre, round
     // where the integers fit
@@ -74,17 +88,17 @@ fn move_records(mut out: Vec<u8>, h: &Header, motion: &Motion) -> Result<Vec<u8>
     let shift: [f64; 3] = if n == 0 {
         h.shift
     } else {
-        std::array::from_fn(|k| match fits(lo[k], hi[k], h.shift[k], h.scale[k]) {
+        std::array::from_fn(|k| match fits(lo[k], hi[k], h.shift[k], scale[k]) {
             true => h.shift[k],
-            false => round_offset(lo[k], hi[k], h.scale[k]),
+            false => round_offset(lo[k], hi[k], scale[k]),
         })
     };
     for (k, axis) in ["x", "y", "z"].into_iter().enumerate().filter(|_| n > 0) {
-        let steps = [lo[k], hi[k]].map(|v| ((v - shift[k]) / h.scale[k]).round());
+        let steps = [lo[k], hi[k]].map(|v| ((v - shift[k]) / scale[k]).round());
         if steps.iter().any(|s| !(*s >= i32::MIN as f64 && *s <= i32::MAX as f64)) {
             return Err(err(format!(
                 "the moved points span {} to {} in {axis}, more than the file's scale {} can store in 32-bit integers",
-                lo[k], hi[k], h.scale[k]
+                lo[k], hi[k], scale[k]
             )));
         }
     }
@@ -92,14 +106,15 @@ fn move_records(mut out: Vec<u8>, h: &Header, motion: &Motion) -> Result<Vec<u8>
     for record in out[h.offset..end].chunks_exact_mut(h.record_len) {
         let q = moved(record);
         for k in 0..3 {
-            let stored = ((q[k] - shift[k]) / h.scale[k]).round() as i32;
+            let stored = ((q[k] - shift[k]) / scale[k]).round() as i32;
             record[4 * k..4 * k + 4].copy_from_slice(&stored.to_le_bytes());
-            let v = stored as f64 * h.scale[k] + shift[k];
+            let v = stored as f64 * scale[k] + shift[k];
             lo[k] = lo[k].min(v);
             hi[k] = hi[k].max(v);
         }
     }
     for k in 0..3 {
+        out[SCALES_AT + 8 * k..SCALES_AT + 8 * k + 8].copy_from_slice(&scale[k].to_le_bytes());
         out[OFFSETS_AT + 8 * k..OFFSETS_AT + 8 * k + 8].copy_from_slice(&shift[k].to_le_bytes());
         if n > 0 {
             let at = BOUNDS_AT + 16 * k;

@@ -7,7 +7,7 @@
 //! byte offsets) comes back as a plain LAZ file: its `copc` VLR and EVLR are left out, since the
 //! moved points neither lie in that octree nor at those offsets.
 
-use super::las::{append_tail, err, laszip_among, vlrs, Header, BOUNDS_AT, MIN_RECORD, OFFSETS_AT, VLR_HEADER};
+use super::las::{append_tail, err, laszip_among, vlrs, Header, BOUNDS_AT, MIN_RECORD, SCALES_AT, VLR_HEADER};
 use crate::Result;
 use laz::laszip::{LasZipCompressor, LazItemRecordBuilder, LazVlr, LazVlrBuilder};
 use std::io::Cursor;
@@ -67,8 +67,8 @@ pub(super) fn compressed(laz: &[u8], h_laz: &Header, las: &[u8]) -> Result<Vec<u
         }
     }
     out.extend_from_slice(&laz[vlrs_end..h_laz.offset]);
-    // the changed points' offsets and bounds, and where they now start
-    out[OFFSETS_AT..BOUNDS_AT + 48].copy_from_slice(&las[OFFSETS_AT..BOUNDS_AT + 48]);
+    // the changed points' scales, offsets and bounds (contiguous), and where they now start
+    out[SCALES_AT..BOUNDS_AT + 48].copy_from_slice(&las[SCALES_AT..BOUNDS_AT + 48]);
     let offset = u32::try_from(out.len()).map_err(|_| err("the VLRs are too long"))?;
     out[96..100].copy_from_slice(&offset.to_le_bytes());
 

@@ -170,9 +170,10 @@ pub(crate) fn fits_alike(r: &Candidate, answer: &Candidate) -> bool {
 /// `alike` the `answer`.
 pub(crate) fn alike_warning(shift: f64, answer: &Candidate, alike: &Candidate) -> String {
     format!(
-        "the source fits about as well moved {} across a thin wall onto its other face (fitness {:.3} against \
-         {:.3}): a scan of one face of a sheet or wall cannot tell which face it is; scan both faces, or check the \
-         answer against the part's thickness",
+        "the source fits about as well moved {} onto a parallel face (fitness {:.3} against {:.3}): the other face \
+         of a thin wall or sheet, which a scan of one face cannot tell from its own (scan both faces, or check the \
+         answer against the part's thickness), or the next of a repeated structure, such as a building's floors \
+         (check the answer against what sets them apart, or give a distance below the repeat)",
         num(shift),
         alike.fitness,
         answer.fitness
