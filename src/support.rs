@@ -198,63 +198,118 @@ pub fn find(points: &[[f32; 3]]) -> Option<SupportPlane> {
 
 /// [`find`] with the sample of `points` already made (`spacing`, [`Spacing::of`] them).
 pub fn find_with(points: &[[f32; 3]], spacing: &Spacing) -> Option<SupportPlane> {
-    search(points, spacing, MIN_REST)
+    Planes::of(points, spacing)?.alone()
 }
 
 /// [`find_with`] for a cloud whose partner stands on a support plane (by either share): the
 /// plane may hold all but [`MIN_REST_PAIRED`] of the sample (a table scanned around a small
 /// object, which [`MIN_REST`] alone takes for a flat object or a wall).
 pub fn find_paired(points: &[[f32; 3]], spacing: &Spacing) -> Option<SupportPlane> {
-    search(points, spacing, MIN_REST_PAIRED)
+    Planes::of(points, spacing)?.paired()
 }
 
-/// The support plane of `points` (their sample `spacing`) with at least `min_rest` of the sample
-/// off it.
-fn search(points: &[[f32; 3]], spacing: &Spacing, min_rest: f64) -> Option<SupportPlane> {
-    let Spacing { sample, index, .. } = spacing;
-    if sample.len() < MIN_SAMPLE {
-        return None;
-    }
-    let reach = spacing.median as f64;
-    if !(reach > 0.0 && reach.is_finite()) {
-        return None;
-    }
-    let mut out = Vec::with_capacity(NEIGHBOURS + 1);
-    let count = |plane: &Plane, band: f64| sample.iter().filter(|p| plane.distance(p).abs() <= band).count();
-    // the seeds' planes, each counted in a band of its own: the larger of THICKNESS times the
-    // sample's median reach and three times the spread of the seed's neighbours about it (a
-    // sparser, noisier table than the object on it)
-    let seeds = SEEDS.min(sample.len());
-    let mut candidates: Vec<Candidate> = Vec::with_capacity(seeds);
-    for s in 0..seeds {
-        let q = &sample[s * sample.len() / seeds];
-        index.knn_into(q, NEIGHBOURS, &mut out);
-        let Some((c, axes, spread)) = principal(out.iter().map(|&(i, _)| sample[i])) else { continue };
-        if spread[0] > FLATNESS * spread[1] {
-            continue;
-        }
-        let plane = Plane { point: c, normal: axes.column(0).into_owned() };
-        let band = (THICKNESS as f64 * reach).max(3.0 * spread[0].sqrt());
-        candidates.push(Candidate { plane, band, count: count(&plane, band) });
-    }
-    // the most populous first (stable: the first seed on ties), each distinct plane once
-    candidates.sort_by_key(|c| std::cmp::Reverse(c.count));
-    let mut distinct: Vec<Candidate> = Vec::with_capacity(MAX_PLANES);
-    for c in candidates {
-        if distinct.len() >= MAX_PLANES {
-            break;
-        }
-        let same = |t: &Candidate| {
-            t.plane.normal.dot(&c.plane.normal).abs() > SAME_COS
-                && t.plane.distance_to(&c.plane.point).abs() <= 2.0 * c.band
-        };
-        if !distinct.iter().any(same) {
-            distinct.push(c);
+/// A cloud's support plane, by the share that found it ([`Planes::stands`]).
+#[derive(Clone, Debug, PartialEq)]
+pub enum Stands {
+    /// At least [`MIN_REST`] of the sample off it: a support whatever the other cloud.
+    Alone(SupportPlane),
+    /// Only [`MIN_REST_PAIRED`] off it: a support where the other cloud stands on one too.
+    Paired(SupportPlane),
+}
+
+impl Stands {
+    /// The plane to leave out: a plane found [`Stands::Alone`], or one found
+    /// [`Stands::Paired`] where `partner` (the other cloud) stands on a support plane.
+    pub fn plane(self, partner: bool) -> Option<SupportPlane> {
+        match self {
+            Stands::Alone(p) => Some(p),
+            Stands::Paired(p) => partner.then_some(p),
         }
     }
-    // the sample points that stand among others (not strays), which judge the points off a plane
-    let settled: Vec<[f32; 3]> = spacing.settled(STRAY_REACH).copied().collect();
-    distinct.iter().find_map(|c| test(points, sample, &settled, reach, min_rest, *c))
+}
+
+/// The planes a cloud may stand on: the [`MAX_PLANES`] most populous distinct planes of its
+/// sample, found once and tested by either share ([`Planes::alone`], [`Planes::paired`]).
+pub struct Planes<'a> {
+    points: &'a [[f32; 3]],
+    sample: &'a [[f32; 3]],
+    /// The sample points that stand among others (not strays), which judge the points off a plane.
+    settled: Vec<[f32; 3]>,
+    /// The sample's median reach.
+    reach: f64,
+    distinct: Vec<Candidate>,
+}
+
+impl<'a> Planes<'a> {
+    /// The planes of `points` (their sample `spacing`); `None` for a sample of fewer than
+    /// [`MIN_SAMPLE`] points or without a positive reach.
+    pub fn of(points: &'a [[f32; 3]], spacing: &'a Spacing) -> Option<Self> {
+        let Spacing { sample, index, .. } = spacing;
+        if sample.len() < MIN_SAMPLE {
+            return None;
+        }
+        let reach = spacing.median as f64;
+        if !(reach > 0.0 && reach.is_finite()) {
+            return None;
+        }
+        let mut out = Vec::with_capacity(NEIGHBOURS + 1);
+        let count = |plane: &Plane, band: f64| sample.iter().filter(|p| plane.distance(p).abs() <= band).count();
+        // the seeds' planes, each counted in a band of its own: the larger of THICKNESS times the
+        // sample's median reach and three times the spread of the seed's neighbours about it (a
+        // sparser, noisier table than the object on it)
+        let seeds = SEEDS.min(sample.len());
+        let mut candidates: Vec<Candidate> = Vec::with_capacity(seeds);
+        for s in 0..seeds {
+            let q = &sample[s * sample.len() / seeds];
+            index.knn_into(q, NEIGHBOURS, &mut out);
+            let Some((c, axes, spread)) = principal(out.iter().map(|&(i, _)| sample[i])) else { continue };
+            if spread[0] > FLATNESS * spread[1] {
+                continue;
+            }
+            let plane = Plane { point: c, normal: axes.column(0).into_owned() };
+            let band = (THICKNESS as f64 * reach).max(3.0 * spread[0].sqrt());
+            candidates.push(Candidate { plane, band, count: count(&plane, band) });
+        }
+        // the most populous first (stable: the first seed on ties), each distinct plane once
+        candidates.sort_by_key(|c| std::cmp::Reverse(c.count));
+        let mut distinct: Vec<Candidate> = Vec::with_capacity(MAX_PLANES);
+        for c in candidates {
+            if distinct.len() >= MAX_PLANES {
+                break;
+            }
+            let same = |t: &Candidate| {
+                t.plane.normal.dot(&c.plane.normal).abs() > SAME_COS
+                    && t.plane.distance_to(&c.plane.point).abs() <= 2.0 * c.band
+            };
+            if !distinct.iter().any(same) {
+                distinct.push(c);
+            }
+        }
+        let settled: Vec<[f32; 3]> = spacing.settled(STRAY_REACH).copied().collect();
+        Some(Planes { points, sample, settled, reach, distinct })
+    }
+
+    /// The support plane, with at least [`MIN_REST`] of the sample off it.
+    pub fn alone(&self) -> Option<SupportPlane> {
+        self.first(MIN_REST)
+    }
+
+    /// The support plane as the pair of a cloud that stands on one, with at least
+    /// [`MIN_REST_PAIRED`] of the sample off it.
+    pub fn paired(&self) -> Option<SupportPlane> {
+        self.first(MIN_REST_PAIRED)
+    }
+
+    /// The plane found [`Planes::alone`], or else [`Planes::paired`].
+    pub fn stands(&self) -> Option<Stands> {
+        self.alone().map(Stands::Alone).or_else(|| self.paired().map(Stands::Paired))
+    }
+
+    /// The first of the planes, most populous first, that is a support with at least `min_rest`
+    /// of the sample off it.
+    fn first(&self, min_rest: f64) -> Option<SupportPlane> {
+        self.distinct.iter().find_map(|c| test(self.points, self.sample, &self.settled, self.reach, min_rest, *c))
+    }
 }
 
 /// `c`'s plane refitted, if it is a support of `points` (see the module docs) with at least

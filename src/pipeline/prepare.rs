@@ -102,15 +102,12 @@ pub(crate) fn prepare(
         }
         e => e,
     })?;
-    // the source's support plane, and else the one it may stand on as the pair of a cloud that
-    // stands on one ([`support::find_paired`]); the target's is searched for as such a pair where
-    // the source stands on either
-    let source_strict = source_spacing.as_ref().and_then(|s| support::find_with(&source.points, s));
-    let source_paired = match (&source_strict, &source_spacing) {
-        (None, Some(s)) => support::find_paired(&source.points, s),
-        _ => None,
-    };
-    let paired = source_strict.is_some() || source_paired.is_some();
+    // the source's support plane, alone or as the pair of a cloud that stands on one
+    // ([`support::Stands`]); the target's is searched for as such a pair where the source stands
+    // on either
+    let source_stands =
+        source_spacing.as_ref().and_then(|s| support::Planes::of(&source.points, s)).and_then(|p| p.stands());
+    let paired = source_stands.is_some();
     // the target given again: its checks passed already, and what it holds is reused below;
     // another target's is dropped before anything is allocated
     let input = InputKey::of(&target, options.non_finite, options.outliers, options.support_plane, paired);
@@ -128,7 +125,7 @@ pub(crate) fn prepare(
         Given::Validated(_, target_warnings, _) => target_warnings,
     };
     let target_stands = target_warnings.iter().any(|w| w.code == WarningCode::SupportPlaneDropped);
-    let source_plane = source_strict.or(source_paired.filter(|_| target_stands));
+    let source_plane = source_stands.and_then(|s| s.plane(target_stands));
     let (source, source_rounding) = finished("source", source, source_plane, &mut source_warnings);
     warnings.extend(source_warnings);
     let spreads_source = checks::not_collinear("source", &source.points, warnings)?;
@@ -302,8 +299,8 @@ fn validated(
     Ok((cloud, warnings, spacing))
 }
 
-/// `cloud` [`validated`], then without its support plane ([`support::find_with`], or else
-/// [`support::find_paired`] where `paired`: the other cloud stands on one by either) with
+/// `cloud` [`validated`], then without its support plane ([`support::Planes::alone`], or else
+/// [`support::Planes::paired`] where `paired`: the other cloud stands on one by either) with
 /// [`Support::Drop`]; see [`finished`].
 fn checked(
     what: &str,
@@ -312,10 +309,10 @@ fn checked(
     paired: bool,
 ) -> Result<(PointCloud, Vec<Warning>, f64)> {
     let (cloud, mut warnings, spacing) = validated(what, cloud, options)?;
-    let plane = spacing.and_then(|s| {
-        support::find_with(&cloud.points, &s)
-            .or_else(|| paired.then(|| support::find_paired(&cloud.points, &s)).flatten())
-    });
+    let plane = spacing
+        .as_ref()
+        .and_then(|s| support::Planes::of(&cloud.points, s))
+        .and_then(|p| p.alone().or_else(|| paired.then(|| p.paired()).flatten()));
     let (cloud, rounding) = finished(what, cloud, plane, &mut warnings);
     Ok((cloud, warnings, rounding))
 }
