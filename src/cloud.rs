@@ -275,14 +275,7 @@ impl PointCloud {
 
     /// The mean of `points` (relative to the origin), accumulated in `f64`.
     pub fn centroid(&self) -> [f64; 3] {
-        let mut s = [0.0f64; 3];
-        for p in &self.points {
-            for a in 0..3 {
-                s[a] += p[a] as f64;
-            }
-        }
-        let n = self.points.len().max(1) as f64;
-        [s[0] / n, s[1] / n, s[2] / n]
+        centroid_of(&self.points)
     }
 
     /// A copy with every point mapped by the rigid (or similarity) transform `m`, in the
@@ -452,6 +445,18 @@ fn choose_origin(n: usize, point: impl Fn(usize) -> [f64; 3]) -> [f64; 3] {
     } else {
         [0.0; 3]
     }
+}
+
+/// The mean of `points`, accumulated in `f64` (the origin for none).
+pub(crate) fn centroid_of(points: &[[f32; 3]]) -> [f64; 3] {
+    let mut s = [0.0f64; 3];
+    for p in points {
+        for a in 0..3 {
+            s[a] += p[a] as f64;
+        }
+    }
+    let n = points.len().max(1) as f64;
+    [s[0] / n, s[1] / n, s[2] / n]
 }
 
 /// The largest half-extent of the box `[lo, hi]`.

@@ -1,11 +1,11 @@
-//! Dense scans ([`arps::global::dense`]): the global descriptors are made finer; and when either
+//! Dense scans ([`arps::global::density`]): the global descriptors are made finer; and when either
 //! cloud has at least [`GLOBAL_BEFORE_STOP_POINTS`] points (scans, or a small scan onto a large
 //! model) the adaptive search does not stop before its global stage, however sure it is of an
 //! earlier answer; sparse samples (the 1,024-point protocol) are searched as before.
 
 mod common;
 
-use arps::global::{dense, TargetFeatures, VOXEL_FRACTION};
+use arps::global::{self, density, Density, TargetFeatures, VOXEL_FRACTION};
 use arps::io::read_mesh;
 use arps::register::GLOBAL_BEFORE_STOP_POINTS;
 use arps::transform::{rigid_inverse, rotation_error_deg};
@@ -23,14 +23,21 @@ fn cad_surface(n: usize) -> PointCloud {
 fn scans_are_dense_and_sparse_samples_or_few_points_are_not() {
     let surface = cad_surface(60_000);
     let memo = TargetFeatures::default();
-    assert!(dense(&surface, &surface, &memo, VOXEL_FRACTION), "60,000 points over one part");
+    let density = |s: &PointCloud, t: &PointCloud| density(s, t, &TargetFeatures::default(), VOXEL_FRACTION);
+    assert_eq!(arps::global::density(&surface, &surface, &memo, VOXEL_FRACTION), Density::Dense, "60,000 points");
     // asked again through the memo: the same answer
-    assert!(dense(&surface, &surface, &memo, VOXEL_FRACTION));
+    assert_eq!(arps::global::density(&surface, &surface, &memo, VOXEL_FRACTION), Density::Dense);
+    // a fifth as many points over the part: between, described at both scales
+    let thinned = cad_surface(12_000);
+    assert_eq!(density(&thinned, &surface), Density::Mid, "12,000 points");
+    assert_eq!(density(&surface, &thinned), Density::Mid, "12,000-point target");
+    assert_eq!(global::feature_voxels(&thinned, &surface, VOXEL_FRACTION).len(), 2);
     let few = cad_surface(2_000);
-    assert!(!dense(&few, &surface, &TargetFeatures::default(), VOXEL_FRACTION), "2,000 points");
-    assert!(!dense(&surface, &few, &TargetFeatures::default(), VOXEL_FRACTION), "2,000-point target");
+    assert_eq!(density(&few, &surface), Density::Sparse, "2,000 points");
+    assert_eq!(density(&surface, &few), Density::Sparse, "2,000-point target");
+    assert_eq!(global::feature_voxels(&few, &surface, VOXEL_FRACTION).len(), 1);
     let (source, target, _) = fixture_pair(0);
-    assert!(!dense(&source, &target, &TargetFeatures::default(), VOXEL_FRACTION), "a 1,024-point pair");
+    assert_eq!(density(&source, &target), Density::Sparse, "a 1,024-point pair");
 }
 
 /// A pair cropped from `n` points over the CAD part (each crop keeps 80%) and registered with
@@ -67,7 +74,8 @@ fn so_does_one_on_clouds_of_a_few_thousand_points() {
     // not dense scans (few points per feature voxel), but beyond the sparse samples the
     // confidence is calibrated on: the global stage runs too
     let surface = cad_surface(4_096);
-    assert!(!dense(&surface, &surface, &TargetFeatures::default(), VOXEL_FRACTION), "precondition: not dense");
+    let density = density(&surface, &surface, &TargetFeatures::default(), VOXEL_FRACTION);
+    assert_ne!(density, Density::Dense, "precondition: not dense");
     let (points, alone, both) = network_then_global(4_096);
     assert!(points >= GLOBAL_BEFORE_STOP_POINTS, "{points} points");
     assert!(both > alone, "the global stage did not run: {both} starts refined");
@@ -105,4 +113,22 @@ fn a_sure_answer_for_a_small_scan_onto_a_large_model_waits_for_the_global_stage(
     let r = registrar.register(&scan, &model, &both).unwrap();
     assert!(rotation_error_deg(&r.T_target_source, &T_target_source) < 2.0);
     assert!(r.starts_refined > alone.starts_refined, "the global stage did not run: {} starts", r.starts_refined);
+}
+
+#[test]
+#[allow(non_snake_case)]
+fn a_thinned_scan_is_described_at_both_scales_and_registered_from_any_pose() {
+    // 12,000 points over the part (between sparse and dense) turned 150 degrees onto 60,000:
+    // the global stage alone, its hypotheses drawn at both scales, recovers the motion
+    let T_target_source = motion([150.0, -40.0, 70.0], [0.3, -0.1, 0.2]);
+    let scan = crop(&cad_surface(12_000), [1.0, 0.2, 0.1], 0.7).transformed(&rigid_inverse(&T_target_source));
+    let model = crop(&cad_surface(60_000), [-1.0, 0.3, 0.0], 0.8);
+    assert_eq!(density(&scan, &model, &TargetFeatures::default(), VOXEL_FRACTION), Density::Mid, "precondition");
+    let params = global::GlobalParams { seed: 3, hypotheses: 2, ..global::GlobalParams::default() };
+    let hypotheses = global::hypotheses(&scan, &model, &params);
+    assert!(hypotheses.len() <= 2 * params.hypotheses, "{} hypotheses", hypotheses.len());
+    let global_only = Options { starts: vec![Start::Global], ..Options::default() };
+    let r = Registrar::with_default_model().unwrap().register(&scan, &model, &global_only).unwrap();
+    assert!(rotation_error_deg(&r.T_target_source, &T_target_source) < 2.0, "{:?}", r.T_target_source);
+    assert!(r.confidence >= 0.5, "confidence {}", r.confidence);
 }

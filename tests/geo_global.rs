@@ -377,7 +377,7 @@ fn global_stage_times() {
     }
     for _ in 0..3 {
         let t0 = now();
-        let v = global::feature_voxel(&s, &t, global::VOXEL_FRACTION);
+        let v = global::feature_voxels(&s, &t, global::VOXEL_FRACTION)[0];
         let t1 = now();
         let (a, b) = (global::describe(&s, v), global::describe(&t, v));
         let t2 = now();
@@ -508,7 +508,7 @@ fn a_target_described_once_gives_every_source_the_hypotheses_of_a_fresh_descript
             let fresh = global::hypotheses(s, &target, &params);
             assert!(k == 2 || !fresh.is_empty(), "source {k}");
             assert_eq!(kept, fresh, "round {round}, source {k}");
-            voxels.push(global::feature_voxel(s, &target, params.voxel_fraction));
+            voxels.extend(global::feature_voxels(s, &target, params.voxel_fraction));
         }
     }
     // the sources did need different feature voxels (so the memo held several sizes)

@@ -8,7 +8,7 @@
 //!
 //! Cost grows gently with the point count: the feature voxel is chosen from the data so that each
 //! voxelised cloud has at most [`MAX_FEATURE_POINTS`] points ([`DENSE_FEATURE_POINTS`] on dense
-//! scans; [`feature_voxel`]), after which
+//! scans; [`feature_voxels`]), after which
 //! descriptors, matching and RANSAC no longer depend on the input size; only the voxelisation
 //! (O(n)) sees every point, and for a large cloud not even that: the pipeline gives a finer
 //! voxelised copy that stands in for its points ([`FeatureCloud`], [`standin`]).
@@ -18,7 +18,7 @@ pub mod matching;
 pub mod ransac;
 pub mod translation;
 
-use crate::cloud::{half_extent_of, PointCloud};
+use crate::cloud::{centroid_of, half_extent_of, PointCloud};
 use crate::sampling::{voxel_downsample, voxel_downsample_at_most_in};
 use crate::spatial::KdIndex;
 pub use ransac::{Hypothesis, RansacParams};
@@ -39,6 +39,15 @@ pub const VOXEL_FRACTION: f64 = 0.08;
 /// validation clouds have 1.3-3.8 points per voxel there, real scans of 15k-70k points 20-200.
 pub const DENSE_OCCUPANCY: usize = 8;
 
+/// A cloud between sparse and dense has at least this many points per occupied voxel of the
+/// default feature voxel (and at least [`DENSE_MIN_POINTS`] points), fewer than
+/// [`DENSE_OCCUPANCY`]: a clean scan thinned to a few thousand points (a room's 19,000-point scan
+/// sampled down to 3,000-5,000 has 4-6.5), or a clean sample of an object of a few thousand.
+/// Neither scale of descriptors is right for all of them (the coarse one misses a thinned room,
+/// the fine one some objects), so a pair of such clouds is described at both ([`Density::Mid`];
+/// `BENCHMARK.md`, "Thinned scans").
+pub const MID_OCCUPANCY: usize = 3;
+
 /// A dense cloud has at least this many points too (twice [`MAX_FEATURE_POINTS`]): a sparse
 /// sample of an elongated shape also crowds the few voxels its extent gives it.
 pub const DENSE_MIN_POINTS: usize = 2 * MAX_FEATURE_POINTS;
@@ -55,12 +64,12 @@ pub const DENSE_FEATURE_POINTS: usize = 2500;
 pub struct GlobalParams {
     /// The feature voxel's starting size as a fraction of the larger half-extent
     /// ([`VOXEL_FRACTION`]); it grows from there until [`MAX_FEATURE_POINTS`] is met (on a
-    /// [`dense`] pair it starts finer, [`DENSE_VOXEL_FRACTION`], and the budget is
+    /// [`Density::Dense`] pair it starts finer, [`DENSE_VOXEL_FRACTION`], and the budget is
     /// [`DENSE_FEATURE_POINTS`]).
     pub voxel_fraction: f64,
     /// RANSAC's most draws ([`MAX_ITERATIONS`]).
     pub max_iterations: u32,
-    /// How many distinct hypotheses to return at most.
+    /// How many distinct hypotheses to return at most, per scale the pair is described at.
     pub hypotheses: usize,
     /// Seed of RANSAC's draws.
     pub seed: u64,
@@ -79,47 +88,85 @@ impl Default for GlobalParams {
 /// one pair in eight (`BENCHMARK.md`, "RANSAC's draws on scans of rooms").
 pub const MAX_ITERATIONS: u32 = 100_000;
 
-/// The feature voxel for a pair: `fraction` of the larger largest half-extent, grown by 25% at a
-/// time until both voxelised clouds have at most [`MAX_FEATURE_POINTS`] points; on a [`dense`]
-/// pair from [`DENSE_VOXEL_FRACTION`] (scaled like `fraction`) to at most
-/// [`DENSE_FEATURE_POINTS`].
+/// The feature voxels for a pair, one per scale its [`density`] describes it at: `fraction` of
+/// the larger largest half-extent, grown by 25% at a time until both voxelised clouds have at most
+/// [`MAX_FEATURE_POINTS`] points; finer, from [`DENSE_VOXEL_FRACTION`] (scaled like `fraction`) to
+/// at most [`DENSE_FEATURE_POINTS`].
 ///
 /// Either cloud may be a stand-in ([`FeatureCloud`]).
-pub fn feature_voxel<'s, 't>(
+pub fn feature_voxels<'s, 't>(
     source: impl Into<FeatureCloud<'s>>,
     target: impl Into<FeatureCloud<'t>>,
     fraction: f64,
-) -> f64 {
+) -> Vec<f64> {
     let memo = TargetFeatures::default();
     let pair = Pair::new(source.into(), target.into(), &memo);
-    feature_grid(&pair, &memo, fraction, dense_of(&pair, &memo, fraction)).0
+    density_of(&pair, &memo, fraction).fine().iter().map(|&fine| feature_grid(&pair, &memo, fraction, fine).0).collect()
 }
 
-/// Whether both clouds are dense ([`DENSE_OCCUPANCY`]) at the feature voxel of `fraction` (of the
-/// larger largest half-extent): a pass over each cloud, which stops once it has counted too many
-/// voxels. The target's side goes through `memo` ([`TargetFeatures`]). Either cloud may be a
-/// stand-in ([`FeatureCloud`]): its own points are counted, per voxel the stand-in occupies.
-pub fn dense<'s, 't>(
+/// How densely a pair samples its surfaces, which sets the scales its descriptors are made at
+/// ([`density`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Density {
+    /// Either cloud is a sparse sample: described at the default feature voxel
+    /// ([`VOXEL_FRACTION`], at most [`MAX_FEATURE_POINTS`] points).
+    Sparse,
+    /// Both clouds are between sparse and dense ([`MID_OCCUPANCY`]): described at both scales,
+    /// each giving its hypotheses.
+    Mid,
+    /// Both clouds are dense ([`DENSE_OCCUPANCY`]): described finer ([`DENSE_VOXEL_FRACTION`], at
+    /// most [`DENSE_FEATURE_POINTS`] points).
+    Dense,
+}
+
+impl Density {
+    /// The scales the pair is described at, in the order their hypotheses come, each whether it
+    /// is the finer one ([`DENSE_VOXEL_FRACTION`], [`DENSE_FEATURE_POINTS`]; otherwise
+    /// [`VOXEL_FRACTION`], [`MAX_FEATURE_POINTS`]): the default scale first.
+    fn fine(self) -> &'static [bool] {
+        match self {
+            Density::Sparse => &[false],
+            Density::Mid => &[false, true],
+            Density::Dense => &[true],
+        }
+    }
+}
+
+/// How densely both clouds sample their surfaces ([`Density`]), by their points per occupied voxel
+/// of the feature voxel of `fraction` (of the larger largest half-extent): a pass over each cloud
+/// per occupancy tried, which stops once it has counted too many voxels. The target's side goes
+/// through `memo` ([`TargetFeatures`]). Either cloud may be a stand-in ([`FeatureCloud`]): its own
+/// points are counted, per voxel the stand-in occupies.
+pub fn density<'s, 't>(
     source: impl Into<FeatureCloud<'s>>,
     target: impl Into<FeatureCloud<'t>>,
     memo: &TargetFeatures,
     fraction: f64,
-) -> bool {
-    dense_of(&Pair::new(source.into(), target.into(), memo), memo, fraction)
+) -> Density {
+    density_of(&Pair::new(source.into(), target.into(), memo), memo, fraction)
 }
 
-/// [`dense`] of two clouds as the global hypotheses see them.
-fn dense_of(pair: &Pair, memo: &TargetFeatures, fraction: f64) -> bool {
+/// [`density`] of two clouds as the global hypotheses see them.
+fn density_of(pair: &Pair, memo: &TargetFeatures, fraction: f64) -> Density {
     let v = (fraction * pair.extent).max(f64::MIN_POSITIVE);
-    dense_at(pair.source, &pair.source_bounds, v) && memo.dense(pair.target, v)
+    let both = |occupancy| {
+        occupied_at(pair.source, &pair.source_bounds, v, occupancy) && memo.occupied(pair.target, v, occupancy)
+    };
+    if both(DENSE_OCCUPANCY) {
+        Density::Dense
+    } else if both(MID_OCCUPANCY) {
+        Density::Mid
+    } else {
+        Density::Sparse
+    }
 }
 
-/// `cloud` has at least [`DENSE_MIN_POINTS`] points and [`DENSE_OCCUPANCY`] per occupied voxel of
-/// size `v` (`bounds`: its points' bounds). The voxels are those its [`FeatureCloud::points`]
-/// occupy; the points counted, all of its [`FeatureCloud::count`].
-fn dense_at(cloud: FeatureCloud, bounds: &([f32; 3], [f32; 3]), v: f64) -> bool {
+/// `cloud` has at least [`DENSE_MIN_POINTS`] points and `occupancy` per occupied voxel of size
+/// `v` (`bounds`: its points' bounds). The voxels are those its [`FeatureCloud::points`] occupy;
+/// the points counted, all of its [`FeatureCloud::count`].
+fn occupied_at(cloud: FeatureCloud, bounds: &([f32; 3], [f32; 3]), v: f64, occupancy: usize) -> bool {
     cloud.count >= DENSE_MIN_POINTS
-        && voxel_downsample_at_most_in(cloud.points, bounds, v as f32, cloud.count / DENSE_OCCUPANCY).is_some()
+        && voxel_downsample_at_most_in(cloud.points, bounds, v as f32, cloud.count / occupancy).is_some()
 }
 
 /// The two clouds of a feature voxel's search, with what its passes need of them, each computed
@@ -144,7 +191,7 @@ impl<'s, 't> Pair<'s, 't> {
 /// finer voxelised copy of them standing in for them (the pipeline gives ICP's copy, at half the
 /// final distance, where it holds at most half the points: [`standin`]), with how many
 /// points the cloud itself has. The feature voxel's search voxelises the copy, each try a pass
-/// over far fewer points; [`dense`] counts the cloud's own points per voxel the copy occupies.
+/// over far fewer points; [`density`] counts the cloud's own points per voxel the copy occupies.
 /// Voxelised again at the coarser feature voxel, the copy gives about the cloud's own voxel
 /// centroids (a centroid of centroids, each weighted alike).
 #[derive(Clone, Copy, Debug)]
@@ -208,21 +255,20 @@ enum Fit {
     No,
 }
 
-/// The search of [`feature_voxel`] (`dense`: whether the pair is [`dense`]), and each cloud
+/// The search of [`feature_voxels`] at one scale (`fine`: the finer one), and each cloud
 /// voxelised at the size found when the search had to voxelise it to see that it fits (`None` for
-/// a cloud within the point budget, [`MAX_FEATURE_POINTS`] or on a dense pair
-/// [`DENSE_FEATURE_POINTS`], which fits as it is, or when no size fitted within the search's
-/// steps). A size that does not fit stops voxelising a cloud as soon as it has more voxels than
+/// a cloud within the scale's point budget, which fits as it is, or when no size fitted within the
+/// search's steps). A size that does not fit stops voxelising a cloud as soon as it has more voxels than
 /// the budget. The target's side goes through `memo` ([`TargetFeatures`]).
 fn feature_grid(
     pair: &Pair,
     memo: &TargetFeatures,
     fraction: f64,
-    dense: bool,
+    fine: bool,
 ) -> (f64, Option<PointCloud>, Option<PointCloud>) {
     let (source, target) = (pair.source.points, pair.target.points);
     let (fraction, cap) =
-        if dense { (dense_fraction(fraction), DENSE_FEATURE_POINTS) } else { (fraction, MAX_FEATURE_POINTS) };
+        if fine { (dense_fraction(fraction), DENSE_FEATURE_POINTS) } else { (fraction, MAX_FEATURE_POINTS) };
     let mut v = (fraction * pair.extent).max(f64::MIN_POSITIVE);
     for _ in 0..60 {
         // (a try that does not fit stops early)
@@ -252,10 +298,11 @@ pub struct TargetFeatures {
     bounds: OnceLock<([f32; 3], [f32; 3])>,
     /// Per voxel size tried (its bits) and point budget, how the target fits it.
     fits: Mutex<Vec<(u64, usize, Fit)>>,
-    /// Per voxel size (its bits), whether the target is dense there ([`dense`]).
-    dense: Mutex<Vec<(u64, bool)>>,
-    /// The target described at a voxel size (its bits).
-    described: Mutex<Option<(u64, Described)>>,
+    /// Per voxel size (its bits) and occupancy, whether the target has that occupancy there
+    /// ([`density`]).
+    occupied: Mutex<Vec<(u64, usize, bool)>>,
+    /// The target described at the voxel sizes (their bits) last used, at most one per scale.
+    described: Mutex<Vec<(u64, Described)>>,
 }
 
 impl TargetFeatures {
@@ -288,34 +335,40 @@ impl TargetFeatures {
         fit
     }
 
-    /// Whether `target` is dense at voxel size `v` ([`dense`]; computed once per size).
-    fn dense(&self, target: FeatureCloud, v: f64) -> bool {
-        let mut dense = self.dense.lock().unwrap_or_else(|e| e.into_inner());
-        if let Some((_, d)) = dense.iter().find(|(bits, _)| *bits == v.to_bits()) {
+    /// Whether `target` has `occupancy` points per occupied voxel of size `v` ([`density`];
+    /// computed once per size and occupancy).
+    fn occupied(&self, target: FeatureCloud, v: f64, occupancy: usize) -> bool {
+        let mut occupied = self.occupied.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some((_, _, d)) = occupied.iter().find(|(bits, o, _)| *bits == v.to_bits() && *o == occupancy) {
             return *d;
         }
-        let d = dense_at(target, self.bounds(target.points), v);
-        dense.push((v.to_bits(), d));
+        let d = occupied_at(target, self.bounds(target.points), v, occupancy);
+        occupied.push((v.to_bits(), occupancy, d));
         d
     }
 
     /// `target` described at `voxel` from its voxelised copy `voxelised` (`None`: from `target`
-    /// itself), computed once per size.
+    /// itself), computed once per size (the sizes of the last two scales kept).
     fn described(&self, target: &PointCloud, voxel: f64, voxelised: Option<PointCloud>) -> Described {
         let mut described = self.described.lock().unwrap_or_else(|e| e.into_inner());
-        match &*described {
-            Some((bits, d)) if *bits == voxel.to_bits() => d.clone(),
-            _ => {
-                let d = match voxelised {
-                    Some(v) => describe_voxelised(v.points, voxel),
-                    None => describe(target, voxel),
-                };
-                *described = Some((voxel.to_bits(), d.clone()));
-                d
-            }
+        if let Some((_, d)) = described.iter().find(|(bits, _)| *bits == voxel.to_bits()) {
+            return d.clone();
         }
+        let d = match voxelised {
+            Some(v) => describe_voxelised(v.points, voxel),
+            None => describe(target, voxel),
+        };
+        if described.len() == KEPT_SCALES {
+            described.remove(0);
+        }
+        described.push((voxel.to_bits(), d.clone()));
+        d
     }
 }
+
+/// How many scales of the target's descriptors [`TargetFeatures`] keeps: both of a
+/// [`Density::Mid`] pair.
+const KEPT_SCALES: usize = 2;
 
 /// A voxelised cloud with its FPFH descriptors.
 #[derive(Clone, Debug)]
@@ -340,18 +393,32 @@ fn describe_voxelised(points: Vec<[f32; 3]>, voxel: f64) -> Described {
     Described { points, descriptors }
 }
 
-/// Both clouds voxelised and described at one feature voxel ([`feature_voxel`]), and their
-/// mutual descriptor matches: what RANSAC draws from. Built once per pair; [`Matched::hypotheses`]
-/// can then draw more than once (the adaptive search asks for more hypotheses when the first
-/// ones were not enough) without describing the clouds again.
+/// Both clouds voxelised and described at each feature voxel of the pair ([`feature_voxels`]),
+/// and their mutual descriptor matches: what RANSAC draws from. Built once per pair;
+/// [`Matched::hypotheses`] can then draw more than once (the adaptive search asks for more
+/// hypotheses when the first ones were not enough) without describing the clouds again.
 #[derive(Clone, Debug)]
 pub struct Matched {
+    /// One per scale, the default one first (at least one).
+    scales: Vec<Scale>,
+}
+
+/// Both clouds described at one feature voxel, and their matches.
+#[derive(Clone, Debug)]
+struct Scale {
     source: Described,
     target: Described,
     matches: Vec<(u32, u32)>,
     /// Every source point's nearest target descriptor (what [`Matched::translations`] votes with).
     nearest: Vec<(u32, u32)>,
     voxel: f64,
+}
+
+impl Scale {
+    /// RANSAC's inlier distance, which is also the radius of [`Matched::translations`]'s clusters.
+    fn inlier_distance(&self) -> f64 {
+        INLIER_VOXELS * self.voxel
+    }
 }
 
 impl Matched {
@@ -371,43 +438,69 @@ impl Matched {
         voxel_fraction: f64,
     ) -> Self {
         let pair = Pair::new(source.into(), target.into(), memo);
-        let dense = dense_of(&pair, memo, voxel_fraction);
-        let (voxel, source_v, target_v) = feature_grid(&pair, memo, voxel_fraction, dense);
-        let (source, target) = (pair.source.points, pair.target.points);
-        // the search's voxelised clouds where it made them (the same as describing anew)
-        let source = match source_v {
-            Some(v) => describe_voxelised(v.points, voxel),
-            None => describe(source, voxel),
+        let density = density_of(&pair, memo, voxel_fraction);
+        let scale = |fine: bool| {
+            let (voxel, source_v, target_v) = feature_grid(&pair, memo, voxel_fraction, fine);
+            // the search's voxelised clouds where it made them (the same as describing anew)
+            let source = match source_v {
+                Some(v) => describe_voxelised(v.points, voxel),
+                None => describe(pair.source.points, voxel),
+            };
+            let target = memo.described(pair.target.points, voxel, target_v);
+            let (nearest, matches) = matching::nearest_and_mutual(&source.descriptors, &target.descriptors, 30);
+            Scale { source, target, matches, nearest, voxel }
         };
-        let target = memo.described(target, voxel, target_v);
-        let (nearest, matches) = matching::nearest_and_mutual(&source.descriptors, &target.descriptors, 30);
-        Self { source, target, matches, nearest, voxel }
+        Self { scales: density.fine().iter().map(|&fine| scale(fine)).collect() }
     }
 
     /// Ranked rigid motions taking the source onto the target, best first (`params.hypotheses` at
-    /// most; `params.voxel_fraction` is the one given to [`Matched::new`]); empty when the
+    /// most per scale, the default scale's first, less a finer scale's in the same basin as one
+    /// before it); `params.voxel_fraction` is the one given to [`Matched::new`]); empty when the
     /// descriptors gave fewer than three correspondences. Deterministic for `params.seed`.
     pub fn hypotheses(&self, params: &GlobalParams) -> Vec<Hypothesis> {
-        let rp = RansacParams {
-            max_iterations: params.max_iterations,
-            confidence: 0.999,
-            inlier_distance: self.inlier_distance(),
-            edge_ratio: 0.9,
-            hypotheses: params.hypotheses,
-            seed: params.seed,
-        };
-        ransac::ransac(&self.source.points, &self.target.points, &self.matches, &rp)
+        let mut all: Vec<Hypothesis> = Vec::new();
+        // basins judged as the default scale's RANSAC judges them
+        let first = &self.scales[0];
+        let center = centroid_of(&first.source.points).map(|v| v as f32);
+        let d = first.inlier_distance();
+        for scale in &self.scales {
+            let rp = RansacParams {
+                max_iterations: params.max_iterations,
+                confidence: 0.999,
+                inlier_distance: scale.inlier_distance(),
+                edge_ratio: 0.9,
+                hypotheses: params.hypotheses,
+                seed: params.seed,
+            };
+            let drawn = ransac::ransac(&scale.source.points, &scale.target.points, &scale.matches, &rp);
+            let before = all.len();
+            for h in drawn {
+                let seen = |a: &Hypothesis| ransac::same_basin(&a.T_target_source, &h.T_target_source, &center, d);
+                if !all[..before].iter().any(seen) {
+                    all.push(h);
+                }
+            }
+        }
+        all
     }
 
     /// Up to `count` translations the matches agree on for the rotation `r`, densest first
-    /// ([`translation::modes`]), with how many agree on each: one per alike part of a row.
+    /// ([`translation::modes`]), with how many agree on each: one per alike part of a row. The
+    /// matches of the finest scale vote.
     pub fn translations(&self, r: &nalgebra::Matrix3<f64>, count: usize) -> Vec<(nalgebra::Vector3<f64>, usize)> {
-        translation::modes(&self.source.points, &self.target.points, &self.nearest, r, self.inlier_distance(), count)
+        let s = self.finest();
+        translation::modes(&s.source.points, &s.target.points, &s.nearest, r, s.inlier_distance(), count)
     }
 
-    /// RANSAC's inlier distance, which is also the radius of [`Matched::translations`]'s clusters.
+    /// The radius of [`Matched::translations`]'s clusters (the finest scale's RANSAC inlier
+    /// distance).
     pub fn inlier_distance(&self) -> f64 {
-        INLIER_VOXELS * self.voxel
+        self.finest().inlier_distance()
+    }
+
+    /// The scale described finest (the last).
+    fn finest(&self) -> &Scale {
+        self.scales.last().expect("a pair is described at one scale at least")
     }
 }
 

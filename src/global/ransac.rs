@@ -80,14 +80,18 @@ fn fit(s: &[[f32; 3]], tg: &[[f32; 3]], m: &[(u32, u32)], idx: &[usize]) -> Matr
     kabsch(&a, &b, None)
 }
 
+/// Whether two motions are the same basin ([`SAME_DEGREES`], [`SAME_DISTANCES`] of the inlier
+/// distance `d`), judged where they move `center` (the source's matched points' centroid).
+pub(crate) fn same_basin(a: &Matrix4<f64>, b: &Matrix4<f64>, center: &[f32; 3], d: f64) -> bool {
+    let (p, q) = (moved(a, center), moved(b, center));
+    let gap = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
+    gap < SAME_DISTANCES * d && rotation_error_deg(a, b) < SAME_DEGREES
+}
+
 /// Inserts `h` into `top` (sorted by inliers, best first, at most `cap` long), unless a kept
 /// hypothesis in the same basin is at least as good; a worse one in the same basin is replaced.
 fn offer(top: &mut Vec<Hypothesis>, h: Hypothesis, center: &[f32; 3], d: f64, cap: usize) {
-    let same = |a: &Hypothesis| {
-        let (p, q) = (moved(&a.T_target_source, center), moved(&h.T_target_source, center));
-        let gap = ((p[0] - q[0]).powi(2) + (p[1] - q[1]).powi(2) + (p[2] - q[2]).powi(2)).sqrt();
-        gap < SAME_DISTANCES * d && rotation_error_deg(&a.T_target_source, &h.T_target_source) < SAME_DEGREES
-    };
+    let same = |a: &Hypothesis| same_basin(&a.T_target_source, &h.T_target_source, center, d);
     if let Some(k) = top.iter().position(same) {
         if top[k].inliers >= h.inliers {
             return;
