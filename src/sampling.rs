@@ -82,7 +82,7 @@ pub(crate) fn voxel_downsample_points(points: &[[f32; 3]], voxel: f32) -> Vec<[f
 
 /// [`voxel_downsample`] when it gives at most `max` points (the same cloud, bit for bit); `None`
 /// as soon as the points met so far occupy more than `max` voxels, without reading the rest (for
-/// a search of the voxel size that fits a budget, `crate::global::feature_voxel`).
+/// a search of the voxel size that fits a budget, `crate::global::feature_voxels`).
 pub fn voxel_downsample_at_most(cloud: &PointCloud, voxel: f32, max: usize) -> Option<PointCloud> {
     voxel_downsample_at_most_in(cloud, &cloud.bounds(), voxel, max)
 }

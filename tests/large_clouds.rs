@@ -105,8 +105,11 @@ fn the_feature_voxel_follows_the_data() {
     let cloud = bumpy_surface(40_000, 0.6);
     let other = PointCloud::new(refine::even_sample(&cloud.points, 30_000));
     // dense scans: the finer start and the larger budget
-    assert!(global::dense(&cloud, &other, &global::TargetFeatures::default(), global::VOXEL_FRACTION));
-    let v = global::feature_voxel(&cloud, &other, global::VOXEL_FRACTION);
+    assert_eq!(
+        global::density(&cloud, &other, &global::TargetFeatures::default(), global::VOXEL_FRACTION),
+        global::Density::Dense
+    );
+    let v = global::feature_voxels(&cloud, &other, global::VOXEL_FRACTION)[0];
     for c in [&cloud, &other] {
         assert!(voxel_downsample(c, v as f32).len() <= global::DENSE_FEATURE_POINTS);
     }
@@ -119,18 +122,21 @@ fn the_feature_voxel_follows_the_data() {
     assert!(v < global::VOXEL_FRACTION * extent, "{v}: not finer than a sparse pair's");
     // too few points to be a dense scan: the default start and budget
     let fewer = PointCloud::new(refine::even_sample(&cloud.points, 2_900));
-    assert!(!global::dense(&fewer, &fewer, &global::TargetFeatures::default(), global::VOXEL_FRACTION));
-    let v_few = global::feature_voxel(&fewer, &fewer, global::VOXEL_FRACTION);
+    assert_ne!(
+        global::density(&fewer, &fewer, &global::TargetFeatures::default(), global::VOXEL_FRACTION),
+        global::Density::Dense
+    );
+    let v_few = global::feature_voxels(&fewer, &fewer, global::VOXEL_FRACTION)[0];
     assert!(v_few >= global::VOXEL_FRACTION * fewer.half_extent());
     assert!(voxel_downsample(&fewer, v_few as f32).len() <= global::MAX_FEATURE_POINTS);
     // the same shape in millimetres: the voxel in millimetres
     let mm = |c: &PointCloud| PointCloud::new(c.points.iter().map(|p| p.map(|x| x * 1000.0)).collect());
-    let v_mm = global::feature_voxel(&mm(&cloud), &mm(&other), global::VOXEL_FRACTION);
+    let v_mm = global::feature_voxels(&mm(&cloud), &mm(&other), global::VOXEL_FRACTION)[0];
     assert!((v_mm / (1000.0 * v) - 1.0).abs() < 1e-3, "{v_mm} vs {v}");
     // a sparse cloud is described as it is
     let sparse = PointCloud::new(refine::even_sample(&cloud.points, 800));
     let own = global::VOXEL_FRACTION * sparse.half_extent();
-    assert_eq!(global::feature_voxel(&sparse, &sparse, global::VOXEL_FRACTION), own);
+    assert_eq!(global::feature_voxels(&sparse, &sparse, global::VOXEL_FRACTION)[0], own);
 }
 
 /// A large cloud's voxelised copy, at half the finest feature voxel, stands in for its points in
@@ -163,13 +169,13 @@ fn a_voxelised_copy_stands_in_for_a_large_cloud_in_the_global_stage() {
     assert!(std::ptr::eq(same.points, &few));
     // dense as the points are: by the cloud's own count, per voxel the copy occupies
     let memo = global::TargetFeatures::default;
-    assert!(global::dense(&source, &target, &memo(), fraction));
-    assert!(global::dense(s, t, &memo(), fraction));
+    assert_eq!(global::density(&source, &target, &memo(), fraction), global::Density::Dense);
+    assert_eq!(global::density(s, t, &memo(), fraction), global::Density::Dense);
     let sparse_count = global::FeatureCloud { points: &source_v, count: source_v.len() / 100 };
-    assert!(!global::dense(sparse_count, t, &memo(), fraction));
+    assert_ne!(global::density(sparse_count, t, &memo(), fraction), global::Density::Dense);
     // about the feature voxel of the points themselves
     let (v_points, v_copies) =
-        (global::feature_voxel(&source, &target, fraction), global::feature_voxel(s, t, fraction));
+        (global::feature_voxels(&source, &target, fraction)[0], global::feature_voxels(s, t, fraction)[0]);
     assert!((v_copies / v_points - 1.0).abs() < 0.3, "{v_copies} against {v_points}");
     // the hypotheses from the copies are those from the points (here the truth and the shape's
     // half-turned look-alike), and recover the motion
