@@ -127,6 +127,12 @@ fn a_thinned_scan_is_described_at_both_scales_and_registered_from_any_pose() {
     let params = global::GlobalParams { seed: 3, hypotheses: 2, ..global::GlobalParams::default() };
     let hypotheses = global::hypotheses(&scan, &model, &params);
     assert!(hypotheses.len() <= 2 * params.hypotheses, "{} hypotheses", hypotheses.len());
+    // described at the default scale alone (the adaptive search, when its answer so far fits at
+    // least half of the source), its hypotheses are the first of both scales'
+    let memo = TargetFeatures::default();
+    let coarse = global::Matched::onto_at(&scan, &model, &memo, VOXEL_FRACTION, false).hypotheses(&params);
+    assert!(!coarse.is_empty() && coarse.len() <= params.hypotheses);
+    assert_eq!(coarse[..], hypotheses[..coarse.len()]);
     let global_only = Options { starts: vec![Start::Global], ..Options::default() };
     let r = Registrar::with_default_model().unwrap().register(&scan, &model, &global_only).unwrap();
     assert!(rotation_error_deg(&r.T_target_source, &T_target_source) < 2.0, "{:?}", r.T_target_source);

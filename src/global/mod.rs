@@ -45,7 +45,8 @@ pub const DENSE_OCCUPANCY: usize = 8;
 /// sampled down to 3,000-5,000 has 4-6.5), or a clean sample of an object of a few thousand.
 /// Neither scale of descriptors is right for all of them (the coarse one misses a thinned room,
 /// the fine one some objects), so a pair of such clouds is described at both ([`Density::Mid`];
-/// `BENCHMARK.md`, "Thinned scans").
+/// the adaptive search only where its answer so far fits under half of the source,
+/// [`Matched::onto_at`]; `BENCHMARK.md`, "Thinned scans").
 pub const MID_OCCUPANCY: usize = 3;
 
 /// A dense cloud has at least this many points too (twice [`MAX_FEATURE_POINTS`]): a sparse
@@ -437,8 +438,23 @@ impl Matched {
         memo: &TargetFeatures,
         voxel_fraction: f64,
     ) -> Self {
+        Self::onto_at(source, target, memo, voxel_fraction, true)
+    }
+
+    /// [`Matched::onto`]; without `finer`, a [`Density::Mid`] pair is described at the default
+    /// scale only.
+    pub fn onto_at<'s, 't>(
+        source: impl Into<FeatureCloud<'s>>,
+        target: impl Into<FeatureCloud<'t>>,
+        memo: &TargetFeatures,
+        voxel_fraction: f64,
+        finer: bool,
+    ) -> Self {
         let pair = Pair::new(source.into(), target.into(), memo);
-        let density = density_of(&pair, memo, voxel_fraction);
+        let density = match density_of(&pair, memo, voxel_fraction) {
+            Density::Mid if !finer => Density::Sparse,
+            d => d,
+        };
         let scale = |fine: bool| {
             let (voxel, source_v, target_v) = feature_grid(&pair, memo, voxel_fraction, fine);
             // the search's voxelised clouds where it made them (the same as describing anew)

@@ -224,6 +224,12 @@ pub(crate) fn search(
         let mut starts = match step {
             Step::Listed(_) if nearly_sure => continue,
             Step::Listed(stage) => {
+                // the adaptive search describes a pair between sparse and dense finer too only
+                // when the answer so far leaves more than half of the source off the target
+                if global_stage && adaptive {
+                    let so_far = waiting.or(best.as_ref().map(|b| b.0));
+                    builder.finer = so_far.is_none_or(|c| c.fitness < FINER_BELOW_FITNESS);
+                }
                 let starts = builder.build(stage, model, workspace)?;
                 // the global hypotheses, against the answer so far: the best, and those that come
                 // near its fit
@@ -699,6 +705,11 @@ const NEARLY_SURE_SCREEN_FIT: f64 = 0.95;
 /// that the descriptors find the answer again is evidence ([`AGREED_CONFIDENCE`]). At 0.8 and 0.9
 /// the search lost pairs (`BENCHMARK.md`, "Starts screened against the answer").
 const GLOBAL_SCREEN_FIT: f64 = 0.7;
+
+/// Below this fitness of the answer so far, the global stage describes a pair between sparse and
+/// dense at the finer scale too (`global::Density::Mid`): a thinned room's coarse descriptors
+/// miss it, and its answers fit under half of the source; objects' answers mostly fit more.
+const FINER_BELOW_FITNESS: f64 = 0.5;
 
 /// The answer moved along the motion its surfaces leave `free` (its constraint below
 /// [`confidence::UNPINNED_CONSTRAINT`], or barely hold when the answer turned far from the guess:

@@ -107,6 +107,9 @@ pub(crate) struct Starts<'a> {
     clock: Option<Clock>,
     matched: Option<global::Matched>,
     hypotheses: Option<Vec<Matrix4<f64>>>,
+    /// Whether a pair between sparse and dense is described at the finer scale too
+    /// ([`global::Density::Mid`]), when the clouds are first described.
+    pub(crate) finer: bool,
     /// Milliseconds spent on the global hypotheses so far.
     pub global_ms: f64,
     /// Milliseconds spent on the network's passes for starts it refines first
@@ -117,7 +120,17 @@ pub(crate) struct Starts<'a> {
 impl<'a> Starts<'a> {
     /// Starts for `prepared`, with the network's estimate `t_net_n` (normalised units).
     pub(crate) fn new(prepared: &'a Prepared, t_net_n: Matrix4<f64>, seed: u64, clock: Option<Clock>) -> Self {
-        Self { prepared, t_net_n, seed, clock, matched: None, hypotheses: None, global_ms: 0.0, network_ms: 0.0 }
+        Self {
+            prepared,
+            t_net_n,
+            seed,
+            clock,
+            matched: None,
+            hypotheses: None,
+            finer: true,
+            global_ms: 0.0,
+            network_ms: 0.0,
+        }
     }
 
     /// The network's estimate these starts were built from (normalised units).
@@ -238,7 +251,7 @@ impl<'a> Starts<'a> {
             let (voxel, fraction) = (f64::from_bits(p.target.sizes.voxel), params.voxel_fraction);
             let source = global::standin(&p.src_n, &p.icp_src, voxel, 1.0, fraction);
             let target = global::standin(&p.target.cloud, &p.target.icp, voxel, 1.0, fraction);
-            global::Matched::onto(source, target, &p.target.features, fraction)
+            global::Matched::onto_at(source, target, &p.target.features, fraction, self.finer)
         });
         let hypotheses = matched.hypotheses(&params).iter().map(|h| h.T_target_source).collect();
         self.global_ms += w.lap();
