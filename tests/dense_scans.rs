@@ -23,21 +23,21 @@ fn cad_surface(n: usize) -> PointCloud {
 fn scans_are_dense_and_sparse_samples_or_few_points_are_not() {
     let surface = cad_surface(60_000);
     let memo = TargetFeatures::default();
-    let density = |s: &PointCloud, t: &PointCloud| density(s, t, &TargetFeatures::default(), VOXEL_FRACTION);
-    assert_eq!(arps::global::density(&surface, &surface, &memo, VOXEL_FRACTION), Density::Dense, "60,000 points");
+    let fresh = |s: &PointCloud, t: &PointCloud| density(s, t, &TargetFeatures::default(), VOXEL_FRACTION);
+    assert_eq!(density(&surface, &surface, &memo, VOXEL_FRACTION), Density::Dense, "60,000 points");
     // asked again through the memo: the same answer
-    assert_eq!(arps::global::density(&surface, &surface, &memo, VOXEL_FRACTION), Density::Dense);
+    assert_eq!(density(&surface, &surface, &memo, VOXEL_FRACTION), Density::Dense);
     // a fifth as many points over the part: between, described at both scales
     let thinned = cad_surface(12_000);
-    assert_eq!(density(&thinned, &surface), Density::Mid, "12,000 points");
-    assert_eq!(density(&surface, &thinned), Density::Mid, "12,000-point target");
+    assert_eq!(fresh(&thinned, &surface), Density::Mid, "12,000 points");
+    assert_eq!(fresh(&surface, &thinned), Density::Mid, "12,000-point target");
     assert_eq!(global::feature_voxels(&thinned, &surface, VOXEL_FRACTION).len(), 2);
     let few = cad_surface(2_000);
-    assert_eq!(density(&few, &surface), Density::Sparse, "2,000 points");
-    assert_eq!(density(&surface, &few), Density::Sparse, "2,000-point target");
+    assert_eq!(fresh(&few, &surface), Density::Sparse, "2,000 points");
+    assert_eq!(fresh(&surface, &few), Density::Sparse, "2,000-point target");
     assert_eq!(global::feature_voxels(&few, &surface, VOXEL_FRACTION).len(), 1);
     let (source, target, _) = fixture_pair(0);
-    assert_eq!(density(&source, &target), Density::Sparse, "a 1,024-point pair");
+    assert_eq!(fresh(&source, &target), Density::Sparse, "a 1,024-point pair");
 }
 
 /// A pair cropped from `n` points over the CAD part (each crop keeps 80%) and registered with
