@@ -400,6 +400,54 @@ fn a_grown_run_computes_what_it_grew_from_and_trains_on() {
     }
 }
 
+/// `slim` keeps one copy of the network (the moving average), exports what the full run exports,
+/// and trains on with Adam restarted; it never overwrites a run.
+#[test]
+fn a_slim_run_exports_what_the_full_run_does_and_trains_on() {
+    let (base, slim) = (dir("slim-base"), dir("slim"));
+    let mut args = COMMON.to_vec();
+    args.extend(["--steps", "20", "--ema", "0.9"]);
+    train(&base, &args);
+    let run_slim = |from: &Path, to: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_arps-train"))
+            .args(["slim", "--from", from.to_str().unwrap(), "--run", to.to_str().unwrap()])
+            .output()
+            .unwrap()
+    };
+    let out = run_slim(&base, &slim);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+
+    let full = checkpoint::load(&base.join("checkpoint.safetensors")).unwrap();
+    let new = checkpoint::load(&slim.join("checkpoint.safetensors")).unwrap();
+    assert_eq!(&new.params, full.ema.as_ref().unwrap(), "the moving average becomes the parameters");
+    assert!(new.ema.is_none() && new.adam.m.is_empty() && new.adam.v.is_empty());
+    assert_eq!((new.adam.t, new.adam.lr), (0, full.adam.lr));
+    assert_eq!(
+        (new.state.step, new.state.pairs_seen, new.state.best_score),
+        (20, full.state.pairs_seen, full.state.best_score)
+    );
+    let size = |d: &Path| std::fs::metadata(d.join("checkpoint.safetensors")).unwrap().len();
+    assert!(size(&slim) * 3 < size(&base), "{} vs {}", size(&slim), size(&base));
+    let (a, b) = (export_latest(&base), export_latest(&slim));
+    for (name, v) in &a.tensors {
+        assert_eq!(b.get(name), v.as_slice(), "{name}");
+    }
+
+    // it trains on: the moments fill in again and the average is kept from the parameters
+    train(&slim, &["--resume", "--steps", "24", "--quiet"]);
+    let trained = checkpoint::load(&slim.join("checkpoint.safetensors")).unwrap();
+    assert_eq!((trained.state.step, trained.adam.t), (24, 4));
+    assert!(trained.ema.is_some() && trained.adam.v.values().all(|v| v.iter().any(|&x| x > 0.0)));
+    assert!(trained.params != new.params);
+    assert!(log::read(&slim.join("log.jsonl")).unwrap().iter().any(|l| l["kind"] == "note"));
+
+    let again = run_slim(&base, &slim);
+    assert!(!again.status.success() && String::from_utf8_lossy(&again.stderr).contains("exists"));
+    for d in [base, slim] {
+        let _ = std::fs::remove_dir_all(d);
+    }
+}
+
 #[test]
 fn part_whole_pairs_are_a_checked_share_of_a_run() {
     let run = dir("part-whole");

@@ -215,6 +215,24 @@ def test_a_grown_run_loads_computes_the_same_and_trains(tmp_path):
     assert np.any(w2[:, 16:] != 0), "the new units start to count"
 
 
+def test_a_slim_run_resumes_from_its_average(tmp_path):
+    """`arps-train slim` keeps the moving average as the parameters and no Adam moments; this
+    trainer resumes it with Adam restarted (t = 0) and the average started from the parameters."""
+    a = init(tmp_path / "a")
+    pytrain(a, 3)
+    s = tmp_path / "s"
+    run("slim", "--from", str(a), "--run", str(s))
+    ca = read_checkpoint(os.path.join(a, "checkpoint.safetensors"))
+    cs = read_checkpoint(os.path.join(s, "checkpoint.safetensors"))
+    assert cs["ema"] is None and not cs["adam_m"] and not cs["adam_v"] and cs["adam"]["t"] == 0
+    for name, v in ca["ema"].items():
+        assert np.array_equal(cs["params"][name], v), name
+    pytrain(s, 5)
+    cs = read_checkpoint(os.path.join(s, "checkpoint.safetensors"))
+    assert cs["state"]["step"] == 5 and cs["adam"]["t"] == 2 and cs["ema"] is not None
+    assert all(np.any(v > 0) for v in cs["adam_v"].values())
+
+
 def test_part_whole_pairs_are_set_on_resume(tmp_path):
     """``--part-whole`` replaces the run's share of part-against-whole training pairs; the
     generators read it from the run's config and the run trains on."""

@@ -13,6 +13,9 @@
 //! * `arps-train pack-bank --bank DIR --out bank.arpsbank.gz`: the shape bank in one file.
 //! * `arps-train grow --from runs/OLD --run runs/NEW --ffn-dim F`: a run whose network is wider
 //!   and computes what the old one did, to train on (`arps::train::run::grow`).
+//! * `arps-train slim --from runs/OLD --run runs/NEW`: the run's network without the optimiser's
+//!   state, a third of the checkpoint or less, to keep as a line's resume point
+//!   (`arps::train::run::slim`).
 //!
 //! The binary only parses arguments; the work is in `arps::train::run`.
 
@@ -61,6 +64,20 @@ enum Command {
     /// Make a new run from a run's checkpoint with wider feed-forward layers that compute what
     /// the old ones did (new hidden units with zero output weights), to go on training it.
     Grow(GrowArgs),
+    /// Make a new run holding only the network to go on from (the moving average, else the
+    /// parameters) without Adam's moments: a third of the checkpoint or less; training it
+    /// restarts Adam.
+    Slim(SlimArgs),
+}
+
+#[derive(Args)]
+struct SlimArgs {
+    /// The run to copy (its checkpoint.safetensors; the run itself is not changed).
+    #[arg(long)]
+    from: PathBuf,
+    /// The new run directory (must not hold a checkpoint).
+    #[arg(long)]
+    run: PathBuf,
 }
 
 #[derive(Args)]
@@ -320,6 +337,7 @@ fn main() -> ExitCode {
         Command::Stream(a) => stream::stream(&a),
         Command::PackBank(a) => stream::pack_bank(&a.bank, &a.out),
         Command::Grow(a) => arps::train::run::grow::grow(&a.from, &a.run, a.ffn_dim, a.seed),
+        Command::Slim(a) => arps::train::run::slim::slim(&a.from, &a.run),
     };
     match r {
         Ok(()) => ExitCode::SUCCESS,

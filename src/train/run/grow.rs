@@ -15,8 +15,7 @@
 //! grows like the parameters. The best validation is forgotten (it was the smaller network's),
 //! as when a run changes its network points.
 
-use super::checkpoint::{self, Checkpoint};
-use super::log;
+use super::checkpoint::Checkpoint;
 use crate::train::model::check_params;
 use crate::train::Params;
 use std::path::Path;
@@ -111,38 +110,23 @@ pub fn grow_ffn(from: &Checkpoint, ffn_dim: usize, seed: u64) -> Result<Checkpoi
 }
 
 /// Grows the run in `from` (its `checkpoint.safetensors`) into a new run directory `run`
-/// ([`grow_ffn`]), with its `config.json` and its log so far plus a `note` line saying what
-/// grew. Refuses to overwrite a run.
+/// ([`grow_ffn`]; written by [`super::fork::write`], with a note saying what grew). Refuses to
+/// overwrite a run.
 pub fn grow(from: &Path, run: &Path, ffn_dim: usize, seed: u64) -> Result<(), String> {
-    let ckpt = run.join("checkpoint.safetensors");
-    if ckpt.exists() {
-        return Err(format!("{} exists", ckpt.display()));
-    }
-    let old = checkpoint::load(&from.join("checkpoint.safetensors"))?;
+    let old = super::fork::load_source(from, run)?;
     let new = grow_ffn(&old, ffn_dim, seed)?;
-    std::fs::create_dir_all(run).map_err(|e| format!("{}: {e}", run.display()))?;
-    super::session::write_config(run, &new.state.config)?;
-    let log_path = run.join("log.jsonl");
-    let history = match log::read_text(&from.join("log.jsonl")) {
-        Ok(text) => text,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => String::new(),
-        Err(e) => return Err(format!("{}: {e}", from.join("log.jsonl").display())),
-    };
-    std::fs::write(&log_path, history).map_err(|e| format!("{}: {e}", log_path.display()))?;
     let count = |p: &Params| p.values().map(Vec::len).sum::<usize>();
     let (before, after) = (count(&old.params), count(&new.params));
-    let st = &new.state;
-    log::JsonlLog::open(&log_path).map_err(|e| format!("{}: {e}", log_path.display()))?.write(serde_json::json!({
-        "kind": "note", "step": st.step, "pairs_seen": st.pairs_seen, "elapsed": st.elapsed,
-        "note": format!("grown from {}: ffn_dim {} -> {ffn_dim} (seed {seed}), {before} -> {after} parameters; best validation forgotten",
-            from.display(), old.state.config.model.ffn_dim),
-    }));
-    checkpoint::save(&ckpt, st, &new.params, &new.adam, new.ema.as_ref())?;
+    let old_ffn = old.state.config.model.ffn_dim;
+    let note = format!(
+        "grown from {}: ffn_dim {old_ffn} -> {ffn_dim} (seed {seed}), {before} -> {after} parameters; best validation forgotten",
+        from.display()
+    );
+    super::fork::write(from, run, &new, note)?;
     eprintln!(
-        "arps-train: grew {} (step {}, ffn_dim {}) into {}: ffn_dim {ffn_dim}, {before} -> {after} parameters",
+        "arps-train: grew {} (step {}, ffn_dim {old_ffn}) into {}: ffn_dim {ffn_dim}, {before} -> {after} parameters",
         from.display(),
-        st.step,
-        old.state.config.model.ffn_dim,
+        new.state.step,
         run.display()
     );
     Ok(())

@@ -13,6 +13,8 @@
 //! * [`bank_pack`]: the shape bank packed into one gzipped file.
 //! * [`stream`]: the binary training-data stream another trainer reads.
 //! * [`grow`]: a run's network made wider without changing what it computes, to train on.
+//! * [`slim`]: a run's checkpoint without the optimiser's state, to keep as a line's resume point.
+//! * [`fork`]: writing a new run made from another run's checkpoint (`grow`, `slim`).
 //! * [`session`]: [`session::train`] runs one training session, [`session::export`] exports
 //!   weights, [`session::init`] starts a run without training.
 
@@ -20,9 +22,11 @@ pub mod bank_pack;
 pub mod checkpoint;
 pub mod curriculum;
 pub mod data;
+pub mod fork;
 pub mod grow;
 pub mod log;
 pub mod session;
+pub mod slim;
 pub mod stream;
 pub mod validate;
 
