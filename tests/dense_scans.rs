@@ -40,6 +40,21 @@ fn scans_are_dense_and_sparse_samples_or_few_points_are_not() {
     assert_eq!(fresh(&source, &target), Density::Sparse, "a 1,024-point pair");
 }
 
+#[test]
+fn a_scan_thinned_to_two_thousand_points_is_between_and_fewer_are_sparse() {
+    // an eighth of the part at 16,000 points over the whole, thinned to 2,000: 3 or more to a
+    // voxel, as a room scan thinned that far, so it is described at both scales; with one point
+    // fewer it counts as a sparse sample, whatever its crowding
+    let model = cad_surface(60_000);
+    let piece = crop(&cad_surface(16_000), [1.0, 0.2, 0.1], 0.125);
+    assert_eq!(piece.len(), global::MID_MIN_POINTS);
+    let fresh = |s: &PointCloud| density(s, &model, &TargetFeatures::default(), VOXEL_FRACTION);
+    assert_eq!(fresh(&piece), Density::Mid);
+    assert_eq!(global::feature_voxels(&piece, &model, VOXEL_FRACTION).len(), 2);
+    let fewer = PointCloud::new(piece.points[1..].to_vec());
+    assert_eq!(fresh(&fewer), Density::Sparse, "{} points", fewer.len());
+}
+
 /// A pair cropped from `n` points over the CAD part (each crop keeps 80%) and registered with
 /// the network's start, then the global one: the number of points per cloud, the starts refined
 /// by the network's start alone and by both, and whether the answer is right and sure.

@@ -40,9 +40,9 @@ pub const VOXEL_FRACTION: f64 = 0.08;
 pub const DENSE_OCCUPANCY: usize = 8;
 
 /// A cloud between sparse and dense has at least this many points per occupied voxel of the
-/// default feature voxel (and at least [`DENSE_MIN_POINTS`] points), fewer than
+/// default feature voxel (and at least [`MID_MIN_POINTS`] points), fewer than
 /// [`DENSE_OCCUPANCY`]: a clean scan thinned to a few thousand points (a room's 19,000-point scan
-/// sampled down to 3,000-5,000 has 4-6.5), or a clean sample of an object of a few thousand.
+/// sampled down to 2,000-5,000 has 3-6.5), or a clean sample of an object of a few thousand.
 /// Neither scale of descriptors is right for all of them (the coarse one misses a thinned room,
 /// the fine one some objects), so a pair of such clouds is described at both ([`Density::Mid`];
 /// the adaptive search only where its answer so far fits under half of the source,
@@ -52,6 +52,11 @@ pub const MID_OCCUPANCY: usize = 3;
 /// A dense cloud has at least this many points too (twice [`MAX_FEATURE_POINTS`]): a sparse
 /// sample of an elongated shape also crowds the few voxels its extent gives it.
 pub const DENSE_MIN_POINTS: usize = 2 * MAX_FEATURE_POINTS;
+
+/// A cloud between sparse and dense ([`MID_OCCUPANCY`]) has at least this many points too: a room
+/// scan thinned to 2,000 points still crowds the default voxel 3 or more to a voxel, and the
+/// coarse descriptors alone lose its structure (`BENCHMARK.md`, "Thinned scans of 2,000 points").
+pub const MID_MIN_POINTS: usize = 2000;
 
 /// The feature voxel's starting size on a dense pair, as a fraction of the larger half-extent
 /// (with the default [`VOXEL_FRACTION`]; another fraction scales it alike).
@@ -150,24 +155,26 @@ pub fn density<'s, 't>(
 /// [`density`] of two clouds as the global hypotheses see them.
 fn density_of(pair: &Pair, memo: &TargetFeatures, fraction: f64) -> Density {
     let v = (fraction * pair.extent).max(f64::MIN_POSITIVE);
-    let both = |occupancy| {
-        occupied_at(pair.source, &pair.source_bounds, v, occupancy) && memo.occupied(pair.target, v, occupancy)
+    let both = |occupancy, min_points| {
+        pair.source.count >= min_points
+            && pair.target.count >= min_points
+            && occupied_at(pair.source, &pair.source_bounds, v, occupancy)
+            && memo.occupied(pair.target, v, occupancy)
     };
-    if both(DENSE_OCCUPANCY) {
+    if both(DENSE_OCCUPANCY, DENSE_MIN_POINTS) {
         Density::Dense
-    } else if both(MID_OCCUPANCY) {
+    } else if both(MID_OCCUPANCY, MID_MIN_POINTS) {
         Density::Mid
     } else {
         Density::Sparse
     }
 }
 
-/// `cloud` has at least [`DENSE_MIN_POINTS`] points and `occupancy` per occupied voxel of size
-/// `v` (`bounds`: its points' bounds). The voxels are those its [`FeatureCloud::points`] occupy;
-/// the points counted, all of its [`FeatureCloud::count`].
+/// `cloud` has `occupancy` points per occupied voxel of size `v` (`bounds`: its points' bounds).
+/// The voxels are those its [`FeatureCloud::points`] occupy; the points counted, all of its
+/// [`FeatureCloud::count`].
 fn occupied_at(cloud: FeatureCloud, bounds: &([f32; 3], [f32; 3]), v: f64, occupancy: usize) -> bool {
-    cloud.count >= DENSE_MIN_POINTS
-        && voxel_downsample_at_most_in(cloud.points, bounds, v as f32, cloud.count / occupancy).is_some()
+    voxel_downsample_at_most_in(cloud.points, bounds, v as f32, cloud.count / occupancy).is_some()
 }
 
 /// The two clouds of a feature voxel's search, with what its passes need of them, each computed
