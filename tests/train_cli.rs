@@ -23,6 +23,15 @@ fn train(run: &Path, extra: &[&str]) {
     assert!(out.status.success(), "arps-train {args:?} failed:\n{}", String::from_utf8_lossy(&out.stderr));
 }
 
+/// `arps-train grow|slim --from FROM --run TO [extra]` (a new run made from another's checkpoint).
+fn fork(command: &str, from: &Path, to: &Path, extra: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_arps-train"))
+        .args([command, "--from", from.to_str().unwrap(), "--run", to.to_str().unwrap()])
+        .args(extra)
+        .output()
+        .unwrap()
+}
+
 /// `arps-train export --latest` of `run`, loaded by the engine.
 fn export_latest(run: &Path) -> arps::Weights {
     let exported = run.join("latest.safetensors");
@@ -350,12 +359,7 @@ fn a_grown_run_computes_what_it_grew_from_and_trains_on() {
     let mut args = COMMON.to_vec();
     args.extend(["--steps", "20", "--ema", "0.9"]);
     train(&base, &args);
-    let grow = |from: &Path, to: &Path, ffn: &str| {
-        Command::new(env!("CARGO_BIN_EXE_arps-train"))
-            .args(["grow", "--from", from.to_str().unwrap(), "--run", to.to_str().unwrap(), "--ffn-dim", ffn])
-            .output()
-            .unwrap()
-    };
+    let grow = |from: &Path, to: &Path, ffn: &str| fork("grow", from, to, &["--ffn-dim", ffn]);
     let out = grow(&base, &grown, "40");
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 
@@ -408,13 +412,7 @@ fn a_slim_run_exports_what_the_full_run_does_and_trains_on() {
     let mut args = COMMON.to_vec();
     args.extend(["--steps", "20", "--ema", "0.9"]);
     train(&base, &args);
-    let run_slim = |from: &Path, to: &Path| {
-        Command::new(env!("CARGO_BIN_EXE_arps-train"))
-            .args(["slim", "--from", from.to_str().unwrap(), "--run", to.to_str().unwrap()])
-            .output()
-            .unwrap()
-    };
-    let out = run_slim(&base, &slim);
+    let out = fork("slim", &base, &slim, &[]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
 
     let full = checkpoint::load(&base.join("checkpoint.safetensors")).unwrap();
@@ -441,7 +439,7 @@ fn a_slim_run_exports_what_the_full_run_does_and_trains_on() {
     assert!(trained.params != new.params);
     assert!(log::read(&slim.join("log.jsonl")).unwrap().iter().any(|l| l["kind"] == "note"));
 
-    let again = run_slim(&base, &slim);
+    let again = fork("slim", &base, &slim, &[]);
     assert!(!again.status.success() && String::from_utf8_lossy(&again.stderr).contains("exists"));
     for d in [base, slim] {
         let _ = std::fs::remove_dir_all(d);
