@@ -397,6 +397,44 @@ pub fn refine_final(
     converge(target, source, c, how)
 }
 
+/// [`refine_final`] for a pose that may land nowhere new (the next of a row of alike parts, the
+/// other face of a wall): first one run of the final stage (no rounds past the cap) on
+/// [`SCREEN_POINTS`] evenly spread points of the capped `source`; `None` when that run fits less
+/// than [`SCREENED_FIT`] as well as the `answer` (`T_target_source`) on the same points, or
+/// comes back onto it ([`coincide`]): neither can replace the answer or be its look-alike. Else
+/// [`refine_final`] on every capped point from where the run left it. At the final distance a
+/// pose off any basin crawls: on 1M-point clouds one took four rounds of 30 iterations on 8,192
+/// points and still fit 0.74 to the answer's 0.96, and a wall's other face that slid back onto
+/// the answer's took 25 iterations to say so (`BENCHMARK.md`, "Large clouds: poses that land
+/// nowhere new, screened").
+#[allow(non_snake_case)]
+pub fn refine_final_screened(
+    target: &IcpTarget,
+    source: &[[f32; 3]],
+    start: Start,
+    T_target_source: &Matrix4<f64>,
+    how: &Refinement,
+    answer: &Matrix4<f64>,
+) -> Option<Candidate> {
+    let sample = even_sample(source, SCREEN_POINTS);
+    let mut from = *T_target_source;
+    // (with no more points than the sample, the screening run would be the refinement itself)
+    if how.kind != IcpKind::Off && sample.len() < source.len() {
+        let run = refine_stages(target, &sample, &[(start, from)], how, FINAL_STAGE)[0];
+        let back = coincide(&run.T_target_source, answer, &sample, how.d_final);
+        if back || run.fitness < SCREENED_FIT * target.evaluate(&sample, answer, how.d_final).0 {
+            return None;
+        }
+        from = run.T_target_source;
+    }
+    Some(refine_final(target, source, start, &from, how))
+}
+
+/// [`refine_final_screened`] refines a pose on every point only when its run on the sample fits at
+/// least this share as well as the answer there: below the share of a look-alike (0.9,
+/// [`crate::confidence::count_search_alternatives`]), with a margin for a run not yet converged.
+pub const SCREENED_FIT: f64 = 0.8;
+
 /// The answer's final stage, when it has not converged within the cap, runs on in rounds of
 /// `max_iterations` for at most this many rounds more ([`refine_best`]).
 pub const CONVERGE_ROUNDS: u32 = 3;

@@ -213,3 +213,39 @@ fn a_large_pair_registers_with_the_default_options() {
     let te = translation_error(&out.T_target_source, &truth);
     assert!(re < 1.0 && te < 0.02, "RE {re:.3} deg, TE {te:.4}, start {:?}", out.start);
 }
+
+/// A pose refined only where it lands somewhere new (`refine::refine_final_screened`): the next of
+/// two alike parts side by side is refined onto it, while a pose a little off the answer (it comes
+/// back onto the answer) and one beside both parts (it fits nothing) are dropped after a run on a
+/// sample, before any refinement on every point.
+#[test]
+fn a_pose_is_refined_on_every_point_only_where_it_lands_somewhere_new() {
+    let part = bumpy_surface(6_000, 0.2).points;
+    let truth = motion([10.0, -5.0, 20.0], [0.1, 0.0, -0.1]);
+    let beside = nalgebra::Matrix4::new_translation(&nalgebra::Vector3::new(4.0, 0.0, 0.0)) * truth;
+    let placed = |t| PointCloud::new(part.clone()).transformed(t).points;
+    let target = IcpTarget::new(&[placed(&truth), placed(&beside)].concat(), false);
+    let source = crop(&PointCloud::new(part.clone()), [0.0, 0.0, 1.0], 0.7).points;
+    assert!(source.len() > refine::SCREEN_POINTS);
+    let how = Refinement::new(IcpKind::Plane, 0.02, 0.02, 30);
+    let refined = |from: &nalgebra::Matrix4<f64>| {
+        refine::refine_final_screened(&target, &source, Start::Global, from, &how, &truth)
+    };
+    // the next part, placed a little off: refined onto it, as `refine_final` would
+    let off = motion([1.0, 0.5, 0.0], [0.01, 0.0, 0.0]);
+    let next = refined(&(beside * off)).expect("the next part is somewhere new");
+    assert!(
+        rotation_error_deg(&next.T_target_source, &beside) < 0.05
+            && translation_error(&next.T_target_source, &beside) < 1e-3
+    );
+    assert!(next.fitness > 0.95, "{}", next.fitness);
+    assert_eq!(Some(next), refined(&(beside * off)), "deterministic");
+    // back onto the answer, and nowhere at all
+    assert_eq!(refined(&(truth * off)), None);
+    let away = nalgebra::Matrix4::new_translation(&nalgebra::Vector3::new(0.0, 3.0, 0.0)) * truth;
+    assert_eq!(refined(&away), None);
+    // ICP off: nothing to run, the pose is scored where it is
+    let off_how = Refinement::new(IcpKind::Off, 0.02, 0.02, 30);
+    let scored = refine::refine_final_screened(&target, &source, Start::Global, &away, &off_how, &truth).unwrap();
+    assert_eq!((scored.T_target_source, scored.iterations), (away, 0));
+}

@@ -38,7 +38,8 @@
 //! replaces the answer when it fits clearly better; with `up`, so are its quarter and half turns
 //! about up ([`UP_TURNS_VOTED`]), each with the translation the matches agree on for it. Then the
 //! answer moved onto the other faces of the thin walls the source lies on
-//! ([`wall::other_faces`]) is refined at the final distance, replacing the answer when it fits
+//! ([`wall::other_faces`]) is refined at the final distance (where it lands somewhere new:
+//! [`refine::refine_final_screened`]), replacing the answer when it fits
 //! better ([`wall::fits_better`]) and moved again (up to [`wall::ROUNDS`] times), with a warning
 //! when it fits alike ([`wall::fits_alike`]).
 //! With no start refined at all, the network's estimate (the initial transform with the network
@@ -144,8 +145,9 @@ pub(crate) fn search(
         refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
         r
     };
-    // one more pose `t` (levelled) refined at the final distance only (the next of a row of alike
-    // parts), kept as `refine_one` keeps its poses
+    // one more pose `t` (levelled) refined at the final distance only where it lands somewhere
+    // new (the next of a row of alike parts; `refine::refine_final_screened`), kept as
+    // `refine_one` keeps its poses
     let capped = refine::even_sample(&p.icp_src.points, refine::REFINE_POINTS);
     let screen = refine::even_sample(&p.icp_src.points, refine::SCREEN_POINTS);
     // most pairs' matches scatter into a second cluster by chance: a pose that does not already
@@ -159,8 +161,8 @@ pub(crate) fn search(
     let at_evidence =
         (p.d_evidence < d_final).then_some(|t: &Matrix4<f64>| target_index.evaluate(&capped, t, p.d_evidence).0);
     let next_part = |c: &Candidate, t: Matrix4<f64>, refined: &mut Vec<(Matrix4<f64>, f64)>| {
-        let r = refine::refine_final(target_index, &capped, c.start, &t, &how);
-        let r = admits(&r.T_target_source).then_some(r);
+        let r = refine::refine_final_screened(target_index, &capped, c.start, &t, &how, &c.T_target_source);
+        let r = r.filter(|r| admits(&r.T_target_source));
         refined.extend(r.map(|r| (r.T_target_source, r.fitness)));
         r
     };

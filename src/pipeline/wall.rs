@@ -194,7 +194,8 @@ pub(crate) struct Across {
 
 /// The `answer` moved across the thin walls of the `target` the `source` lies on
 /// ([`other_faces`]), each pose `level`led and refined at the final distance only
-/// ([`refine::refine_final`] on the source capped as for the answer: the wider stages pair
+/// ([`refine::refine_final_screened`] on the source capped as for the answer, so a pose that
+/// slides back onto the answer's faces stops after a run on a sample; the wider stages would pair
 /// points across the wall); one that fits better ([`fits_better`]) and `improves` on the answer replaces it and is
 /// moved again, up to [`ROUNDS`] times (a scan a wall off along two or three axes). A pose that
 /// fits alike gives a warning, its shift measured at the source's `centre` (`scale`: the clouds'
@@ -218,8 +219,9 @@ pub(crate) fn across_walls(
     for _ in 0..ROUNDS {
         let from = chosen;
         for t in other_faces(target, source, &from.T_target_source, d_final) {
-            let r = refine::refine_final(target, capped, answer.start, &level(t), how);
+            let r = refine::refine_final_screened(target, capped, answer.start, &level(t), how, &from.T_target_source);
             tried += 1;
+            let Some(r) = r else { continue };
             if admits(&r.T_target_source) {
                 refined.push(r);
                 if fits_better(&r, &chosen) && improves(&chosen, &r) {
