@@ -270,8 +270,8 @@ pub struct Refinement {
     /// least `d_final`; larger when the caller's final distance is tighter than the default one,
     /// so that the starts travel as far as at the default (a tight distance sets the precision,
     /// not how far the search reaches), then halve down to `d_final` ([`Refinement::stages`]);
-    /// [`refine_starts`] then also refines every start through [`SCHEDULE`] alone, and the fit
-    /// chooses.
+    /// [`refine_starts`] then also refines every start through [`SCHEDULE`] alone (when `d_coarse`
+    /// is at least [`SCHEDULE_ALONE_RATIO`] times `d_final`), and the fit chooses.
     pub d_coarse: f64,
     /// Iteration cap of each ICP stage.
     pub max_iterations: u32,
@@ -480,8 +480,9 @@ pub fn even_sample(points: &[[f32; 3]], n: usize) -> Vec<[f32; 3]> {
 /// [`SCHEDULE`] times `how.d_final` unless the final distance is tighter than the coarse one,
 /// each stage capped at `how.max_iterations`; `how.estimate` takes the widest stage
 /// plainly, damped ([`WIDE_DAMPING`]) and not at all, as three candidates) and scores
-/// each result at `how.d_final`. With a coarse distance above the final one, the starts are
-/// refined a second time through [`SCHEDULE`] alone, and those candidates follow the first ones.
+/// each result at `how.d_final`. With a coarse distance at least [`SCHEDULE_ALONE_RATIO`] times
+/// the final one, the starts are refined a second time through [`SCHEDULE`] alone, and those
+/// candidates follow the first ones.
 ///
 /// The starts advance stage by stage together; before each stage a start that has come within
 /// [`MERGE_FRACTION`] of `how.d_final` of an earlier one (largest displacement of a source point) is
@@ -496,7 +497,7 @@ pub fn refine_starts(
     how: &Refinement,
 ) -> Vec<Candidate> {
     let mut all = refine_stages(target, source, starts, how, &how.stages());
-    if how.d_coarse > how.d_final {
+    if how.d_coarse >= SCHEDULE_ALONE_RATIO * how.d_final {
         // and through the caller's own schedule alone: a start already near the answer (a guess
         // placed by hand) can be pulled off it by the wide stages in a scene of repeated
         // structure (a corridor's walls paired with the next ones), where the starts that must
@@ -505,6 +506,13 @@ pub fn refine_starts(
     }
     all
 }
+
+/// [`refine_starts`] refines the starts through [`SCHEDULE`] alone too only when the stages start
+/// from at least this many times the final distance's ([`Refinement::d_coarse`]): nearer, the two
+/// schedules nearly coincide (a dense object's default distance at 0.73 of the size-based one:
+/// stages of 5.5, 2.7, 1.4 and 1 times it against 4, 2 and 1), and the second run only doubled
+/// the time (`BENCHMARK.md`, "Large clouds: poses that land nowhere new, screened").
+pub const SCHEDULE_ALONE_RATIO: f64 = 2.0;
 
 /// [`refine_starts`] with the given stages (multiples of `how.d_final`) instead of [`SCHEDULE`].
 fn refine_stages(

@@ -358,6 +358,26 @@ fn starts_far_behind_after_a_coarse_stage_are_dropped() {
     assert!(rotation_error_deg(&c[0].T_target_source, &truth) < 0.01);
 }
 
+/// A start is refined a second time through the final distance's own schedule only when the
+/// stages start at least `SCHEDULE_ALONE_RATIO` times wider than it: nearer, the two schedules
+/// nearly coincide.
+#[test]
+fn the_final_distances_own_schedule_runs_too_only_from_twice_as_wide() {
+    let (target, source, truth) = surface_pair();
+    let d = 0.02;
+    let near = motion([2.0, 0.0, 0.0], [0.0, 0.0, 0.0]) * truth;
+    let one = [(Start::Global, near)];
+    let runs =
+        |coarse: f64| refine::refine_starts(&target, &source, &one, &Refinement::new(IcpKind::Plane, d, coarse, 30));
+    assert_eq!(runs(d).len(), 1);
+    assert_eq!(runs(1.5 * d).len(), 1, "stages of 6, 3, 1.5 and 1 times d against 4, 2 and 1");
+    let both = runs(refine::SCHEDULE_ALONE_RATIO * d);
+    assert_eq!(both.len(), 2);
+    for c in &both {
+        assert!(rotation_error_deg(&c.T_target_source, &truth) < 0.05, "{c:?}");
+    }
+}
+
 /// `coincide`: two transforms that move no source point farther apart than half the final
 /// distance are the same answer.
 #[test]
