@@ -8,6 +8,9 @@
 //! starts that meet are merged ([`MERGE_FRACTION`]), starts far behind the best after a coarse
 //! stage are dropped ([`CUT_BEHIND`]), and large sources are compared on a sample of
 //! [`SCREEN_POINTS`] points, only the winner being refined on more (at most [`REFINE_POINTS`]).
+//! A single pose that may land nowhere new (the next of alike parts, a wall's other face) is
+//! refined on every point only when a run on such a sample comes near the answer's fit
+//! ([`refine_final_screened`]).
 
 use crate::icp::{IcpKind, IcpParams, IcpTarget, Partners};
 use crate::transform::rotation_angle_deg;
